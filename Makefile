@@ -1,0 +1,46 @@
+# povh3d: `make render` renders the bundled sample, `make test` runs the tests.
+# Both set up what they need: POV-Ray (apt) and a .venv with povh3d installed.
+SHELL := bash
+.SHELLFLAGS := -eu -o pipefail -c
+.DELETE_ON_ERROR:
+.DEFAULT_GOAL := help
+MAKEFLAGS += --no-builtin-rules
+
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+PRESET ?= demo
+QUALITY ?= normal
+
+.PHONY: help render test bench povray venv clean
+
+help: ## list the targets
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-8s %s\n", $$1, $$2}'
+
+povray: ## install POV-Ray 3.7 with apt when it is missing
+	@command -v povray >/dev/null || { echo "installing POV-Ray (apt-get install povray)"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq povray >/dev/null; }
+	@povray --version 2>&1 | grep -m1 'POV-Ray'
+
+$(BIN)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q -e '.[test]'
+	touch $@
+
+venv: $(BIN)/.installed ## create .venv with povh3d installed
+
+render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=demo)
+	mkdir -p out
+	$(BIN)/povh3d render sample_models/sample.pov --preset $(PRESET) --quality $(QUALITY) \
+	  -o out/sample-h3d.png --views-dir out/views
+
+test: povray venv ## run the test suite (POV-Ray tests included)
+	$(BIN)/python -m pytest -q
+
+bench: povray venv ## measure H3D render time against a plain 2D render of the panel
+	$(BIN)/python benchmarks/bench_render.py
+
+clean: ## remove outputs (not the cache)
+	rm -rf out

@@ -1,0 +1,161 @@
+"""The Python API: render a scene to an H3D PNG, interleave and extract view stacks.
+
+These functions touch files; the geometry and image work they call is pure.
+Outputs are written atomically, each image with its JSON sidecar.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import __version__
+from .errors import ConfigError, InputError, OutputError
+from .geometry import LensArray
+from .imageio import atomic_path, check_writable, read_png, read_sidecar, write_png, write_sidecar
+from .interleave import extract, interleave
+from .methods import METHODS, run_method
+from .povray import find_povray, povray_version
+from .render import Progress, RenderSettings
+from .scene import load_scene
+
+VIEW_NAME = "v_{l:03d}_{k:03d}.png"
+_VIEW_RE = re.compile(r"^v_(\d{3,})_(\d{3,})\.png$")
+
+
+def _sidecar(kind: str, lens_array: LensArray | None, **extra: Any) -> dict[str, Any]:
+    record: dict[str, Any] = {"povh3d_version": __version__, "kind": kind}
+    if lens_array is not None:
+        record["lens_array"] = lens_array.describe()
+    record.update(extra)
+    return record
+
+
+def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
+           method: str = "multi-ortho", settings: RenderSettings | None = None,
+           views_dir: str | Path | None = None, include_dirs: tuple[str | Path, ...] = (),
+           display: dict[str, Any] | None = None, progress: Progress | None = None) -> dict[str, Any]:
+    """Render ``scene_path`` through ``lens_array`` into the H3D PNG ``output``.
+
+    Returns the sidecar record written beside ``output``.
+    """
+    settings = settings or RenderSettings()
+    if method not in METHODS:
+        raise ConfigError(f"unknown method {method!r}; choose one of: {', '.join(METHODS)}")
+    output = Path(output)
+    if output.suffix.lower() != ".png":
+        raise ConfigError(f"the output {str(output)!r} must be a .png file")
+    scene = load_scene(scene_path, include_dirs)
+    check_writable(output)  # fail before rendering, not after
+    if views_dir is not None:
+        lens_array.require_views()
+        Path(views_dir).mkdir(parents=True, exist_ok=True)
+        check_writable(Path(views_dir) / ".povh3d-write-test")
+
+    start = time.perf_counter()
+    result = run_method(method, scene, lens_array, settings, progress)
+    render_seconds = time.perf_counter() - start
+    h3d = result.h3d
+    expected = (lens_array.panel.height, lens_array.panel.width)
+    if h3d.shape[:2] != expected:  # a bug, never the user's doing
+        raise RuntimeError(f"{method} produced {h3d.shape[:2]}, expected {expected}")
+
+    record = _sidecar(
+        "h3d", lens_array, method=method, display=display or {}, scene=str(scene.path),
+        scene_sha256=scene.digest,
+        quality={"level": settings.quality, "povray_options": list(settings.options),
+                 "bit_depth": settings.bit_depth, "front_clearance_mm": result.back_off},
+        output_gamma="sRGB", povray_version=result.stats.povray_version,
+        timings={"render_seconds": round(render_seconds, 4), **result.stats.as_dict()},
+    )
+    if views_dir is not None:
+        write_views(views_dir, extract(h3d, lens_array.require_views()), lens_array, record)
+    write_png(output, h3d)
+    write_sidecar(output, record)
+    return record
+
+
+def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray | None,
+                source: dict[str, Any] | None = None) -> None:
+    """Write a ``(Ny, Nx, Ly, Lx, C)`` view stack as ``v_{l:03d}_{k:03d}.png`` plus ``views.json``."""
+    folder = Path(views_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    ny, nx = views.shape[:2]
+    for l in range(ny):
+        for k in range(nx):
+            write_png(folder / VIEW_NAME.format(l=l, k=k), views[l, k])
+    record = _sidecar("views", lens_array, views=[nx, ny], source=source or {})
+    with atomic_path(folder / "views.json") as tmp:
+        tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+
+
+def read_views(views_dir: str | Path) -> np.ndarray:
+    """Read ``v_{l}_{k}.png`` files into a ``(Ny, Nx, Ly, Lx, C)`` stack; every view must be there."""
+    folder = Path(views_dir)
+    if not folder.is_dir():
+        raise InputError(f"views folder {str(folder)!r} does not exist; check the path")
+    found = {}
+    for p in folder.iterdir():
+        m = _VIEW_RE.match(p.name)
+        if m:
+            found[(int(m.group(1)), int(m.group(2)))] = p
+    if not found:
+        raise InputError(f"no view images (v_LLL_KKK.png) in {str(folder)!r}; render with --views-dir first")
+    ny = max(l for l, _ in found) + 1
+    nx = max(k for _, k in found) + 1
+    absent = [(l, k) for l in range(ny) for k in range(nx) if (l, k) not in found]
+    if absent:
+        l, k = absent[0]
+        raise InputError(f"{len(absent)} views missing in {str(folder)!r}, first {VIEW_NAME.format(l=l, k=k)}; "
+                         "the stack must be a full Ny x Nx grid")
+    images = [read_png(found[(l, k)]) for l in range(ny) for k in range(nx)]
+    shapes = {img.shape for img in images}
+    if len(shapes) != 1:
+        raise InputError(f"the views in {str(folder)!r} differ in size or channels: {sorted(shapes)}")
+    dtypes = {img.dtype for img in images}
+    if len(dtypes) != 1:
+        raise InputError(f"the views in {str(folder)!r} mix 8-bit and 16-bit images")
+    return np.stack(images).reshape(ny, nx, *images[0].shape)
+
+
+def interleave_dir(views_dir: str | Path, output: str | Path) -> dict[str, Any]:
+    """Interleave a folder of views into an H3D PNG with its sidecar."""
+    views = read_views(views_dir)
+    check_writable(output)
+    h3d = interleave(views)
+    source = read_sidecar(Path(views_dir) / "views.json") or {}
+    record = _sidecar("h3d", None, method="interleave", views=[views.shape[1], views.shape[0]],
+                      views_dir=str(Path(views_dir).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
+                      lens_array=source.get("lens_array"), output_gamma="sRGB")
+    write_png(output, h3d)
+    write_sidecar(output, record)
+    return record
+
+
+def extract_file(h3d_path: str | Path, ppl: tuple[int, int], views_dir: str | Path) -> dict[str, Any]:
+    """Extract the view stack of an H3D PNG into ``views_dir``; ``ppl`` is ``(Ny, Nx)``."""
+    h3d = read_png(h3d_path)
+    try:
+        views = extract(h3d, ppl)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    try:
+        Path(views_dir).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create {str(views_dir)!r}: {exc.strerror}") from None
+    write_views(views_dir, views, None, {"h3d": str(Path(h3d_path).resolve())})
+    return {"views": [ppl[1], ppl[0]], "view_size_px": [views.shape[3], views.shape[2]]}
+
+
+def povray_info() -> dict[str, str]:
+    binary = find_povray()
+    return {"binary": binary, "version": povray_version(binary)}
+
+
+ProgressFactory = Callable[[str], Progress]

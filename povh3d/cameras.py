@@ -1,0 +1,157 @@
+"""Camera geometry of each rendering method, as plain values for the templates.
+
+Pure: a LensArray in, NumPy arrays and numbers out.  Every camera here traces
+the ray of a pixel of CONVENTIONS.md: through the lens centre ``c`` with
+direction ``(u, v, f)``, starting ``back_off`` mm in front of the display plane
+so that objects floating in front of the screen are seen.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .geometry import LensArray
+
+
+def default_back_off(lens_array: LensArray) -> float:
+    """How far in front of the screen rays start, mm: four panel widths.
+
+    Far enough for any object a display can show in front of its screen, near
+    enough that POV-Ray's single-precision mesh vertices (mesh camera) keep the
+    sample grid within about 1e-4 mm.
+    """
+    width, height = lens_array.panel.size_mm
+    return 4.0 * max(width, height)
+
+
+# -- multi-orthographic camera bank, one orthographic camera per view ---------------
+
+def ortho_view_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
+    """The orthographic camera of every view, row-major over ``(l, k)``.
+
+    Returns
+    -------
+    common : dict
+        ``right``, ``up`` (mm vectors spanning the lens array) and image size.
+    frames : list of dict
+        ``{"view": (l, k), "direction": (u/f, v/f, 1)}``; the template backs the
+        camera off along ``direction`` (z component 1, so by exactly ``back_off``).
+    """
+    u, v = lens_array.view_offsets()
+    f = lens_array.focal
+    frames = [{"view": (l, k), "direction": (float(u[k] / f), float(v[l] / f), 1.0)}
+              for l in range(len(v)) for k in range(len(u))]
+    common = {
+        "right": (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0),
+        "up": (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0),
+        "width": lens_array.lenses_x,
+        "height": lens_array.lenses_y,
+    }
+    return common, frames
+
+
+# -- the same bank in one pass: a mesh camera ----------------------------------------
+
+@dataclass(frozen=True)
+class CameraMesh:
+    """A ``mesh_camera`` mesh whose UV lookup yields every panel pixel's ray.
+
+    POV-Ray 3.7's ``mesh_camera { 1 3 mesh { M } smooth }`` looks image pixel
+    ``(col, row)`` up at ``(col/W, 1 - row/H)`` in the mesh's UV space (measured;
+    not the pixel centre) and shoots a ray from the interpolated position along
+    the interpolated normal.  Image row 0 is looked up at ``1 - 0.5/H`` instead,
+    so the render has one extra row on top that is cut off: panel row ``r`` is
+    image row ``r + 1``.  Lens faces meet at pixel borders, half a pixel from any
+    lookup, so no point sample lands on an edge; antialiasing samples that cross
+    a border get the neighbouring lens, as the physical pixel area would.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float, mm        ray origins at z = -back_off
+    normals : (n, 3) float              ray directions ``(u, v, f)``
+    uvs : (n, 2) float                  lookup coordinates
+    faces : (m, 3) int
+    image_size : (int, int)             ``(W, H + 1)`` to render
+    """
+
+    vertices: np.ndarray
+    normals: np.ndarray
+    uvs: np.ndarray
+    faces: np.ndarray
+    image_size: tuple[int, int]
+
+
+def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+    """One quad per lens (one strip per lens column for lenticular arrays).
+
+    Within a lens, origin and direction are linear in the pixel offset ``(u, v)``,
+    so the face interpolation is exact; the corners sit at ``(+-px/2, +-py/2)``,
+    all of one length, so interpolating normalised normals is exact too.
+    """
+    panel = lens_array.panel
+    W, H = panel.width, panel.height
+    sx, sy = panel.pitch_x, panel.pitch_y
+    f = lens_array.focal
+    centres = lens_array.lens_centres()  # (Ly, Lx, 2)
+    hx, hy = lens_array.pitch_x / 2, lens_array.pitch_y / 2
+
+    if lens_array.grid == "lenticular":
+        # One strip per lens column spanning every row: v = 0, y follows the row.
+        cx = centres[0, :, 0]
+        y_top, y_bottom = panel.height * sy / 2 + sy, -panel.height * sy / 2 - sy
+        corner_u = np.array([-hx, hx, hx, -hx])
+        corner_y = np.array([y_bottom, y_bottom, y_top, y_top])
+        x = cx[:, None] + corner_u[None, :]                    # panel x of the corner
+        y = np.broadcast_to(corner_y, x.shape)
+        u = np.broadcast_to(corner_u, x.shape)
+        v = np.zeros_like(x)
+        origin_x = cx[:, None] - u * (back_off / f)
+        origin_y = y
+    else:
+        c = centres.reshape(-1, 2)
+        corner_u = np.array([-hx, hx, hx, -hx])
+        corner_v = np.array([-hy, -hy, hy, hy])
+        x = c[:, 0:1] + corner_u[None, :]
+        y = c[:, 1:2] + corner_v[None, :]
+        u = np.broadcast_to(corner_u, x.shape)
+        v = np.broadcast_to(corner_v, x.shape)
+        origin_x = c[:, 0:1] - u * (back_off / f)
+        origin_y = c[:, 1:2] - v * (back_off / f)
+
+    # Panel position -> fractional image column/row -> mesh-camera UV.
+    col = x / sx + W / 2 - 0.5
+    row = H / 2 - 0.5 - y / sy
+    uv = np.stack([col / W, 1.0 - (row + 1.0) / (H + 1)], axis=-1)
+
+    n_quads = x.shape[0]
+    vertices = np.stack([origin_x, origin_y, np.full(x.shape, -back_off)], axis=-1).reshape(-1, 3)
+    normals = np.stack([u, v, np.full(x.shape, f)], axis=-1).reshape(-1, 3)
+    base = 4 * np.arange(n_quads)[:, None]
+    faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
+    return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W, H + 1))
+
+
+# -- per-lens pinhole cameras ---------------------------------------------------------
+
+def pinhole_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
+    """One perspective camera per lens, pinhole at the lens centre, row-major over lenses.
+
+    POV-Ray's perspective pixel ``(k, l)`` looks along
+    ``direction + ((k+0.5)/Nx - 0.5) right + (0.5 - (l+0.5)/Ny) up`` =
+    ``(u_k, v_l, f)`` with ``right = Nx*s``, ``up = Ny*s``, ``direction = f``.
+    """
+    ny, nx = lens_array.require_views()
+    s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
+    centres = lens_array.lens_centres()
+    frames = [{"lens": (i, j), "centre": (float(centres[i, j, 0]), float(centres[i, j, 1]), 0.0)}
+              for i in range(lens_array.lenses_y) for j in range(lens_array.lenses_x)]
+    common = {
+        "direction": (0.0, 0.0, lens_array.focal),
+        "right": (nx * s_x, 0.0, 0.0),
+        "up": (0.0, ny * s_y, 0.0),
+        "width": nx,
+        "height": ny,
+    }
+    return common, frames

@@ -1,0 +1,81 @@
+"""Views <-> H3D image, and elemental images -> H3D image (pure NumPy).
+
+CONVENTIONS: ``H3D[i*Ny + l, j*Nx + k] = view[l, k][i, j]``.  Each function is
+one reshape-transpose-copy: no Python loop over pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _with_channels(array: np.ndarray, ndim: int, name: str) -> tuple[np.ndarray, bool]:
+    """Add a trailing channel axis to a single-channel array; say whether we did."""
+    if array.ndim == ndim:
+        return array[..., None], True
+    if array.ndim == ndim + 1:
+        return array, False
+    raise ValueError(f"{name} must have {ndim} or {ndim + 1} dimensions, got shape {array.shape}")
+
+
+def interleave(views: np.ndarray) -> np.ndarray:
+    """Interleave a view stack into an H3D image.
+
+    Parameters
+    ----------
+    views : (Ny, Nx, Ly, Lx[, C]) array
+        View ``(l, k)`` of the camera bank at ``views[l, k]``, each ``Ly x Lx``.
+
+    Returns
+    -------
+    (Ly*Ny, Lx*Nx[, C]) array, same dtype.
+    """
+    views = np.asarray(views)
+    v, squeeze = _with_channels(views, 4, "views")
+    ny, nx, ly, lx, c = v.shape
+    h3d = np.ascontiguousarray(v.transpose(2, 0, 3, 1, 4)).reshape(ly * ny, lx * nx, c)
+    return h3d[..., 0] if squeeze else h3d
+
+
+def extract(h3d: np.ndarray, ppl: tuple[int, int]) -> np.ndarray:
+    """Extract the view stack from an H3D image: the exact inverse of ``interleave``.
+
+    Parameters
+    ----------
+    h3d : (H, W[, C]) array
+    ppl : (Ny, Nx) int
+        Whole pixels per lens, rows then columns; ``H`` and ``W`` must be multiples.
+
+    Returns
+    -------
+    (Ny, Nx, H/Ny, W/Nx[, C]) array.
+    """
+    h3d = np.asarray(h3d)
+    ny, nx = (int(p) for p in ppl)
+    if ny < 1 or nx < 1:
+        raise ValueError(f"ppl must be at least 1x1, got {ppl!r}")
+    img, squeeze = _with_channels(h3d, 2, "h3d")
+    h, w, c = img.shape
+    if h % ny or w % nx:
+        raise ValueError(f"an H3D image of {w}x{h} pixels does not hold whole lenses of {nx}x{ny} pixels; "
+                         "check --ppl")
+    views = np.ascontiguousarray(img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))
+    return views[..., 0] if squeeze else views
+
+
+def tile_elemental_images(elemental: np.ndarray) -> np.ndarray:
+    """Place per-lens elemental images side by side into an H3D image.
+
+    Parameters
+    ----------
+    elemental : (Ly, Lx, Ny, Nx[, C]) array
+        The image behind lens ``(j, i)`` at ``elemental[i, j]``.
+
+    Returns
+    -------
+    (Ly*Ny, Lx*Nx[, C]) array.
+    """
+    e, squeeze = _with_channels(np.asarray(elemental), 4, "elemental")
+    ly, lx, ny, nx, c = e.shape
+    h3d = np.ascontiguousarray(e.transpose(0, 2, 1, 3, 4)).reshape(ly * ny, lx * nx, c)
+    return h3d[..., 0] if squeeze else h3d

@@ -1,0 +1,172 @@
+"""Read POV-Ray 3.7's console output: its error message and its render time.
+
+Pure functions over the text of a log (stdout and stderr together); no I/O.
+They are tested against logs captured from Debian's POV-Ray 3.7.0.10.
+
+POV-Ray wraps console lines at 80 columns: at the last space that fits (the
+space starts the next line) or, inside a long word such as a path, exactly at
+column 80.  `unwrap` undoes both, so a message is one line again.
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["parse_error", "parse_render_time", "unwrap"]
+
+#: Column at which POV-Ray wraps its console output.
+WRAP_WIDTH = 80
+
+_LOCATION = re.compile(r"^File '(?P<file>.+?)' line (?P<line>\d+): (?P<message>.*)$")
+# "Parse Error: ...", "Photon Error: ...": at most one word before "Error", so
+# "Possible Parse Error" (a warning, the render goes on) never matches.
+_ERROR = re.compile(r"^(?:[A-Z]\w* )?Error: ")
+_POSSIBLE = re.compile(r"^Possible \w+ Error: ")
+_FATAL = re.compile(r"^Fatal error in \w+: ")
+# I/O restriction messages of POV-Ray 3.7 builds whose restrictions work (the
+# Debian build ignores its [File I/O Security] setting) and the OS's refusal.
+_ACCESS = re.compile(r"IO Restrictions prohibit|is not permitted|Permission denied")
+# Failures POV-Ray reports in plain words, without "Error".
+_PLAIN = ("Failed to parse command-line option",
+          "Cannot create render state output file",
+          "Cannot open input file")
+_SECONDS = re.compile(
+    r"^\s*(?:Photon|Radiosity|Trace) Time:.*\((?P<seconds>\d+(?:\.\d+)?) seconds\)")
+
+
+def unwrap(log: str) -> list[str]:
+    """Split a log into lines, joining the lines POV-Ray wrapped.
+
+    Parameters
+    ----------
+    log : str
+        POV-Ray's console output.
+
+    Returns
+    -------
+    list of str
+        One entry per message line, without line terminators.
+    """
+    lines: list[str] = []
+    last = ""  # the previous physical line: its length decides a wrap
+    for line in re.split(r"\r\n|\r|\n", log):
+        if lines and _continues(last, line):
+            lines[-1] += line
+        else:
+            lines.append(line)
+        last = line
+    return lines
+
+
+def _continues(previous: str, line: str) -> bool:
+    """Whether `line` is the wrapped tail of `previous`."""
+    if not previous or not line or len(previous) > WRAP_WIDTH:
+        return False  # longer lines come unwrapped from POV-Ray's stderr
+    if line[0] == " ":
+        # A word wrap: one space, and the word would not have fitted before.
+        word = line[1:].split(" ", 1)[0]
+        return bool(word) and len(previous) + 1 + len(word) > WRAP_WIDTH
+    return len(previous) == WRAP_WIDTH  # a hard break inside a long word
+
+
+def parse_error(log: str) -> str | None:
+    """POV-Ray's own error message, on one line.
+
+    Parameters
+    ----------
+    log : str
+        POV-Ray's console output.
+
+    Returns
+    -------
+    str or None
+        The first real error, with its file and line when POV-Ray gives them,
+        e.g. ``"scene.pov line 12: Parse Error: Expected 'object', ..."``;
+        else an I/O refusal, a fatal error or a plain-worded failure; None if
+        the log holds no error.  Warnings, including "Possible Parse Error",
+        are not errors, though one may explain a fatal error that follows it.
+    """
+    lines = [line.strip() for line in unwrap(log)]
+    for find in (_first_error, _access_error, _fatal_error, _plain_error):
+        message = find(lines)
+        if message is not None:
+            return message
+    return None
+
+
+def _split_location(line: str) -> tuple[str, str]:
+    """``("scene.pov line 12", message)``, or ``("", line)`` without a location."""
+    match = _LOCATION.match(line)
+    if match is None:
+        return "", line
+    return f"{match['file']} line {match['line']}", match["message"]
+
+
+def _join(where: str, message: str) -> str:
+    return f"{where}: {message}" if where else message
+
+
+def _first_error(lines: list[str]) -> str | None:
+    for line in lines:
+        where, message = _split_location(line)
+        if _ERROR.match(message):
+            return _join(where, message)
+    return None
+
+
+def _access_error(lines: list[str]) -> str | None:
+    for line in lines:
+        if _ACCESS.search(line):
+            where, message = _split_location(line.removeprefix("povray: "))
+            return _join(where, message)
+    return None
+
+
+def _fatal_error(lines: list[str]) -> str | None:
+    """A fatal error, explained by the located warnings just before it.
+
+    A missing image_map file, for one, gives only "Possible Parse Error: Cannot
+    find file 'x.png'" and then "Fatal error in parser: Cannot open file."
+    """
+    for index, line in enumerate(lines):
+        if _FATAL.match(line):
+            cause = _cause(lines[:index])
+            return f"{cause} ({line})" if cause else line
+    return None
+
+
+def _cause(before: list[str]) -> str | None:
+    """The first of the located possible errors that end `before`."""
+    cause = None
+    for line in reversed(before):
+        where, message = _split_location(line)
+        if not (where and _POSSIBLE.match(message)):
+            break
+        cause = _join(where, _POSSIBLE.sub("", message))
+    return cause
+
+
+def _plain_error(lines: list[str]) -> str | None:
+    for line in lines:
+        if line.startswith(_PLAIN):
+            return line
+    return None
+
+
+def parse_render_time(log: str) -> float | None:
+    """Seconds POV-Ray spent rendering, from its statistics.
+
+    Parameters
+    ----------
+    log : str
+        POV-Ray's console output.
+
+    Returns
+    -------
+    float or None
+        Sum of the photon, radiosity and trace times over every frame, s
+        (parsing excluded); None if the log reports none (failed or cut short).
+    """
+    times = [float(match["seconds"]) for line in unwrap(log)
+             if (match := _SECONDS.match(line))]
+    return sum(times) if times else None

@@ -1,0 +1,101 @@
+"""The camera geometry, checked against the ray of a pixel without POV-Ray.
+
+The mesh camera is simulated as POV-Ray 3.7 runs it (measured): image pixel
+(col, row) looks up UV (col/W, 1 - row/H), finds the face holding it and
+interpolates position and normal barycentrically.
+"""
+
+import numpy as np
+import pytest
+
+from povh3d.cameras import camera_mesh, ortho_view_frames, pinhole_frames
+from povh3d.geometry import pixel_rays
+
+from .conftest import lenticular_array, square_array
+
+
+def _simulate_mesh_camera(mesh):
+    W, H1 = mesh.image_size
+    cols, rows = np.meshgrid(np.arange(W), np.arange(H1))
+    p = np.stack([cols / W, 1 - rows / H1], axis=-1).reshape(-1, 2)
+    tri = mesh.uvs[mesh.faces]  # (m, 3, 2)
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    v0, v1 = b - a, c - a
+    d = p[:, None, :] - a[None]
+    den = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
+    w1 = (d[..., 0] * v1[:, 1] - d[..., 1] * v1[:, 0]) / den
+    w2 = (v0[:, 0] * d[..., 1] - v0[:, 1] * d[..., 0]) / den
+    w0 = 1 - w1 - w2
+    w = np.stack([w0, w1, w2], axis=-1)  # (pixels, faces, 3)
+    margin = w.min(axis=-1)
+    face = margin.argmax(axis=1)
+    best = margin[np.arange(len(p)), face]
+    bary = w[np.arange(len(p)), face]
+    idx = mesh.faces[face]
+    origin = np.einsum("pk,pkd->pd", bary, mesh.vertices[idx])
+    normal = np.einsum("pk,pkd->pd", bary, mesh.normals[idx] / np.linalg.norm(mesh.normals[idx], axis=-1, keepdims=True))
+    # Clearance of each lookup from the border of its lens's quad, in pixels: the
+    # quad's inner diagonal is harmless (both triangles interpolate one affine map).
+    quad_uv = mesh.uvs[mesh.faces[(face // 2) * 2]].reshape(len(p), 3, 2)
+    quad_uv = np.concatenate([quad_uv, mesh.uvs[mesh.faces[(face // 2) * 2 + 1]]], axis=1)
+    lo, hi = quad_uv.min(axis=1), quad_uv.max(axis=1)
+    clearance = np.minimum(p - lo, hi - p) * np.array([W, H1])
+    shape = (H1, W)
+    return (origin.reshape(*shape, 3), normal.reshape(*shape, 3), clearance.min(axis=1).reshape(shape),
+            best.reshape(shape))
+
+
+@pytest.mark.parametrize("la", [square_array(lx=6, ly=4, nx=4, ny=3), lenticular_array(lx=5, rows=7, nx=6),
+                                square_array(lx=3, ly=2, nx=1, ny=1)], ids=["square", "lenticular", "1ppl"])
+def test_mesh_camera_traces_the_ray_of_every_pixel(la):
+    back_off = 50.0
+    mesh = camera_mesh(la, back_off)
+    origin, normal, margin, inside_face = (a[1:] for a in _simulate_mesh_camera(mesh))  # row 0 is cut off
+    assert np.all(inside_face > -1e-12), "a lookup fell outside every face"
+    centres, dirs, inside = pixel_rays(la)
+    assert inside.all()
+    # Every lookup falls inside a face, well clear of its edges (no edge ambiguity).
+    assert margin.min() == pytest.approx(0.5)
+    d = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    np.testing.assert_allclose(d, dirs, atol=1e-12)
+    # The ray crosses z = 0 at the lens centre.
+    t = -origin[..., 2] / d[..., 2]
+    hit = origin[..., :2] + t[..., None] * d[..., :2]
+    if la.grid == "lenticular":
+        X, Y = la.panel.pixel_centres()
+        np.testing.assert_allclose(hit[..., 0], centres[..., 0], atol=1e-9)
+        np.testing.assert_allclose(hit[..., 1], np.broadcast_to(Y[:, None], hit.shape[:2]), atol=1e-9)
+    else:
+        np.testing.assert_allclose(hit, centres, atol=1e-9)
+
+
+def test_mesh_camera_normals_have_equal_length_per_lens():
+    # Interpolating normalised normals is exact only if the corners share one length.
+    mesh = camera_mesh(square_array(nx=5, ny=3), 10.0)
+    lengths = np.linalg.norm(mesh.normals, axis=-1).reshape(-1, 4)
+    np.testing.assert_allclose(lengths, lengths[:, :1].repeat(4, axis=1), rtol=1e-14)
+
+
+def test_ortho_view_frames_sample_the_lens_centres():
+    la = square_array(lx=6, ly=4, nx=3, ny=2)
+    common, frames = ortho_view_frames(la)
+    assert len(frames) == 6 and frames[4]["view"] == (1, 1)
+    # POV-Ray orthographic pixel (j, i) origin: location + ((j+.5)/W - .5) right + (.5 - (i+.5)/H) up,
+    # location = -D * direction; moving D along direction lands on z = 0 at:
+    j, i = np.meshgrid(np.arange(common["width"]), np.arange(common["height"]))
+    x = ((j + 0.5) / common["width"] - 0.5) * common["right"][0]
+    y = (0.5 - (i + 0.5) / common["height"]) * common["up"][1]
+    np.testing.assert_allclose(np.stack([x, y], -1), la.lens_centres(), atol=1e-12)
+    u, v = la.view_offsets()
+    assert frames[5]["direction"] == pytest.approx((u[2] / la.focal, v[1] / la.focal, 1.0))
+
+
+def test_pinhole_pixels_look_along_view_directions():
+    la = square_array(nx=4, ny=3, f=2.0)
+    common, frames = pinhole_frames(la)
+    k, l = np.meshgrid(np.arange(4), np.arange(3))
+    d = (np.array(common["direction"]) + ((k + 0.5) / 4 - 0.5)[..., None] * np.array(common["right"])
+         + (0.5 - (l + 0.5) / 3)[..., None] * np.array(common["up"]))
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    np.testing.assert_allclose(d, la.view_directions(), atol=1e-12)
+    assert frames[1]["centre"][:2] == pytest.approx(tuple(la.lens_centres()[0, 1]))
