@@ -132,7 +132,9 @@ def interleave_dir(views_dir: str | Path, output: str | Path) -> dict[str, Any]:
     source = read_sidecar(Path(views_dir) / "views.json") or {}
     record = _sidecar("h3d", None, method="interleave", views=[views.shape[1], views.shape[0]],
                       views_dir=str(Path(views_dir).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
-                      lens_array=source.get("lens_array"), output_gamma="sRGB")
+                      output_gamma="sRGB")
+    if source.get("lens_array"):
+        record["lens_array"] = source["lens_array"]
     write_png(output, h3d)
     write_sidecar(output, record)
     return record

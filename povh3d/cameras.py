@@ -62,8 +62,9 @@ class CameraMesh:
     ``(col, row)`` up at ``(col/W, 1 - row/H)`` in the mesh's UV space (measured;
     not the pixel centre) and shoots a ray from the interpolated position along
     the interpolated normal.  Image row 0 is looked up at ``1 - 0.5/H`` instead,
-    so the render has one extra row on top that is cut off: panel row ``r`` is
-    image row ``r + 1``.  Lens faces meet at pixel borders, half a pixel from any
+    and the last image column half a pixel off too (both measured), so the
+    render has one extra row on top and one extra column on the right, both cut
+    off: panel pixel ``(c, r)`` is image pixel ``(c, r + 1)``.  Lens faces meet at pixel borders, half a pixel from any
     lookup, so no point sample lands on an edge; antialiasing samples that cross
     a border get the neighbouring lens, as the physical pixel area would.
 
@@ -73,7 +74,7 @@ class CameraMesh:
     normals : (n, 3) float              ray directions ``(u, v, f)``
     uvs : (n, 2) float                  lookup coordinates
     faces : (m, 3) int
-    image_size : (int, int)             ``(W, H + 1)`` to render
+    image_size : (int, int)             ``(W + 1, H + 1)`` to render
     """
 
     vertices: np.ndarray
@@ -123,14 +124,14 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     # Panel position -> fractional image column/row -> mesh-camera UV.
     col = x / sx + W / 2 - 0.5
     row = H / 2 - 0.5 - y / sy
-    uv = np.stack([col / W, 1.0 - (row + 1.0) / (H + 1)], axis=-1)
+    uv = np.stack([col / (W + 1), 1.0 - (row + 1.0) / (H + 1)], axis=-1)
 
     n_quads = x.shape[0]
     vertices = np.stack([origin_x, origin_y, np.full(x.shape, -back_off)], axis=-1).reshape(-1, 3)
     normals = np.stack([u, v, np.full(x.shape, f)], axis=-1).reshape(-1, 3)
     base = 4 * np.arange(n_quads)[:, None]
     faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
-    return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W, H + 1))
+    return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1))
 
 
 # -- per-lens pinhole cameras ---------------------------------------------------------

@@ -36,7 +36,7 @@ def _multi_ortho_batch(lens_array: LensArray, back_off: float) -> FrameBatch:
 
 
 def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarray:
-    return images[0][1:]  # image row 0 is not a panel row (see cameras.CameraMesh)
+    return images[0][1:, :-1]  # the extra first row and last column (see cameras.CameraMesh)
 
 
 def _views_batch(lens_array: LensArray, back_off: float) -> FrameBatch:

@@ -27,9 +27,11 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
+from typing import BinaryIO
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -55,8 +57,6 @@ _POLL_SECONDS = 0.02
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
 _TAIL_LINES = 40
-# Blocked while a child starts, so Ctrl-C cannot orphan it (see _deferred_signals).
-_DEFERRED = frozenset({signal.SIGINT})
 _PR_SET_PDEATHSIG = 1
 _LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") else None
 
@@ -338,20 +338,24 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
     if not isinstance(processes, int) or processes < 1:
         raise ConfigError(f"processes must be a positive integer, got {processes!r}.")
     jobs = list(jobs)
-    binary = binary or find_povray() if jobs else binary
+    if not jobs:
+        return []
+    binary = binary or find_povray()
     seconds = [0.0] * len(jobs)
     pending = deque(enumerate(jobs))
     running: list[_Child] = []
+    done = 0
     try:
         while pending or running:
             while pending and len(running) < processes:
                 index, job = pending.popleft()
-                _start(index, job, str(binary), workdir, running)
+                _start(index, job, binary, workdir, running)
             for child in _wait_for_exits(running):
                 running.remove(child)
                 seconds[child.index] = _finish(child, on_result)
+                done += 1
                 if on_progress is not None:
-                    on_progress(len(jobs) - len(pending) - len(running), len(jobs))
+                    on_progress(done, len(jobs))
     except KeyboardInterrupt:
         raise RenderInterrupted("Rendering interrupted; every POV-Ray process "
                                 "was stopped.") from None
@@ -366,24 +370,30 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
            running: list[_Child]) -> None:
     """Start `job` in a fresh folder and add it to `running`."""
     folder = _make_folder(workdir)
+    registered = False  # from then on, run_jobs owns the folder
     try:
         command = build_command(job, binary)
         env = _prepare(folder, job)
-        with open(folder / LOG_FILE, "wb") as log, _deferred_signals():
-            process = subprocess.Popen(
-                command, cwd=folder, env=env, stdin=subprocess.DEVNULL,
-                stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
-                preexec_fn=functools.partial(_child_setup, os.getpid()))
+        with open(folder / LOG_FILE, "wb") as log, _deferred_interrupt():
+            process = _spawn(command, folder, env, log)
             running.append(_Child(index, job, folder, command, process, time.monotonic()))
-    except BaseException as error:
-        shutil.rmtree(folder, ignore_errors=True)
-        if isinstance(error, OSError) and not isinstance(error, (Povh3dOSError)):
-            raise PovrayNotFound(f"Cannot run POV-Ray at {binary}: {error.strerror}; "
-                                 f"{INSTALL_HINT}.") from None
+            registered = True
+    except BaseException:
+        if not registered:
+            shutil.rmtree(folder, ignore_errors=True)
         raise
 
 
-Povh3dOSError = ()  # placeholder replaced below
+def _spawn(command: list[str], folder: Path, env: dict[str, str],
+           log: BinaryIO) -> subprocess.Popen[bytes]:
+    try:
+        return subprocess.Popen(
+            command, cwd=folder, env=env, stdin=subprocess.DEVNULL, stdout=log,
+            stderr=subprocess.STDOUT, start_new_session=True,
+            preexec_fn=functools.partial(_child_setup, os.getpid()))
+    except OSError as error:
+        raise PovrayNotFound(f"Cannot run POV-Ray at {command[0]}: "
+                             f"{error.strerror}; {INSTALL_HINT}.") from None
 
 
 def _make_folder(workdir: str | Path | None) -> Path:
@@ -396,32 +406,41 @@ def _make_folder(workdir: str | Path | None) -> Path:
 
 def _prepare(folder: Path, job: PovrayJob) -> dict[str, str]:
     """Write the scene and a private HOME into `folder`; the child's environment."""
-    (folder / SCENE_FILE).write_text(job.script, encoding="utf-8")
     home = folder / "home"
     conf = home / ".povray" / "3.7" / "povray.conf"
-    conf.parent.mkdir(parents=True)
     read_dirs = [os.path.abspath(path) for path in job.include_dirs]
-    conf.write_text(povray_conf(read_dirs, str(folder)))
+    try:
+        (folder / SCENE_FILE).write_text(job.script, encoding="utf-8")
+        conf.parent.mkdir(parents=True)
+        conf.write_text(povray_conf(read_dirs, str(folder)))
+    except OSError as error:
+        raise OutputError(f"Cannot write the scene into {folder}: {error.strerror}.") from None
     return dict(os.environ, HOME=str(home))
 
 
 @contextlib.contextmanager
-def _deferred_signals() -> Iterator[None]:
+def _deferred_interrupt() -> Iterator[None]:
     """Hold Ctrl-C while a child starts, so it is recorded before any interrupt.
 
-    A KeyboardInterrupt raised inside Popen, after the fork, would leave a
-    child nobody knows of.  The child unblocks the signal in `_child_setup`.
+    A KeyboardInterrupt raised inside Popen after the fork would leave a child
+    nobody knows of.  Python raises it only in the main thread, where the
+    SIGINT handler may be swapped; elsewhere there is nothing to hold.
     """
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED)
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        signal.signal(signal.SIGINT, previous)
+        if caught and callable(previous):
+            previous(signal.SIGINT, None)  # the default handler raises KeyboardInterrupt
 
 
 def _child_setup(parent: int) -> None:
-    """Run in the child before exec: unblock signals, die with the parent."""
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, _DEFERRED)
+    """Run in the child before exec: die with the parent (Linux)."""
     if _LIBC is not None:
         _LIBC.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
         if os.getppid() != parent:  # the parent died before prctl took effect

@@ -17,6 +17,9 @@ __all__ = ["parse_error", "parse_render_time", "unwrap"]
 #: Column at which POV-Ray wraps its console output.
 WRAP_WIDTH = 80
 
+# Lines that start a message of their own, never the tail of a long word.
+_MESSAGE_START = re.compile(
+    r"^(?:File '|Fatal error|Possible |Parse |Render|POV-Ray|povray:|=+ |-{10})")
 _LOCATION = re.compile(r"^File '(?P<file>.+?)' line (?P<line>\d+): (?P<message>.*)$")
 # "Parse Error: ...", "Photon Error: ...": at most one word before "Error", so
 # "Possible Parse Error" (a warning, the render goes on) never matches.
@@ -66,7 +69,8 @@ def _continues(previous: str, line: str) -> bool:
         # A word wrap: one space, and the word would not have fitted before.
         word = line[1:].split(" ", 1)[0]
         return bool(word) and len(previous) + 1 + len(word) > WRAP_WIDTH
-    return len(previous) == WRAP_WIDTH  # a hard break inside a long word
+    # A hard break inside a long word; a message exactly 80 wide ends there too.
+    return len(previous) == WRAP_WIDTH and not _MESSAGE_START.match(line)
 
 
 def parse_error(log: str) -> str | None:
