@@ -134,6 +134,48 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1))
 
 
+def view_bank_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+    """The orthographic camera bank as one mesh camera: one quad per view.
+
+    The image is the views tiled side by side, view ``(l, k)`` at rows
+    ``l*Ly .. (l+1)*Ly - 1`` and columns ``k*Lx .. (k+1)*Lx - 1``, so that
+    ``tiled[l*Ly + i, k*Lx + j] = view[l, k][i, j]``.  Within a view the ray
+    origin is linear in the lens index and the direction is constant, so a
+    single quad per view is exact: ``Nx*Ny`` quads instead of one per lens, which
+    keeps POV-Ray's per-pixel face lookup as cheap as a plain camera's.
+    Same lookup rules as ``camera_mesh`` (extra first row and last column).
+    """
+    ny, nx = lens_array.require_views()
+    lx, ly = lens_array.lenses_x, lens_array.lenses_y
+    W, H = lx * nx, ly * ny
+    f = lens_array.focal
+    u, v = lens_array.view_offsets()
+    l, k = np.meshgrid(np.arange(ny), np.arange(nx), indexing="ij")
+    l, k = l.reshape(-1, 1), k.reshape(-1, 1)
+    # Corners of each view's tile: half a pitch outside the outer lens centres.
+    corner_j = np.array([-0.5, lx - 0.5, lx - 0.5, -0.5])
+    corner_i = np.array([ly - 0.5, ly - 0.5, -0.5, -0.5])
+    centres = lens_array.lens_centres()
+    hx, hy = lens_array.pitch_x / 2, lens_array.pitch_y / 2
+    left, right = centres[0, 0, 0] - hx, centres[0, -1, 0] + hx
+    top, bottom = centres[0, 0, 1] + hy, centres[-1, 0, 1] - hy
+    x = np.array([left, right, right, left])                        # on z = 0
+    y = np.array([bottom, bottom, top, top])
+    uk, vl = u[k], v[l]                                             # (views, 1)
+    origin_x = x[None, :] - uk * (back_off / f)
+    origin_y = y[None, :] - vl * (back_off / f)
+    col = k * lx + corner_j[None, :]
+    row = l * ly + corner_i[None, :]
+    uv = np.stack([col / (W + 1), 1.0 - (row + 1.0) / (H + 1)], axis=-1)
+    shape = origin_x.shape
+    vertices = np.stack([origin_x, origin_y, np.full(shape, -back_off)], axis=-1).reshape(-1, 3)
+    normals = np.stack([np.broadcast_to(uk, shape), np.broadcast_to(vl, shape), np.full(shape, f)],
+                       axis=-1).reshape(-1, 3)
+    base = 4 * np.arange(shape[0])[:, None]
+    faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
+    return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1))
+
+
 # -- per-lens pinhole cameras ---------------------------------------------------------
 
 def pinhole_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:

@@ -79,3 +79,25 @@ def tile_elemental_images(elemental: np.ndarray) -> np.ndarray:
     ly, lx, ny, nx, c = e.shape
     h3d = np.ascontiguousarray(e.transpose(0, 2, 1, 3, 4)).reshape(ly * ny, lx * nx, c)
     return h3d[..., 0] if squeeze else h3d
+
+
+def untile_views(tiled: np.ndarray, views: tuple[int, int]) -> np.ndarray:
+    """Split views tiled side by side into a view stack.
+
+    Parameters
+    ----------
+    tiled : (Ny*Ly, Nx*Lx[, C]) array
+        ``tiled[l*Ly + i, k*Lx + j] = view[l, k][i, j]``.
+    views : (Ny, Nx) int
+
+    Returns
+    -------
+    (Ny, Nx, Ly, Lx[, C]) array (a view of ``tiled`` where possible).
+    """
+    t, squeeze = _with_channels(np.asarray(tiled), 2, "tiled")
+    ny, nx = views
+    h, w, c = t.shape
+    if h % ny or w % nx:
+        raise ValueError(f"a tiled image of {w}x{h} does not hold {nx}x{ny} equal views")
+    stack = t.reshape(ny, h // ny, nx, w // nx, c).transpose(0, 2, 1, 3, 4)
+    return stack[..., 0] if squeeze else stack

@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames
+from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames, view_bank_mesh
 from .geometry import LensArray
-from .interleave import interleave, tile_elemental_images
+from .interleave import interleave, tile_elemental_images, untile_views
 from .render import FrameBatch, Progress, RenderSettings, RenderStats, cpu_count, render_frames
 from .scene import Scene
 
@@ -30,13 +30,17 @@ from .scene import Scene
 def _multi_ortho_batch(lens_array: LensArray, back_off: float) -> FrameBatch:
     if lens_array.grid == "hex":
         lens_array.require_views()  # raises "render hex with single-stage"
-    mesh = camera_mesh(lens_array, back_off)
+    # Whole PPL: one quad per view (views tiled); otherwise one quad per lens.
+    mesh = view_bank_mesh(lens_array, back_off) if lens_array.views else camera_mesh(lens_array, back_off)
     width, height = mesh.image_size
     return FrameBatch("multi_ortho.pov.j2", {"mesh": mesh}, [{}], width, height, processes=1)
 
 
 def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarray:
-    return images[0][1:, :-1]  # the extra first row and last column (see cameras.CameraMesh)
+    image = images[0][1:, :-1]  # the extra first row and last column (see cameras.CameraMesh)
+    if lens_array.views:
+        return interleave(untile_views(image, lens_array.views))
+    return image
 
 
 def _views_batch(lens_array: LensArray, back_off: float) -> FrameBatch:

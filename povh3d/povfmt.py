@@ -39,12 +39,13 @@ def pov_vector_list(array: np.ndarray, per_line: int = 4) -> str:
     array = np.asarray(array)
     if array.ndim != 2:
         raise ValueError(f"pov_vector_list takes an (n, k) array, got shape {array.shape}")
-    if np.issubdtype(array.dtype, np.integer):
-        items = ["<" + ", ".join(str(int(v)) for v in row) + ">" for row in array.tolist()]
-    else:
+    if not np.issubdtype(array.dtype, np.integer):
         if not np.all(np.isfinite(array)):
             raise ConfigError("cannot write non-finite numbers into a POV-Ray script")
-        items = [pov_vector(row) for row in array.tolist()]
+        array = array.astype(np.float64, copy=False)
+    # repr of a Python int or float round-trips; mapping it over tolist() is the
+    # fast path (a camera mesh has hundreds of thousands of numbers).
+    items = ["<" + ", ".join(map(repr, row)) + ">" for row in array.tolist()]
     lines = [", ".join(items[i:i + per_line]) for i in range(0, len(items), per_line)]
     return ",\n    ".join(lines)
 

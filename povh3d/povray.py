@@ -31,9 +31,9 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
-from typing import BinaryIO
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import BinaryIO
 
 from .errors import (ConfigError, OutputError, PovrayError, PovrayNotFound,
                      PovrayTimeout, RenderInterrupted)
@@ -292,7 +292,7 @@ class _Child:
     @property
     def log(self) -> str:
         path = self.folder / LOG_FILE
-        return path.read_text(errors="replace") if path.exists() else ""
+        return path.read_text(encoding="utf-8", errors="replace") if path.exists() else ""
 
 
 def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
@@ -331,9 +331,13 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
     PovrayTimeout
         A job ran longer than its timeout.
     RenderInterrupted
-        Ctrl-C.
-    Every child is stopped and every temporary folder deleted before any
-    exception leaves, including one raised by a callback.
+        Ctrl-C (a KeyboardInterrupt, also one raised by a callback).
+
+    Notes
+    -----
+    Before any exception leaves, including one from a callback, the first
+    failure stops every child (SIGTERM to its process group, SIGKILL after a
+    second), no further job starts and every temporary folder is deleted.
     """
     if not isinstance(processes, int) or processes < 1:
         raise ConfigError(f"processes must be a positive integer, got {processes!r}.")
@@ -370,7 +374,7 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
            running: list[_Child]) -> None:
     """Start `job` in a fresh folder and add it to `running`."""
     folder = _make_folder(workdir)
-    registered = False  # from then on, run_jobs owns the folder
+    registered = False  # once True, run_jobs owns the folder and the child
     try:
         command = build_command(job, binary)
         env = _prepare(folder, job)
@@ -469,7 +473,7 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
         log = child.log
         images = _collect_images(child.folder, child.job.frames)
         if child.process.returncode != 0 or images is None:
-            raise _failure(child, log, images)
+            raise _failure(child, log)
         if on_result is not None:
             on_result(JobResult(child.job, images, seconds, log))
         return seconds
@@ -489,7 +493,7 @@ def _collect_images(folder: Path, frames: int) -> tuple[Path, ...] | None:
     return tuple(numbered[number] for number in range(1, frames + 1))
 
 
-def _failure(child: _Child, log: str, images: tuple[Path, ...] | None) -> PovrayError:
+def _failure(child: _Child, log: str) -> PovrayError:
     code = child.process.returncode
     reason = parse_error(log)
     if reason is None and code != 0:
@@ -508,7 +512,7 @@ def _expected(job: PovrayJob) -> str:
 
 def _describe_exit(code: int, log: str) -> str:
     if code < 0:
-        return f"POV-Ray was killed by {signal.Signals(-code).name}"
+        return f"POV-Ray was killed by signal {-code}"
     last = next((line.strip() for line in reversed(log.splitlines()) if line.strip()), "")
     return f"POV-Ray exited with code {code}" + (f": {last}" if last else "")
 

@@ -99,3 +99,30 @@ def test_pinhole_pixels_look_along_view_directions():
     d /= np.linalg.norm(d, axis=-1, keepdims=True)
     np.testing.assert_allclose(d, la.view_directions(), atol=1e-12)
     assert frames[1]["centre"][:2] == pytest.approx(tuple(la.lens_centres()[0, 1]))
+
+
+@pytest.mark.parametrize("la", [square_array(lx=6, ly=4, nx=4, ny=3), lenticular_array(lx=5, rows=7, nx=6)],
+                         ids=["square", "lenticular"])
+def test_view_bank_mesh_traces_every_view_pixel(la):
+    from povh3d.cameras import view_bank_mesh
+    from povh3d.interleave import interleave, untile_views
+
+    mesh = view_bank_mesh(la, 40.0)
+    origin, normal, margin, inside_face = (a[1:, :-1] for a in _simulate_mesh_camera(mesh))
+    assert np.all(inside_face > -1e-12)
+    assert margin.min() == pytest.approx(0.5)
+    views = la.views
+    d = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    t = -origin[..., 2] / d[..., 2]
+    hit = origin[..., :2] + t[..., None] * d[..., :2]
+    # Re-order tiled pixels into panel order the way the method does, then compare.
+    hit = interleave(untile_views(hit, views))
+    d = interleave(untile_views(d, views))
+    centres, dirs, _ = pixel_rays(la)
+    np.testing.assert_allclose(d, dirs, atol=1e-12)
+    if la.grid == "lenticular":
+        X, Y = la.panel.pixel_centres()
+        np.testing.assert_allclose(hit[..., 0], centres[..., 0], atol=1e-9)
+        np.testing.assert_allclose(hit[..., 1], np.broadcast_to(Y[:, None], hit.shape[:2]), atol=1e-9)
+    else:
+        np.testing.assert_allclose(hit, centres, atol=1e-9)

@@ -6,9 +6,9 @@ an endless ``#while`` loop stands in for a slow render.
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import shutil
-import multiprocessing
 import signal
 import struct
 import sys

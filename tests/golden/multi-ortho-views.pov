@@ -18,7 +18,7 @@ global_settings { assumed_gamma 1.0 }
 // so every ray crosses z = 0 exactly at its lens centre: no cosine squeeze,
 // no drift.  (Shearing the scene instead would change its shading.)
 #declare Povh3d_Directions = array[4] {
-    <-0.08333333333333333, 0.08333333333333333, 1>, <0.08333333333333333, 0.08333333333333333, 1>, <-0.08333333333333333, -0.08333333333333333, 1>, <0.08333333333333333, -0.08333333333333333, 1>
+    <-0.08333333333333333, 0.08333333333333333, 1.0>, <0.08333333333333333, 0.08333333333333333, 1.0>, <-0.08333333333333333, -0.08333333333333333, 1.0>, <0.08333333333333333, -0.08333333333333333, 1.0>
 };
 #declare Povh3d_Frame = (frame_number > 0 ? frame_number - 1 : 0);
 #declare Povh3d_Direction = Povh3d_Directions[Povh3d_Frame];

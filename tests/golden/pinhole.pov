@@ -14,7 +14,7 @@ global_settings { assumed_gamma 1.0 }
 //   direction + ((k + 0.5)/Nx - 0.5) * right + (0.5 - (l + 0.5)/Ny) * up = (u_k, v_l, f).
 // A pinhole sees only what lies behind the screen (z > 0).
 #declare Povh3d_Centres = array[4] {
-    <-0.25, 0.25, 0>, <0.25, 0.25, 0>, <-0.25, -0.25, 0>, <0.25, -0.25, 0>
+    <-0.25, 0.25, 0.0>, <0.25, 0.25, 0.0>, <-0.25, -0.25, 0.0>, <0.25, -0.25, 0.0>
 };
 #declare Povh3d_Frame = (frame_number > 0 ? frame_number - 1 : 0);
 camera {
