@@ -45,6 +45,16 @@ def _simulate_mesh_camera(mesh):
             best.reshape(shape))
 
 
+def _assert_hits_lens_centres(la, hit, centres):
+    """Rays cross z = 0 at their lens centre (lenticular: at the pixel's own row height)."""
+    if la.grid == "lenticular":
+        _, Y = la.panel.pixel_centres()
+        np.testing.assert_allclose(hit[..., 0], centres[..., 0], atol=1e-9)
+        np.testing.assert_allclose(hit[..., 1], np.broadcast_to(Y[:, None], hit.shape[:2]), atol=1e-9)
+    else:
+        np.testing.assert_allclose(hit, centres, atol=1e-9)
+
+
 @pytest.mark.parametrize("la", [square_array(lx=6, ly=4, nx=4, ny=3), lenticular_array(lx=5, rows=7, nx=6),
                                 square_array(lx=3, ly=2, nx=1, ny=1)], ids=["square", "lenticular", "1ppl"])
 def test_mesh_camera_traces_the_ray_of_every_pixel(la):
@@ -61,12 +71,7 @@ def test_mesh_camera_traces_the_ray_of_every_pixel(la):
     # The ray crosses z = 0 at the lens centre.
     t = -origin[..., 2] / d[..., 2]
     hit = origin[..., :2] + t[..., None] * d[..., :2]
-    if la.grid == "lenticular":
-        X, Y = la.panel.pixel_centres()
-        np.testing.assert_allclose(hit[..., 0], centres[..., 0], atol=1e-9)
-        np.testing.assert_allclose(hit[..., 1], np.broadcast_to(Y[:, None], hit.shape[:2]), atol=1e-9)
-    else:
-        np.testing.assert_allclose(hit, centres, atol=1e-9)
+    _assert_hits_lens_centres(la, hit, centres)
 
 
 def test_mesh_camera_normals_have_equal_length_per_lens():
@@ -120,9 +125,4 @@ def test_view_bank_mesh_traces_every_view_pixel(la):
     d = interleave(untile_views(d, views))
     centres, dirs, _ = pixel_rays(la)
     np.testing.assert_allclose(d, dirs, atol=1e-12)
-    if la.grid == "lenticular":
-        X, Y = la.panel.pixel_centres()
-        np.testing.assert_allclose(hit[..., 0], centres[..., 0], atol=1e-9)
-        np.testing.assert_allclose(hit[..., 1], np.broadcast_to(Y[:, None], hit.shape[:2]), atol=1e-9)
-    else:
-        np.testing.assert_allclose(hit, centres, atol=1e-9)
+    _assert_hits_lens_centres(la, hit, centres)
