@@ -75,7 +75,7 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         timings={"render_seconds": round(render_seconds, 4), **result.stats.as_dict()},
     )
     if views_dir is not None:
-        write_views(views_dir, extract(h3d, lens_array.require_views()), lens_array, record)
+        write_views(views_dir, extract(h3d[lens_array.bank_region], lens_array.require_views()), lens_array, record)
     write_png(output, h3d)
     write_sidecar(output, record)
     return record

@@ -155,16 +155,29 @@ class LensArray:
         nx, ny = nearest_integer(self.ppl_x), nearest_integer(self.ppl_y)
         if nx is None or ny is None:
             return None
+        # The array is centred on the panel: an odd pixel margin would put every
+        # pixel half a pixel off the u_k grid, and no view bank fits.
+        if (self.panel.width - self.lenses_x * nx) % 2 or (self.panel.height - self.lenses_y * ny) % 2:
+            return None
         return (ny, nx)
+
+    @property
+    def bank_region(self) -> tuple[slice, slice]:
+        """Rows and columns of the panel that the camera bank covers (the array is centred)."""
+        ny, nx = self.require_views()
+        row0 = (self.panel.height - self.lenses_y * ny) // 2
+        col0 = (self.panel.width - self.lenses_x * nx) // 2
+        return (slice(row0, row0 + self.lenses_y * ny), slice(col0, col0 + self.lenses_x * nx))
 
     def require_views(self) -> tuple[int, int]:
         """The views ``(Ny, Nx)``, or a ConfigError saying why there is no camera bank."""
         if self.views is None:
             if self.grid == "hex":
-                raise ConfigError("a hex lens array has no orthographic camera bank; "
-                                  "render it with --method single-stage")
-            raise ConfigError(f"pixels per lens must be whole for a camera bank, got {self.ppl_x:g} x {self.ppl_y:g}; "
-                              "change --ppl or the lens pitch")
+                raise ConfigError("a hex lens array has no orthographic camera bank and renders only "
+                                  "through a virtual lens array (single-stage), which this version "
+                                  "does not have yet; pick a square or lenticular --grid")
+            raise ConfigError(f"a camera bank needs whole pixels per lens (got {self.ppl_x:g} x {self.ppl_y:g}) "
+                              "and an even pixel margin around the array; change --ppl, --lenses or the panel")
         return self.views
 
     @property

@@ -110,4 +110,11 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     batch = method.batch(lens_array, back_off)
     images, stats = render_frames(scene, batch, settings, method=name,
                                   header=display_header(lens_array), progress=progress)
-    return MethodResult(method.assemble(lens_array, images), stats, back_off)
+    h3d = method.assemble(lens_array, images)
+    panel_shape = (lens_array.panel.height, lens_array.panel.width)
+    if h3d.shape[:2] != panel_shape:
+        # A camera bank covers the lens array; the panel margin outside it stays black.
+        canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
+        canvas[lens_array.bank_region] = h3d
+        h3d = canvas
+    return MethodResult(h3d, stats, back_off)

@@ -49,6 +49,7 @@ def checker_oracle(lens_array: LensArray, z0: float, period: float) -> tuple[np.
     def clear(coord, half):
         return np.floor((coord - half) / period) == np.floor((coord + half) / period)
 
+    parity = np.where(inside, parity, 0)  # no ray outside the lenses (NaN)
     return parity.astype(int), inside & clear(hit[..., 0], half_x) & clear(hit[..., 1], half_y)
 
 

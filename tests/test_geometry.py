@@ -113,3 +113,11 @@ def test_geometry_is_finite_and_scale_free(pitch, ppl, lenses, focal):
                        Panel(lenses * ppl, 2 * ppl, s * 1e3, s * 1e3))
     np.testing.assert_allclose(scaled.view_directions(), d, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(scaled.lens_centres() / 1e3, la.lens_centres(), rtol=1e-12)
+
+
+def test_odd_pixel_margin_has_no_camera_bank():
+    # 5 lenses of 4 px on 21 px: a 0.5-px margin puts every pixel off the u_k grid.
+    assert LensArray("square", 5, 1, 0.4, 0.4, 1.0, Panel(21, 4, 0.1, 0.1)).views is None
+    even = LensArray("square", 5, 1, 0.4, 0.4, 1.0, Panel(22, 4, 0.1, 0.1))
+    assert even.views == (4, 4)
+    assert even.bank_region == (slice(0, 4), slice(1, 21))

@@ -8,6 +8,7 @@ A pseudoscopic image (views in reverse order) must fail the same check.
 import numpy as np
 import pytest
 
+from povh3d.geometry import LensArray, Panel, pixel_rays
 from povh3d.methods import run_method
 from povh3d.render import RenderSettings
 from povh3d.scene import load_scene
@@ -18,6 +19,8 @@ from .scenes import checker_oracle, classify, write_checker_plane
 ARRAYS = {
     "lenticular": lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=1.5),
     "square": square_array(lx=24, ly=16, nx=6, ny=6, s=0.1, f=1.5),
+    # A panel wider than the array by 2 pixels a side (like ipad-retina's 2048 = 341*6 + 2).
+    "square-margin": LensArray("square", 22, 16, 0.6, 0.6, 1.5, Panel(136, 100, 0.1, 0.1)),
 }
 PERIOD = 2.5
 
@@ -36,10 +39,14 @@ def test_checker_plane_matches_oracle(tmp_path, method, grid, z0):
     scene = load_scene(write_checker_plane(tmp_path, z0, PERIOD))
     result = run_method(method, scene, la, RenderSettings(quality="draft", use_cache=False))
     expected, clear = checker_oracle(la, z0, PERIOD)
+    assert not result.h3d[~pixel_rays(la)[2]].any(), "pixels outside every lens must stay black"
     assert clear.mean() > 0.3, "test set-up: too few pixels clear of pattern edges"
     got = classify(result.h3d)
     match = np.mean(got[clear] == expected[clear])
     assert match >= 0.995, f"{match:.4f} of clear pixels match the oracle"
     # The same check must fail for the pseudoscopic (view-reversed) image.
-    flipped = classify(reverse_views(result.h3d, la.views[1]))
+    rows, cols = la.bank_region
+    flipped = result.h3d.copy()
+    flipped[rows, cols] = reverse_views(result.h3d[rows, cols], la.views[1])
+    flipped = classify(flipped)
     assert np.mean(flipped[clear] == expected[clear]) < 0.9
