@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import re
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -159,5 +158,3 @@ def povray_info() -> dict[str, str]:
     binary = find_povray()
     return {"binary": binary, "version": povray_version(binary)}
 
-
-ProgressFactory = Callable[[str], Progress]

@@ -18,7 +18,6 @@ from .errors import InputError
 _STRING = re.compile(r'"([^"\n]{1,400})"')
 _COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
 _GAMMA = re.compile(r"\bassumed_gamma\b")
-_CAMERA = re.compile(r"^\s*camera\s*\{", re.M)
 
 
 @dataclass(frozen=True)
@@ -32,7 +31,6 @@ class Scene:
     files : tuple[Path, ...]  the scene and every file it was found to read
     digest : str              sha256 over the files' names and contents
     sets_assumed_gamma : bool
-    has_camera : bool
     """
 
     path: Path
@@ -40,7 +38,6 @@ class Scene:
     files: tuple[Path, ...]
     digest: str
     sets_assumed_gamma: bool
-    has_camera: bool
 
 
 def _read_text(path: Path) -> str:
@@ -65,7 +62,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = ()) -> S
 
     seen: dict[Path, None] = {}
     pending = [scene]
-    sets_gamma = has_camera = False
+    sets_gamma = False
     while pending:
         current = pending.pop()
         if current in seen:
@@ -78,7 +75,6 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = ()) -> S
         except OSError as exc:
             raise InputError(f"cannot read {str(current)!r}: {exc.strerror}") from None
         sets_gamma = sets_gamma or bool(_GAMMA.search(text))
-        has_camera = has_camera or bool(_CAMERA.search(text))
         for name in _STRING.findall(text):
             for base in [current.parent, *dirs]:
                 candidate = base / name
@@ -92,4 +88,4 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = ()) -> S
         h.update(b"\0")
         h.update(f.read_bytes())
         h.update(b"\0")
-    return Scene(scene, tuple(dirs), tuple(sorted(seen)), h.hexdigest(), sets_gamma, has_camera)
+    return Scene(scene, tuple(dirs), tuple(sorted(seen)), h.hexdigest(), sets_gamma)
