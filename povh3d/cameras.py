@@ -121,15 +121,30 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         origin_x = c[:, 0:1] - u * (back_off / f)
         origin_y = c[:, 1:2] - v * (back_off / f)
 
-    # Panel position -> fractional image column/row -> mesh-camera UV.
+    # Panel position -> fractional image column/row.
     col = x / sx + W / 2 - 0.5
     row = H / 2 - 0.5 - y / sy
-    uv = np.stack([col / (W + 1), 1.0 - (row + 1.0) / (H + 1)], axis=-1)
+    return _quad_mesh(origin_x, origin_y, u, v, col, row, (W, H), back_off, f)
 
-    n_quads = x.shape[0]
-    vertices = np.stack([origin_x, origin_y, np.full(x.shape, -back_off)], axis=-1).reshape(-1, 3)
-    normals = np.stack([u, v, np.full(x.shape, f)], axis=-1).reshape(-1, 3)
-    base = 4 * np.arange(n_quads)[:, None]
+
+def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.ndarray,
+               col: np.ndarray, row: np.ndarray, size: tuple[int, int], back_off: float,
+               focal: float) -> CameraMesh:
+    """A CameraMesh from ``(quads, 4)`` corner values, corners counter-clockwise.
+
+    ``col``/``row`` are fractional pixel positions of the corners in a
+    ``W x H`` image; POV-Ray's lookup rules (extra first row and last column,
+    see ``CameraMesh``) turn them into UV here and only here.
+    """
+    W, H = size
+    shape = np.broadcast_shapes(origin_x.shape, origin_y.shape, u.shape, v.shape, col.shape, row.shape)
+    def full(*values):
+        return [np.broadcast_to(np.asarray(a, dtype=np.float64), shape) for a in values]
+
+    uv = np.stack(full(col / (W + 1), 1.0 - (row + 1.0) / (H + 1)), axis=-1)
+    vertices = np.stack(full(origin_x, origin_y, -back_off), axis=-1).reshape(-1, 3)
+    normals = np.stack(full(u, v, focal), axis=-1).reshape(-1, 3)
+    base = 4 * np.arange(shape[0])[:, None]
     faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
     return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1))
 
@@ -166,14 +181,7 @@ def view_bank_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     origin_y = y[None, :] - vl * (back_off / f)
     col = k * lx + corner_j[None, :]
     row = l * ly + corner_i[None, :]
-    uv = np.stack([col / (W + 1), 1.0 - (row + 1.0) / (H + 1)], axis=-1)
-    shape = origin_x.shape
-    vertices = np.stack([origin_x, origin_y, np.full(shape, -back_off)], axis=-1).reshape(-1, 3)
-    normals = np.stack([np.broadcast_to(uk, shape), np.broadcast_to(vl, shape), np.full(shape, f)],
-                       axis=-1).reshape(-1, 3)
-    base = 4 * np.arange(shape[0])[:, None]
-    faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
-    return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1))
+    return _quad_mesh(origin_x, origin_y, uk, vl, col, row, (W, H), back_off, f)
 
 
 # -- per-lens pinhole cameras ---------------------------------------------------------
