@@ -211,23 +211,22 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
                               file_gamma="sRGB", timeout=settings.timeout))
     chunk_of_job = {id(job): chunk for job, chunk in zip(jobs, chunks)}
 
+    done = stats.cached
+    if progress:
+        progress(done, len(keys))
+
     def collect(result: JobResult) -> None:
+        # Jobs finish in any order; count the frames each one brings.
+        nonlocal done
         for index, image_path in zip(chunk_of_job[id(result.job)], result.images):
             images[index] = read_png(image_path)
             if cache is not None:
                 cache.put(keys[index], image_path)
-
-    done_before = stats.cached
-    if progress:
-        progress(done_before, len(keys))
-
-    def on_progress(done_jobs: int, total_jobs: int) -> None:
+            done += 1
         if progress:
-            finished = sum(len(chunks[i]) for i in range(done_jobs))
-            progress(done_before + finished, len(keys))
+            progress(done, len(keys))
 
     if jobs:
-        stats.povray_seconds = run_jobs(jobs, processes=processes, on_result=collect,
-                                        on_progress=on_progress, binary=binary)
+        stats.povray_seconds = run_jobs(jobs, processes=processes, on_result=collect, binary=binary)
     stats.wall_seconds = time.perf_counter() - start
     return [img for img in images if img is not None], stats
