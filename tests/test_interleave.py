@@ -39,3 +39,16 @@ def test_tile_elemental_images_is_interleave_transposed():
 def test_extract_rejects_partial_lenses():
     with pytest.raises(ValueError, match="whole lenses"):
         extract(np.zeros((10, 10, 3)), (3, 3))
+
+
+@pytest.mark.parametrize("shape", [(1, 8, 601, 240, 3), (3, 5, 397, 160, 4)])
+def test_large_stacks_split_over_threads_match_one_transpose(shape):
+    # Big enough (over 2 MB) that on two or more cores the copy is split by lens rows over worker threads,
+    # with a lens-row count that does not divide evenly.
+    rng = np.random.default_rng(3)
+    views = rng.integers(0, 255, size=shape, dtype=np.uint8)
+    ny, nx, ly, lx, c = shape
+    expected = views.transpose(2, 0, 3, 1, 4).reshape(ly * ny, lx * nx, c)
+    h3d = interleave(views)
+    assert np.array_equal(h3d, expected)
+    assert np.array_equal(extract(h3d, (ny, nx)), views)
