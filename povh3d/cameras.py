@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .footprint import CENTRE
 from .geometry import LensArray
 
 
@@ -149,7 +150,7 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
     return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1))
 
 
-def view_bank_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None) -> CameraMesh:
     """The orthographic camera bank as one mesh camera: one quad per view.
 
     The image is the views tiled side by side, view ``(l, k)`` at rows
@@ -159,14 +160,25 @@ def view_bank_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     single quad per view is exact: ``Nx*Ny`` quads instead of one per lens, which
     keeps POV-Ray's per-pixel face lookup as cheap as a plain camera's.
     Same lookup rules as ``camera_mesh`` (extra first row and last column).
+
+    Parameters
+    ----------
+    samples : (K, 4) float, optional
+        Footprint samples (see ``povh3d.footprint``); each gets a whole bank,
+        the banks stacked top to bottom (bank ``b`` at rows ``b*Ny*Ly ..``), so
+        K samples of every pixel come out of one POV-Ray pass.  Default: the
+        pixel's own ray.
     """
     ny, nx = lens_array.require_views()
     lx, ly = lens_array.lenses_x, lens_array.lenses_y
-    W, H = lx * nx, ly * ny
+    samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
+    W, H = lx * nx, ly * ny * len(samples)
     f = lens_array.focal
+    s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
     u, v = lens_array.view_offsets()
-    l, k = np.meshgrid(np.arange(ny), np.arange(nx), indexing="ij")
-    l, k = l.reshape(-1, 1), k.reshape(-1, 1)
+    b, l, k = np.meshgrid(np.arange(len(samples)), np.arange(ny), np.arange(nx), indexing="ij")
+    b, l, k = b.reshape(-1, 1), l.reshape(-1, 1), k.reshape(-1, 1)
+    ax, ay, du, dv = (samples[b, n] for n in range(4))               # (quads, 1) each
     # Corners of each view's tile: half a pitch outside the outer lens centres.
     corner_j = np.array([-0.5, lx - 0.5, lx - 0.5, -0.5])
     corner_i = np.array([ly - 0.5, ly - 0.5, -0.5, -0.5])
@@ -174,13 +186,13 @@ def view_bank_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     hx, hy = lens_array.pitch_x / 2, lens_array.pitch_y / 2
     left, right = centres[0, 0, 0] - hx, centres[0, -1, 0] + hx
     top, bottom = centres[0, 0, 1] + hy, centres[-1, 0, 1] - hy
-    x = np.array([left, right, right, left])                        # on z = 0
-    y = np.array([bottom, bottom, top, top])
-    uk, vl = u[k], v[l]                                             # (views, 1)
-    origin_x = x[None, :] - uk * (back_off / f)
-    origin_y = y[None, :] - vl * (back_off / f)
+    x = np.array([left, right, right, left]) + ax * lens_array.pitch_x   # on z = 0
+    y = np.array([bottom, bottom, top, top]) + ay * lens_array.pitch_y
+    uk, vl = u[k] + du * s_x, v[l] + dv * s_y                          # (quads, 1)
+    origin_x = x - uk * (back_off / f)
+    origin_y = y - vl * (back_off / f)
     col = k * lx + corner_j[None, :]
-    row = l * ly + corner_i[None, :]
+    row = (b * ny + l) * ly + corner_i[None, :]
     return _quad_mesh(origin_x, origin_y, uk, vl, col, row, (W, H), back_off, f)
 
 

@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from .colour import mean_in_linear_light
+from .errors import ConfigError
 from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames, view_bank_mesh
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
@@ -27,24 +29,38 @@ from .render import FrameBatch, Progress, RenderSettings, RenderStats, cpu_count
 from .scene import Scene
 
 
-def _multi_ortho_batch(lens_array: LensArray, back_off: float) -> FrameBatch:
+def _multi_ortho_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     if lens_array.grid == "hex":
         lens_array.require_views()  # raises "render hex with single-stage"
     # Whole PPL: one quad per view (views tiled); otherwise one quad per lens.
-    mesh = view_bank_mesh(lens_array, back_off) if lens_array.views else camera_mesh(lens_array, back_off)
+    if lens_array.views:
+        mesh = view_bank_mesh(lens_array, back_off, samples)
+    else:
+        _point_sampled_only(samples, "multi-ortho with a non-integral number of pixels per lens")
+        mesh = camera_mesh(lens_array, back_off)
     width, height = mesh.image_size
     return FrameBatch("multi_ortho.pov.j2", {"mesh": mesh}, [{}], width, height, processes=1)
 
 
 def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarray:
     image = images[0][1:, :-1]  # the extra first row and last column (see cameras.CameraMesh)
-    if lens_array.views:
-        return interleave(untile_views(image, lens_array.views))
-    return image
+    if not lens_array.views:
+        return image
+    ny, nx = lens_array.views
+    banks = image.shape[0] // (ny * lens_array.lenses_y)  # one per footprint sample, stacked
+    bank = mean_in_linear_light(image.reshape(banks, -1, *image.shape[1:])) if banks > 1 else image
+    return interleave(untile_views(bank, (ny, nx)))
 
 
-def _views_batch(lens_array: LensArray, back_off: float) -> FrameBatch:
+def _point_sampled_only(samples: np.ndarray, what: str) -> None:
+    if len(samples) != 1 or np.any(samples):
+        raise ConfigError(f"{what} traces one ray per pixel; use sub-views and footprint samples "
+                          "with multi-ortho on whole pixels per lens")
+
+
+def _views_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     lens_array.require_views()
+    _point_sampled_only(samples, "multi-ortho-views")
     common, frames = ortho_view_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     # Process start-up (~0.7 s) is mostly idle, so more processes than cores
@@ -60,8 +76,9 @@ def _views_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarr
     return interleave(np.stack(images).reshape(ny, nx, *images[0].shape))
 
 
-def _pinhole_batch(lens_array: LensArray, back_off: float) -> FrameBatch:
+def _pinhole_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     lens_array.require_views()
+    _point_sampled_only(samples, "pinhole")
     common, frames = pinhole_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     processes = 2 * cpu_count()
@@ -78,7 +95,7 @@ def _pinhole_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.nda
 
 @dataclass(frozen=True)
 class Method:
-    batch: Callable[[LensArray, float], FrameBatch]
+    batch: Callable[[LensArray, float, np.ndarray], FrameBatch]  # (array, back-off mm, footprint samples)
     assemble: Callable[[LensArray, list[np.ndarray]], np.ndarray]
 
 
@@ -89,10 +106,10 @@ METHODS: dict[str, Method] = {
 }
 
 
-def display_header(lens_array: LensArray) -> dict[str, Any]:
+def display_header(lens_array: LensArray, max_trace_level: int | None = None) -> dict[str, Any]:
     """Display constants the scene header declares (``Povh3d_Panel_Width`` ...)."""
     return {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
-            "focal": lens_array.focal}
+            "focal": lens_array.focal, "max_trace_level": max_trace_level}
 
 
 @dataclass
@@ -107,9 +124,11 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     """Render ``scene`` with method ``name`` and return the H3D image."""
     method = METHODS[name]
     back_off = settings.back_off or default_back_off(lens_array)
-    batch = method.batch(lens_array, back_off)
+    quality = settings.spec
+    batch = method.batch(lens_array, back_off, quality.samples())
     images, stats = render_frames(scene, batch, settings, method=name,
-                                  header=display_header(lens_array), progress=progress)
+                                  header=display_header(lens_array, quality.max_trace_level),
+                                  progress=progress)
     h3d = method.assemble(lens_array, images)
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
     if h3d.shape[:2] != panel_shape:

@@ -21,18 +21,86 @@ import numpy as np
 from . import __version__
 from .cache import ImageCache, content_key, default_cache_dir
 from .errors import ConfigError
+from .footprint import angular_grid, latin_hypercube
 from .imageio import read_png
 from .povray import JobResult, PovrayJob, find_povray, povray_version, run_jobs
 from .scene import Scene
 from .templating import render_template, templates_dir
 
-# POV-Ray switches of each quality level.  draft is point-sampled: one ray per
-# pixel, what methods are compared with when they must agree exactly.
-QUALITY_OPTIONS: dict[str, tuple[str, ...]] = {
-    "draft": ("-A",),
-    "normal": ("+A0.3", "+AM1", "+R2"),
-    "high": ("+A0.05", "+AM2", "+R3"),
+@dataclass(frozen=True)
+class Quality:
+    """How densely a render samples each pixel's footprint (CONVENTIONS).
+
+    Attributes
+    ----------
+    antialias : float or None   POV-Ray's ``+A`` threshold; None: one ray per sub-view
+    aa_method : {1, 2}          ``+AM``: 1 non-recursive, 2 adaptive recursive
+    aa_depth : int              ``+R``: supersampling depth
+    jitter : bool               ``+J``: jitter the supersamples
+    subviews : int              angular sub-views per axis, averaged in linear light:
+                                an orthographic view pixel spans the lens aperture
+                                but not the pixel's angular width; these do
+    footprint : int             > 0: that many stratified random samples of the whole
+                                footprint instead (the converged reference)
+    seed : int                  of the footprint samples
+    max_trace_level : int or None   overrides the scene's (None: the scene's own)
+    """
+
+    antialias: float | None = None
+    aa_method: int = 1
+    aa_depth: int = 2
+    jitter: bool = False
+    subviews: int = 1
+    footprint: int = 0
+    seed: int = 0
+    max_trace_level: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.antialias is not None and not 0 <= self.antialias <= 3:
+            raise ConfigError(f"the antialiasing threshold must be within 0..3, got {self.antialias}")
+        if self.aa_method not in (1, 2):
+            raise ConfigError(f"the antialiasing method must be 1 or 2, got {self.aa_method}")
+        if not 1 <= self.aa_depth <= 9:
+            raise ConfigError(f"the antialiasing depth must be within 1..9, got {self.aa_depth}")
+        if self.subviews < 1 or self.footprint < 0:
+            raise ConfigError("sub-views must be at least 1 and footprint samples at least 0")
+        if self.max_trace_level is not None and not 1 <= self.max_trace_level <= 256:
+            raise ConfigError(f"max trace level must be within 1..256, got {self.max_trace_level}")
+
+    @property
+    def options(self) -> tuple[str, ...]:
+        """POV-Ray's command-line switches for this quality."""
+        if self.antialias is None:
+            return ("-A",)
+        return (f"+A{self.antialias:g}", f"+AM{self.aa_method}", f"+R{self.aa_depth}") + (
+            ("+J",) if self.jitter else ())
+
+    def samples(self) -> np.ndarray:
+        """The footprint samples each pixel gets, ``(K, 4)`` (see ``povh3d.footprint``)."""
+        if self.footprint:
+            return latin_hypercube(self.footprint, self.seed)
+        return angular_grid(self.subviews)
+
+    @property
+    def label(self) -> str:
+        parts = [" ".join(self.options)]
+        if self.footprint:
+            parts.append(f"{self.footprint} footprint samples")
+        elif self.subviews > 1:
+            parts.append(f"{self.subviews}x{self.subviews} sub-views")
+        if self.max_trace_level is not None:
+            parts.append(f"trace level {self.max_trace_level}")
+        return ", ".join(parts)
+
+
+# The named levels.  draft is point-sampled: one ray per pixel, what methods are
+# compared with when they must agree exactly.
+QUALITY_LEVELS: dict[str, Quality] = {
+    "draft": Quality(),
+    "normal": Quality(antialias=0.3, aa_method=1, aa_depth=2),
+    "high": Quality(antialias=0.05, aa_method=2, aa_depth=3),
 }
+QUALITY_OPTIONS: dict[str, tuple[str, ...]] = {name: q.options for name, q in QUALITY_LEVELS.items()}
 
 Progress = Callable[[int, int], None]
 
@@ -43,7 +111,7 @@ class RenderSettings:
 
     Attributes
     ----------
-    quality : {'draft', 'normal', 'high'}
+    quality : {'draft', 'normal', 'high'} or Quality
     jobs : int or None          parallel POV-Ray processes (None: chosen per method)
     threads : int or None       POV-Ray threads per process (None: cores / jobs)
     timeout : float or None     seconds allowed to each POV-Ray run
@@ -53,7 +121,7 @@ class RenderSettings:
     back_off : float or None    mm in front of the screen where rays start (None: default)
     """
 
-    quality: str = "normal"
+    quality: str | Quality = "normal"
     jobs: int | None = None
     threads: int | None = None
     timeout: float | None = None
@@ -63,8 +131,8 @@ class RenderSettings:
     back_off: float | None = None
 
     def __post_init__(self) -> None:
-        if self.quality not in QUALITY_OPTIONS:
-            raise ConfigError(f"quality must be one of {', '.join(QUALITY_OPTIONS)}, got {self.quality!r}")
+        if not isinstance(self.quality, Quality) and self.quality not in QUALITY_LEVELS:
+            raise ConfigError(f"quality must be one of {', '.join(QUALITY_LEVELS)}, got {self.quality!r}")
         if self.jobs is not None and self.jobs < 1:
             raise ConfigError(f"--jobs must be at least 1, got {self.jobs}")
         if self.threads is not None and self.threads < 1:
@@ -77,8 +145,12 @@ class RenderSettings:
             raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.back_off}")
 
     @property
+    def spec(self) -> Quality:
+        return self.quality if isinstance(self.quality, Quality) else QUALITY_LEVELS[self.quality]
+
+    @property
     def options(self) -> tuple[str, ...]:
-        return QUALITY_OPTIONS[self.quality]
+        return self.spec.options
 
 
 @dataclass(frozen=True)

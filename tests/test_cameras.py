@@ -126,3 +126,27 @@ def test_view_bank_mesh_traces_every_view_pixel(la):
     centres, dirs, _ = pixel_rays(la)
     np.testing.assert_allclose(d, dirs, atol=1e-12)
     _assert_hits_lens_centres(la, hit, centres)
+
+
+@pytest.mark.parametrize("la", [square_array(lx=5, ly=3, nx=3, ny=2), lenticular_array(lx=4, rows=5, nx=4)],
+                         ids=["square", "lenticular"])
+def test_view_bank_mesh_stacks_one_bank_per_footprint_sample(la):
+    # Bank b traces the ray of CONVENTIONS' pixel footprint sample b: through
+    # c + (ax*px, ay*py) with direction (u + du*s, v + dv*s, f).
+    from povh3d.cameras import view_bank_mesh
+    from povh3d.footprint import latin_hypercube
+    from povh3d.interleave import interleave, untile_views
+
+    samples = latin_hypercube(3, seed=7)
+    mesh = view_bank_mesh(la, 40.0, samples)
+    origin, normal, margin, inside_face = (a[1:, :-1] for a in _simulate_mesh_camera(mesh))
+    assert np.all(inside_face > -1e-12) and margin.min() == pytest.approx(0.5)
+    centres, dirs, _ = pixel_rays(la)
+    s = la.panel.pitch_x
+    for b, (ax, ay, du, dv) in enumerate(samples):
+        rows = slice(b * origin.shape[0] // 3, (b + 1) * origin.shape[0] // 3)
+        o, n = (interleave(untile_views(a[rows], la.views)) for a in (origin, normal))
+        expected = dirs / dirs[..., 2:] * la.focal + np.array([du * s, dv * la.panel.pitch_y, 0.0])
+        np.testing.assert_allclose(n / n[..., 2:] * la.focal, expected, atol=1e-12)
+        hit = o[..., :2] - o[..., 2:] / n[..., 2:] * n[..., :2]
+        _assert_hits_lens_centres(la, hit - np.array([ax * la.pitch_x, ay * la.pitch_y]), centres)
