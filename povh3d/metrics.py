@@ -1,0 +1,44 @@
+"""Image error figures and the time-versus-error Pareto front (pure NumPy)."""
+
+from __future__ import annotations
+
+import numpy as np
+from skimage.metrics import structural_similarity
+
+
+def _unit(image: np.ndarray) -> np.ndarray:
+    """Integer image to float in ``[0, 1]`` (still sRGB-encoded: errors as a viewer sees them)."""
+    return np.asarray(image, dtype=np.float64) / float(np.iinfo(image.dtype).max)
+
+
+def psnr(image: np.ndarray, reference: np.ndarray) -> float:
+    """Peak signal-to-noise ratio in dB of two integer images of one shape; inf if equal."""
+    if image.shape != reference.shape:
+        raise ValueError(f"images differ in shape: {image.shape} and {reference.shape}")
+    mse = float(np.mean((_unit(image) - _unit(reference)) ** 2))
+    return float("inf") if mse == 0 else 10.0 * np.log10(1.0 / mse)
+
+
+def ssim(image: np.ndarray, reference: np.ndarray) -> float:
+    """Structural similarity (scikit-image, 7x7 window) of two integer images, over channels."""
+    a, b = _unit(image), _unit(reference)
+    return float(structural_similarity(a, b, data_range=1.0, channel_axis=-1 if a.ndim == 3 else None))
+
+
+def pareto_front(seconds: np.ndarray, error_db: np.ndarray) -> np.ndarray:
+    """Which trials no other trial beats in both time and PSNR.
+
+    Parameters
+    ----------
+    seconds : (n,) float     wall time, lower is better
+    error_db : (n,) float    PSNR, higher is better
+
+    Returns
+    -------
+    (n,) bool
+    """
+    t, q = np.asarray(seconds, float), np.asarray(error_db, float)
+    # i is dominated if some j is no slower and no worse, and strictly better in one.
+    no_worse = (t[None, :] <= t[:, None]) & (q[None, :] >= q[:, None])
+    better = (t[None, :] < t[:, None]) | (q[None, :] > q[:, None])
+    return ~np.any(no_worse & better, axis=1)
