@@ -62,7 +62,7 @@ def refocus(views: np.ndarray, offsets, pitch, focal: float, depth: float) -> np
 def gradient_energy(image: np.ndarray) -> float:
     """Mean squared gradient of a linear-light image: higher is sharper."""
     g = np.asarray(image, np.float64).mean(axis=-1) if image.ndim == 3 else np.asarray(image, np.float64)
-    return float(np.mean(np.diff(g, axis=0) ** 2) + np.mean(np.diff(g, axis=1) ** 2))
+    return float(sum(np.mean(np.diff(g, axis=a) ** 2) for a in (0, 1) if g.shape[a] > 1))
 
 
 def contact_sheet(images: list[np.ndarray], cols: int | None = None, gap: int = 2) -> np.ndarray:
