@@ -39,10 +39,13 @@ def _sidecar(kind: str, lens_array: LensArray | None, **extra: Any) -> dict[str,
 def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
            method: str = "multi-ortho", settings: RenderSettings | None = None,
            views_dir: str | Path | None = None, include_dirs: tuple[str | Path, ...] = (),
-           display: dict[str, Any] | None = None, progress: Progress | None = None) -> dict[str, Any]:
+           display: dict[str, Any] | None = None, progress: Progress | None = None,
+           mapping: Any = None, mapped_panel: tuple[int, int] | None = None) -> dict[str, Any]:
     """Render ``scene_path`` through ``lens_array`` into the H3D PNG ``output``.
 
-    Returns the sidecar record written beside ``output``.
+    With a ``mapping`` (``povh3d.mappings``), ``lens_array`` is the view-space
+    array it reads (``mapping.render_array``) and ``output`` is the panel image
+    of size ``mapped_panel`` (W, H).  Returns the sidecar record written beside ``output``.
     """
     settings = settings or RenderSettings()
     if method not in METHODS:
@@ -75,6 +78,9 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
     )
     if views_dir is not None:
         write_views(views_dir, extract(h3d[lens_array.bank_region], lens_array.require_views()), lens_array, record)
+    if mapping is not None:
+        h3d = mapping.apply(h3d, mapped_panel)
+        record.update(kind="panel", mapping=mapping.name, size_px=list(mapped_panel))
     write_png(output, h3d)
     write_sidecar(output, record)
     return record

@@ -95,6 +95,12 @@ def cmd_render(args: argparse.Namespace) -> int:
     from .render import RenderSettings
 
     lens_array, display = _lens_array(args)
+    mapping = mapped_panel = None
+    if args.mapping:  # render exactly the views the mapping reads, then map them
+        mapping, panel = _mapping(args, lens_array, display)
+        mapped_panel = (panel.width, panel.height)
+        lens_array = mapping.render_array(panel, lens_array.focal)
+        display = {**display, "mapping": mapping.name}
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
                               timeout=args.timeout, use_cache=not args.no_cache,
                               bit_depth=args.bit_depth, back_off=args.front_clearance)
@@ -103,11 +109,12 @@ def cmd_render(args: argparse.Namespace) -> int:
     try:
         record = render(args.scene, lens_array, output, method=args.method, settings=settings,
                         views_dir=args.views_dir, include_dirs=tuple(args.include), display=display,
-                        progress=update)
+                        progress=update, mapping=mapping, mapped_panel=mapped_panel)
     finally:
         close()
     t = record["timings"]
-    print(f"{output}  {lens_array.panel.width}x{lens_array.panel.height}  {args.method}  "
+    size = mapped_panel or (lens_array.panel.width, lens_array.panel.height)
+    print(f"{output}  {size[0]}x{size[1]}  {args.method}{'  ' + mapping.name if mapping else ''}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return 0
 
@@ -141,6 +148,9 @@ def cmd_presets(args: argparse.Namespace) -> int:
 def cmd_info(args: argparse.Namespace) -> int:
     lens_array, display = _lens_array(args)
     info = {**display, **lens_array.describe()}
+    if args.mapping:
+        mapping, panel = _mapping(args, lens_array, display)
+        info.update(mapping.figures(panel))
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -149,6 +159,166 @@ def cmd_info(args: argparse.Namespace) -> int:
             value = {k: [round(a, 3) for a in v] for k, v in value.items()}
         print(f"{key:22s} {value}")
     return 0
+
+
+def _add_mapping_options(p: argparse.ArgumentParser, required: bool = False) -> None:
+    g = p.add_argument_group("pixel mapping (see 'povh3d map --help')")
+    g.add_argument("--mapping", required=required, metavar="NAME",
+                   help="alioscopy, philips, slanted, triangular, distributed, smart:N, distributed-smart:N")
+    g.add_argument("--subpixels-per-lens", type=float, metavar="X", help="slanted: subpixels under one lens")
+    g.add_argument("--views", type=int, metavar="N", help="slanted: view count")
+    g.add_argument("--slant-tan", type=float, metavar="T", help="slanted: tan a (1/3 for 18.43 deg)")
+    g.add_argument("--slant-deg", type=float, metavar="DEG", help="slanted: slant angle in degrees")
+    g.add_argument("--offset", type=float, default=0.0, metavar="K", help="slanted: k_off in subpixels")
+    g.add_argument("--rows-per-view", type=int, metavar="B", help="slanted: panel rows per view row")
+    g.add_argument("--reverse-views", action="store_true", help="slanted: view N-1-v")
+    g.add_argument("--blend", action="store_true", help="slanted: blend fractional views (linear light)")
+    g.add_argument("--calibration", metavar="JSON", help="slanted: Looking Glass calibration (visual.json)")
+
+
+def _mapping(args: argparse.Namespace, lens_array, display):
+    from .display import mapping_for_display
+    from .mappings import slope_from_degrees
+
+    slope = 3 * args.slant_tan if args.slant_tan is not None else (
+        slope_from_degrees(args.slant_deg) if args.slant_deg is not None else None)
+    return mapping_for_display(args.mapping, display, lens_array, calibration_path=args.calibration,
+                               per_lens=args.subpixels_per_lens, views=args.views, slope=slope,
+                               offset=args.offset or None, rows_per_view=args.rows_per_view,
+                               reverse=args.reverse_views or None, blend=args.blend or None)
+
+
+def _ppl_arg(text: str | None, option: str = "--ppl") -> tuple[int, int] | None:
+    if text is None:
+        return None
+    ppl = parse_pair(text, option, integral=True)
+    return (ppl[1], ppl[0]) if isinstance(ppl, tuple) else (1, ppl)
+
+
+def _image_lens_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--ppl", help="pixels per lens NxxNy (lenticular: Nx); default: from the sidecar")
+    p.add_argument("--focal", type=float, help="focal length, mm (default: from the sidecar)")
+    p.add_argument("--pixel-pitch", type=float, help="pixel pitch, mm (default: from the sidecar)")
+
+
+def cmd_map(args: argparse.Namespace) -> int:
+    from .display import map_file
+
+    lens_array, display = _lens_array(args)
+    mapping, _ = _mapping(args, lens_array, display)
+    panel = parse_pair(args.panel_size, "--panel-size", integral=True) if args.panel_size else None
+    if panel is not None and not isinstance(panel, tuple):
+        raise ConfigError(f"--panel-size takes WxH like 1920x1080, got {args.panel_size!r}")
+    record = map_file(args.input, mapping, args.output, panel)
+    print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {mapping.name}")
+    return 0
+
+
+def cmd_resample(args: argparse.Namespace) -> int:
+    from .display import lens_info, resample_file
+
+    info = lens_info(args.input, _ppl_arg(args.ppl), None, None)
+    ppl_out = _ppl_arg(args.ppl_out, "--ppl-out")
+    if info["ppl"][0] == 1 and ppl_out[0] == 1:
+        pass
+    elif len(str(args.ppl_out).lower().split("x")) == 1:
+        ppl_out = (ppl_out[1], ppl_out[1])  # an omnidirectional image: N means NxN
+    record = resample_file(args.input, args.output, info["ppl"], ppl_out, args.mode)
+    print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {args.mode}")
+    return 0
+
+
+def cmd_quilt(args: argparse.Namespace) -> int:
+    from .display import export_quilt, import_quilt, lens_info
+
+    grid = parse_pair(args.quilt, "--quilt", integral=True) if args.quilt else None
+    if grid is not None and not isinstance(grid, tuple):
+        raise ConfigError(f"--quilt takes COLSxROWS like 8x6, got {args.quilt!r}")
+    if args.import_quilt:
+        record = import_quilt(args.input, args.output, grid, args.views)
+        print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  from {record['views'][0]} views")
+        return 0
+    if grid is None:
+        raise ConfigError("give the quilt grid with --quilt COLSxROWS, e.g. --quilt 8x6")
+    ppl = lens_info(args.input, _ppl_arg(args.ppl), None, None)["ppl"]
+    if ppl[0] != 1:
+        raise ConfigError("a quilt holds one row of views: use a lenticular (horizontal-only) H3D image")
+    out = export_quilt(args.input, ppl[1], grid, args.output, args.aspect)
+    print(out)
+    return 0
+
+
+def cmd_refocus(args: argparse.Namespace) -> int:
+    from .display import lens_info, refocus_file
+
+    info = lens_info(args.input, _ppl_arg(args.ppl), args.focal, args.pixel_pitch)
+    if (args.depth is None) == (args.sweep is None):
+        raise ConfigError("give one of --depth MM or --sweep N")
+    sweep = None
+    if args.sweep is not None:
+        f = info["focal"] or 1.0
+        sweep = (args.near if args.near is not None else -10 * f, args.far if args.far is not None else 10 * f,
+                 args.sweep)
+    record = refocus_file(args.input, args.output, info, depth=args.depth, sweep=sweep)
+    extra = f"  sharpest at {record['sharpest_depth_mm']:.3g} mm" if "sharpest_depth_mm" in record else ""
+    print(f"{args.output}  {len(record['depths_mm'])} plane(s){extra}")
+    return 0
+
+
+def cmd_preview(args: argparse.Namespace) -> int:
+    from .display import lens_info, preview_file
+
+    info = lens_info(args.input, _ppl_arg(args.ppl), args.focal, args.pixel_pitch)
+    preview_file(args.input, args.output, info, frames=args.frames, scale=args.scale)
+    print(f"{args.output}  {args.frames} frames, contact sheet {Path(args.output).with_suffix('.png')}")
+    return 0
+
+
+def _add_display_commands(sub) -> None:
+    p = sub.add_parser("map", help="map an unmapped view-space H3D image onto a display's subpixels")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True, help="panel PNG to write")
+    p.add_argument("--panel-size", metavar="WxH", help="panel size (default: the one the image fits)")
+    _add_array_options(p)
+    _add_mapping_options(p, required=True)
+    p.set_defaults(func=cmd_map)
+
+    p = sub.add_parser("resample", help="resample every micro-image (thesis appendix C)")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True)
+    p.add_argument("--ppl", help="pixels per lens of the input (default: from the sidecar)")
+    p.add_argument("--ppl-out", required=True, help="pixels per lens of the output")
+    p.add_argument("--mode", choices=("micro", "lenses"), default="micro",
+                   help="micro: resize micro-images; lenses: fewer pixels per lens, more lenses")
+    p.set_defaults(func=cmd_resample)
+
+    p = sub.add_parser("quilt", help="export the views of an H3D image as a quilt, or import one")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True, help="export: folder; import: H3D PNG")
+    p.add_argument("--quilt", metavar="COLSxROWS", help="grid, e.g. 8x6 (import: default from the name)")
+    p.add_argument("--import", dest="import_quilt", action="store_true", help="quilt -> H3D image")
+    p.add_argument("--ppl", help="pixels per lens (default: from the sidecar)")
+    p.add_argument("--views", type=int, help="import: how many tiles hold views (default: all)")
+    p.add_argument("--aspect", type=float, help="export: view aspect for the name (default: tile w/h)")
+    p.set_defaults(func=cmd_quilt)
+
+    p = sub.add_parser("refocus", help="refocus an H3D image at a depth (shift-and-sum over views)")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True)
+    p.add_argument("--depth", type=float, metavar="MM", help="depth of the focal plane (> 0 behind the screen)")
+    p.add_argument("--sweep", type=int, metavar="N", help="N planes from --near to --far, with a contact sheet")
+    p.add_argument("--near", type=float, metavar="MM")
+    p.add_argument("--far", type=float, metavar="MM")
+    _image_lens_options(p)
+    p.set_defaults(func=cmd_refocus)
+
+    p = sub.add_parser("preview", help="what a viewer sees across the viewing angle (GIF + contact sheet)")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True, help="preview .gif (the contact sheet goes beside it as .png)")
+    p.add_argument("--frames", type=int, default=12)
+    p.add_argument("--scale", type=int, help="enlarge each lens to this many pixels")
+    _image_lens_options(p)
+    p.set_defaults(func=cmd_preview)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -175,6 +345,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     _add_array_options(p)
+    _add_mapping_options(p)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("interleave", help="interleave a folder of views into an H3D image")
@@ -194,7 +365,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("info", help="derived values of a display / lens array")
     p.add_argument("--json", action="store_true")
     _add_array_options(p)
+    _add_mapping_options(p)
     p.set_defaults(func=cmd_info)
+    _add_display_commands(sub)
     return parser
 
 

@@ -66,7 +66,12 @@ def merge_overrides(fields: dict[str, Any], overrides: dict[str, Any]) -> dict[s
     merged = dict(fields)
     given = {k: v for k, v in overrides.items() if v is not None}
     if any(k in given for k in _ARRAY_FIELDS) and "panel" not in given:
-        merged.pop("panel", None)
+        # A lens count re-derives the panel; a new PPL or pitch alone keeps the
+        # preset's panel and re-derives the lens count (ipad-retina --ppl 22).
+        if any(k in given for k in ("lenses", "rows")):
+            merged.pop("panel", None)
+        else:
+            merged.pop("lenses", None)
         if "ppl" in given:
             merged.pop("lens_pitch", None)
         # A custom array renders as given: the preset's mapping no longer applies.

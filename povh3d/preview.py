@@ -1,0 +1,57 @@
+"""What a viewer sees through the lens array while walking past it.
+
+A far viewer whose line of sight has direction ``(tan ax, tan ay, 1)`` sees,
+under each lens, the pixel whose ray (CONVENTIONS) points along it: the pixel
+at offset ``(u, v) = f (tan ax, tan ay)`` from the lens centre.  A viewer
+standing left of the screen looks rightward and so sees pixels right of the
+lens centres.  Each preview frame takes, under every lens, the pixel nearest
+that offset: one pixel per lens, like the eye.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def viewer_angles(pitch: float, focal: float, frames: int) -> np.ndarray:
+    """``frames`` viewer positions (degrees, + = right of the screen) across the viewing angle."""
+    half = np.degrees(np.arctan(pitch / (2 * focal)))
+    edges = np.linspace(-half, half, frames + 1)
+    return (edges[:-1] + edges[1:]) / 2
+
+
+def seen_view(angle_deg: float, ppl: int, pixel_pitch: float, focal: float) -> int:
+    """Index k (left to right under the lens) of the pixel a viewer at ``angle_deg`` sees.
+
+    The viewer right of the screen (angle > 0) looks leftward: line of sight
+    ``tan = -tan(angle)``, so ``u = -f tan(angle)``.
+    """
+    u = -focal * np.tan(np.radians(angle_deg))
+    k = int(np.floor(u / pixel_pitch + ppl / 2))
+    return min(max(k, 0), ppl - 1)
+
+
+def preview_frames(h3d: np.ndarray, ppl: tuple[int, int], pixel_pitch: float, focal: float,
+                   angles_deg: np.ndarray, vertical_deg: float = 0.0) -> np.ndarray:
+    """One frame per viewer angle: ``(F, Ly, Lx, C)``, each frame one pixel per lens.
+
+    Parameters
+    ----------
+    h3d : (Ly*Ny, Lx*Nx, C) array
+    ppl : (Ny, Nx)
+    pixel_pitch : mm
+    focal : mm
+    angles_deg : (F,) horizontal viewer positions
+    vertical_deg : the viewer's vertical position (omnidirectional arrays)
+    """
+    ny, nx = ppl
+    h, w, c = h3d.shape
+    lenses = h3d.reshape(h // ny, ny, w // nx, nx, c)
+    l = ny - 1 - seen_view(vertical_deg, ny, pixel_pitch, focal)  # rows count down, v up
+    ks = [seen_view(a, nx, pixel_pitch, focal) for a in angles_deg]
+    return np.stack([lenses[:, l, :, k] for k in ks])
+
+
+def enlarge(frame: np.ndarray, scale: tuple[int, int]) -> np.ndarray:
+    """Nearest-neighbour enlargement by whole factors ``(rows, cols)`` (to show lens-sized pixels)."""
+    return np.repeat(np.repeat(frame, scale[0], axis=0), scale[1], axis=1)
