@@ -24,6 +24,8 @@ from .povray import find_povray, povray_version
 from .render import Progress, RenderSettings
 from .scene import load_scene
 
+from .animation import FrameRange, render_animation  # noqa: E402,F401  (animation uses this module)
+
 VIEW_NAME = "v_{l:03d}_{k:03d}.png"
 _VIEW_RE = re.compile(r"^v_(\d{3,})_(\d{3,})\.png$")
 
