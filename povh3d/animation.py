@@ -94,9 +94,10 @@ class FrameRange:
             raise ConfigError(f"frame {n} is outside {self.first}:{self.last}")
         if self.last == self.first:
             return float(self.clock_start)
+        a, b = float(self.clock_start), float(self.clock_end)
         t = (n - self.first) / (self.last - self.first)
-        # Exact at both ends: (1 - t) a + t b, not a + t (b - a).
-        return float((1 - t) * self.clock_start + t * self.clock_end)
+        # From the nearer end: exact at both ends and constant when a == b.
+        return a + t * (b - a) if t <= 0.5 else b - (1 - t) * (b - a)
 
 
 def parse_frames(text: str) -> tuple[int, int]:

@@ -23,6 +23,7 @@ from .cache import ImageCache, content_key, default_cache_dir
 from .errors import ConfigError
 from .imageio import read_png
 from .povray import JobResult, PovrayJob, find_povray, povray_version, run_jobs
+from .sandbox import files_within
 from .scene import Scene
 from .templating import render_template, templates_dir
 
@@ -237,7 +238,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
                               frames=len(chunk), include_dirs=tuple(str(d) for d in scene.include_dirs),
                               options=settings.options, threads=threads, bit_depth=settings.bit_depth,
                               file_gamma="sRGB", timeout=settings.timeout,
-                              read_files=tuple(str(f) for f in scene.files)))
+                              read_files=files_within(scene.files, scene.include_dirs)))
     chunk_of_job = {id(job): chunk for job, chunk in zip(jobs, chunks)}
 
     done = stats.cached

@@ -39,7 +39,7 @@ from functools import cache
 from .errors import ConfigError, OutputError
 
 __all__ = ["Policy", "Ruleset", "landlock_abi", "sandbox_mode", "system_read_paths",
-           "build_ruleset", "restrict_self", "describe"]
+           "build_ruleset", "restrict_self", "describe", "files_within"]
 
 ENV_VAR = "POVH3D_SANDBOX"
 MODES = ("auto", "require", "off")
@@ -143,6 +143,22 @@ def system_read_paths(binary: str) -> tuple[str, ...]:
                   os.path.join(prefix, "etc", "povray"), "/dev/null", "/dev/urandom",
                   "/sys/devices/system/cpu"]  # glibc's CPU count for POV-Ray's threads
     return tuple(dict.fromkeys(p for p in candidates if os.path.exists(p)))
+
+
+def files_within(files: Iterable[str | os.PathLike[str]],
+                 folders: Iterable[str | os.PathLike[str]]) -> tuple[str, ...]:
+    """The `files` that lie inside one of `folders` (absolute, resolved).
+
+    A scene's file list holds every existing file its string literals name,
+    ``"/etc/passwd"`` too; only those in the scene's own folders are its inputs.
+    """
+    roots = [os.path.realpath(folder) for folder in folders]
+    kept = []
+    for file in files:
+        real = os.path.realpath(file)
+        if any(os.path.commonpath([real, root]) == root for root in roots):
+            kept.append(real)
+    return tuple(kept)
 
 
 class Ruleset:
