@@ -313,7 +313,8 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
              on_result: Callable[[JobResult], None] | None = None,
              on_progress: Callable[[int, int], None] | None = None,
              binary: str | None = None,
-             workdir: str | Path | None = None) -> list[float]:
+             workdir: str | Path | None = None,
+             should_stop: Callable[[], bool] | None = None) -> list[float]:
     """Render jobs with at most `processes` POV-Ray children at once.
 
     Parameters
@@ -331,6 +332,9 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
         POV-Ray executable; `find_povray` by default.
     workdir : str or Path, optional
         Folder for the jobs' temporary folders; the system's by default.
+    should_stop : callable, optional
+        Polled while children run; True stops them all and raises
+        `RenderInterrupted` (a cancelled task on a Dask worker).
 
     Returns
     -------
@@ -368,7 +372,7 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
             while pending and len(running) < processes:
                 index, job = pending.popleft()
                 _start(index, job, binary, workdir, running)
-            for child in _wait_for_exits(running):
+            for child in _wait_for_exits(running, should_stop):
                 running.remove(child)
                 seconds[child.index] = _finish(child, on_result)
                 done += 1
@@ -482,9 +486,12 @@ def _child_setup(parent: int, ruleset_fd: int | None = None) -> None:
         sandbox.restrict_self(ruleset_fd)
 
 
-def _wait_for_exits(running: list[_Child]) -> list[_Child]:
-    """Wait until a child exits; the exited ones.  Raises on a timeout."""
+def _wait_for_exits(running: list[_Child],
+                    should_stop: Callable[[], bool] | None = None) -> list[_Child]:
+    """Wait until a child exits; the exited ones.  Raises on a timeout or a stop."""
     while True:
+        if should_stop is not None and should_stop():
+            raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
         now = time.monotonic()
         exited = [child for child in running if child.process.poll() is not None]
         for child in exited:
