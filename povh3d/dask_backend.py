@@ -36,6 +36,7 @@ from .povray import JobResult, PovrayJob, find_povray, povray_version, run_jobs
 __all__ = ["DaskRunner", "connect", "job_files"]
 
 _CLIENTS: dict[str, Any] = {}
+_CHECKED: dict[str, tuple[frozenset[str], str]] = {}  # address -> (workers, POV-Ray version)
 _LOCK = threading.Lock()
 _MIRROR = "files"  # the worker's copy of path /a/b is ROOT/files/a/b
 
@@ -178,6 +179,11 @@ class DaskRunner:
     def __init__(self, address: str) -> None:
         self.address = address
         self.client = connect(address)
+        workers = frozenset(self.client.scheduler_info().get("workers", {}))
+        known = _CHECKED.get(address)
+        if known is not None and known[0] == workers:  # the same workers as last time
+            self.version, self.workers = known[1], len(workers)
+            return
         answers = self.client.run(_worker_povray)
         missing = {w: why for w, (ok, why) in answers.items() if not ok}
         if missing:
@@ -189,6 +195,7 @@ class DaskRunner:
                               f"({', '.join(sorted(versions))}); install one version on all")
         self.version = versions.pop()
         self.workers = len(answers)
+        _CHECKED[address] = (frozenset(answers), self.version)
 
     def run(self, jobs: Sequence[PovrayJob], *, processes: int = 1,
             on_result: Callable[[JobResult], None] | None = None,

@@ -17,6 +17,7 @@ from distributed import LocalCluster
 
 from povh3d.api import render
 from povh3d.cli import main
+from povh3d import dask_backend
 from povh3d.dask_backend import DaskRunner
 from povh3d.errors import ConfigError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
 from povh3d.imageio import read_png, write_png
@@ -152,6 +153,12 @@ def test_worker_without_povray(address: str, cluster) -> None:
     # A builtin travels by name; os.environ's methods would carry a copy of it.
     runner.client.run(exec, "import os; os.environ['POVH3D_POVRAY'] = '/nonexistent/povray'")
     try:
+        # The workers were checked already: the task itself reports it ...
+        with pytest.raises(PovrayNotFound, match=r"Dask worker tcp://\S+: POVH3D_POVRAY="
+                                                 r"/nonexistent/povray is not an executable"):
+            runner.run([PovrayJob("j", "#version 3.7;\n", 2, 2)])
+        # ... and a first connection checks every worker before any job.
+        dask_backend._CHECKED.clear()
         with pytest.raises(PovrayNotFound, match=r"Dask worker tcp://.* cannot run POV-Ray: "
                                                  r"POVH3D_POVRAY=/nonexistent/povray"):
             DaskRunner(address)
