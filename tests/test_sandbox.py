@@ -180,3 +180,13 @@ def test_system_paths_leave_out_etc() -> None:
     assert "/usr" in paths and "/etc/povray" in paths
     assert "/etc" not in paths and not any(p.startswith(("/home", "/root", "/tmp")) for p in paths)
     assert all(os.path.isabs(p) for p in paths)
+
+
+def test_sidecar_records_the_sandbox(tmp_path: Path) -> None:
+    from povh3d.api import render
+
+    scene = tmp_path / "s.pov"
+    scene.write_text("#version 3.7;\nplane { z, 1 pigment { rgb 1 } }\n")
+    record = render(scene, square_array(2, 2, 2, 2), tmp_path / "o.png",
+                    settings=RenderSettings(quality="draft"))
+    assert record["sandbox"].startswith("landlock ABI")
