@@ -22,7 +22,10 @@ from .interleave import extract, interleave
 from .methods import METHODS, run_method
 from .povray import find_povray, povray_version
 from .render import Progress, RenderSettings
+from .sandbox import describe as describe_sandbox
 from .scene import load_scene
+
+from .animation import FrameRange, render_animation  # noqa: E402,F401  (animation uses this module)
 
 VIEW_NAME = "v_{l:03d}_{k:03d}.png"
 _VIEW_RE = re.compile(r"^v_(\d{3,})_(\d{3,})\.png$")
@@ -74,6 +77,7 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         quality={"level": settings.quality, "povray_options": list(settings.options),
                  "bit_depth": settings.bit_depth, "front_clearance_mm": result.back_off},
         output_gamma="sRGB", povray_version=result.stats.povray_version,
+        sandbox=describe_sandbox(), scheduler=settings.scheduler,
         timings={"render_seconds": round(render_seconds, 4), **result.stats.as_dict()},
     )
     if views_dir is not None:

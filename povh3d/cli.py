@@ -103,8 +103,14 @@ def cmd_render(args: argparse.Namespace) -> int:
         display = {**display, "mapping": mapping.name}
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
                               timeout=args.timeout, use_cache=not args.no_cache,
-                              bit_depth=args.bit_depth, back_off=args.front_clearance)
+                              bit_depth=args.bit_depth, back_off=args.front_clearance,
+                              scheduler=args.scheduler)
     output = Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png")
+    if args.frames is not None:
+        return _render_animation(args, lens_array, display, settings, output)
+    for option in ("video", "clock"):
+        if getattr(args, option) is not None:
+            raise ConfigError(f"--{option} needs --frames FIRST:LAST")
     update, close = _progress(not args.quiet and sys.stderr.isatty())
     try:
         record = render(args.scene, lens_array, output, method=args.method, settings=settings,
@@ -116,6 +122,31 @@ def cmd_render(args: argparse.Namespace) -> int:
     size = mapped_panel or (lens_array.panel.width, lens_array.panel.height)
     print(f"{output}  {size[0]}x{size[1]}  {args.method}{'  ' + mapping.name if mapping else ''}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
+    return 0
+
+
+def _render_animation(args: argparse.Namespace, lens_array: Any, display: dict[str, Any],
+                      settings: Any, output: Path) -> int:
+    from .animation import FrameRange, parse_clock, parse_frames, render_animation
+
+    if args.views_dir is not None:
+        raise ConfigError("--views-dir cannot be combined with --frames; render one frame for its views")
+    first, last = parse_frames(args.frames)
+    clock = parse_clock(args.clock) if args.clock is not None else (0.0, 1.0)
+    frames = FrameRange(first, last, *clock)
+    update, close = _progress(not args.quiet and sys.stderr.isatty())
+    try:
+        report = render_animation(args.scene, lens_array, output, frames, method=args.method,
+                                  settings=settings, include_dirs=tuple(args.include),
+                                  display=display, progress=update, video=args.video, fps=args.fps)
+    finally:
+        close()
+    names = report["frames"]
+    print(f"{names[0]} .. {names[-1]}  {len(names)} frames  {report['rendered']} rendered, "
+          f"{report['from_cache']} from cache, {report['copied']} copies (scene {'reads' if report['scene_uses_clock'] else 'ignores'} "
+          f"the clock)  {report['seconds']:.2f} s")
+    if report["video"]:
+        print(report["video"])
     return 0
 
 
@@ -344,6 +375,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="how far in front of the screen rays start (default: 4 panel widths)")
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    g = p.add_argument_group("animation and cluster")
+    g.add_argument("--frames", metavar="FIRST:LAST",
+                   help="render frames FIRST..LAST as OUT_nnnn.png (POV-Ray's +KFI/+KFF)")
+    g.add_argument("--clock", metavar="START:END",
+                   help="clock at the first and last frame (POV-Ray's +KI/+KF; default 0:1)")
+    g.add_argument("--video", metavar="FILE", help="also assemble the frames into FILE (.mp4 or .gif)")
+    g.add_argument("--fps", type=float, default=24.0, help="video frames per second (default 24)")
+    g.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                   help="render on this Dask cluster instead of local processes")
     _add_array_options(p)
     _add_mapping_options(p)
     p.set_defaults(func=cmd_render)

@@ -7,6 +7,9 @@ holds a ``povray.conf`` that permits reading the job's include folders, so
 POV-Ray's file I/O security allows them on builds that enforce it (Debian's
 3.7.0.10 reads the setting but, through an upstream bug, enforces nothing),
 and the log does not start with "cannot open the user configuration file".
+Because POV-Ray does not enforce it, each child is also confined by the
+kernel (``sandbox.py``, Linux Landlock): it reads only POV-Ray's own files
+and the job's inputs, and writes only in its folder.
 A side effect: a user's own ``~/.povray/3.7/povray.ini`` is not read, which
 keeps renders reproducible.
 
@@ -35,6 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
+from . import sandbox
 from .errors import (ConfigError, OutputError, PovrayError, PovrayNotFound,
                      PovrayTimeout, RenderInterrupted)
 from .povray_log import parse_error
@@ -53,6 +57,7 @@ LOG_FILE = "povray.log"
 OUTPUT_STEM = "frame"
 _FRAME_NAME = re.compile(rf"{OUTPUT_STEM}(\d+)\.png")
 
+_DENIED = re.compile(r"Cannot (open|find)")
 _POLL_SECONDS = 0.02
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
@@ -92,6 +97,9 @@ class PovrayJob:
     start_row, end_row : int or None
         Render only rows ``start_row <= row < end_row`` (0-based); the image
         keeps its full size and the other rows are black.
+    read_files : tuple of str or None
+        The files the scene may read (the sandbox's allow-list), besides
+        POV-Ray's own; None allows everything below `include_dirs`.
     """
 
     name: str
@@ -107,8 +115,14 @@ class PovrayJob:
     timeout: float | None = None
     start_row: int | None = None
     end_row: int | None = None
+    read_files: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
+        if self.read_files is not None:
+            if isinstance(self.read_files, (str, bytes)):
+                self._reject("read_files", "must be a sequence of paths", self.read_files)
+            object.__setattr__(self, "read_files",
+                               tuple(os.path.abspath(p) for p in self.read_files))
         for name in ("include_dirs", "options"):
             value = getattr(self, name)
             if isinstance(value, (str, bytes)):
@@ -299,7 +313,8 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
              on_result: Callable[[JobResult], None] | None = None,
              on_progress: Callable[[int, int], None] | None = None,
              binary: str | None = None,
-             workdir: str | Path | None = None) -> list[float]:
+             workdir: str | Path | None = None,
+             should_stop: Callable[[], bool] | None = None) -> list[float]:
     """Render jobs with at most `processes` POV-Ray children at once.
 
     Parameters
@@ -317,6 +332,9 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
         POV-Ray executable; `find_povray` by default.
     workdir : str or Path, optional
         Folder for the jobs' temporary folders; the system's by default.
+    should_stop : callable, optional
+        Polled while children run; True stops them all and raises
+        `RenderInterrupted` (a cancelled task on a Dask worker).
 
     Returns
     -------
@@ -354,7 +372,7 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
             while pending and len(running) < processes:
                 index, job = pending.popleft()
                 _start(index, job, binary, workdir, running)
-            for child in _wait_for_exits(running):
+            for child in _wait_for_exits(running, should_stop):
                 running.remove(child)
                 seconds[child.index] = _finish(child, on_result)
                 done += 1
@@ -378,8 +396,9 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
     try:
         command = build_command(job, binary)
         env = _prepare(folder, job)
-        with open(folder / LOG_FILE, "wb") as log, _deferred_interrupt():
-            process = _spawn(command, folder, env, log)
+        with open(folder / LOG_FILE, "wb") as log, _confinement(job, binary, folder) as fd, \
+                _deferred_interrupt():
+            process = _spawn(command, folder, env, log, fd)
             running.append(_Child(index, job, folder, command, process, time.monotonic()))
             registered = True
     except BaseException:
@@ -388,13 +407,27 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
         raise
 
 
+@contextlib.contextmanager
+def _confinement(job: PovrayJob, binary: str, folder: Path) -> Iterator[int | None]:
+    """The Landlock ruleset fd of `job` while its child starts (None: unconfined)."""
+    inputs = job.read_files if job.read_files is not None else \
+        tuple(os.path.abspath(d) for d in job.include_dirs)
+    policy = sandbox.Policy(sandbox.system_read_paths(binary) + inputs, (str(folder),))
+    ruleset = sandbox.build_ruleset(policy)
+    try:
+        yield None if ruleset is None else ruleset.fd
+    finally:
+        if ruleset is not None:
+            ruleset.close()
+
+
 def _spawn(command: list[str], folder: Path, env: dict[str, str],
-           log: BinaryIO) -> subprocess.Popen[bytes]:
+           log: BinaryIO, ruleset_fd: int | None = None) -> subprocess.Popen[bytes]:
     try:
         return subprocess.Popen(
             command, cwd=folder, env=env, stdin=subprocess.DEVNULL, stdout=log,
             stderr=subprocess.STDOUT, start_new_session=True,
-            preexec_fn=functools.partial(_child_setup, os.getpid()))
+            preexec_fn=functools.partial(_child_setup, os.getpid(), ruleset_fd))
     except OSError as error:
         raise PovrayNotFound(f"Cannot run POV-Ray at {command[0]}: "
                              f"{error.strerror}; {INSTALL_HINT}.") from None
@@ -443,17 +476,22 @@ def _deferred_interrupt() -> Iterator[None]:
             previous(signal.SIGINT, None)  # the default handler raises KeyboardInterrupt
 
 
-def _child_setup(parent: int) -> None:
-    """Run in the child before exec: die with the parent (Linux)."""
+def _child_setup(parent: int, ruleset_fd: int | None = None) -> None:
+    """Run in the child before exec: die with the parent (Linux), enter the sandbox."""
     if _LIBC is not None:
         _LIBC.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
         if os.getppid() != parent:  # the parent died before prctl took effect
             os._exit(1)
+    if ruleset_fd is not None:
+        sandbox.restrict_self(ruleset_fd)
 
 
-def _wait_for_exits(running: list[_Child]) -> list[_Child]:
-    """Wait until a child exits; the exited ones.  Raises on a timeout."""
+def _wait_for_exits(running: list[_Child],
+                    should_stop: Callable[[], bool] | None = None) -> list[_Child]:
+    """Wait until a child exits; the exited ones.  Raises on a timeout or a stop."""
     while True:
+        if should_stop is not None and should_stop():
+            raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
         now = time.monotonic()
         exited = [child for child in running if child.process.poll() is not None]
         for child in exited:
@@ -500,6 +538,11 @@ def _failure(child: _Child, log: str) -> PovrayError:
         reason = _describe_exit(code, log)
     elif reason is None:
         reason = f"POV-Ray finished without writing {_expected(child.job)}"
+    if code == 126 and not log.strip():
+        reason = "the POV-Ray process could not enter its sandbox (Landlock); set POVH3D_SANDBOX=off to run unconfined"
+    elif _DENIED.search(reason) and sandbox.landlock_abi() and sandbox.sandbox_mode() != "off":
+        reason += (" (povh3d lets a scene read only its own files and POV-Ray's include files, "
+                   "and write only in its job folder)")
     return PovrayError(f"{child.job.name}: {reason}", command=child.command,
                        returncode=code, log_tail=_tail(log))
 

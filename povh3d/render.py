@@ -24,6 +24,7 @@ from .errors import ConfigError
 from .footprint import angular_grid, latin_hypercube
 from .imageio import read_png
 from .povray import JobResult, PovrayJob, find_povray, povray_version, run_jobs
+from .sandbox import files_within
 from .scene import Scene
 from .templating import render_template, templates_dir
 
@@ -119,6 +120,9 @@ class RenderSettings:
     cache_dir : Path or None    None: ``default_cache_dir()``
     bit_depth : {8, 16}
     back_off : float or None    mm in front of the screen where rays start (None: default)
+    clock : float or None       POV-Ray's ``clock`` for every run (None: POV-Ray's default, 0);
+                                set only for scenes that read it (see animation.py)
+    scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
     """
 
     quality: str | Quality = "normal"
@@ -129,6 +133,8 @@ class RenderSettings:
     cache_dir: Path | None = None
     bit_depth: int = 8
     back_off: float | None = None
+    clock: float | None = None
+    scheduler: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.quality, Quality) and self.quality not in QUALITY_LEVELS:
@@ -144,13 +150,20 @@ class RenderSettings:
         if self.back_off is not None and not (np.isfinite(self.back_off) and self.back_off > 0):
             raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.back_off}")
 
+        if self.clock is not None and not np.isfinite(self.clock):
+            raise ConfigError(f"the clock must be a finite number, got {self.clock}")
+
     @property
     def spec(self) -> Quality:
         return self.quality if isinstance(self.quality, Quality) else QUALITY_LEVELS[self.quality]
 
     @property
     def options(self) -> tuple[str, ...]:
-        return self.spec.options
+        # +K sets the clock of a still; a run of several camera frames is a
+        # POV-Ray animation, where initial = final clock keeps it constant.
+        c = self.clock
+        clock = () if c is None else (f"+K{c!r}", f"+KI{c!r}", f"+KF{c!r}")
+        return self.spec.options + clock
 
 
 @dataclass(frozen=True)
@@ -188,6 +201,18 @@ class RenderStats:
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),
                 "wall_seconds": round(self.wall_seconds, 4)}
+
+
+class LocalRunner:
+    """Runs jobs as POV-Ray processes on this machine (``dask_backend.DaskRunner``: on a cluster)."""
+
+    def __init__(self, binary: str) -> None:
+        self.binary = binary
+        self.version = povray_version(binary)
+
+    def run(self, jobs: list[PovrayJob], *, processes: int,
+            on_result: Callable[[JobResult], None]) -> list[float]:
+        return run_jobs(jobs, processes=processes, on_result=on_result, binary=self.binary)
 
 
 def cpu_count() -> int:
@@ -246,8 +271,12 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
     stats : RenderStats
     """
     start = time.perf_counter()
-    binary = find_povray()
-    stats = RenderStats(frames=len(batch.frames), povray_version=povray_version(binary))
+    if settings.scheduler:
+        from .dask_backend import DaskRunner
+        runner: Any = DaskRunner(settings.scheduler)
+    else:
+        runner = LocalRunner(find_povray())
+    stats = RenderStats(frames=len(batch.frames), povray_version=runner.version)
     cache = ImageCache(settings.cache_dir or default_cache_dir()) if settings.use_cache else None
 
     common_key = content_key(__version__, stats.povray_version, scene.digest, batch.template,
@@ -280,7 +309,8 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         jobs.append(PovrayJob(name=name, script=script, width=batch.width, height=batch.height,
                               frames=len(chunk), include_dirs=tuple(str(d) for d in scene.include_dirs),
                               options=settings.options, threads=threads, bit_depth=settings.bit_depth,
-                              file_gamma="sRGB", timeout=settings.timeout))
+                              file_gamma="sRGB", timeout=settings.timeout,
+                              read_files=files_within(scene.files, scene.include_dirs)))
     chunk_of_job = {id(job): chunk for job, chunk in zip(jobs, chunks)}
 
     done = stats.cached
@@ -299,6 +329,6 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
             progress(done, len(keys))
 
     if jobs:
-        stats.povray_seconds = run_jobs(jobs, processes=processes, on_result=collect, binary=binary)
+        stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect)
     stats.wall_seconds = time.perf_counter() - start
     return [img for img in images if img is not None], stats
