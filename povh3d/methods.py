@@ -6,6 +6,10 @@
 - ``multi-ortho-views``: the same bank as one orthographic camera per view
   (the BBC method as the thesis ran it), views interleaved in NumPy.
 - ``pinhole``: one perspective camera per lens, the traditional baseline.
+- ``single-stage``: a virtual array of CSG lenslets with an index of
+  refraction, rendered by one orthographic camera (thesis 3.3): a physical
+  simulation, compared with the others by an error figure
+  (``povh3d/single_stage.py``).
 
 All three trace the ray of a pixel of CONVENTIONS.md; point-sampled they agree.
 A method is two pure halves around the renderer: what frames to ask POV-Ray
@@ -21,10 +25,12 @@ from typing import Any
 import numpy as np
 
 from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames, view_bank_mesh
+from .errors import ConfigError
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
 from .render import FrameBatch, Progress, RenderSettings, RenderStats, cpu_count, render_frames
 from .scene import Scene
+from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
 
 def _multi_ortho_batch(lens_array: LensArray, back_off: float) -> FrameBatch:
@@ -76,16 +82,35 @@ def _pinhole_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.nda
     return tile_elemental_images(elemental)
 
 
+def _single_stage_plan(lens_array: LensArray, back_off: float, lenslet: str = "conic",
+                       ior: float | None = None) -> SingleStagePlan:
+    return SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off)
+
+
+def _single_stage_batch(lens_array: LensArray, back_off: float, **options: Any) -> FrameBatch:
+    return _single_stage_plan(lens_array, back_off, **options).batch()
+
+
+def _single_stage_assemble(lens_array: LensArray, images: list[np.ndarray], *, back_off: float,
+                           **options: Any) -> np.ndarray:
+    return _single_stage_plan(lens_array, back_off, **options).assemble(images[0])
+
+
 @dataclass(frozen=True)
 class Method:
-    batch: Callable[[LensArray, float], FrameBatch]
-    assemble: Callable[[LensArray, list[np.ndarray]], np.ndarray]
+    batch: Callable[..., FrameBatch]
+    assemble: Callable[..., np.ndarray]
+    # Keyword options the method takes (CLI --lenslet, --ior); a method with
+    # options gets them, and back_off, in both batch() and assemble().
+    options: tuple[str, ...] = ()
+    default_back_off: Callable[[LensArray], float] = default_back_off
 
 
 METHODS: dict[str, Method] = {
     "multi-ortho": Method(_multi_ortho_batch, _multi_ortho_assemble),
     "multi-ortho-views": Method(_views_batch, _views_assemble),
     "pinhole": Method(_pinhole_batch, _pinhole_assemble),
+    "single-stage": Method(_single_stage_batch, _single_stage_assemble, ("lenslet", "ior"), default_depth),
 }
 
 
@@ -103,14 +128,24 @@ class MethodResult:
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
-               progress: Progress | None = None) -> MethodResult:
-    """Render ``scene`` with method ``name`` and return the H3D image."""
+               progress: Progress | None = None, **options: Any) -> MethodResult:
+    """Render ``scene`` with method ``name`` and return the H3D image.
+
+    ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
+    None values count as not given.
+    """
     method = METHODS[name]
-    back_off = settings.back_off or default_back_off(lens_array)
-    batch = method.batch(lens_array, back_off)
+    options = {k: v for k, v in options.items() if v is not None}
+    unknown = sorted(set(options) - set(method.options))
+    if unknown:
+        raise ConfigError(f"method {name!r} takes no option {', '.join(unknown)}; "
+                          f"drop it or pick a method that does")
+    back_off = settings.back_off or method.default_back_off(lens_array)
+    extra = {"back_off": back_off, **options} if method.options else {}
+    batch = method.batch(lens_array, back_off, **options)
     images, stats = render_frames(scene, batch, settings, method=name,
                                   header=display_header(lens_array), progress=progress)
-    h3d = method.assemble(lens_array, images)
+    h3d = method.assemble(lens_array, images, **extra)
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
     if h3d.shape[:2] != panel_shape:
         # A camera bank covers the lens array; the panel margin outside it stays black.
