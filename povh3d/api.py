@@ -39,9 +39,11 @@ def _sidecar(kind: str, lens_array: LensArray | None, **extra: Any) -> dict[str,
 def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
            method: str = "multi-ortho", settings: RenderSettings | None = None,
            views_dir: str | Path | None = None, include_dirs: tuple[str | Path, ...] = (),
-           display: dict[str, Any] | None = None, progress: Progress | None = None) -> dict[str, Any]:
+           display: dict[str, Any] | None = None, progress: Progress | None = None,
+           **method_options: Any) -> dict[str, Any]:
     """Render ``scene_path`` through ``lens_array`` into the H3D PNG ``output``.
 
+    ``method_options`` go to the method (``single-stage``: ``lenslet``, ``ior``).
     Returns the sidecar record written beside ``output``.
     """
     settings = settings or RenderSettings()
@@ -58,7 +60,7 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         check_writable(Path(views_dir) / ".povh3d-write-test")
 
     start = time.perf_counter()
-    result = run_method(method, scene, lens_array, settings, progress)
+    result = run_method(method, scene, lens_array, settings, progress, **method_options)
     render_seconds = time.perf_counter() - start
     h3d = result.h3d
     expected = (lens_array.panel.height, lens_array.panel.width)
@@ -73,6 +75,8 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         output_gamma="sRGB", povray_version=result.stats.povray_version,
         timings={"render_seconds": round(render_seconds, 4), **result.stats.as_dict()},
     )
+    if method == "single-stage":
+        record["single_stage"] = single_stage_record(lens_array, result.back_off, **method_options)
     if views_dir is not None:
         write_views(views_dir, extract(h3d[lens_array.bank_region], lens_array.require_views()), lens_array, record)
     write_png(output, h3d)
@@ -139,9 +143,16 @@ def interleave_dir(views_dir: str | Path, output: str | Path) -> dict[str, Any]:
     return record
 
 
-def extract_file(h3d_path: str | Path, ppl: tuple[int, int], views_dir: str | Path) -> dict[str, Any]:
-    """Extract the view stack of an H3D PNG into ``views_dir``; ``ppl`` is ``(Ny, Nx)``."""
+def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: str | Path) -> dict[str, Any]:
+    """Extract the view stack of an H3D PNG into ``views_dir``; ``ppl`` is ``(Ny, Nx)``.
+
+    Without ``ppl`` the lens array comes from the image's sidecar; a hex or
+    fractional-PPL array is resampled lens by lens (``elemental.extract_views``)
+    and ``views.json`` records the lens centres used.
+    """
     h3d = read_png(h3d_path)
+    if ppl is None:
+        return _extract_resampled(h3d, h3d_path, views_dir)
     try:
         views = extract(h3d, ppl)
     except ValueError as exc:
@@ -152,6 +163,38 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int], views_dir: str | Pa
         raise OutputError(f"cannot create {str(views_dir)!r}: {exc.strerror}") from None
     write_views(views_dir, views, None, {"h3d": str(Path(h3d_path).resolve())})
     return {"views": [ppl[1], ppl[0]], "view_size_px": [views.shape[3], views.shape[2]]}
+
+
+def single_stage_record(lens_array: LensArray, back_off: float, lenslet: str = "conic",
+                        ior: float | None = None) -> dict[str, Any]:
+    """What the single-stage method built: lenslet optics, focal plane, capture size."""
+    from .single_stage import SingleStagePlan, lenslet_for
+
+    return SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off).describe()
+
+
+def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | Path) -> dict[str, Any]:
+    from .elemental import extract_views, view_grid
+    from .presets import lens_array_from_record
+
+    record = read_sidecar(h3d_path)
+    if not record or "lens_array" not in record:
+        raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
+    lens_array = lens_array_from_record(record["lens_array"])
+    if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
+        raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
+                         f"{lens_array.panel.width}x{lens_array.panel.height} panel; re-render it")
+    ny, nx = lens_array.views or view_grid(lens_array)
+    views = extract_views(h3d, lens_array, (ny, nx)) if lens_array.views is None else \
+        extract(h3d[lens_array.bank_region], (ny, nx))
+    try:
+        Path(views_dir).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create {str(views_dir)!r}: {exc.strerror}") from None
+    source = {"h3d": str(Path(h3d_path).resolve()), "resampled": lens_array.views is None,
+              "lens_centres_mm": lens_array.lens_centres().reshape(-1, 2).tolist()}
+    write_views(views_dir, views, lens_array, source)
+    return {"views": [nx, ny], "view_size_px": [views.shape[3], views.shape[2]]}
 
 
 def povray_info() -> dict[str, str]:
