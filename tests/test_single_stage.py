@@ -204,3 +204,67 @@ def test_unknown_option_is_refused(tmp_path):
     scene = load_scene(write_checker_plane(tmp_path, 5.93, 2.5))
     with pytest.raises(ConfigError, match="takes no option ior"):
         run_method("multi-ortho", scene, SQUARE, DRAFT, ior=1.5)
+
+
+# -- command line ------------------------------------------------------------------
+
+import json  # noqa: E402
+import os  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+HEX_SMALL = ["--grid", "hex", "--lenses", "12x8", "--ppl", "9.5", "--pixel-pitch", "0.1", "--focal", "1.2",
+             "--quality", "draft", "-q", "--method", "single-stage"]
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, "-m", "povh3d.cli", *map(str, args)], capture_output=True,
+                          text=True, env=dict(os.environ), cwd=REPO)
+
+
+def error_line(proc) -> str:
+    assert proc.returncode == 2, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("povh3d: error: ") and "Traceback" not in proc.stderr
+    return lines[0]
+
+
+def test_cli_hex_render_and_resampled_extract(tmp_path):
+    scene = write_textured_scene(tmp_path)
+    out = tmp_path / "hex.png"
+    proc = cli("render", scene, "-o", out, *HEX_SMALL, "--lenslet", "spherical")
+    assert proc.returncode == 0, proc.stderr
+    record = json.loads(out.with_suffix(".json").read_text())
+    assert record["method"] == "single-stage"
+    assert record["single_stage"]["lenslet"]["shape"] == "spherical"
+    assert record["single_stage"]["focal_plane_z_mm"] == 0
+    proc = cli("extract", out, "-o", tmp_path / "views")
+    assert proc.returncode == 0, proc.stderr
+    views = json.loads((tmp_path / "views" / "views.json").read_text())
+    assert views["views"] == [10, 10] and views["source"]["resampled"]
+    assert len(views["source"]["lens_centres_mm"]) == 12 * 8
+    assert (tmp_path / "views" / "v_009_009.png").is_file()
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--ior", "1.0"], "index of refraction must be greater than 1"),
+    (["--ior", "1.2", "--lenslet", "spherical"], "raise --ior above"),
+    (["--ppl", "0.5"], "under one pixel"),
+    (["--front-clearance", "5"], "drop --front-clearance"),
+])
+def test_cli_bad_single_stage_input(tmp_path, args, needle):
+    scene = write_textured_scene(tmp_path)
+    base = list(HEX_SMALL)
+    if "--ppl" in args:
+        i = base.index("--ppl")
+        del base[i:i + 2]
+    proc = cli("render", scene, "-o", tmp_path / "x.png", *base, *args)
+    assert needle in error_line(proc)
+    assert not list(tmp_path.glob("x*"))
+
+
+def test_cli_ior_needs_single_stage(tmp_path):
+    scene = write_textured_scene(tmp_path)
+    proc = cli("render", scene, "-o", tmp_path / "x.png", "--lenses", "4x4", "--ppl", "4", "--ior", "1.5")
+    assert "only apply to --method single-stage" in error_line(proc)
