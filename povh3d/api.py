@@ -21,7 +21,7 @@ from .imageio import atomic_path, check_writable, read_png, read_sidecar, write_
 from .interleave import extract, interleave
 from .methods import METHODS, run_method
 from .povray import find_povray, povray_version
-from .render import Progress, RenderSettings
+from .render import Progress, Quality, RenderSettings
 from .sandbox import describe as describe_sandbox
 from .scene import load_scene
 
@@ -43,12 +43,15 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
            method: str = "multi-ortho", settings: RenderSettings | None = None,
            views_dir: str | Path | None = None, include_dirs: tuple[str | Path, ...] = (),
            display: dict[str, Any] | None = None, progress: Progress | None = None,
-           mapping: Any = None, mapped_panel: tuple[int, int] | None = None) -> dict[str, Any]:
+           mapping: Any = None, mapped_panel: tuple[int, int] | None = None,
+           **method_options: Any) -> dict[str, Any]:
     """Render ``scene_path`` through ``lens_array`` into the H3D PNG ``output``.
 
     With a ``mapping`` (``povh3d.mappings``), ``lens_array`` is the view-space
     array it reads (``mapping.render_array``) and ``output`` is the panel image
-    of size ``mapped_panel`` (W, H).  Returns the sidecar record written beside ``output``.
+    of size ``mapped_panel`` (W, H).  ``method_options`` go to the method
+    (``single-stage``: ``lenslet``, ``ior``).  Returns the sidecar record written
+    beside ``output``.
     """
     settings = settings or RenderSettings()
     if method not in METHODS:
@@ -64,7 +67,7 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         check_writable(Path(views_dir) / ".povh3d-write-test")
 
     start = time.perf_counter()
-    result = run_method(method, scene, lens_array, settings, progress)
+    result = run_method(method, scene, lens_array, settings, progress, **method_options)
     render_seconds = time.perf_counter() - start
     h3d = result.h3d
     expected = (lens_array.panel.height, lens_array.panel.width)
@@ -74,12 +77,14 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
     record = _sidecar(
         "h3d", lens_array, method=method, display=display or {}, scene=str(scene.path),
         scene_sha256=scene.digest,
-        quality={"level": settings.quality, "povray_options": list(settings.options),
-                 "bit_depth": settings.bit_depth, "front_clearance_mm": result.back_off},
+        quality={**quality_record(settings, result.quality), "bit_depth": settings.bit_depth,
+                 "front_clearance_mm": result.back_off},
         output_gamma="sRGB", povray_version=result.stats.povray_version,
         sandbox=describe_sandbox(), scheduler=settings.scheduler,
         timings={"render_seconds": round(render_seconds, 4), **result.stats.as_dict()},
     )
+    if method == "single-stage":
+        record["single_stage"] = single_stage_record(lens_array, result.back_off, **method_options)
     if views_dir is not None:
         write_views(views_dir, extract(h3d[lens_array.bank_region], lens_array.require_views()), lens_array, record)
     if mapping is not None:
@@ -149,9 +154,16 @@ def interleave_dir(views_dir: str | Path, output: str | Path) -> dict[str, Any]:
     return record
 
 
-def extract_file(h3d_path: str | Path, ppl: tuple[int, int], views_dir: str | Path) -> dict[str, Any]:
-    """Extract the view stack of an H3D PNG into ``views_dir``; ``ppl`` is ``(Ny, Nx)``."""
+def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: str | Path) -> dict[str, Any]:
+    """Extract the view stack of an H3D PNG into ``views_dir``; ``ppl`` is ``(Ny, Nx)``.
+
+    Without ``ppl`` the lens array comes from the image's sidecar; a hex or
+    fractional-PPL array is resampled lens by lens (``elemental.extract_views``)
+    and ``views.json`` records the lens centres used.
+    """
     h3d = read_png(h3d_path)
+    if ppl is None:
+        return _extract_resampled(h3d, h3d_path, views_dir)
     try:
         views = extract(h3d, ppl)
     except ValueError as exc:
@@ -162,6 +174,46 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int], views_dir: str | Pa
         raise OutputError(f"cannot create {str(views_dir)!r}: {exc.strerror}") from None
     write_views(views_dir, views, None, {"h3d": str(Path(h3d_path).resolve())})
     return {"views": [ppl[1], ppl[0]], "view_size_px": [views.shape[3], views.shape[2]]}
+
+
+def quality_record(settings: RenderSettings, rendered: Quality) -> dict[str, Any]:
+    """The quality asked for and as rendered (a method without sub-views antialiases instead)."""
+    level = settings.quality if isinstance(settings.quality, str) else "custom"
+    return {"level": level, "setting": rendered.label, "povray_options": list(rendered.options),
+            "subviews": rendered.subviews, "footprint_samples": rendered.footprint,
+            "max_trace_level": rendered.max_trace_level}
+
+
+def single_stage_record(lens_array: LensArray, back_off: float, lenslet: str = "conic",
+                        ior: float | None = None) -> dict[str, Any]:
+    """What the single-stage method built: lenslet optics, focal plane, capture size."""
+    from .single_stage import SingleStagePlan, lenslet_for
+
+    return SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off).describe()
+
+
+def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | Path) -> dict[str, Any]:
+    from .elemental import extract_views, view_grid
+    from .presets import lens_array_from_record
+
+    record = read_sidecar(h3d_path)
+    if not record or "lens_array" not in record:
+        raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
+    lens_array = lens_array_from_record(record["lens_array"])
+    if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
+        raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
+                         f"{lens_array.panel.width}x{lens_array.panel.height} panel; re-render it")
+    ny, nx = lens_array.views or view_grid(lens_array)
+    views = extract_views(h3d, lens_array, (ny, nx)) if lens_array.views is None else \
+        extract(h3d[lens_array.bank_region], (ny, nx))
+    try:
+        Path(views_dir).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create {str(views_dir)!r}: {exc.strerror}") from None
+    source = {"h3d": str(Path(h3d_path).resolve()), "resampled": lens_array.views is None,
+              "lens_centres_mm": lens_array.lens_centres().reshape(-1, 2).tolist()}
+    write_views(views_dir, views, lens_array, source)
+    return {"views": [nx, ny], "view_size_px": [views.shape[3], views.shape[2]]}
 
 
 def povray_info() -> dict[str, str]:

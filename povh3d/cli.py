@@ -115,7 +115,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     try:
         record = render(args.scene, lens_array, output, method=args.method, settings=settings,
                         views_dir=args.views_dir, include_dirs=tuple(args.include), display=display,
-                        progress=update, mapping=mapping, mapped_panel=mapped_panel)
+                        progress=update, mapping=mapping, mapped_panel=mapped_panel,
+                        **_method_options(args))
     finally:
         close()
     t = record["timings"]
@@ -150,6 +151,17 @@ def _render_animation(args: argparse.Namespace, lens_array: Any, display: dict[s
     return 0
 
 
+def _method_options(args: argparse.Namespace) -> dict[str, Any]:
+    """--lenslet / --ior, for the methods that take them (single-stage)."""
+    options = {"lenslet": args.lenslet, "ior": args.ior}
+    if args.method != "single-stage":
+        given = [f"--{k}" for k, v in options.items() if v is not None]
+        if given:
+            raise ConfigError(f"{' and '.join(given)} only apply to --method single-stage")
+        return {}
+    return options
+
+
 def cmd_interleave(args: argparse.Namespace) -> int:
     from .api import interleave_dir
 
@@ -161,9 +173,13 @@ def cmd_interleave(args: argparse.Namespace) -> int:
 def cmd_extract(args: argparse.Namespace) -> int:
     from .api import extract_file
 
-    ppl = parse_pair(args.ppl, "--ppl", integral=True)
-    nx, ny = ppl if isinstance(ppl, tuple) else (ppl, 1)
-    record = extract_file(args.h3d, (ny, nx), args.output)
+    if args.ppl is None:  # the lens array from the sidecar; hex / fractional PPL resampled
+        record = extract_file(args.h3d, None, args.output)
+        nx, ny = record["views"]
+    else:
+        ppl = parse_pair(args.ppl, "--ppl", integral=True)
+        nx, ny = ppl if isinstance(ppl, tuple) else (ppl, 1)
+        record = extract_file(args.h3d, (ny, nx), args.output)
     print(f"{args.output}  {nx}x{ny} views of {record['view_size_px'][0]}x{record['view_size_px'][1]}")
     return 0
 
@@ -384,6 +400,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--fps", type=float, default=24.0, help="video frames per second (default 24)")
     g.add_argument("--scheduler", metavar="tcp://HOST:8786",
                    help="render on this Dask cluster instead of local processes")
+    p.add_argument("--lenslet", choices=("spherical", "conic"),
+                   help="single-stage lenslet surface (default: conic, aberration-free)")
+    p.add_argument("--ior", type=float, help="single-stage lenslet index of refraction; the radius "
+                   "follows from the lens-maker equation (default: an optically thin lens)")
     _add_array_options(p)
     _add_mapping_options(p)
     p.set_defaults(func=cmd_render)
@@ -395,7 +415,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("extract", help="extract the views of an H3D image")
     p.add_argument("h3d")
-    p.add_argument("--ppl", required=True, help="pixels per lens NxxNy (lenticular: Nx)")
+    p.add_argument("--ppl", help="pixels per lens NxxNy (lenticular: Nx); default: the lens array "
+                   "in the image's sidecar (hex and fractional PPL are resampled lens by lens)")
     p.add_argument("-o", "--output", required=True, help="folder for v_LLL_KKK.png")
     p.set_defaults(func=cmd_extract)
 

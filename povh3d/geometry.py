@@ -173,9 +173,9 @@ class LensArray:
         """The views ``(Ny, Nx)``, or a ConfigError saying why there is no camera bank."""
         if self.views is None:
             if self.grid == "hex":
-                raise ConfigError("a hex lens array has no orthographic camera bank and renders only "
-                                  "through a virtual lens array (single-stage), which this version "
-                                  "does not have yet; pick a square or lenticular --grid")
+                raise ConfigError("a hex lens array has no orthographic camera bank; render it through a "
+                                  "virtual lens array with --method single-stage (views: 'povh3d extract' "
+                                  "resamples them), or pick a square or lenticular --grid")
             raise ConfigError(f"a camera bank needs whole pixels per lens (got {self.ppl_x:g} x {self.ppl_y:g}) "
                               "and an even pixel margin around the array; change --ppl, --lenses or the panel")
         return self.views

@@ -6,6 +6,10 @@
 - ``multi-ortho-views``: the same bank as one orthographic camera per view
   (the BBC method as the thesis ran it), views interleaved in NumPy.
 - ``pinhole``: one perspective camera per lens, the traditional baseline.
+- ``single-stage``: a virtual array of CSG lenslets with an index of
+  refraction, rendered by one orthographic camera (thesis 3.3): a physical
+  simulation, compared with the others by an error figure
+  (``povh3d/single_stage.py``).
 
 All three trace the ray of a pixel of CONVENTIONS.md; point-sampled they agree.
 A method is two pure halves around the renderer: what frames to ask POV-Ray
@@ -15,29 +19,26 @@ for, and how to assemble the returned images into the H3D image.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from .colour import mean_in_linear_light
-from .errors import ConfigError
 from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames, view_bank_mesh
+from .errors import ConfigError
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
-from .render import FrameBatch, Progress, RenderSettings, RenderStats, cpu_count, render_frames
+from .render import FrameBatch, Progress, Quality, RenderSettings, RenderStats, cpu_count, render_frames
 from .scene import Scene
+from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
 
 def _multi_ortho_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     if lens_array.grid == "hex":
         lens_array.require_views()  # raises "render hex with single-stage"
     # Whole PPL: one quad per view (views tiled); otherwise one quad per lens.
-    if lens_array.views:
-        mesh = view_bank_mesh(lens_array, back_off, samples)
-    else:
-        _point_sampled_only(samples, "multi-ortho with a non-integral number of pixels per lens")
-        mesh = camera_mesh(lens_array, back_off)
+    mesh = view_bank_mesh(lens_array, back_off, samples) if lens_array.views else camera_mesh(lens_array, back_off)
     width, height = mesh.image_size
     return FrameBatch("multi_ortho.pov.j2", {"mesh": mesh}, [{}], width, height, processes=1)
 
@@ -52,15 +53,8 @@ def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np
     return interleave(untile_views(bank, (ny, nx)))
 
 
-def _point_sampled_only(samples: np.ndarray, what: str) -> None:
-    if len(samples) != 1 or np.any(samples):
-        raise ConfigError(f"{what} traces one ray per pixel; use sub-views and footprint samples "
-                          "with multi-ortho on whole pixels per lens")
-
-
 def _views_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     lens_array.require_views()
-    _point_sampled_only(samples, "multi-ortho-views")
     common, frames = ortho_view_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     # Process start-up (~0.7 s) is mostly idle, so more processes than cores
@@ -78,7 +72,6 @@ def _views_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarr
 
 def _pinhole_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     lens_array.require_views()
-    _point_sampled_only(samples, "pinhole")
     common, frames = pinhole_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     processes = 2 * cpu_count()
@@ -93,16 +86,41 @@ def _pinhole_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.nda
     return tile_elemental_images(elemental)
 
 
+def _single_stage_plan(lens_array: LensArray, back_off: float, lenslet: str = "conic",
+                       ior: float | None = None) -> SingleStagePlan:
+    return SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off)
+
+
+def _single_stage_batch(lens_array: LensArray, back_off: float, samples: np.ndarray,
+                        **options: Any) -> FrameBatch:
+    return _single_stage_plan(lens_array, back_off, **options).batch()
+
+
+def _single_stage_assemble(lens_array: LensArray, images: list[np.ndarray], *, back_off: float,
+                           **options: Any) -> np.ndarray:
+    return _single_stage_plan(lens_array, back_off, **options).assemble(images[0])
+
+
 @dataclass(frozen=True)
 class Method:
-    batch: Callable[[LensArray, float, np.ndarray], FrameBatch]  # (array, back-off mm, footprint samples)
-    assemble: Callable[[LensArray, list[np.ndarray]], np.ndarray]
+    # batch(array, back-off mm, footprint samples (K, 4), **options)
+    batch: Callable[..., FrameBatch]
+    assemble: Callable[..., np.ndarray]
+    # Keyword options the method takes (CLI --lenslet, --ior); a method with
+    # options gets them, and back_off, in both batch() and assemble().
+    options: tuple[str, ...] = ()
+    default_back_off: Callable[[LensArray], float] = default_back_off
+    # Whether the method can trace footprint samples (sub-views) for this array;
+    # where it cannot, a quality that asks for them falls back to antialiasing.
+    takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
 
 
 METHODS: dict[str, Method] = {
-    "multi-ortho": Method(_multi_ortho_batch, _multi_ortho_assemble),
+    "multi-ortho": Method(_multi_ortho_batch, _multi_ortho_assemble,
+                          takes_samples=lambda lens_array: lens_array.views is not None),
     "multi-ortho-views": Method(_views_batch, _views_assemble),
     "pinhole": Method(_pinhole_batch, _pinhole_assemble),
+    "single-stage": Method(_single_stage_batch, _single_stage_assemble, ("lenslet", "ior"), default_depth),
 }
 
 
@@ -117,23 +135,36 @@ class MethodResult:
     h3d: np.ndarray          # (H, W, C) uint8 or uint16
     stats: RenderStats
     back_off: float
+    quality: Quality         # as rendered (after any fallback to antialiasing)
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
-               progress: Progress | None = None) -> MethodResult:
-    """Render ``scene`` with method ``name`` and return the H3D image."""
+               progress: Progress | None = None, **options: Any) -> MethodResult:
+    """Render ``scene`` with method ``name`` and return the H3D image.
+
+    ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
+    None values count as not given.
+    """
     method = METHODS[name]
-    back_off = settings.back_off or default_back_off(lens_array)
-    quality = settings.spec
-    batch = method.batch(lens_array, back_off, quality.samples())
+    options = {k: v for k, v in options.items() if v is not None}
+    unknown = sorted(set(options) - set(method.options))
+    if unknown:
+        raise ConfigError(f"method {name!r} takes no option {', '.join(unknown)}; "
+                          f"drop it or pick a method that does")
+    back_off = settings.back_off or method.default_back_off(lens_array)
+    extra = {"back_off": back_off, **options} if method.options else {}
+    quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
+    if quality != settings.spec:
+        settings = replace(settings, quality=quality)
+    batch = method.batch(lens_array, back_off, quality.samples(), **options)
     images, stats = render_frames(scene, batch, settings, method=name,
                                   header=display_header(lens_array, quality.max_trace_level),
                                   progress=progress)
-    h3d = method.assemble(lens_array, images)
+    h3d = method.assemble(lens_array, images, **extra)
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
     if h3d.shape[:2] != panel_shape:
         # A camera bank covers the lens array; the panel margin outside it stays black.
         canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
         canvas[lens_array.bank_region] = h3d
         h3d = canvas
-    return MethodResult(h3d, stats, back_off)
+    return MethodResult(h3d, stats, back_off, quality)

@@ -153,3 +153,12 @@ def describe_fields(fields: dict[str, Any]) -> dict[str, Any]:
         sx, sy = _pair("pixel pitch", fields["pixel_pitch"])
         out["physical_panel"] = {"size_px": list(fields["panel"]), "pixel_pitch_mm": [sx, sy]}
     return out
+
+
+def lens_array_from_record(record: dict[str, Any]) -> LensArray:
+    """The LensArray a sidecar's ``lens_array`` entry (``LensArray.describe()``) describes."""
+    try:
+        panel = Panel(*record["panel"]["size_px"], *record["panel"]["pixel_pitch_mm"])
+        return LensArray(record["grid"], *record["lenses"], *record["lens_pitch_mm"], record["focal_mm"], panel)
+    except (KeyError, TypeError) as exc:
+        raise ConfigError(f"the sidecar's lens array is incomplete ({exc}); give --ppl NxxNy") from None

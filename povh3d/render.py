@@ -12,7 +12,7 @@ import hashlib
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +75,14 @@ class Quality:
             return ("-A",)
         return (f"+A{self.antialias:g}", f"+AM{self.aa_method}", f"+R{self.aa_depth}") + (
             ("+J",) if self.jitter else ())
+
+    def point_sampled(self) -> Quality:
+        """This quality for a method that traces one ray per sub-view (no footprint
+        samples): sub-views and footprint samples become adaptive antialiasing."""
+        if self.subviews == 1 and not self.footprint:
+            return self
+        aa = {} if self.antialias is not None else {"antialias": 0.05, "aa_method": 2, "aa_depth": 3}
+        return replace(self, subviews=1, footprint=0, **aa)
 
     def samples(self) -> np.ndarray:
         """The footprint samples each pixel gets, ``(K, 4)`` (see ``povh3d.footprint``)."""

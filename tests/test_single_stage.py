@@ -1,0 +1,270 @@
+"""Single-stage rendering through a virtual lens array, measured in POV-Ray.
+
+- The focal length of a rendered lenslet, from collimated camera rays landing
+  on position-coded planes at two depths (the slope of hit position against
+  ray height gives ``f``, its zero crossing the focal plane).
+- Against multi-ortho on the same scene (point-sampled): PSNR for conic and
+  spherical lenslets; an image that skips the 180-degree turn must fail.
+- hex-5.6 over the whole panel: the rays of every lens cross the display plane
+  at its CONVENTIONS centre, within 0.05 pixel.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from povh3d.errors import ConfigError
+from povh3d.geometry import LensArray, Panel, pixel_rays
+from povh3d.imageio import read_png
+from povh3d.methods import display_header, run_method
+from povh3d.povray import PovrayJob, find_povray, run_jobs
+from povh3d.presets import get_preset, lens_array_from_fields
+from povh3d.render import RenderSettings, build_script
+from povh3d.scene import load_scene
+from povh3d.single_stage import SingleStagePlan, lenslet_for, recentre_unit
+
+from .conftest import lenticular_array, square_array
+from .scenes import psnr, write_checker_plane, write_textured_scene
+
+DRAFT = RenderSettings(quality="draft", use_cache=False)
+HALF = 70.0  # position code covers -HALF..HALF mm
+
+
+def write_position_plane(folder: Path, z0: float, half: float = HALF) -> Path:
+    """An emissive plane at ``z0`` whose red and green encode x and y in ``-half..half`` mm."""
+    path = folder / f"position_{z0:+g}.pov"
+    path.write_text(f"""#version 3.7;
+global_settings {{ assumed_gamma 1.0 }}
+plane {{ z, {z0!r}
+  pigment {{ average pigment_map {{
+    [1 function {{ (x + {half!r}) / {2 * half!r} }} color_map {{ [0 rgb 0] [1 rgb <2, 0, 0>] }}]
+    [1 function {{ (y + {half!r}) / {2 * half!r} }} color_map {{ [0 rgb 0] [1 rgb <0, 2, 0>] }}] }} }}
+  finish {{ emission 1 diffuse 0 ambient 0 }} }}
+""")
+    return path
+
+
+def capture_positions(plan: SingleStagePlan, scene: Path, half: float = HALF) -> np.ndarray:
+    """Render the raw capture (no turn) in linear 16-bit; decode the (x, y) each ray hit."""
+    batch = plan.batch()
+    script = build_script(batch, batch.frames, method="single-stage", scene_path=str(scene),
+                          add_assumed_gamma=False, header=display_header(plan.lens_array))
+    job = PovrayJob(name="positions", script=script, width=batch.width, height=batch.height,
+                    options=("-A",), bit_depth=16, file_gamma="1.0", read_files=(str(scene),))
+    out = []
+    run_jobs([job], processes=1, binary=find_povray(), on_result=lambda r: out.append(read_png(r.images[0])))
+    img = out[0].astype(np.float64) / 65535
+    return np.stack([img[..., 0], img[..., 1]], axis=-1) * (2 * half) - half
+
+
+@pytest.mark.parametrize("shape,ior", [("conic", None), ("conic", 1.5), ("spherical", None), ("spherical", 1.5)])
+def test_rendered_lenslet_focal_length(tmp_path, shape, ior):
+    f = 1.5
+    la = LensArray("square", 1, 1, 0.8, 0.8, f, Panel(80, 80, 0.01, 0.01))
+    plan = SingleStagePlan(la, lenslet_for(la, shape, ior))
+    X, _ = la.panel.pixel_centres()
+    row = 40  # the row through the axis (y = -0.005 mm)
+    hits = {z: capture_positions(plan, write_position_plane(tmp_path, z, 1.0), 1.0)[row, :, 0]
+            for z in (0.6, 1.2)}  # code +-1 mm: 16-bit steps of 3e-5 mm
+    # Each ray's axis crossing (the spot a bright line focuses to), from the
+    # principal plane z = -f: the focal length.
+    z_cross = 0.6 - hits[0.6] * (1.2 - 0.6) / (hits[1.2] - hits[0.6])
+    rays = np.abs(X) > 0.04  # rays on the axis cross it everywhere
+    paraxial = rays & (np.abs(X) < 0.12)
+    f_focus = np.median(z_cross[paraxial]) + f
+    assert f_focus == pytest.approx(f, rel=0.02)
+    if shape == "conic":  # aberration-free: every ray to the same point, rim included
+        assert np.abs(z_cross[rays & (np.abs(X) < 0.38)]).max() < 0.02 * f
+    else:  # negative control: the sphere's rim rays focus short
+        assert z_cross[np.abs(X) > 0.3].mean() < -0.02 * f or plan.lenslet.corner_sag < 0.01 * f
+    # The angle scale near the axis: hit = -w (z - zF) / f_angle.
+    slope = lambda z: np.polyfit(X[paraxial], hits[z][paraxial], 1)[0]  # noqa: E731
+    assert (1.2 - 0.6) / (slope(0.6) - slope(1.2)) == pytest.approx(f, rel=0.02)
+
+
+def test_hex_56_lens_centres_over_the_whole_panel(tmp_path):
+    la = lens_array_from_fields(get_preset("hex-5.6"))
+    assert la.lenses_x * la.lenses_y > 14000
+    plan = SingleStagePlan(la, lenslet_for(la, "conic"))
+    hit = capture_positions(plan, write_position_plane(tmp_path, 0.0))
+    centres, _, inside = pixel_rays(la)
+    X, Y = np.meshgrid(*la.panel.pixel_centres())
+    # pixel_rays calls a pixel inside when it is within the hexagon's circumradius;
+    # on the outer rows that disc pokes out of the hexagon: keep true hexagon pixels.
+    dx, dy = np.abs(X - centres[..., 0]), np.abs(Y - centres[..., 1])
+    in_hex = inside & (np.minimum(la.pitch_x / 2 - dx, la.pitch_x / 2 - dx / 2 - math.sqrt(3) / 2 * dy) > 1e-6)
+    assert in_hex.sum() > 0.98 * la.panel.width * la.panel.height
+    err = np.abs(hit - centres) / la.panel.pitch_x
+    assert err[in_hex].max() < 0.05, f"worst lens-centre error {err[in_hex].max():.3f} px"
+    # Negative control: a centre grid off by a tenth of a pixel is caught.
+    assert (np.abs(hit[..., 0] - centres[..., 0] - 0.1 * la.panel.pitch_x) / la.panel.pitch_x)[in_hex].max() > 0.05
+
+
+SQUARE = square_array(lx=24, ly=16, nx=6, ny=6, s=0.1, f=1.5)
+# z0 = +-5.93 mm: at +-6 mm with 2.5 mm squares about 5 % of the point samples land
+# exactly on a checker edge, where even multi-ortho and multi-ortho-views disagree.
+Z_ORACLE = {"behind": 5.93, "in-front": -5.93}
+
+
+@pytest.fixture(scope="module")
+def checker_renders(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("checker")
+    out = {}
+    for name, z0 in Z_ORACLE.items():
+        scene = load_scene(write_checker_plane(folder, z0, 2.5))
+        out[name] = {"multi-ortho": run_method("multi-ortho", scene, SQUARE, DRAFT).h3d}
+        for shape in ("conic", "spherical"):
+            out[name][shape] = run_method("single-stage", scene, SQUARE, DRAFT, lenslet=shape).h3d
+    return out
+
+
+@pytest.mark.parametrize("where", list(Z_ORACLE))
+def test_conic_matches_multi_ortho_on_the_oracle_scene(checker_renders, where):
+    r = checker_renders[where]
+    assert psnr(r["conic"], r["multi-ortho"]) >= 28
+
+
+@pytest.mark.parametrize("where", list(Z_ORACLE))
+def test_spherical_aberration_costs_accuracy(checker_renders, where, capsys):
+    # Reported, not a target: a sphere's rim rays miss the focal point, and the
+    # depth re-centring (focal plane 18 mm in front) magnifies the miss.
+    r = checker_renders[where]
+    sph, con = psnr(r["spherical"], r["multi-ortho"]), psnr(r["conic"], r["multi-ortho"])
+    with capsys.disabled():
+        print(f"\n  single-stage vs multi-ortho, checker {where}: conic {con:.1f} dB, spherical {sph:.1f} dB")
+    assert sph <= con
+
+
+def test_without_the_turn_it_fails(checker_renders):
+    r = checker_renders["behind"]
+    h = r["conic"].reshape(16, 6, 24, 6, -1)[:, ::-1, :, ::-1].reshape(r["conic"].shape)
+    assert psnr(h, r["multi-ortho"]) < 20
+
+
+def test_textured_scene_and_real_glass(tmp_path):
+    scene = load_scene(write_textured_scene(tmp_path))
+    la = square_array(lx=16, ly=12, nx=6, ny=6, s=0.1, f=1.5)
+    ref = run_method("multi-ortho", scene, la, DRAFT).h3d
+    thin = run_method("single-stage", scene, la, DRAFT).h3d
+    glass = run_method("single-stage", scene, la, DRAFT, ior=1.5).h3d
+    assert psnr(thin, ref) >= 30
+    # Real acrylic: its thickness distorts the ray angles (tan = w / (f + sag)).
+    assert psnr(glass, ref) < psnr(thin, ref)
+
+
+def test_lenticular_matches_multi_ortho(tmp_path):
+    la = lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=1.5)
+    scene = load_scene(write_checker_plane(tmp_path, 5.93, 2.5))
+    ref = run_method("multi-ortho", scene, la, DRAFT).h3d
+    assert psnr(run_method("single-stage", scene, la, DRAFT).h3d, ref) >= 28
+
+
+def test_fractional_ppl_square_renders_close_to_multi_ortho(tmp_path):
+    # 6.5 pixels per lens: no view bank, the turn resamples each lens.
+    la = LensArray("square", 12, 8, 0.65, 0.65, 1.5, Panel(78, 52, 0.1, 0.1))
+    scene = load_scene(write_textured_scene(tmp_path))
+    ref = run_method("multi-ortho", scene, la, DRAFT).h3d
+    got = run_method("single-stage", scene, la, DRAFT).h3d
+    assert got.shape == ref.shape
+    # Resampling mixes neighbouring views (6.5 px lenses fall between pixels):
+    # measured 16.6 dB; a capture not turned at all is far worse.
+    assert psnr(got, ref) >= 15
+    plan = SingleStagePlan(la, lenslet_for(la))
+    unturned = plan.assemble(got)  # turning twice = not turning (up to resampling)
+    assert psnr(unturned, ref) < psnr(got, ref) - 2
+
+
+def test_recentre_depth_is_exact_and_refused_for_hex():
+    assert recentre_unit(SQUARE) == pytest.approx(1.5 * 12)            # even 6 PPL: 2 * 6 * f
+    la = square_array(lx=10, ly=10, nx=5, ny=3, s=0.1, f=1.0)
+    assert recentre_unit(la) == pytest.approx(15.0)                    # lcm(5, 3) * f
+    plan = SingleStagePlan.for_clearance(SQUARE, lenslet_for(SQUARE), 10.0)
+    assert plan.depth == pytest.approx(18.0)
+    sx, sy = plan.shifts
+    assert sx.tolist() == [-5, -3, -1, 1, 3, 5] and sy.tolist() == [5, 3, 1, -1, -3, -5]
+    hexa = lens_array_from_fields(get_preset("hex-5.6"))
+    with pytest.raises(ConfigError, match="front-clearance"):
+        SingleStagePlan.for_clearance(hexa, lenslet_for(hexa), 5.0)
+
+
+def test_hex_56_renders_through_the_method(tmp_path):
+    la = lens_array_from_fields(get_preset("hex-5.6"))
+    scene = load_scene(write_checker_plane(tmp_path, 8.0, 7.0))
+    h3d = run_method("single-stage", scene, la, DRAFT).h3d
+    assert h3d.shape[:2] == (800, 1280)
+    inside = pixel_rays(la)[2]
+    assert not h3d[~inside].any() and h3d[inside].any()
+
+
+def test_unknown_option_is_refused(tmp_path):
+    scene = load_scene(write_checker_plane(tmp_path, 5.93, 2.5))
+    with pytest.raises(ConfigError, match="takes no option ior"):
+        run_method("multi-ortho", scene, SQUARE, DRAFT, ior=1.5)
+
+
+# -- command line ------------------------------------------------------------------
+
+import json  # noqa: E402
+import os  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+HEX_SMALL = ["--grid", "hex", "--lenses", "12x8", "--ppl", "9.5", "--pixel-pitch", "0.1", "--focal", "1.2",
+             "--quality", "draft", "-q", "--method", "single-stage"]
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, "-m", "povh3d.cli", *map(str, args)], capture_output=True,
+                          text=True, env=dict(os.environ), cwd=REPO)
+
+
+def error_line(proc) -> str:
+    assert proc.returncode == 2, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("povh3d: error: ") and "Traceback" not in proc.stderr
+    return lines[0]
+
+
+def test_cli_hex_render_and_resampled_extract(tmp_path):
+    scene = write_textured_scene(tmp_path)
+    out = tmp_path / "hex.png"
+    proc = cli("render", scene, "-o", out, *HEX_SMALL, "--lenslet", "spherical")
+    assert proc.returncode == 0, proc.stderr
+    record = json.loads(out.with_suffix(".json").read_text())
+    assert record["method"] == "single-stage"
+    assert record["single_stage"]["lenslet"]["shape"] == "spherical"
+    assert record["single_stage"]["focal_plane_z_mm"] == 0
+    proc = cli("extract", out, "-o", tmp_path / "views")
+    assert proc.returncode == 0, proc.stderr
+    views = json.loads((tmp_path / "views" / "views.json").read_text())
+    assert views["views"] == [10, 10] and views["source"]["resampled"]
+    assert len(views["source"]["lens_centres_mm"]) == 12 * 8
+    assert (tmp_path / "views" / "v_009_009.png").is_file()
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--ior", "1.0"], "index of refraction must be greater than 1"),
+    (["--ior", "1.2", "--lenslet", "spherical"], "raise --ior above"),
+    (["--ppl", "0.5"], "under one pixel"),
+    (["--front-clearance", "5"], "drop --front-clearance"),
+])
+def test_cli_bad_single_stage_input(tmp_path, args, needle):
+    scene = write_textured_scene(tmp_path)
+    base = list(HEX_SMALL)
+    if "--ppl" in args:
+        i = base.index("--ppl")
+        del base[i:i + 2]
+    proc = cli("render", scene, "-o", tmp_path / "x.png", *base, *args)
+    assert needle in error_line(proc)
+    assert not list(tmp_path.glob("x*"))
+
+
+def test_cli_ior_needs_single_stage(tmp_path):
+    scene = write_textured_scene(tmp_path)
+    proc = cli("render", scene, "-o", tmp_path / "x.png", "--lenses", "4x4", "--ppl", "4", "--ior", "1.5")
+    assert "only apply to --method single-stage" in error_line(proc)
