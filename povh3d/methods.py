@@ -22,7 +22,8 @@ import numpy as np
 
 from .colour import mean_in_linear_light
 from .errors import ConfigError
-from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames, view_bank_mesh
+from .cameras import (camera_mesh, check_clearance, default_back_off, ortho_view_frames, pinhole_frames,
+                      view_bank_mesh)
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
 from .render import FrameBatch, Progress, RenderSettings, RenderStats, cpu_count, render_frames
@@ -61,6 +62,7 @@ def _point_sampled_only(samples: np.ndarray, what: str) -> None:
 def _views_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     lens_array.require_views()
     _point_sampled_only(samples, "multi-ortho-views")
+    check_clearance(lens_array, back_off)
     common, frames = ortho_view_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     # Process start-up (~0.7 s) is mostly idle, so more processes than cores
