@@ -19,6 +19,7 @@ import pytest
 from povh3d.api import render
 from povh3d.cameras import MIN_CLEARANCE
 from povh3d.errors import ConfigError, PovrayError
+from povh3d.footprint import CENTRE, angular_grid
 from povh3d.geometry import LensArray, Panel, pixel_rays
 from povh3d.methods import METHODS, display_header, run_method
 from povh3d.povfmt import pov_number
@@ -211,7 +212,9 @@ SCRIPT_CASES = [(m, i) for m in METHODS for i in range(len(EXTREMES))
 @pytest.mark.parametrize("method, index", SCRIPT_CASES)
 def test_scripts_hold_only_finite_numbers(method, index):
     la = EXTREMES[index]
-    batch = METHODS[method].batch(la, 4 * max(la.panel.size_mm))
+    # multi-ortho also with footprint samples (3x3 angular sub-views per pixel).
+    samples = angular_grid(3) if method == "multi-ortho" and la.views else CENTRE
+    batch = METHODS[method].batch(la, 4 * max(la.panel.size_mm), samples)
     script = build_script(batch, batch.frames, method=method, scene_path="/s.pov", add_assumed_gamma=True,
                           header=display_header(la))
     assert not re.search(r"\b(nan|inf|infinity)\b", script, re.I)
