@@ -56,8 +56,8 @@ def lens_arrays(draw, grids=("square", "lenticular", "hex"), integral=None, max_
     return LensArray("square", lx, ly, pitch, ny * s, focal, Panel(width, height, s, s))
 
 
-SETTINGS = settings(max_examples=60, deadline=None)
-FEWER = settings(max_examples=25, deadline=None)  # the costlier properties
+SETTINGS = settings(max_examples=60, deadline=None, derandomize=True)  # CI runs are repeatable
+FEWER = settings(max_examples=25, deadline=None, derandomize=True)  # the costlier properties
 
 
 @SETTINGS
