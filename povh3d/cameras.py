@@ -12,19 +12,67 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import ConfigError
 from .footprint import CENTRE
 from .geometry import LensArray
 
+# POV-Ray 3.7 ignores surfaces nearer than 1e-4 mm or further than 1e7 mm along a
+# ray from its start (measured with a plane: missed at 0.95e-4 mm, seen at
+# 1.05e-4 mm; views vanish once the path to the screen passes 1e7 mm).  Both are
+# absolute, so they decide which scene scales povh3d's cameras can render.
+POVRAY_MIN_DEPTH = 1e-4
+POVRAY_MAX_DEPTH = 1e7
+#: The least front clearance, mm: a hundred times POV-Ray's nearest depth, so a
+#: tiny panel (scene scaled to micrometres) still sees its screen.
+MIN_CLEARANCE = 100 * POVRAY_MIN_DEPTH
+
 
 def default_back_off(lens_array: LensArray) -> float:
-    """How far in front of the screen rays start, mm: four panel widths.
+    """How far in front of the screen rays start, mm: four panel widths, at least 0.01 mm.
 
     Far enough for any object a display can show in front of its screen, near
     enough that POV-Ray's single-precision mesh vertices (mesh camera) keep the
-    sample grid within about 1e-4 mm.
+    sample grid within about 1e-6 panel widths.  The floor keeps the screen
+    beyond POV-Ray's nearest intersection depth on panels under 2.5 um wide.
     """
     width, height = lens_array.panel.size_mm
-    return 4.0 * max(width, height)
+    return max(4.0 * max(width, height), MIN_CLEARANCE)
+
+
+def ray_stretch(lens_array: LensArray) -> float:
+    """Path length per mm of depth of the most oblique pixel ray, ``max |d| / d_z``.
+
+    Bounded with the largest pixel offset from a lens centre: half the pitch
+    (hex: the cell's circumradius ``px / sqrt(3)``; lenticular: ``v = 0``).
+    """
+    f = lens_array.focal
+    if lens_array.grid == "hex":
+        hx, hy = lens_array.pitch_x / np.sqrt(3), 0.0
+    else:
+        hx = lens_array.pitch_x / 2
+        hy = 0.0 if lens_array.grid == "lenticular" else lens_array.pitch_y / 2
+    return float(np.sqrt(hx * hx + hy * hy + f * f) / f)
+
+
+def check_clearance(lens_array: LensArray, back_off: float) -> None:
+    """Refuse a front clearance POV-Ray cannot trace (ConfigError naming the range that works).
+
+    Rays start ``back_off`` mm in front of the screen; the most oblique travels
+    ``back_off * ray_stretch`` to reach it.  That must stay above POV-Ray's
+    nearest intersection depth and under half its furthest, leaving at least
+    as much again for the scene behind the screen.
+    """
+    if not back_off >= MIN_CLEARANCE:
+        raise ConfigError(
+            f"the front clearance {back_off:g} mm is under {MIN_CLEARANCE:g} mm: POV-Ray ignores surfaces "
+            f"nearer than {POVRAY_MIN_DEPTH:g} mm to where a ray starts; use --front-clearance {MIN_CLEARANCE:g} or more")
+    stretch = ray_stretch(lens_array)
+    if back_off * stretch > POVRAY_MAX_DEPTH / 2:
+        most = POVRAY_MAX_DEPTH / 2 / stretch
+        raise ConfigError(
+            f"rays starting {back_off:.6g} mm in front of the screen travel {back_off * stretch:.4g} mm to reach it, "
+            f"over half of POV-Ray's {POVRAY_MAX_DEPTH:g} mm ray length, so the scene behind it would vanish; "
+            f"use --front-clearance between {MIN_CLEARANCE:g} and {most:.6g} mm (or model the scene in smaller units)")
 
 
 # -- multi-orthographic camera bank, one orthographic camera per view ---------------
@@ -92,6 +140,7 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     so the face interpolation is exact; the corners sit at ``(+-px/2, +-py/2)``,
     all of one length, so interpolating normalised normals is exact too.
     """
+    check_clearance(lens_array, back_off)
     panel = lens_array.panel
     W, H = panel.width, panel.height
     sx, sy = panel.pitch_x, panel.pitch_y
@@ -170,6 +219,7 @@ def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray |
         pixel's own ray.
     """
     ny, nx = lens_array.require_views()
+    check_clearance(lens_array, back_off)
     lx, ly = lens_array.lenses_x, lens_array.lenses_y
     samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
     W, H = lx * nx, ly * ny * len(samples)

@@ -25,7 +25,8 @@ from typing import Any
 import numpy as np
 
 from .colour import mean_in_linear_light
-from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames, view_bank_mesh
+from .cameras import (camera_mesh, check_clearance, default_back_off, ortho_view_frames, pinhole_frames,
+                      view_bank_mesh)
 from .errors import ConfigError
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
@@ -55,6 +56,7 @@ def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np
 
 def _views_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     lens_array.require_views()
+    check_clearance(lens_array, back_off)
     common, frames = ortho_view_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     # Process start-up (~0.7 s) is mostly idle, so more processes than cores
