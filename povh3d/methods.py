@@ -20,6 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from .crop import CropSettings
+from .crop_render import render_cropped_tiles
+from .features import quality_settings, scene_features
 from .cameras import camera_mesh, default_back_off, ortho_view_frames, pinhole_frames, view_bank_mesh
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
@@ -100,21 +103,36 @@ class MethodResult:
     h3d: np.ndarray          # (H, W, C) uint8 or uint16
     stats: RenderStats
     back_off: float
+    crop: dict[str, Any] | None = None  # what the crop did (multi-ortho), for the sidecar
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
-               progress: Progress | None = None) -> MethodResult:
-    """Render ``scene`` with method ``name`` and return the H3D image."""
+               progress: Progress | None = None, crop: CropSettings | None = None) -> MethodResult:
+    """Render ``scene`` with method ``name`` and return the H3D image.
+
+    ``crop`` (multi-ortho only): trace each view only where objects can be, fill
+    the rest with the background (``crop_render``); None renders everything.
+    """
     method = METHODS[name]
     back_off = settings.back_off or default_back_off(lens_array)
-    batch = method.batch(lens_array, back_off)
-    images, stats = render_frames(scene, batch, settings, method=name,
-                                  header=display_header(lens_array), progress=progress)
-    h3d = method.assemble(lens_array, images)
+    header = display_header(lens_array)
+    settings_needed = quality_settings(scene_features(scene), settings.quality)
+    if settings_needed:
+        header["global_settings"] = settings_needed
+    h3d, crop_info = None, None
+    if name == "multi-ortho" and crop is not None:
+        tiles = render_cropped_tiles(scene, lens_array, back_off, settings, crop, header, progress)
+        crop_info = tiles.info
+        if tiles.tiled is not None:
+            h3d, stats = interleave(untile_views(tiles.tiled, lens_array.views)), tiles.stats
+    if h3d is None:
+        batch = method.batch(lens_array, back_off)
+        images, stats = render_frames(scene, batch, settings, method=name, header=header, progress=progress)
+        h3d = method.assemble(lens_array, images)
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
     if h3d.shape[:2] != panel_shape:
         # A camera bank covers the lens array; the panel margin outside it stays black.
         canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
         canvas[lens_array.bank_region] = h3d
         h3d = canvas
-    return MethodResult(h3d, stats, back_off)
+    return MethodResult(h3d, stats, back_off, crop_info)

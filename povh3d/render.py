@@ -96,6 +96,7 @@ class FrameBatch:
     height: int
     frames_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
+    options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
 
 
 @dataclass
@@ -181,7 +182,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
     common_key = content_key(__version__, stats.povray_version, scene.digest, batch.template,
                              _template_digest(batch.template), _canonical(batch.context),
                              _canonical(header), batch.width, batch.height, settings.options,
-                             settings.bit_depth, scene.sets_assumed_gamma)
+                             settings.bit_depth, scene.sets_assumed_gamma, batch.options)
     keys = [content_key(common_key, _canonical(frame)) for frame in batch.frames]
     images: list[np.ndarray | None] = [None] * len(keys)
     missing: list[int] = []
@@ -207,7 +208,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         name = f"{method} frame {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
         jobs.append(PovrayJob(name=name, script=script, width=batch.width, height=batch.height,
                               frames=len(chunk), include_dirs=tuple(str(d) for d in scene.include_dirs),
-                              options=settings.options, threads=threads, bit_depth=settings.bit_depth,
+                              options=settings.options + batch.options, threads=threads, bit_depth=settings.bit_depth,
                               file_gamma="sRGB", timeout=settings.timeout))
     chunk_of_job = {id(job): chunk for job, chunk in zip(jobs, chunks)}
 
