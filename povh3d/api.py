@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
+from .crop import CropSettings
 from .errors import ConfigError, InputError, OutputError
 from .geometry import LensArray
 from .imageio import atomic_path, check_writable, read_png, read_sidecar, write_png, write_sidecar
@@ -39,8 +40,11 @@ def _sidecar(kind: str, lens_array: LensArray | None, **extra: Any) -> dict[str,
 def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
            method: str = "multi-ortho", settings: RenderSettings | None = None,
            views_dir: str | Path | None = None, include_dirs: tuple[str | Path, ...] = (),
-           display: dict[str, Any] | None = None, progress: Progress | None = None) -> dict[str, Any]:
+           display: dict[str, Any] | None = None, progress: Progress | None = None,
+           crop: CropSettings | None = None) -> dict[str, Any]:
     """Render ``scene_path`` through ``lens_array`` into the H3D PNG ``output``.
+
+    ``crop``: trace only where objects can be (multi-ortho; see ``povh3d.crop``).
 
     Returns the sidecar record written beside ``output``.
     """
@@ -58,7 +62,7 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         check_writable(Path(views_dir) / ".povh3d-write-test")
 
     start = time.perf_counter()
-    result = run_method(method, scene, lens_array, settings, progress)
+    result = run_method(method, scene, lens_array, settings, progress, crop=crop)
     render_seconds = time.perf_counter() - start
     h3d = result.h3d
     expected = (lens_array.panel.height, lens_array.panel.width)
@@ -73,6 +77,8 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         output_gamma="sRGB", povray_version=result.stats.povray_version,
         timings={"render_seconds": round(render_seconds, 4), **result.stats.as_dict()},
     )
+    if result.crop is not None:
+        record["crop"] = result.crop
     if views_dir is not None:
         write_views(views_dir, extract(h3d[lens_array.bank_region], lens_array.require_views()), lens_array, record)
     write_png(output, h3d)

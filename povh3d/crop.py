@@ -329,7 +329,7 @@ def paste(cropped: np.ndarray, plan: CropPlan, fill: np.ndarray) -> np.ndarray:
 
 # -- what the user asked for ----------------------------------------------------------------
 
-CROP_MODES = ("auto", "off")
+CROP_MODES = ("auto", "off", "measure")
 
 
 @dataclass(frozen=True)
@@ -338,9 +338,12 @@ class CropSettings:
 
     Attributes
     ----------
-    mode : {'auto', 'off'}
-        ``auto`` crops when the scene's background is a constant colour: from
-        ``bbox`` when given, else from a coverage pre-pass at the same rays.
+    mode : {'auto', 'off', 'measure'}
+        ``auto`` crops to ``bbox`` when one is given; ``measure`` finds what each
+        view can see with a coverage pre-pass at the same rays (exact, but it
+        costs about as much as tracing a simple scene, so it pays only for
+        expensive scenes); ``off`` traces everything.  Either way only where the
+        background is one colour and the render does not jitter.
     bbox : (2, 3) float or None, mm   every object lies inside (the user's word)
     margin : int                      background lenses kept beside what a view sees
     """

@@ -70,6 +70,9 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
     info: dict[str, Any] = {"mode": crop.mode}
     if crop.mode == "off":
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "--crop off"})
+    if crop.mode == "auto" and crop.bbox is None:
+        return CroppedTiles(None, None, {**info, "applied": False,
+                                         "reason": "no --bbox given (--crop measure finds it with a pre-pass)"})
     if lens_array.views is None:
         return CroppedTiles(None, None, {**info, "applied": False,
                                          "reason": "fractional pixels per lens: one quad per lens, not cropped"})
@@ -85,7 +88,7 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
                                          "reason": f"the scene uses {', '.join(used)}: rays that miss every "
                                                    "object are not one colour, so nothing can be filled"})
     start = time.perf_counter()
-    if crop.bbox is not None:
+    if crop.mode == "auto":
         col_hits, row_hits = bbox_hits(lens_array, crop.bbox)
         info["source"] = "bbox"
     else:
@@ -102,7 +105,7 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
     tiled, stats = _render_plan(scene, lens_array, back_off, settings, plan, header, progress)
     fill = fill_colour(tiled, plan)
     if fill is None:
-        if crop.bbox is not None:
+        if info["source"] == "bbox":
             raise InputError(f"objects reach outside --bbox {list(crop.bbox[0]) + list(crop.bbox[1])} "
                              "(the pixels at the crop edges are not all background); give a box that "
                              "holds every object, or --crop off")

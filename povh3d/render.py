@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import os
 import time
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -193,6 +194,11 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         else:
             missing.append(index)
     stats.cached = len(keys) - len(missing)
+    # Identical frames (same content key) in one batch are traced once.
+    first_of: dict[str, int] = {}
+    copies = {i: first_of.setdefault(keys[i], i) for i in missing}
+    missing = [i for i in missing if copies[i] == i]
+    n_copies = Counter(copies.values())
 
     chunks = [missing[i:i + batch.frames_per_job] for i in range(0, len(missing), batch.frames_per_job)]
     cores = cpu_count()
@@ -223,11 +229,14 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
             images[index] = read_png(image_path)
             if cache is not None:
                 cache.put(keys[index], image_path)
-            done += 1
+            done += n_copies.get(index, 1)
         if progress:
             progress(done, len(keys))
 
     if jobs:
         stats.povray_seconds = run_jobs(jobs, processes=processes, on_result=collect, binary=binary)
+    for index, source in copies.items():
+        if images[index] is None:
+            images[index] = images[source]
     stats.wall_seconds = time.perf_counter() - start
     return [img for img in images if img is not None], stats
