@@ -240,7 +240,7 @@ def plan_crop(col_hits: np.ndarray, row_hits: np.ndarray, margin: int = DEFAULT_
     lenses = (col_hits.shape[1], row_hits.shape[1])
     cols, rows = col_hits.reshape(-1), row_hits.reshape(-1)
     if not (cols.any() and rows.any()):
-        # Nothing to see anywhere: trace one corner of background, for its colour.
+        # Nothing to see anywhere: trace one corner (3 x 3 lenses) of background, for its colour.
         cols, rows = np.zeros_like(cols), np.zeros_like(rows)
         cols[0] = rows[0] = True
     # Dilating the tiled columns (not each view's) keeps a view's neighbour in the
@@ -250,7 +250,10 @@ def plan_crop(col_hits: np.ndarray, row_hits: np.ndarray, margin: int = DEFAULT_
 
 def _keep(hits: np.ndarray, margin: int, block: int | None) -> np.ndarray:
     """Hits widened by ``margin`` each side; removed runs cut to whole ``block``s."""
-    keep = np.convolve(hits.astype(np.int64), np.ones(2 * margin + 1, np.int64), mode="same") > 0
+    n = len(hits)
+    count = np.concatenate([[0], np.cumsum(hits)])            # hits before each index
+    index = np.arange(n)
+    keep = count[np.minimum(index + margin + 1, n)] > count[np.maximum(index - margin, 0)]
     if block:
         for a, b in _runs(~keep):
             keep[a:b - (b - a) // block * block] = True  # give back the left end of the run
