@@ -41,6 +41,7 @@ test: povray venv ## run the test suite (POV-Ray tests included)
 
 bench: povray venv ## measure H3D render time against a plain 2D render of the panel
 	$(BIN)/python benchmarks/bench_render.py
+	$(BIN)/python benchmarks/bench_skip.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out
