@@ -44,6 +44,7 @@ bench: povray venv ## measure H3D render time against a plain 2D render, and Das
 	$(BIN)/python benchmarks/bench_mapping.py
 	$(BIN)/python benchmarks/bench_dask.py 2> >(grep -v -E 'distributed|^ |Traceback|CommClosed' >&2)
 	$(BIN)/python benchmarks/bench_single_stage.py
+	$(BIN)/python benchmarks/bench_skip.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out

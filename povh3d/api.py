@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
+from .crop import CropSettings
 from .errors import ConfigError, InputError, OutputError
 from .geometry import LensArray
 from .imageio import atomic_path, check_writable, read_png, read_sidecar, write_png, write_sidecar
@@ -44,13 +45,14 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
            views_dir: str | Path | None = None, include_dirs: tuple[str | Path, ...] = (),
            display: dict[str, Any] | None = None, progress: Progress | None = None,
            mapping: Any = None, mapped_panel: tuple[int, int] | None = None,
-           **method_options: Any) -> dict[str, Any]:
+           crop: CropSettings | None = None, **method_options: Any) -> dict[str, Any]:
     """Render ``scene_path`` through ``lens_array`` into the H3D PNG ``output``.
 
     With a ``mapping`` (``povh3d.mappings``), ``lens_array`` is the view-space
     array it reads (``mapping.render_array``) and ``output`` is the panel image
     of size ``mapped_panel`` (W, H).  ``method_options`` go to the method
-    (``single-stage``: ``lenslet``, ``ior``).  Returns the sidecar record written
+    (``single-stage``: ``lenslet``, ``ior``).  ``crop``: trace only where objects
+    can be (multi-ortho; see ``povh3d.crop``).  Returns the sidecar record written
     beside ``output``.
     """
     settings = settings or RenderSettings()
@@ -67,7 +69,7 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         check_writable(Path(views_dir) / ".povh3d-write-test")
 
     start = time.perf_counter()
-    result = run_method(method, scene, lens_array, settings, progress, **method_options)
+    result = run_method(method, scene, lens_array, settings, progress, crop=crop, **method_options)
     render_seconds = time.perf_counter() - start
     h3d = result.h3d
     expected = (lens_array.panel.height, lens_array.panel.width)
@@ -85,6 +87,8 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
     )
     if method == "single-stage":
         record["single_stage"] = single_stage_record(lens_array, result.back_off, **method_options)
+    if result.crop is not None:
+        record["crop"] = result.crop
     if views_dir is not None:
         write_views(views_dir, extract(h3d[lens_array.bank_region], lens_array.require_views()), lens_array, record)
     if mapping is not None:

@@ -246,6 +246,34 @@ def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray |
     return _quad_mesh(origin_x, origin_y, uk, vl, col, row, (W, H), back_off, f)
 
 
+def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan) -> CameraMesh:
+    """``view_bank_mesh`` over the columns and rows a ``crop.CropPlan`` keeps.
+
+    One quad per kept column segment times kept row segment (a segment is a
+    run of kept lenses within one view); the image is the uncropped tiled image
+    with the other columns and rows removed.  Corner positions come from lens
+    indices (CONVENTIONS), as in ``view_bank_mesh``.
+    """
+    lens_array.require_views()
+    lx, ly = lens_array.lenses_x, lens_array.lenses_y
+    f = lens_array.focal
+    u, v = lens_array.view_offsets()
+    cs, rs = plan.col_segments(), plan.row_segments()           # (n, 4): view, start, stop, offset
+    c = np.repeat(cs, len(rs), axis=0)                            # every column segment ...
+    r = np.tile(rs, (len(cs), 1))                                 # ... times every row segment
+    k, j0, j1, col0 = (c[:, n:n + 1] for n in range(4))
+    l, i0, i1, row0 = (r[:, n:n + 1] for n in range(4))
+    # Corners counter-clockwise from bottom left, half a lens outside the kept centres.
+    j = np.concatenate([j0, j1, j1, j0], axis=1) - 0.5            # (quads, 4) lens index
+    i = np.concatenate([i1, i1, i0, i0], axis=1) - 0.5
+    x = (j + 0.5 - lx / 2) * lens_array.pitch_x
+    y = (ly / 2 - i - 0.5) * lens_array.pitch_y
+    uk, vl = u[k], v[l]
+    origin_x = x - uk * (back_off / f)
+    origin_y = y - vl * (back_off / f)
+    return _quad_mesh(origin_x, origin_y, uk, vl, col0 + (j - j0), row0 + (i - i0), plan.size, back_off, f)
+
+
 # -- per-lens pinhole cameras ---------------------------------------------------------
 
 def pinhole_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:

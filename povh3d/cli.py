@@ -92,6 +92,7 @@ def _progress(enabled: bool):
 
 def cmd_render(args: argparse.Namespace) -> int:
     from .api import render
+    from .crop import CropSettings, parse_bbox
     from .render import RenderSettings
 
     lens_array, display = _lens_array(args)
@@ -105,6 +106,7 @@ def cmd_render(args: argparse.Namespace) -> int:
                               timeout=args.timeout, use_cache=not args.no_cache,
                               bit_depth=args.bit_depth, back_off=args.front_clearance,
                               scheduler=args.scheduler)
+    crop = CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None)
     output = Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png")
     if args.frames is not None:
         return _render_animation(args, lens_array, display, settings, output)
@@ -115,7 +117,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     try:
         record = render(args.scene, lens_array, output, method=args.method, settings=settings,
                         views_dir=args.views_dir, include_dirs=tuple(args.include), display=display,
-                        progress=update, mapping=mapping, mapped_panel=mapped_panel,
+                        progress=update, mapping=mapping, mapped_panel=mapped_panel, crop=crop,
                         **_method_options(args))
     finally:
         close()
@@ -390,6 +392,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--front-clearance", type=float, metavar="MM",
                    help="how far in front of the screen rays start (default: 4 panel widths)")
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
+    p.add_argument("--crop", choices=("auto", "off", "measure"), default="auto",
+                   help="trace each view only where objects can be (multi-ortho): auto = from --bbox, "
+                        "measure = find it with a pre-pass, off = trace everything")
+    p.add_argument("--bbox", metavar="X0,Y0,Z0,X1,Y1,Z1",
+                   help="a box (mm) that holds every object of the scene, for --crop auto")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     g = p.add_argument_group("animation and cluster")
     g.add_argument("--frames", metavar="FIRST:LAST",

@@ -28,6 +28,9 @@ from .colour import mean_in_linear_light
 from .cameras import (camera_mesh, check_clearance, default_back_off, ortho_view_frames, pinhole_frames,
                       view_bank_mesh)
 from .errors import ConfigError
+from .crop import CropSettings
+from .crop_render import render_cropped_tiles
+from .features import quality_settings, scene_features
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
 from .render import FrameBatch, Progress, Quality, RenderSettings, RenderStats, cpu_count, render_frames
@@ -126,10 +129,10 @@ METHODS: dict[str, Method] = {
 }
 
 
-def display_header(lens_array: LensArray, max_trace_level: int | None = None) -> dict[str, Any]:
+def display_header(lens_array: LensArray) -> dict[str, Any]:
     """Display constants the scene header declares (``Povh3d_Panel_Width`` ...)."""
     return {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
-            "focal": lens_array.focal, "max_trace_level": max_trace_level}
+            "focal": lens_array.focal}
 
 
 @dataclass
@@ -138,14 +141,18 @@ class MethodResult:
     stats: RenderStats
     back_off: float
     quality: Quality         # as rendered (after any fallback to antialiasing)
+    crop: dict[str, Any] | None = None  # what the crop did (multi-ortho), for the sidecar
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
-               progress: Progress | None = None, **options: Any) -> MethodResult:
+               progress: Progress | None = None, crop: CropSettings | None = None,
+               **options: Any) -> MethodResult:
     """Render ``scene`` with method ``name`` and return the H3D image.
 
     ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
-    None values count as not given.
+    None values count as not given.  ``crop`` (multi-ortho only): trace each view
+    only where objects can be, fill the rest with the background
+    (``crop_render``); None renders everything.
     """
     method = METHODS[name]
     options = {k: v for k, v in options.items() if v is not None}
@@ -158,15 +165,25 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if quality != settings.spec:
         settings = replace(settings, quality=quality)
-    batch = method.batch(lens_array, back_off, quality.samples(), **options)
-    images, stats = render_frames(scene, batch, settings, method=name,
-                                  header=display_header(lens_array, quality.max_trace_level),
-                                  progress=progress)
-    h3d = method.assemble(lens_array, images, **extra)
+    samples = quality.samples()
+    header = display_header(lens_array)
+    settings_needed = quality_settings(scene_features(scene), quality)
+    if settings_needed:
+        header["global_settings"] = settings_needed
+    h3d, crop_info = None, None
+    if name == "multi-ortho" and crop is not None and len(samples) == 1:
+        tiles = render_cropped_tiles(scene, lens_array, back_off, settings, crop, header, progress)
+        crop_info = tiles.info
+        if tiles.tiled is not None:
+            h3d, stats = interleave(untile_views(tiles.tiled, lens_array.views)), tiles.stats
+    if h3d is None:
+        batch = method.batch(lens_array, back_off, samples, **options)
+        images, stats = render_frames(scene, batch, settings, method=name, header=header, progress=progress)
+        h3d = method.assemble(lens_array, images, **extra)
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
     if h3d.shape[:2] != panel_shape:
         # A camera bank covers the lens array; the panel margin outside it stays black.
         canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
         canvas[lens_array.bank_region] = h3d
         h3d = canvas
-    return MethodResult(h3d, stats, back_off, quality)
+    return MethodResult(h3d, stats, back_off, quality, crop_info)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import os
 import time
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -73,8 +74,10 @@ class Quality:
         """POV-Ray's command-line switches for this quality."""
         if self.antialias is None:
             return ("-A",)
-        return (f"+A{self.antialias:g}", f"+AM{self.aa_method}", f"+R{self.aa_depth}") + (
-            ("+J",) if self.jitter else ())
+        # POV-Ray jitters by default, and its jitter depends on where a pixel sits in
+        # the image: -J keeps a pixel's value whatever the layout (crop, tiling).
+        return (f"+A{self.antialias:g}", f"+AM{self.aa_method}", f"+R{self.aa_depth}",
+                "+J" if self.jitter else "-J")
 
     def point_sampled(self) -> Quality:
         """This quality for a method that traces one ray per sub-view (no footprint
@@ -189,6 +192,7 @@ class FrameBatch:
     height: int
     frames_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
+    options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
 
 
 @dataclass
@@ -290,7 +294,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
     common_key = content_key(__version__, stats.povray_version, scene.digest, batch.template,
                              _template_digest(batch.template), _canonical(batch.context),
                              _canonical(header), batch.width, batch.height, settings.options,
-                             settings.bit_depth, scene.sets_assumed_gamma)
+                             settings.bit_depth, scene.sets_assumed_gamma, batch.options)
     keys = [content_key(common_key, _canonical(frame)) for frame in batch.frames]
     images: list[np.ndarray | None] = [None] * len(keys)
     missing: list[int] = []
@@ -301,6 +305,11 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         else:
             missing.append(index)
     stats.cached = len(keys) - len(missing)
+    # Identical frames (same content key) in one batch are traced once.
+    first_of: dict[str, int] = {}
+    copies = {i: first_of.setdefault(keys[i], i) for i in missing}
+    missing = [i for i in missing if copies[i] == i]
+    n_copies = Counter(copies.values())
 
     chunks = [missing[i:i + batch.frames_per_job] for i in range(0, len(missing), batch.frames_per_job)]
     cores = cpu_count()
@@ -316,7 +325,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         name = f"{method} frame {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
         jobs.append(PovrayJob(name=name, script=script, width=batch.width, height=batch.height,
                               frames=len(chunk), include_dirs=tuple(str(d) for d in scene.include_dirs),
-                              options=settings.options, threads=threads, bit_depth=settings.bit_depth,
+                              options=settings.options + batch.options, threads=threads, bit_depth=settings.bit_depth,
                               file_gamma="sRGB", timeout=settings.timeout,
                               read_files=files_within(scene.files, scene.include_dirs)))
     chunk_of_job = {id(job): chunk for job, chunk in zip(jobs, chunks)}
@@ -332,11 +341,14 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
             images[index] = read_png(image_path)
             if cache is not None:
                 cache.put(keys[index], image_path)
-            done += 1
+            done += n_copies.get(index, 1)
         if progress:
             progress(done, len(keys))
 
     if jobs:
         stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect)
+    for index, source in copies.items():
+        if images[index] is None:
+            images[index] = images[source]
     stats.wall_seconds = time.perf_counter() - start
     return [img for img in images if img is not None], stats
