@@ -32,6 +32,8 @@ class Window:
     height: int
 
     def __post_init__(self) -> None:
+        for name in ("x0", "x1", "y0", "y1"):  # plain floats: their repr goes into scripts
+            object.__setattr__(self, name, float(getattr(self, name)))
         if not (self.x1 > self.x0 and self.y1 > self.y0):
             raise ValueError(f"window must have x1 > x0 and y1 > y0, got {self}")
         if self.width < 1 or self.height < 1:
