@@ -10,9 +10,15 @@ integer.  For plain vectors the text is byte-identical to ``pov_vector_list``
 
 from __future__ import annotations
 
+import multiprocessing
+import os
+
 import numpy as np
 
 from ..errors import ConfigError
+
+#: Rows above which formatting is split over processes (one per core, at most 4).
+PARALLEL_ROWS = 200_000
 
 ITEM_SEP = ", "
 LINE_SEP = ",\n    "
@@ -51,6 +57,31 @@ def format_rows(array: np.ndarray, item: str, per_line: int = 4) -> str:
         array = array.astype(np.float64, copy=False)
     elif np.issubdtype(array.dtype, np.integer):
         array = array.astype(np.int64, copy=False)
+    if n >= PARALLEL_ROWS and _cores() > 1:
+        return _format_parallel(array, item, per_line)
+    return _format(array, item, per_line)
+
+
+def _cores() -> int:
+    try:
+        return min(4, len(os.sched_getaffinity(0)))
+    except AttributeError:
+        return 1
+
+
+def _format_parallel(array: np.ndarray, item: str, per_line: int) -> str:
+    """The same text, the rows split at line boundaries over forked workers (repr is CPU-bound)."""
+    workers = _cores()
+    lines = -(-len(array) // per_line)
+    bounds = [min(len(array), round(lines * k / workers) * per_line) for k in range(workers + 1)]
+    chunks = [array[a:b] for a, b in zip(bounds, bounds[1:]) if b > a]
+    with multiprocessing.get_context("fork").Pool(len(chunks)) as pool:
+        texts = pool.starmap(_format, [(c, item, per_line) for c in chunks])
+    return LINE_SEP.join(texts)
+
+
+def _format(array: np.ndarray, item: str, per_line: int) -> str:
+    n = len(array)
     full, rest = divmod(n, per_line)
     line = ITEM_SEP.join([item] * per_line)
     lines = [line] * full
