@@ -10,8 +10,6 @@ may declare before the include to change how the model is lit.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from .. import __version__
@@ -20,13 +18,6 @@ from .load import Part
 from .numbers import format_rows, format_vectors, vector_item
 
 DEFAULT_FINISH = "finish { ambient 0.05 diffuse 0.85 specular 0.15 roughness 0.05 }"
-
-
-@dataclass(frozen=True)
-class Shading:
-    """How to write one part: ``smooth`` writes ``normal_vectors``."""
-
-    smooth: bool = True
 
 
 def colour_keyword(colour_space: str, alpha: bool) -> str:
