@@ -224,3 +224,24 @@ def povray_info() -> dict[str, str]:
     binary = find_povray()
     return {"binary": binary, "version": povray_version(binary)}
 
+
+
+def render_model(model: str | Path, lens_array: LensArray, output: str | Path, *, depth: float | None = None,
+                 shading: str = "auto", max_triangles: int | str | None = None, **kwargs: Any) -> dict[str, Any]:
+    """Render a mesh file (OBJ, STL, PLY, glTF, ...) on the default stage; see ``povh3d.mesh.stage``.
+
+    The model is converted once (cached by content), scaled to the display's
+    field and depth budget (``depth`` mm overrides the budget) and centred on
+    the screen; ``kwargs`` go to ``render``.  Returns the sidecar record, which
+    also describes the model and its placement.
+    """
+    from .mesh.stage import prepare_stage
+
+    settings = kwargs.get("settings")
+    cache_dir = settings.cache_dir if settings is not None else None
+    stage, model_record = prepare_stage(model, lens_array, depth=depth, shading=shading,
+                                        max_triangles=max_triangles, cache_dir=cache_dir)
+    record = render(stage, lens_array, output, **kwargs)
+    record["model"] = model_record
+    write_sidecar(output, record)
+    return record

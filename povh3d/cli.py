@@ -115,10 +115,19 @@ def cmd_render(args: argparse.Namespace) -> int:
             raise ConfigError(f"--{option} needs --frames FIRST:LAST")
     update, close = _progress(not args.quiet and sys.stderr.isatty())
     try:
-        record = render(args.scene, lens_array, output, method=args.method, settings=settings,
-                        views_dir=args.views_dir, include_dirs=tuple(args.include), display=display,
-                        progress=update, mapping=mapping, mapped_panel=mapped_panel, crop=crop,
-                        **_method_options(args))
+        from .mesh import is_mesh_file
+
+        common = dict(method=args.method, settings=settings, views_dir=args.views_dir,
+                      include_dirs=tuple(args.include), display=display, progress=update, mapping=mapping,
+                      mapped_panel=mapped_panel, crop=crop, **_method_options(args))
+        if is_mesh_file(args.scene):  # a model, not a scene: convert it and put it on the default stage
+            from .api import render_model
+
+            record = render_model(args.scene, lens_array, output, depth=args.depth, shading=args.shading,
+                                  max_triangles=_max_triangles(args.max_triangles), **common)
+            _warn(record["model"]["warnings"])
+        else:
+            record = render(args.scene, lens_array, output, **common)
     finally:
         close()
     t = record["timings"]
@@ -162,6 +171,53 @@ def _method_options(args: argparse.Namespace) -> dict[str, Any]:
             raise ConfigError(f"{' and '.join(given)} only apply to --method single-stage")
         return {}
     return options
+
+
+def _warn(messages: list[str]) -> None:
+    yellow, reset = ("\033[33m", "\033[0m") if sys.stderr.isatty() else ("", "")
+    for message in messages:
+        print(f"{yellow}povh3d: warning: {message}{reset}", file=sys.stderr)
+
+
+def _max_triangles(text: str | None) -> int | str | None:
+    if text is None or text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise ConfigError(f"--max-triangles takes a whole number or 'auto', got {text!r}") from None
+
+
+def cmd_convert_mesh(args: argparse.Namespace) -> int:
+    from .mesh import convert_mesh
+
+    max_triangles = _max_triangles(args.max_triangles)
+    if max_triangles == "auto":
+        from .mesh.simplify import auto_budget
+
+        max_triangles = auto_budget(_lens_array(args)[0])
+    result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
+                          fit_depth=args.fit_depth, center=args.center, max_triangles=max_triangles)
+    _warn(result.warnings)
+    line = f"{result.include}  {result.ident}  {result.summary()}  {result.seconds:.2f} s"
+    if result.simplification:
+        s = result.simplification
+        line += (f"  (simplified from {s['triangles_before']} triangles; "
+                 f"silhouette error {100 * s['silhouette_error']:.3f} %)")
+    print(line)
+    return 0
+
+
+def _add_mesh_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("mesh models (.obj .stl .ply .off .glb .gltf .3mf)")
+    shading = g.add_mutually_exclusive_group()
+    shading.add_argument("--smooth", dest="shading", action="store_const", const="smooth",
+                         help="smooth shading with vertex normals (default, except STL)")
+    shading.add_argument("--flat", dest="shading", action="store_const", const="flat",
+                         help="flat triangles (default for STL)")
+    g.add_argument("--max-triangles", metavar="N|auto",
+                   help="simplify to at most N triangles; auto: from the display's 3D resolution")
+    p.set_defaults(shading="auto")
 
 
 def cmd_interleave(args: argparse.Namespace) -> int:
@@ -379,7 +435,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     p = sub.add_parser("render", help="render a POV-Ray scene to an H3D image")
-    p.add_argument("scene", help="POV-Ray scene without a camera (.pov)")
+    p.add_argument("scene", help="POV-Ray scene without a camera (.pov), or a mesh model (.obj .stl .ply ...)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=list(METHODS), default="multi-ortho")
     p.add_argument("--quality", choices=list(QUALITY_OPTIONS), default="normal")
@@ -411,9 +467,26 @@ def build_parser() -> argparse.ArgumentParser:
                    help="single-stage lenslet surface (default: conic, aberration-free)")
     p.add_argument("--ior", type=float, help="single-stage lenslet index of refraction; the radius "
                    "follows from the lens-maker equation (default: an optically thin lens)")
+
+
+    p.add_argument("--depth", type=float, metavar="MM",
+                   help="a model's depth on the display (default: the depth budget the lens array shows sharply)")
+    _add_mesh_options(p)
     _add_array_options(p)
     _add_mapping_options(p)
     p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("convert-mesh", help="convert a mesh model to a POV-Ray mesh2 include")
+    p.add_argument("model", help="model file: .obj .stl .ply .off .glb .gltf .3mf")
+    p.add_argument("-o", "--output", help="include to write (default: MODEL.inc beside the model)")
+    p.add_argument("--name", help="identifier to declare (default: from the file name)")
+    p.add_argument("--unit", choices=("mm", "cm", "m", "in"),
+                   help="the model's unit (default: the file's, else mm; glTF: m)")
+    p.add_argument("--fit-depth", type=float, metavar="MM", help="scale the model to this depth (z extent)")
+    p.add_argument("--center", action="store_true", help="centre the model's bounding box on the origin")
+    _add_mesh_options(p)
+    _add_array_options(p)  # only for --max-triangles auto
+    p.set_defaults(func=cmd_convert_mesh)
 
     p = sub.add_parser("interleave", help="interleave a folder of views into an H3D image")
     p.add_argument("views_dir")

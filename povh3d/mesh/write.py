@@ -1,0 +1,108 @@
+"""A model's parts as the text of a POV-Ray include: ``mesh2`` objects and their bounds.
+
+Pure: text and texture images in, nothing written; ``convert.py`` writes them.
+The include declares ``IDENT`` (one ``mesh2``, or a ``union`` of them),
+``IDENT_min`` and ``IDENT_max`` (its bounding box, mm) and ``IDENT_Dir``, the
+folder prefix of its texture files (empty: found beside the scene or through
+``+L``).  Every texture uses the finish ``Povh3d_Mesh_Finish``, which a scene
+may declare before the include to change how the model is lit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import __version__
+from ..povfmt import pov_string, pov_vector
+from .load import Part
+from .numbers import format_rows, format_vectors, vector_item
+
+DEFAULT_FINISH = "finish { ambient 0.05 diffuse 0.85 specular 0.15 roughness 0.05 }"
+
+
+def colour_keyword(colour_space: str, alpha: bool) -> str:
+    """``srgb``/``srgbt`` for display-encoded 8-bit colours, ``rgb``/``rgbt`` for linear ones."""
+    return ("srgb" if colour_space == "srgb" else "rgb") + ("t" if alpha else "")
+
+
+def colour_values(rgba: np.ndarray, alpha: bool) -> np.ndarray:
+    """``(k, 4)`` uint8 RGBA -> ``(k, 3|4)`` float64: ``c / 255``, transmit ``1 - a / 255``."""
+    rgba = np.asarray(rgba, dtype=np.float64).reshape(-1, 4)
+    rgb = rgba[:, :3] / 255.0
+    return np.column_stack([rgb, (255.0 - rgba[:, 3]) / 255.0]) if alpha else rgb
+
+
+def _pigment_literal(rgba: np.ndarray, colour_space: str) -> str:
+    alpha = bool(rgba[3] < 255)
+    return f"{colour_keyword(colour_space, alpha)} {pov_vector(colour_values(rgba, alpha)[0])}"
+
+
+def _block(keyword: str, count: int, body: str) -> str:
+    return f"  {keyword} {{\n    {count},\n    {body}\n  }}\n" if count else f"  {keyword} {{ 0 }}\n"
+
+
+def _texture_list(colours: np.ndarray, colour_space: str) -> str:
+    alpha = bool((colours[:, 3] < 255).any())
+    item = ("texture { pigment { " + colour_keyword(colour_space, alpha) + " "
+            + vector_item(4 if alpha else 3) + " } finish { Povh3d_Mesh_Finish } }")
+    return _block("texture_list", len(colours), format_rows(colour_values(colours, alpha), item, per_line=1))
+
+
+def mesh2_text(part: Part, *, smooth: bool, normals: np.ndarray | None, texture_file: str | None,
+               ident: str) -> str:
+    """One part as a ``mesh2 { ... }`` block.
+
+    Parameters
+    ----------
+    part : Part                cleaned (finite numbers, no degenerate faces)
+    smooth : bool              write ``normal_vectors`` (``normals`` must be given)
+    normals : (n, 3) float or None
+    texture_file : str or None the image file name the part's UVs look up
+    ident : str                the model's identifier (for ``IDENT_Dir``)
+    """
+    out = [f"mesh2 {{  // {part.name}\n",
+           _block("vertex_vectors", len(part.vertices), format_vectors(part.vertices))]
+    if smooth:
+        out.append(_block("normal_vectors", len(normals), format_vectors(normals)))
+    textured = texture_file is not None and part.uv is not None
+    if textured:
+        out.append(_block("uv_vectors", len(part.uv), format_vectors(part.uv)))
+
+    faces = part.faces
+    if not textured and part.vertex_colors is not None:
+        colours, index = np.unique(part.vertex_colors, axis=0, return_inverse=True)
+        out.append(_texture_list(colours, part.colour_space))
+        rows = np.column_stack([faces, index.ravel()[faces]])
+        out.append(_block("face_indices", len(faces), format_rows(rows, "<%d, %d, %d>, %d, %d, %d", 2)))
+    elif not textured and part.face_colors is not None:
+        colours, index = np.unique(part.face_colors, axis=0, return_inverse=True)
+        out.append(_texture_list(colours, part.colour_space))
+        rows = np.column_stack([faces, index.ravel()])
+        out.append(_block("face_indices", len(faces), format_rows(rows, "<%d, %d, %d>, %d", 3)))
+    else:
+        out.append(_block("face_indices", len(faces), format_vectors(faces)))
+
+    if textured:
+        kind = "png"
+        out.append(f"  texture {{ uv_mapping pigment {{ image_map {{ {kind} concat({ident}_Dir, "
+                   f"{pov_string(texture_file)}) interpolate 2 }} }} finish {{ Povh3d_Mesh_Finish }} }}\n")
+    elif part.vertex_colors is None and part.face_colors is None:
+        out.append(f"  texture {{ pigment {{ {_pigment_literal(part.base_color, part.colour_space)} }} "
+                   "finish { Povh3d_Mesh_Finish } }\n")
+    out.append("}\n")
+    return "".join(out)
+
+
+def include_text(parts: list[str], ident: str, bounds: tuple[np.ndarray, np.ndarray], *,
+                 source: str, summary: str) -> str:
+    """The include file around the parts' ``mesh2`` blocks."""
+    lo, hi = bounds
+    body = parts[0] if len(parts) == 1 else "union {\n" + "".join(parts) + "}\n"
+    return (f"// {ident}: converted by povh3d {__version__} from {source}\n"
+            f"// {summary}\n"
+            "// POV-Ray frame, mm: x right, y up, z away from the viewer (the model's +z was negated).\n"
+            f"#ifndef ({ident}_Dir) #declare {ident}_Dir = \"\"; #end  // folder of the texture files, ending in /\n"
+            f"#ifndef (Povh3d_Mesh_Finish) #declare Povh3d_Mesh_Finish = {DEFAULT_FINISH} #end\n"
+            f"#declare {ident}_min = {pov_vector(lo)};\n"
+            f"#declare {ident}_max = {pov_vector(hi)};\n"
+            f"#declare {ident} =\n{body}")
