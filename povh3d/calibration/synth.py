@@ -61,6 +61,10 @@ class WhiteSpec:
         Aperture radius as a fraction of half the pitch (rounded).
     border_px : float
         Width of the dark border between flat micro-images.
+    edge_px : float
+        Width of the linear ramp at every aperture edge: the micro-lens blurs
+        its aperture's image, and a hard edge would alias (the true centre would
+        then depend on the supersampling).
     vignetting : float
         Relative fall-off at the image corners (cos^4 law), 0 = none.
     noise : float
@@ -83,6 +87,7 @@ class WhiteSpec:
     focal_px: float = 12.0
     aperture: float = 0.92
     border_px: float = 1.2
+    edge_px: float = 0.7
     vignetting: float = 0.0
     noise: float = 0.0
     level: float = 0.9
@@ -140,7 +145,7 @@ def _response(d: np.ndarray, spec: WhiteSpec) -> np.ndarray:
     if spec.profile == "rounded":
         r2 = np.sum(d * d, axis=-1)
         falloff = (1.0 + r2 / spec.focal_px**2) ** (-spec.cos_power / 2)  # cos^k(atan(r/f))
-        return np.where(r2 <= (spec.aperture * half) ** 2, falloff, 0.0)
+        return falloff * _ramp(spec.aperture * half - np.sqrt(r2), spec.edge_px)
     # Flat: inside the lens cell (distance to every cell edge) less half the border.
     basis = spec.basis
     normals = [basis[0], basis[1]] if spec.lattice == "square" else [basis[0], basis[1], basis[1] - basis[0]]
@@ -148,7 +153,14 @@ def _response(d: np.ndarray, spec: WhiteSpec) -> np.ndarray:
     for nvec in normals:
         u = nvec / np.linalg.norm(nvec)
         reach = np.maximum(reach, np.abs(d @ u))
-    return (reach <= half - spec.border_px / 2).astype(np.float64)
+    return _ramp(half - spec.border_px / 2 - reach, spec.edge_px)
+
+
+def _ramp(inside_by: np.ndarray, width: float) -> np.ndarray:
+    """1 well inside an edge, 0 well outside, linear over ``width`` px across it."""
+    if width <= 0:
+        return (inside_by >= 0).astype(np.float64)
+    return np.clip(inside_by / width + 0.5, 0.0, 1.0)
 
 
 def render_white(spec: WhiteSpec, *, rows_per_chunk: int = 64) -> np.ndarray:
@@ -194,6 +206,9 @@ def true_centres(spec: WhiteSpec, margin: float = 0.0) -> np.ndarray:
     reach = int(math.ceil(1.5 * math.hypot(w, h) / spec.pitch_px)) + 2
     m, n = np.meshgrid(np.arange(-reach, reach + 1), np.arange(-reach, reach + 1), indexing="ij")
     ideal = c0 + m.ravel()[:, None] * basis[0] + n.ravel()[:, None] * basis[1]
+    # Only the part of the ideal plane the image sees: a barrel model folds back
+    # far outside it, which would list phantom lenses.
+    ideal = ideal[np.hypot(*(ideal - [(w - 1) / 2, (h - 1) / 2]).T) <= 1.5 * 0.5 * math.hypot(w, h)]
     c = spec.distortion.distort(ideal)
     keep = ((c[:, 0] >= -0.5 + margin) & (c[:, 0] <= w - 0.5 - margin)
             & (c[:, 1] >= -0.5 + margin) & (c[:, 1] <= h - 0.5 - margin))
