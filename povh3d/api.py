@@ -23,6 +23,8 @@ from .methods import METHODS, run_method
 from .povray import find_povray, povray_version
 from .render import Progress, RenderSettings
 from .scene import load_scene
+from .calibration.commands import (  # noqa: F401  capture-side processing (thesis ch. 4)
+    borders_file, calibrate_file, equalise_file, stitch_files, undistort_file, viewpoints_file)
 
 VIEW_NAME = "v_{l:03d}_{k:03d}.png"
 _VIEW_RE = re.compile(r"^v_(\d{3,})_(\d{3,})\.png$")

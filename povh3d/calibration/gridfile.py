@@ -31,6 +31,32 @@ from ..imageio import atomic_path
 from .distortion import Brown
 
 LATTICES = ("square", "hex")
+
+
+def nearest_lattice(q: np.ndarray, basis: np.ndarray, lattice: str) -> np.ndarray:
+    """Integer lattice coordinates ``(..., 2)`` of the lattice point nearest each ``q`` (lattice units).
+
+    ``basis`` rows are the lattice vectors (px), which decide "nearest" for hex.
+    """
+    if lattice == "square":
+        return np.round(q)
+    # Hex: the nearest point is one of the four corners of the enclosing rhombus.
+    base = np.floor(q)
+    best = base
+    best_d = None
+    for dm in (0.0, 1.0):
+        for dn in (0.0, 1.0):
+            cand = base + np.array([dm, dn])
+            r = q - cand
+            v = r[..., 0:1] * basis[0] + r[..., 1:2] * basis[1]
+            d = np.sum(v * v, axis=-1)
+            if best_d is None:
+                best, best_d = cand, d
+            else:
+                closer = d < best_d
+                best = np.where(closer[..., None], cand, best)
+                best_d = np.where(closer, d, best_d)
+    return best
 KIND = "povh3d-lens-grid"
 
 
@@ -168,6 +194,21 @@ class Grid:
         jy = (d.distort(points + ey) - d.distort(points - ey)) / (2 * eps)
         return np.stack([jx, jy], axis=-1)
 
+    def lens_of_pixels(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The lens each recorded position ``(..., 2)`` belongs to (its Voronoi cell in the ideal frame).
+
+        Returns table row ``i``, column ``j`` (may fall outside the table) and the
+        lens's recorded centre ``(..., 2)`` px.
+        """
+        ideal = self.distortion.undistort(points) if not self.distortion.is_identity else np.asarray(points, float)
+        q = (ideal - self.origin) @ np.linalg.inv(self.basis)  # axial lattice coordinates
+        mn = nearest_lattice(q, self.basis, self.lattice)
+        centre = self.distortion.distort(self.origin + mn @ self.basis)
+        m = mn[..., 0].astype(np.int64)
+        n = mn[..., 1].astype(np.int64)
+        # Hex: axial (m, n) -> CONVENTIONS offset rows, j = m + floor(i / 2).
+        return n, (m if self.lattice == "square" else m + n // 2), centre
+
     def check_image(self, shape: tuple[int, ...], name: str = "the image") -> None:
         """InputError unless an image of ``shape`` ``(H, W, ...)`` is the size this grid was made for."""
         h, w = shape[:2]
@@ -235,7 +276,7 @@ def read_grid(path: str | Path) -> Grid:
     return Grid.from_dict(record, repr(str(path)))
 
 
-def grid_for_lens_array(lens_array, *, margin_px: tuple[float, float] = (0.0, 0.0)) -> Grid:
+def grid_for_lens_array(lens_array) -> Grid:
     """The exact grid of an H3D image rendered by povh3d for ``lens_array`` (no distortion).
 
     Lens ``(i, j)`` of CONVENTIONS is lens ``(i, j)`` of the grid; the pixel

@@ -181,10 +181,11 @@ class Template:
 
     def sample(self, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Bilinear value and gradient (per px) at offsets ``dx``, ``dy`` (same shape); edge-clamped."""
-        v = self.values.ravel()
+        v = self.values.ravel().astype(dx.dtype)
         k = self.values.shape[0]
-        fx = np.clip(dx * (1 / self.step) + k // 2, 0, k - 1.000001)
-        fy = np.clip(dy * (1 / self.step) + k // 2, 0, k - 1.000001)
+        inv = dx.dtype.type(1 / self.step)
+        fx = np.clip(dx * inv + k // 2, 0, k - 1.001)
+        fy = np.clip(dy * inv + k // 2, 0, k - 1.001)
         x0 = fx.astype(np.intp)
         y0 = fy.astype(np.intp)
         tx = fx - x0
@@ -197,8 +198,8 @@ class Template:
         top = v00 + (v01 - v00) * tx
         bot = v10 + (v11 - v10) * tx
         val = top + (bot - top) * ty
-        gx = ((v01 - v00) + ((v11 - v10) - (v01 - v00)) * ty) * (1 / self.step)
-        gy = (bot - top) * (1 / self.step)
+        gx = ((v01 - v00) + ((v11 - v10) - (v01 - v00)) * ty) * inv
+        gy = (bot - top) * inv
         return val, gx, gy
 
 
@@ -229,7 +230,8 @@ def build_template(img: np.ndarray, centres: np.ndarray, gain: np.ndarray, backg
     flat = (by * k + bx)[inside]
     num = np.bincount(flat, vals[inside].astype(np.float64), k * k).reshape(k, k)
     cnt = np.bincount(flat, minlength=k * k).reshape(k, k).astype(np.float64)
-    sigma = 0.6 if len(c) > 300 else 1.5  # few lenses leave empty bins: fill them by smoothing
+    # Few samples per bin leave holes: fill them by smoothing more.
+    sigma = 0.6 if vals.size / (k * k) >= 8 else 1.5
     num = ndimage.gaussian_filter(num, sigma, mode="constant")
     cnt = ndimage.gaussian_filter(cnt, sigma, mode="constant")
     t = np.where(cnt > 1e-6, num / np.maximum(cnt, 1e-6), 0.0)
@@ -268,19 +270,25 @@ def measure(img: np.ndarray, centres: np.ndarray, template: Template, half: int,
     ox, oy = _disc(half, radius)
     px = ix[ok, None] + ox  # (n, p) pixel positions
     py = iy[ok, None] + oy
-    values = img[py, px].astype(np.float64)
+    values = img[py, px].astype(np.float32)[:, :, None]
+    px = px.astype(np.float32)
+    py = py.astype(np.float32)
     c = centres[ok].copy()
     n = len(c)
     sol = np.zeros((n, 4))
+    design = np.empty((n, 4, px.shape[1]), dtype=np.float32)  # float32: half the memory traffic
+    design[:, 1] = 1.0
     for _ in range(iterations):
-        dx = px - c[:, 0:1]
-        dy = py - c[:, 1:2]
+        dx = px - c[:, 0:1].astype(np.float32)
+        dy = py - c[:, 1:2].astype(np.float32)
         t, gx, gy = template.sample(dx, dy)
-        wgt = np.clip(radius + 1.0 - np.sqrt(dx * dx + dy * dy), 0.0, 1.0)
-        design = np.stack([t, np.ones_like(t), -gx, -gy], axis=-1)
-        dw = design * wgt[..., None]
-        normal = np.einsum("npk,npl->nkl", dw, design) + 1e-9 * np.eye(4)
-        rhs = np.einsum("npk,np->nk", dw, values)
+        wgt = np.clip(np.float32(radius + 1.0) - np.sqrt(dx * dx + dy * dy), 0.0, 1.0)
+        design[:, 0] = t
+        design[:, 2] = -gx
+        design[:, 3] = -gy
+        dw = design * wgt[:, None, :]
+        normal = (dw @ design.transpose(0, 2, 1)).astype(np.float64) + 1e-9 * np.eye(4)
+        rhs = (dw @ values)[..., 0].astype(np.float64)
         sol = np.linalg.solve(normal, rhs[..., None])[..., 0]
         amp = np.where(np.abs(sol[:, 0]) > 1e-9, sol[:, 0], 1e-9)
         c += np.clip(sol[:, 2:4] / amp[:, None], -0.25 * radius, 0.25 * radius)
@@ -458,8 +466,9 @@ def calibrate(image: np.ndarray, *, lattice: str | None = None, distortion: bool
         for _ in range(2 if first or final else 1):
             pred = model.predict(mn)
             if template is None:
+                density = len(mn) * (2 * half + 1) ** 2 / (2 * (half + 2) / 0.25) ** 2
                 template = build_template(img, pred, np.ones(len(pred)), np.zeros(len(pred)), half,
-                                          0.25 if len(mn) > 300 else 0.5)
+                                          0.25 if density >= 8 else 0.5)
             got = measure(img, pred, template, half, radius, iterations=3 if first else 2)
             good = got.ok & (got.gain > 0.25 * np.median(got.gain[got.ok]))
             if good.sum() < 4:

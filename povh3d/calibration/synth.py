@@ -19,12 +19,14 @@ The true centre of lens ``(m, n)`` is ``distort(centre0 + m a1 + n a2)``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import ConfigError
 from .distortion import Brown
+from .gridfile import nearest_lattice
 
 PROFILES = ("rounded", "flat")
 
@@ -116,29 +118,6 @@ class WhiteSpec:
         return np.array([(w - 1) / 2 + self.offset_px[0], (h - 1) / 2 + self.offset_px[1]])
 
 
-def _nearest_lattice(q: np.ndarray, basis: np.ndarray, lattice: str) -> np.ndarray:
-    """Integer lattice coordinates ``(..., 2)`` of the lattice point nearest each of ``q`` (lattice units)."""
-    base = np.floor(q)
-    if lattice == "square":
-        return np.round(q)
-    # Hex: the nearest point is one of the four corners of the enclosing rhombus.
-    best = None
-    best_d = None
-    for dm in (0.0, 1.0):
-        for dn in (0.0, 1.0):
-            cand = base + np.array([dm, dn])
-            r = q - cand
-            v = r[..., 0:1] * basis[0] + r[..., 1:2] * basis[1]
-            d = np.sum(v * v, axis=-1)
-            if best is None:
-                best, best_d = cand, d
-            else:
-                closer = d < best_d
-                best = np.where(closer[..., None], cand, best)
-                best_d = np.where(closer, d, best_d)
-    return best
-
-
 def _response(d: np.ndarray, spec: WhiteSpec) -> np.ndarray:
     """White response at ideal offsets ``d`` ``(..., 2)`` px from the lens centre."""
     half = spec.pitch_px / 2
@@ -163,8 +142,17 @@ def _ramp(inside_by: np.ndarray, width: float) -> np.ndarray:
     return np.clip(inside_by / width + 0.5, 0.0, 1.0)
 
 
-def render_white(spec: WhiteSpec, *, rows_per_chunk: int = 64) -> np.ndarray:
-    """The white image, ``(H, W)`` float32 linear, values about ``[0, level]``."""
+Content = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+def render_white(spec: WhiteSpec, *, content: Content | None = None, rows_per_chunk: int = 64) -> np.ndarray:
+    """The white image, ``(H, W)`` float32 linear, values about ``[0, level]``.
+
+    ``content(centre, uv)`` turns it into a scene capture: the scene brightness
+    seen by the lens whose ideal centre is ``centre`` (``(..., 2)`` px) at the
+    in-lens position ``uv`` (``(..., 2)``, lattice units along ``a1`` and
+    perpendicular to it, ``0`` at the centre); it multiplies the white response.
+    """
     w, h = spec.size
     s = int(spec.supersample)
     sub = (np.arange(s) + 0.5) / s - 0.5
@@ -180,9 +168,15 @@ def render_white(spec: WhiteSpec, *, rows_per_chunk: int = 64) -> np.ndarray:
         pts = np.stack(np.broadcast_arrays(xs[None, :], ys[:, None]), axis=-1)
         ideal = pts if dist.is_identity else dist.undistort(pts)
         q = (ideal - c0) @ inv.T
-        nearest = _nearest_lattice(q, basis, spec.lattice)
+        nearest = nearest_lattice(q, basis, spec.lattice)
         d = ideal - (c0 + nearest @ basis)
         value = _response(d, spec)
+        if content is not None:
+            centre = c0 + nearest @ basis
+            e1 = basis[0] / np.linalg.norm(basis[0])
+            e2 = np.array([-e1[1], e1[0]])
+            uv = np.stack([d @ e1, d @ e2], axis=-1) / spec.pitch_px
+            value = value * content(centre, uv)
         out[r0:r1] = value.reshape(r1 - r0, s, w, s).mean(axis=(1, 3))
     if spec.vignetting > 0:
         yy, xx = np.mgrid[0:h, 0:w]
