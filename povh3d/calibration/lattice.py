@@ -487,12 +487,14 @@ def calibrate(image: np.ndarray, *, lattice: str | None = None, distortion: bool
     confidence = inlier * min(1.0, math.log10(snr) / 3) / (1 + (residual / (0.02 * pitch)) ** 2)
     t_origin, t_basis, table = _table(model, found, (h, w))
     # Template normalised to peak 1; the gain carries the white level of each lens.
-    peak = float(template.values.max())
-    grid = Grid(found, (w, h), t_basis, t_origin, table, model.brown(), residual_px=residual,
-                confidence=round(confidence, 4), template=template.values / peak, template_step=template.step)
-    where = grid.centres
-    gain = _smooth_gain(got.centres[use], got.gain[use] * peak, where, (h, w)).reshape(table)
+    # The white response is A T + B per lens; B (stray light, template blur in the
+    # gaps) scales with the lens's gain, so it joins the template as a constant.
+    ratio = float(np.median(got.background[use] / got.gain[use]))
+    response = np.clip(template.values + ratio, 0.0, None)
+    peak = float(response.max())
+    grid = Grid(found, (w, h), t_basis, t_origin, table, model.brown())
+    gain = _smooth_gain(got.centres[use], got.gain[use] * peak, grid.centres, (h, w)).reshape(table)
     return Grid(found, (w, h), t_basis, t_origin, table, model.brown(), residual_px=residual,
-                confidence=round(confidence, 4), template=template.values / peak, template_step=template.step,
+                confidence=round(confidence, 4), template=response / peak, template_step=template.step,
                 gain=np.maximum(gain, 0.0),
                 extra={"lenses_measured": int(keep.sum()), "fourier_snr": round(snr, 1)})
