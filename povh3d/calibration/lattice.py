@@ -97,6 +97,9 @@ def _fft_basis(img: np.ndarray, lattice: str | None, name: str) -> tuple[str, np
     h, w = img.shape
     size = min(h, w, FFT_CROP)
     crop, _ = _crop(img, size)
+    if float(crop.std()) < 1e-3 * max(float(np.abs(crop).mean()), 1e-6):
+        raise InputError(f"{name} is uniform and shows no lens lattice; calibrate with a sharp image of a "
+                         "white background taken through the lens array")
     win = np.hanning(size)
     data = (crop - crop.mean()) * win[:, None] * win[None, :]
     mag = np.fft.fftshift(np.abs(np.fft.fft2(data)))
