@@ -29,8 +29,10 @@ def white_response(grid: Grid) -> np.ndarray:
         raise InputError("this grid has no white-response template; make it with 'povh3d calibrate' from a white image")
     w, h = grid.image_size
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
-    i, j, centre = grid.lens_of_pixels(np.stack([xx, yy], axis=-1))
-    d = np.stack([xx, yy], axis=-1) - centre
+    pts = np.stack([xx, yy], axis=-1)
+    i, j, centre = grid.lens_of_pixels(pts)
+    # The template lives in the ideal (undistorted) frame, like the lattice.
+    d = pts - centre if grid.distortion.is_identity else grid.distortion.undistort(pts) - grid.distortion.undistort(centre)
     t, _, _ = Template(grid.template, grid.template_step).sample(d[..., 0], d[..., 1])
     rows, cols = grid.table
     gain = grid.gain[np.clip(i, 0, rows - 1), np.clip(j, 0, cols - 1)]

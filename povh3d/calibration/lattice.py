@@ -219,15 +219,24 @@ def _patches(img: np.ndarray, centres: np.ndarray, half: int):
 
 
 def build_template(img: np.ndarray, centres: np.ndarray, gain: np.ndarray, background: np.ndarray,
-                   half: int, step: float = 0.25) -> Template:
-    """Average micro-image around ``centres`` (gain and background removed), made point-symmetric."""
+                   half: int, step: float = 0.25, unwarp: np.ndarray | None = None) -> Template:
+    """Average micro-image around ``centres`` (gain and background removed), made point-symmetric.
+
+    ``unwarp`` ``(n, 2, 2)`` maps each lens's pixel offsets to the ideal frame (the
+    inverse local Jacobian of the distortion), so micro-images squeezed by a barrel
+    lens average into one undistorted template.
+    """
     ok, patch, xs, ys = _patches(img, centres, half)
     c = centres[ok]
     k = int(round((half + 2) / step)) * 2 + 1
     mid = k // 2
-    bx = np.rint((xs[:, None, :] - c[:, 0, None, None]) / step).astype(np.intp) + mid
-    by = np.rint((ys[:, :, None] - c[:, 1, None, None]) / step).astype(np.intp) + mid
-    bx, by = np.broadcast_arrays(bx, by)
+    dx, dy = np.broadcast_arrays(xs[:, None, :] - c[:, 0, None, None], ys[:, :, None] - c[:, 1, None, None])
+    if unwarp is not None:
+        u = unwarp[ok]
+        dx, dy = (u[:, 0, 0, None, None] * dx + u[:, 0, 1, None, None] * dy,
+                  u[:, 1, 0, None, None] * dx + u[:, 1, 1, None, None] * dy)
+    bx = np.rint(dx / step).astype(np.intp) + mid
+    by = np.rint(dy / step).astype(np.intp) + mid
     vals = (patch - background[ok, None, None]) / gain[ok, None, None]
     inside = (bx >= 0) & (bx < k) & (by >= 0) & (by < k)
     flat = (by * k + bx)[inside]
@@ -260,7 +269,7 @@ def _disc(half: int, radius: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def measure(img: np.ndarray, centres: np.ndarray, template: Template, half: int, radius: float,
-            iterations: int = 3) -> Measured:
+            iterations: int = 3, unwarp: np.ndarray | None = None) -> Measured:
     """Centre of symmetry of each micro-image near ``centres`` (Gauss-Newton against ``template``).
 
     Per lens, ``I = A T(x - c - delta) + B`` is linearised in ``delta`` and solved
@@ -284,7 +293,13 @@ def measure(img: np.ndarray, centres: np.ndarray, template: Template, half: int,
     for _ in range(iterations):
         dx = px - c[:, 0:1].astype(np.float32)
         dy = py - c[:, 1:2].astype(np.float32)
-        t, gx, gy = template.sample(dx, dy)
+        if unwarp is None:
+            t, gx, gy = template.sample(dx, dy)
+        else:  # template in the ideal frame: T(U d), gradient U^T grad T
+            u = unwarp[ok].astype(np.float32)
+            t, ga, gb = template.sample(u[:, 0, 0:1] * dx + u[:, 0, 1:2] * dy, u[:, 1, 0:1] * dx + u[:, 1, 1:2] * dy)
+            gx = u[:, 0, 0:1] * ga + u[:, 1, 0:1] * gb
+            gy = u[:, 0, 1:2] * ga + u[:, 1, 1:2] * gb
         wgt = np.clip(np.float32(radius + 1.0) - np.sqrt(dx * dx + dy * dy), 0.0, 1.0)
         design[:, 0] = t
         design[:, 2] = -gx
@@ -321,6 +336,17 @@ class _Model:
 
     def brown(self) -> Brown:
         return Brown(float(self.k[0]), float(self.k[1]), tuple(self.brown_centre), self.scale)
+
+    def unwarp(self, mn: np.ndarray) -> np.ndarray | None:
+        """Inverse local Jacobians ``(n, 2, 2)`` of the distortion at the lenses (None: no distortion)."""
+        if not self.k.any():
+            return None
+        u = self.ideal(mn)
+        b = self.brown()
+        e = 0.5
+        jx = (b.distort(u + [e, 0.0]) - b.distort(u - [e, 0.0])) / (2 * e)
+        jy = (b.distort(u + [0.0, e]) - b.distort(u - [0.0, e])) / (2 * e)
+        return np.linalg.inv(np.stack([jx, jy], axis=-1))
 
 
 def _fit(model: _Model, mn: np.ndarray, meas: np.ndarray, n_k: int) -> _Model:
@@ -465,25 +491,28 @@ def calibrate(image: np.ndarray, *, lattice: str | None = None, distortion: bool
         if len(mn) < 4:
             raise InputError(f"{name} holds too few whole lenses ({len(mn)}) to fit a lattice; "
                              "use a larger image")
-        n_k = 0 if not distortion or stage < 0.45 * full else (1 if not final else 2)
+        # Distortion terms as soon as the disc is wide enough to see them, so the
+        # next, wider disc is predicted well enough to label every lens right.
+        n_k = 0 if not distortion or stage < 0.2 * full else (1 if stage < 0.6 * full else 2)
         for _ in range(2 if first or final else 1):
             pred = model.predict(mn)
             if template is None:
                 density = len(mn) * (2 * half + 1) ** 2 / (2 * (half + 2) / 0.25) ** 2
                 template = build_template(img, pred, np.ones(len(pred)), np.zeros(len(pred)), half,
                                           0.25 if density >= 8 else 0.5)
-            got = measure(img, pred, template, half, radius, iterations=3 if first else 2)
+            unwarp = model.unwarp(mn)
+            got = measure(img, pred, template, half, radius, iterations=3 if first else 2, unwarp=unwarp)
             good = got.ok & (got.gain > 0.25 * np.median(got.gain[got.ok]))
             if good.sum() < 4:
                 raise InputError(f"{name}: too few lenses could be measured ({int(good.sum())}); check the image")
             model, keep, err = _fit_robust(model, mn[good], got.centres[good], n_k)
             use = np.flatnonzero(good)[keep]
             template = build_template(img, got.centres[use], got.gain[use], got.background[use], half,
-                                      template.step)
+                                      template.step, None if unwarp is None else unwarp[use])
             first = False
         if final:
             break
-        stage *= 2.0
+        stage *= 1.6
 
     residual = float(np.sqrt(np.mean(err[keep] ** 2)))
     inlier = float(keep.sum()) / max(1, int(got.ok.sum()))
