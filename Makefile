@@ -39,8 +39,9 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 test: povray venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
 
-bench: povray venv ## measure H3D render time against a plain 2D render of the panel
+bench: povray venv ## measure H3D render time against a plain 2D render; lens-grid calibration time
 	$(BIN)/python benchmarks/bench_render.py
+	$(BIN)/python benchmarks/bench_calibrate.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out
