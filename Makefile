@@ -39,13 +39,14 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 test: povray venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
 
-bench: povray venv ## measure H3D render time against a plain 2D render, the quality, mapping, Dask, single-stage, crop and mesh benchmarks
+bench: povray venv ## measure H3D render time against a plain 2D render, the quality, mapping, Dask, single-stage, crop, mesh and calibration benchmarks
 	$(BIN)/python benchmarks/bench_render.py
 	$(BIN)/python benchmarks/bench_mapping.py
 	$(BIN)/python benchmarks/bench_dask.py 2> >(grep -v -E 'distributed|^ |Traceback|CommClosed' >&2)
 	$(BIN)/python benchmarks/bench_single_stage.py
 	$(BIN)/python benchmarks/bench_skip.py
 	$(BIN)/python benchmarks/bench_mesh.py
+	$(BIN)/python benchmarks/bench_calibrate.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out

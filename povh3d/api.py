@@ -25,6 +25,8 @@ from .povray import find_povray, povray_version
 from .render import Progress, Quality, RenderSettings
 from .sandbox import describe as describe_sandbox
 from .scene import load_scene
+from .calibration.commands import (  # noqa: F401  capture-side processing (thesis ch. 4)
+    borders_file, calibrate_file, equalise_file, stitch_files, undistort_file, viewpoints_file)
 
 from .animation import FrameRange, render_animation  # noqa: E402,F401  (animation uses this module)
 
