@@ -1,31 +1,38 @@
-"""sRGB transfer functions: filtering that mixes pixels works in linear light (CONVENTIONS)."""
+"""sRGB transfer functions, the one copy in povh3d: filtering that mixes pixels
+works in linear light, images are sRGB-encoded (CONVENTIONS, "Files")."""
 
 from __future__ import annotations
 
 import numpy as np
 
 
-def srgb_to_linear(values: np.ndarray) -> np.ndarray:
-    """sRGB-encoded values in ``[0, 1]`` to linear light (IEC 61966-2-1), float64."""
-    v = np.asarray(values, dtype=np.float64)
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+def srgb_to_linear(values: np.ndarray, dtype: np.dtype | type = np.float64) -> np.ndarray:
+    """sRGB-encoded values in ``[0, 1]`` to linear light (IEC 61966-2-1), computed in ``dtype``."""
+    dtype = np.dtype(dtype).type
+    v = np.asarray(values, dtype=dtype)
+    return np.where(v <= 0.04045, v / dtype(12.92), ((v + dtype(0.055)) / dtype(1.055)) ** dtype(2.4))
 
 
-def linear_to_srgb(values: np.ndarray) -> np.ndarray:
-    """Linear light in ``[0, 1]`` to sRGB-encoded values, float64 (clipped to ``[0, 1]``)."""
-    v = np.clip(np.asarray(values, dtype=np.float64), 0.0, 1.0)
-    return np.where(v <= 0.0031308, v * 12.92, 1.055 * v ** (1 / 2.4) - 0.055)
+def linear_to_srgb(values: np.ndarray, dtype: np.dtype | type = np.float64) -> np.ndarray:
+    """Linear light to sRGB-encoded values in ``[0, 1]`` (clipped), computed in ``dtype``."""
+    dtype = np.dtype(dtype).type
+    v = np.clip(np.asarray(values, dtype=dtype), 0.0, 1.0)
+    return np.where(v <= 0.0031308, v * dtype(12.92), dtype(1.055) * v ** dtype(1 / 2.4) - dtype(0.055))
 
 
-def decode(image: np.ndarray) -> np.ndarray:
-    """An 8- or 16-bit sRGB image to linear light, float64."""
-    return srgb_to_linear(image / float(np.iinfo(image.dtype).max))
+def decode(image: np.ndarray, dtype: np.dtype | type = np.float64) -> np.ndarray:
+    """An sRGB image to linear light in ``dtype``: 8- or 16-bit, or float already in ``[0, 1]``."""
+    image, dtype = np.asarray(image), np.dtype(dtype).type
+    if np.issubdtype(image.dtype, np.integer):
+        image = image.astype(dtype) / dtype(np.iinfo(image.dtype).max)
+    return srgb_to_linear(image, dtype)
 
 
-def encode(linear: np.ndarray, dtype: np.dtype) -> np.ndarray:
-    """Linear light to an sRGB image of integer ``dtype``, rounded to nearest."""
+def encode(linear: np.ndarray, dtype: np.dtype | type = np.uint8) -> np.ndarray:
+    """Linear light to an sRGB image of integer ``dtype`` (uint8 or uint16), rounded to nearest."""
     top = np.iinfo(dtype).max
-    return np.rint(linear_to_srgb(linear) * top).astype(dtype)
+    work = np.float32 if np.asarray(linear).dtype == np.float32 else np.float64
+    return np.rint(linear_to_srgb(linear, work) * top).astype(dtype)
 
 
 def mean_in_linear_light(images: np.ndarray) -> np.ndarray:

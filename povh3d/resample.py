@@ -17,27 +17,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from .colour import decode, encode
 from .interleave import extract, interleave
 
 
 def to_linear(image: np.ndarray) -> np.ndarray:
     """sRGB-encoded uint8/uint16 (or float in 0..1) -> linear float32 in 0..1."""
-    image = np.asarray(image)
-    if image.dtype == np.uint8:
-        x = image.astype(np.float32) / 255.0
-    elif image.dtype == np.uint16:
-        x = image.astype(np.float32) / 65535.0
-    else:
-        x = image.astype(np.float32)
-    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4).astype(np.float32)
+    return decode(image, np.float32)
 
 
 def from_linear(linear: np.ndarray, dtype: np.dtype | type = np.uint8) -> np.ndarray:
     """Linear float in 0..1 -> sRGB-encoded ``dtype`` (uint8 or uint16), rounded."""
-    x = np.clip(np.asarray(linear, np.float32), 0.0, 1.0)
-    s = np.where(x <= 0.0031308, x * 12.92, 1.055 * x ** (1 / 2.4) - 0.055)
-    top = 65535.0 if np.dtype(dtype) == np.uint16 else 255.0
-    return np.rint(s * top).astype(dtype)
+    return encode(linear, dtype)
 
 
 def resample_matrix(n_in: int, n_out: int) -> np.ndarray:

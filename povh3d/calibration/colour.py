@@ -1,4 +1,5 @@
-"""Pixel values <-> linear light, and the grey image the lattice is found in.
+"""Pixel values <-> linear light (povh3d.colour) for images that may be float, and the
+grey image the lattice is found in.
 
 Filtering that mixes pixels works in linear light (CONVENTIONS "Files"); images
 are sRGB-encoded, 8- or 16-bit.  Float images are taken as linear already.
@@ -8,30 +9,21 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def _srgb_to_linear(v: np.ndarray) -> np.ndarray:
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
-
-
-def _linear_to_srgb(v: np.ndarray) -> np.ndarray:
-    v = np.clip(v, 0.0, 1.0)
-    return np.where(v <= 0.0031308, v * 12.92, 1.055 * v ** (1 / 2.4) - 0.055)
+from ..colour import decode, encode
 
 
 def to_linear(image: np.ndarray) -> tuple[np.ndarray, np.dtype]:
     """``(H, W[, C])`` uint8/uint16 sRGB or float linear -> float64 linear in ``[0, 1]``, and the dtype."""
     image = np.asarray(image)
     if image.dtype == np.uint8 or image.dtype == np.uint16:
-        top = float(np.iinfo(image.dtype).max)
-        return _srgb_to_linear(image.astype(np.float64) / top), image.dtype
+        return decode(image), image.dtype
     return image.astype(np.float64), image.dtype
 
 
 def from_linear(image: np.ndarray, dtype: np.dtype) -> np.ndarray:
     """Inverse of :func:`to_linear`: back to ``dtype`` (sRGB-encoded when integer)."""
     if dtype == np.uint8 or dtype == np.uint16:
-        top = float(np.iinfo(dtype).max)
-        return np.round(_linear_to_srgb(image) * top).astype(dtype)
+        return encode(image, dtype)
     return image.astype(dtype)
 
 
