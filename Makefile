@@ -41,6 +41,7 @@ test: povray venv ## run the test suite (POV-Ray tests included)
 
 bench: povray venv ## measure H3D render time against a plain 2D render, the quality, mapping, Dask, single-stage, crop, mesh and calibration benchmarks
 	$(BIN)/python benchmarks/bench_render.py
+	$(BIN)/python benchmarks/bench_quality.py
 	$(BIN)/python benchmarks/bench_mapping.py
 	$(BIN)/python benchmarks/bench_dask.py 2> >(grep -v -E 'distributed|^ |Traceback|CommClosed' >&2)
 	$(BIN)/python benchmarks/bench_single_stage.py

@@ -38,7 +38,7 @@ from typing import Any
 from .errors import ConfigError, OutputError
 from .geometry import LensArray
 from .imageio import read_png, write_sidecar
-from .render import Progress, RenderSettings
+from .render import AUTO, Progress, RenderSettings
 from .scene import Scene, load_scene
 
 __all__ = ["FrameRange", "parse_frames", "parse_clock", "scene_uses_clock", "frame_path",
@@ -185,6 +185,7 @@ def render_animation(scene_path: str | Path, lens_array: LensArray, output: str 
     """
     from . import api
     from .povray import find_povray
+    from .quality_bench import resolve_auto
     from .video import check_video_path, write_video
 
     settings = settings or RenderSettings()
@@ -198,6 +199,10 @@ def render_animation(scene_path: str | Path, lens_array: LensArray, output: str 
     if povray_binary is None and not settings.scheduler:
         povray_binary = find_povray()
     uses_clock = scene_uses_clock(scene, povray_binary)
+    if settings.quality == AUTO:  # choose once, on the first frame, for the whole sequence
+        first = dataclasses.replace(settings, clock=frames.clock(frames.first) if uses_clock else None)
+        chosen, _ = resolve_auto(scene, lens_array, method, first)
+        settings = dataclasses.replace(settings, quality=chosen.quality, max_error_db=None)
     digits = max(4, len(str(frames.last)))
     folder = output.parent if str(output.parent) else Path(".")
     try:

@@ -21,6 +21,7 @@ from .geometry import LensArray
 from .imageio import atomic_path, check_writable, read_png, read_sidecar, write_png, write_sidecar
 from .interleave import extract, interleave
 from .methods import METHODS, run_method
+from .quality_bench import resolve_auto
 from .povray import find_povray, povray_version
 from .render import Progress, Quality, RenderSettings
 from .sandbox import describe as describe_sandbox
@@ -71,6 +72,7 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         check_writable(Path(views_dir) / ".povh3d-write-test")
 
     start = time.perf_counter()
+    settings, auto = resolve_auto(scene, lens_array, method, settings, **method_options)
     result = run_method(method, scene, lens_array, settings, progress, crop=crop, **method_options)
     render_seconds = time.perf_counter() - start
     h3d = result.h3d
@@ -87,6 +89,8 @@ def render(scene_path: str | Path, lens_array: LensArray, output: str | Path, *,
         sandbox=describe_sandbox(), scheduler=settings.scheduler,
         timings={"render_seconds": round(render_seconds, 4), **result.stats.as_dict()},
     )
+    if auto is not None:
+        record["quality"].update(level="auto", auto=auto.as_dict())
     if method == "single-stage":
         record["single_stage"] = single_stage_record(lens_array, result.back_off, **method_options)
     if result.crop is not None:

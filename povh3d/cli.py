@@ -105,7 +105,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
                               timeout=args.timeout, use_cache=not args.no_cache,
                               bit_depth=args.bit_depth, back_off=args.front_clearance,
-                              scheduler=args.scheduler)
+                              scheduler=args.scheduler, max_error_db=args.max_error)
     crop = CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None)
     output = Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png")
     if args.frames is not None:
@@ -478,6 +478,25 @@ def _add_calibration_commands(sub) -> None:
                                          f"of lenses ({r['mode']})"))
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .quality_bench import default_trials, format_table, run_bench, write_report
+    from .scene import load_scene
+
+    lens_array, _ = _lens_array(args)
+    scene = load_scene(args.scene, tuple(args.include))
+    trials = default_trials(args.methods.split(","))
+    update, close = _progress(not args.quiet and sys.stderr.isatty())
+    try:
+        report = run_bench(scene, lens_array, trials, reference_samples=args.reference_samples,
+                           on_trial=(lambda done, total, what: update(done, total)) if update else None)
+    finally:
+        close()
+    paths = write_report(report, args.output)
+    print(format_table(report))
+    print(f"\n{paths['csv']}  {paths['table']}  {paths['plot']}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .methods import METHODS
     from .render import QUALITY_OPTIONS
@@ -490,7 +509,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="POV-Ray scene without a camera (.pov), or a mesh model (.obj .stl .ply ...)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=list(METHODS), default="multi-ortho")
-    p.add_argument("--quality", choices=list(QUALITY_OPTIONS), default="normal")
+    p.add_argument("--quality", choices=[*QUALITY_OPTIONS, "auto"], default="normal",
+                   help="draft: one ray per pixel; normal: antialiased; high: 256 footprint samples, "
+                   "converged; auto: the fastest that meets --max-error (see 'povh3d bench')")
+    p.add_argument("--max-error", type=float, metavar="DB",
+                   help="with --quality auto: the lowest PSNR against a converged reference to accept")
     p.add_argument("--jobs", type=int, help="parallel POV-Ray processes")
     p.add_argument("--threads", type=int, help="POV-Ray threads per process")
     p.add_argument("--timeout", type=float, help="seconds allowed to each POV-Ray run")
@@ -539,6 +562,19 @@ def build_parser() -> argparse.ArgumentParser:
     _add_mesh_options(p)
     _add_array_options(p)  # only for --max-triangles auto
     p.set_defaults(func=cmd_convert_mesh)
+
+    p = sub.add_parser("bench", help="run time against error of every method and quality setting")
+    p.add_argument("scene", help="POV-Ray scene without a camera (.pov)")
+    p.add_argument("-o", "--output", default="bench", help="folder for bench.csv, bench.md, bench.png")
+    p.add_argument("--methods", default="multi-ortho,pinhole",
+                   help="comma-separated methods to bench, e.g. multi-ortho,pinhole,single-stage:conic,"
+                   "single-stage:spherical (default: multi-ortho,pinhole)")
+    p.add_argument("--reference-samples", type=int, default=256, metavar="N",
+                   help="footprint samples per pixel of the reference (default 256)")
+    p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    _add_array_options(p)
+    p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("interleave", help="interleave a folder of views into an H3D image")
     p.add_argument("views_dir")

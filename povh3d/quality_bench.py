@@ -12,6 +12,7 @@ import math
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,7 @@ from .errors import ConfigError
 from .geometry import LensArray
 from .methods import METHODS, run_method
 from .metrics import pareto_front, psnr, ssim
-from .render import QUALITY_LEVELS, Quality, RenderSettings
+from .render import AUTO, QUALITY_LEVELS, Quality, RenderSettings
 from .scene import Scene
 
 
@@ -28,11 +29,12 @@ from .scene import Scene
 class Trial:
     method: str
     quality: Quality
-    name: str = ""
+    options: tuple[tuple[str, Any], ...] = ()   # the method's own (single-stage: lenslet, ior)
 
     @property
     def label(self) -> str:
-        return self.name or f"{self.method}: {self.quality.label}"
+        extra = "".join(f" {k}={v}" for k, v in self.options)
+        return f"{self.method}{extra}: {self.quality.label}"
 
 
 @dataclass(frozen=True)
@@ -63,26 +65,26 @@ def reference_quality(samples: int = 256, seed: int = 1) -> Quality:
 
 
 def default_trials(methods: Iterable[str] = ("multi-ortho", "pinhole")) -> list[Trial]:
-    """The grid the bench walks: each named level, then antialiasing, jitter,
-    angular sub-views and trace depth one at a time, for the methods given."""
+    """The grid the bench walks for each method: POV-Ray's antialiasing (threshold,
+    method, depth, jitter), angular sub-views with and without it, footprint samples,
+    a cut trace depth, and the named levels as the method renders them."""
+    aa = Quality(antialias=0.1, aa_method=2, aa_depth=3)
     trials: list[Trial] = []
-    for method in methods:
+    for entry in methods:
+        method, _, lenslet = entry.partition(":")   # single-stage:conic, single-stage:spherical
         if method not in METHODS:
             raise ConfigError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
-        aa = [Quality(), Quality(antialias=0.3), Quality(antialias=0.1, aa_method=2, aa_depth=3),
-              Quality(antialias=0.1, aa_method=2, aa_depth=3, jitter=True)]
-        trials += [Trial(method, q) for q in aa]
-        if method == "multi-ortho":  # the only method that takes footprint samples
-            for n in (2, 3, 4):
-                trials.append(Trial(method, Quality(subviews=n)))
-                trials.append(Trial(method, Quality(antialias=0.1, aa_method=2, aa_depth=3, jitter=True,
-                                                    subviews=n)))
-            trials += [Trial(method, Quality(footprint=n, seed=7)) for n in (16, 64)]
-            trials.append(Trial(method, Quality(antialias=0.1, aa_method=2, aa_depth=3, jitter=True,
-                                                subviews=3, max_trace_level=2)))
-        trials += [Trial(method, q, f"{method}: --quality {name}") for name, q in QUALITY_LEVELS.items()
-                   if method == "multi-ortho" or not (q.subviews > 1 or q.footprint)]
-    return list(dict.fromkeys(trials))  # a level equal to a grid point is run once
+        options = (("lenslet", lenslet),) if lenslet else ()
+        grid = [Quality(), Quality(antialias=0.3), aa, replace(aa, jitter=True),
+                replace(aa, max_trace_level=1)]
+        if method == "multi-ortho":  # the method that traces footprint samples
+            grid += [Quality(subviews=2), Quality(subviews=3), replace(aa, subviews=2), replace(aa, subviews=3),
+                     Quality(footprint=16, seed=7), Quality(footprint=64, seed=7), Quality(footprint=128, seed=7)]
+            levels = QUALITY_LEVELS.values()
+        else:
+            levels = [q.point_sampled() for q in QUALITY_LEVELS.values()]
+        trials += [Trial(method, q, options) for q in dict.fromkeys([*grid, *levels])]
+    return trials
 
 
 def run_bench(scene: Scene, lens_array: LensArray, trials: list[Trial], *,
@@ -91,9 +93,10 @@ def run_bench(scene: Scene, lens_array: LensArray, trials: list[Trial], *,
     """Render the reference twice and every trial once (uncached), and score each."""
     base = replace(settings or RenderSettings(), use_cache=False)
 
-    def render(method: str, quality: Quality, bit_depth: int = 8) -> tuple[np.ndarray, float]:
+    def render(method: str, quality: Quality, bit_depth: int = 8, options=()) -> tuple[np.ndarray, float]:
         start = time.perf_counter()
-        h3d = run_method(method, scene, lens_array, replace(base, quality=quality, bit_depth=bit_depth)).h3d
+        h3d = run_method(method, scene, lens_array, replace(base, quality=quality, bit_depth=bit_depth),
+                         **dict(options)).h3d
         return h3d, time.perf_counter() - start
 
     steps = len(trials) + 2
@@ -111,7 +114,7 @@ def run_bench(scene: Scene, lens_array: LensArray, trials: list[Trial], *,
     for n, trial in enumerate(trials):
         if on_trial:
             on_trial(n + 2, steps, trial.label)
-        image, seconds = render(trial.method, trial.quality)
+        image, seconds = render(trial.method, trial.quality, options=trial.options)
         measured.append((trial, seconds, psnr(image, reference), ssim(image, reference)))
     front = pareto_front(np.array([m[1] for m in measured]), np.array([m[2] for m in measured]))
     results = tuple(TrialResult(t, s, p, q, bool(f)) for (t, s, p, q), f in zip(measured, front))
@@ -120,6 +123,60 @@ def run_bench(scene: Scene, lens_array: LensArray, trials: list[Trial], *,
 
 def _to_8bit(image: np.ndarray) -> np.ndarray:
     return (np.rint(image / 257.0)).astype(np.uint8) if image.dtype == np.uint16 else image
+
+
+# What --quality auto tries, cheapest first (the order the bench measures): it takes
+# the first that meets the target on a probe of the central lenses.
+AUTO_LADDER: tuple[Quality, ...] = (
+    QUALITY_LEVELS["draft"], QUALITY_LEVELS["normal"],
+    *(Quality(footprint=n) for n in (8, 16, 32, 64, 128)), QUALITY_LEVELS["high"],
+)
+
+
+@dataclass(frozen=True)
+class AutoChoice:
+    quality: Quality
+    min_psnr_db: float
+    tried: tuple[tuple[str, float], ...]   # (setting, PSNR dB) on the probe, in order
+    probe_lenses: tuple[int, int]
+    seconds: float
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"max_error_db": self.min_psnr_db, "chosen": self.quality.label,
+                "probe_lenses": list(self.probe_lenses), "probe_seconds": round(self.seconds, 3),
+                "tried": [{"setting": s, "psnr_db": round(p, 2)} for s, p in self.tried]}
+
+
+def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: RenderSettings,
+                 **options: Any) -> tuple[RenderSettings, AutoChoice | None]:
+    """``settings`` with ``--quality auto`` replaced by the cheapest setting of
+    ``AUTO_LADDER`` that reaches ``settings.max_error_db`` on a probe of the
+    central lenses; unchanged (and None) for any other quality.
+
+    The probe renders a footprint reference of the probe (cached like any render),
+    then the ladder in order until one setting meets the target; a ConfigError
+    if none does.  Methods without footprint samples stop at antialiasing.
+    """
+    if settings.quality != AUTO:
+        return settings, None
+    start = time.perf_counter()
+    target = float(settings.max_error_db)
+    probe = probe_array(lens_array)
+    base = replace(settings, quality=QUALITY_LEVELS["draft"], max_error_db=None, scheduler=settings.scheduler)
+    reference = run_method("multi-ortho", scene, probe, replace(base, quality=reference_quality(), bit_depth=16)).h3d
+    reference = _to_8bit(reference)
+    takes_samples = METHODS[method].takes_samples(probe)
+    tried: list[tuple[str, float]] = []
+    for quality in dict.fromkeys(q if takes_samples else q.point_sampled() for q in AUTO_LADDER):
+        result = run_method(method, scene, probe, replace(base, quality=quality), **options)
+        tried.append((quality.label, psnr(result.h3d, reference)))
+        if tried[-1][1] >= target:
+            choice = AutoChoice(quality, target, tuple(tried), (probe.lenses_x, probe.lenses_y),
+                                time.perf_counter() - start)
+            return replace(settings, quality=quality, max_error_db=None), choice
+    best = max(tried, key=lambda t: t[1])
+    raise ConfigError(f"no quality setting reaches {target:g} dB on this scene (best {best[1]:.1f} dB with "
+                      f"{best[0]}, on the central {probe.lenses_x}x{probe.lenses_y} lenses); lower --max-error")
 
 
 def fastest_meeting(report: BenchReport, min_psnr_db: float) -> TrialResult:
@@ -133,7 +190,7 @@ def fastest_meeting(report: BenchReport, min_psnr_db: float) -> TrialResult:
     return min(good, key=lambda r: r.seconds)
 
 
-def probe_array(lens_array: LensArray, max_lenses: tuple[int, int] = (32, 20)) -> LensArray:
+def probe_array(lens_array: LensArray, max_lenses: tuple[int, int] = (24, 16)) -> LensArray:
     """The central part of ``lens_array``, at most ``max_lenses``, on a panel of its own size:
     what ``--quality auto`` renders to choose a setting.  Lenticular arrays keep 8 panel rows
     per lens row of the limit, since every panel row is its own lens row."""
@@ -143,3 +200,66 @@ def probe_array(lens_array: LensArray, max_lenses: tuple[int, int] = (32, 20)) -
     width = math.ceil(lx * lens_array.pitch_x / p.pitch_x - 1e-9)
     height = ly if lens_array.grid == "lenticular" else math.ceil(ly * lens_array.pitch_y / p.pitch_y - 1e-9)
     return replace(lens_array, lenses_x=lx, lenses_y=ly, panel=replace(p, width=width, height=height))
+
+
+def write_report(report: BenchReport, folder: str | Path) -> dict[str, Path]:
+    """``bench.csv``, ``bench.md`` (a table) and ``bench.png`` (time against PSNR,
+    the Pareto front joined) into ``folder``, each written atomically."""
+    import csv
+    import io
+
+    from .imageio import atomic_path
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    rows = report.rows()
+    paths = {"csv": folder / "bench.csv", "table": folder / "bench.md", "plot": folder / "bench.png"}
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]))
+    writer.writeheader()
+    writer.writerows(rows)
+    with atomic_path(paths["csv"]) as tmp:
+        tmp.write_text(buffer.getvalue(), encoding="utf-8")
+    with atomic_path(paths["table"]) as tmp:
+        tmp.write_text(format_table(report) + "\n", encoding="utf-8")
+    with atomic_path(paths["plot"]) as tmp:
+        _plot(report, tmp)
+    return paths
+
+
+def format_table(report: BenchReport) -> str:
+    w, h = report.panel
+    lines = [f"Panel {w}x{h}; reference: {report.reference.label} "
+             f"({report.reference_seconds:.1f} s); its noise floor {report.noise_floor_db:.2f} dB "
+             "(PSNR between two references of different seeds).", "",
+             "| setting | wall s | PSNR dB | SSIM | Pareto |", "|---|---|---|---|---|"]
+    for r in sorted(report.results, key=lambda r: r.seconds):
+        lines.append(f"| {r.trial.label} | {r.seconds:.2f} | {r.psnr_db:.2f} | {r.ssim:.4f} | "
+                     f"{'yes' if r.pareto else ''} |")
+    return "\n".join(lines)
+
+
+def _plot(report: BenchReport, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")  # no display: write the file only
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5), dpi=120)
+    for method in dict.fromkeys(r.trial.method for r in report.results):
+        rs = [r for r in report.results if r.trial.method == method]
+        ax.scatter([r.seconds for r in rs], [r.psnr_db for r in rs], label=method, s=24)
+    front = sorted((r for r in report.results if r.pareto), key=lambda r: r.seconds)
+    ax.plot([r.seconds for r in front], [r.psnr_db for r in front], "k--", lw=1, label="Pareto front")
+    for r in front:
+        ax.annotate(r.trial.quality.label, (r.seconds, r.psnr_db), fontsize=6, xytext=(4, -8),
+                    textcoords="offset points")
+    ax.axhline(report.noise_floor_db, color="grey", lw=0.8, ls=":", label="reference noise floor")
+    ax.set_xscale("log")
+    ax.set_xlabel("wall time, s (log)")
+    ax.set_ylabel("PSNR against the footprint reference, dB")
+    w, h = report.panel
+    ax.set_title(f"povh3d bench: {w}x{h} panel")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, format="png")
+    plt.close(fig)

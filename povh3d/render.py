@@ -105,13 +105,21 @@ class Quality:
         return ", ".join(parts)
 
 
-# The named levels.  draft is point-sampled: one ray per pixel, what methods are
-# compared with when they must agree exactly.
+# The named levels, chosen from `povh3d bench` (README, "Run time against error"):
+# on a finely textured scene, against a reference that integrates every pixel's
+# footprint, point sampling reached 21 dB; POV-Ray's adaptive antialiasing 34 dB
+# at about 1.8x the time (it integrates across the lens aperture, which an
+# orthographic view pixel spans, not the pixel's angular width); stratified
+# footprint samples converge to the reference itself, 256 of them to its noise
+# floor.  draft is point-sampled: what methods are compared with when they must
+# agree exactly.  A method that cannot trace footprint samples antialiases
+# instead (``Quality.point_sampled``).
 QUALITY_LEVELS: dict[str, Quality] = {
     "draft": Quality(),
-    "normal": Quality(antialias=0.3, aa_method=1, aa_depth=2),
-    "high": Quality(antialias=0.05, aa_method=2, aa_depth=3),
+    "normal": Quality(antialias=0.1, aa_method=2, aa_depth=3),
+    "high": Quality(footprint=256),
 }
+AUTO = "auto"  # --quality auto --max-error DB: the fastest setting that meets DB (quality_bench)
 QUALITY_OPTIONS: dict[str, tuple[str, ...]] = {name: q.options for name, q in QUALITY_LEVELS.items()}
 
 Progress = Callable[[int, int], None]
@@ -123,7 +131,8 @@ class RenderSettings:
 
     Attributes
     ----------
-    quality : {'draft', 'normal', 'high'} or Quality
+    quality : {'draft', 'normal', 'high', 'auto'} or Quality
+              ('auto' is resolved before rendering; see ``quality_bench.resolve_auto``)
     jobs : int or None          parallel POV-Ray processes (None: chosen per method)
     threads : int or None       POV-Ray threads per process (None: cores / jobs)
     timeout : float or None     seconds allowed to each POV-Ray run
@@ -134,6 +143,7 @@ class RenderSettings:
     clock : float or None       POV-Ray's ``clock`` for every run (None: POV-Ray's default, 0);
                                 set only for scenes that read it (see animation.py)
     scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
+    max_error_db : float or None   with quality 'auto': the lowest PSNR against the reference to accept
     """
 
     quality: str | Quality = "normal"
@@ -146,10 +156,14 @@ class RenderSettings:
     back_off: float | None = None
     clock: float | None = None
     scheduler: str | None = None
+    max_error_db: float | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.quality, Quality) and self.quality not in QUALITY_LEVELS:
-            raise ConfigError(f"quality must be one of {', '.join(QUALITY_LEVELS)}, got {self.quality!r}")
+        if not isinstance(self.quality, Quality) and self.quality not in (*QUALITY_LEVELS, AUTO):
+            raise ConfigError(f"quality must be one of {', '.join(QUALITY_LEVELS)} or auto, got {self.quality!r}")
+        if (self.quality == AUTO) != (self.max_error_db is not None):
+            raise ConfigError("--quality auto needs --max-error DB (the lowest PSNR to accept), "
+                              "and --max-error needs --quality auto")
         if self.jobs is not None and self.jobs < 1:
             raise ConfigError(f"--jobs must be at least 1, got {self.jobs}")
         if self.threads is not None and self.threads < 1:
@@ -166,6 +180,8 @@ class RenderSettings:
 
     @property
     def spec(self) -> Quality:
+        if self.quality == AUTO:
+            raise RuntimeError("resolve --quality auto first (quality_bench.resolve_auto)")
         return self.quality if isinstance(self.quality, Quality) else QUALITY_LEVELS[self.quality]
 
     @property

@@ -97,6 +97,9 @@ def test_scene_may_include_files_beside_it(tmp_path):
     (["render", SAMPLE, "-o", "/nonexistent-dir/x.png", *SMALL], "does not exist"),
     (["render", SAMPLE, "--method", "nope"], "invalid choice"),
     (["info", "--focal", "-1"], "focal length"),
+    (["render", SAMPLE, "--quality", "auto", "-q"], "--quality auto needs --max-error"),
+    (["render", SAMPLE, "--lenses", "12x8", "--ppl", "4x4", "--quality", "auto", "--max-error", "99", "-q",
+      "-o", "/tmp/povh3d-never.png"], "lower --max-error"),
 ])
 def test_bad_input_is_one_line(args, fragment):
     assert fragment in one_error_line(run(*args))
@@ -127,3 +130,13 @@ def test_povray_not_installed_says_how(tmp_path):
 def test_main_returns_zero_in_process(tmp_path, capsys):
     assert main(["info", "--preset", "demo", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["views"] == [8, 8]
+
+
+def test_quality_auto_records_its_choice(tmp_path):
+    out = tmp_path / "auto.png"
+    proc = run("render", SAMPLE, "-o", out, "--lenses", "12x8", "--ppl", "4x4", "--quality", "auto",
+               "--max-error", "28", "-q")
+    assert proc.returncode == 0, proc.stderr
+    quality = json.loads(out.with_suffix(".json").read_text())["quality"]
+    assert quality["level"] == "auto" and quality["auto"]["tried"][-1]["psnr_db"] >= 28
+    assert quality["setting"] == quality["auto"]["chosen"]
