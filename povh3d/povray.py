@@ -236,6 +236,17 @@ def _version(binary: str) -> str:
     return match[1]
 
 
+def _image_buffer_mb(job: PovrayJob) -> int:
+    """Memory for POV-Ray's image buffer, MB (``+MI``, default 128).
+
+    Past it POV-Ray 3.7 backs the image with a file at the hard-wired path
+    ``/tmp/pov<pid>`` (not TMPDIR), outside the job folder: the sandbox refuses
+    it, and a crash would leave it behind.  It keeps about 5 floats a pixel;
+    give it twice that.
+    """
+    return max(128, -(-2 * 20 * job.width * job.height // (1 << 20)))
+
+
 def build_command(job: PovrayJob, binary: str) -> list[str]:
     """Command line that renders `job` in its folder.
 
@@ -245,7 +256,7 @@ def build_command(job: PovrayJob, binary: str) -> list[str]:
     """
     command = [binary, f"+I{SCENE_FILE}", f"+O{OUTPUT_STEM}.png",
                f"+W{job.width}", f"+H{job.height}", f"+FN{job.bit_depth}",
-               f"File_Gamma={job.file_gamma}", "-D", "-V"]
+               f"File_Gamma={job.file_gamma}", "-D", "-V", f"+MI{_image_buffer_mb(job)}"]
     # Unquoted, POV-Ray rejects a library path holding a space.
     command += [f"+L{_quote(os.path.abspath(folder))}" for folder in job.include_dirs]
     if job.threads is not None:

@@ -125,8 +125,8 @@ def test_build_command() -> None:
                     options=("+A0.3",), threads=2, bit_depth=16, file_gamma="1.0",
                     start_row=0, end_row=1)
     command = build_command(job, "/usr/bin/povray")
-    assert command[:10] == ["/usr/bin/povray", "+Iscene.pov", "+Oframe.png", "+W10",
-                            "+H6", "+FN16", "File_Gamma=1.0", "-D", "-V",
+    assert command[:11] == ["/usr/bin/povray", "+Iscene.pov", "+Oframe.png", "+W10",
+                            "+H6", "+FN16", "File_Gamma=1.0", "-D", "-V", "+MI128",
                             '+L"/a b"']
     assert f'+L"{os.path.abspath("rel")}"' in command
     assert command[-6:] == ["+WT2", "+KFI1", "+KFF3", "+SR1.5", "+ER1.5", "+A0.3"]
@@ -208,6 +208,17 @@ def test_povray_version() -> None:
 
 
 @needs_povray
+def test_image_larger_than_povrays_default_buffer_stays_in_memory(workdir: Path) -> None:
+    # Past +MI (default 128 MB, ~5 floats a pixel) POV-Ray 3.7 backs the image
+    # with /tmp/pov<pid>, which the sandbox refuses ("Unknown error code").
+    images: dict[str, list] = {}
+    job = PovrayJob("big", flat("rgb <0, 1, 0>"), 2600, 2600, options=("-A",))
+    assert "+MI258" in build_command(job, "povray")
+    run_jobs([job], processes=1, on_result=collect(images), workdir=workdir)
+    (_, image), = images["big"]
+    assert image.size == (2600, 2600) and image.getpixel((2599, 2599)) == (0, 255, 0)
+
+
 def test_single_frame_and_animation(workdir: Path) -> None:
     images: dict[str, list] = {}
     progress: list[tuple[int, int]] = []
