@@ -190,7 +190,7 @@ def fastest_meeting(report: BenchReport, min_psnr_db: float) -> TrialResult:
     return min(good, key=lambda r: r.seconds)
 
 
-def probe_array(lens_array: LensArray, max_lenses: tuple[int, int] = (24, 16)) -> LensArray:
+def probe_array(lens_array: LensArray, max_lenses: tuple[int, int] = (16, 12)) -> LensArray:
     """The central part of ``lens_array``, at most ``max_lenses``, on a panel of its own size:
     what ``--quality auto`` renders to choose a setting.  Lenticular arrays keep 8 panel rows
     per lens row of the limit, since every panel row is its own lens row."""
