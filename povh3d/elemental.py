@@ -13,18 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .colour import linear_to_srgb, srgb_to_linear  # noqa: F401  (the one copy; re-exported)
 from .geometry import LensArray, nearest_integer, pixel_rays
-
-
-def srgb_to_linear(x: np.ndarray) -> np.ndarray:
-    """sRGB-encoded values in [0, 1] to linear light."""
-    x = np.asarray(x, dtype=np.float64)
-    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
-
-
-def linear_to_srgb(x: np.ndarray) -> np.ndarray:
-    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
 
 
 def lens_index_map(lens_array: LensArray) -> np.ndarray:
@@ -154,3 +144,89 @@ def extract_views(h3d: np.ndarray, lens_array: LensArray, views: tuple[int, int]
 def is_resampled(lens_array: LensArray) -> bool:
     """True when views cannot be pulled out by a reshape (hex, fractional PPL)."""
     return lens_array.views is None or nearest_integer(lens_array.ppl_x) is None
+
+
+def cell_contains(grid: str, pitch_x: float, pitch_y: float, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Whether offsets ``(u, v)`` (mm, from a lens centre) lie strictly inside its cell.
+
+    Points on a cell edge count as outside: POV-Ray's ray there grazes two lenslets.
+    """
+    tight = 1 - 1e-9
+    ax, ay = np.abs(u), np.abs(v)
+    if grid == "hex":
+        return (ax < pitch_x / 2 * tight) & (ax / 2 + np.sqrt(3) / 2 * ay < pitch_x / 2 * tight)
+    if grid == "lenticular":
+        return ax < pitch_x / 2 * tight
+    return (ax < pitch_x / 2 * tight) & (ay < pitch_y / 2 * tight)
+
+
+def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[float, float],
+                       phase: tuple[float, float], gain: float, camera: tuple[float, float]) -> np.ndarray:
+    """The display image from a capture sampled on a lens-aligned grid (single-stage, any grid).
+
+    Every capture lens ``c'`` is sampled at offsets ``w = ((k + phase_x) sx, (m + phase_y) sy)``,
+    the same for every lens.  The display ray at offset ``u`` from lens ``c`` is the capture
+    ray of sample ``w = -u`` of lens ``c' = c - u D / f`` (single_stage module doc), i.e. the
+    capture pixel at ``c - u gain`` with ``gain = 1 + D / f``.  Display offsets between
+    samples are interpolated bilinearly in direction, in linear light, from samples of
+    the same lens only (a sample outside the cell belongs to another view entirely);
+    where none of the four is in the cell, the nearest sample in it is taken.
+
+    Parameters
+    ----------
+    capture : (Hc, Wc, C) uint8 or uint16, sRGB-encoded    the camera image
+    lens_array : LensArray                      the display array
+    pitch : (sx, sy), mm                        capture pixel pitch (lens pitch / samples per lens)
+    phase : (phase_x, phase_y)                  0 or 1/2: where samples sit relative to lens centres
+    gain : float                                ``1 + D / f``
+    camera : (x0, y0), mm                       centre of the capture camera's image
+
+    Returns
+    -------
+    (H, W, C) array of ``capture.dtype``; pixels outside every lens are black.
+    """
+    from .colour import decode, encode
+
+    la = lens_array
+    hc, wc = capture.shape[:2]
+    sx, sy = pitch
+    centres, _, inside = pixel_rays(la)
+    X, Y = np.meshgrid(*la.panel.pixel_centres())
+    cx, cy = centres[inside, 0], centres[inside, 1]
+    u = X[inside] - cx
+    v = np.zeros_like(u) if la.grid == "lenticular" else Y[inside] - cy
+    a, b = u / sx - phase[0], v / sy - phase[1]
+    k0, m0 = np.floor(a), np.floor(b)
+    fa, fb = a - k0, b - m0
+    lin = decode(capture)
+    acc = np.zeros((u.size, capture.shape[2]))
+    total = np.zeros(u.size)
+    best = np.full(u.size, np.inf)
+    nearest = np.zeros((u.size, capture.shape[2]))
+    for dk in (-1, 0, 1, 2):
+        for dm in ((0,) if la.grid == "lenticular" else (-1, 0, 1, 2)):
+            ou, ov = (k0 + dk + phase[0]) * sx, (m0 + dm + phase[1]) * sy
+            if la.grid == "lenticular":
+                ov = np.zeros_like(ou)
+            valid = cell_contains(la.grid, la.pitch_x, la.pitch_y, ou, ov)
+            col = (cx - ou * gain - camera[0]) / sx + wc / 2 - 0.5
+            row = hc / 2 - 0.5 - (cy - ov * gain - camera[1]) / sy
+            ci, ri = np.rint(col).astype(np.int64), np.rint(row).astype(np.int64)
+            # The capture grid is built lens-aligned: every valid sample is a pixel centre.
+            assert np.all(~valid | ((np.abs(col - ci) < 1e-6) & (np.abs(row - ri) < 1e-6))), "capture grid misaligned"
+            assert np.all(~valid | ((ci >= 0) & (ci < wc) & (ri >= 0) & (ri < hc))), "capture too small"
+            value = lin[np.clip(ri, 0, hc - 1), np.clip(ci, 0, wc - 1)]
+            if dk in (0, 1) and dm in (0, 1):
+                w = (fa if dk else 1 - fa) * ((fb if dm else 1 - fb) if la.grid != "lenticular" else 1.0)
+                w = np.where(valid, w, 0.0)
+                acc += w[:, None] * value
+                total += w
+            d = np.where(valid, (ou - u) ** 2 + (ov - v) ** 2, np.inf)
+            closer = d < best
+            best = np.where(closer, d, best)
+            nearest = np.where(closer[:, None], value, nearest)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        value = np.where((total > 1e-12)[:, None], acc / total[:, None], nearest)
+    out = np.zeros((la.panel.height, la.panel.width, capture.shape[2]), capture.dtype)
+    out[inside] = encode(value, capture.dtype)
+    return out

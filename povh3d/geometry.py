@@ -318,7 +318,12 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
             better = d < best_d
             best_d, best_i, best_j = np.where(better, d, best_d), np.where(better, i, best_i), np.where(better, j, best_j)
         i, j = best_i, best_j
-        inside = best_d <= (px / np.sqrt(3)) ** 2 * (1 + 1e-9)  # within a hexagon's circumradius
+        # Inside the true hexagon (flat sides at |dx| = px/2, slanted sides at
+        # |dx|/2 + sqrt(3)/2 |dy| = px/2), not its circumradius disc: the disc pokes
+        # out past the slanted sides on the outer rows, where no lens lies.
+        dx, dy = np.abs(X - centres[i, j, 0]), np.abs(Y - centres[i, j, 1])
+        half = px / 2 * (1 + 1e-9)
+        inside = (dx <= half) & (dx / 2 + np.sqrt(3) / 2 * dy <= half)
     else:
         fj = X / px + Lx / 2
         fi = Ly / 2 - Y / py

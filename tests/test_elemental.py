@@ -59,3 +59,31 @@ def test_resampling_works_in_linear_light():
     pts = np.array([[0.0, 0.05]])
     from povh3d.elemental import sample_in_lens
     assert sample_in_lens(img, la, pts, np.array([0]))[0, 0] == 188
+
+
+def test_hex_inside_is_the_true_hexagon():
+    # pixel_rays: a pixel is inside when it lies in its lens's hexagon (flat sides
+    # at |dx| = px/2, slanted |dx|/2 + sqrt(3)/2 |dy| = px/2); the circumradius disc
+    # used before wrongly took about 2,300 hex-5.6 pixels past the outer rows.
+    from povh3d.geometry import pixel_rays
+
+    la = lens_array_from_fields(get_preset("hex-5.6"))
+    centres, _, inside = pixel_rays(la)
+    X, Y = np.meshgrid(*la.panel.pixel_centres())
+    dx, dy = np.abs(X - centres[..., 0]), np.abs(Y - centres[..., 1])
+    assert np.all(dx[inside] / 2 + math.sqrt(3) / 2 * dy[inside] <= la.pitch_x / 2 * (1 + 1e-9))
+    assert np.all(dx[inside] <= la.pitch_x / 2 * (1 + 1e-9))
+    area = la.lenses_x * la.lenses_y * la.pitch_x * la.pitch_y / (la.panel.pitch_x * la.panel.pitch_y)
+    assert abs(inside.sum() - area) < 0.01 * area  # hexagon area = px * py per lens
+    # Negative control: the circumradius disc takes ~2,300 more pixels.
+    near = np.zeros(X.shape, bool)
+    r2 = (la.pitch_x / math.sqrt(3)) ** 2
+    cs = la.lens_centres().reshape(-1, 2)
+    i = np.clip(np.rint(la.lenses_y / 2 - 0.5 - Y / la.pitch_y).astype(int), 0, la.lenses_y - 1)
+    for di in (-1, 0, 1):
+        ii = np.clip(i + di, 0, la.lenses_y - 1)
+        for dj in (-1, 0, 1):
+            jj = np.clip(np.rint(X / la.pitch_x + la.lenses_x / 2 - 0.5 - (ii % 2) / 2).astype(int) + dj, 0, la.lenses_x - 1)
+            c = cs[ii * la.lenses_x + jj]
+            near |= (X - c[..., 0]) ** 2 + (Y - c[..., 1]) ** 2 <= r2
+    assert near.sum() - inside.sum() > 2000

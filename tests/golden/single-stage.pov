@@ -17,6 +17,8 @@ global_settings { assumed_gamma 1.0 }
 // povh3d turns each elemental image by 180 degrees afterwards (orthoscopic)
 // and, when the focal plane lies in front of the screen, shifts each view by a
 // whole number of lenses so that the rays cross z = 0 at the lens centres.
+// Hex / fractional PPL: the camera grid is aligned to the lens centres (same
+// sample offsets in every lens), so the samples are views that shift the same way.
 // Lenslet: conic, ior 6.56, R 8.34 mm, K -43.03359999999999.
 #declare Povh3d_Lenslet = intersection {
   box { <-0.25, -0.25, -0.007507586901914622>, <0.25, 0.25, 0> }
