@@ -88,6 +88,27 @@ def gather_rgb8(dst, src, base, tid, table, reach):  # pragma: no cover - compil
 
 
 @njit(parallel=True, cache=True, boundscheck=False, nogil=True)
+def gather_bytes(dst, src, base, tid, table):  # pragma: no cover - compiled
+    """1-byte items (uint8 subpixels): eight byte loads packed into one 64-bit store."""
+    rows = base.shape[0]
+    q_count = table.shape[1]
+    groups = q_count // 8
+    for r in prange(rows):
+        b = base[r]
+        t = table[tid[r]]
+        d = r * q_count
+        for g in range(groups):
+            q = 8 * g
+            w = (np.uint64(src[b + t[q]]) | (np.uint64(src[b + t[q + 1]]) << np.uint64(8))
+                 | (np.uint64(src[b + t[q + 2]]) << np.uint64(16)) | (np.uint64(src[b + t[q + 3]]) << np.uint64(24))
+                 | (np.uint64(src[b + t[q + 4]]) << np.uint64(32)) | (np.uint64(src[b + t[q + 5]]) << np.uint64(40))
+                 | (np.uint64(src[b + t[q + 6]]) << np.uint64(48)) | (np.uint64(src[b + t[q + 7]]) << np.uint64(56)))
+            _store_u64(dst, d + q, w)
+        for q in range(8 * groups, q_count):
+            dst[d + q] = src[b + t[q]]
+
+
+@njit(parallel=True, cache=True, boundscheck=False, nogil=True)
 def gather_units(dst, src, base, tid, table, m):  # pragma: no cover - compiled
     """Any pixel of ``m`` units (``dst``, ``src`` 1-D of one unsigned dtype); offsets in units."""
     rows = base.shape[0]
@@ -132,9 +153,12 @@ def row_gather(src: np.ndarray, pixel_bytes: int, base: np.ndarray, tid: np.ndar
     d8 = out.reshape(-1).view(np.uint8)
     if pixel_bytes == 3:
         reach = table.max(axis=1)
-        if int(base.max()) + int(reach.max()) + 3 <= s8.size and int(base.min()) + int(table.min()) >= 0:
+        if int((base + reach[tid]).max()) + 3 <= s8.size and int((base + table.min(axis=1)[tid]).min()) >= 0:
             gather_rgb8(d8, s8, base, tid, table, reach)
             return True
+    if pixel_bytes == 1:
+        gather_bytes(d8, s8, base, tid, table)
+        return True
     # The widest unit that divides the pixel, every offset and both buffers' addresses.
     for unit in (8, 4, 2, 1):
         if pixel_bytes % unit or src.ctypes.data % unit or out.ctypes.data % unit or s8.size % unit:
