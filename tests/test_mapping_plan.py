@@ -67,3 +67,21 @@ def test_blended_mappings_keep_the_reference_gather():
     src = m.source((120, 40))
     image = np.random.default_rng(0).integers(0, 255, src.shape, dtype=np.uint8)
     assert np.array_equal(m.apply(image, (120, 40)), m.apply(image, (120, 40), reference=True))
+
+
+@pytest.mark.parametrize("name", ["alioscopy", "philips", "slanted", "smart", "distributed-smart"])
+@pytest.mark.parametrize("blend", [False, True])
+def test_slanted_maps_built_in_row_blocks_equal_one_block(name, blend, monkeypatch):
+    from povh3d.mappings.slanted import Slanted
+
+    entry = MAPPINGS[name]
+    opts = entry.example if name != "slanted" else MappingOptions(per_lens=5.5, views=11, slope=0.75, blend=blend)
+    m = entry.build(entry.n_range[0] if entry.n_range else None, opts)
+    panel = (131, 77)
+    monkeypatch.setattr(Slanted, "BLOCK_ROWS", 7)
+    blocks = m._sample(panel)
+    monkeypatch.setattr(Slanted, "BLOCK_ROWS", 10**9)
+    whole = m._sample(panel)
+    for a, b in [(blocks.index, whole.index), (blocks.black, whole.black), (blocks.index2, whole.index2),
+                 (blocks.weight, whole.weight)]:
+        assert (a is None and b is None) or np.array_equal(a, b)
