@@ -19,6 +19,9 @@ cached on disk (``cache=True``), so only the first run on a machine compiles.
 
 from __future__ import annotations
 
+import os
+
+import numba
 import numpy as np
 from llvmlite import ir
 from numba import njit, prange, types
@@ -129,6 +132,25 @@ def gather_units(dst, src, base, tid, table, m):  # pragma: no cover - compiled
 
 
 _UNITS = {1: np.uint8, 2: np.uint16, 4: np.uint32, 8: np.uint64}
+_MIN_PARALLEL_BYTES = 1 << 20
+
+
+def threads_for(nbytes: int) -> int:
+    """Threads for a gather of ``nbytes``: every core, unless the job is small or the cores are busy.
+
+    ``prange`` splits rows statically, so when another process holds a core the
+    kernel waits a whole scheduler time slice (about 4 ms) for its descheduled
+    half: measured 4-10x slower than one thread while other jobs ran.  The
+    one-minute load average is the cheap signal for that.
+    """
+    cores = numba.config.NUMBA_NUM_THREADS
+    if nbytes < _MIN_PARALLEL_BYTES or cores < 2:
+        return 1
+    try:
+        busy = os.getloadavg()[0]
+    except OSError:  # pragma: no cover - no load average on this platform
+        busy = 0.0
+    return 1 if busy >= cores - 0.5 else cores
 
 
 def row_gather(src: np.ndarray, pixel_bytes: int, base: np.ndarray, tid: np.ndarray,
@@ -151,6 +173,7 @@ def row_gather(src: np.ndarray, pixel_bytes: int, base: np.ndarray, tid: np.ndar
         return True
     s8 = src.reshape(-1).view(np.uint8)
     d8 = out.reshape(-1).view(np.uint8)
+    numba.set_num_threads(threads_for(out.nbytes))
     if pixel_bytes == 3:
         reach = table.max(axis=1)
         if int((base + reach[tid]).max()) + 3 <= s8.size and int((base + table.min(axis=1)[tid]).min()) >= 0:
