@@ -1,7 +1,10 @@
-"""Views <-> H3D image, and elemental images -> H3D image (pure NumPy).
+"""Views <-> H3D image, and elemental images -> H3D image.
 
-CONVENTIONS: ``H3D[i*Ny + l, j*Nx + k] = view[l, k][i, j]``.  Each function is
-one reshape-transpose-copy: no Python loop over pixels.
+CONVENTIONS: ``H3D[i*Ny + l, j*Nx + k] = view[l, k][i, j]``.  ``interleave``
+and ``extract`` run the compiled row gather of ``_kernels`` (one table row: the
+layout of one lens row; one source offset per output row); arrays it does not
+take (non-contiguous, object dtypes) go through the NumPy reference path,
+``interleave_reference`` / ``extract_reference``, which the tests compare against.
 """
 
 from __future__ import annotations
@@ -80,10 +83,48 @@ def interleave(views: np.ndarray) -> np.ndarray:
     views = np.asarray(views)
     v, squeeze = _with_channels(views, 4, "views")
     ny, nx, ly, lx, c = v.shape
-    h3d = np.empty((ly, ny, lx, nx, c), v.dtype)
-    _copy_planes(h3d.transpose(1, 3, 0, 2, 4), v)
-    h3d = h3d.reshape(ly * ny, lx * nx, c)
+    h3d = np.empty((ly * ny, lx * nx, c), v.dtype)
+    if not _interleave_fast(v, h3d):
+        _copy_planes(h3d.reshape(ly, ny, lx, nx, c).transpose(1, 3, 0, 2, 4), v)
     return h3d[..., 0] if squeeze else h3d
+
+
+def _fits_kernel(a: np.ndarray) -> bool:
+    return a.flags.c_contiguous and not a.dtype.hasobject and a.dtype.itemsize > 0
+
+
+def _offsets(values: np.ndarray) -> np.ndarray:
+    """Byte offsets as int32 when they fit (a smaller table stays in cache), else int64."""
+    return values.astype(np.int32 if values.size == 0 or values.max() < 2**31 else np.int64)
+
+
+def _interleave_fast(v: np.ndarray, out: np.ndarray) -> bool:
+    """Output row ``i*Ny + l`` reads view row ``(l, k, i)`` for every ``k``: base plus lens layout."""
+    if not _fits_kernel(v):
+        return False
+    ny, nx, ly, lx, c = v.shape
+    b = c * v.dtype.itemsize
+    i, l = np.arange(ly, dtype=np.int64)[:, None], np.arange(ny, dtype=np.int64)[None, :]
+    base = ((l * nx * ly + i) * lx * b).reshape(-1)  # r = i*Ny + l
+    j, k = np.arange(lx, dtype=np.int64)[:, None], np.arange(nx, dtype=np.int64)[None, :]
+    table = _offsets((k * ly * lx * b + j * b).reshape(1, -1))  # q = j*Nx + k
+    from ._kernels import row_gather  # numba loads on first use, not with the CLI
+
+    return row_gather(v, b, base, np.zeros(base.size, np.intp), table, out)
+
+
+def _extract_fast(img: np.ndarray, ny: int, nx: int, out: np.ndarray) -> bool:
+    """View row ``(l, k, i)`` reads H3D row ``i*Ny + l`` from column ``k`` in steps of ``Nx``."""
+    if not _fits_kernel(img):
+        return False
+    h, w, c = img.shape
+    b = c * img.dtype.itemsize
+    l, k, i = np.ogrid[:ny, :nx, :h // ny]
+    base = (((i * ny + l) * w + k) * b).astype(np.int64).reshape(-1)  # r = (l*Nx + k)*Ly + i
+    table = _offsets((np.arange(w // nx, dtype=np.int64) * nx * b)[None, :])
+    from ._kernels import row_gather
+
+    return row_gather(img, b, base, np.zeros(base.size, np.intp), table, out)
 
 
 def extract(h3d: np.ndarray, ppl: tuple[int, int]) -> np.ndarray:
@@ -109,7 +150,8 @@ def extract(h3d: np.ndarray, ppl: tuple[int, int]) -> np.ndarray:
         raise ValueError(f"an H3D image of {w}x{h} pixels does not hold whole lenses of {nx}x{ny} pixels; "
                          "check --ppl")
     views = np.empty((ny, nx, h // ny, w // nx, c), img.dtype)
-    _copy_planes(views, img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))
+    if not _extract_fast(img, ny, nx, views):
+        _copy_planes(views, img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))
     return views[..., 0] if squeeze else views
 
 
@@ -151,3 +193,22 @@ def untile_views(tiled: np.ndarray, views: tuple[int, int]) -> np.ndarray:
         raise ValueError(f"a tiled image of {w}x{h} does not hold {nx}x{ny} equal views")
     stack = t.reshape(ny, h // ny, nx, w // nx, c).transpose(0, 2, 1, 3, 4)
     return stack[..., 0] if squeeze else stack
+
+
+def interleave_reference(views: np.ndarray) -> np.ndarray:
+    """``interleave`` by NumPy plane copies alone (the oracle of the compiled path)."""
+    v, squeeze = _with_channels(np.asarray(views), 4, "views")
+    ny, nx, ly, lx, c = v.shape
+    h3d = np.empty((ly, ny, lx, nx, c), v.dtype)
+    _copy_planes(h3d.transpose(1, 3, 0, 2, 4), v)
+    h3d = h3d.reshape(ly * ny, lx * nx, c)
+    return h3d[..., 0] if squeeze else h3d
+
+
+def extract_reference(h3d: np.ndarray, ppl: tuple[int, int]) -> np.ndarray:
+    """``extract`` by one NumPy reshape-transpose-copy (the oracle of the compiled path)."""
+    img, squeeze = _with_channels(np.asarray(h3d), 2, "h3d")
+    ny, nx = ppl
+    h, w, c = img.shape
+    views = np.ascontiguousarray(img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))
+    return views[..., 0] if squeeze else views

@@ -237,8 +237,10 @@ def test_cropped_render_is_identical_point_sampled(quarter_scene, grid, mode):
     assert not np.array_equal(full.h3d, np.where(crop.h3d == full.h3d[0, 0], 0, crop.h3d))
 
 
-def test_cropped_render_is_identical_antialiased_without_jitter(aa_scene):
-    st_ = RenderSettings(quality="normal", use_cache=False)
+@pytest.mark.parametrize("quality", ["normal", Quality(antialias=0.3, aa_method=1, aa_depth=2)],
+                         ids=["normal", "AM1"])
+def test_cropped_render_is_identical_antialiased_without_jitter(aa_scene, quality):
+    st_ = RenderSettings(quality=quality, use_cache=False)
     full = run_method("multi-ortho", aa_scene, AA_ARRAY, st_)
     crop = run_method("multi-ortho", aa_scene, AA_ARRAY, st_, crop=CropSettings("auto", AA_BOX))
     assert crop.crop["applied"] and crop.crop["traced_fraction"] < 0.3, crop.crop
@@ -301,7 +303,8 @@ def test_without_block_alignment_antialiased_pixels_change(aa_scene, monkeypatch
     """Negative control for the block rule of plan_crop: cuts off POV-Ray's block grid change pixels."""
     import povh3d.crop_render as crop_render
     monkeypatch.setattr(crop_render, "layout_independent", lambda options: (True, None))
-    st_ = RenderSettings(quality="normal", use_cache=False)
+    # Non-recursive antialiasing (+AM1) compares a pixel with its neighbours in the block.
+    st_ = RenderSettings(quality=Quality(antialias=0.3, aa_method=1, aa_depth=2), use_cache=False)
     full = run_method("multi-ortho", aa_scene, AA_ARRAY, st_)
     crop = run_method("multi-ortho", aa_scene, AA_ARRAY, st_, crop=CropSettings("auto", AA_BOX))
     assert crop.crop["applied"]

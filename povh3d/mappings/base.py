@@ -134,8 +134,11 @@ class Mapping(ABC):
             "mapping_source_px": [src.lenses * src.views, src.rows],
         }
 
-    def apply(self, h3d: np.ndarray, panel: tuple[int, int]) -> np.ndarray:
+    def apply(self, h3d: np.ndarray, panel: tuple[int, int], *, reference: bool = False) -> np.ndarray:
         """Map an unmapped view-space H3D image onto a ``(W, H)`` panel.
+
+        ``reference=True`` gathers with the full index map of ``sample`` (NumPy
+        fancy indexing) instead of the compiled plan: the tests' oracle.
 
         Parameters
         ----------
@@ -162,6 +165,11 @@ class Mapping(ABC):
         elif h3d.shape[2] == 4:
             h3d = h3d[..., :3]
         flat = np.ascontiguousarray(h3d).reshape(-1)
+        plan = None if reference else _cached_plan(self, (int(panel[0]), int(panel[1])))
+        if plan is not None:  # the compiled row gather (mappings/plan.py); the rest is the reference
+            out = np.empty((panel[1], panel[0], 3), h3d.dtype)
+            plan.apply(flat, out)
+            return out
         s = self.sample(panel)
         out = flat[s.index]
         if s.index2 is not None:
@@ -181,6 +189,20 @@ def _cached_sampling(mapping: Mapping, panel: tuple[int, int]) -> Sampling:
         if a is not None:
             a.setflags(write=False)
     return s
+
+
+@lru_cache(maxsize=16)
+def _cached_plan(mapping: Mapping, panel: tuple[int, int]):
+    """The compressed plan of a non-blended mapping (None for blended ones: they mix two sources).
+
+    Built from an uncached ``_sample`` so the 200 MB int64 map of a 4K panel is not kept.
+    """
+    if getattr(mapping, "blend", False):
+        return None
+    from .plan import build_plan
+
+    s = mapping._sample(panel)
+    return None if s.index2 is not None else build_plan(s)
 
 
 def centred_margin(width: int, lens: int) -> tuple[int, int]:
