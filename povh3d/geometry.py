@@ -289,7 +289,8 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     """The ray of every panel pixel (CONVENTIONS, "The ray of a pixel").
 
     A pixel belongs to the lens whose cell holds its centre (square and
-    lenticular: the lens's pitch rectangle; hex: the nearest centre).
+    lenticular: the lens's pitch rectangle, a centre on its border going to the
+    lens on the right or below; hex: the nearest centre).
 
     Returns
     -------
@@ -325,8 +326,10 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
         half = px / 2 * (1 + 1e-9)
         inside = (dx <= half) & (dx / 2 + np.sqrt(3) / 2 * dy <= half)
     else:
-        fj = X / px + Lx / 2
-        fi = Ly / 2 - Y / py
+        # A pixel centre on a lens border (fractional PPL) belongs to the lens on
+        # its right (below); the tolerance keeps rounding from deciding.
+        fj = X / px + Lx / 2 + 1e-9
+        fi = Ly / 2 - Y / py + 1e-9
         j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
         inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
         j, i = np.clip(j, 0, Lx - 1), np.clip(i, 0, Ly - 1)
