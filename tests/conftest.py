@@ -19,3 +19,11 @@ def lenticular_array(lx: int = 8, rows: int = 12, nx: int = 4, s: float = 0.1, f
 def _isolated_cache(tmp_path_factory, monkeypatch):
     # Never touch the user's cache; each test starts cold unless it shares this folder.
     monkeypatch.setenv("POVH3D_CACHE", str(tmp_path_factory.mktemp("cache")))
+
+
+@pytest.fixture
+def workdir(tmp_path):
+    """A folder for POV-Ray jobs' temporary folders (run_jobs(workdir=...))."""
+    path = tmp_path / "work"
+    path.mkdir()
+    return path

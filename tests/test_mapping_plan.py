@@ -7,13 +7,9 @@ from povh3d.mappings import MAPPINGS, MappingOptions
 from povh3d.mappings.base import _cached_plan
 from povh3d.mappings.plan import build_plan, expand
 
+from .test_mappings import example
+
 PANELS = [(360, 216), (131, 77), (97, 12)]  # odd sizes: partial lenses, clipped rows, margins
-
-
-def example(name):
-    entry = MAPPINGS[name]
-    n = entry.n_range[0] + 1 if entry.n_range else None
-    return entry.build(n, entry.example)
 
 
 def reference_map(mapping, panel):

@@ -95,13 +95,6 @@ def write_png(path: Path, rgb: tuple[int, int, int], size: int = 4) -> None:
 
 
 @pytest.fixture
-def workdir(tmp_path: Path) -> Path:
-    path = tmp_path / "work"
-    path.mkdir()
-    return path
-
-
-@pytest.fixture
 def outside() -> Iterator[Path]:
     """A folder outside /tmp (and outside HOME, unless the repo is in it)."""
     path = Path(tempfile.mkdtemp(prefix=".povh3d-test-", dir=Path(__file__).parent))

@@ -40,13 +40,6 @@ def run(script: str, workdir: Path, **job: object) -> list[np.ndarray]:
 
 
 @pytest.fixture
-def workdir(tmp_path: Path) -> Path:
-    folder = tmp_path / "work"
-    folder.mkdir()
-    return folder
-
-
-@pytest.fixture
 def outside(tmp_path: Path) -> Path:
     """A folder no job may touch, holding a secret include file."""
     folder = tmp_path / "outside"
