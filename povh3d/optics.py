@@ -38,6 +38,10 @@ DEFAULT_THINNESS = 0.005
 GLASS_IOR = 1.5
 
 
+# A lenslet deeper than this many focal lengths is refused (IOR too close to 1).
+MAX_SAG_FOCALS = 10.0
+
+
 def aperture_radius(aperture: str, pitch_x: float, pitch_y: float) -> float:
     """Largest distance from the lens centre to its aperture edge, mm.
 
@@ -124,6 +128,24 @@ class Lenslet:
                 f"a spherical lenslet of focal length {self.focal:g} mm and index {n:g} has radius "
                 f"{self.radius:.4g} mm, too small to span the {rho:.4g} mm aperture corner; raise --ior "
                 f"above {need_n:.4g}, lengthen --focal above {rho / (n - 1):.4g} mm, or use --lenslet conic")
+
+        if self.corner_sag > MAX_SAG_FOCALS * self.focal:
+            # Near n = 1 the curved face needs an enormous sag, and its maths loses
+            # precision (measured: focus off by half at n - 1 = 1e-9).
+            raise ConfigError(
+                f"an index of refraction of {n:.12g} makes the {self.shape} lenslet {self.corner_sag:.4g} mm "
+                f"deep, {self.corner_sag / self.focal:.0f} focal lengths; raise --ior (at least about "
+                f"{self._least_ior():.4g}; 1.5 is glass)")
+
+    def _least_ior(self) -> float:
+        """The smallest index whose corner sag stays within MAX_SAG_FOCALS focal lengths."""
+        lo, hi = 1.0, 2.0
+        for _ in range(60):
+            mid = (lo + hi) / 2
+            deep = sag(self.aperture_radius, (mid - 1) * self.focal,
+                       0.0 if self.shape == "spherical" else -mid ** 2) > MAX_SAG_FOCALS * self.focal
+            lo, hi = (mid, hi) if deep else (lo, mid)
+        return hi
 
     @property
     def radius(self) -> float:

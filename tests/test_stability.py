@@ -257,3 +257,27 @@ def test_clearance_beyond_povray_reach_is_refused_before_rendering(tmp_path):
     with pytest.raises(ConfigError, match=f"under {MIN_CLEARANCE:g} mm"):
         run_method("multi-ortho-views", load_scene(write_checker_plane(tmp_path, 1.0, 1.0)),
                    scaled_array("square", 1.0), RenderSettings(quality="draft", back_off=1e-3))
+
+
+# -- index of refraction close to 1 (single-stage lenslets) -------------------------
+
+@pytest.mark.parametrize("ior", [1.001, 1.01, 1.1])
+def test_conic_lenslet_close_to_ior_one_still_focuses_at_f(ior):
+    from povh3d.optics import Lenslet, trace_collimated
+
+    lens = Lenslet("conic", "square", 0.8, 0.8, 1.5, ior)
+    h = np.linspace(0.01, 0.999, 7) * lens.aperture_radius
+    z, _ = trace_collimated(lens, h)
+    np.testing.assert_allclose(z, 1.5, rtol=1e-6)
+    assert all(np.isfinite(np.asarray(part, dtype=float)).all() for part in lens.quadric())
+    assert np.isfinite(lens.thickness) and lens.thickness < 10 * 1.5 * 1.1
+
+
+@pytest.mark.parametrize("ior", [1 + 1e-12, 1 + 1e-9, 1 + 1e-6, 1.0001])
+def test_ior_too_close_to_one_is_refused_not_mistraced(ior):
+    # Negative control for the refusal: at n - 1 = 1e-9 the conic's maths focused
+    # collimated light at half the focal length (and the lens was 12.6 m deep).
+    from povh3d.optics import Lenslet
+
+    with pytest.raises(ConfigError, match=r"raise --ior \(at least about 1\.00"):
+        Lenslet("conic", "square", 0.8, 0.8, 1.5, ior)
