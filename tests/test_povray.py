@@ -358,6 +358,9 @@ def test_interrupt_from_callback(workdir: Path) -> None:
 def test_interrupt_by_signal(workdir: Path) -> None:
     # Ctrl-C in a terminal sends SIGINT to Python only: children have their
     # own session.  The jobs never end, so the signal surely arrives inside.
+    # A shell starts background jobs with SIGINT ignored, and Python keeps that:
+    # give this test Python's own handler, whatever started pytest.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT))
     jobs = [PovrayJob(f"slow {n}", SLOW, 2, 2, timeout=30) for n in range(3)]
     timer.start()
@@ -366,6 +369,7 @@ def test_interrupt_by_signal(workdir: Path) -> None:
             run_jobs(jobs, processes=2, workdir=workdir)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert_clean(workdir)
 
 
