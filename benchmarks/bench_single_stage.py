@@ -19,10 +19,9 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from povh3d.geometry import LensArray, Panel
 from povh3d.methods import run_method
+from povh3d.metrics import psnr
 from povh3d.presets import get_preset, lens_array_from_fields, merge_overrides
 from povh3d.render import RenderSettings, cpu_count
 from povh3d.scene import load_scene
@@ -34,11 +33,6 @@ CASES = {
 }
 VARIANTS = {"conic": {"lenslet": "conic"}, "spherical": {"lenslet": "spherical"},
             "conic n=1.5": {"lenslet": "conic", "ior": 1.5}, "spherical n=1.5": {"lenslet": "spherical", "ior": 1.5}}
-
-
-def psnr(a: np.ndarray, b: np.ndarray) -> float:
-    mse = np.mean((a.astype(float) - b.astype(float)) ** 2)
-    return float("inf") if mse == 0 else float(10 * np.log10(255.0 ** 2 / mse))
 
 
 def timed(fn, repeats: int):

@@ -162,7 +162,7 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     start = time.perf_counter()
     target = float(settings.max_error_db)
     probe = probe_array(lens_array)
-    base = replace(settings, quality=QUALITY_LEVELS["draft"], max_error_db=None, scheduler=settings.scheduler)
+    base = replace(settings, quality=QUALITY_LEVELS["draft"], max_error_db=None)
     reference = run_method("multi-ortho", scene, probe, replace(base, quality=reference_quality(), bit_depth=16)).h3d
     reference = _to_8bit(reference)
     takes_samples = METHODS[method].takes_samples(probe)
@@ -177,17 +177,6 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     best = max(tried, key=lambda t: t[1])
     raise ConfigError(f"no quality setting reaches {target:g} dB on this scene (best {best[1]:.1f} dB with "
                       f"{best[0]}, on the central {probe.lenses_x}x{probe.lenses_y} lenses); lower --max-error")
-
-
-def fastest_meeting(report: BenchReport, min_psnr_db: float) -> TrialResult:
-    """The fastest trial whose PSNR reaches ``min_psnr_db``; a ConfigError if none does."""
-    good = [r for r in report.results if r.psnr_db >= min_psnr_db]
-    if not good:
-        best = max(report.results, key=lambda r: r.psnr_db)
-        raise ConfigError(f"no quality setting reaches {min_psnr_db:g} dB on this scene (best "
-                          f"{best.psnr_db:.1f} dB with {best.trial.label}; the reference's own noise "
-                          f"floor is {report.noise_floor_db:.1f} dB); lower --max-error")
-    return min(good, key=lambda r: r.seconds)
 
 
 def probe_array(lens_array: LensArray, max_lenses: tuple[int, int] = (16, 12)) -> LensArray:

@@ -78,8 +78,3 @@ box { <-1, -1, -1>, <1, 1, 1> rotate <20, 35, 0> translate <2.5, -1, 3>
   pigment { bozo color_map { [0 rgb <0.1, 0.7, 0.2>] [1 rgb <0.8, 1, 0.6>] } scale 0.3 } }
 """)
     return path
-
-
-def psnr(a: np.ndarray, b: np.ndarray) -> float:
-    mse = np.mean((a.astype(float) - b.astype(float)) ** 2)
-    return float("inf") if mse == 0 else 10 * np.log10(255.0**2 / mse)

@@ -11,11 +11,12 @@ import pytest
 
 from povh3d.geometry import LensArray
 from povh3d.methods import run_method
+from povh3d.metrics import psnr
 from povh3d.render import RenderSettings
 from povh3d.scene import load_scene
 
 from .conftest import square_array
-from .scenes import psnr, write_textured_scene
+from .scenes import write_textured_scene
 
 LA = square_array(lx=16, ly=12, nx=6, ny=6, s=0.1, f=1.5)
 DRAFT = RenderSettings(quality="draft", use_cache=False)

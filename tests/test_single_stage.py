@@ -22,13 +22,14 @@ from povh3d.geometry import LensArray, Panel, pixel_rays
 from povh3d.imageio import read_png
 from povh3d.methods import display_header, run_method
 from povh3d.povray import PovrayJob, find_povray, run_jobs
+from povh3d.metrics import psnr
 from povh3d.presets import get_preset, lens_array_from_fields
 from povh3d.render import RenderSettings, build_script
 from povh3d.scene import load_scene
 from povh3d.single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
 
 from .conftest import lenticular_array, square_array
-from .scenes import checker_oracle, classify, psnr, write_checker_plane, write_textured_scene
+from .scenes import checker_oracle, classify, write_checker_plane, write_textured_scene
 
 DRAFT = RenderSettings(quality="draft", use_cache=False)
 HALF = 70.0  # position code covers -HALF..HALF mm
