@@ -77,3 +77,25 @@ def test_row_gather_negative_control_wrong_table_is_detected():
     assert _kernels.row_gather(views, b, base, np.zeros(6, np.intp), table, out)
     assert not np.array_equal(out, interleave_reference(views))
     assert np.array_equal(out, interleave_reference(views[:, ::-1]))
+
+
+@pytest.mark.parametrize("pixel_bytes", [1, 2, 3])
+@pytest.mark.parametrize("offset", [-1, "past the end"])
+def test_row_gather_refuses_offsets_outside_the_source(pixel_bytes, offset):
+    # The kernels load without bounds or negative-index checks (that doubled their speed), so
+    # row_gather itself must refuse a table that reaches outside the source, before any load.
+    src = np.arange(4 * 8 * pixel_bytes, dtype=np.uint8)
+    table = (np.arange(8) * pixel_bytes).reshape(1, -1).astype(np.int32)
+    base = np.zeros(4, np.int64)
+    out = np.zeros(4 * 8 * pixel_bytes, np.uint8)
+    if offset == -1:
+        table[0, 3] = -1
+    else:
+        base[-1] = src.size - 8 * pixel_bytes + 1  # the last row's last pixel ends one byte past the source
+    with pytest.raises(IndexError, match="outside the source"):
+        _kernels.row_gather(src, pixel_bytes, base, np.zeros(4, np.intp), table, out)
+    assert not out.any()
+    base[-1] = src.size - 8 * pixel_bytes  # in range: gathers the last row exactly
+    table[0, 3] = 3 * pixel_bytes
+    assert _kernels.row_gather(src, pixel_bytes, base, np.zeros(4, np.intp), table, out)
+    assert np.array_equal(out[-8 * pixel_bytes:], src[-8 * pixel_bytes:])

@@ -45,6 +45,11 @@ def test_periodic_mappings_compress_to_a_few_rows():
     assert plan.unit == 1 and plan.table.shape[0] <= 24 + 6
     smart = _cached_plan(MAPPINGS["smart"].build(3, MappingOptions(ppl=6)), (384, 240))
     assert smart.unit == 3  # whole pixels move together
+    # smart:4 / distributed-smart:4 at P 6 repeat every 24 rows; within a view row of 4 rows a
+    # one-row shift also holds (3 rows of 4), which a short search window took for the period.
+    for name in ("smart", "distributed-smart"):
+        plan = _cached_plan(MAPPINGS[name].build(4, MappingOptions(ppl=6)), (640, 400))
+        assert plan.table.shape[0] <= 24 + 6, (name, plan.table.shape)
 
 
 def test_negative_control_a_wrong_table_entry_is_caught():
