@@ -1,9 +1,10 @@
 """Benchmark: what skipping what a scene does not need saves.
 
-1. Crop (``--crop auto --bbox``, ``--crop measure``): the one-pass view bank on a
-   large omnidirectional panel, an object covering a quarter of every view,
-   against the uncropped render, point-sampled and antialiased without jitter;
-   the differing pixels are counted (must be 0).
+1. Crop (``--crop auto --bbox``, ``--crop measure``): the one-pass view bank on
+   omnidirectional panels, an object covering a quarter of every view, against
+   the uncropped render, at each quality level (``draft`` point-sampled,
+   ``normal`` POV-Ray's adaptive antialiasing, ``high`` footprint samples); the
+   differing pixels are counted.
 2. Global settings a plain scene does not use: what each would cost if the
    header added it anyway (radiosity, photons, max_trace_level) - the cost
    ``features.needed_settings`` saves.
@@ -11,7 +12,8 @@
 Repeats alternate between the cases so that load from other processes hits
 them alike; the median is reported, and the ratios are what to compare.
 
-    .venv/bin/python benchmarks/bench_skip.py [--repeats 3] [--lenses 240x136]
+    .venv/bin/python benchmarks/bench_skip.py [--repeats 3] [--lenses 240x136] [--large-lenses 480x272]
+                                              [--high-lenses 60x34]
 """
 
 from __future__ import annotations
@@ -26,7 +28,6 @@ from pathlib import Path
 
 import numpy as np
 
-from povh3d import render as render_module
 from povh3d.crop import CropSettings
 from povh3d.methods import run_method
 from povh3d.presets import get_preset, lens_array_from_fields, merge_overrides
@@ -65,25 +66,36 @@ def parse_lenses(text: str) -> tuple[int, int]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--lenses", default="240x136", help="omni lens array, 8x8 pixels per lens")
+    ap.add_argument("--lenses", default="240x136", help="omni lens array for draft and normal, 8x8 pixels per lens")
+    ap.add_argument("--large-lenses", default="480x272", help="a larger array for draft")
+    ap.add_argument("--high-lenses", default="60x34", help="omni lens array for high (256 banks of samples)")
     ap.add_argument("--json", default=str(REPO / "bench-out" / "bench_skip.json"))
     args = ap.parse_args()
     results: dict = {"cores": cpu_count(), "repeats": args.repeats}
-    # A quality level like 'normal' without POV-Ray's jitter (the crop refuses jittered renders).
-    render_module.QUALITY_OPTIONS.setdefault("normal-nojitter", ("+A0.3", "+AM1", "+R2", "-J"))
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         (tmp / "quarter.pov").write_text(QUARTER)
         scene = load_scene(tmp / "quarter.pov")
-        la = lens_array_from_fields(merge_overrides(get_preset("demo"), {"lenses": parse_lenses(args.lenses),
-                                                                          "ppl": (8, 8)}))
-        W, H = la.panel.size_mm
-        bbox = ((-W / 4, -H / 4, -3.02), (W / 4, H / 4, 2.99))
-        print(f"crop: {la.panel.width}x{la.panel.height} omni, 8x8 views, object over a quarter of each view, "
-              f"{cpu_count()} cores, median of {args.repeats}")
         results["crop"] = {}
-        for quality in ("draft", "normal-nojitter"):
+        # What every POV-Ray run costs whatever it traces (start-up, mostly idle), which no crop removes.
+        tiny = lens_array_from_fields(merge_overrides(get_preset("demo"), {"lenses": (2, 2), "ppl": (8, 8)}))
+        starts = []
+        for _ in range(args.repeats):
+            t = time.perf_counter()
+            run_method("multi-ortho", scene, tiny, RenderSettings(quality="draft", use_cache=False))
+            starts.append(time.perf_counter() - t)
+        results["povray_start_seconds"] = statistics.median(starts)
+        print(f"a render of 16x16 pixels (POV-Ray start-up and povh3d overhead): {statistics.median(starts):.2f} s")
+        cases_run = (("draft", args.lenses), ("draft", args.large_lenses), ("normal", args.lenses),
+                     ("high", args.high_lenses))
+        for quality, lenses in cases_run:
+            la = lens_array_from_fields(merge_overrides(get_preset("demo"), {"lenses": parse_lenses(lenses),
+                                                                              "ppl": (8, 8)}))
+            W, H = la.panel.size_mm
+            bbox = ((-W / 4, -H / 4, -3.02), (W / 4, H / 4, 2.99))
+            print(f"crop, {quality}: {la.panel.width}x{la.panel.height} omni, 8x8 views, object over a quarter "
+                  f"of each view, {cpu_count()} cores, median of {args.repeats}")
             st = RenderSettings(quality=quality, use_cache=False)
             cases = {"full": None, "bbox": CropSettings("auto", bbox), "measure": CropSettings("measure")}
             times: dict[str, list[float]] = {k: [] for k in cases}
@@ -94,17 +106,19 @@ def main() -> int:
                     outputs[name] = run_method("multi-ortho", scene, la, st, crop=crop)
                     times[name].append(time.perf_counter() - t)
             full = statistics.median(times["full"])
-            row = {"full_seconds": full}
-            print(f"  {quality:16s} full {full:6.2f} s")
+            row = {"panel": [la.panel.width, la.panel.height], "full_seconds": full,
+                   "povray_seconds": sum(outputs["full"].stats.povray_seconds)}
+            print(f"  {quality:8s} full    {full:6.2f} s")
             for name in ("bbox", "measure"):
                 t = statistics.median(times[name])
                 info = outputs[name].crop
                 diff = int(np.any(outputs[name].h3d != outputs["full"].h3d, axis=-1).sum())
                 row[name] = {"seconds": t, "speedup": full / t, "differing_pixels": diff,
                              "traced_fraction": info.get("traced_fraction"), "applied": info.get("applied")}
-                print(f"  {quality:16s} {name:7s} {t:6.2f} s = {full / t:4.2f}x faster, traced "
-                      f"{info.get('traced_fraction', 1):.3f} of the pixels, {diff} pixels differ")
-            results["crop"][quality] = row
+                print(f"  {quality:8s} {name:7s} {t:6.2f} s = {full / t:4.2f}x faster, traced "
+                      f"{info.get('traced_fraction', 1):.3f} of the pixels, {diff} of "
+                      f"{la.panel.width * la.panel.height} pixels differ")
+            results["crop"][f"{quality} {la.panel.width}x{la.panel.height}"] = row
 
         # Global settings the scene does not use, had the header added them anyway.
         small = lens_array_from_fields(merge_overrides(get_preset("demo"), {"lenses": (120, 68), "ppl": (8, 8)}))

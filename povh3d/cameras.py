@@ -8,12 +8,13 @@ so that objects floating in front of the screen are seen.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import ConfigError
-from .footprint import CENTRE
+from .footprint import CENTRE, GRID
 from .geometry import LensArray
 
 # POV-Ray 3.7 ignores surfaces nearer than 1e-4 mm or further than 1e7 mm along a
@@ -117,13 +118,20 @@ class CameraMesh:
     lookup, so no point sample lands on an edge; antialiasing samples that cross
     a border get the neighbouring lens, as the physical pixel area would.
 
+    POV-Ray stores vertices and normals in single precision.  ``scale`` is
+    a transform of the mesh (``scale <sx, sy, sz>``, applied in double
+    precision: POV-Ray moves origins by it and directions by its inverse, as
+    surface normals): view banks are written in lens-pitch units, where every
+    corner is a multiple of 1/1024 and so stored exactly.
+
     Attributes
     ----------
-    vertices : (n, 3) float, mm        ray origins at z = -back_off
-    normals : (n, 3) float              ray directions ``(u, v, f)``
+    vertices : (n, 3) float            ray origins at z = -back_off, in mm / ``scale``
+    normals : (n, 3) float              ray directions ``(u, v, f)`` times ``scale``
     uvs : (n, 2) float                  lookup coordinates
     faces : (m, 3) int
     image_size : (int, int)             ``(W + 1, H + 1)`` to render
+    scale : (3,) float                  mm per vertex unit along x, y, z
     """
 
     vertices: np.ndarray
@@ -131,6 +139,12 @@ class CameraMesh:
     uvs: np.ndarray
     faces: np.ndarray
     image_size: tuple[int, int]
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    def in_mm(self) -> CameraMesh:
+        """The same camera with the scale applied: vertices in mm, normals the mm directions."""
+        scale = np.asarray(self.scale, dtype=np.float64)
+        return CameraMesh(self.vertices * scale, self.normals / scale, self.uvs, self.faces, self.image_size)
 
 
 # How far lens quads are moved off pixel centres that lie on lens borders, in
@@ -203,7 +217,7 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
 
 def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.ndarray,
                col: np.ndarray, row: np.ndarray, size: tuple[int, int], back_off: float,
-               focal: float) -> CameraMesh:
+               focal: float, scale: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> CameraMesh:
     """A CameraMesh from ``(quads, 4)`` corner values, corners counter-clockwise.
 
     ``col``/``row`` are fractional pixel positions of the corners in a
@@ -220,7 +234,26 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
     normals = np.stack(full(u, v, focal), axis=-1).reshape(-1, 3)
     base = 4 * np.arange(shape[0])[:, None]
     faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
-    return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1))
+    return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1),
+                      tuple(float(a) for a in scale))
+
+
+# Faces per mesh-camera frame.  POV-Ray 3.7 finds a pixel's face by scanning a
+# bit set of every face (32 per step), so a frame of many stacked banks costs
+# more per ray: with 64 views, 8 banks took 38 ms a bank and 128 banks 88 ms.
+MAX_FRAME_FACES = 2048
+
+
+def bank_groups(samples: np.ndarray, faces_per_bank: int) -> list[np.ndarray]:
+    """Footprint samples split into equal groups, one mesh-camera frame each.
+
+    The groups are as large as ``MAX_FRAME_FACES`` allows and all of one size
+    (a batch's frames share one image size): the largest divisor of the count.
+    """
+    samples = np.asarray(samples, dtype=np.float64).reshape(-1, 4)
+    most = max(1, MAX_FRAME_FACES // max(1, faces_per_bank))
+    size = max(d for d in range(1, min(most, len(samples)) + 1) if len(samples) % d == 0)
+    return [samples[i:i + size] for i in range(0, len(samples), size)]
 
 
 def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None) -> CameraMesh:
@@ -233,6 +266,7 @@ def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray |
     single quad per view is exact: ``Nx*Ny`` quads instead of one per lens, which
     keeps POV-Ray's per-pixel face lookup as cheap as a plain camera's.
     Same lookup rules as ``camera_mesh`` (extra first row and last column).
+    Rays start ``bank_back_off`` in front of the screen (``back_off``, rounded up).
 
     Parameters
     ----------
@@ -243,59 +277,87 @@ def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray |
         pixel's own ray.
     """
     ny, nx = lens_array.require_views()
-    check_clearance(lens_array, back_off)
     lx, ly = lens_array.lenses_x, lens_array.lenses_y
-    samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
-    W, H = lx * nx, ly * ny * len(samples)
-    f = lens_array.focal
-    s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
-    u, v = lens_array.view_offsets()
-    b, l, k = np.meshgrid(np.arange(len(samples)), np.arange(ny), np.arange(nx), indexing="ij")
-    b, l, k = b.reshape(-1, 1), l.reshape(-1, 1), k.reshape(-1, 1)
-    ax, ay, du, dv = (samples[b, n] for n in range(4))               # (quads, 1) each
-    # Corners of each view's tile: half a pitch outside the outer lens centres.
-    corner_j = np.array([-0.5, lx - 0.5, lx - 0.5, -0.5])
-    corner_i = np.array([ly - 0.5, ly - 0.5, -0.5, -0.5])
-    centres = lens_array.lens_centres()
-    hx, hy = lens_array.pitch_x / 2, lens_array.pitch_y / 2
-    left, right = centres[0, 0, 0] - hx, centres[0, -1, 0] + hx
-    top, bottom = centres[0, 0, 1] + hy, centres[-1, 0, 1] - hy
-    x = np.array([left, right, right, left]) + ax * lens_array.pitch_x   # on z = 0
-    y = np.array([bottom, bottom, top, top]) + ay * lens_array.pitch_y
-    uk, vl = u[k] + du * s_x, v[l] + dv * s_y                          # (quads, 1)
-    origin_x = x - uk * (back_off / f)
-    origin_y = y - vl * (back_off / f)
-    col = k * lx + corner_j[None, :]
-    row = (b * ny + l) * ly + corner_i[None, :]
-    return _quad_mesh(origin_x, origin_y, uk, vl, col, row, (W, H), back_off, f)
+    cols = np.array([(k, 0, lx, k * lx) for k in range(nx)])
+    rows = np.array([(l, 0, ly, l * ly) for l in range(ny)])
+    return _bank_mesh(lens_array, back_off, samples, cols, rows, (lx * nx, ly * ny))
 
 
-def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan) -> CameraMesh:
+def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan,
+                           samples: np.ndarray | None = None) -> CameraMesh:
     """``view_bank_mesh`` over the columns and rows a ``crop.CropPlan`` keeps.
 
     One quad per kept column segment times kept row segment (a segment is a
     run of kept lenses within one view); the image is the uncropped tiled image
-    with the other columns and rows removed.  Corner positions come from lens
-    indices (CONVENTIONS), as in ``view_bank_mesh``.
+    with the other columns and rows removed, one such bank per footprint sample.
+    Every corner is exact in single precision (``bank_back_off``), so a kept
+    pixel gets the very ray, to double rounding, that the uncropped mesh gives it.
     """
-    lens_array.require_views()
+    return _bank_mesh(lens_array, back_off, samples, plan.col_segments(), plan.row_segments(), plan.size)
+
+
+def bank_back_off(lens_array: LensArray, back_off: float) -> float:
+    """The front clearance a view bank uses: ``back_off`` rounded up to a multiple of ``f * lcm(Nx, Ny)``.
+
+    Then every view's origin shift ``u * back_off / f``, in lens pitches, is a
+    multiple of 1/2 (times the sample's 1/1024 grid), so the bank's corners,
+    written in lens pitches, are exact in POV-Ray's single precision.
+    """
+    ny, nx = lens_array.require_views()
+    unit = lens_array.focal * math.lcm(nx, ny)
+    return math.ceil(back_off / unit * (1 - 1e-12)) * unit
+
+
+def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None, cols: np.ndarray,
+               rows: np.ndarray, size: tuple[int, int]) -> CameraMesh:
+    """Quads over column segments x row segments of the tiled views, one bank per sample.
+
+    ``cols``/``rows`` are ``(n, 4)``: ``(view, first lens, stop lens, image column/row)``.
+    Vertices are in lens pitches (x, y) and mm (z), the mesh scaled by ``(px, py, 1)``:
+    a corner ``j`` lenses from the array's centre, shifted by the view's origin
+    offset, is a multiple of 1/1024 and stored exactly (see ``CameraMesh``).
+    """
+    ny, nx = lens_array.require_views()
+    back_off = bank_back_off(lens_array, back_off)
+    check_clearance(lens_array, back_off)
     lx, ly = lens_array.lenses_x, lens_array.lenses_y
-    f = lens_array.focal
-    u, v = lens_array.view_offsets()
-    cs, rs = plan.col_segments(), plan.row_segments()           # (n, 4): view, start, stop, offset
-    c = np.repeat(cs, len(rs), axis=0)                            # every column segment ...
-    r = np.tile(rs, (len(cs), 1))                                 # ... times every row segment
+    px, py, f = lens_array.pitch_x, lens_array.pitch_y, lens_array.focal
+    s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
+    samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
+    width, height = size
+    b = np.repeat(np.arange(len(samples)), len(cols) * len(rows))[:, None]
+    r = np.tile(np.repeat(rows, len(cols), axis=0), (len(samples), 1))   # every row segment ...
+    c = np.tile(cols, (len(rows) * len(samples), 1))                      # ... times every column segment, per bank
     k, j0, j1, col0 = (c[:, n:n + 1] for n in range(4))
     l, i0, i1, row0 = (r[:, n:n + 1] for n in range(4))
-    # Corners counter-clockwise from bottom left, half a lens outside the kept centres.
-    j = np.concatenate([j0, j1, j1, j0], axis=1) - 0.5            # (quads, 4) lens index
+    ax, ay, du, dv = (samples[b, n] for n in range(4))                   # (quads, 1) each
+    # Corners counter-clockwise from bottom left, half a lens outside the kept lens
+    # centres, in lens pitches (CONVENTIONS' centres, on the 1/GRID grid: exact).
+    centres = lens_array.lens_centres()
+    cx = np.round(centres[0, :, 0] / px * GRID) / GRID
+    cy = np.round(centres[:, 0, 1] / py * GRID) / GRID
+    left, right = cx[j0] - 0.5, cx[j1 - 1] + 0.5
+    top, bottom = cy[i0] + 0.5, cy[i1 - 1] - 0.5
+    x = np.concatenate([left, right, right, left], axis=1) + ax
+    y = np.concatenate([bottom, bottom, top, top], axis=1) + ay
+    # The origin shift u * back_off / f in lens pitches: u = (k - (Nx-1)/2 + du) s and
+    # px = Nx s, so (k - (Nx-1)/2 + du) * back_off / (f Nx), a whole multiple of the offset.
+    units = round(back_off / (f * math.lcm(nx, ny)))
+    mx, my = units * math.lcm(nx, ny) // nx, units * math.lcm(nx, ny) // ny
+    turn_x = k - (nx - 1) / 2 + du
+    turn_y = (ny - 1) / 2 - l + dv
+    origin_x, origin_y = x - turn_x * mx, y - turn_y * my
+    j = np.concatenate([j0, j1, j1, j0], axis=1) - 0.5                  # lens index of each corner
     i = np.concatenate([i1, i1, i0, i0], axis=1) - 0.5
-    x = (j + 0.5 - lx / 2) * lens_array.pitch_x
-    y = (ly / 2 - i - 0.5) * lens_array.pitch_y
-    uk, vl = u[k], v[l]
-    origin_x = x - uk * (back_off / f)
-    origin_y = y - vl * (back_off / f)
-    return _quad_mesh(origin_x, origin_y, uk, vl, col0 + (j - j0), row0 + (i - i0), plan.size, back_off, f)
+    return _quad_mesh(origin_x, origin_y, turn_x * s_x * px, turn_y * s_y * py,
+                      col0 + (j - j0), b * height + row0 + (i - i0),
+                      (width, height * len(samples)), back_off, f, (px, py, 1.0))
+
+
+def stack_frames(images: list[np.ndarray]) -> np.ndarray:
+    """Rendered mesh-camera frames stacked top to bottom, each without the extra first
+    row and last column of ``CameraMesh``."""
+    return images[0][1:, :-1] if len(images) == 1 else np.concatenate([im[1:, :-1] for im in images])
 
 
 # -- per-lens pinhole cameras ---------------------------------------------------------

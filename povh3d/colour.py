@@ -3,6 +3,8 @@ works in linear light, images are sRGB-encoded (CONVENTIONS, "Files")."""
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 
@@ -23,9 +25,21 @@ def linear_to_srgb(values: np.ndarray, dtype: np.dtype | type = np.float64) -> n
 def decode(image: np.ndarray, dtype: np.dtype | type = np.float64) -> np.ndarray:
     """An sRGB image to linear light in ``dtype``: 8- or 16-bit, or float already in ``[0, 1]``."""
     image, dtype = np.asarray(image), np.dtype(dtype).type
+    if image.dtype in (np.uint8, np.uint16):
+        return _decode_table(image.dtype.type, dtype)[image]
     if np.issubdtype(image.dtype, np.integer):
         image = image.astype(dtype) / dtype(np.iinfo(image.dtype).max)
     return srgb_to_linear(image, dtype)
+
+
+@lru_cache(maxsize=8)
+def _decode_table(code: type, dtype: type) -> np.ndarray:
+    """Every 8- or 16-bit code's linear value: a lookup is ~10x faster than the power per pixel
+    and gives the same numbers (the same formula, per code)."""
+    top = np.iinfo(code).max
+    table = srgb_to_linear(np.arange(top + 1, dtype=dtype) / dtype(top), dtype)
+    table.setflags(write=False)
+    return table
 
 
 def encode(linear: np.ndarray, dtype: np.dtype | type = np.uint8) -> np.ndarray:
@@ -36,5 +50,12 @@ def encode(linear: np.ndarray, dtype: np.dtype | type = np.uint8) -> np.ndarray:
 
 
 def mean_in_linear_light(images: np.ndarray) -> np.ndarray:
-    """Average ``(K, ...)`` sRGB images of one integer dtype in linear light."""
-    return encode(decode(images).mean(axis=0), images.dtype)
+    """Average ``(K, ...)`` sRGB images of one integer dtype in linear light.
+
+    Summed one image at a time (as ``mean(axis=0)`` sums, so the same numbers):
+    256 footprint banks decoded at once would take gigabytes.
+    """
+    total = decode(images[0])
+    for image in images[1:]:
+        total += decode(image)
+    return encode(total / len(images), images.dtype)

@@ -9,7 +9,8 @@ is cached and every POV-Ray process goes through ``povray.py``):
    scene.  At quality 0 POV-Ray shades nothing (quick colours, opaque even for
    glass) but intersects everything, so alpha is exactly "this ray met an object
    that is not ``no_image``";
-2. the cropped render: one quad per kept tile;
+2. the cropped render: one quad per kept tile (per footprint sample, banks
+   stacked as in ``cameras.view_bank_mesh``);
 3. the paste into a canvas of the background colour, read at the cuts.
 
 Returns None where cropping does not apply, with the reason, so the caller
@@ -24,13 +25,14 @@ from typing import Any
 
 import numpy as np
 
-from .cameras import cropped_view_bank_mesh, view_bank_mesh
+from .cameras import bank_groups, cropped_view_bank_mesh, stack_frames, view_bank_mesh
 from .crop import (CropPlan, CropSettings, bbox_hits, fill_colour, layout_independent, mask_hits, paste,
                    plan_crop)
 from .errors import InputError
 from .features import scene_features
+from .footprint import CENTRE
 from .geometry import LensArray
-from .render import FrameBatch, Progress, RenderSettings, RenderStats, render_frames
+from .render import Progress, RenderSettings, RenderStats, mesh_camera_batch, render_frames
 from .scene import Scene
 
 COVERAGE_OPTIONS = ("-A", "+Q0", "+UA")
@@ -40,27 +42,29 @@ COVERAGE_OPTIONS = ("-A", "+Q0", "+UA")
 class CroppedTiles:
     """The uncropped tiled image (extra row and column removed) and what the crop did."""
 
-    tiled: np.ndarray | None      # None: not cropped, render the whole bank
+    tiled: np.ndarray | None      # (K*Ny*Ly, Nx*Lx, C), one bank per sample; None: not cropped
     stats: RenderStats | None
     info: dict[str, Any]
 
 
 def coverage_mask(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
-                  header: dict[str, Any]) -> tuple[np.ndarray, RenderStats]:
-    """(Ny*Ly, Nx*Lx) bool: the tiled image's rays that meet an object."""
-    mesh = view_bank_mesh(lens_array, back_off)
-    width, height = mesh.image_size
-    batch = FrameBatch("coverage.pov.j2", {"mesh": mesh}, [{}], width, height, processes=1,
-                       options=COVERAGE_OPTIONS)
+                  header: dict[str, Any], samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
+    """(Ny*Ly, Nx*Lx) bool: the tiled image's pixels one of whose ``samples`` meets an object."""
+    ny, nx = lens_array.require_views()
+    meshes = [view_bank_mesh(lens_array, back_off, group) for group in bank_groups(samples, 2 * ny * nx)]
+    batch = mesh_camera_batch("coverage.pov.j2", meshes, COVERAGE_OPTIONS)
     images, stats = render_frames(scene, batch, settings, method="multi-ortho coverage", header=header)
-    alpha = images[0][1:, :-1, -1]
-    return alpha > 0, stats
+    alpha = stack_frames(images)[..., -1]
+    return (alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0), stats
 
 
 def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
                          crop: CropSettings, header: dict[str, Any],
-                         progress: Progress | None = None) -> CroppedTiles:
+                         progress: Progress | None = None, samples: np.ndarray = CENTRE) -> CroppedTiles:
     """Render the one-pass view bank cropped to what the objects can reach.
+
+    ``samples`` are the footprint samples of ``view_bank_mesh``; each gets a
+    bank, cropped alike, so the reach is that of the pixel's whole footprint.
 
     Raises
     ------
@@ -89,10 +93,10 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
                                                    "object are not one colour, so nothing can be filled"})
     start = time.perf_counter()
     if crop.mode == "auto":
-        col_hits, row_hits = bbox_hits(lens_array, crop.bbox)
+        col_hits, row_hits = bbox_hits(lens_array, crop.bbox, angular=bool(np.any(samples[:, 2:])))
         info["source"] = "bbox"
     else:
-        mask, _ = coverage_mask(scene, lens_array, back_off, settings, header)
+        mask, _ = coverage_mask(scene, lens_array, back_off, settings, header, samples)
         col_hits, row_hits = mask_hits(mask, lens_array.views)
         info["source"] = "coverage pre-pass"
         info["coverage_fraction"] = round(float(mask.mean()), 6)
@@ -102,8 +106,10 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
     if plan.is_full:
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
 
-    tiled, stats = _render_plan(scene, lens_array, back_off, settings, plan, header, progress)
-    fill = fill_colour(tiled, plan)
+    tiled, stats = _render_plan(scene, lens_array, back_off, settings, plan, header, progress, samples)
+    banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])
+    fills = [fill_colour(bank, plan) for bank in banks]
+    fill = fills[0] if all(f is not None and np.array_equal(f, fills[0]) for f in fills) else None
     if fill is None:
         if info["source"] == "bbox":
             raise InputError(f"objects reach outside --bbox {list(crop.bbox[0]) + list(crop.bbox[1])} "
@@ -112,15 +118,16 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
         return CroppedTiles(None, None, {**info, "applied": False,
                                          "reason": "the pixels at the crop edges differ: background not constant"})
     info.update(applied=True, fill=fill.tolist())
-    return CroppedTiles(paste(tiled, plan, fill), stats, info)
+    return CroppedTiles(np.concatenate([paste(bank, plan, fill) for bank in banks]), stats, info)
 
 
 def _render_plan(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
-                 plan: CropPlan, header: dict[str, Any], progress: Progress | None
+                 plan: CropPlan, header: dict[str, Any], progress: Progress | None, samples: np.ndarray
                  ) -> tuple[np.ndarray, RenderStats]:
-    mesh = cropped_view_bank_mesh(lens_array, back_off, plan)
-    width, height = mesh.image_size
-    batch = FrameBatch("multi_ortho.pov.j2", {"mesh": mesh}, [{}], width, height, processes=1)
+    faces_per_bank = 2 * len(plan.col_segments()) * len(plan.row_segments())
+    meshes = [cropped_view_bank_mesh(lens_array, back_off, plan, group)
+              for group in bank_groups(samples, faces_per_bank)]
+    batch = mesh_camera_batch("multi_ortho.pov.j2", meshes)
     images, stats = render_frames(scene, batch, settings, method="multi-ortho", header=header,
                                   progress=progress)
-    return images[0][1:, :-1], stats  # the extra first row and last column (cameras.CameraMesh)
+    return stack_frames(images), stats

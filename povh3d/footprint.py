@@ -14,6 +14,18 @@ from __future__ import annotations
 import numpy as np
 
 CENTRE = np.zeros((1, 4))
+#: Samples sit on a grid of 1/GRID: a view bank's corners (``cameras.bank_back_off``)
+#: then stay exact in POV-Ray's single precision, and a cropped bank traces the very
+#: rays of the uncropped one.
+GRID = 2048
+
+
+def on_grid(samples: np.ndarray, low: np.ndarray | float = -0.5, high: np.ndarray | float = 0.5) -> np.ndarray:
+    """Samples rounded to the nearest multiple of ``1/GRID`` within ``[low, high)``
+    (an interval at least ``1/GRID`` long, so one exists: a stratum keeps its sample)."""
+    q = np.round(np.asarray(samples, dtype=np.float64) * GRID) / GRID
+    q = np.where(q < low, np.ceil(np.asarray(low) * GRID) / GRID, q)
+    return np.where(q >= high, (np.ceil(np.asarray(high) * GRID) - 1) / GRID, q)
 
 
 def angular_grid(n: int) -> np.ndarray:
@@ -24,14 +36,14 @@ def angular_grid(n: int) -> np.ndarray:
 
     Returns
     -------
-    (n*n, 4) float: ``(0, 0, du, dv)`` at the centres of the grid cells.
+    (n*n, 4) float: ``(0, 0, du, dv)`` at the centres of the grid cells (``on_grid``).
     """
     if n < 1:
         raise ValueError(f"sub-views per axis must be at least 1, got {n}")
     steps = (np.arange(n) + 0.5) / n - 0.5
     du, dv = np.meshgrid(steps, steps, indexing="xy")
     zeros = np.zeros(n * n)
-    return np.stack([zeros, zeros, du.ravel(), dv.ravel()], axis=1)
+    return on_grid(np.stack([zeros, zeros, du.ravel(), dv.ravel()], axis=1))
 
 
 def latin_hypercube(count: int, seed: int = 0) -> np.ndarray:
@@ -43,10 +55,11 @@ def latin_hypercube(count: int, seed: int = 0) -> np.ndarray:
 
     Returns
     -------
-    (count, 4) float in ``[-0.5, 0.5)``.
+    (count, 4) float in ``[-0.5, 0.5)``, on the ``1/GRID`` grid.
     """
-    if count < 1:
-        raise ValueError(f"footprint samples must be at least 1, got {count}")
+    if not 1 <= count <= GRID:
+        raise ValueError(f"footprint samples must be 1 to {GRID}, got {count}")
     rng = np.random.default_rng(seed)
     strata = np.stack([rng.permutation(count) for _ in range(4)], axis=1)
-    return (strata + rng.random((count, 4))) / count - 0.5
+    # Each sample stays in its stratum (1/count >= 1/GRID wide) on the grid.
+    return on_grid((strata + rng.random((count, 4))) / count - 0.5, strata / count - 0.5, (strata + 1) / count - 0.5)

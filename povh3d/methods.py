@@ -25,15 +25,16 @@ from typing import Any
 import numpy as np
 
 from .colour import mean_in_linear_light
-from .cameras import (camera_mesh, check_clearance, default_back_off, ortho_view_frames, pinhole_frames,
-                      view_bank_mesh)
+from .cameras import (bank_groups, camera_mesh, check_clearance, default_back_off, ortho_view_frames,
+                      pinhole_frames, stack_frames, view_bank_mesh)
 from .errors import ConfigError
 from .crop import CropSettings
 from .crop_render import render_cropped_tiles
 from .features import quality_settings, scene_features
 from .geometry import LensArray
 from .interleave import interleave, tile_elemental_images, untile_views
-from .render import FrameBatch, Progress, Quality, RenderSettings, RenderStats, cpu_count, render_frames
+from .render import (FrameBatch, Progress, Quality, RenderSettings, RenderStats, cpu_count, mesh_camera_batch,
+                     render_frames)
 from .scene import Scene
 from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
@@ -41,18 +42,23 @@ from .single_stage import SingleStagePlan, default_depth, lenslet_for
 def _multi_ortho_batch(lens_array: LensArray, back_off: float, samples: np.ndarray) -> FrameBatch:
     if lens_array.grid == "hex":
         lens_array.require_views()  # raises "render hex with single-stage"
-    # Whole PPL: one quad per view (views tiled); otherwise one quad per lens.
-    mesh = view_bank_mesh(lens_array, back_off, samples) if lens_array.views else camera_mesh(lens_array, back_off)
-    width, height = mesh.image_size
-    return FrameBatch("multi_ortho.pov.j2", {"mesh": mesh}, [{}], width, height, processes=1)
+    if not lens_array.views:  # fractional PPL: one quad per lens
+        return mesh_camera_batch("multi_ortho.pov.j2", [camera_mesh(lens_array, back_off)])
+    # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
+    ny, nx = lens_array.views
+    return mesh_camera_batch("multi_ortho.pov.j2", [view_bank_mesh(lens_array, back_off, group)
+                                                    for group in bank_groups(samples, 2 * ny * nx)])
 
 
 def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarray:
-    image = images[0][1:, :-1]  # the extra first row and last column (see cameras.CameraMesh)
-    if not lens_array.views:
-        return image
-    ny, nx = lens_array.views
-    banks = image.shape[0] // (ny * lens_array.lenses_y)  # one per footprint sample, stacked
+    image = stack_frames(images)
+    return _banks_to_h3d(lens_array, image) if lens_array.views else image
+
+
+def _banks_to_h3d(lens_array: LensArray, image: np.ndarray) -> np.ndarray:
+    """The H3D image of tiled view banks stacked one per footprint sample (averaged in linear light)."""
+    ny, nx = lens_array.require_views()
+    banks = image.shape[0] // (ny * lens_array.lenses_y)
     bank = mean_in_linear_light(image.reshape(banks, -1, *image.shape[1:])) if banks > 1 else image
     return interleave(untile_views(bank, (ny, nx)))
 
@@ -171,11 +177,11 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     if settings_needed:
         header["global_settings"] = settings_needed
     h3d, crop_info = None, None
-    if name == "multi-ortho" and crop is not None and len(samples) == 1:
-        tiles = render_cropped_tiles(scene, lens_array, back_off, settings, crop, header, progress)
+    if name == "multi-ortho" and crop is not None:
+        tiles = render_cropped_tiles(scene, lens_array, back_off, settings, crop, header, progress, samples)
         crop_info = tiles.info
         if tiles.tiled is not None:
-            h3d, stats = interleave(untile_views(tiles.tiled, lens_array.views)), tiles.stats
+            h3d, stats = _banks_to_h3d(lens_array, tiles.tiled), tiles.stats
     if h3d is None:
         batch = method.batch(lens_array, back_off, samples, **options)
         images, stats = render_frames(scene, batch, settings, method=name, header=header, progress=progress)

@@ -22,7 +22,7 @@ import numpy as np
 from . import __version__
 from .cache import ImageCache, content_key, default_cache_dir
 from .errors import ConfigError
-from .footprint import angular_grid, latin_hypercube
+from .footprint import GRID, angular_grid, latin_hypercube
 from .imageio import read_png
 from .povray import JobResult, PovrayJob, find_povray, povray_version, run_jobs
 from .sandbox import files_within
@@ -64,8 +64,8 @@ class Quality:
             raise ConfigError(f"the antialiasing method must be 1 or 2, got {self.aa_method}")
         if not 1 <= self.aa_depth <= 9:
             raise ConfigError(f"the antialiasing depth must be within 1..9, got {self.aa_depth}")
-        if self.subviews < 1 or self.footprint < 0:
-            raise ConfigError("sub-views must be at least 1 and footprint samples at least 0")
+        if self.subviews < 1 or not 0 <= self.footprint <= GRID:
+            raise ConfigError(f"sub-views must be at least 1 and footprint samples 0 to {GRID}")
         if self.max_trace_level is not None and not 1 <= self.max_trace_level <= 256:
             raise ConfigError(f"max trace level must be within 1..256, got {self.max_trace_level}")
 
@@ -209,6 +209,16 @@ class FrameBatch:
     frames_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
     options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
+
+
+def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...] = ()) -> FrameBatch:
+    """One frame per camera mesh (``cameras.CameraMesh``, all of one image size), spread over the cores."""
+    width, height = meshes[0].image_size
+    if len(meshes) == 1:
+        return FrameBatch(template, {"mesh": meshes[0]}, [{}], width, height, processes=1, options=options)
+    processes = min(cpu_count(), len(meshes))
+    return FrameBatch(template, {}, [{"mesh": m} for m in meshes], width, height,
+                      frames_per_job=-(-len(meshes) // processes), processes=processes, options=options)
 
 
 @dataclass

@@ -15,6 +15,7 @@ from .conftest import lenticular_array, square_array
 
 
 def _simulate_mesh_camera(mesh):
+    mesh = mesh.in_mm()  # POV-Ray applies the mesh's scale to origins and directions
     W, H1 = mesh.image_size
     cols, rows = np.meshgrid(np.arange(W), np.arange(H1))
     p = np.stack([cols / W, 1 - rows / H1], axis=-1).reshape(-1, 2)  # as POV-Ray (but row 0, last col)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -12,6 +14,7 @@ from povh3d.cameras import cropped_view_bank_mesh, default_back_off, view_bank_m
 from povh3d.crop import (CropPlan, CropSettings, bbox_hits, cut_mask, fill_colour, full_plan,
                          layout_independent, mask_hits, parse_bbox, paste, plan_crop)
 from povh3d.errors import ConfigError, InputError
+from povh3d.footprint import latin_hypercube
 from povh3d.geometry import pixel_rays
 from povh3d.interleave import extract, interleave, untile_views
 from povh3d.methods import run_method
@@ -23,17 +26,20 @@ from .conftest import lenticular_array, square_array
 BOX = ((-1.2, -0.7, -1.0), (0.9, 0.8, 2.0))
 
 
-def brute_force_hits(la, box, samples=9):
-    """Per view and lens: does any ray in the pixel's footprint (a grid over the lens) meet the box?"""
+def brute_force_hits(la, box, samples=9, angular=0):
+    """Per view and lens: does any ray in the pixel's footprint (a grid over the lens, and with
+    ``angular`` > 0 a grid of that many directions across the pixel's angular width) meet the box?"""
     lo, hi = np.asarray(box)
     centres, dirs, _ = pixel_rays(la)                 # (H, W, 2), (H, W, 3) per panel pixel
     views = extract(np.concatenate([centres, dirs], axis=-1), la.views)   # (Ny, Nx, Ly, Lx, 5)
     hit = np.zeros(views.shape[:4], bool)
     offs = np.linspace(-0.5, 0.5, samples)
-    for ox in offs * la.pitch_x:
-        for oy in offs * la.pitch_y:
+    turns = np.linspace(-0.5, 0.5, angular) if angular else np.zeros(1)
+    for ox, oy, du, dv in itertools.product(offs * la.pitch_x, offs * la.pitch_y, turns, turns):
+        if True:  # keeps the slab test's indentation
             c = views[..., :2] + [ox, oy]
-            d = views[..., 2:]
+            # The footprint sample's direction (u + du*s, v + dv*s, f) (povh3d.footprint).
+            d = views[..., 2:] / views[..., 4:5] * la.focal + [du * la.panel.pitch_x, dv * la.panel.pitch_y, 0.0]
             # slab test along z: t = z / d_z, point = c + d_xy * z / d_z
             z0 = np.maximum(lo[2], -1e9)
             t_lo = np.full(hit.shape, z0)
@@ -65,6 +71,20 @@ def test_bbox_hits_contain_every_ray_that_meets_the_box(la):
     for pred, true in ((col, true_col), (row, true_row)):
         grown = true | np.roll(true, 1, axis=1) | np.roll(true, -1, axis=1)
         assert not np.any(pred & ~grown)
+
+
+@pytest.mark.parametrize("la", [square_array(lx=20, ly=14, nx=4, ny=3, s=0.1, f=0.5),
+                                lenticular_array(lx=20, rows=30, nx=5, s=0.1, f=0.5)],
+                         ids=["square", "lenticular"])
+def test_angular_bbox_hits_contain_every_footprint_ray(la):
+    # Footprint samples also turn the ray across the pixel's angular width; with a short focal
+    # length that reaches lenses the aperture-only reach misses, which the angular reach keeps.
+    box = ((-1.17, -0.713, -1.0), (0.93, 0.787, 2.03))   # off round numbers: no ray grazes an edge
+    truth = brute_force_hits(la, box, samples=5, angular=5)
+    col, row = bbox_hits(la, box, angular=True)
+    assert not np.any(truth & ~(row[:, None, :, None] & col[None, :, None, :]))
+    col0, row0 = bbox_hits(la, box)
+    assert np.any(truth & ~(row0[:, None, :, None] & col0[None, :, None, :])), "negative control"
 
 
 def test_bbox_hits_shift_with_view_direction_like_parallax():
@@ -139,13 +159,16 @@ def test_paste_is_the_inverse_of_cropping():
     assert fill_colour(cropped, plan) is None
 
 
-def test_cropped_mesh_rays_match_the_uncropped_mesh():
-    """Every kept pixel of the cropped mesh interpolates the same ray as the uncropped mesh."""
+@pytest.mark.parametrize("samples", [None, latin_hypercube(3, seed=4)], ids=["centre", "footprint"])
+def test_cropped_mesh_rays_match_the_uncropped_mesh(samples):
+    """Every kept pixel of the cropped mesh interpolates the same ray as the uncropped mesh, in every bank."""
     la = square_array(lx=12, ly=9, nx=3, ny=2)
     back = default_back_off(la)
-    plan = plan_crop(*bbox_hits(la, ((-0.3, -0.3, -0.5), (0.2, 0.4, 0.5))))
-    full, crop = view_bank_mesh(la, back), cropped_view_bank_mesh(la, back, plan)
-    assert len(crop.faces) < len(full.faces) * 4 and crop.image_size == (plan.size[0] + 1, plan.size[1] + 1)
+    plan = plan_crop(*bbox_hits(la, ((-0.3, -0.3, -0.5), (0.2, 0.4, 0.5)), angular=samples is not None))
+    full, crop = view_bank_mesh(la, back, samples), cropped_view_bank_mesh(la, back, plan, samples)
+    banks = 1 if samples is None else len(samples)
+    assert len(crop.faces) < len(full.faces) * 4
+    assert crop.image_size == (plan.size[0] + 1, banks * plan.size[1] + 1)
 
     def rays(mesh, cols, rows):
         # Barycentric interpolation at each pixel centre's UV, the lookup rule of cameras.CameraMesh.
@@ -162,9 +185,12 @@ def test_cropped_mesh_rays_match_the_uncropped_mesh():
             out[inside] = np.column_stack([p, n])[inside]
         return out
 
-    r, c = np.meshgrid(np.flatnonzero(plan.keep_rows), np.flatnonzero(plan.keep_cols), indexing="ij")
-    rc, cc = np.meshgrid(np.arange(plan.size[1]), np.arange(plan.size[0]), indexing="ij")
-    assert np.allclose(rays(crop, cc.ravel(), rc.ravel()), rays(full, c.ravel(), r.ravel()), atol=1e-9)
+    for b in range(banks):
+        r, c = np.meshgrid(np.flatnonzero(plan.keep_rows), np.flatnonzero(plan.keep_cols), indexing="ij")
+        rc, cc = np.meshgrid(np.arange(plan.size[1]), np.arange(plan.size[0]), indexing="ij")
+        got = rays(crop, cc.ravel(), rc.ravel() + b * plan.size[1])
+        want = rays(full, c.ravel(), r.ravel() + b * plan.full_size[1])
+        assert not np.isnan(want).any() and np.allclose(got, want, atol=1e-9), b
 
 
 def test_layout_independence_of_switches():
@@ -235,6 +261,20 @@ def test_cropped_render_is_identical_point_sampled(quarter_scene, grid, mode):
     assert np.array_equal(full.h3d, crop.h3d)
     # Negative control: the same crop without the paste's fill is not the full image.
     assert not np.array_equal(full.h3d, np.where(crop.h3d == full.h3d[0, 0], 0, crop.h3d))
+
+
+@pytest.mark.parametrize("mode", ["auto", "measure"])
+def test_cropped_render_is_identical_with_footprint_samples(quarter_scene, mode):
+    # Footprint samples (quality high) trace one cropped bank per sample; the reach covers the
+    # pixel's angular width too, so every sample that meets an object is traced.
+    la = ARRAYS["square"]
+    st_ = RenderSettings(quality=Quality(footprint=6, seed=3), use_cache=False)
+    full = run_method("multi-ortho", quarter_scene, la, st_)
+    crop = run_method("multi-ortho", quarter_scene, la, st_, crop=CropSettings(mode, SCENE_BOX))
+    assert crop.crop["applied"] and crop.crop["traced_fraction"] < 0.7, crop.crop
+    assert np.array_equal(full.h3d, crop.h3d)
+    point = run_method("multi-ortho", quarter_scene, la, RenderSettings(quality="draft", use_cache=False))
+    assert not np.array_equal(point.h3d, crop.h3d)   # the samples were traced, not the centre ray alone
 
 
 @pytest.mark.parametrize("quality", ["normal", Quality(antialias=0.3, aa_method=1, aa_depth=2)],

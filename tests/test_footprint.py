@@ -2,15 +2,25 @@ import numpy as np
 import pytest
 
 from povh3d.colour import decode, encode, linear_to_srgb, mean_in_linear_light, srgb_to_linear
-from povh3d.footprint import angular_grid, latin_hypercube
+from povh3d.footprint import GRID, angular_grid, latin_hypercube
 
 
 def test_angular_grid_cuts_the_pixel_angle_into_equal_cells():
     g = angular_grid(3)
     assert g.shape == (9, 4)
     assert np.all(g[:, :2] == 0)  # the aperture is left to antialiasing
-    np.testing.assert_allclose(sorted(set(g[:, 2])), [-1 / 3, 0, 1 / 3], atol=1e-15)
+    # Cell centres, on the 1/2048 grid that keeps mesh-camera corners exact in float32.
+    np.testing.assert_allclose(sorted(set(g[:, 2])), [-1 / 3, 0, 1 / 3], atol=0.5 / GRID)
+    assert np.array_equal(g * GRID, np.round(g * GRID))
     np.testing.assert_array_equal(angular_grid(1), np.zeros((1, 4)))
+
+
+@pytest.mark.parametrize("count", [3, 7, 64, 2048])
+def test_latin_hypercube_samples_sit_on_the_grid(count):
+    s = latin_hypercube(count, seed=5)
+    assert np.array_equal(s * GRID, np.round(s * GRID))
+    with pytest.raises(ValueError, match="1 to 2048"):
+        latin_hypercube(GRID + 1)
 
 
 @pytest.mark.parametrize("count", [1, 7, 64])

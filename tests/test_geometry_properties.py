@@ -17,7 +17,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from povh3d.cameras import (TIE_SHIFT, MIN_CLEARANCE, POVRAY_MAX_DEPTH, camera_mesh, check_clearance,
-                            default_back_off, ortho_view_frames, pinhole_frames, ray_stretch,
+                            bank_back_off, default_back_off, ortho_view_frames, pinhole_frames, ray_stretch,
                             view_bank_mesh)
 from povh3d.errors import ConfigError
 from povh3d.geometry import LensArray, Panel, pixel_rays
@@ -176,6 +176,7 @@ def test_scaling_by_a_power_of_two_is_exact(la, exponent):
 
 def _corner_hits(mesh):
     """Where each vertex's ray (origin, normal) crosses z = 0, and the unit normals."""
+    mesh = mesh.in_mm()
     n = mesh.normals / np.linalg.norm(mesh.normals, axis=-1, keepdims=True)
     t = -mesh.vertices[:, 2] / n[:, 2]
     return mesh.vertices[:, :2] + t[:, None] * n[:, :2], n
@@ -189,13 +190,19 @@ def test_view_bank_mesh_corner_rays_cross_the_lens_grid(la):
     mesh = view_bank_mesh(la, back_off)
     for a in (mesh.vertices, mesh.normals, mesh.uvs):
         assert np.isfinite(a).all()
-    assert np.all(mesh.vertices[:, 2] == -back_off)
+    # Rays start at the clearance rounded up to a multiple of f lcm(Nx, Ny), never nearer.
+    start = bank_back_off(la, back_off)
+    unit = la.focal * math.lcm(*la.views)
+    assert back_off <= start < back_off + unit * (1 + 1e-9)
+    assert np.all(mesh.in_mm().vertices[:, 2] == -start)
+    # ... so every corner, in lens pitches, is stored exactly in POV-Ray's single precision.
+    assert np.array_equal(mesh.vertices[:, :2].astype(np.float32).astype(float), mesh.vertices[:, :2])
     hit, n = _corner_hits(mesh)
     c = la.lens_centres()
     left, right = c[0, 0, 0] - la.pitch_x / 2, c[0, -1, 0] + la.pitch_x / 2
     top, bottom = c[0, 0, 1] + la.pitch_y / 2, c[-1, 0, 1] - la.pitch_y / 2
     expect = np.tile([[left, bottom], [right, bottom], [right, top], [left, top]], (len(hit) // 4, 1))
-    scale = np.abs(mesh.vertices[:, :2]).max() + np.abs(expect).max()
+    scale = np.abs(mesh.in_mm().vertices[:, :2]).max() + np.abs(expect).max()
     np.testing.assert_allclose(hit, expect, rtol=0, atol=16 * np.finfo(float).eps * scale)
     # One direction per view, the view's own.
     np.testing.assert_allclose(n.reshape(-1, 4, 3), np.repeat(la.view_directions().reshape(-1, 1, 3), 4, 1),
@@ -250,7 +257,8 @@ def _float32_crossing_error(la):
     mesh = view_bank_mesh(la, default_back_off(la))
     exact, _ = _corner_hits(mesh)
     stored = type(mesh)(mesh.vertices.astype(np.float32).astype(float),
-                        mesh.normals.astype(np.float32).astype(float), mesh.uvs, mesh.faces, mesh.image_size)
+                        mesh.normals.astype(np.float32).astype(float), mesh.uvs, mesh.faces, mesh.image_size,
+                        mesh.scale)
     hit, _ = _corner_hits(stored)
     return float(np.abs(hit - exact).max())
 
