@@ -238,21 +238,25 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
                       tuple(float(a) for a in scale))
 
 
-# Faces per mesh-camera frame.  POV-Ray 3.7 finds a pixel's face by scanning a
-# bit set of every face (32 per step), so a frame of many stacked banks costs
-# more per ray: with 64 views, 8 banks took 38 ms a bank and 128 banks 88 ms.
-MAX_FRAME_FACES = 2048
+# How many footprint banks go into one mesh-camera frame.  POV-Ray 3.7 finds a
+# ray's face by scanning every face of the mesh (measured with 64 views at 480x272:
+# 38 ms a bank with 8 banks a frame, 88 ms with 128, about 2.5e-11 s per face per
+# ray), while each further frame of a run costs about 0.25 s (parse, start of frame).
+# The banks per frame that minimise the sum: sqrt(FRAME_SECONDS / (rays x faces x SCAN_SECONDS)).
+FRAME_SECONDS = 0.25
+SCAN_SECONDS = 2.5e-11
 
 
-def bank_groups(samples: np.ndarray, faces_per_bank: int) -> list[np.ndarray]:
+def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) -> list[np.ndarray]:
     """Footprint samples split into equal groups, one mesh-camera frame each.
 
-    The groups are as large as ``MAX_FRAME_FACES`` allows and all of one size
-    (a batch's frames share one image size): the largest divisor of the count.
+    All groups have one size (a batch's frames share one image size): the largest
+    divisor of the count not above the cheapest size (see ``FRAME_SECONDS``), so a
+    small probe takes 64 banks a frame, a 480x272 panel 16 and a 1920x1088 one 4.
     """
     samples = np.asarray(samples, dtype=np.float64).reshape(-1, 4)
-    most = max(1, MAX_FRAME_FACES // max(1, faces_per_bank))
-    size = max(d for d in range(1, min(most, len(samples)) + 1) if len(samples) % d == 0)
+    best = math.sqrt(FRAME_SECONDS / (SCAN_SECONDS * max(1, rays_per_bank) * max(1, faces_per_bank)))
+    size = max(d for d in range(1, min(max(1, int(best)), len(samples)) + 1) if len(samples) % d == 0)
     return [samples[i:i + size] for i in range(0, len(samples), size)]
 
 

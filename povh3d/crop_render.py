@@ -51,7 +51,8 @@ def coverage_mask(scene: Scene, lens_array: LensArray, back_off: float, settings
                   header: dict[str, Any], samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
     """(Ny*Ly, Nx*Lx) bool: the tiled image's pixels one of whose ``samples`` meets an object."""
     ny, nx = lens_array.require_views()
-    meshes = [view_bank_mesh(lens_array, back_off, group) for group in bank_groups(samples, 2 * ny * nx)]
+    rays = lens_array.lenses_x * lens_array.lenses_y * nx * ny
+    meshes = [view_bank_mesh(lens_array, back_off, group) for group in bank_groups(samples, 2 * ny * nx, rays)]
     batch = mesh_camera_batch("coverage.pov.j2", meshes, COVERAGE_OPTIONS)
     images, stats = render_frames(scene, batch, settings, method="multi-ortho coverage", header=header)
     alpha = stack_frames(images)[..., -1]
@@ -126,7 +127,7 @@ def _render_plan(scene: Scene, lens_array: LensArray, back_off: float, settings:
                  ) -> tuple[np.ndarray, RenderStats]:
     faces_per_bank = 2 * len(plan.col_segments()) * len(plan.row_segments())
     meshes = [cropped_view_bank_mesh(lens_array, back_off, plan, group)
-              for group in bank_groups(samples, faces_per_bank)]
+              for group in bank_groups(samples, faces_per_bank, plan.size[0] * plan.size[1])]
     batch = mesh_camera_batch("multi_ortho.pov.j2", meshes)
     images, stats = render_frames(scene, batch, settings, method="multi-ortho", header=header,
                                   progress=progress)

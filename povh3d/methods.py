@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from .colour import mean_in_linear_light
-from .cameras import (bank_groups, camera_mesh, check_clearance, default_back_off, ortho_view_frames,
-                      pinhole_frames, stack_frames, view_bank_mesh)
+from .cameras import (bank_back_off, bank_groups, camera_mesh, check_clearance, default_back_off,
+                      ortho_view_frames, pinhole_frames, stack_frames, view_bank_mesh)
 from .errors import ConfigError
 from .crop import CropSettings
 from .crop_render import render_cropped_tiles
@@ -46,8 +46,8 @@ def _multi_ortho_batch(lens_array: LensArray, back_off: float, samples: np.ndarr
         return mesh_camera_batch("multi_ortho.pov.j2", [camera_mesh(lens_array, back_off)])
     # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
     ny, nx = lens_array.views
-    return mesh_camera_batch("multi_ortho.pov.j2", [view_bank_mesh(lens_array, back_off, group)
-                                                    for group in bank_groups(samples, 2 * ny * nx)])
+    groups = bank_groups(samples, 2 * ny * nx, lens_array.lenses_x * lens_array.lenses_y * nx * ny)
+    return mesh_camera_batch("multi_ortho.pov.j2", [view_bank_mesh(lens_array, back_off, g) for g in groups])
 
 
 def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarray:
@@ -167,6 +167,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         raise ConfigError(f"method {name!r} takes no option {', '.join(unknown)}; "
                           f"drop it or pick a method that does")
     back_off = settings.back_off or method.default_back_off(lens_array)
+    if name == "multi-ortho" and lens_array.views:
+        back_off = bank_back_off(lens_array, back_off)  # where its rays really start (the sidecar's figure)
     extra = {"back_off": back_off, **options} if method.options else {}
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if quality != settings.spec:

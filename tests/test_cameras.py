@@ -151,3 +151,23 @@ def test_view_bank_mesh_stacks_one_bank_per_footprint_sample(la):
         np.testing.assert_allclose(n / n[..., 2:] * la.focal, expected, atol=1e-12)
         hit = o[..., :2] - o[..., 2:] / n[..., 2:] * n[..., :2]
         _assert_hits_lens_centres(la, hit - np.array([ax * la.pitch_x, ay * la.pitch_y]), centres)
+
+
+@pytest.mark.parametrize("count, faces, rays, size", [
+    (256, 128, 16 * 12 * 64, 64),      # the --quality auto probe: few rays, few frames
+    (256, 128, 60 * 34 * 64, 16),      # 480x272
+    (256, 128, 240 * 136 * 64, 4),     # 1920x1088: many rays, short face scans
+    (49, 128, 60 * 34 * 64, 7), (7, 128, 60 * 34 * 64, 7), (1, 10_000, 10**7, 1), (13, 10**6, 10**7, 1)])
+def test_bank_groups_split_samples_into_equal_frames_by_cost(count, faces, rays, size):
+    # POV-Ray scans every face of a mesh camera per ray and a further frame costs a fixed
+    # time: the groups take the cheapest size, equal for all frames (a divisor of the count).
+    from povh3d.cameras import FRAME_SECONDS, SCAN_SECONDS, bank_groups
+    from povh3d.footprint import latin_hypercube
+
+    samples = latin_hypercube(count, seed=2)
+    groups = bank_groups(samples, faces, rays)
+    assert {len(g) for g in groups} == {size}
+    assert np.array_equal(np.concatenate(groups), samples)
+    cost = lambda g: count / g * FRAME_SECONDS + count * rays * g * faces * SCAN_SECONDS  # noqa: E731
+    divisors = [d for d in range(1, count + 1) if count % d == 0]
+    assert cost(size) <= 2 * min(cost(d) for d in divisors)

@@ -97,3 +97,19 @@ def test_auto_needs_a_target_and_a_target_needs_auto():
         RenderSettings(quality="auto")
     with pytest.raises(ConfigError, match="--quality auto"):
         RenderSettings(quality="normal", max_error_db=30)
+
+
+def test_probe_reference_is_10_db_better_than_the_target_where_256_samples_allow():
+    # Two 256-sample references differ by 43.4 dB (bench), each ~46.4 dB from the converged
+    # image, 3 dB per halving: the probe takes the fewest samples 10 dB under the target.
+    from povh3d.quality_bench import probe_reference_samples
+
+    def error_db(n):
+        return 46.4 - 3.0 * np.log2(256 / n)
+
+    targets = [15, 25, 29, 30, 33, 35, 38, 45]
+    samples = [probe_reference_samples(t) for t in targets]
+    assert samples == sorted(samples) and set(samples) <= {32, 64, 128, 256}
+    for t, n in zip(targets, samples):
+        assert n == 256 or error_db(n) >= t + 10
+        assert n == 32 or error_db(n // 2) < t + 10          # and no more than that
