@@ -122,7 +122,7 @@ class CameraMesh:
     a transform of the mesh (``scale <sx, sy, sz>``, applied in double
     precision: POV-Ray moves origins by it and directions by its inverse, as
     surface normals): view banks are written in lens-pitch units, where every
-    corner is a multiple of 1/1024 and so stored exactly.
+    corner is a multiple of 1/GRID (``footprint.GRID``) and so stored exactly.
 
     Attributes
     ----------
@@ -260,6 +260,28 @@ def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) ->
     return [samples[i:i + size] for i in range(0, len(samples), size)]
 
 
+def view_bank_frames(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None,
+                     plan=None) -> list[CameraMesh]:
+    """The meshes of the frames that trace a view bank per footprint sample (``bank_groups``):
+    ``view_bank_mesh`` for each group, or ``cropped_view_bank_mesh`` over ``plan``'s tiles."""
+    cols, rows, size = _bank_tiles(lens_array, plan)
+    samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
+    groups = bank_groups(samples, 2 * len(cols) * len(rows), size[0] * size[1])
+    return [_bank_mesh(lens_array, back_off, group, cols, rows, size) for group in groups]
+
+
+def _bank_tiles(lens_array: LensArray, plan) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+    """Column and row segments ``(view, first lens, stop lens, image column/row)`` and the
+    image size of one bank: whole views, or the tiles a ``crop.CropPlan`` keeps."""
+    if plan is not None:
+        return plan.col_segments(), plan.row_segments(), plan.size
+    ny, nx = lens_array.require_views()
+    lx, ly = lens_array.lenses_x, lens_array.lenses_y
+    cols = np.array([(k, 0, lx, k * lx) for k in range(nx)])
+    rows = np.array([(l, 0, ly, l * ly) for l in range(ny)])
+    return cols, rows, (lx * nx, ly * ny)
+
+
 def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None) -> CameraMesh:
     """The orthographic camera bank as one mesh camera: one quad per view.
 
@@ -280,11 +302,7 @@ def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray |
         K samples of every pixel come out of one POV-Ray pass.  Default: the
         pixel's own ray.
     """
-    ny, nx = lens_array.require_views()
-    lx, ly = lens_array.lenses_x, lens_array.lenses_y
-    cols = np.array([(k, 0, lx, k * lx) for k in range(nx)])
-    rows = np.array([(l, 0, ly, l * ly) for l in range(ny)])
-    return _bank_mesh(lens_array, back_off, samples, cols, rows, (lx * nx, ly * ny))
+    return _bank_mesh(lens_array, back_off, samples, *_bank_tiles(lens_array, None))
 
 
 def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan,
@@ -297,14 +315,14 @@ def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan,
     Every corner is exact in single precision (``bank_back_off``), so a kept
     pixel gets the very ray, to double rounding, that the uncropped mesh gives it.
     """
-    return _bank_mesh(lens_array, back_off, samples, plan.col_segments(), plan.row_segments(), plan.size)
+    return _bank_mesh(lens_array, back_off, samples, *_bank_tiles(lens_array, plan))
 
 
 def bank_back_off(lens_array: LensArray, back_off: float) -> float:
     """The front clearance a view bank uses: ``back_off`` rounded up to a multiple of ``f * lcm(Nx, Ny)``.
 
     Then every view's origin shift ``u * back_off / f``, in lens pitches, is a
-    multiple of 1/2 (times the sample's 1/1024 grid), so the bank's corners,
+    multiple of 1/2 (times the samples' 1/GRID grid), so the bank's corners,
     written in lens pitches, are exact in POV-Ray's single precision.
     """
     ny, nx = lens_array.require_views()
@@ -319,7 +337,7 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     ``cols``/``rows`` are ``(n, 4)``: ``(view, first lens, stop lens, image column/row)``.
     Vertices are in lens pitches (x, y) and mm (z), the mesh scaled by ``(px, py, 1)``:
     a corner ``j`` lenses from the array's centre, shifted by the view's origin
-    offset, is a multiple of 1/1024 and stored exactly (see ``CameraMesh``).
+    offset, is a multiple of 1/GRID and stored exactly (see ``CameraMesh``).
     """
     ny, nx = lens_array.require_views()
     back_off = bank_back_off(lens_array, back_off)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .cameras import bank_groups, cropped_view_bank_mesh, stack_frames, view_bank_mesh
+from .cameras import stack_frames, view_bank_frames
 from .crop import (CropPlan, CropSettings, bbox_hits, fill_colour, layout_independent, mask_hits, paste,
                    plan_crop)
 from .errors import InputError
@@ -50,10 +50,7 @@ class CroppedTiles:
 def coverage_mask(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
                   header: dict[str, Any], samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
     """(Ny*Ly, Nx*Lx) bool: the tiled image's pixels one of whose ``samples`` meets an object."""
-    ny, nx = lens_array.require_views()
-    rays = lens_array.lenses_x * lens_array.lenses_y * nx * ny
-    meshes = [view_bank_mesh(lens_array, back_off, group) for group in bank_groups(samples, 2 * ny * nx, rays)]
-    batch = mesh_camera_batch("coverage.pov.j2", meshes, COVERAGE_OPTIONS)
+    batch = mesh_camera_batch("coverage.pov.j2", view_bank_frames(lens_array, back_off, samples), COVERAGE_OPTIONS)
     images, stats = render_frames(scene, batch, settings, method="multi-ortho coverage", header=header)
     alpha = stack_frames(images)[..., -1]
     return (alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0), stats
@@ -125,10 +122,7 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
 def _render_plan(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
                  plan: CropPlan, header: dict[str, Any], progress: Progress | None, samples: np.ndarray
                  ) -> tuple[np.ndarray, RenderStats]:
-    faces_per_bank = 2 * len(plan.col_segments()) * len(plan.row_segments())
-    meshes = [cropped_view_bank_mesh(lens_array, back_off, plan, group)
-              for group in bank_groups(samples, faces_per_bank, plan.size[0] * plan.size[1])]
-    batch = mesh_camera_batch("multi_ortho.pov.j2", meshes)
+    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples, plan))
     images, stats = render_frames(scene, batch, settings, method="multi-ortho", header=header,
                                   progress=progress)
     return stack_frames(images), stats

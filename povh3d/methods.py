@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from .colour import mean_in_linear_light
-from .cameras import (bank_back_off, bank_groups, camera_mesh, check_clearance, default_back_off,
-                      ortho_view_frames, pinhole_frames, stack_frames, view_bank_mesh)
+from .cameras import (bank_back_off, camera_mesh, check_clearance, default_back_off, ortho_view_frames,
+                      pinhole_frames, stack_frames, view_bank_frames)
 from .errors import ConfigError
 from .crop import CropSettings
 from .crop_render import render_cropped_tiles
@@ -45,9 +45,7 @@ def _multi_ortho_batch(lens_array: LensArray, back_off: float, samples: np.ndarr
     if not lens_array.views:  # fractional PPL: one quad per lens
         return mesh_camera_batch("multi_ortho.pov.j2", [camera_mesh(lens_array, back_off)])
     # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
-    ny, nx = lens_array.views
-    groups = bank_groups(samples, 2 * ny * nx, lens_array.lenses_x * lens_array.lenses_y * nx * ny)
-    return mesh_camera_batch("multi_ortho.pov.j2", [view_bank_mesh(lens_array, back_off, g) for g in groups])
+    return mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples))
 
 
 def _multi_ortho_assemble(lens_array: LensArray, images: list[np.ndarray]) -> np.ndarray:

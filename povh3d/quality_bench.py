@@ -156,8 +156,9 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     central lenses; unchanged (and None) for any other quality.
 
     The probe renders a footprint reference of the probe (cached like any render;
-    ``probe_reference_samples`` for the target), then the ladder in order until one setting meets the target; a ConfigError
-    if none does.  Methods without footprint samples stop at antialiasing.
+    ``probe_reference_samples`` for the target), then the ladder in order until
+    one setting meets the target; a ConfigError if none does.  Methods without
+    footprint samples stop at antialiasing.
     """
     if settings.quality != AUTO:
         return settings, None
