@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from povh3d.calibration.lattice import calibrate
-from povh3d.calibration.synth import WhiteSpec, render_white, to_uint, true_centres
+from tests.support.synth import WhiteSpec, render_white, to_uint, true_centres
 
 REPO = Path(__file__).resolve().parents[1]
 CASES = {

@@ -23,10 +23,11 @@ from pathlib import Path
 import numpy as np
 from distributed import LocalCluster
 
-from povh3d.api import render
-from povh3d.geometry import LensArray, Panel
-from povh3d.imageio import read_png
-from povh3d.render import cpu_count, RenderSettings
+from povh3d.app.render import render
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.image.io import read_png
+from povh3d.system import cpu_count
+from povh3d.engine.quality import RenderSettings
 
 REPO = Path(__file__).resolve().parents[1]
 SCENE = REPO / "sample_models" / "sample.pov"

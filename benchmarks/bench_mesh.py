@@ -22,12 +22,12 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from povh3d.povray import PovrayJob, run_jobs
+from povh3d.povray.process import PovrayJob, run_jobs
 
 CHILD = """
 import json, resource, sys, time
 t = time.perf_counter()
-from povh3d.mesh import convert_mesh
+from povh3d.app.convert_mesh import convert_mesh
 r = convert_mesh(sys.argv[1], sys.argv[2])
 seconds = time.perf_counter() - t
 print(json.dumps({"seconds": seconds, "triangles": r.triangles, "vertices": r.vertices,

@@ -14,11 +14,11 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from povh3d.api import render
-from povh3d.geometry import LensArray, Panel
-from povh3d.quality_bench import default_trials, format_table, run_bench, write_report
-from povh3d.render import RenderSettings
-from povh3d.scene import load_scene
+from povh3d.app.render import render
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.app.bench import default_trials, format_table, run_bench, write_report
+from povh3d.engine.quality import RenderSettings
+from povh3d.scene.scene import load_scene
 
 REPO = Path(__file__).resolve().parents[1]
 SCENE = REPO / "sample_models" / "fine_texture.pov"

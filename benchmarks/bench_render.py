@@ -20,13 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from povh3d.geometry import LensArray
-from povh3d.interleave import interleave
-from povh3d.methods import METHODS, run_method
-from povh3d.povray import PovrayJob, find_povray, run_jobs
-from povh3d.presets import get_preset, lens_array_from_fields, merge_overrides
-from povh3d.render import QUALITY_OPTIONS, RenderSettings, cpu_count
-from povh3d.scene import load_scene
+from povh3d.geometry.lens_array import LensArray
+from povh3d.image.interleave import interleave
+from povh3d.engine.methods import METHODS, run_method
+from povh3d.povray.process import PovrayJob, find_povray, run_jobs
+from povh3d.geometry.presets import get_preset, lens_array_from_fields, merge_overrides
+from povh3d.engine.quality import QUALITY_OPTIONS, RenderSettings
+from povh3d.system import cpu_count
+from povh3d.scene.scene import load_scene
 
 REPO = Path(__file__).resolve().parents[1]
 CASES = {

@@ -28,11 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
-from povh3d.crop import CropSettings
-from povh3d.methods import run_method
-from povh3d.presets import get_preset, lens_array_from_fields, merge_overrides
-from povh3d.render import RenderSettings, cpu_count
-from povh3d.scene import load_scene
+from povh3d.geometry.crop import CropSettings
+from povh3d.engine.methods import run_method
+from povh3d.geometry.presets import get_preset, lens_array_from_fields, merge_overrides
+from povh3d.engine.quality import RenderSettings
+from povh3d.system import cpu_count
+from povh3d.scene.scene import load_scene
 
 REPO = Path(__file__).resolve().parents[1]
 

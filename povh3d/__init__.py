@@ -1,3 +1,53 @@
-"""povh3d: holoscopic 3D (integral imaging) images rendered with POV-Ray."""
+"""povh3d: holoscopic 3D (integral imaging, light-field) images rendered with POV-Ray.
 
-__version__ = "0.1.0"
+    import povh3d
+    povh3d.render("scene.pov", "out.png", preset="demo", quality="draft")
+    array = povh3d.presets.lens_array("demo", ppl=6)
+    povh3d.render("scene.pov", "out6.png", lens_array=array)
+
+The names below are loaded when first used, so ``import povh3d`` (and the
+``povh3d`` command's start-up) costs nothing until a render is asked for.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from ._version import __version__
+
+if TYPE_CHECKING:  # what type checkers and editors see
+    from .app.api import render
+    from .app.request import ModelOptions, RenderRequest
+    from .app.animation import FrameRange
+    from .engine.quality import Quality, RenderSettings
+    from .errors import ConfigError, InputError, OutputError, Povh3dError, PovrayError
+    from .geometry import presets
+    from .geometry.crop import CropSettings
+    from .geometry.lens_array import LensArray, Panel
+
+_PUBLIC = {
+    "render": "povh3d.app.api",
+    "RenderRequest": "povh3d.app.request", "ModelOptions": "povh3d.app.request",
+    "FrameRange": "povh3d.app.animation",
+    "Quality": "povh3d.engine.quality", "RenderSettings": "povh3d.engine.quality",
+    "CropSettings": "povh3d.geometry.crop",
+    "LensArray": "povh3d.geometry.lens_array", "Panel": "povh3d.geometry.lens_array",
+    "Povh3dError": "povh3d.errors", "ConfigError": "povh3d.errors", "InputError": "povh3d.errors",
+    "OutputError": "povh3d.errors", "PovrayError": "povh3d.errors",
+}
+_MODULES = {"presets": "povh3d.geometry.presets"}
+
+__all__ = ["__version__", *_PUBLIC, *_MODULES]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _MODULES:
+        return importlib.import_module(_MODULES[name])
+    if name in _PUBLIC:
+        return getattr(importlib.import_module(_PUBLIC[name]), name)
+    raise AttributeError(f"module 'povh3d' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

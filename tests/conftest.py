@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from povh3d.geometry import LensArray, Panel
+from povh3d.geometry.lens_array import LensArray, Panel
 
 
 def square_array(lx: int = 8, ly: int = 6, nx: int = 4, ny: int = 4, s: float = 0.1, f: float = 1.5) -> LensArray:

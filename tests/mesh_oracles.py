@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from povh3d.mesh.raster import Window
-from povh3d.povray import PovrayJob, run_jobs
+from povh3d.povray.process import PovrayJob, run_jobs
 
 _VEC = re.compile(r"<([^<>]*)>")
 
@@ -91,6 +91,6 @@ object {{ {ident} }}
 
 
 def _read(path: Path) -> np.ndarray:
-    from povh3d.imageio import read_png
+    from povh3d.image.io import read_png
 
     return read_png(path)

@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from povh3d.animation import (FrameRange, frame_path, parse_clock, parse_frames,
-                              render_animation, scene_uses_clock)
-from povh3d.cli import main
+from povh3d.app.animation import FrameRange, frame_path, parse_clock, parse_frames
+from tests.support.render import render_animation
+from povh3d.cli.main import main
 from povh3d.errors import ConfigError, PovrayError
-from povh3d.imageio import read_png
-from povh3d.render import RenderSettings
-from povh3d.scene import load_scene
-from povh3d.video import VIDEO_WRITERS, write_video
+from povh3d.image.io import read_png
+from povh3d.engine.quality import RenderSettings
+from povh3d.scene.scene import load_scene
+from povh3d.image.video import VIDEO_WRITERS, write_video
 from tests.conftest import square_array
 
 DRAFT = RenderSettings(quality="draft")
@@ -79,10 +79,10 @@ def test_clock_detection(tmp_path: Path) -> None:
     (tmp_path / "moves.inc").write_text("#declare X = frame_number;\n")
     nested = write_scene(tmp_path, "nested.pov", "rgb 1", '#include "moves.inc"')
     system = write_scene(tmp_path, "system.pov", "rgb 1", '#include "colors.inc"')
-    assert scene_uses_clock(load_scene(uses))
-    assert not scene_uses_clock(load_scene(ignores))
-    assert scene_uses_clock(load_scene(nested))
-    assert not scene_uses_clock(load_scene(system), "/usr/bin/povray")
+    assert load_scene(uses).uses_clock
+    assert not load_scene(ignores).uses_clock
+    assert load_scene(nested).uses_clock
+    assert not load_scene(system).uses_clock
 
 
 # -- rendering -------------------------------------------------------------------
@@ -192,7 +192,7 @@ def test_video_round_trip(tmp_path: Path, suffix: str) -> None:
 
 
 def test_video_16_bit_and_bad_input(tmp_path: Path) -> None:
-    from povh3d.video import to_rgb8
+    from povh3d.image.video import to_rgb8
 
     assert to_rgb8(np.array([[[0, 32896, 65535]]], np.uint16)).tolist() == [[[0, 128, 255]]]
     with pytest.raises(ConfigError):

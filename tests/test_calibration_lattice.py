@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 
 from povh3d.calibration.gridfile import Grid, read_grid, write_grid
 from povh3d.calibration.lattice import calibrate
-from povh3d.calibration.synth import WhiteSpec, render_white, to_uint, true_centres
+from tests.support.synth import WhiteSpec, render_white, to_uint, true_centres
 from povh3d.errors import InputError
 
 ROTATIONS = [0.0, 0.1, 0.3, 6.34, 9.46]

@@ -13,7 +13,7 @@ from povh3d.calibration.borders import correct_borders
 from povh3d.calibration.distortion import Brown, undistort_image
 from povh3d.calibration.equalise import default_size, equalise
 from povh3d.calibration.lattice import calibrate
-from povh3d.calibration.synth import WhiteSpec, render_white
+from tests.support.synth import WhiteSpec, render_white
 from povh3d.calibration.viewpoints import viewpoints
 from povh3d.errors import ConfigError
 

@@ -13,15 +13,15 @@ import json
 import numpy as np
 import pytest
 
-from povh3d.api import render
+from tests.support.render import render
 from povh3d.calibration.gridfile import grid_for_lens_array, write_grid
 from povh3d.calibration.lattice import calibrate
 from povh3d.calibration.stitch import find_shift, stitch
-from povh3d.calibration.synth import WhiteSpec, render_white, to_uint
-from povh3d.cli import main
+from tests.support.synth import WhiteSpec, render_white, to_uint
+from povh3d.cli.main import main
 from povh3d.errors import InputError
-from povh3d.imageio import read_png, write_png
-from povh3d.render import RenderSettings
+from povh3d.image.io import read_png, write_png
+from povh3d.engine.quality import RenderSettings
 
 from .conftest import square_array
 

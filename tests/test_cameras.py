@@ -8,8 +8,8 @@ interpolates position and normal barycentrically.
 import numpy as np
 import pytest
 
-from povh3d.cameras import camera_mesh, ortho_view_frames, pinhole_frames
-from povh3d.geometry import pixel_rays
+from povh3d.geometry.cameras import camera_mesh, ortho_view_frames, pinhole_frames
+from povh3d.geometry.lens_array import pixel_rays
 
 from .conftest import lenticular_array, square_array
 
@@ -110,8 +110,8 @@ def test_pinhole_pixels_look_along_view_directions():
 @pytest.mark.parametrize("la", [square_array(lx=6, ly=4, nx=4, ny=3), lenticular_array(lx=5, rows=7, nx=6)],
                          ids=["square", "lenticular"])
 def test_view_bank_mesh_traces_every_view_pixel(la):
-    from povh3d.cameras import view_bank_mesh
-    from povh3d.interleave import interleave, untile_views
+    from povh3d.geometry.cameras import view_bank_mesh
+    from povh3d.image.interleave import interleave, untile_views
 
     mesh = view_bank_mesh(la, 40.0)
     origin, normal, margin, inside_face = (a[1:, :-1] for a in _simulate_mesh_camera(mesh))
@@ -134,9 +134,9 @@ def test_view_bank_mesh_traces_every_view_pixel(la):
 def test_view_bank_mesh_stacks_one_bank_per_footprint_sample(la):
     # Bank b traces the ray of CONVENTIONS' pixel footprint sample b: through
     # c + (ax*px, ay*py) with direction (u + du*s, v + dv*s, f).
-    from povh3d.cameras import view_bank_mesh
-    from povh3d.footprint import latin_hypercube
-    from povh3d.interleave import interleave, untile_views
+    from povh3d.geometry.cameras import view_bank_mesh
+    from povh3d.geometry.footprint import latin_hypercube
+    from povh3d.image.interleave import interleave, untile_views
 
     samples = latin_hypercube(3, seed=7)
     mesh = view_bank_mesh(la, 40.0, samples)
@@ -161,8 +161,8 @@ def test_view_bank_mesh_stacks_one_bank_per_footprint_sample(la):
 def test_bank_groups_split_samples_into_equal_frames_by_cost(count, faces, rays, size):
     # POV-Ray scans every face of a mesh camera per ray and a further frame costs a fixed
     # time: the groups take the cheapest size, equal for all frames (a divisor of the count).
-    from povh3d.cameras import FRAME_SECONDS, SCAN_SECONDS, bank_groups
-    from povh3d.footprint import latin_hypercube
+    from povh3d.geometry.cameras import FRAME_SECONDS, SCAN_SECONDS, bank_groups
+    from povh3d.geometry.footprint import latin_hypercube
 
     samples = latin_hypercube(count, seed=2)
     groups = bank_groups(samples, faces, rays)

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from povh3d.cli import main
-from povh3d.imageio import read_png
+from povh3d.cli.main import main
+from povh3d.image.io import read_png
 
 from .scenes import write_textured_scene
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from povh3d.colour import decode, encode, linear_to_srgb, mean_in_linear_light, srgb_to_linear
+from povh3d.image.colour import decode, encode, linear_to_srgb, mean_in_linear_light, srgb_to_linear
 
 
 @pytest.mark.parametrize("code", [np.uint8, np.uint16])

@@ -9,17 +9,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from povh3d import render as render_module
-from povh3d.cameras import cropped_view_bank_mesh, default_back_off, view_bank_mesh
-from povh3d.crop import (CropPlan, CropSettings, bbox_hits, cut_mask, fill_colour, full_plan,
-                         layout_independent, mask_hits, parse_bbox, paste, plan_crop)
+from povh3d.geometry.cameras import cropped_view_bank_mesh, default_back_off, view_bank_mesh
+from povh3d.geometry.crop import (CropPlan, CropSettings, bbox_hits, cut_mask, fill_colour, full_plan,
+    layout_independent, mask_hits, parse_bbox, paste, plan_crop)
 from povh3d.errors import ConfigError, InputError
-from povh3d.footprint import latin_hypercube
-from povh3d.geometry import pixel_rays
-from povh3d.interleave import extract, interleave, untile_views
-from povh3d.methods import run_method
-from povh3d.render import FrameBatch, Quality, RenderSettings, render_frames
-from povh3d.scene import load_scene
+from povh3d.geometry.footprint import latin_hypercube
+from povh3d.geometry.lens_array import pixel_rays
+from povh3d.image.interleave import extract, interleave, untile_views
+from povh3d.engine.methods import run_method
+from povh3d.engine.frames import FrameBatch, render_frames
+from povh3d.engine.quality import Quality, RenderSettings
+from povh3d.scene.scene import load_scene
 
 from .conftest import lenticular_array, square_array
 
@@ -227,12 +227,10 @@ sphere { <1, 0.5, 1>, 2.5
 """
 AA_BOX = ((-1.5, -2, -1.5), (3.5, 3, 3.5))
 AA_ARRAY = square_array(lx=96, ly=64, nx=4, ny=4, s=0.1, f=2.0)
-AA_OPTIONS = ("+A0.3", "+AM1", "+R2", "-J")
 
 
 @pytest.fixture()
-def aa_scene(tmp_path, monkeypatch):
-    monkeypatch.setitem(render_module.QUALITY_OPTIONS, "normal", AA_OPTIONS)
+def aa_scene(tmp_path):
     path = tmp_path / "aa.pov"
     path.write_text(AA_SCENE)
     return load_scene(path)
@@ -280,7 +278,7 @@ def test_cropped_render_is_identical_with_footprint_samples(quarter_scene, mode)
 def test_footprint_banks_split_over_frames_give_the_same_image(quarter_scene, monkeypatch):
     # Banks of footprint samples go to POV-Ray a few per frame (cameras.bank_groups, the
     # template's #switch on frame_number); stacked back in order they are the one-frame render.
-    import povh3d.cameras as cameras
+    import povh3d.geometry.cameras as cameras
     la = ARRAYS["square"]
     st_ = RenderSettings(quality=Quality(footprint=6, seed=3), use_cache=False)
     one = run_method("multi-ortho", quarter_scene, la, st_)
@@ -320,7 +318,7 @@ def test_crop_refused_where_pixels_could_change(quarter_scene, tmp_path, monkeyp
 
 def test_too_small_bbox_is_refused(quarter_scene, tmp_path):
     out = tmp_path / "o.png"
-    from povh3d.api import render
+    from tests.support.render import render
     with pytest.raises(InputError, match="outside --bbox"):
         render(quarter_scene.path, ARRAYS["square"], out, settings=RenderSettings(quality="draft"),
                crop=CropSettings("auto", ((0.0, 0.0, 0.0), (0.3, 0.3, 0.3))))
@@ -337,7 +335,7 @@ def test_lenticular_bank_has_one_view_row():
 
 def test_identical_frames_in_one_batch_are_traced_once(quarter_scene):
     la = square_array(lx=8, ly=6, nx=2, ny=2)
-    from povh3d.cameras import ortho_view_frames
+    from povh3d.geometry.cameras import ortho_view_frames
     common, frames = ortho_view_frames(la)
     w, h = common.pop("width"), common.pop("height")
     twice = [frames[0], frames[1], dict(frames[0])]
@@ -354,7 +352,7 @@ def test_identical_frames_in_one_batch_are_traced_once(quarter_scene):
 
 def test_without_block_alignment_antialiased_pixels_change(aa_scene, monkeypatch):
     """Negative control for the block rule of plan_crop: cuts off POV-Ray's block grid change pixels."""
-    import povh3d.crop_render as crop_render
+    import povh3d.engine.cropped as crop_render
     monkeypatch.setattr(crop_render, "layout_independent", lambda options: (True, None))
     # Non-recursive antialiasing (+AM1) compares a pixel with its neighbours in the block.
     st_ = RenderSettings(quality=Quality(antialias=0.3, aa_method=1, aa_depth=2), use_cache=False)

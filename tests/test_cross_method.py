@@ -9,11 +9,11 @@ check can fail.
 import numpy as np
 import pytest
 
-from povh3d.geometry import LensArray
-from povh3d.methods import run_method
-from povh3d.metrics import psnr
-from povh3d.render import RenderSettings
-from povh3d.scene import load_scene
+from povh3d.geometry.lens_array import LensArray
+from povh3d.engine.methods import run_method
+from povh3d.image.metrics import psnr
+from povh3d.engine.quality import RenderSettings
+from povh3d.scene.scene import load_scene
 
 from .conftest import square_array
 from .scenes import write_textured_scene

@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 from distributed import LocalCluster
 
-from povh3d.api import render
-from povh3d.cli import main
-from povh3d import dask_backend
-from povh3d.dask_backend import DaskRunner
+from tests.support.render import render
+from povh3d.cli.main import main
+from povh3d.povray import cluster as dask_backend
+from povh3d.povray.cluster import DaskRunner
 from povh3d.errors import ConfigError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
-from povh3d.imageio import read_png, write_png
-from povh3d.povray import JobResult, PovrayJob
-from povh3d.render import RenderSettings
+from povh3d.image.io import read_png, write_png
+from povh3d.povray.process import JobResult, PovrayJob
+from povh3d.engine.quality import RenderSettings
 from tests.conftest import square_array
 from tests.scenes import write_textured_scene
 
@@ -185,7 +185,8 @@ def test_unreachable_scheduler(tmp_path: Path, capsys: pytest.CaptureFixture[str
 
 
 def test_animation_on_the_cluster(tmp_path: Path, address: str) -> None:
-    from povh3d.animation import FrameRange, frame_path, render_animation
+    from povh3d.app.animation import FrameRange, frame_path
+    from tests.support.render import render_animation
 
     scene = tmp_path / "fade.pov"
     scene.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n"

@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from povh3d.elemental import extract_views, lens_index_map, turn_elemental_images
-from povh3d.geometry import LensArray, Panel
-from povh3d.interleave import extract
-from povh3d.presets import get_preset, lens_array_from_fields
+from povh3d.image.elemental import extract_views, lens_index_map, turn_elemental_images
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.image.interleave import extract
+from povh3d.geometry.presets import get_preset, lens_array_from_fields
 
 from .conftest import lenticular_array, square_array
 
@@ -57,7 +57,7 @@ def test_resampling_works_in_linear_light():
     img[:, 2:] = 255
     # Half way between a black and a white pixel: linear 0.5 -> sRGB 188, not 128.
     pts = np.array([[0.0, 0.05]])
-    from povh3d.elemental import sample_in_lens
+    from povh3d.image.elemental import sample_in_lens
     assert sample_in_lens(img, la, pts, np.array([0]))[0, 0] == 188
 
 
@@ -65,7 +65,7 @@ def test_hex_inside_is_the_true_hexagon():
     # pixel_rays: a pixel is inside when it lies in its lens's hexagon (flat sides
     # at |dx| = px/2, slanted |dx|/2 + sqrt(3)/2 |dy| = px/2); the circumradius disc
     # used before wrongly took about 2,300 hex-5.6 pixels past the outer rows.
-    from povh3d.geometry import pixel_rays
+    from povh3d.geometry.lens_array import pixel_rays
 
     la = lens_array_from_fields(get_preset("hex-5.6"))
     centres, _, inside = pixel_rays(la)

@@ -6,13 +6,13 @@ import re
 
 import pytest
 
-from povh3d.render import QUALITY_LEVELS, Quality
+from povh3d.engine.quality import QUALITY_LEVELS, Quality
 
-from povh3d.features import (FEATURE_PATTERNS, SETTING_NEEDS, features_of_text,
-                             needed_settings, quality_settings, scene_features)
-from povh3d.methods import display_header
-from povh3d.render import build_script, FrameBatch
-from povh3d.scene import load_scene
+from povh3d.scene.features import FEATURE_PATTERNS, SETTING_NEEDS, features_of_text, needed_settings
+from povh3d.engine.quality import quality_settings
+from povh3d.engine.methods import display_header
+from povh3d.engine.frames import build_script, FrameBatch
+from povh3d.scene.scene import load_scene
 
 from .conftest import square_array
 
@@ -60,10 +60,10 @@ def test_features_in_included_and_system_files(tmp_path):
     (tmp_path / "glass.inc").write_text("#declare G = texture { finish { reflection 0.2 } }\n")
     scene = tmp_path / "s.pov"
     scene.write_text(PLAIN + '#include "glass.inc"\n#include "textures.inc"\n')
-    used = scene_features(load_scene(scene)).used
+    used = load_scene(scene).features.used
     assert "reflection" in used          # from the scene's own include
     assert "refraction" in used          # textures.inc (POV-Ray's) declares glass with ior/filter
-    assert "refraction" not in scene_features(load_scene(scene), system_dirs=()).used
+    assert "refraction" not in load_scene(scene, system_dirs=()).features.used
 
 
 def test_background_constant_only_without_fog_media_sky_rainbow():
@@ -94,7 +94,7 @@ def _header(tmp_path, text: str, quality: str) -> str:
     scene = load_scene(path)
     la = square_array()
     header = display_header(la)
-    extra = quality_settings(scene_features(scene), QUALITIES[quality])
+    extra = quality_settings(scene.features, QUALITIES[quality])
     if extra:
         header["global_settings"] = extra
     script = build_script(FrameBatch("pinhole.pov.j2", {"direction": (0, 0, 1), "right": (1, 0, 0),

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from povh3d.colour import decode, encode, linear_to_srgb, mean_in_linear_light, srgb_to_linear
-from povh3d.footprint import GRID, angular_grid, latin_hypercube
+from povh3d.image.colour import decode, encode, linear_to_srgb, mean_in_linear_light, srgb_to_linear
+from povh3d.geometry.footprint import GRID, angular_grid, latin_hypercube
 
 
 def test_angular_grid_cuts_the_pixel_angle_into_equal_cells():

@@ -16,11 +16,11 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from povh3d.cameras import (TIE_SHIFT, MIN_CLEARANCE, POVRAY_MAX_DEPTH, camera_mesh, check_clearance,
-                            bank_back_off, default_back_off, ortho_view_frames, pinhole_frames, ray_stretch,
-                            view_bank_mesh)
+from povh3d.geometry.cameras import (TIE_SHIFT, MIN_CLEARANCE, POVRAY_MAX_DEPTH, camera_mesh,
+    check_clearance, bank_back_off, default_back_off, ortho_view_frames, pinhole_frames, ray_stretch,
+    view_bank_mesh)
 from povh3d.errors import ConfigError
-from povh3d.geometry import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
 
 MAX_ANGLE = 80.0  # degrees: the widest view the issue asks for
 

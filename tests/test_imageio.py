@@ -3,7 +3,7 @@ import pytest
 from PIL import Image
 
 from povh3d.errors import InputError, OutputError
-from povh3d.imageio import read_png, write_png, write_sidecar, read_sidecar
+from povh3d.image.io import read_png, write_png, write_sidecar, read_sidecar
 
 
 @pytest.mark.parametrize("dtype", [np.uint8, np.uint16])

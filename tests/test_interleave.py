@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from povh3d.interleave import extract, interleave, tile_elemental_images
+from povh3d.image.interleave import extract, interleave, tile_elemental_images
 
 
 def test_interleave_follows_conventions_index_formula():

@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from povh3d import _kernels
-from povh3d.interleave import extract, extract_reference, interleave, interleave_reference
+from povh3d.image import kernels as _kernels
+from povh3d.image.interleave import extract, extract_reference, interleave, interleave_reference
 
 DTYPES = [np.uint8, np.int8, np.uint16, np.int32, np.float32, np.float64, np.complex128]
 

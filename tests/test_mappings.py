@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from povh3d.errors import ConfigError
-from povh3d.geometry import Panel
+from povh3d.geometry.lens_array import Panel
 from povh3d.mappings import MAPPINGS, MappingOptions, build_mapping, looking_glass, parse_name
 from povh3d.mappings.slanted import Slanted
 

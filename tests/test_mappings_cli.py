@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from povh3d.api import read_views
-from povh3d.cli import main
-from povh3d.imageio import read_png, write_png
-from povh3d.interleave import interleave
+from povh3d.app.views import read_views
+from povh3d.cli.main import main
+from povh3d.image.io import read_png, write_png
+from povh3d.image.interleave import interleave
 from povh3d.mappings import MappingOptions, build_mapping
 
 from .test_cli import SAMPLE, one_error_line, run

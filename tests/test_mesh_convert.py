@@ -12,7 +12,8 @@ import pytest
 import trimesh
 from PIL import Image
 
-from povh3d.mesh import FORMATS, convert_mesh
+from povh3d.app.convert_mesh import convert_mesh
+from povh3d.mesh import FORMATS
 from povh3d.mesh.load import to_pov_frame
 from tests.mesh_oracles import parse_include
 

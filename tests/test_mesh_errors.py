@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 import trimesh
 
-from povh3d.cli import main
+from povh3d.cli.main import main
 from povh3d.errors import ConfigError, InputError, OutputError
-from povh3d.mesh import convert_mesh
+from povh3d.app.convert_mesh import convert_mesh
 from povh3d.mesh.identifiers import check_identifier, identifier_from_path, pov_keywords
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_models"
@@ -123,7 +123,7 @@ def test_unwritable_output_folder(tmp_path, capsys):
 
 def test_failure_after_textures_removes_them(tmp_path, monkeypatch):
     """The include is written last; if that fails, the texture written before it goes too."""
-    import povh3d.mesh.convert as convert
+    import povh3d.app.convert_mesh as convert
 
     for name in ("letter_f.obj", "letter_f.mtl", "letter_f.png"):
         (tmp_path / name).write_bytes((SAMPLES / name).read_bytes())

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from povh3d.mesh import convert_mesh
+from povh3d.app.convert_mesh import convert_mesh
 from povh3d.mesh.raster import Window, iou, silhouette
 from tests.mesh_oracles import pov_silhouette
 
@@ -57,7 +57,7 @@ def test_texture_is_upright(tmp_path):
 
 
 def test_render_model_cli_demo(tmp_path):
-    from povh3d.cli import main
+    from povh3d.cli.main import main
 
     out = tmp_path / "f.png"
     assert main(["render", str(SAMPLES / "letter_f.obj"), "--preset", "demo", "--quality", "draft",

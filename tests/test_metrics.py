@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from povh3d.metrics import pareto_front, psnr, ssim
+from povh3d.image.metrics import pareto_front, psnr, ssim
 
 
 def test_psnr_matches_its_definition():

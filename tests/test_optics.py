@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from povh3d.errors import ConfigError
-from povh3d.optics import DEFAULT_THINNESS, Lenslet, aperture_radius, default_ior, sag, trace_collimated
+from povh3d.geometry.optics import (DEFAULT_THINNESS, Lenslet, aperture_radius, default_ior, sag,
+    trace_collimated)
 
 
 def test_lens_maker_radius():

@@ -1,7 +1,7 @@
 """Tests of povh3d.povray_log against real POV-Ray 3.7 console output.
 
 The logs below were captured from Debian's POV-Ray 3.7.0.10.unofficial run
-exactly as povh3d runs it (``povh3d.povray.build_command`` in a job folder with
+exactly as povh3d runs it (``povh3d.povray.process.build_command`` in a job folder with
 its private HOME), on small broken scenes; most are cut to start at the
 "==== [Parsing...]" or "==== [Rendering...]" banner, keeping what follows
 byte for byte (trailing spaces and POV-Ray's 80-column wrapping included).
@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from povh3d.povray_log import WRAP_WIDTH, parse_error, parse_render_time, unwrap
+from povh3d.povray.log import WRAP_WIDTH, parse_error, parse_render_time, unwrap
 
 # Scenes start with 3 lines (#version, global_settings, camera); the broken
 # line follows.

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from povh3d.geometry import LensArray, Panel, pixel_rays
-from povh3d.interleave import interleave
-from povh3d.preview import preview_frames, viewer_angles
+from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.image.interleave import interleave
+from povh3d.image.preview import preview_frames, viewer_angles
 
 COLOURS = np.random.default_rng(3).integers(0, 256, (64, 3), dtype=np.uint8)
 

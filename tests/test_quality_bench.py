@@ -6,14 +6,15 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from povh3d.colour import decode
+from povh3d.image.colour import decode
 from povh3d.errors import ConfigError
-from povh3d.footprint import latin_hypercube
-from povh3d.geometry import pixel_rays
-from povh3d.methods import run_method
-from povh3d.quality_bench import AUTO_LADDER, Trial, resolve_auto, run_bench, write_report
-from povh3d.render import QUALITY_LEVELS, Quality, RenderSettings
-from povh3d.scene import load_scene
+from povh3d.geometry.footprint import latin_hypercube
+from povh3d.geometry.lens_array import pixel_rays
+from povh3d.engine.methods import run_method
+from povh3d.engine.auto import AUTO_LADDER, resolve_auto
+from povh3d.app.bench import Trial, run_bench, write_report
+from povh3d.engine.quality import QUALITY_LEVELS, Quality, RenderSettings
+from povh3d.scene.scene import load_scene
 
 from .conftest import lenticular_array, square_array
 from .scenes import COLOUR_A, COLOUR_B, write_checker_plane, write_textured_scene
@@ -102,7 +103,7 @@ def test_auto_needs_a_target_and_a_target_needs_auto():
 def test_probe_reference_is_10_db_better_than_the_target_where_256_samples_allow():
     # Two 256-sample references differ by 43.4 dB (bench), each ~46.4 dB from the converged
     # image, 3 dB per halving: the probe takes the fewest samples 10 dB under the target.
-    from povh3d.quality_bench import probe_reference_samples
+    from povh3d.engine.auto import probe_reference_samples
 
     def error_db(n):
         return 46.4 - 3.0 * np.log2(256 / n)

@@ -4,8 +4,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from povh3d.errors import ConfigError
-from povh3d.quilt import bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order, quilt_to_views, \
-    views_to_quilt
+from povh3d.image.quilt import (bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
+                                quilt_to_views, views_to_quilt)
 
 
 def test_view_zero_is_bottom_left_and_order_runs_right_then_up():

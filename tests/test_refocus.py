@@ -2,11 +2,11 @@
 
 import numpy as np
 
-from povh3d.api import render
-from povh3d.display import lens_info, refocus_file
-from povh3d.imageio import read_png, read_sidecar
-from povh3d.refocus import gradient_energy, refocus_linear
-from povh3d.render import RenderSettings
+from tests.support.render import render
+from povh3d.app.display import lens_info, refocus_file
+from povh3d.image.io import read_png, read_sidecar
+from povh3d.image.refocus import gradient_energy, refocus_linear
+from povh3d.engine.quality import RenderSettings
 
 from .conftest import square_array
 from .scenes import write_checker_plane

@@ -8,10 +8,10 @@ A pseudoscopic image (views in reverse order) must fail the same check.
 import numpy as np
 import pytest
 
-from povh3d.geometry import LensArray, Panel, pixel_rays
-from povh3d.methods import run_method
-from povh3d.render import RenderSettings
-from povh3d.scene import load_scene
+from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.engine.methods import run_method
+from povh3d.engine.quality import RenderSettings
+from povh3d.scene.scene import load_scene
 
 from .conftest import lenticular_array, square_array
 from .scenes import checker_oracle, classify, write_checker_plane

@@ -1,8 +1,10 @@
 import numpy as np
 import pytest
 
-from povh3d.interleave import extract, interleave
-from povh3d.resample import from_linear, resample_matrix, resample_micro_images, to_linear, trade_views_for_lenses
+from povh3d.image.interleave import extract, interleave
+from povh3d.image.colour import from_linear, to_linear
+from povh3d.image.resample import (resample_matrix, resample_micro_images,
+    trade_views_for_lenses)
 
 
 def test_srgb_round_trip_and_half_grey():

@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from povh3d import sandbox
+from povh3d.povray import sandbox
 from povh3d.errors import ConfigError, PovrayError
-from povh3d.imageio import read_png
-from povh3d.povray import JobResult, PovrayJob, run_jobs
-from povh3d.render import RenderSettings
+from povh3d.image.io import read_png
+from povh3d.povray.process import JobResult, PovrayJob, run_jobs
+from povh3d.engine.quality import RenderSettings
 from tests.conftest import square_array
 
 HEAD = """#version 3.7;
@@ -136,7 +136,7 @@ def test_read_files_allow_listed_and_not(workdir: Path, tmp_path: Path) -> None:
 def test_render_of_a_scene_naming_etc_passwd(tmp_path: Path) -> None:
     # scene.py lists /etc/passwd among the scene's files (it exists and is
     # named); the sandbox still allows only the scene's own folders.
-    from povh3d.api import render
+    from tests.support.render import render
 
     folder = tmp_path / "scene"
     folder.mkdir()
@@ -176,7 +176,7 @@ def test_system_paths_leave_out_etc() -> None:
 
 
 def test_sidecar_records_the_sandbox(tmp_path: Path) -> None:
-    from povh3d.api import render
+    from tests.support.render import render
 
     scene = tmp_path / "s.pov"
     scene.write_text("#version 3.7;\nplane { z, 1 pigment { rgb 1 } }\n")

@@ -18,15 +18,16 @@ import numpy as np
 import pytest
 
 from povh3d.errors import ConfigError
-from povh3d.geometry import LensArray, Panel, pixel_rays
-from povh3d.imageio import read_png
-from povh3d.methods import display_header, run_method
-from povh3d.povray import PovrayJob, find_povray, run_jobs
-from povh3d.metrics import psnr
-from povh3d.presets import get_preset, lens_array_from_fields
-from povh3d.render import RenderSettings, build_script
-from povh3d.scene import load_scene
-from povh3d.single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
+from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.image.io import read_png
+from povh3d.engine.methods import display_header, run_method
+from povh3d.povray.process import PovrayJob, find_povray, run_jobs
+from povh3d.image.metrics import psnr
+from povh3d.geometry.presets import get_preset, lens_array_from_fields
+from povh3d.engine.quality import RenderSettings
+from povh3d.engine.frames import build_script
+from povh3d.scene.scene import load_scene
+from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
 
 from .conftest import lenticular_array, square_array
 from .scenes import checker_oracle, classify, write_checker_plane, write_textured_scene

@@ -16,16 +16,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from povh3d.api import render
-from povh3d.cameras import MIN_CLEARANCE
+from tests.support.render import render
+from povh3d.geometry.cameras import MIN_CLEARANCE
 from povh3d.errors import ConfigError, PovrayError
-from povh3d.footprint import CENTRE, angular_grid
-from povh3d.geometry import LensArray, Panel, pixel_rays
-from povh3d.methods import METHODS, display_header, run_method
-from povh3d.povfmt import pov_number
-from povh3d.povray import PovrayJob, run_jobs
-from povh3d.render import RenderSettings, build_script
-from povh3d.scene import load_scene
+from povh3d.geometry.footprint import CENTRE, angular_grid
+from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.engine.methods import METHODS, display_header, run_method
+from povh3d.povray.format import pov_number
+from povh3d.povray.process import PovrayJob, run_jobs
+from povh3d.engine.quality import RenderSettings
+from povh3d.engine.frames import build_script
+from povh3d.scene.scene import load_scene
 
 from .scenes import classify, write_checker_plane
 
@@ -214,7 +215,7 @@ def test_scripts_hold_only_finite_numbers(method, index):
     la = EXTREMES[index]
     # multi-ortho also with footprint samples (3x3 angular sub-views per pixel).
     samples = angular_grid(3) if method == "multi-ortho" and la.views else CENTRE
-    batch = METHODS[method].batch(la, 4 * max(la.panel.size_mm), samples)
+    batch = METHODS[method].plan(la, 4 * max(la.panel.size_mm), samples, **METHODS[method].options).batch
     script = build_script(batch, batch.frames, method=method, scene_path="/s.pov", add_assumed_gamma=True,
                           header=display_header(la))
     assert not re.search(r"\b(nan|inf|infinity)\b", script, re.I)
@@ -263,7 +264,7 @@ def test_clearance_beyond_povray_reach_is_refused_before_rendering(tmp_path):
 
 @pytest.mark.parametrize("ior", [1.001, 1.01, 1.1])
 def test_conic_lenslet_close_to_ior_one_still_focuses_at_f(ior):
-    from povh3d.optics import Lenslet, trace_collimated
+    from povh3d.geometry.optics import Lenslet, trace_collimated
 
     lens = Lenslet("conic", "square", 0.8, 0.8, 1.5, ior)
     h = np.linspace(0.01, 0.999, 7) * lens.aperture_radius
@@ -277,7 +278,7 @@ def test_conic_lenslet_close_to_ior_one_still_focuses_at_f(ior):
 def test_ior_too_close_to_one_is_refused_not_mistraced(ior):
     # Negative control for the refusal: at n - 1 = 1e-9 the conic's maths focused
     # collimated light at half the focal length (and the lens was 12.6 m deep).
-    from povh3d.optics import Lenslet
+    from povh3d.geometry.optics import Lenslet
 
     with pytest.raises(ConfigError, match=r"raise --ior \(at least about 1\.00"):
         Lenslet("conic", "square", 0.8, 0.8, 1.5, ior)

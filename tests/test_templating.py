@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from povh3d.footprint import CENTRE
-from povh3d.methods import METHODS, display_header
-from povh3d.render import build_script
+from povh3d.geometry.footprint import CENTRE
+from povh3d.engine.methods import METHODS, display_header
+from povh3d.engine.frames import build_script
 
 from .conftest import square_array
 
@@ -22,7 +22,7 @@ GOLDEN = Path(__file__).parent / "golden"
 @pytest.mark.parametrize("name", list(METHODS))
 def test_script_matches_golden(name):
     la = square_array(lx=2, ly=2, nx=2, ny=2, s=0.25, f=1.5)
-    batch = METHODS[name].batch(la, 10.0, CENTRE)
+    batch = METHODS[name].plan(la, 10.0, CENTRE, **METHODS[name].options).batch
     script = build_script(batch, batch.frames, method=name, scene_path="/scenes/tiny.pov",
                           add_assumed_gamma=True, header=display_header(la))
     script = script.replace(script.splitlines()[0], "// header line")  # carries the version
@@ -34,7 +34,7 @@ def test_script_matches_golden(name):
 
 def test_numbers_in_scripts_round_trip():
     la = square_array(lx=3, ly=1, nx=3, ny=1, s=0.1, f=1.7)
-    batch = METHODS["multi-ortho-views"].batch(la, 10.0, CENTRE)
+    batch = METHODS["multi-ortho-views"].plan(la, 10.0, CENTRE).batch
     script = build_script(batch, batch.frames, method="x", scene_path="/s.pov", add_assumed_gamma=False,
                           header=display_header(la))
     # u/f for the right view, written with repr: reads back as the same double
@@ -45,7 +45,7 @@ def test_numbers_in_scripts_round_trip():
 def test_scene_with_quote_in_path_is_refused():
     from povh3d.errors import ConfigError
     la = square_array(lx=1, ly=1, nx=1, ny=1)
-    batch = METHODS["multi-ortho"].batch(la, 10.0, CENTRE)
+    batch = METHODS["multi-ortho"].plan(la, 10.0, CENTRE).batch
     with pytest.raises(ConfigError, match="rename"):
         build_script(batch, batch.frames, method="x", scene_path='/a"b.pov', add_assumed_gamma=True,
                      header=display_header(la))

@@ -16,7 +16,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import ConfigError, InputError
-from .colour import from_linear, to_linear
+from ..image.colour import from_linear, to_linear
 from .gridfile import Grid
 from .lattice import Template
 
@@ -57,7 +57,7 @@ def correct_borders(image: np.ndarray, grid: Grid, *, threshold: float = 0.5,
     i, j, _ = grid.lens_of_pixels(np.stack([xx, yy], axis=-1))
     gain = grid.gain[np.clip(i, 0, rows - 1), np.clip(j, 0, cols - 1)]
     border = response < threshold * np.maximum(gain, 1e-12)
-    lin, dtype = to_linear(image)
+    lin, dtype = to_linear(image), image.dtype
     scale = np.where(border, 0.0, 1.0 / np.maximum(response, 1e-12))
     out = lin * (scale if lin.ndim == 2 else scale[..., None])
     if fill == "nearest" and border.any() and not border.all():

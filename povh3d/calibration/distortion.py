@@ -19,7 +19,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import ConfigError
-from .colour import from_linear, to_linear
+from ..image.colour import from_linear, to_linear
 
 
 @dataclass(frozen=True)
@@ -117,5 +117,5 @@ def undistort_image(image: np.ndarray, model: Brown) -> np.ndarray:
     h, w = image.shape[:2]
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
     src = model.distort(np.stack([xx, yy], axis=-1))
-    lin, dtype = to_linear(image)
+    lin, dtype = to_linear(image), image.dtype
     return from_linear(sample(lin, src), dtype)

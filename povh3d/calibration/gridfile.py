@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..errors import ConfigError, InputError
-from ..imageio import atomic_path
+from ..image.io import atomic_path
 from .distortion import Brown
 
 LATTICES = ("square", "hex")

@@ -29,7 +29,6 @@ import numpy as np
 from scipy import ndimage, optimize
 
 from ..errors import InputError
-from .colour import grey
 from .distortion import Brown
 from .gridfile import Grid
 
@@ -43,6 +42,21 @@ def _crop(img: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
     h, w = img.shape
     y0, x0 = (h - size) // 2, (w - size) // 2
     return img[y0:y0 + size, x0:x0 + size], np.array([x0, y0], dtype=np.float64)
+
+
+def grey(image: np.ndarray) -> np.ndarray:
+    """``(H, W)`` float32 brightness in ``[0, 1]`` for lattice finding.
+
+    Integer images are only scaled, not linearised: the lattice fit models the
+    micro-image shape from the image itself, so any monotonic encoding works,
+    and skipping the power law keeps calibrating a 21-megapixel image fast.
+    """
+    image = np.asarray(image)
+    if image.ndim == 3:
+        image = image[..., :3].mean(axis=2, dtype=np.float32) if image.shape[2] > 1 else image[..., 0]
+    if image.dtype == np.uint8 or image.dtype == np.uint16:
+        return image.astype(np.float32) * np.float32(1.0 / np.iinfo(image.dtype).max)
+    return image.astype(np.float32)
 
 
 def _refine_peak(mag: np.ndarray, iy: int, ix: int) -> tuple[float, float]:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .colour import to_linear
+from ..image.colour import to_linear
 from .gridfile import Grid
 from .viewpoints import rectify
 
@@ -40,7 +40,7 @@ class Shift:
 
 def lens_means(image: np.ndarray, grid: Grid, ppl: int) -> np.ndarray:
     """``(rows, cols, C)`` mean linear value of each complete micro-image, NaN elsewhere."""
-    rect = rectify(to_linear(image)[0], grid, ppl)
+    rect = rectify(to_linear(image), grid, ppl)
     rows, cols = grid.table
     rect = rect.reshape(rows, ppl, cols, ppl, -1).mean(axis=(1, 3))
     rect[~grid.complete] = np.nan

@@ -11,7 +11,7 @@ With a calibrated grid the micro-images are rarely whole pixels wide, turned
 ``p`` the pitch) mapped through the grid's distortion, with bilinear
 interpolation in linear light.  The result is an H3D image with square,
 upright, ``N x N``-pixel micro-images on the lens table (the layout
-:func:`povh3d.interleave.extract` reads); lenses not wholly on the image are black.
+:func:`povh3d.image.interleave.extract` reads); lenses not wholly on the image are black.
 Hex tables keep CONVENTIONS' offset rows, tiled without the half-lens shift.
 """
 
@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ConfigError
-from ..interleave import extract
-from .colour import from_linear, to_linear
+from ..image.interleave import extract
+from ..image.colour import from_linear, to_linear
 from .distortion import sample
 from .gridfile import Grid
 
@@ -44,7 +44,7 @@ def rectify(image: np.ndarray, grid: Grid, ppl: int) -> np.ndarray:
     """``(rows * N, cols * N[, C])`` H3D image with upright ``N x N`` micro-images, same dtype."""
     grid.check_image(image.shape)
     pos = micro_image_positions(grid, ppl)
-    lin, dtype = to_linear(image)
+    lin, dtype = to_linear(image), image.dtype
     out = sample(lin, pos)
     out[~grid.complete] = 0.0
     rows, cols = grid.table

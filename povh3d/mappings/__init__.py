@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import ConfigError
-from .base import Mapping, Sampling, Source
+from .base import Mapping
+from .sampling import Sampling, Source
 from .slanted import Slanted, looking_glass
 from .unslanted import Distributed, DistributedSmart, Triangular, smart
 

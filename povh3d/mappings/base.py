@@ -10,54 +10,20 @@ fancy-indexing gather, so the per-image cost is one pass over the panel.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from ..errors import ConfigError
-from ..geometry import LensArray, Panel
+from ..geometry.lens_array import LensArray, Panel
+from ..image.colour import from_linear, to_linear
+from .plan import build_plan
+from .sampling import Sampling, Source
 
 # Floors of phases that are whole numbers in exact arithmetic must not fall to
 # the integer below through rounding (e.g. (1 - 1/3) * 3 = 1.9999999999999998).
 EPS = 1e-9
-
-
-@dataclass(frozen=True)
-class Source:
-    """The unmapped view-space H3D image a mapping reads: ``rows x lenses*views`` RGB."""
-
-    rows: int
-    lenses: int
-    views: int
-
-    @property
-    def shape(self) -> tuple[int, int, int]:
-        return (self.rows, self.lenses * self.views, 3)
-
-
-@dataclass(frozen=True)
-class Sampling:
-    """An index map and, for blended views, a second one with its weight.
-
-    index : (H, W, 3) intp
-        Flat index into the source ``(rows, lenses*views, 3)`` for every panel subpixel.
-    black : (H, W, 3) bool or None
-        Subpixels that show nothing (outside every lens).
-    index2, weight : (H, W, 3) intp and float32, or None
-        Blended fractional views: ``(1 - weight) * src[index] + weight * src[index2]``.
-    """
-
-    index: np.ndarray
-    black: np.ndarray | None = None
-    index2: np.ndarray | None = None
-    weight: np.ndarray | None = None
-
-
-def flat_index(src: Source, i: np.ndarray, j: np.ndarray, v: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Flat index of channel ``c`` of view ``v`` under lens ``j`` in view row ``i``."""
-    return ((i * src.lenses + j) * src.views + v) * 3 + c
 
 
 def whole(name: str, value: Any, low: int = 1) -> int:
@@ -173,9 +139,8 @@ class Mapping(ABC):
         s = self.sample(panel)
         out = flat[s.index]
         if s.index2 is not None:
-            from ..resample import from_linear, to_linear  # blending mixes pixels: linear light
 
-            lin = (1 - s.weight) * to_linear(out) + s.weight * to_linear(flat[s.index2])
+            lin = (1 - s.weight) * to_linear(out, np.float32) + s.weight * to_linear(flat[s.index2], np.float32)
             out = from_linear(lin, h3d.dtype)
         if s.black is not None:
             out[s.black] = 0
@@ -199,8 +164,6 @@ def _cached_plan(mapping: Mapping, panel: tuple[int, int]):
     """
     if getattr(mapping, "blend", False):
         return None
-    from .plan import build_plan
-
     s = mapping._sample(panel)
     return None if s.index2 is not None else build_plan(s)
 
@@ -211,11 +174,3 @@ def centred_margin(width: int, lens: int) -> tuple[int, int]:
     if count < 1:
         raise ConfigError(f"a lens of {lens} does not fit a panel {width} wide; use fewer pixels per lens (--ppl)")
     return count, (width - count * lens) // 2
-
-
-def floor_eps(x: np.ndarray) -> np.ndarray:
-    return np.floor(x + EPS).astype(np.int64)
-
-
-def isclose_int(x: float) -> bool:
-    return abs(x - round(x)) < 1e-9

@@ -36,7 +36,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
-from .base import EPS, Mapping, Sampling, Source, centred_margin, flat_index
+from .base import EPS, Mapping, centred_margin
+from .sampling import Sampling, Source, flat_index
 
 UNITS = ("subpixel", "pixel")
 

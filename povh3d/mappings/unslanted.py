@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
-from .base import Mapping, Sampling, Source, centred_margin, flat_index
+from .base import Mapping, centred_margin
+from .sampling import Sampling, Source, flat_index
 from .slanted import Slanted
 
 TRIANGLE = (0, 1, -1)

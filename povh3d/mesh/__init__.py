@@ -1,12 +1,12 @@
-"""Mesh files to POV-Ray: load (trimesh), clean, simplify, write ``mesh2``, stage for rendering.
+"""Mesh files to POV-Ray text: load (trimesh), clean, simplify, format ``mesh2``.
 
 One module per step: ``formats`` (the registry), ``load``, ``clean``,
 ``simplify``, ``numbers`` (array formatting), ``write`` (include text),
-``convert`` (writes files), ``raster`` (silhouettes in NumPy), ``stage``
-(the default scene around a model for ``povh3d render MODEL``).
+``identifiers``, ``raster`` (silhouettes in NumPy).  Writing files is
+``povh3d.app``'s: ``app.convert_mesh`` (``povh3d convert-mesh``) and
+``app.stage`` (the default scene around a model for ``povh3d render MODEL``).
 """
 
-from .convert import ConversionResult, convert_mesh
 from .formats import FORMATS, UNITS, is_mesh_file
 
-__all__ = ["ConversionResult", "convert_mesh", "FORMATS", "UNITS", "is_mesh_file"]
+__all__ = ["FORMATS", "UNITS", "is_mesh_file"]

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..geometry import LensArray
+from ..geometry.lens_array import LensArray
 from .load import Part
 from .raster import Window, iou, silhouette
 

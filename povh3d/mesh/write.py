@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import __version__
-from ..povfmt import pov_string, pov_vector
+from .._version import __version__
+from ..povray.format import pov_string, pov_vector
 from .load import Part
 from .numbers import format_rows, format_vectors, vector_item
 

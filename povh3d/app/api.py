@@ -1,0 +1,62 @@
+"""``povh3d.render``: a render from Python in one call, through the same request and
+path as ``povh3d render`` on the command line.
+
+    import povh3d
+    record = povh3d.render("scene.pov", "out.png", preset="demo", quality="draft")
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+from ..engine.quality import Progress, RenderSettings
+from ..errors import ConfigError
+from ..geometry.lens_array import LensArray
+from ..geometry.presets import describe_fields, get_preset, lens_array_from_fields, merge_overrides
+from .display import mapping_for_display
+from .render import render as render_request
+from .request import RenderRequest
+
+_REQUEST = tuple(f.name for f in fields(RenderRequest) if f.name not in ("source", "output", "lens_array",
+                                                                          "settings", "mapping", "mapped_panel"))
+_SETTINGS = tuple(f.name for f in fields(RenderSettings))
+
+
+def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens_array: LensArray | None = None,
+           mapping: str | None = None, progress: Progress | None = None, **options: Any) -> dict[str, Any]:
+    """Render a scene or a mesh model into ``output`` (PNG + JSON sidecar); return the sidecar record.
+
+    Parameters
+    ----------
+    source : path             a POV-Ray scene (.pov) or a mesh model (.obj .stl .ply .glb ...)
+    output : path             the .png to write
+    preset : str              a display preset (``povh3d.presets.names()``)
+    lens_array : LensArray    a lens array of your own, instead of the preset's
+    mapping : str             a pixel mapping name (``alioscopy``, ``slanted``, ``smart:4`` ...)
+    **options
+        Any field of ``RenderRequest`` (``method``, ``method_options``, ``views_dir``,
+        ``frames`` ...) or of ``RenderSettings`` (``quality``, ``jobs``, ``bit_depth`` ...).
+        An unknown name is refused with the list of names.
+    """
+    unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
+    if unknown:
+        raise ConfigError(f"render() takes no option {', '.join(map(repr, unknown))}; it takes: "
+                          f"preset, lens_array, mapping, {', '.join(_REQUEST + _SETTINGS)}")
+    fields_ = get_preset(preset)
+    display = {"preset": preset, **describe_fields(fields_)}
+    if lens_array is None:
+        lens_array = lens_array_from_fields(merge_overrides(fields_, {}))
+    else:
+        display = {"preset": None}
+    mapped = {}
+    if mapping is not None:
+        built, panel = mapping_for_display(mapping, display, lens_array)
+        mapped = {"mapping": built, "mapped_panel": panel}
+        display = {**display, "mapping": built.name}
+    settings = RenderSettings(**{k: v for k, v in options.items() if k in _SETTINGS})
+    request = RenderRequest(source=Path(source), output=Path(output), lens_array=lens_array,
+                            settings=settings, **{"display": display, **mapped},
+                            **{k: v for k, v in options.items() if k in _REQUEST and k != "display"})
+    return render_request(request, progress)

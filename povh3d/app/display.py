@@ -1,0 +1,283 @@
+"""Display preparation on files: map, resample, quilts, refocus, preview.
+
+Each function reads PNGs, calls the pure NumPy modules (``mappings``,
+``resample``, ``quilt``, ``refocus``, ``preview``) and writes its outputs
+atomically, each image with a JSON sidecar.  Every input is checked before
+anything is written.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError, InputError
+from ..geometry.lens_array import Panel
+from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png, write_sidecar
+from .records import base_record, png_output
+from ..image.interleave import extract, interleave
+from ..mappings import Mapping
+from ..mappings.sampling import Source
+from ..image.quilt import (bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
+                           quilt_to_views, views_to_quilt)
+from ..image.refocus import contact_sheet, gradient_energy, refocus_linear
+from ..image.colour import from_linear, to_linear
+from ..image.resample import resample_micro_images, trade_views_for_lenses
+
+
+# -- lens geometry of an input image -----------------------------------------------------------------
+def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | None,
+              pixel_pitch: float | None) -> dict[str, Any]:
+    """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
+    side = (read_sidecar(h3d_path) or {}).get("lens_array") or {}
+    if ppl is None and side.get("views"):
+        ppl = (int(side["views"][1]), int(side["views"][0]))
+    if ppl is None:
+        raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
+    focal = focal if focal is not None else side.get("focal_mm")
+    if pixel_pitch is None and side.get("panel"):
+        pixel_pitch = side["panel"]["pixel_pitch_mm"][0]
+    return {"ppl": ppl, "focal": focal, "pixel_pitch": pixel_pitch,
+            "pixel_pitch_y": (side.get("panel") or {}).get("pixel_pitch_mm", [None, pixel_pitch])[1] or pixel_pitch}
+
+
+def _need(value: Any, what: str, flag: str) -> Any:
+    if value is None:
+        raise ConfigError(f"the {what} is unknown (no sidecar); give it with {flag}")
+    return value
+
+
+# -- map ---------------------------------------------------------------------------------------------
+def infer_panel(mapping: Mapping, shape: tuple[int, int]) -> tuple[int, int] | None:
+    """The panel ``(W, H)`` whose mapping reads a view-space image of ``shape`` (rows, cols), if one does."""
+    lens_px, _, row_px = mapping.view_pitch((1.0, 1.0))
+    rows, cols = shape
+    guesses = []
+    for views in range(1, cols + 1):
+        if cols % views:
+            continue
+        lenses = cols // views
+        w = round(lenses * lens_px)
+        h = round(rows * row_px)
+        guesses += [(w + dw, h + dh) for dw in (0, 1, -1, 2) for dh in range(0, max(1, round(row_px)))]
+    for w, h in guesses:
+        if w < 1 or h < 1:
+            continue
+        try:
+            src: Source = mapping.source((w, h))
+        except ConfigError:
+            continue
+        if src.shape[:2] == (rows, cols):
+            return (w, h)
+    return None
+
+
+def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
+             panel: tuple[int, int] | None = None) -> dict[str, Any]:
+    """Map an unmapped view-space H3D PNG onto a panel and write ``output`` with its sidecar."""
+    image = read_png(input_path)
+    if panel is None:
+        panel = infer_panel(mapping, image.shape[:2])
+        if panel is None:
+            raise ConfigError(f"no panel size fits a {image.shape[1]}x{image.shape[0]} image under mapping "
+                              f"{mapping.name!r}; give it with --panel WxH")
+    out = png_output(output)
+    mapped = mapping.apply(image, panel)  # raises before anything is written
+    record = base_record("panel", mapping=mapping.name, mapping_parameters=_params(mapping),
+                     source=str(Path(input_path).resolve()), size_px=list(panel), output_gamma="sRGB")
+    write_png(out, mapped)
+    write_sidecar(out, record)
+    return record
+
+
+def _params(mapping: Mapping) -> dict[str, Any]:
+    return {k: v for k, v in vars(mapping).items() if isinstance(v, (int, float, str, bool))}
+
+
+# -- resample ----------------------------------------------------------------------------------------
+def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int, int],
+                  ppl_out: tuple[int, int], mode: str = "micro") -> dict[str, Any]:
+    image = read_png(input_path)
+    out = png_output(output)
+    try:
+        if mode == "micro":
+            result = resample_micro_images(image, ppl_in, ppl_out)
+        elif mode == "lenses":
+            result = trade_views_for_lenses(image, ppl_in, ppl_out)
+        else:
+            raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
+    except ValueError as exc:
+        raise ConfigError(f"{exc}; check --ppl and --ppl-out") from None
+    record = base_record("h3d", method=f"resample-{mode}", ppl_in=[ppl_in[1], ppl_in[0]],
+                     ppl_out=[ppl_out[1], ppl_out[0]], source=str(Path(input_path).resolve()),
+                     size_px=[result.shape[1], result.shape[0]], output_gamma="sRGB")
+    if mode == "lenses":
+        record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
+                            "focal_scale": ppl_out[1] / ppl_in[1]}
+    write_png(out, result)
+    write_sidecar(out, record)
+    return record
+
+
+# -- quilts ------------------------------------------------------------------------------------------
+def export_quilt(h3d_path: str | Path, ppl: int, grid: tuple[int, int], output_dir: str | Path,
+                 aspect: float | None = None) -> Path:
+    """Write the views of a lenticular H3D image as ``stem_qs{c}x{r}a{aspect}.png`` in ``output_dir``."""
+    image = read_png(h3d_path)
+    try:
+        bank = extract(image, (1, ppl))
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    views = bank_to_quilt_order(bank)
+    if views.shape[0] != grid[0] * grid[1]:
+        raise ConfigError(f"{views.shape[0]} views do not fill a {grid[0]}x{grid[1]} quilt exactly; "
+                          f"give --quilt with cols x rows = {views.shape[0]}")
+    h, w = views.shape[1:3]
+    aspect = aspect or w / h
+    folder = Path(output_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    out = folder / quilt_name(Path(h3d_path).stem, grid[0], grid[1], aspect)
+    check_writable(out)
+    write_png(out, views_to_quilt(views, *grid))
+    write_sidecar(out, base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
+                               source=str(Path(h3d_path).resolve())))
+    return out
+
+
+def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, int] | None = None,
+                 count: int | None = None) -> dict[str, Any]:
+    """Interleave the views of a quilt into a lenticular H3D image (one pixel row per view row)."""
+    parsed = parse_quilt_name(Path(quilt_path).name)
+    if grid is None:
+        if parsed is None:
+            raise ConfigError(f"{Path(quilt_path).name!r} does not name its grid (_qs8x6a0.75); give --quilt 8x6")
+        grid = parsed[:2]
+    out = png_output(output)
+    views = quilt_to_views(read_png(quilt_path), grid[0], grid[1], count)
+    h3d = interleave(quilt_to_bank_order(views))
+    record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
+                     source=str(Path(quilt_path).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
+                     output_gamma="sRGB")
+    write_png(out, h3d)
+    write_sidecar(out, record)
+    return record
+
+
+# -- refocus ---------------------------------------------------------------------------------------
+def _views_geometry(h3d: np.ndarray, info: dict[str, Any]) -> tuple[np.ndarray, tuple, tuple, float]:
+    ny, nx = info["ppl"]
+    focal = _need(info["focal"], "focal length", "--focal")
+    sx = _need(info["pixel_pitch"], "pixel pitch", "--pixel-pitch")
+    sy = info["pixel_pitch_y"] or sx
+    try:
+        views = extract(h3d[..., :3], (ny, nx))
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    u = (np.arange(nx) + 0.5 - nx / 2) * sx
+    v = (ny / 2 - np.arange(ny) - 0.5) * sy
+    pitch = (nx * sx, ny * sy)
+    return views, (u, v), pitch, focal
+
+
+def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any], *,
+                 depth: float | None = None, sweep: tuple[float, float, int] | None = None) -> dict[str, Any]:
+    """Refocus at ``depth`` mm, or at ``sweep = (near, far, count)`` depths with a contact sheet.
+
+    A sweep writes ``output`` as the contact sheet and ``stem_NNN.png`` per plane beside it.
+    """
+    image = read_png(h3d_path)
+    views, offsets, pitch, focal = _views_geometry(image, info)
+    out = png_output(output)
+    lin = to_linear(views, np.float32)
+    depths = [float(depth)] if sweep is None else list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
+    if not depths or (sweep is not None and int(sweep[2]) < 2):
+        raise ConfigError("--sweep needs at least 2 planes")
+    planes = [refocus_linear(lin, offsets, pitch, focal, d) for d in depths]
+    energy = [gradient_energy(p) for p in planes]
+    record = base_record("refocus", source=str(Path(h3d_path).resolve()), depths_mm=depths,
+                     gradient_energy=energy, output_gamma="sRGB")
+    encoded = [from_linear(p, image.dtype) for p in planes]
+    if sweep is None:
+        write_png(out, encoded[0])
+    else:
+        for n, img in enumerate(encoded):
+            write_png(out.with_name(f"{out.stem}_{n:03d}.png"), img)
+        write_png(out, contact_sheet(encoded))
+        record["sharpest_depth_mm"] = depths[int(np.argmax(energy))]
+    write_sidecar(out, record)
+    return record
+
+
+# -- preview ---------------------------------------------------------------------------------------
+def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any], *, frames: int = 12,
+                 scale: int | None = None, duration_ms: int = 120) -> dict[str, Any]:
+    """Write ``output`` (.gif) sweeping the viewing angle, and ``stem.png``, its contact sheet."""
+    from PIL import Image
+
+    from ..image.preview import enlarge, preview_frames, viewer_angles
+
+    output = Path(output)
+    if output.suffix.lower() != ".gif":
+        raise ConfigError(f"the preview {str(output)!r} must be a .gif file")
+    image = read_png(h3d_path)
+    ny, nx = info["ppl"]
+    focal = _need(info["focal"], "focal length", "--focal")
+    sx = _need(info["pixel_pitch"], "pixel pitch", "--pixel-pitch")
+    if image.shape[0] % ny or image.shape[1] % nx:
+        raise ConfigError(f"a {image.shape[1]}x{image.shape[0]} image does not hold whole lenses of "
+                          f"{nx}x{ny} pixels; check --ppl")
+    if frames < 2:
+        raise ConfigError("--frames must be at least 2")
+    sheet_path = output.with_suffix(".png")
+    check_writable(output)
+    check_writable(sheet_path)
+    angles = viewer_angles(nx * sx, focal, frames)
+    shots = preview_frames(image[..., :3], (ny, nx), sx, focal, angles)
+    if shots.dtype == np.uint16:
+        shots = (shots >> 8).astype(np.uint8)
+    aspect = max(1, round(nx / ny)) if ny < nx else 1  # a lenticular lens is nx pixels wide, one row high
+    if scale is None:  # lens-sized pixels, about 480 pixels across
+        scale = max(1, 480 // max(shots.shape[1], shots.shape[2] * aspect))
+    big = [enlarge(f, (scale, scale * aspect)) for f in shots]
+    with atomic_path(output) as tmp:
+        Image.fromarray(big[0]).save(tmp, format="GIF", save_all=True, append_images=[Image.fromarray(b) for b in big[1:]],
+                                     duration=duration_ms, loop=0)
+    write_png(sheet_path, contact_sheet(big))
+    record = base_record("preview", source=str(Path(h3d_path).resolve()), angles_deg=list(map(float, angles)),
+                     frames=frames)
+    with atomic_path(output.with_suffix(".json")) as tmp:
+        tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+    return record
+
+
+
+# -- the display a mapping is for --------------------------------------------------------------------
+def mapping_for_display(name: str, display: dict[str, Any], lens_array: Any, *,
+                        calibration_path: str | None = None, **options: Any) -> tuple[Mapping, Panel]:
+    """The mapping ``name`` for the display of a preset or CLI lens array, and its physical panel.
+
+    Presets with a mapping (alioscopy-42, philips-20) describe the view-space
+    array; their physical panel is in ``display['physical_panel']``.
+    """
+    from ..mappings import build_mapping, options_from_display
+
+    phys = display.get("physical_panel")
+    if phys:
+        (w, h), (sx, sy) = phys["size_px"], phys["pixel_pitch_mm"]
+        panel = Panel(int(w), int(h), float(sx), float(sy))
+    else:
+        panel = lens_array.panel
+    fields = {k: display[k] for k in ("slant_deg", "views") if display.get(k) is not None}
+    fields.update(lens_pitch=lens_array.pitch_x, pixel_pitch=panel.pitch_x)
+    if calibration_path is not None:
+        try:
+            options["calibration"] = json.loads(Path(calibration_path).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InputError(f"cannot read the calibration {calibration_path!r}: {exc.strerror}") from None
+        except ValueError as exc:
+            raise InputError(f"the calibration {calibration_path!r} is not JSON: {exc}") from None
+    opts = options_from_display(fields, lens_array.pitch_x / panel.pitch_x, **options)
+    return build_mapping(name, opts), panel

@@ -1,0 +1,42 @@
+"""The sidecar record and the output checks every command shares.
+
+Every image povh3d writes has a JSON sidecar (``name.json`` beside
+``name.png``); its base record is built here and only here, and every output
+path is checked here before any work starts.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._version import __version__
+from ..errors import ConfigError
+from ..geometry.lens_array import LensArray
+from ..image.io import check_writable, write_png, write_sidecar
+
+
+def base_record(kind: str, lens_array: LensArray | None = None, **extra: Any) -> dict[str, Any]:
+    """``povh3d_version``, ``kind`` (``h3d``, ``panel``, ``views``, ...), the lens array, then ``extra``."""
+    record: dict[str, Any] = {"povh3d_version": __version__, "kind": kind}
+    if lens_array is not None:
+        record["lens_array"] = lens_array.describe()
+    record.update(extra)
+    return record
+
+
+def png_output(path: str | Path, what: str = "output") -> Path:
+    """``path`` as a PNG output: a ``.png`` name in a writable folder (checked before any work)."""
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise ConfigError(f"the {what} {str(path)!r} must be a .png file")
+    check_writable(path)
+    return path
+
+
+def write_image(path: str | Path, image: np.ndarray, record: dict[str, Any]) -> None:
+    """Write ``image`` and its sidecar ``record`` beside it."""
+    write_png(path, image)
+    write_sidecar(path, record)

@@ -1,0 +1,116 @@
+"""The one render path: a ``RenderRequest`` in, the H3D (or panel) image and its
+sidecar out, for a still or every frame of an animation.
+
+``render`` prepares once what every frame shares (the scene, or a mesh model
+put on the default stage; the quality, when it is ``auto``), then hands
+``render_frame`` to the still or to the animation loop.  ``render_frame`` runs
+the method, applies the mapping and builds the sidecar record: a frame of an
+animation and a still go through exactly the same steps.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from functools import partial
+from typing import Any
+
+from ..engine.auto import AutoChoice, resolve_auto
+from ..engine.methods import run_method
+from ..engine.quality import Progress, Quality, RenderSettings
+from ..image.interleave import extract
+from .stage import prepare_stage
+from ..povray.sandbox import describe as describe_sandbox
+from ..scene.scene import Scene, load_scene
+from .animation import Frame, render_sequence
+from .records import base_record, png_output, write_image
+from .request import RenderRequest
+from .views import check_views_dir, write_views
+
+
+def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
+    """Carry out ``request``; return the sidecar record of the still, or the animation's report.
+
+    Every output is checked before any work and written atomically.
+    """
+    output = png_output(request.output)
+    if request.views_dir is not None:
+        check_views_dir(request.views_dir)
+    scene, model_record = load_content(request)
+    settings, auto = _resolve_quality(request, scene)
+    frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record)
+    if request.frames is None:
+        still = frame(None, progress)
+        if still.views is not None:
+            write_views(request.views_dir, still.views, request.render_array, still.record)
+        write_image(output, still.image, still.record)
+        return still.record
+    return render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
+                           video=request.video, fps=request.fps)
+
+
+def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
+    """The scene to render: the request's own, or a mesh model staged for the display (converted
+    once, cached by content); and the model's record for the sidecar (None for a scene)."""
+    if not request.is_model:
+        return load_scene(request.source, request.include_dirs), None
+    m = request.model
+    stage, model_record = prepare_stage(request.source, request.render_array, depth=m.depth, shading=m.shading,
+                                        max_triangles=m.max_triangles, cache_dir=request.settings.cache_dir)
+    return load_scene(stage, request.include_dirs), model_record
+
+
+def _resolve_quality(request: RenderRequest, scene: Scene) -> tuple[RenderSettings, AutoChoice | None]:
+    """``--quality auto`` chosen once for the whole request (on the first frame's clock)."""
+    first_clock = None
+    if request.frames is not None and scene.uses_clock:
+        first_clock = request.frames.clock(request.frames.first)
+    probe = replace(request.settings, clock=first_clock)
+    chosen, auto = resolve_auto(scene, request.render_array, request.method, probe, **request.method_options)
+    return replace(chosen, clock=None), auto
+
+
+def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
+                 progress: Progress | None = None, *, auto: AutoChoice | None = None,
+                 model: dict[str, Any] | None = None) -> Frame:
+    """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default)."""
+    array = request.render_array
+    start = time.perf_counter()
+    result = run_method(request.method, scene, array, replace(settings, clock=clock), progress,
+                        crop=request.crop, **request.method_options)
+    seconds = time.perf_counter() - start
+    h3d = result.h3d
+    expected = (array.panel.height, array.panel.width)
+    if h3d.shape[:2] != expected:  # a bug, never the user's doing
+        raise RuntimeError(f"{request.method} produced {h3d.shape[:2]}, expected {expected}")
+
+    timings = {"render_seconds": round(seconds, 4), **result.stats.as_dict()}
+    record = base_record(
+        "h3d", array, method=request.method, display=dict(request.display), scene=str(scene.path),
+        scene_sha256=scene.digest,
+        quality={**quality_record(settings, result.quality), "bit_depth": settings.bit_depth,
+                 "front_clearance_mm": result.back_off},
+        output_gamma="sRGB", povray_version=result.stats.povray_version,
+        sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
+    )
+    if auto is not None:
+        record["quality"].update(level="auto", auto=auto.as_dict())
+    if result.record is not None:
+        record[request.method.replace("-", "_")] = result.record
+    if result.crop is not None:
+        record["crop"] = result.crop
+    if model is not None:
+        record["model"] = model
+    views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
+    if request.mapping is not None:
+        h3d = request.mapping.apply(h3d, request.image_size)
+        record.update(kind="panel", mapping=request.mapping.name, size_px=list(request.image_size))
+    return Frame(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
+
+
+def quality_record(settings: RenderSettings, rendered: Quality) -> dict[str, Any]:
+    """The quality asked for and as rendered (a method without sub-views antialiases instead)."""
+    level = settings.quality if isinstance(settings.quality, str) else "custom"
+    return {"level": level, "setting": rendered.label, "povray_options": list(rendered.options),
+            "subviews": rendered.subviews, "footprint_samples": rendered.footprint,
+            "max_trace_level": rendered.max_trace_level}

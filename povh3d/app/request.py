@@ -1,0 +1,148 @@
+"""One render, described whole: the ``RenderRequest`` that the CLI and the Python
+API both build, and that ``app.render.render`` carries out.
+
+A request names the content (a POV-Ray scene or a mesh model), the display
+(lens array, and the pixel mapping of a slanted panel), the method and its
+options, the quality, and every output (image, views, animation frames, video).
+It is frozen and checked on construction: a request that exists can be rendered.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping as MappingABC
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from ..engine.methods import get_method
+from ..engine.quality import RenderSettings
+from ..errors import ConfigError
+from ..geometry.crop import CropSettings
+from ..geometry.lens_array import LensArray, Panel
+from ..image.video import check_video_path
+from ..mappings import Mapping
+from ..mesh.formats import is_mesh_file
+from .animation import FrameRange
+
+SHADINGS = ("auto", "smooth", "flat")
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """How a mesh model is put on the default stage (``app.stage``).
+
+    Attributes
+    ----------
+    depth : float or None, mm      the model's depth (None: the display's depth budget)
+    shading : {'auto', 'smooth', 'flat'}
+    max_triangles : int, 'auto' or None   simplify to this many triangles
+    """
+
+    depth: float | None = None
+    shading: str = "auto"
+    max_triangles: int | str | None = None
+
+    def __post_init__(self) -> None:
+        if self.depth is not None and not (math.isfinite(self.depth) and self.depth > 0):
+            raise ConfigError(f"--depth must be a positive number of mm, got {self.depth!r}")
+        if self.shading not in SHADINGS:
+            raise ConfigError(f"shading must be one of {', '.join(SHADINGS)}, got {self.shading!r}")
+        m = self.max_triangles
+        if m is not None and m != "auto" and (isinstance(m, bool) or not isinstance(m, int) or m < 4):
+            raise ConfigError(f"--max-triangles takes a whole number >= 4 or 'auto', got {m!r}")
+
+
+@dataclass(frozen=True)
+class RenderRequest:
+    """Everything one render needs.
+
+    Attributes
+    ----------
+    source : Path                  a POV-Ray scene (.pov) or a mesh model (.obj .stl .ply ...)
+    lens_array : LensArray         the display's lens array
+    output : Path                  the PNG to write (frames: ``OUT_nnnn.png``)
+    display : mapping              what the display is (preset name and fields), for the sidecar
+    method : str                   a name in ``engine.methods.METHODS``
+    method_options : mapping       the method's own options (single-stage: lenslet, ior);
+                                   defaults filled in from the method, unknown names refused
+    settings : RenderSettings      quality and how POV-Ray runs
+    crop : CropSettings or None    trace only where objects can be (methods that crop)
+    mapping : Mapping or None      a slanted panel's pixel mapping: render exactly the
+                                   views it reads, then map them onto ``mapped_panel``
+    mapped_panel : Panel or None   the physical panel the mapping fills (with ``mapping``)
+    include_dirs : tuple of Path   extra folders POV-Ray searches for includes
+    views_dir : Path or None       also write the view stack here (stills only)
+    model : ModelOptions           how a mesh model is staged (models only)
+    frames : FrameRange or None    render an animation: one image per clock value
+    video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
+    fps : float                    video frames per second
+    """
+
+    source: Path
+    lens_array: LensArray
+    output: Path
+    display: MappingABC[str, Any] = field(default_factory=dict)
+    method: str = "multi-ortho"
+    method_options: MappingABC[str, Any] = field(default_factory=dict)
+    settings: RenderSettings = field(default_factory=RenderSettings)
+    crop: CropSettings | None = None
+    mapping: Mapping | None = None
+    mapped_panel: Panel | None = None
+    include_dirs: tuple[Path, ...] = ()
+    views_dir: Path | None = None
+    model: ModelOptions = field(default_factory=ModelOptions)
+    frames: FrameRange | None = None
+    video: Path | None = None
+    fps: float = 24.0
+
+    def __post_init__(self) -> None:
+        set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
+        set_("source", Path(self.source))
+        set_("output", Path(self.output))
+        set_("include_dirs", tuple(Path(d) for d in self.include_dirs))
+        if self.views_dir is not None:
+            set_("views_dir", Path(self.views_dir))
+        if not isinstance(self.lens_array, LensArray):
+            raise ConfigError(f"lens_array must be a povh3d.LensArray, got {type(self.lens_array).__name__}")
+        if not isinstance(self.settings, RenderSettings):
+            raise ConfigError(f"settings must be a RenderSettings, got {type(self.settings).__name__}")
+        if self.output.suffix.lower() != ".png":
+            raise ConfigError(f"the output {str(self.output)!r} must be a .png file")
+        set_("method_options", get_method(self.method).resolve_options(self.method, self.method_options))
+        if (self.mapping is None) != (self.mapped_panel is None):
+            raise ConfigError("a mapping needs the panel it fills (mapped_panel), and mapped_panel a mapping")
+        if self.frames is None:
+            for name in ("video",):
+                if getattr(self, name) is not None:
+                    raise ConfigError(f"--{name} needs --frames FIRST:LAST")
+        elif self.views_dir is not None:
+            raise ConfigError("--views-dir cannot be combined with --frames; render one frame for its views")
+        if self.video is not None:
+            set_("video", check_video_path(self.video))
+        if not (isinstance(self.fps, (int, float)) and math.isfinite(self.fps) and self.fps > 0):
+            raise ConfigError(f"--fps must be a positive number, got {self.fps}")
+        if self.views_dir is not None:
+            self.render_array.require_views()
+
+    @property
+    def is_model(self) -> bool:
+        """Whether ``source`` is a mesh model (put on the default stage) rather than a scene."""
+        return is_mesh_file(str(self.source))
+
+    @property
+    def render_array(self) -> LensArray:
+        """The array the method renders: the display's, or the view-space array a mapping reads."""
+        if self.mapping is None:
+            return self.lens_array
+        return self.mapping.render_array(self.mapped_panel, self.lens_array.focal)
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """``(W, H)`` of the image written: the mapped panel, or the H3D image."""
+        panel = self.mapped_panel or self.lens_array.panel
+        return panel.width, panel.height
+
+
+def request_fields() -> tuple[str, ...]:
+    return tuple(f.name for f in fields(RenderRequest))

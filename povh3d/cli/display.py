@@ -1,0 +1,199 @@
+"""Commands on displays and images: ``presets``, ``info``, ``interleave``, ``extract``,
+``map``, ``resample``, ``quilt``, ``refocus``, ``preview``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from ..errors import ConfigError
+from .options import (add_array_options, add_image_lens_options, add_mapping_options, lens_array_from_args,
+                      mapping_from_args, parse_pair, ppl_arg)
+
+
+def cmd_interleave(args: argparse.Namespace) -> int:
+    from ..app.views import interleave_dir
+
+    record = interleave_dir(args.views_dir, args.output)
+    print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  from {record['views'][0]}x{record['views'][1]} views")
+    return 0
+
+
+def cmd_extract(args: argparse.Namespace) -> int:
+    from ..app.views import extract_file
+
+    if args.ppl is None:  # the lens array from the sidecar; hex / fractional PPL resampled
+        record = extract_file(args.h3d, None, args.output)
+        nx, ny = record["views"]
+    else:
+        ppl = parse_pair(args.ppl, "--ppl", integral=True)
+        nx, ny = ppl if isinstance(ppl, tuple) else (ppl, 1)
+        record = extract_file(args.h3d, (ny, nx), args.output)
+    print(f"{args.output}  {nx}x{ny} views of {record['view_size_px'][0]}x{record['view_size_px'][1]}")
+    return 0
+
+
+def cmd_presets(args: argparse.Namespace) -> int:
+    from ..geometry.presets import load_presets
+
+    for name, fields in load_presets().items():
+        print(f"{name:22s} {fields.get('description', '')}")
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    lens_array, display = lens_array_from_args(args)
+    info = {**display, **lens_array.describe()}
+    if args.mapping:
+        mapping, panel = mapping_from_args(args, lens_array, display)
+        info.update(mapping.figures(panel))
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    for key, value in info.items():
+        if key == "view_angles_deg":
+            value = {k: [round(a, 3) for a in v] for k, v in value.items()}
+        print(f"{key:22s} {value}")
+    return 0
+
+
+def cmd_map(args: argparse.Namespace) -> int:
+    from ..app.display import map_file
+
+    lens_array, display = lens_array_from_args(args)
+    mapping, _ = mapping_from_args(args, lens_array, display)
+    panel = parse_pair(args.panel_size, "--panel-size", integral=True) if args.panel_size else None
+    if panel is not None and not isinstance(panel, tuple):
+        raise ConfigError(f"--panel-size takes WxH like 1920x1080, got {args.panel_size!r}")
+    record = map_file(args.input, mapping, args.output, panel)
+    print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {mapping.name}")
+    return 0
+
+
+def cmd_resample(args: argparse.Namespace) -> int:
+    from ..app.display import lens_info, resample_file
+
+    info = lens_info(args.input, ppl_arg(args.ppl), None, None)
+    ppl_out = ppl_arg(args.ppl_out, "--ppl-out")
+    if info["ppl"][0] == 1 and ppl_out[0] == 1:
+        pass
+    elif len(str(args.ppl_out).lower().split("x")) == 1:
+        ppl_out = (ppl_out[1], ppl_out[1])  # an omnidirectional image: N means NxN
+    record = resample_file(args.input, args.output, info["ppl"], ppl_out, args.mode)
+    print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {args.mode}")
+    return 0
+
+
+def cmd_quilt(args: argparse.Namespace) -> int:
+    from ..app.display import export_quilt, import_quilt, lens_info
+
+    grid = parse_pair(args.quilt, "--quilt", integral=True) if args.quilt else None
+    if grid is not None and not isinstance(grid, tuple):
+        raise ConfigError(f"--quilt takes COLSxROWS like 8x6, got {args.quilt!r}")
+    if args.import_quilt:
+        record = import_quilt(args.input, args.output, grid, args.views)
+        print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  from {record['views'][0]} views")
+        return 0
+    if grid is None:
+        raise ConfigError("give the quilt grid with --quilt COLSxROWS, e.g. --quilt 8x6")
+    ppl = lens_info(args.input, ppl_arg(args.ppl), None, None)["ppl"]
+    if ppl[0] != 1:
+        raise ConfigError("a quilt holds one row of views: use a lenticular (horizontal-only) H3D image")
+    out = export_quilt(args.input, ppl[1], grid, args.output, args.aspect)
+    print(out)
+    return 0
+
+
+def cmd_refocus(args: argparse.Namespace) -> int:
+    from ..app.display import lens_info, refocus_file
+
+    info = lens_info(args.input, ppl_arg(args.ppl), args.focal, args.pixel_pitch)
+    if (args.depth is None) == (args.sweep is None):
+        raise ConfigError("give one of --depth MM or --sweep N")
+    sweep = None
+    if args.sweep is not None:
+        f = info["focal"] or 1.0
+        sweep = (args.near if args.near is not None else -10 * f, args.far if args.far is not None else 10 * f,
+                 args.sweep)
+    record = refocus_file(args.input, args.output, info, depth=args.depth, sweep=sweep)
+    extra = f"  sharpest at {record['sharpest_depth_mm']:.3g} mm" if "sharpest_depth_mm" in record else ""
+    print(f"{args.output}  {len(record['depths_mm'])} plane(s){extra}")
+    return 0
+
+
+def cmd_preview(args: argparse.Namespace) -> int:
+    from ..app.display import lens_info, preview_file
+
+    info = lens_info(args.input, ppl_arg(args.ppl), args.focal, args.pixel_pitch)
+    preview_file(args.input, args.output, info, frames=args.frames, scale=args.scale)
+    print(f"{args.output}  {args.frames} frames, contact sheet {Path(args.output).with_suffix('.png')}")
+    return 0
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser("interleave", help="interleave a folder of views into an H3D image")
+    p.add_argument("views_dir")
+    p.add_argument("-o", "--output", required=True)
+    p.set_defaults(func=cmd_interleave)
+
+    p = sub.add_parser("extract", help="extract the views of an H3D image")
+    p.add_argument("h3d")
+    p.add_argument("--ppl", help="pixels per lens NxxNy (lenticular: Nx); default: the lens array "
+                   "in the image's sidecar (hex and fractional PPL are resampled lens by lens)")
+    p.add_argument("-o", "--output", required=True, help="folder for v_LLL_KKK.png")
+    p.set_defaults(func=cmd_extract)
+
+    p = sub.add_parser("presets", help="list the display presets")
+    p.set_defaults(func=cmd_presets)
+
+    p = sub.add_parser("info", help="derived values of a display / lens array")
+    p.add_argument("--json", action="store_true")
+    add_array_options(p)
+    add_mapping_options(p)
+    p.set_defaults(func=cmd_info)
+    p = sub.add_parser("map", help="map an unmapped view-space H3D image onto a display's subpixels")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True, help="panel PNG to write")
+    p.add_argument("--panel-size", metavar="WxH", help="panel size (default: the one the image fits)")
+    add_array_options(p)
+    add_mapping_options(p, required=True)
+    p.set_defaults(func=cmd_map)
+
+    p = sub.add_parser("resample", help="resample every micro-image (thesis appendix C)")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True)
+    p.add_argument("--ppl", help="pixels per lens of the input (default: from the sidecar)")
+    p.add_argument("--ppl-out", required=True, help="pixels per lens of the output")
+    p.add_argument("--mode", choices=("micro", "lenses"), default="micro",
+                   help="micro: resize micro-images; lenses: fewer pixels per lens, more lenses")
+    p.set_defaults(func=cmd_resample)
+
+    p = sub.add_parser("quilt", help="export the views of an H3D image as a quilt, or import one")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True, help="export: folder; import: H3D PNG")
+    p.add_argument("--quilt", metavar="COLSxROWS", help="grid, e.g. 8x6 (import: default from the name)")
+    p.add_argument("--import", dest="import_quilt", action="store_true", help="quilt -> H3D image")
+    p.add_argument("--ppl", help="pixels per lens (default: from the sidecar)")
+    p.add_argument("--views", type=int, help="import: how many tiles hold views (default: all)")
+    p.add_argument("--aspect", type=float, help="export: view aspect for the name (default: tile w/h)")
+    p.set_defaults(func=cmd_quilt)
+
+    p = sub.add_parser("refocus", help="refocus an H3D image at a depth (shift-and-sum over views)")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True)
+    p.add_argument("--depth", type=float, metavar="MM", help="depth of the focal plane (> 0 behind the screen)")
+    p.add_argument("--sweep", type=int, metavar="N", help="N planes from --near to --far, with a contact sheet")
+    p.add_argument("--near", type=float, metavar="MM")
+    p.add_argument("--far", type=float, metavar="MM")
+    add_image_lens_options(p)
+    p.set_defaults(func=cmd_refocus)
+
+    p = sub.add_parser("preview", help="what a viewer sees across the viewing angle (GIF + contact sheet)")
+    p.add_argument("input")
+    p.add_argument("-o", "--output", required=True, help="preview .gif (the contact sheet goes beside it as .png)")
+    p.add_argument("--frames", type=int, default=12)
+    p.add_argument("--scale", type=int, help="enlarge each lens to this many pixels")
+    add_image_lens_options(p)
+    p.set_defaults(func=cmd_preview)

@@ -1,0 +1,142 @@
+"""Options shared by several commands, and turning them into povh3d's own values.
+
+Parsing only: numbers and pairs are checked here, everything they mean is
+decided by ``povh3d.app`` and below.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from typing import Any
+
+from ..errors import ConfigError
+
+_PAIR = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(?:[xX]\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*)?$")
+
+
+def parse_pair(text: str, option: str, *, integral: bool) -> tuple[float, float] | float:
+    """``'60x40'`` -> (60, 40), ``'60'`` -> 60; a ConfigError naming the option otherwise."""
+    m = _PAIR.match(text)
+    example = "60x40 or 60" if integral else "8x8 or 8"
+    if not m:
+        raise ConfigError(f"{option} takes a number or WxH like {example}, got {text!r}")
+    values = [float(g) for g in m.groups() if g is not None]
+    if integral and any(v != int(v) for v in values):
+        raise ConfigError(f"{option} takes whole numbers like {example}, got {text!r}")
+    if integral:
+        values = [int(v) for v in values]
+    return tuple(values) if len(values) == 2 else values[0]
+
+
+def add_array_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("display and lens array (override the preset field by field)")
+    g.add_argument("--preset", default="demo", help="display preset (default: demo; see 'povh3d presets')")
+    g.add_argument("--grid", choices=("square", "lenticular", "hex"))
+    g.add_argument("--lenses", help="lens count, LxxLy (lenticular: Lx)")
+    g.add_argument("--ppl", help="pixels per lens, NxxNy (lenticular: Nx)")
+    g.add_argument("--pixel-pitch", type=float, help="pixel pitch, mm")
+    g.add_argument("--focal", type=float, help="lens focal length, mm")
+    g.add_argument("--rows", type=int, help="panel height in pixel rows (lenticular)")
+    g.add_argument("--panel", help="panel size WxH in pixels")
+
+
+def lens_array_from_args(args: argparse.Namespace):
+    from ..geometry.presets import describe_fields, get_preset, lens_array_from_fields, merge_overrides
+
+    overrides: dict[str, Any] = {
+        "grid": args.grid,
+        "lenses": parse_pair(args.lenses, "--lenses", integral=True) if args.lenses else None,
+        "ppl": parse_pair(args.ppl, "--ppl", integral=False) if args.ppl else None,
+        "pixel_pitch": args.pixel_pitch,
+        "focal": args.focal,
+        "rows": args.rows,
+        "panel": parse_pair(args.panel, "--panel", integral=True) if args.panel else None,
+    }
+    if overrides["panel"] is not None and not isinstance(overrides["panel"], tuple):
+        raise ConfigError(f"--panel takes WxH like 1920x1080, got {args.panel!r}")
+    fields = merge_overrides(get_preset(args.preset), overrides)
+    return lens_array_from_fields(fields), {"preset": args.preset, **describe_fields(fields)}
+
+
+def progress_bar(enabled: bool):
+    if not enabled:
+        return None, lambda: None
+    from tqdm import tqdm
+
+    bar = tqdm(total=0, unit="frame", file=sys.stderr, dynamic_ncols=True, leave=False)
+
+    def update(done: int, total: int) -> None:
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    return update, bar.close
+
+
+def warn(messages: list[str]) -> None:
+    yellow, reset = ("\033[33m", "\033[0m") if sys.stderr.isatty() else ("", "")
+    for message in messages:
+        print(f"{yellow}povh3d: warning: {message}{reset}", file=sys.stderr)
+
+
+def max_triangles(text: str | None) -> int | str | None:
+    if text is None or text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise ConfigError(f"--max-triangles takes a whole number or 'auto', got {text!r}") from None
+
+
+def add_mesh_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("mesh models (.obj .stl .ply .off .glb .gltf .3mf)")
+    shading = g.add_mutually_exclusive_group()
+    shading.add_argument("--smooth", dest="shading", action="store_const", const="smooth",
+                         help="smooth shading with vertex normals (default, except STL)")
+    shading.add_argument("--flat", dest="shading", action="store_const", const="flat",
+                         help="flat triangles (default for STL)")
+    g.add_argument("--max-triangles", metavar="N|auto",
+                   help="simplify to at most N triangles; auto: from the display's 3D resolution")
+    p.set_defaults(shading="auto")
+
+
+def add_mapping_options(p: argparse.ArgumentParser, required: bool = False) -> None:
+    g = p.add_argument_group("pixel mapping (see 'povh3d map --help')")
+    g.add_argument("--mapping", required=required, metavar="NAME",
+                   help="alioscopy, philips, slanted, triangular, distributed, smart:N, distributed-smart:N")
+    g.add_argument("--subpixels-per-lens", type=float, metavar="X", help="slanted: subpixels under one lens")
+    g.add_argument("--views", type=int, metavar="N", help="slanted: view count")
+    g.add_argument("--slant-tan", type=float, metavar="T", help="slanted: tan a (1/3 for 18.43 deg)")
+    g.add_argument("--slant-deg", type=float, metavar="DEG", help="slanted: slant angle in degrees")
+    g.add_argument("--offset", type=float, default=0.0, metavar="K", help="slanted: k_off in subpixels")
+    g.add_argument("--rows-per-view", type=int, metavar="B", help="slanted: panel rows per view row")
+    g.add_argument("--reverse-views", action="store_true", help="slanted: view N-1-v")
+    g.add_argument("--blend", action="store_true", help="slanted: blend fractional views (linear light)")
+    g.add_argument("--calibration", metavar="JSON", help="slanted: Looking Glass calibration (visual.json)")
+
+
+def mapping_from_args(args: argparse.Namespace, lens_array, display):
+    from ..app.display import mapping_for_display
+    from ..mappings import slope_from_degrees
+
+    slope = 3 * args.slant_tan if args.slant_tan is not None else (
+        slope_from_degrees(args.slant_deg) if args.slant_deg is not None else None)
+    return mapping_for_display(args.mapping, display, lens_array, calibration_path=args.calibration,
+                               per_lens=args.subpixels_per_lens, views=args.views, slope=slope,
+                               offset=args.offset or None, rows_per_view=args.rows_per_view,
+                               reverse=args.reverse_views or None, blend=args.blend or None)
+
+
+def ppl_arg(text: str | None, option: str = "--ppl") -> tuple[int, int] | None:
+    if text is None:
+        return None
+    ppl = parse_pair(text, option, integral=True)
+    return (ppl[1], ppl[0]) if isinstance(ppl, tuple) else (1, ppl)
+
+
+def add_image_lens_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--ppl", help="pixels per lens NxxNy (lenticular: Nx); default: from the sidecar")
+    p.add_argument("--focal", type=float, help="focal length, mm (default: from the sidecar)")
+    p.add_argument("--pixel-pitch", type=float, help="pixel pitch, mm (default: from the sidecar)")

@@ -1,0 +1,198 @@
+"""``povh3d render``, ``convert-mesh`` and ``bench``: parse the options, build the
+request, hand it to ``povh3d.app``, print one summary line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from ..errors import ConfigError
+from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args,
+                      mapping_from_args, max_triangles, progress_bar, warn)
+
+METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage")
+QUALITY_NAMES = ("draft", "normal", "high", "auto")
+
+
+def request_from_args(args: argparse.Namespace) -> Any:
+    """The ``RenderRequest`` the options of ``povh3d render`` describe."""
+    from ..app.animation import FrameRange, parse_clock, parse_frames
+    from ..app.request import ModelOptions, RenderRequest
+    from ..engine.quality import RenderSettings
+    from ..geometry.crop import CropSettings, parse_bbox
+
+    lens_array, display = lens_array_from_args(args)
+    mapping = panel = None
+    if args.mapping:  # render exactly the views the mapping reads, then map them
+        mapping, panel = mapping_from_args(args, lens_array, display)
+        display = {**display, "mapping": mapping.name}
+    settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
+                              timeout=args.timeout, use_cache=not args.no_cache,
+                              bit_depth=args.bit_depth, back_off=args.front_clearance,
+                              scheduler=args.scheduler, max_error_db=args.max_error)
+    frames = None
+    if args.frames is not None:
+        clock = parse_clock(args.clock) if args.clock is not None else (0.0, 1.0)
+        frames = FrameRange(*parse_frames(args.frames), *clock)
+    elif args.clock is not None:
+        raise ConfigError("--clock needs --frames FIRST:LAST")
+    return RenderRequest(
+        source=Path(args.scene), lens_array=lens_array,
+        output=Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png"),
+        display=display, method=args.method, method_options=_method_options(args), settings=settings,
+        crop=CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None),
+        mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
+        views_dir=Path(args.views_dir) if args.views_dir else None,
+        model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles)),
+        frames=frames, video=Path(args.video) if args.video else None, fps=args.fps)
+
+
+def _method_options(args: argparse.Namespace) -> dict[str, Any]:
+    """--lenslet / --ior, for the methods that take them (single-stage)."""
+    options = {"lenslet": args.lenslet, "ior": args.ior}
+    if args.method != "single-stage":
+        given = [f"--{k}" for k, v in options.items() if v is not None]
+        if given:
+            raise ConfigError(f"{' and '.join(given)} only apply to --method single-stage")
+        return {}
+    return options
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from ..app.render import render
+
+    request = request_from_args(args)
+    update, close = progress_bar(not args.quiet and sys.stderr.isatty())
+    try:
+        result = render(request, update)
+    finally:
+        close()
+    if request.frames is not None:
+        names = result["frames"]
+        print(f"{names[0]} .. {names[-1]}  {len(names)} frames  {result['rendered']} rendered, "
+              f"{result['from_cache']} from cache, {result['copied']} copies (scene "
+              f"{'reads' if result['scene_uses_clock'] else 'ignores'} the clock)  {result['seconds']:.2f} s")
+        if result["video"]:
+            print(result["video"])
+        return 0
+    if "model" in result:
+        warn(result["model"]["warnings"])
+    t = result["timings"]
+    w, h = request.image_size
+    mapping = f"  {request.mapping.name}" if request.mapping else ""
+    print(f"{request.output}  {w}x{h}  {request.method}{mapping}  "
+          f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
+    return 0
+
+
+def cmd_convert_mesh(args: argparse.Namespace) -> int:
+    from ..app.convert_mesh import convert_mesh
+
+    budget = max_triangles(args.max_triangles)
+    if budget == "auto":
+        from ..mesh.simplify import auto_budget
+
+        budget = auto_budget(lens_array_from_args(args)[0])
+    result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
+                          fit_depth=args.fit_depth, center=args.center, max_triangles=budget)
+    warn(result.warnings)
+    line = f"{result.include}  {result.ident}  {result.summary()}  {result.seconds:.2f} s"
+    if result.simplification:
+        s = result.simplification
+        line += (f"  (simplified from {s['triangles_before']} triangles; "
+                 f"silhouette error {100 * s['silhouette_error']:.3f} %)")
+    print(line)
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from ..app.bench import default_trials, format_table, run_bench, write_report
+    from ..scene.scene import load_scene
+
+    lens_array, _ = lens_array_from_args(args)
+    scene = load_scene(args.scene, tuple(args.include))
+    trials = default_trials(args.methods.split(","))
+    update, close = progress_bar(not args.quiet and sys.stderr.isatty())
+    try:
+        report = run_bench(scene, lens_array, trials, reference_samples=args.reference_samples,
+                           on_trial=(lambda done, total, what: update(done, total)) if update else None)
+    finally:
+        close()
+    paths = write_report(report, args.output)
+    print(format_table(report))
+    print(f"\n{paths['csv']}  {paths['table']}  {paths['plot']}")
+    return 0
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser("render", help="render a POV-Ray scene to an H3D image")
+    p.add_argument("scene", help="POV-Ray scene without a camera (.pov), or a mesh model (.obj .stl .ply ...)")
+    p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
+    p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
+    p.add_argument("--quality", choices=QUALITY_NAMES, default="normal",
+                   help="draft: one ray per pixel; normal: antialiased; high: 256 footprint samples, "
+                   "converged; auto: the fastest that meets --max-error (see 'povh3d bench')")
+    p.add_argument("--max-error", type=float, metavar="DB",
+                   help="with --quality auto: the lowest PSNR against a converged reference to accept")
+    p.add_argument("--jobs", type=int, help="parallel POV-Ray processes")
+    p.add_argument("--threads", type=int, help="POV-Ray threads per process")
+    p.add_argument("--timeout", type=float, help="seconds allowed to each POV-Ray run")
+    p.add_argument("--views-dir", help="also write the view stack here (v_LLL_KKK.png)")
+    p.add_argument("--no-cache", action="store_true", help="render everything again, ignore the cache")
+    p.add_argument("--bit-depth", type=int, choices=(8, 16), default=8)
+    p.add_argument("--front-clearance", type=float, metavar="MM",
+                   help="how far in front of the screen rays start (default: 4 panel widths)")
+    p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
+    p.add_argument("--crop", choices=("auto", "off", "measure"), default="auto",
+                   help="trace each view only where objects can be (multi-ortho): auto = from --bbox, "
+                        "measure = find it with a pre-pass, off = trace everything")
+    p.add_argument("--bbox", metavar="X0,Y0,Z0,X1,Y1,Z1",
+                   help="a box (mm) that holds every object of the scene, for --crop auto")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    g = p.add_argument_group("animation and cluster")
+    g.add_argument("--frames", metavar="FIRST:LAST",
+                   help="render frames FIRST..LAST as OUT_nnnn.png (POV-Ray's +KFI/+KFF)")
+    g.add_argument("--clock", metavar="START:END",
+                   help="clock at the first and last frame (POV-Ray's +KI/+KF; default 0:1)")
+    g.add_argument("--video", metavar="FILE", help="also assemble the frames into FILE (.mp4 or .gif)")
+    g.add_argument("--fps", type=float, default=24.0, help="video frames per second (default 24)")
+    g.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                   help="render on this Dask cluster instead of local processes")
+    g = p.add_argument_group("single-stage")
+    g.add_argument("--lenslet", choices=("spherical", "conic"),
+                   help="single-stage lenslet surface (default: conic, aberration-free)")
+    g.add_argument("--ior", type=float, help="single-stage lenslet index of refraction; the radius "
+                   "follows from the lens-maker equation (default: an optically thin lens)")
+    p.add_argument("--depth", type=float, metavar="MM",
+                   help="a model's depth on the display (default: the depth budget the lens array shows sharply)")
+    add_mesh_options(p)
+    add_array_options(p)
+    add_mapping_options(p)
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("convert-mesh", help="convert a mesh model to a POV-Ray mesh2 include")
+    p.add_argument("model", help="model file: .obj .stl .ply .off .glb .gltf .3mf")
+    p.add_argument("-o", "--output", help="include to write (default: MODEL.inc beside the model)")
+    p.add_argument("--name", help="identifier to declare (default: from the file name)")
+    p.add_argument("--unit", choices=("mm", "cm", "m", "in"),
+                   help="the model's unit (default: the file's, else mm; glTF: m)")
+    p.add_argument("--fit-depth", type=float, metavar="MM", help="scale the model to this depth (z extent)")
+    p.add_argument("--center", action="store_true", help="centre the model's bounding box on the origin")
+    add_mesh_options(p)
+    add_array_options(p)  # only for --max-triangles auto
+    p.set_defaults(func=cmd_convert_mesh)
+
+    p = sub.add_parser("bench", help="run time against error of every method and quality setting")
+    p.add_argument("scene", help="POV-Ray scene without a camera (.pov)")
+    p.add_argument("-o", "--output", default="bench", help="folder for bench.csv, bench.md, bench.png")
+    p.add_argument("--methods", default="multi-ortho,pinhole",
+                   help="comma-separated methods to bench, e.g. multi-ortho,pinhole,single-stage:conic,"
+                   "single-stage:spherical (default: multi-ortho,pinhole)")
+    p.add_argument("--reference-samples", type=int, default=256, metavar="N",
+                   help="footprint samples per pixel of the reference (default 256)")
+    p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_array_options(p)
+    p.set_defaults(func=cmd_bench)

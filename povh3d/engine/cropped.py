@@ -1,0 +1,128 @@
+"""The one-pass view bank traced only where objects can be: coverage, crop, paste.
+
+``crop.py`` decides which lenses of each view to keep; this module runs the
+renders that decision needs (through ``render.render_frames``, so every image
+is cached and every POV-Ray process goes through ``povray.py``):
+
+1. the coverage, unless a bounding box was given: the same mesh camera at the
+   same rays with ``+Q0 +UA -A`` and a transparent background appended after the
+   scene.  At quality 0 POV-Ray shades nothing (quick colours, opaque even for
+   glass) but intersects everything, so alpha is exactly "this ray met an object
+   that is not ``no_image``";
+2. the cropped render: one quad per kept tile (per footprint sample, banks
+   stacked as in ``cameras.view_bank_mesh``);
+3. the paste into a canvas of the background colour, read at the cuts.
+
+Returns None where cropping does not apply, with the reason, so the caller
+renders the whole bank.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..geometry.cameras import stack_frames, view_bank_frames
+from ..geometry.crop import (CropPlan, CropSettings, bbox_hits, fill_colour, layout_independent,
+    mask_hits, paste, plan_crop)
+from ..errors import InputError
+from ..geometry.footprint import CENTRE
+from ..geometry.lens_array import LensArray
+from .quality import Progress, RenderSettings
+from .frames import RenderStats, mesh_camera_batch, render_frames
+from ..scene.scene import Scene
+
+COVERAGE_OPTIONS = ("-A", "+Q0", "+UA")
+
+
+@dataclass
+class CroppedTiles:
+    """The uncropped tiled image (extra row and column removed) and what the crop did."""
+
+    tiled: np.ndarray | None      # (K*Ny*Ly, Nx*Lx, C), one bank per sample; None: not cropped
+    stats: RenderStats | None
+    info: dict[str, Any]
+
+
+def coverage_mask(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
+                  header: dict[str, Any], samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
+    """(Ny*Ly, Nx*Lx) bool: the tiled image's pixels one of whose ``samples`` meets an object."""
+    batch = mesh_camera_batch("coverage.pov.j2", view_bank_frames(lens_array, back_off, samples), COVERAGE_OPTIONS)
+    images, stats = render_frames(scene, batch, settings, method="multi-ortho coverage", header=header)
+    alpha = stack_frames(images)[..., -1]
+    return (alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0), stats
+
+
+def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
+                         crop: CropSettings, header: dict[str, Any],
+                         progress: Progress | None = None, samples: np.ndarray = CENTRE) -> CroppedTiles:
+    """Render the one-pass view bank cropped to what the objects can reach.
+
+    ``samples`` are the footprint samples of ``view_bank_mesh``; each gets a
+    bank, cropped alike, so the reach is that of the pixel's whole footprint.
+
+    Raises
+    ------
+    InputError
+        A ``--bbox`` that does not hold every object (seen at the cuts).
+    """
+    info: dict[str, Any] = {"mode": crop.mode}
+    if crop.mode == "off":
+        return CroppedTiles(None, None, {**info, "applied": False, "reason": "--crop off"})
+    if crop.mode == "auto" and crop.bbox is None:
+        return CroppedTiles(None, None, {**info, "applied": False,
+                                         "reason": "no --bbox given (--crop measure finds it with a pre-pass)"})
+    if lens_array.views is None:
+        return CroppedTiles(None, None, {**info, "applied": False,
+                                         "reason": "fractional pixels per lens: one quad per lens, not cropped"})
+    ok, block = layout_independent(settings.options)
+    if not ok:
+        return CroppedTiles(None, None, {**info, "applied": False,
+                                         "reason": "POV-Ray's antialiasing jitter depends on where a pixel sits "
+                                                   "in the image; crop gives identical pixels only with -J or -A"})
+    features = scene.features
+    if not features.background_is_constant:
+        used = sorted(features.used & {"fog", "media", "sky_sphere", "rainbow"})
+        return CroppedTiles(None, None, {**info, "applied": False,
+                                         "reason": f"the scene uses {', '.join(used)}: rays that miss every "
+                                                   "object are not one colour, so nothing can be filled"})
+    start = time.perf_counter()
+    if crop.mode == "auto":
+        col_hits, row_hits = bbox_hits(lens_array, crop.bbox, angular=bool(np.any(samples[:, 2:])))
+        info["source"] = "bbox"
+    else:
+        mask, _ = coverage_mask(scene, lens_array, back_off, settings, header, samples)
+        col_hits, row_hits = mask_hits(mask, lens_array.views)
+        info["source"] = "coverage pre-pass"
+        info["coverage_fraction"] = round(float(mask.mean()), 6)
+    info["plan_seconds"] = round(time.perf_counter() - start, 4)
+    plan = plan_crop(col_hits, row_hits, crop.margin, block)
+    info.update(plan.describe())
+    if plan.is_full:
+        return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
+
+    tiled, stats = _render_plan(scene, lens_array, back_off, settings, plan, header, progress, samples)
+    banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])
+    fills = [fill_colour(bank, plan) for bank in banks]
+    fill = fills[0] if all(f is not None and np.array_equal(f, fills[0]) for f in fills) else None
+    if fill is None:
+        if info["source"] == "bbox":
+            raise InputError(f"objects reach outside --bbox {list(crop.bbox[0]) + list(crop.bbox[1])} "
+                             "(the pixels at the crop edges are not all background); give a box that "
+                             "holds every object, or --crop off")
+        return CroppedTiles(None, None, {**info, "applied": False,
+                                         "reason": "the pixels at the crop edges differ: background not constant"})
+    info.update(applied=True, fill=fill.tolist())
+    return CroppedTiles(np.concatenate([paste(bank, plan, fill) for bank in banks]), stats, info)
+
+
+def _render_plan(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
+                 plan: CropPlan, header: dict[str, Any], progress: Progress | None, samples: np.ndarray
+                 ) -> tuple[np.ndarray, RenderStats]:
+    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples, plan))
+    images, stats = render_frames(scene, batch, settings, method="multi-ortho", header=header,
+                                  progress=progress)
+    return stack_frames(images), stats

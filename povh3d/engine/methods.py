@@ -1,0 +1,206 @@
+"""The rendering methods, registered by name (``METHODS``).
+
+- ``multi-ortho``: the multi-orthographic camera bank traced in one POV-Ray
+  pass through a mesh camera (one face per view, or per lens with fractional
+  pixels per lens); the default, about as fast as a plain 2D render of the panel.
+- ``multi-ortho-views``: the same bank as one orthographic camera per view
+  (the BBC method as the thesis ran it), views interleaved in NumPy.
+- ``pinhole``: one perspective camera per lens, the traditional baseline.
+- ``single-stage``: a virtual array of CSG lenslets with an index of
+  refraction, rendered by one orthographic camera (thesis 3.3): a physical
+  simulation, compared with the others by an error figure (``single_stage``).
+
+Every method traces the ray of a pixel (docs/geometry.md); point-sampled they
+agree.  A method is pure around the renderer: its ``plan`` says which frames to
+ask POV-Ray for and how to assemble the returned images into the H3D image;
+its hooks say what it supports (footprint samples, crop, back-off rounding)
+and what the sidecar records of it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..geometry.cameras import (bank_back_off, camera_mesh, check_clearance, default_back_off,
+                                ortho_view_frames, pinhole_frames, stack_frames, view_bank_frames)
+from ..geometry.crop import CropSettings
+from ..geometry.lens_array import LensArray
+from ..image.colour import mean_in_linear_light
+from ..image.interleave import interleave, tile_elemental_images, untile_views
+from ..scene.scene import Scene
+from ..system import cpu_count
+from .cropped import render_cropped_tiles
+from .frames import FrameBatch, RenderStats, mesh_camera_batch, render_frames
+from .quality import Progress, Quality, RenderSettings, quality_settings
+from .single_stage import SingleStagePlan, default_depth, lenslet_for
+
+
+@dataclass(frozen=True)
+class MethodPlan:
+    """What one render of a method asks POV-Ray for, and how it becomes the H3D image."""
+
+    batch: FrameBatch
+    assemble: Callable[[list[np.ndarray]], np.ndarray]
+    record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
+
+
+def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+    if lens_array.grid == "hex":
+        lens_array.require_views()  # raises "render hex with single-stage"
+    if not lens_array.views:  # fractional PPL: one quad per lens
+        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [camera_mesh(lens_array, back_off)]),
+                          stack_frames)
+    # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
+    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples)),
+                      lambda images: banks_to_h3d(lens_array, stack_frames(images)))
+
+
+def banks_to_h3d(lens_array: LensArray, image: np.ndarray) -> np.ndarray:
+    """The H3D image of tiled view banks stacked one per footprint sample (averaged in linear light)."""
+    ny, nx = lens_array.require_views()
+    banks = image.shape[0] // (ny * lens_array.lenses_y)
+    bank = mean_in_linear_light(image.reshape(banks, -1, *image.shape[1:])) if banks > 1 else image
+    return interleave(untile_views(bank, (ny, nx)))
+
+
+def _multi_ortho_views(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+    ny, nx = lens_array.require_views()
+    check_clearance(lens_array, back_off)
+    common, frames = ortho_view_frames(lens_array)
+    width, height = common.pop("width"), common.pop("height")
+    # Process start-up (~0.7 s) is mostly idle, so more processes than cores
+    # overlap it; a few frames per run amortise it further.
+    processes = 4 * cpu_count()
+    per_job = max(1, -(-len(frames) // processes))
+    batch = FrameBatch("multi_ortho_views.pov.j2", {**common, "back_off": back_off}, frames,
+                       width, height, frames_per_job=per_job, processes=processes)
+    return MethodPlan(batch, lambda images: interleave(np.stack(images).reshape(ny, nx, *images[0].shape)))
+
+
+def _pinhole(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+    lens_array.require_views()
+    common, frames = pinhole_frames(lens_array)
+    width, height = common.pop("width"), common.pop("height")
+    processes = 2 * cpu_count()
+    # Many small frames per run: each extra frame costs a re-parse, not a start-up.
+    per_job = max(1, min(500, -(-len(frames) // processes)))
+    batch = FrameBatch("pinhole.pov.j2", common, frames, width, height,
+                       frames_per_job=per_job, processes=processes)
+    lenses = (lens_array.lenses_y, lens_array.lenses_x)
+    return MethodPlan(batch, lambda images: tile_elemental_images(
+        np.stack(images).reshape(*lenses, *images[0].shape)))
+
+
+def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *,
+                  lenslet: str, ior: float | None) -> MethodPlan:
+    plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off)
+    return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
+
+
+@dataclass(frozen=True)
+class Method:
+    """A rendering method and what it supports.
+
+    plan(array, back-off mm, footprint samples (K, 4), **options) -> MethodPlan
+    """
+
+    plan: Callable[..., MethodPlan]
+    # The method's own options and their defaults (CLI --lenslet, --ior).
+    options: Mapping[str, Any] = field(default_factory=dict)
+    default_back_off: Callable[[LensArray], float] = default_back_off
+    # Where the rays really start for a requested clearance (the sidecar's figure).
+    round_back_off: Callable[[LensArray, float], float] = lambda lens_array, back_off: back_off
+    # Whether the method can trace footprint samples (sub-views) for this array;
+    # where it cannot, a quality that asks for them falls back to antialiasing.
+    takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
+    # Whether it can trace only the lenses objects can reach (``cropped``).
+    crops: bool = False
+
+    def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
+        """``given`` (None values count as not given) over the defaults; unknown names refused."""
+        given = {k: v for k, v in given.items() if v is not None}
+        unknown = sorted(set(given) - set(self.options))
+        if unknown:
+            raise ConfigError(f"method {name!r} takes no option {', '.join(unknown)}; "
+                              f"drop it or pick a method that does")
+        return {**self.options, **given}
+
+
+def _whole_views(lens_array: LensArray) -> bool:
+    return lens_array.views is not None
+
+
+METHODS: dict[str, Method] = {
+    "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True,
+                          round_back_off=lambda la, b: bank_back_off(la, b) if la.views else b),
+    "multi-ortho-views": Method(_multi_ortho_views),
+    "pinhole": Method(_pinhole),
+    "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth),
+}
+
+
+def get_method(name: str) -> Method:
+    if name not in METHODS:
+        raise ConfigError(f"unknown method {name!r}; choose one of: {', '.join(METHODS)}")
+    return METHODS[name]
+
+
+def display_header(lens_array: LensArray) -> dict[str, Any]:
+    """Display constants the scene header declares (``Povh3d_Panel_Width`` ...)."""
+    return {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
+            "focal": lens_array.focal}
+
+
+@dataclass
+class MethodResult:
+    h3d: np.ndarray          # (H, W, C) uint8 or uint16
+    stats: RenderStats
+    back_off: float
+    quality: Quality         # as rendered (after any fallback to antialiasing)
+    crop: dict[str, Any] | None = None    # what the crop did, for the sidecar
+    record: dict[str, Any] | None = None  # the method's own set-up, for the sidecar
+
+
+def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
+               progress: Progress | None = None, crop: CropSettings | None = None,
+               **options: Any) -> MethodResult:
+    """Render ``scene`` with method ``name`` and return the H3D image.
+
+    ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
+    None values count as not given.  ``crop`` (methods that crop): trace each
+    view only where objects can be, fill the rest with the background
+    (``cropped``); None renders everything.
+    """
+    method = get_method(name)
+    options = method.resolve_options(name, options)
+    back_off = method.round_back_off(lens_array, settings.back_off or method.default_back_off(lens_array))
+    quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
+    if quality != settings.spec:
+        settings = replace(settings, quality=quality)
+    samples = quality.samples()
+    header = display_header(lens_array)
+    settings_needed = quality_settings(scene.features, quality)
+    if settings_needed:
+        header["global_settings"] = settings_needed
+    h3d, crop_info, record = None, None, None
+    if method.crops and crop is not None:
+        tiles = render_cropped_tiles(scene, lens_array, back_off, settings, crop, header, progress, samples)
+        crop_info = tiles.info
+        if tiles.tiled is not None:
+            h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats
+    if h3d is None:
+        plan = method.plan(lens_array, back_off, samples, **options)
+        images, stats = render_frames(scene, plan.batch, settings, method=name, header=header, progress=progress)
+        h3d, record = plan.assemble(images), plan.record
+    panel_shape = (lens_array.panel.height, lens_array.panel.width)
+    if h3d.shape[:2] != panel_shape:
+        # A camera bank covers the lens array; the panel margin outside it stays black.
+        canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
+        canvas[lens_array.bank_region] = h3d
+        h3d = canvas
+    return MethodResult(h3d, stats, back_off, quality, crop_info, record)

@@ -1,0 +1,364 @@
+"""Single-stage rendering through a virtual lens array: geometry and assembly.
+
+The geometry (thesis 3.3, worked out against CONVENTIONS):
+
+1. **Capture panel and camera.**  One orthographic camera on the viewer's side
+   (z < 0, looking +z) at the panel's pixel pitch: camera pixel ``(col, row)``
+   is a ray parallel to z at the panel position ``(X, Y)`` of that pixel.  It
+   plays the panel (the thesis's CCD); its location only has to be in front of
+   the lenses.
+2. **Lenslets.**  Plano-convex, flat face toward the camera, curved face toward
+   the scene (``optics.Lenslet``), at the lens centres ``c`` of CONVENTIONS.
+   A camera ray at offset ``w`` from ``c`` leaves the lens through the rear focal
+   point ``c + f z`` (exactly for the conic lens, paraxially for the sphere)
+   with direction ``(-w, f)``.
+3. **180-degree turn.**  The ray of the display pixel at offset ``u`` has
+   direction ``(u, f)`` (CONVENTIONS), so it is the camera ray at ``w = -u``:
+   each elemental image is turned by 180 degrees about its lens centre.  This is
+   the pseudoscopic-to-orthoscopic conversion of integral imaging.
+4. **Depth re-centring.**  The rays of lens ``c`` must cross the display plane
+   at ``c``: the focal plane of the virtual array is the display plane, so the
+   principal plane (the curved vertices) sits at ``z = -f`` and the flat faces a
+   lens thickness further.  The camera then sees everything behind
+   ``z = -f``.  To see objects further in front, the array moves forward by a
+   depth ``D`` (focal plane at ``z = -D``); the ray of view ``(u, v)`` through
+   lens ``c'`` then crosses ``z = 0`` at ``c' + (u, v) D / f``.  With whole
+   pixels per lens and ``D`` a multiple of ``f * Nx`` (odd ``Nx``) or
+   ``2 f Nx`` (even), that offset is a whole number of lenses for every view,
+   so shifting each view by it puts every ray through its own lens centre
+   again, exactly.  The array is rendered that many lenses larger on each
+   side.
+5. **Hex and fractional PPL: a lens-aligned capture bank.**  Their display
+   pixels sit at a different phase in every lens, so there is no view to
+   shift.  The capture camera is therefore not the panel: its pixel pitch is
+   ``px / N`` by ``py / M`` and its grid is aligned to the lens centres, so every
+   capture lens is sampled at the same offsets ``w_km = ((k + a) px/N, (m + b) py/M)``
+   (``a, b`` 0 or 1/2).  Those samples are views again: for ``D = T f`` with the
+   whole number ``T`` chosen so that every in-cell offset times ``T`` is a lattice
+   vector of the array (hex: odd row steps carry a half-pitch), sample ``-u`` of
+   capture lens ``c - u T`` is exactly the ray through ``(c, 0)`` with direction
+   ``(u, f)``.  The display pixel at offset ``u`` from lens ``c`` is then
+   interpolated in direction only, bilinearly in linear light, from the samples
+   of its own lens around ``u`` (``elemental.sample_turned_bank``).  Where the
+   PPL is a whole multiple of a half or a third (6.5) the samples can hit the
+   display offsets exactly (``N = ppl * q``) and no interpolation is left; hex
+   vertical offsets are irrational multiples of a pixel.  ``capture_bank``
+   picks ``N, M`` (at least one sample per pixel; hex ``N`` even, to align the
+   half-pitch) for the fewest capture pixels.
+   The same construction is why a hex array cannot simply move forward: a lens
+   array in one plane offers only rays through its own focal points, and
+   ``c - u D/f`` is a focal point only on such a grid.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from fractions import Fraction
+
+from ..image.elemental import cell_contains, sample_turned_bank
+from ..errors import ConfigError
+from ..geometry.lens_array import LensArray, Panel, pixel_rays
+from ..image.interleave import interleave
+from ..geometry.optics import Lenslet
+from .frames import FrameBatch
+
+APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
+
+
+def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None = None) -> Lenslet:
+    """The lenslet of ``lens_array``: its pitch, its focal length, ``shape`` and ``ior``."""
+    return Lenslet(shape, APERTURE_OF_GRID[lens_array.grid], lens_array.pitch_x,
+                   lens_array.pitch_y, lens_array.focal, ior)
+
+
+def recentre_unit(lens_array: LensArray) -> float:
+    """Smallest depth ``D`` (mm) at which every view shifts by whole lenses; 0 if none.
+
+    ``u_k D / (f px) = (k + 0.5 - Nx/2) D / (f Nx)`` is whole for every ``k`` when
+    ``D / f`` is a multiple of ``Nx`` (odd ``Nx``) or ``2 Nx`` (even); likewise
+    vertically (not for lenticular sheets, whose rays keep their row).
+    """
+    views = lens_array.views
+    if views is None:
+        return lens_array.focal * capture_bank(lens_array).unit
+    ny, nx = views
+    steps = [nx if nx % 2 else 2 * nx]
+    if not lens_array.unidirectional:
+        steps.append(ny if ny % 2 else 2 * ny)
+    return lens_array.focal * math.lcm(*steps)
+
+
+@dataclass(frozen=True)
+class CaptureBank:
+    """The lens-aligned capture grid of a hex or fractional-PPL array (module doc, 5).
+
+    Attributes
+    ----------
+    samples : (N, M)        capture samples per lens pitch, horizontally and vertically
+    phase : (a, b)          0 or 1/2: sample ``k`` sits at ``(k + a) px / N`` from the centre
+    unit : int              ``T``: the smallest ``D / f`` at which every sample is a lattice shift
+    offsets : (K, 2) int    the in-cell sample indices ``(k, m)``
+    """
+
+    samples: tuple[int, int]
+    phase: tuple[float, float]
+    unit: int
+    offsets: np.ndarray
+
+
+def _axis_candidates(ppl: float, display_offsets: np.ndarray, even: bool) -> list[tuple[int, float, bool]]:
+    """``(N, phase, exact)`` candidates for one axis (``display_offsets`` in lens pitches).
+
+    ``N`` at least one sample per pixel; ``exact`` when every display offset is a sample.
+    """
+    out = []
+    for n in sorted({*range(math.ceil(ppl - 1e-9), math.ceil(ppl - 1e-9) + 4),
+                     *(round(ppl * q) for q in (2, 3) if abs(ppl * q - round(ppl * q)) < 1e-6)}):
+        if n < 1 or (even and n % 2):
+            continue
+        for phase in (0.0, 0.5):
+            x = display_offsets * n - phase
+            out.append((n, phase, bool(np.all(np.abs(x - np.rint(x)) < 1e-6))))
+    return out
+
+
+def _unit(grid: str, xs: set, pairs: set) -> int:
+    """Smallest whole ``T`` with every in-cell offset times ``T`` a lattice vector."""
+    if grid == "hex":  # rows step by whole b, columns by whole a plus b/2
+        terms = {y for _, y in pairs} | {x - y / 2 for x, y in pairs}
+    elif grid == "lenticular":
+        terms = xs
+    else:
+        terms = {x for x, _ in pairs} | {y for _, y in pairs}
+    return math.lcm(*(f.denominator for f in terms))
+
+
+def capture_bank(lens_array: LensArray) -> CaptureBank:
+    """The capture grid and re-centring unit of a hex or fractional-PPL array.
+
+    Among the candidate grids (``N, M`` from the PPL up, both phases) the one
+    with the fewest capture pixels at one unit of depth, halved for grids that
+    hit every display offset exactly (no direction interpolation left).
+    """
+    la = lens_array
+    centres, _, inside = pixel_rays(la)
+    X, Y = np.meshgrid(*la.panel.pixel_centres())
+    du = ((X - centres[..., 0]) / la.pitch_x)[inside]
+    dv = ((Y - centres[..., 1]) / la.pitch_y)[inside]
+    lent = la.grid == "lenticular"
+    xs = _axis_candidates(la.ppl_x, du, even=la.grid == "hex")
+    ys = [(1, 0.0, True)] if lent else _axis_candidates(la.ppl_y, dv, even=False)
+    best = None
+    for n, a, ex_x in xs:
+        for m, b, ex_y in ys:
+            k = np.arange(-n - 1, n + 1)
+            mm = np.zeros(1, np.int64) if lent else np.arange(-2 * m - 1, 2 * m + 1)
+            K, M = np.meshgrid(k, mm)
+            ou, ov = (K + a) * la.pitch_x / n, (M + b) * la.pitch_y / m
+            ok = cell_contains(la.grid, la.pitch_x, la.pitch_y, ou, np.zeros_like(ou) if lent else ov)
+            offsets = np.stack([K[ok], M[ok]], axis=-1)
+            fa, fb = Fraction(a), Fraction(b)
+            pairs = {((int(kk) + fa) / n, (int(ll) + fb) / m) for kk, ll in offsets}
+            t = _unit(la.grid, {x for x, _ in pairs}, pairs)
+            ex = float(max(abs(x) for x, _ in pairs)) * t + 1
+            ey = 0.0 if lent else float(max(abs(y) for _, y in pairs)) * t + 1
+            cost = (la.lenses_x + 2 * ex) * n * (la.lenses_y + 2 * ey) * m / (2 if ex_x and ex_y else 1)
+            if best is None or cost < best[0]:
+                best = (cost, CaptureBank((n, m), (a, b), t, offsets))
+    return best[1]
+
+
+def default_depth(lens_array: LensArray) -> float:
+    """Default re-centring depth: one unit (module doc, 4 and 5)."""
+    return recentre_unit(lens_array)
+
+
+@dataclass(frozen=True)
+class SingleStagePlan:
+    """Everything the single-stage method decides before rendering.
+
+    Attributes
+    ----------
+    lens_array : LensArray     the display's array (CONVENTIONS)
+    lenslet : Lenslet
+    depth : float, mm          ``D``: the focal plane of the virtual array is ``z = -D``
+    """
+
+    lens_array: LensArray
+    lenslet: Lenslet
+    depth: float = 0.0
+
+    def __post_init__(self) -> None:
+        unit = recentre_unit(self.lens_array)
+        if self.depth < 0 or not math.isfinite(self.depth):
+            raise ConfigError(f"the front clearance must be 0 or more mm, got {self.depth!r}")
+        if self.depth > 0:
+            ratio = self.depth / unit
+            if abs(ratio - round(ratio)) > 1e-9:
+                raise ConfigError(f"single-stage depth {self.depth!r} mm is not a multiple of {unit!r} mm")
+
+    @classmethod
+    def for_clearance(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float) -> SingleStagePlan:
+        """The plan whose depth is the smallest exact ``D >= clearance`` (0 for no clearance)."""
+        unit = recentre_unit(lens_array)
+        if clearance <= 0:
+            return cls(lens_array, lenslet, 0.0)
+        return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9))
+
+    # -- view shifts ------------------------------------------------------------
+    @cached_property
+    def shifts(self) -> tuple[np.ndarray, np.ndarray]:
+        """Whole-lens shift of every view: ``(sx (Nx,), sy (Ny,))`` int.
+
+        Display lens ``(j, i)``, view ``(l, k)`` takes capture lens
+        ``(j + Ex - sx[k], i + Ey + sy[l])``.
+        """
+        la = self.lens_array
+        if self.depth == 0.0:
+            views = la.views or (1, 1)
+            return np.zeros(views[1], np.int64), np.zeros(views[0], np.int64)
+        u, v = la.view_offsets()
+        sx = u * self.depth / (la.focal * la.pitch_x)
+        sy = np.zeros_like(v) if la.unidirectional else v * self.depth / (la.focal * la.pitch_y)
+        for s in (sx, sy):
+            assert np.allclose(s, np.round(s), atol=1e-6), "depth is not an exact re-centring unit"
+        return np.round(sx).astype(np.int64), np.round(sy).astype(np.int64)
+
+    @cached_property
+    def bank(self) -> CaptureBank | None:
+        """The lens-aligned capture grid (hex, fractional PPL), None with whole PPL."""
+        return capture_bank(self.lens_array) if self.lens_array.views is None else None
+
+    @property
+    def extension(self) -> tuple[int, int]:
+        """Extra capture lenses on each side, ``(Ex, Ey)``."""
+        bank, la = self.bank, self.lens_array
+        if bank is not None:
+            (n, m), (a, b) = bank.samples, bank.phase
+            t = self.depth / la.focal
+            ex = math.ceil(np.abs(bank.offsets[:, 0] + a).max() / n * t - 1e-9) + (1 if la.grid == "hex" else 0)
+            if la.grid == "lenticular":
+                return ex, 0
+            ey = math.ceil(np.abs(bank.offsets[:, 1] + b).max() / m * t - 1e-9)
+            return ex, ey + ey % 2 if la.grid == "hex" else ey  # hex: keep the row parity
+        sx, sy = self.shifts
+        return int(np.abs(sx).max()), int(np.abs(sy).max())
+
+    @cached_property
+    def capture_array(self) -> LensArray:
+        """The virtual array rendered: the display's, ``Ex``/``Ey`` lenses larger per side.
+
+        Hex and fractional PPL: its panel is the lens-aligned capture grid of
+        ``bank`` (pitch ``px/N x py/M``), one sample wider on every side.
+        """
+        la = self.lens_array
+        if self.bank is not None:
+            (n, m) = self.bank.samples
+            ex, ey = self.extension
+            lx, ly = la.lenses_x + 2 * ex, la.lenses_y + 2 * ey
+            if la.grid == "lenticular":
+                panel = Panel(lx * n + 2, la.panel.height, la.pitch_x / n, la.panel.pitch_y)
+            else:
+                extra = n // 2 if la.grid == "hex" and ly > 1 else 0
+                # Hex cells reach 2/3 of a row pitch past their centre, 1/6 past the row.
+                tips = 2 * math.ceil(m / 6) if la.grid == "hex" else 0
+                panel = Panel(lx * n + extra + 2, ly * m + tips + 2, la.pitch_x / n, la.pitch_y / m)
+            return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, panel)
+        ny, nx = la.views
+        ex, ey = self.extension
+        lx, ly = la.lenses_x + 2 * ex, la.lenses_y + 2 * ey
+        panel = Panel(lx * nx, ly * ny, la.panel.pitch_x, la.panel.pitch_y)
+        return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, panel)
+
+    @cached_property
+    def camera_offset(self) -> tuple[float, float]:
+        """Centre of the capture image (mm): 0, or under a sample for the lens-aligned grid."""
+        if self.bank is None:
+            return 0.0, 0.0
+        cap, (a, b) = self.capture_array, self.bank.phase
+        sx, sy = cap.panel.pitch_x, cap.panel.pitch_y
+        c0 = cap.lens_centres()[0, 0]
+        # Pixel centres x0 + (col + 1/2 - Wc/2) sx must include c0 + a sx (likewise y).
+        rx = (c0[0] / sx + a + cap.panel.width / 2 - 0.5) % 1.0
+        ry = 0.0 if cap.grid == "lenticular" else (c0[1] / sy + b - cap.panel.height / 2 + 0.5) % 1.0
+        return sx * (rx - (rx >= 0.5)), sy * (ry - (ry >= 0.5))
+
+    # -- the POV-Ray frame ------------------------------------------------------
+    def template_context(self) -> dict[str, Any]:
+        cap = self.capture_array
+        lenslet = self.lenslet
+        panel = cap.panel
+        width_mm, height_mm = panel.size_mm
+        z_vertex = -self.depth - lenslet.focal
+        half_x = cap.pitch_x / 2
+        if cap.grid == "lenticular":
+            # One lens per column spanning every row (CONVENTIONS: v = 0).
+            lenses, pitch = (cap.lenses_x, 1), (cap.pitch_x, height_mm)
+            half_y = height_mm / 2 + cap.panel.pitch_y
+        else:
+            lenses, pitch = (cap.lenses_x, cap.lenses_y), (cap.pitch_x, cap.pitch_y)
+            half_y = cap.pitch_y / 2
+        hex_half_y = cap.pitch_x / math.sqrt(3)
+        return {
+            "aperture": lenslet.aperture, "lenslet": lenslet, "quadric": lenslet.quadric(),
+            "half_x": half_x, "half_y": half_y, "hex_half_y": hex_half_y,
+            "bound_half_y": hex_half_y if cap.grid == "hex" else half_y,
+            "sqrt3_2": math.sqrt(3) / 2, "thickness": lenslet.thickness,
+            "lenses": lenses, "pitch": pitch,
+            "z_vertex": z_vertex, "z_flat": z_vertex - lenslet.thickness, "z_focus": -self.depth,
+            "z_camera": z_vertex - lenslet.thickness - lenslet.focal, "camera_xy": self.camera_offset,
+            "right": (width_mm, 0.0, 0.0), "up": (0.0, height_mm, 0.0),
+        }
+
+    def batch(self) -> FrameBatch:
+        panel = self.capture_array.panel
+        return FrameBatch("single_stage.pov.j2", self.template_context(), [{}],
+                          panel.width, panel.height, processes=1)
+
+    # -- from the capture to the H3D image ------------------------------------------
+    def assemble(self, capture: np.ndarray) -> np.ndarray:
+        """Turn the elemental images and re-centre the depth.
+
+        Parameters
+        ----------
+        capture : (Hc, Wc, C) array     the camera image of ``capture_array``
+
+        Returns
+        -------
+        (H, W, C) array for the panel (fractional PPL / hex), or the bank region
+        ``(Ly*Ny, Lx*Nx, C)`` (whole PPL; the caller pads the margin).
+        """
+        la = self.lens_array
+        if self.bank is not None:
+            cap = self.capture_array.panel
+            return sample_turned_bank(capture, la, (cap.pitch_x, cap.pitch_y), self.bank.phase,
+                                      1 + self.depth / la.focal, self.camera_offset)
+        ny, nx = la.views
+        cap = self.capture_array
+        c = capture.shape[2]
+        # Whole PPL: the turn is a flip of every lens's Ny x Nx block.
+        lenses = capture.reshape(cap.lenses_y, ny, cap.lenses_x, nx, c)[:, ::-1, :, ::-1]
+        views = lenses.transpose(1, 3, 0, 2, 4)  # (Ny, Nx, Ly', Lx', C)
+        sx, sy = self.shifts
+        ex, ey = self.extension
+        out = np.empty((ny, nx, la.lenses_y, la.lenses_x, c), capture.dtype)
+        for l in range(ny):
+            for k in range(nx):
+                i0, j0 = ey + sy[l], ex - sx[k]
+                out[l, k] = views[l, k, i0:i0 + la.lenses_y, j0:j0 + la.lenses_x]
+        return interleave(out)
+
+    def describe(self) -> dict[str, Any]:
+        cap = self.capture_array
+        return {"lenslet": self.lenslet.describe(), "focal_plane_z_mm": -self.depth,
+                "principal_plane_z_mm": -self.depth - self.lenslet.focal,
+                "capture_lenses": [cap.lenses_x, cap.lenses_y],
+                "capture_size_px": [cap.panel.width, cap.panel.height],
+                **({"capture_samples_per_lens": list(self.bank.samples),
+                    "capture_sample_phase": list(self.bank.phase)} if self.bank is not None else {})}

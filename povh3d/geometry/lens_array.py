@@ -1,0 +1,343 @@
+"""Panel and lens-array model: the geometry of CONVENTIONS.md as frozen values.
+
+Everything here is pure: parameters in, NumPy arrays or numbers out.  Positions
+are computed from indices (``(j + 0.5 - Lx/2) * px``), never by accumulating
+increments, so a row of thousands of lenses does not drift.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import ConfigError
+
+GRIDS = ("square", "lenticular", "hex")
+
+# PPL closer than this to a whole number counts as integral: pitches come from
+# decimal data sheets (0.3825 / 0.0425 is 9 within rounding, not exactly).
+_INTEGRAL_TOLERANCE = 1e-6
+
+
+def _positive(name: str, value: float, fix: str) -> float:
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise ConfigError(f"{name} must be a number, got {value!r}; {fix}")
+    value = float(value)
+    if not math.isfinite(value) or value <= 0:
+        raise ConfigError(f"{name} must be a positive finite number, got {value!r}; {fix}")
+    return value
+
+
+def _count(name: str, value: int, fix: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ConfigError(f"{name} must be a whole number of at least 1, got {value!r}; {fix}")
+    return int(value)
+
+
+def nearest_integer(value: float) -> int | None:
+    """``value`` as an int when it is integral within data-sheet rounding, else None."""
+    rounded = round(value)
+    if rounded >= 1 and abs(value - rounded) <= _INTEGRAL_TOLERANCE * max(1.0, abs(value)):
+        return int(rounded)
+    return None
+
+
+@dataclass(frozen=True)
+class Panel:
+    """A pixel panel: ``width x height`` pixels of pitch ``pitch_x x pitch_y`` mm."""
+
+    width: int
+    height: int
+    pitch_x: float
+    pitch_y: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "width", _count("panel width", self.width, "give the panel size as WxH pixels, e.g. --panel 1920x1080"))
+        object.__setattr__(self, "height", _count("panel height", self.height, "give the panel size as WxH pixels, e.g. --panel 1920x1080"))
+        object.__setattr__(self, "pitch_x", _positive("pixel pitch", self.pitch_x, "give it in mm, e.g. --pixel-pitch 0.1"))
+        object.__setattr__(self, "pitch_y", _positive("vertical pixel pitch", self.pitch_y, "give it in mm, e.g. --pixel-pitch 0.1"))
+
+    @property
+    def size_mm(self) -> tuple[float, float]:
+        return (self.width * self.pitch_x, self.height * self.pitch_y)
+
+    def pixel_centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel centres on the panel.
+
+        Returns
+        -------
+        X : (W,) float, mm
+            ``(col + 0.5 - W/2) * s`` for each column.
+        Y : (H,) float, mm
+            ``(H/2 - row - 0.5) * s`` for each row (row 0 at the top).
+        """
+        cols = np.arange(self.width, dtype=np.float64)
+        rows = np.arange(self.height, dtype=np.float64)
+        return ((cols + 0.5 - self.width / 2) * self.pitch_x,
+                (self.height / 2 - rows - 0.5) * self.pitch_y)
+
+
+@dataclass(frozen=True)
+class LensArray:
+    """A lens array over a panel, following CONVENTIONS.md.
+
+    Parameters
+    ----------
+    grid : {'square', 'lenticular', 'hex'}
+    lenses_x, lenses_y : int
+        Lens count ``Lx x Ly`` (lenticular: ``Ly`` is the panel height in rows).
+    pitch_x, pitch_y : float, mm
+        Lens pitch (lenticular: ``pitch_y`` is the pixel pitch; hex: row spacing
+        ``pitch_x * sqrt(3)/2``).
+    focal : float, mm
+        Focal length: the gap between the lens array and the panel.
+    panel : Panel
+    """
+
+    grid: str
+    lenses_x: int
+    lenses_y: int
+    pitch_x: float
+    pitch_y: float
+    focal: float
+    panel: Panel
+
+    def __post_init__(self) -> None:
+        if self.grid not in GRIDS:
+            raise ConfigError(f"grid must be one of {', '.join(GRIDS)}, got {self.grid!r}; pick one with --grid")
+        object.__setattr__(self, "lenses_x", _count("lens count", self.lenses_x, "give it as --lenses 60x40 (lenticular: --lenses 60)"))
+        object.__setattr__(self, "lenses_y", _count("lens rows", self.lenses_y, "give it as --lenses 60x40 (lenticular: --rows)"))
+        object.__setattr__(self, "pitch_x", _positive("lens pitch", self.pitch_x, "give pixels per lens with --ppl or a lens pitch in mm"))
+        object.__setattr__(self, "pitch_y", _positive("vertical lens pitch", self.pitch_y, "give pixels per lens with --ppl 8x8"))
+        object.__setattr__(self, "focal", _positive("focal length", self.focal, "give it in mm with --focal, e.g. --focal 1.5"))
+        p = self.panel
+        if self.grid == "lenticular":
+            if self.lenses_y != p.height or not math.isclose(self.pitch_y, p.pitch_y, rel_tol=1e-12):
+                raise ConfigError("a lenticular array has one lens row per panel row; set the panel height with --rows")
+        if self.grid == "hex" and not math.isclose(self.pitch_y, self.pitch_x * math.sqrt(3) / 2, rel_tol=1e-9):
+            raise ConfigError("a hex array has rows spaced pitch*sqrt(3)/2; give only the horizontal lens pitch")
+        if self.pitch_x < p.pitch_x * (1 - 1e-9) or self.pitch_y < p.pitch_y * (1 - 1e-9):
+            raise ConfigError(f"the lens pitch {self.pitch_x:g} mm is under one pixel ({p.pitch_x:g} mm); "
+                              "use at least 1 pixel per lens (--ppl)")
+        width_mm, height_mm = p.size_mm
+        # hex odd rows are shifted right by half a pitch, so they reach further.
+        array_w = self.lenses_x * self.pitch_x + (self.pitch_x / 2 if self.grid == "hex" and self.lenses_y > 1 else 0)
+        array_h = self.lenses_y * self.pitch_y
+        slack = 1e-9 * max(width_mm, height_mm)
+        if array_w > width_mm + slack or array_h > height_mm + slack:
+            raise ConfigError(
+                f"the lens array ({array_w:.6g} x {array_h:.6g} mm) is larger than the panel "
+                f"({width_mm:.6g} x {height_mm:.6g} mm); use fewer lenses (--lenses) or a larger panel (--panel)")
+
+    # -- pixels per lens and views -------------------------------------------------
+    @property
+    def ppl_x(self) -> float:
+        """Pixels per lens horizontally, ``Nx = px / s`` (need not be whole)."""
+        return self.pitch_x / self.panel.pitch_x
+
+    @property
+    def ppl_y(self) -> float:
+        """Pixels per lens vertically, ``Ny = py / s`` (1 for lenticular)."""
+        return self.pitch_y / self.panel.pitch_y
+
+    @property
+    def unidirectional(self) -> bool:
+        return self.grid == "lenticular"
+
+    @cached_property
+    def views(self) -> tuple[int, int] | None:
+        """``(Ny, Nx)`` views of the camera bank, or None when the PPL is not whole."""
+        if self.grid == "hex":
+            return None
+        nx, ny = nearest_integer(self.ppl_x), nearest_integer(self.ppl_y)
+        if nx is None or ny is None:
+            return None
+        # The array is centred on the panel: an odd pixel margin would put every
+        # pixel half a pixel off the u_k grid, and no view bank fits.
+        if (self.panel.width - self.lenses_x * nx) % 2 or (self.panel.height - self.lenses_y * ny) % 2:
+            return None
+        return (ny, nx)
+
+    @property
+    def bank_region(self) -> tuple[slice, slice]:
+        """Rows and columns of the panel that the camera bank covers (the array is centred)."""
+        ny, nx = self.require_views()
+        row0 = (self.panel.height - self.lenses_y * ny) // 2
+        col0 = (self.panel.width - self.lenses_x * nx) // 2
+        return (slice(row0, row0 + self.lenses_y * ny), slice(col0, col0 + self.lenses_x * nx))
+
+    def require_views(self) -> tuple[int, int]:
+        """The views ``(Ny, Nx)``, or a ConfigError saying why there is no camera bank."""
+        if self.views is None:
+            if self.grid == "hex":
+                raise ConfigError("a hex lens array has no orthographic camera bank; render it through a "
+                                  "virtual lens array with --method single-stage (views: 'povh3d extract' "
+                                  "resamples them), or pick a square or lenticular --grid")
+            raise ConfigError(f"a camera bank needs whole pixels per lens (got {self.ppl_x:g} x {self.ppl_y:g}) "
+                              "and an even pixel margin around the array; change --ppl, --lenses or the panel")
+        return self.views
+
+    @property
+    def view_size(self) -> tuple[int, int]:
+        """``(rows, cols)`` of one view image: one pixel per lens, ``Ly x Lx``."""
+        return (self.lenses_y, self.lenses_x)
+
+    @property
+    def h3d_size(self) -> tuple[int, int]:
+        """``(rows, cols)`` of the H3D image the camera bank fills: ``Ly*Ny x Lx*Nx``."""
+        ny, nx = self.require_views()
+        return (self.lenses_y * ny, self.lenses_x * nx)
+
+    def view_offsets(self) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel offsets from the lens centre for every view.
+
+        Returns
+        -------
+        u : (Nx,) float, mm
+            ``u_k = (k + 0.5 - Nx/2) * s``, k left to right.
+        v : (Ny,) float, mm
+            ``v_l = (Ny/2 - l - 0.5) * s``, l top to bottom.
+        """
+        ny, nx = self.require_views()
+        k = np.arange(nx, dtype=np.float64)
+        l = np.arange(ny, dtype=np.float64)
+        return ((k + 0.5 - nx / 2) * self.panel.pitch_x, (ny / 2 - l - 0.5) * self.panel.pitch_y)
+
+    def view_directions(self) -> np.ndarray:
+        """Unit ray direction of every view.
+
+        Returns
+        -------
+        (Ny, Nx, 3) float
+            ``normalize(u_k, v_l, f)``.
+        """
+        u, v = self.view_offsets()
+        d = np.stack(np.broadcast_arrays(u[None, :], v[:, None], np.float64(self.focal)), axis=-1)
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def view_angles_deg(self) -> tuple[np.ndarray, np.ndarray]:
+        """Horizontal and vertical view angles ``atan(u_k/f)``, ``atan(v_l/f)`` in degrees."""
+        u, v = self.view_offsets()
+        return (np.degrees(np.arctan2(u, self.focal)), np.degrees(np.arctan2(v, self.focal)))
+
+    # -- lens centres ------------------------------------------------------------
+    def lens_centres(self) -> np.ndarray:
+        """Centre of every lens on the display plane.
+
+        Returns
+        -------
+        (Ly, Lx, 2) float, mm
+            ``(cx, cy)`` of lens ``(j, i)`` at ``[i, j]``; hex odd rows shifted by ``px/2``.
+        """
+        j = np.arange(self.lenses_x, dtype=np.float64)
+        i = np.arange(self.lenses_y, dtype=np.float64)
+        cx = np.broadcast_to((j + 0.5 - self.lenses_x / 2) * self.pitch_x, (self.lenses_y, self.lenses_x))
+        if self.grid == "hex":
+            # CONVENTIONS literally: odd rows shifted right by px/2 from the square
+            # formula (so the array as a whole sits px/4 right of the origin).
+            cx = cx + (np.arange(self.lenses_y) % 2)[:, None] * (self.pitch_x / 2)
+        cy = np.broadcast_to(((self.lenses_y / 2 - i - 0.5) * self.pitch_y)[:, None], cx.shape)
+        return np.stack([cx, cy], axis=-1)
+
+    # -- display figures ------------------------------------------------------------
+    @property
+    def viewing_angle_deg(self) -> float:
+        """Full viewing angle ``2 atan(pitch / 2f)`` in degrees."""
+        return math.degrees(2 * math.atan(self.pitch_x / (2 * self.focal)))
+
+    @property
+    def resolution_3d(self) -> tuple[int, int]:
+        """``(horizontal, vertical)`` 3D pixels: one per lens."""
+        return (self.lenses_x, self.lenses_y)
+
+    @property
+    def ppi_3d(self) -> tuple[float, float]:
+        """3D pixels per inch, horizontal and vertical."""
+        return (25.4 / self.pitch_x, 25.4 / self.pitch_y)
+
+    def describe(self) -> dict:
+        """Plain values for JSON sidecars and ``povh3d info``."""
+        out: dict = {
+            "grid": self.grid,
+            "lenses": [self.lenses_x, self.lenses_y],
+            "lens_pitch_mm": [self.pitch_x, self.pitch_y],
+            "focal_mm": self.focal,
+            "panel": {"size_px": [self.panel.width, self.panel.height],
+                      "pixel_pitch_mm": [self.panel.pitch_x, self.panel.pitch_y],
+                      "size_mm": list(self.panel.size_mm)},
+            "ppl": [self.ppl_x, self.ppl_y],
+            "viewing_angle_deg": self.viewing_angle_deg,
+            "resolution_3d": list(self.resolution_3d),
+            "pixel_distance_3d_mm": [self.pitch_x, self.pitch_y],
+            "ppi_3d": list(self.ppi_3d),
+        }
+        if self.views is not None:
+            ah, av = self.view_angles_deg()
+            out.update({
+                "views": [self.views[1], self.views[0]],
+                "view_size_px": [self.lenses_x, self.lenses_y],
+                "h3d_size_px": [self.h3d_size[1], self.h3d_size[0]],
+                "view_angles_deg": {"horizontal": ah.tolist(), "vertical": av.tolist()},
+            })
+        return out
+
+
+def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ray of every panel pixel (CONVENTIONS, "The ray of a pixel").
+
+    A pixel belongs to the lens whose cell holds its centre (square and
+    lenticular: the lens's pitch rectangle, a centre on its border going to the
+    lens on the right or below; hex: the nearest centre).
+
+    Returns
+    -------
+    centres : (H, W, 2) float, mm
+        Centre ``(cx, cy)`` of the pixel's lens.
+    directions : (H, W, 3) float
+        Unit direction ``normalize(u, v, f)`` with ``(u, v)`` the pixel's offset.
+    inside : (H, W) bool
+        False for pixels outside every lens (their rays are undefined: NaN).
+    """
+    panel = lens_array.panel
+    X, Y = panel.pixel_centres()
+    X, Y = np.meshgrid(X, Y)  # (H, W)
+    centres = lens_array.lens_centres()
+    Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
+    px, py = lens_array.pitch_x, lens_array.pitch_y
+    if lens_array.grid == "hex":
+        i0 = np.rint(Ly / 2 - 0.5 - Y / py).astype(np.int64)
+        best_d = np.full(X.shape, np.inf)
+        best_i = np.zeros(X.shape, np.int64)
+        best_j = np.zeros(X.shape, np.int64)
+        for di in (-1, 0, 1):  # the nearest centre lies in the nearest row or one beside it
+            i = np.clip(i0 + di, 0, Ly - 1)
+            j = np.clip(np.rint(X / px + Lx / 2 - 0.5 - (i % 2) / 2).astype(np.int64), 0, Lx - 1)
+            d = (X - centres[i, j, 0]) ** 2 + (Y - centres[i, j, 1]) ** 2
+            better = d < best_d
+            best_d, best_i, best_j = np.where(better, d, best_d), np.where(better, i, best_i), np.where(better, j, best_j)
+        i, j = best_i, best_j
+        # Inside the true hexagon (flat sides at |dx| = px/2, slanted sides at
+        # |dx|/2 + sqrt(3)/2 |dy| = px/2), not its circumradius disc: the disc pokes
+        # out past the slanted sides on the outer rows, where no lens lies.
+        dx, dy = np.abs(X - centres[i, j, 0]), np.abs(Y - centres[i, j, 1])
+        half = px / 2 * (1 + 1e-9)
+        inside = (dx <= half) & (dx / 2 + np.sqrt(3) / 2 * dy <= half)
+    else:
+        # A pixel centre on a lens border (fractional PPL) belongs to the lens on
+        # its right (below); the tolerance keeps rounding from deciding.
+        fj = X / px + Lx / 2 + 1e-9
+        fi = Ly / 2 - Y / py + 1e-9
+        j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
+        inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
+        j, i = np.clip(j, 0, Lx - 1), np.clip(i, 0, Ly - 1)
+    c = centres[i, j]
+    u = X - c[..., 0]
+    v = np.zeros_like(u) if lens_array.grid == "lenticular" else Y - c[..., 1]
+    d = np.stack([u, v, np.full(u.shape, lens_array.focal)], axis=-1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    c = np.where(inside[..., None], c, np.nan)
+    d = np.where(inside[..., None], d, np.nan)
+    return c, d, inside

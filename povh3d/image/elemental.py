@@ -1,0 +1,231 @@
+"""Per-lens resampling of elemental images (hex grids, fractional pixels per lens).
+
+With whole pixels per lens on a square or lenticular grid every lens has the
+same pixel offsets and views are a reshape (``interleave.extract``).  Otherwise
+each lens sits at its own sub-pixel phase, so a view direction ``(u, v)`` falls
+between pixels, differently for every lens.  These functions sample an image
+at arbitrary panel points, bilinearly and in linear light (CONVENTIONS: filters
+that mix pixels work in linear light), from the pixels of one given lens only,
+so that neighbouring lenses (other views entirely) never bleed in.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .colour import decode, encode, linear_to_srgb, srgb_to_linear
+from ..geometry.lens_array import LensArray, nearest_integer, pixel_rays
+
+
+def lens_index_map(lens_array: LensArray) -> np.ndarray:
+    """The lens of every panel pixel, ``i * Lx + j`` (CONVENTIONS cells), -1 outside every lens.
+
+    Returns
+    -------
+    (H, W) int64
+    """
+    centres, _, inside = pixel_rays(lens_array)
+    la = lens_array
+    i = np.rint(la.lenses_y / 2 - 0.5 - np.nan_to_num(centres[..., 1]) / la.pitch_y).astype(np.int64)
+    if la.grid == "lenticular":
+        _, Y = la.panel.pixel_centres()
+        i = np.broadcast_to(np.arange(la.panel.height)[:, None], i.shape)
+    shift = (i % 2) * 0.5 if la.grid == "hex" else 0.0
+    j = np.rint(np.nan_to_num(centres[..., 0]) / la.pitch_x + la.lenses_x / 2 - 0.5 - shift).astype(np.int64)
+    return np.where(inside, i * la.lenses_x + j, -1)
+
+
+def sample_in_lens(image: np.ndarray, lens_array: LensArray, points: np.ndarray, lens: np.ndarray,
+                   lens_map: np.ndarray | None = None) -> np.ndarray:
+    """Bilinear samples of ``image`` at panel ``points``, from pixels of ``lens`` only.
+
+    Parameters
+    ----------
+    image : (H, W, C) uint8 or uint16, sRGB-encoded
+    lens_array : LensArray                  its panel gives the pixel grid
+    points : (..., 2) float, mm             panel positions ``(x, y)``
+    lens : (...) int                        the lens each point must be read from
+    lens_map : (H, W) int, optional         ``lens_index_map(lens_array)``
+
+    Returns
+    -------
+    (..., C) array of ``image.dtype``.  A point none of whose four neighbours
+    belongs to its lens takes the nearest pixel (hex cell corners).
+    """
+    panel = lens_array.panel
+    H, W = panel.height, panel.width
+    lens_map = lens_index_map(lens_array) if lens_map is None else lens_map
+    top = np.iinfo(image.dtype).max
+    lin = srgb_to_linear(image / top)
+    col = points[..., 0] / panel.pitch_x + W / 2 - 0.5
+    row = H / 2 - 0.5 - points[..., 1] / panel.pitch_y
+    c0, r0 = np.floor(col).astype(np.int64), np.floor(row).astype(np.int64)
+    fc, fr = col - c0, row - r0
+    acc = np.zeros(points.shape[:-1] + (image.shape[2],))
+    total = np.zeros(points.shape[:-1])
+    for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, 1, (1 - fr) * fc),
+                      (1, 0, fr * (1 - fc)), (1, 1, fr * fc)):
+        r, c = r0 + dr, c0 + dc
+        valid = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        rc, cc = np.clip(r, 0, H - 1), np.clip(c, 0, W - 1)
+        w = np.where(valid & (lens_map[rc, cc] == lens), w, 0.0)
+        acc += w[..., None] * lin[rc, cc]
+        total += w
+    nearest = lin[np.clip(np.rint(row).astype(np.int64), 0, H - 1), np.clip(np.rint(col).astype(np.int64), 0, W - 1)]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        value = np.where((total > 1e-12)[..., None], acc / total[..., None], nearest)
+    return np.rint(linear_to_srgb(value) * top).astype(image.dtype)
+
+
+def turn_elemental_images(capture: np.ndarray, lens_array: LensArray) -> np.ndarray:
+    """Turn every elemental image by 180 degrees about its lens centre.
+
+    Display pixel ``X`` of lens ``c`` takes the capture at ``2c - X``, which lies
+    in the same lens cell (a hexagon and a rectangle are point-symmetric).
+    Pixels outside every lens are black.
+
+    Parameters
+    ----------
+    capture : (H, W, C) array       the camera image through the virtual array
+    """
+    centres, _, inside = pixel_rays(lens_array)
+    X, Y = np.meshgrid(*lens_array.panel.pixel_centres())
+    lens_map = lens_index_map(lens_array)
+    pts = np.stack([2 * centres[..., 0] - X, 2 * centres[..., 1] - Y], axis=-1)
+    if lens_array.grid == "lenticular":
+        pts[..., 1] = Y  # a cylinder lens does not turn along its axis
+    pts = np.where(inside[..., None], pts, np.stack([X, Y], axis=-1))
+    out = sample_in_lens(capture, lens_array, pts[inside], lens_map[inside], lens_map)
+    result = np.zeros_like(capture)
+    result[inside] = out
+    return result
+
+
+def view_grid(lens_array: LensArray) -> tuple[int, int]:
+    """Views ``(Ny, Nx)`` pulled from a resampled array: whole pixels per lens, rounded."""
+    nx = max(1, round(lens_array.ppl_x))
+    ny = 1 if lens_array.unidirectional else max(1, round(lens_array.pitch_x / lens_array.panel.pitch_y))
+    return ny, nx
+
+
+def extract_views(h3d: np.ndarray, lens_array: LensArray, views: tuple[int, int] | None = None) -> np.ndarray:
+    """Viewpoint images of any array: each lens resampled at the view offsets.
+
+    View ``(l, k)`` pixel ``(i, j)`` is the H3D image at ``c_ij + (u_k, v_l)`` with
+    ``u_k = (k + 0.5 - Nx/2) s``, ``v_l = (Ny/2 - l - 0.5) s`` (the multi-ortho
+    offsets), read from lens ``(j, i)``'s own pixels.  With whole PPL on a square
+    grid the samples land on pixel centres and this equals ``interleave.extract``.
+
+    Parameters
+    ----------
+    h3d : (H, W, C) array
+    views : (Ny, Nx), optional       default ``view_grid(lens_array)``
+
+    Returns
+    -------
+    (Ny, Nx, Ly, Lx, C) array.  Hex cells are narrower than the square of view
+    offsets at their corners: those views read the nearest pixel of the lens.
+    """
+    ny, nx = views or view_grid(lens_array)
+    s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
+    u = (np.arange(nx) + 0.5 - nx / 2) * s_x
+    v = (ny / 2 - np.arange(ny) - 0.5) * s_y
+    centres = lens_array.lens_centres()                     # (Ly, Lx, 2)
+    ly, lx = centres.shape[:2]
+    lens = np.arange(ly * lx).reshape(ly, lx)
+    if lens_array.grid == "lenticular":
+        v = np.zeros(1)
+    pts = np.empty((ny, nx, ly, lx, 2))
+    pts[..., 0] = centres[None, None, :, :, 0] + u[None, :, None, None]
+    pts[..., 1] = centres[None, None, :, :, 1] + v[:, None, None, None]
+    return sample_in_lens(h3d, lens_array, pts, np.broadcast_to(lens, pts.shape[:-1]))
+
+
+def is_resampled(lens_array: LensArray) -> bool:
+    """True when views cannot be pulled out by a reshape (hex, fractional PPL)."""
+    return lens_array.views is None or nearest_integer(lens_array.ppl_x) is None
+
+
+def cell_contains(grid: str, pitch_x: float, pitch_y: float, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Whether offsets ``(u, v)`` (mm, from a lens centre) lie strictly inside its cell.
+
+    Points on a cell edge count as outside: POV-Ray's ray there grazes two lenslets.
+    """
+    tight = 1 - 1e-9
+    ax, ay = np.abs(u), np.abs(v)
+    if grid == "hex":
+        return (ax < pitch_x / 2 * tight) & (ax / 2 + np.sqrt(3) / 2 * ay < pitch_x / 2 * tight)
+    if grid == "lenticular":
+        return ax < pitch_x / 2 * tight
+    return (ax < pitch_x / 2 * tight) & (ay < pitch_y / 2 * tight)
+
+
+def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[float, float],
+                       phase: tuple[float, float], gain: float, camera: tuple[float, float]) -> np.ndarray:
+    """The display image from a capture sampled on a lens-aligned grid (single-stage, any grid).
+
+    Every capture lens ``c'`` is sampled at offsets ``w = ((k + phase_x) sx, (m + phase_y) sy)``,
+    the same for every lens.  The display ray at offset ``u`` from lens ``c`` is the capture
+    ray of sample ``w = -u`` of lens ``c' = c - u D / f`` (single_stage module doc), i.e. the
+    capture pixel at ``c - u gain`` with ``gain = 1 + D / f``.  Display offsets between
+    samples are interpolated bilinearly in direction, in linear light, from samples of
+    the same lens only (a sample outside the cell belongs to another view entirely);
+    where none of the four is in the cell, the nearest sample in it is taken.
+
+    Parameters
+    ----------
+    capture : (Hc, Wc, C) uint8 or uint16, sRGB-encoded    the camera image
+    lens_array : LensArray                      the display array
+    pitch : (sx, sy), mm                        capture pixel pitch (lens pitch / samples per lens)
+    phase : (phase_x, phase_y)                  0 or 1/2: where samples sit relative to lens centres
+    gain : float                                ``1 + D / f``
+    camera : (x0, y0), mm                       centre of the capture camera's image
+
+    Returns
+    -------
+    (H, W, C) array of ``capture.dtype``; pixels outside every lens are black.
+    """
+
+    la = lens_array
+    hc, wc = capture.shape[:2]
+    sx, sy = pitch
+    centres, _, inside = pixel_rays(la)
+    X, Y = np.meshgrid(*la.panel.pixel_centres())
+    cx, cy = centres[inside, 0], centres[inside, 1]
+    u = X[inside] - cx
+    v = np.zeros_like(u) if la.grid == "lenticular" else Y[inside] - cy
+    a, b = u / sx - phase[0], v / sy - phase[1]
+    k0, m0 = np.floor(a), np.floor(b)
+    fa, fb = a - k0, b - m0
+    lin = decode(capture)
+    acc = np.zeros((u.size, capture.shape[2]))
+    total = np.zeros(u.size)
+    best = np.full(u.size, np.inf)
+    nearest = np.zeros((u.size, capture.shape[2]))
+    for dk in (-1, 0, 1, 2):
+        for dm in ((0,) if la.grid == "lenticular" else (-1, 0, 1, 2)):
+            ou, ov = (k0 + dk + phase[0]) * sx, (m0 + dm + phase[1]) * sy
+            if la.grid == "lenticular":
+                ov = np.zeros_like(ou)
+            valid = cell_contains(la.grid, la.pitch_x, la.pitch_y, ou, ov)
+            col = (cx - ou * gain - camera[0]) / sx + wc / 2 - 0.5
+            row = hc / 2 - 0.5 - (cy - ov * gain - camera[1]) / sy
+            ci, ri = np.rint(col).astype(np.int64), np.rint(row).astype(np.int64)
+            # The capture grid is built lens-aligned: every valid sample is a pixel centre.
+            assert np.all(~valid | ((np.abs(col - ci) < 1e-6) & (np.abs(row - ri) < 1e-6))), "capture grid misaligned"
+            assert np.all(~valid | ((ci >= 0) & (ci < wc) & (ri >= 0) & (ri < hc))), "capture too small"
+            value = lin[np.clip(ri, 0, hc - 1), np.clip(ci, 0, wc - 1)]
+            if dk in (0, 1) and dm in (0, 1):
+                w = (fa if dk else 1 - fa) * ((fb if dm else 1 - fb) if la.grid != "lenticular" else 1.0)
+                w = np.where(valid, w, 0.0)
+                acc += w[:, None] * value
+                total += w
+            d = np.where(valid, (ou - u) ** 2 + (ov - v) ** 2, np.inf)
+            closer = d < best
+            best = np.where(closer, d, best)
+            nearest = np.where(closer[:, None], value, nearest)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        value = np.where((total > 1e-12)[:, None], acc / total[:, None], nearest)
+    out = np.zeros((la.panel.height, la.panel.width, capture.shape[2]), capture.dtype)
+    out[inside] = encode(value, capture.dtype)
+    return out

@@ -1,0 +1,603 @@
+"""Every POV-Ray process povh3d starts: finding the binary and running jobs.
+
+This is the only module that starts processes.  Each job gets a fresh
+temporary folder that is the child's working folder and holds the scene, the
+output images, the console log and a private ``HOME``.  The private ``HOME``
+holds a ``povray.conf`` that permits reading the job's include folders, so
+POV-Ray's file I/O security allows them on builds that enforce it (Debian's
+3.7.0.10 reads the setting but, through an upstream bug, enforces nothing),
+and the log does not start with "cannot open the user configuration file".
+Because POV-Ray does not enforce it, each child is also confined by the
+kernel (``sandbox.py``, Linux Landlock): it reads only POV-Ray's own files
+and the job's inputs, and writes only in its folder.
+A side effect: a user's own ``~/.povray/3.7/povray.ini`` is not read, which
+keeps renders reproducible.
+
+Children run in their own session, so a Ctrl-C in the terminal reaches only
+Python, which then stops them; on Linux they also die with Python.  Their
+output goes to a log file, so no pipe can fill up and block them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import functools
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import BinaryIO
+
+from . import sandbox
+from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
+    RenderInterrupted)
+from .log import parse_error
+
+__all__ = ["PovrayJob", "JobResult", "find_povray", "povray_version",
+           "run_jobs", "build_command", "povray_conf"]
+
+#: Environment variable naming the POV-Ray executable to use.
+ENV_VAR = "POVH3D_POVRAY"
+INSTALL_HINT = ("install it with 'sudo apt-get install -y povray' (Debian/Ubuntu) "
+                f"or set {ENV_VAR}=/path/to/povray")
+SCENE_FILE = "scene.pov"
+LOG_FILE = "povray.log"
+#: Output name: ``frame.png``, or ``frame1.png``... for an animation, where
+#: POV-Ray pads the number to the width of the last one (frame01..frame12).
+OUTPUT_STEM = "frame"
+_FRAME_NAME = re.compile(rf"{OUTPUT_STEM}(\d+)\.png")
+
+_DENIED = re.compile(r"Cannot (open|find)")
+_POLL_SECONDS = 0.02
+# POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
+_GRACE_SECONDS = 1.0
+_TAIL_LINES = 40
+_PR_SET_PDEATHSIG = 1
+_LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") else None
+
+
+@dataclass(frozen=True)
+class PovrayJob:
+    """One POV-Ray run: a scene, its size and switches.
+
+    Parameters
+    ----------
+    name : str
+        Shown in progress and errors, e.g. ``"view 3,5"``.
+    script : str
+        The complete ``.pov`` text.
+    width, height : int
+        Image size, pixels.
+    frames : int
+        Above 1, an animation: ``frame_number`` runs 1..frames, one image each.
+    include_dirs : tuple of str
+        Library folders (``+L``), the scene's own folder first; POV-Ray may
+        read anything below them.  Relative paths are taken from the caller's
+        working folder.
+    options : tuple of str
+        Extra switches, appended last, e.g. ``("+A0.3", "+R3")``.
+    threads : int or None
+        Render threads (``+WT``); None for POV-Ray's default.
+    bit_depth : {8, 16}
+        Bits per PNG channel.
+    file_gamma : str
+        ``File_Gamma`` of the output, e.g. ``"sRGB"`` or ``"1.0"``.
+    timeout : float or None
+        Seconds this job may take.
+    start_row, end_row : int or None
+        Render only rows ``start_row <= row < end_row`` (0-based); the image
+        keeps its full size and the other rows are black.
+    read_files : tuple of str or None
+        The files the scene may read (the sandbox's allow-list), besides
+        POV-Ray's own; None allows everything below `include_dirs`.
+    """
+
+    name: str
+    script: str
+    width: int
+    height: int
+    frames: int = 1
+    include_dirs: tuple[str, ...] = ()
+    options: tuple[str, ...] = ()
+    threads: int | None = None
+    bit_depth: int = 8
+    file_gamma: str = "sRGB"
+    timeout: float | None = None
+    start_row: int | None = None
+    end_row: int | None = None
+    read_files: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        if self.read_files is not None:
+            if isinstance(self.read_files, (str, bytes)):
+                self._reject("read_files", "must be a sequence of paths", self.read_files)
+            object.__setattr__(self, "read_files",
+                               tuple(os.path.abspath(p) for p in self.read_files))
+        for name in ("include_dirs", "options"):
+            value = getattr(self, name)
+            if isinstance(value, (str, bytes)):
+                self._reject(name, "must be a sequence of strings", value)
+            # Lists are accepted for convenience; stored as tuples to stay hashable.
+            object.__setattr__(self, name, tuple(str(item) for item in value))
+        for name in ("width", "height", "frames"):
+            self._check_positive(name, getattr(self, name))
+        if self.threads is not None:
+            self._check_positive("threads", self.threads)
+        if self.bit_depth not in (8, 16):
+            self._reject("bit_depth", "must be 8 or 16", self.bit_depth)
+        if not self.file_gamma or any(c.isspace() for c in self.file_gamma):
+            self._reject("file_gamma", "must be a word such as 'sRGB' or '1.0'",
+                         self.file_gamma)
+        if self.timeout is not None and not self.timeout > 0:
+            self._reject("timeout", "must be positive seconds or None", self.timeout)
+        self._check_rows()
+
+    @property
+    def rows(self) -> tuple[int, int] | None:
+        """``(start, end)`` rows to render, 0-based, end exclusive; None for all."""
+        if self.start_row is None and self.end_row is None:
+            return None
+        start = 0 if self.start_row is None else self.start_row
+        return start, self.height if self.end_row is None else self.end_row
+
+    def _check_rows(self) -> None:
+        rows = self.rows
+        if rows is not None and not 0 <= rows[0] < rows[1] <= self.height:
+            self._reject("start_row, end_row",
+                         f"must satisfy 0 <= start_row < end_row <= height ({self.height})",
+                         rows)
+
+    def _check_positive(self, name: str, value: object) -> None:
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            self._reject(name, "must be a positive integer", value)
+
+    def _reject(self, name: str, rule: str, value: object) -> None:
+        raise ConfigError(f"POV-Ray job {self.name!r}: {name} {rule}, got {value!r}.")
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """A finished job, handed to ``on_result`` while its folder exists.
+
+    Parameters
+    ----------
+    job : PovrayJob
+    images : tuple of Path
+        One PNG per frame, in frame order; deleted after ``on_result`` returns.
+    seconds : float
+        Wall time of the POV-Ray process, s.
+    log : str
+        POV-Ray's console output (stdout and stderr).
+    """
+
+    job: PovrayJob
+    images: tuple[Path, ...]
+    seconds: float
+    log: str
+
+
+def find_povray() -> str:
+    """Path of the POV-Ray executable.
+
+    ``$POVH3D_POVRAY`` if set (a path or a command name), else ``povray`` on
+    ``PATH``.
+
+    Raises
+    ------
+    PovrayNotFound
+        With a one-line hint on installing it.
+    """
+    configured = os.environ.get(ENV_VAR)
+    if configured:
+        found = shutil.which(configured)
+        if found is None:
+            raise PovrayNotFound(f"{ENV_VAR}={configured} is not an executable "
+                                 f"program; {INSTALL_HINT}.")
+        return found
+    found = shutil.which("povray")
+    if found is None:
+        raise PovrayNotFound(f"POV-Ray was not found on PATH; {INSTALL_HINT}.")
+    return found
+
+
+def povray_version(binary: str | None = None) -> str:
+    """POV-Ray's version, e.g. ``"3.7.0.10.unofficial"``; asked once per binary."""
+    return _version(binary or find_povray())
+
+
+@functools.cache
+def _version(binary: str) -> str:
+    command = [binary, "--version"]
+    try:
+        done = subprocess.run(command, capture_output=True, text=True,
+                              errors="replace", timeout=30, check=False)
+    except OSError as error:
+        raise PovrayNotFound(f"Cannot run {binary}: {error.strerror}; "
+                             f"{INSTALL_HINT}.") from None
+    except subprocess.TimeoutExpired:
+        raise PovrayError(f"{binary} --version did not answer within 30 s.",
+                          command=command) from None
+    output = done.stdout + done.stderr  # POV-Ray 3.7 prints it on stderr
+    match = re.search(r"^POV-Ray (\d+\.\d+\S*)", output, re.MULTILINE)
+    if match is None:
+        raise PovrayError(f"{binary} --version did not report a POV-Ray version.",
+                          command=command, returncode=done.returncode,
+                          log_tail=_tail(output))
+    return match[1]
+
+
+def _image_buffer_mb(job: PovrayJob) -> int:
+    """Memory for POV-Ray's image buffer, MB (``+MI``, default 128).
+
+    Past it POV-Ray 3.7 backs the image with a file at the hard-wired path
+    ``/tmp/pov<pid>`` (not TMPDIR), outside the job folder: the sandbox refuses
+    it, and a crash would leave it behind.  It keeps about 5 floats a pixel;
+    give it twice that.
+    """
+    return max(128, -(-2 * 20 * job.width * job.height // (1 << 20)))
+
+
+def build_command(job: PovrayJob, binary: str) -> list[str]:
+    """Command line that renders `job` in its folder.
+
+    Paths of the scene and images are relative: the child runs in the job's
+    folder.  Include folders are made absolute here, from the caller's
+    working folder.
+    """
+    command = [binary, f"+I{SCENE_FILE}", f"+O{OUTPUT_STEM}.png",
+               f"+W{job.width}", f"+H{job.height}", f"+FN{job.bit_depth}",
+               f"File_Gamma={job.file_gamma}", "-D", "-V", f"+MI{_image_buffer_mb(job)}"]
+    # Unquoted, POV-Ray rejects a library path holding a space.
+    command += [f"+L{_quote(os.path.abspath(folder))}" for folder in job.include_dirs]
+    if job.threads is not None:
+        command.append(f"+WT{job.threads}")
+    if job.frames > 1:
+        command += ["+KFI1", f"+KFF{job.frames}"]
+    if job.rows is not None:
+        # POV-Ray reads a row of 1 or less as a fraction of the height (+ER1
+        # means the last row); "n.5" is above 1 and truncates to row n.
+        start, end = job.rows
+        command += [f"+SR{start + 1}.5", f"+ER{end}.5"]
+    return command + list(job.options)
+
+
+def povray_conf(read_dirs: Sequence[str], write_dir: str) -> str:
+    """Text of a user ``povray.conf`` for one job.
+
+    Parameters
+    ----------
+    read_dirs : sequence of str
+        Absolute folders POV-Ray may read, with everything below them.
+    write_dir : str
+        The job's folder, where it may also write.
+    """
+    lines = ["; Written by povh3d for one render; deleted with it.",
+             "[File I/O Security]", "restricted",
+             "[Shellout Security]", "forbidden",
+             "[Permitted Paths]",
+             # A user conf replaces the system's paths, so list those again.
+             'read* = "%INSTALLDIR%/include"', 'read* = "/etc/povray"']
+    lines += [f"read* = {_quote(folder)}" for folder in read_dirs]
+    lines += [f"read+write* = {_quote(write_dir)}", "read+write = ."]
+    return "\n".join(lines) + "\n"
+
+
+def _quote(path: str) -> str:
+    """`path` in the quotes POV-Ray accepts on its command line and in its conf."""
+    if '"' not in path:
+        return f'"{path}"'
+    if "'" not in path:
+        return f"'{path}'"
+    raise ConfigError(f"POV-Ray cannot take a folder whose name holds both "
+                      f"quote characters: {path!r}.")
+
+
+@dataclass(eq=False)
+class _Child:
+    """A started job: its folder, command and process."""
+
+    index: int
+    job: PovrayJob
+    folder: Path
+    command: list[str]
+    process: subprocess.Popen[bytes]
+    started: float
+    ended: float | None = field(default=None)
+
+    @property
+    def log(self) -> str:
+        path = self.folder / LOG_FILE
+        return path.read_text(encoding="utf-8", errors="replace") if path.exists() else ""
+
+
+def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
+             on_result: Callable[[JobResult], None] | None = None,
+             on_progress: Callable[[int, int], None] | None = None,
+             binary: str | None = None,
+             workdir: str | Path | None = None,
+             should_stop: Callable[[], bool] | None = None) -> list[float]:
+    """Render jobs with at most `processes` POV-Ray children at once.
+
+    Parameters
+    ----------
+    jobs : sequence of PovrayJob
+        Started in this order.
+    processes : int
+        Most children running at the same time.
+    on_result : callable, optional
+        Called with each `JobResult` as its job finishes, in this thread,
+        while the job's images exist; they are deleted when it returns.
+    on_progress : callable, optional
+        Called as ``on_progress(done, total)`` after each job, in this thread.
+    binary : str, optional
+        POV-Ray executable; `find_povray` by default.
+    workdir : str or Path, optional
+        Folder for the jobs' temporary folders; the system's by default.
+    should_stop : callable, optional
+        Polled while children run; True stops them all and raises
+        `RenderInterrupted` (a cancelled task on a Dask worker).
+
+    Returns
+    -------
+    list of float
+        Wall time of each job, s, in job order.
+
+    Raises
+    ------
+    PovrayError
+        A job failed (non-zero exit, missing image); the message names the
+        job and quotes POV-Ray's error.
+    PovrayTimeout
+        A job ran longer than its timeout.
+    RenderInterrupted
+        Ctrl-C (a KeyboardInterrupt, also one raised by a callback).
+
+    Notes
+    -----
+    Before any exception leaves, including one from a callback, the first
+    failure stops every child (SIGTERM to its process group, SIGKILL after a
+    second), no further job starts and every temporary folder is deleted.
+    """
+    if not isinstance(processes, int) or processes < 1:
+        raise ConfigError(f"processes must be a positive integer, got {processes!r}.")
+    jobs = list(jobs)
+    if not jobs:
+        return []
+    binary = binary or find_povray()
+    seconds = [0.0] * len(jobs)
+    pending = deque(enumerate(jobs))
+    running: list[_Child] = []
+    done = 0
+    try:
+        while pending or running:
+            while pending and len(running) < processes:
+                index, job = pending.popleft()
+                _start(index, job, binary, workdir, running)
+            for child in _wait_for_exits(running, should_stop):
+                running.remove(child)
+                seconds[child.index] = _finish(child, on_result)
+                done += 1
+                if on_progress is not None:
+                    on_progress(done, len(jobs))
+    except KeyboardInterrupt:
+        raise RenderInterrupted("Rendering interrupted; every POV-Ray process "
+                                "was stopped.") from None
+    finally:
+        _stop(running)
+        for child in running:
+            shutil.rmtree(child.folder, ignore_errors=True)
+    return seconds
+
+
+def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
+           running: list[_Child]) -> None:
+    """Start `job` in a fresh folder and add it to `running`."""
+    folder = _make_folder(workdir)
+    registered = False  # once True, run_jobs owns the folder and the child
+    try:
+        command = build_command(job, binary)
+        env = _prepare(folder, job)
+        with open(folder / LOG_FILE, "wb") as log, _confinement(job, binary, folder) as fd, \
+                _deferred_interrupt():
+            process = _spawn(command, folder, env, log, fd)
+            running.append(_Child(index, job, folder, command, process, time.monotonic()))
+            registered = True
+    except BaseException:
+        if not registered:
+            shutil.rmtree(folder, ignore_errors=True)
+        raise
+
+
+@contextlib.contextmanager
+def _confinement(job: PovrayJob, binary: str, folder: Path) -> Iterator[int | None]:
+    """The Landlock ruleset fd of `job` while its child starts (None: unconfined)."""
+    inputs = job.read_files if job.read_files is not None else \
+        tuple(os.path.abspath(d) for d in job.include_dirs)
+    policy = sandbox.Policy(sandbox.system_read_paths(binary) + inputs, (str(folder),))
+    ruleset = sandbox.build_ruleset(policy)
+    try:
+        yield None if ruleset is None else ruleset.fd
+    finally:
+        if ruleset is not None:
+            ruleset.close()
+
+
+def _spawn(command: list[str], folder: Path, env: dict[str, str],
+           log: BinaryIO, ruleset_fd: int | None = None) -> subprocess.Popen[bytes]:
+    try:
+        return subprocess.Popen(
+            command, cwd=folder, env=env, stdin=subprocess.DEVNULL, stdout=log,
+            stderr=subprocess.STDOUT, start_new_session=True,
+            preexec_fn=functools.partial(_child_setup, os.getpid(), ruleset_fd))
+    except OSError as error:
+        raise PovrayNotFound(f"Cannot run POV-Ray at {command[0]}: "
+                             f"{error.strerror}; {INSTALL_HINT}.") from None
+
+
+def _make_folder(workdir: str | Path | None) -> Path:
+    try:
+        return Path(tempfile.mkdtemp(prefix="povh3d-", dir=workdir))
+    except OSError as error:
+        raise OutputError(f"Cannot create a temporary folder in "
+                          f"{workdir or tempfile.gettempdir()}: {error.strerror}.") from None
+
+
+def _prepare(folder: Path, job: PovrayJob) -> dict[str, str]:
+    """Write the scene and a private HOME into `folder`; the child's environment."""
+    home = folder / "home"
+    conf = home / ".povray" / "3.7" / "povray.conf"
+    read_dirs = [os.path.abspath(path) for path in job.include_dirs]
+    try:
+        (folder / SCENE_FILE).write_text(job.script, encoding="utf-8")
+        conf.parent.mkdir(parents=True)
+        conf.write_text(povray_conf(read_dirs, str(folder)))
+    except OSError as error:
+        raise OutputError(f"Cannot write the scene into {folder}: {error.strerror}.") from None
+    return dict(os.environ, HOME=str(home))
+
+
+@contextlib.contextmanager
+def _deferred_interrupt() -> Iterator[None]:
+    """Hold Ctrl-C while a child starts, so it is recorded before any interrupt.
+
+    A KeyboardInterrupt raised inside Popen after the fork would leave a child
+    nobody knows of.  Python raises it only in the main thread, where the
+    SIGINT handler may be swapped; elsewhere there is nothing to hold.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if caught and callable(previous):
+            previous(signal.SIGINT, None)  # the default handler raises KeyboardInterrupt
+
+
+def _child_setup(parent: int, ruleset_fd: int | None = None) -> None:
+    """Run in the child before exec: die with the parent (Linux), enter the sandbox."""
+    if _LIBC is not None:
+        _LIBC.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        if os.getppid() != parent:  # the parent died before prctl took effect
+            os._exit(1)
+    if ruleset_fd is not None:
+        sandbox.restrict_self(ruleset_fd)
+
+
+def _wait_for_exits(running: list[_Child],
+                    should_stop: Callable[[], bool] | None = None) -> list[_Child]:
+    """Wait until a child exits; the exited ones.  Raises on a timeout or a stop."""
+    while True:
+        if should_stop is not None and should_stop():
+            raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
+        now = time.monotonic()
+        exited = [child for child in running if child.process.poll() is not None]
+        for child in exited:
+            child.ended = now
+        if exited:
+            return exited
+        for child in running:
+            if child.job.timeout is not None and now - child.started > child.job.timeout:
+                raise _timeout(child)
+        time.sleep(_POLL_SECONDS)
+
+
+def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> float:
+    """Check an exited child, hand over its result, delete its folder."""
+    try:
+        seconds = (child.ended or time.monotonic()) - child.started
+        log = child.log
+        images = _collect_images(child.folder, child.job.frames)
+        if child.process.returncode != 0 or images is None:
+            raise _failure(child, log)
+        if on_result is not None:
+            on_result(JobResult(child.job, images, seconds, log))
+        return seconds
+    finally:
+        shutil.rmtree(child.folder, ignore_errors=True)
+
+
+def _collect_images(folder: Path, frames: int) -> tuple[Path, ...] | None:
+    """The output images in frame order, or None unless all are there."""
+    if frames == 1:
+        path = folder / f"{OUTPUT_STEM}.png"
+        return (path,) if path.is_file() else None
+    numbered = {int(match[1]): path for path in folder.glob(f"{OUTPUT_STEM}*.png")
+                if (match := _FRAME_NAME.fullmatch(path.name))}
+    if sorted(numbered) != list(range(1, frames + 1)):
+        return None
+    return tuple(numbered[number] for number in range(1, frames + 1))
+
+
+def _failure(child: _Child, log: str) -> PovrayError:
+    code = child.process.returncode
+    reason = parse_error(log)
+    if reason is None and code != 0:
+        reason = _describe_exit(code, log)
+    elif reason is None:
+        reason = f"POV-Ray finished without writing {_expected(child.job)}"
+    if code == 126 and not log.strip():
+        reason = "the POV-Ray process could not enter its sandbox (Landlock); set POVH3D_SANDBOX=off to run unconfined"
+    elif _DENIED.search(reason) and sandbox.landlock_abi() and sandbox.sandbox_mode() != "off":
+        reason += (" (povh3d lets a scene read only its own files and POV-Ray's include files, "
+                   "and write only in its job folder)")
+    return PovrayError(f"{child.job.name}: {reason}", command=child.command,
+                       returncode=code, log_tail=_tail(log))
+
+
+def _expected(job: PovrayJob) -> str:
+    if job.frames == 1:
+        return f"{OUTPUT_STEM}.png"
+    return f"the {job.frames} frames {OUTPUT_STEM}1.png..{OUTPUT_STEM}{job.frames}.png"
+
+
+def _describe_exit(code: int, log: str) -> str:
+    if code < 0:
+        return f"POV-Ray was killed by signal {-code}"
+    last = next((line.strip() for line in reversed(log.splitlines()) if line.strip()), "")
+    return f"POV-Ray exited with code {code}" + (f": {last}" if last else "")
+
+
+def _timeout(child: _Child) -> PovrayTimeout:
+    return PovrayTimeout(f"{child.job.name}: POV-Ray did not finish within "
+                         f"{child.job.timeout:g} s (the job's timeout).",
+                         command=child.command, log_tail=_tail(child.log))
+
+
+def _tail(log: str) -> str:
+    return "\n".join(log.splitlines()[-_TAIL_LINES:])
+
+
+def _stop(children: list[_Child]) -> None:
+    """Stop every live child: SIGTERM, then SIGKILL after a grace; reap them."""
+    live = [child for child in children if child.process.poll() is None]
+    _signal_groups(live, signal.SIGTERM)
+    deadline = time.monotonic() + _GRACE_SECONDS
+    try:
+        while time.monotonic() < deadline and any(c.process.poll() is None for c in live):
+            time.sleep(_POLL_SECONDS)
+    except KeyboardInterrupt:
+        pass  # a second Ctrl-C: no more grace
+    _signal_groups([c for c in live if c.process.poll() is None], signal.SIGKILL)
+    for child in live:
+        child.process.wait()
+
+
+def _signal_groups(children: list[_Child], signum: signal.Signals) -> None:
+    for child in children:
+        # Each child leads its own session, so its group id is its pid.
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(child.process.pid, signum)

@@ -1,0 +1,155 @@
+"""The user's POV-Ray scene: where it is, what it reads, and what that says about it.
+
+One walk over the scene's text finds everything povh3d needs to know before it
+renders:
+
+- the files it reads: every file a string literal in the scene (or, recursively,
+  in what it includes) names and that exists beside the scene or in an include
+  folder.  Their names and contents make the digest, so the cache key changes
+  when any of them does;
+- the POV-Ray include files it names (``textures.inc`` ...), found in POV-Ray's
+  own include folders: not part of the digest (they change with POV-Ray, whose
+  version is in the key) but read for what follows;
+- the features it uses (``features.FEATURE_PATTERNS``), and so which global
+  settings a quality level may add;
+- whether it reads the animation clock: a scene that never mentions ``clock``
+  or the other animation identifiers looks the same at every clock value;
+- whether it sets ``assumed_gamma`` (povh3d adds one where it does not).
+
+Comments do not count; a mention anywhere else, even in a string, does: a false
+alarm only costs work, a miss would give wrong pixels.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+from ..errors import InputError
+from .features import Features, features_of_text, strip_comments
+
+_STRING = re.compile(r'"([^"\n]{1,400})"')
+_GAMMA = re.compile(r"\bassumed_gamma\b")
+# Every identifier through which a scene can see the animation.
+_CLOCK_WORDS = re.compile(r"\b(clock|clock_delta|clock_on|frame_number|initial_frame|"
+                          r"final_frame|initial_clock|final_clock)\b")
+# Files whose text is read for names of other files (the rest are only hashed).
+_TEXT_SUFFIXES = (".pov", ".inc", ".mcr", ".ini", ".txt", ".csv")
+# Files whose text is POV-Ray source: features and clock use are read from these.
+_SOURCE_SUFFIXES = (".pov", ".inc", ".mcr", ".ini")
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A scene file, its include folders and what one walk over its text found.
+
+    Attributes
+    ----------
+    path : Path               the scene, absolute
+    include_dirs : tuple[Path, ...]   the scene's folder first, then the user's
+    files : tuple[Path, ...]  the scene and every file it was found to read
+    digest : str              sha256 over the files' names and contents
+    sets_assumed_gamma : bool
+    features : Features       found in its sources and the POV-Ray include files they name
+    uses_clock : bool         whether any of those sources reads the animation clock
+    """
+
+    path: Path
+    include_dirs: tuple[Path, ...]
+    files: tuple[Path, ...]
+    digest: str
+    sets_assumed_gamma: bool
+    features: Features = Features(frozenset())
+    uses_clock: bool = False
+
+
+@cache
+def system_include_dirs() -> tuple[Path, ...]:
+    """POV-Ray's own include folders (``/usr/share/povray-3.7/include``): beside the
+    binary ``$POVH3D_POVRAY`` or ``PATH`` names, then the usual prefixes."""
+    prefixes = []
+    binary = os.environ.get("POVH3D_POVRAY") or shutil.which("povray")
+    if binary:
+        prefixes.append(Path(binary).resolve().parent.parent)
+    prefixes += [Path("/usr"), Path("/usr/local")]
+    found = [d for prefix in prefixes for d in sorted((prefix / "share").glob("povray-*/include"))]
+    return tuple(dict.fromkeys(found))
+
+
+def _read_text(path: Path) -> str:
+    try:
+        text = path.read_bytes().decode("latin-1")  # POV-Ray sources are bytes; never fail on encoding
+    except OSError as exc:
+        raise InputError(f"cannot read {str(path)!r}: {exc.strerror}") from None
+    return strip_comments(text)
+
+
+def _find(name: str, folders: list[Path]) -> Path | None:
+    for base in folders:
+        candidate = base / name
+        if candidate.is_file():
+            return candidate.resolve()
+    return None
+
+
+def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
+               system_dirs: tuple[Path, ...] | None = None) -> Scene:
+    """Find a scene and walk what it reads; raise InputError when it is not there.
+
+    ``system_dirs``: POV-Ray's include folders (None: ``system_include_dirs()``).
+    """
+    scene = Path(path)
+    if not scene.exists():
+        raise InputError(f"scene file {str(path)!r} does not exist; check the path")
+    if not scene.is_file():
+        raise InputError(f"scene {str(path)!r} is not a file; give a .pov file")
+    scene = scene.resolve()
+    dirs = [scene.parent]
+    for d in include_dirs:
+        d = Path(d).resolve()
+        if not d.is_dir():
+            raise InputError(f"include folder {str(d)!r} does not exist; check --include")
+        if d not in dirs:
+            dirs.append(d)
+    system = list(system_include_dirs() if system_dirs is None else system_dirs)
+
+    own: dict[Path, None] = {}        # the scene's files, in the digest
+    seen: set[Path] = set()
+    sources: list[str] = []           # POV-Ray source texts, the scene's and the system's
+    pending = [(scene, True)]
+    sets_gamma = False
+    while pending:
+        current, is_own = pending.pop()
+        if current in seen:
+            continue
+        seen.add(current)
+        if is_own:
+            own[current] = None
+        suffix = current.suffix.lower()
+        if suffix not in _TEXT_SUFFIXES:
+            continue  # images, fonts, density files: hash them, do not parse them
+        text = _read_text(current)
+        if suffix in _SOURCE_SUFFIXES:
+            sources.append(text)
+        if is_own:
+            sets_gamma = sets_gamma or bool(_GAMMA.search(text))
+        for name in _STRING.findall(text):
+            found = _find(name, [current.parent, *dirs] if is_own else [current.parent, *system])
+            if found is not None:
+                pending.append((found, is_own))
+            elif (found := _find(name, system)) is not None:
+                pending.append((found, False))
+
+    h = hashlib.sha256()
+    for f in sorted(own):
+        h.update(str(f.relative_to(scene.parent) if f.is_relative_to(scene.parent) else f).encode())
+        h.update(b"\0")
+        h.update(f.read_bytes())
+        h.update(b"\0")
+    return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
+                 features_of_text(sources), any(_CLOCK_WORDS.search(t) for t in sources))
