@@ -24,6 +24,7 @@ import numpy as np
 from distributed import LocalCluster
 
 from povh3d.app.render import render
+from povh3d.app.request import RenderRequest
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.io import read_png
 from povh3d.system import cpu_count
@@ -57,7 +58,7 @@ def main() -> int:
                 for where, scheduler in (("local", None), ("dask", cluster.scheduler_address)):
                     settings = RenderSettings(quality=args.quality, use_cache=False, scheduler=scheduler)
                     start = time.perf_counter()
-                    render(SCENE, lens, Path(tmp) / f"{where}.png", method=method, settings=settings)
+                    render(RenderRequest(SCENE, lens, Path(tmp) / f"{where}.png", method=method, settings=settings))
                     times[where].append(time.perf_counter() - start)
             local, dask = statistics.median(times["local"]), statistics.median(times["dask"])
             same = np.array_equal(read_png(Path(tmp) / "local.png"), read_png(Path(tmp) / "dask.png"))

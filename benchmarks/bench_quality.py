@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from povh3d.app.render import render
+from povh3d.app.request import RenderRequest
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.app.bench import default_trials, format_table, run_bench, write_report
 from povh3d.engine.quality import RenderSettings
@@ -40,7 +41,7 @@ def main() -> int:
 
     # 1. Every setting on the 240x144 omnidirectional panel (30x18 lenses, 8x8 views).
     if not args.auto_only:
-        report = run_bench(scene, omni((30, 18)), default_trials(args.methods.split(",")),
+        report = run_bench(scene, omni((30, 18)), default_trials(omni((30, 18)), args.methods.split(",")),
                            on_trial=lambda n, total, what: print(f"  [{n + 1}/{total}] {what}", file=sys.stderr))
         write_report(report, out / "quality")
         print(format_table(report))
@@ -51,14 +52,14 @@ def main() -> int:
     results["panel"] = [la.panel.width, la.panel.height]
     base = RenderSettings(quality="draft", use_cache=False)
     t = time.perf_counter()
-    render(SCENE, la, out / "high.png", settings=replace(base, quality="high"))
+    render(RenderRequest(SCENE, la, out / "high.png", settings=replace(base, quality="high")))
     high = time.perf_counter() - t
     results["high_seconds"] = high
     print(f"\n480x272, --quality high: {high:.1f} s")
     for target in (25.0, 30.0, 35.0, 38.0):
         t = time.perf_counter()
-        record = render(SCENE, la, out / f"auto-{target:g}.png",
-                        settings=replace(base, quality="auto", max_error_db=target))
+        record = render(RenderRequest(SCENE, la, out / f"auto-{target:g}.png",
+                                      settings=replace(base, quality="auto", max_error_db=target)))
         seconds = time.perf_counter() - t
         chosen = record["quality"]["auto"]["chosen"]
         results["auto"].append({"target_db": target, "seconds": seconds, "chosen": chosen,

@@ -38,7 +38,9 @@ _PUBLIC = {
 }
 _MODULES = {"presets": "povh3d.geometry.presets"}
 
-__all__ = ["__version__", *_PUBLIC, *_MODULES]
+__all__ = ["__version__", "render", "RenderRequest", "ModelOptions", "FrameRange", "Quality", "RenderSettings",
+           "CropSettings", "LensArray", "Panel", "presets", "Povh3dError", "ConfigError", "InputError",
+           "OutputError", "PovrayError"]
 
 
 def __getattr__(name: str) -> Any:

@@ -1,18 +1,17 @@
-"""Shared fixtures: small lens arrays and an isolated image cache per test."""
+"""Shared fixtures (an isolated image cache per test, a POV-Ray work folder, the in-process
+command line) and the paths the tests share."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
-from povh3d.geometry.lens_array import LensArray, Panel
+from tests.support.cli import Result, run_in_process
 
-
-def square_array(lx: int = 8, ly: int = 6, nx: int = 4, ny: int = 4, s: float = 0.1, f: float = 1.5) -> LensArray:
-    return LensArray("square", lx, ly, nx * s, ny * s, f, Panel(lx * nx, ly * ny, s, s))
-
-
-def lenticular_array(lx: int = 8, rows: int = 12, nx: int = 4, s: float = 0.1, f: float = 1.5) -> LensArray:
-    return LensArray("lenticular", lx, rows, nx * s, s, f, Panel(lx * nx, rows, s, s))
+REPO = Path(__file__).resolve().parents[1]
+SAMPLES = REPO / "sample_models"
+SAMPLE = SAMPLES / "sample.pov"
 
 
 @pytest.fixture(autouse=True)
@@ -27,3 +26,19 @@ def workdir(tmp_path):
     path = tmp_path / "work"
     path.mkdir()
     return path
+
+
+@pytest.fixture
+def cli(monkeypatch):
+    """The command line in this process: ``cli(*args, cwd=None, env=None) -> Result(code, out, err)``.
+
+    ``main`` runs with stdout and stderr captured and ``SystemExit`` caught; ``cwd`` and ``env``
+    (added to the environment) hold for that one run."""
+    def run(*args, cwd: str | Path | None = None, env: dict[str, str] | None = None) -> Result:
+        with monkeypatch.context() as patch:
+            if cwd is not None:
+                patch.chdir(cwd)
+            for name, value in (env or {}).items():
+                patch.setenv(name, value)
+            return run_in_process(*args)
+    return run

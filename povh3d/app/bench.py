@@ -64,10 +64,11 @@ class BenchReport:
                 for r in self.results]
 
 
-def default_trials(methods: Iterable[str] = ("multi-ortho", "pinhole")) -> list[Trial]:
+def default_trials(lens_array: LensArray, methods: Iterable[str] = ("multi-ortho", "pinhole")) -> list[Trial]:
     """The grid the bench walks for each method: POV-Ray's antialiasing (threshold,
-    method, depth, jitter), angular sub-views with and without it, footprint samples,
-    a cut trace depth, and the named levels as the method renders them."""
+    method, depth, jitter), angular sub-views with and without it, footprint samples
+    (for a method that traces them on ``lens_array``), a cut trace depth, and the
+    named levels as the method renders them."""
     aa = Quality(antialias=0.1, aa_method=2, aa_depth=3)
     trials: list[Trial] = []
     for entry in methods:
@@ -77,7 +78,7 @@ def default_trials(methods: Iterable[str] = ("multi-ortho", "pinhole")) -> list[
         options = (("lenslet", lenslet),) if lenslet else ()
         grid = [Quality(), Quality(antialias=0.3), aa, replace(aa, jitter=True),
                 replace(aa, max_trace_level=1)]
-        if method == "multi-ortho":  # the method that traces footprint samples
+        if METHODS[method].takes_samples(lens_array):
             grid += [Quality(subviews=2), Quality(subviews=3), replace(aa, subviews=2), replace(aa, subviews=3),
                      Quality(footprint=16, seed=7), Quality(footprint=64, seed=7), Quality(footprint=128, seed=7)]
             levels = QUALITY_LEVELS.values()

@@ -21,7 +21,7 @@ from ..errors import ConfigError
 from ..geometry.crop import CropSettings
 from ..geometry.lens_array import LensArray, Panel
 from ..image.video import check_video_path
-from ..mappings import Mapping
+from ..mappings.base import Mapping
 from ..mesh.formats import is_mesh_file
 from .animation import FrameRange
 

@@ -2,7 +2,7 @@
 
 Depth budget (the depth range the lens array shows sharply).  The thesis gives
 no depth-of-field formula, so this is the standard one for integral imaging
-with the panel a focal length behind the lenses (CONVENTIONS' set-up, the
+with the panel a focal length behind the lenses (the conventions' set-up, the
 "depth-priority" mode): a pixel of pitch ``s`` under a lens of pitch ``p`` and
 focal length ``f`` sends a beam ``p`` wide (the whole aperture) that spreads
 by the pixel's angle ``s / f``.  At distance ``z`` from the screen the beam,

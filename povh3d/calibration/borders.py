@@ -18,7 +18,7 @@ from scipy import ndimage
 from ..errors import ConfigError, InputError
 from ..image.colour import from_linear, to_linear
 from .gridfile import Grid
-from .lattice import Template
+from .template import Template
 
 FILLS = ("black", "nearest")
 

@@ -111,7 +111,7 @@ def undistort_image(image: np.ndarray, model: Brown) -> np.ndarray:
     """The image as an ideal camera would have recorded it (same size and dtype).
 
     Output pixel ``u`` takes the input at ``model.distort(u)`` (bilinear, in
-    linear light for 8/16-bit sRGB images, CONVENTIONS "Files"); positions
+    linear light for 8/16-bit sRGB images, docs/geometry.md "Files"); positions
     that fall outside the input become black.
     """
     h, w = image.shape[:2]

@@ -2,11 +2,11 @@
 
 A grid says where every micro-lens of a holoscopic capture sits.  Lens
 ``(i, j)`` (row ``i`` top to bottom, column ``j`` left to right, as in
-CONVENTIONS) has its ideal centre
+docs/geometry.md) has its ideal centre
 
 - square: ``origin + j a1 + i a2``
 - hex:    ``origin + (j + (i mod 2) / 2) a1 + i r``, ``r = a2 - a1 / 2``
-  (odd rows shifted right by half a pitch, as in CONVENTIONS),
+  (odd rows shifted right by half a pitch, as in docs/geometry.md),
 
 and is recorded at ``distortion.distort(ideal)``.  ``a1`` runs along a lens row
 (the lattice vector nearest image ``+x``), ``a2`` is ``a1`` turned by 90 (square)
@@ -206,7 +206,7 @@ class Grid:
         centre = self.distortion.distort(self.origin + mn @ self.basis)
         m = mn[..., 0].astype(np.int64)
         n = mn[..., 1].astype(np.int64)
-        # Hex: axial (m, n) -> CONVENTIONS offset rows, j = m + floor(i / 2).
+        # Hex: axial (m, n) -> docs/geometry.md offset rows, j = m + floor(i / 2).
         return n, (m if self.lattice == "square" else m + n // 2), centre
 
     def check_image(self, shape: tuple[int, ...], name: str = "the image") -> None:
@@ -274,24 +274,3 @@ def read_grid(path: str | Path) -> Grid:
     except (OSError, ValueError) as exc:
         raise InputError(f"cannot read grid file {str(path)!r}: {exc}") from None
     return Grid.from_dict(record, repr(str(path)))
-
-
-def grid_for_lens_array(lens_array) -> Grid:
-    """The exact grid of an H3D image rendered by povh3d for ``lens_array`` (no distortion).
-
-    Lens ``(i, j)`` of CONVENTIONS is lens ``(i, j)`` of the grid; the pixel
-    centre ``(X, Y)`` mm maps to ``x = X / s + W/2 - 0.5``, ``y = H/2 - 0.5 - Y / s``.
-    """
-    p = lens_array.panel
-    if lens_array.grid not in LATTICES:
-        raise ConfigError(f"a lens grid is square or hex, not {lens_array.grid!r}")
-    c = lens_array.lens_centres()
-    x = c[..., 0] / p.pitch_x + p.width / 2 - 0.5
-    y = p.height / 2 - 0.5 - c[..., 1] / p.pitch_y
-    a1 = np.array([lens_array.pitch_x / p.pitch_x, 0.0])
-    if lens_array.grid == "square":
-        a2 = np.array([0.0, lens_array.pitch_y / p.pitch_y])
-    else:
-        a2 = np.array([a1[0] / 2, lens_array.pitch_y / p.pitch_y])
-    return Grid(lens_array.grid, (p.width, p.height), np.stack([a1, a2]), np.array([x[0, 0], y[0, 0]]),
-                (lens_array.lenses_y, lens_array.lenses_x), Brown.for_image(p.width, p.height))

@@ -26,314 +26,17 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage, optimize
+from scipy import optimize
 
 from ..errors import InputError
+from .basis import FFT_CROP, MIN_PITCH_PX, WORK_PX, fft_basis, fold_origin, grey
 from .distortion import Brown
 from .gridfile import Grid
-
-MIN_PITCH_PX = 3.0
-FFT_CROP = 1024
-WORK_PX = 400_000  # lens-window pixels measured per pass
-
-
-# -- 1. lattice basis from the Fourier peaks ------------------------------------
-def _crop(img: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
-    h, w = img.shape
-    y0, x0 = (h - size) // 2, (w - size) // 2
-    return img[y0:y0 + size, x0:x0 + size], np.array([x0, y0], dtype=np.float64)
-
-
-def grey(image: np.ndarray) -> np.ndarray:
-    """``(H, W)`` float32 brightness in ``[0, 1]`` for lattice finding.
-
-    Integer images are only scaled, not linearised: the lattice fit models the
-    micro-image shape from the image itself, so any monotonic encoding works,
-    and skipping the power law keeps calibrating a 21-megapixel image fast.
-    """
-    image = np.asarray(image)
-    if image.ndim == 3:
-        image = image[..., :3].mean(axis=2, dtype=np.float32) if image.shape[2] > 1 else image[..., 0]
-    if image.dtype == np.uint8 or image.dtype == np.uint16:
-        return image.astype(np.float32) * np.float32(1.0 / np.iinfo(image.dtype).max)
-    return image.astype(np.float32)
-
-
-def _refine_peak(mag: np.ndarray, iy: int, ix: int) -> tuple[float, float]:
-    """Sub-bin peak position by a parabola through the log magnitudes (exact for a Gaussian)."""
-    def vertex(a: float, b: float, c: float) -> float:
-        a, b, c = np.log(max(a, 1e-30)), np.log(max(b, 1e-30)), np.log(max(c, 1e-30))
-        den = a - 2 * b + c
-        return 0.0 if den >= 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
-    n = mag.shape[0]
-    dx = vertex(mag[iy, (ix - 1) % n], mag[iy, ix], mag[iy, (ix + 1) % n])
-    dy = vertex(mag[(iy - 1) % n, ix], mag[iy, ix], mag[(iy + 1) % n, ix])
-    return ix + dx, iy + dy
-
-
-def _reduce(b1: np.ndarray, b2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lagrange-Gauss reduction: the two shortest independent lattice vectors."""
-    for _ in range(64):
-        if b2 @ b2 < b1 @ b1:
-            b1, b2 = b2, b1
-        mu = round(float(b1 @ b2) / float(b1 @ b1))
-        if mu == 0:
-            break
-        b2 = b2 - mu * b1
-    return b1, b2
-
-
-def _canonical(b1: np.ndarray, b2: np.ndarray, lattice: str) -> np.ndarray:
-    """Rows ``a1`` (nearest image +x) and ``a2`` (``a1`` turned 90/60 deg toward +y)."""
-    cands = [m * b1 + n * b2 for m in (-1, 0, 1) for n in (-1, 0, 1) if (m, n) != (0, 0)]
-    short = min(np.linalg.norm(v) for v in cands)
-    cands = [v for v in cands if np.linalg.norm(v) < 1.2 * short]
-    a1 = min(cands, key=lambda v: abs(math.atan2(v[1], v[0])))
-    turn = math.radians(90 if lattice == "square" else 60)
-    ang1 = math.atan2(a1[1], a1[0])
-
-    def miss(v):
-        d = math.atan2(v[1], v[0]) - ang1 - turn
-        return abs((d + math.pi) % (2 * math.pi) - math.pi)
-    a2 = min(cands, key=miss)
-    return np.stack([a1, a2])
-
-
-@dataclass(frozen=True)
-class _Start:
-    lattice: str
-    basis: np.ndarray  # rows a1, a2, px
-    origin: np.ndarray  # a lens centre near the image centre, px
-    snr: float
-
-
-def _fft_basis(img: np.ndarray, lattice: str | None, name: str) -> tuple[str, np.ndarray, float]:
-    h, w = img.shape
-    size = min(h, w, FFT_CROP)
-    crop, _ = _crop(img, size)
-    if float(crop.std()) < 1e-3 * max(float(np.abs(crop).mean()), 1e-6):
-        raise InputError(f"{name} is uniform and shows no lens lattice; calibrate with a sharp image of a "
-                         "white background taken through the lens array")
-    win = np.hanning(size)
-    data = (crop - crop.mean()) * win[:, None] * win[None, :]
-    mag = np.fft.fftshift(np.abs(np.fft.fft2(data)))
-    k = np.arange(size) - size // 2
-    kr = np.hypot(k[None, :], k[:, None])
-    # Below 4 cycles per crop: vignetting, and too few lenses to measure anything.
-    mag_hp = np.where(kr >= 4, mag, 0.0)
-    floor = float(np.median(mag_hp[kr >= 4])) + 1e-30
-    peaks = (mag_hp == ndimage.maximum_filter(mag_hp, size=3, mode="wrap")) & (mag_hp > 0)
-    top = float(mag_hp[peaks].max()) if peaks.any() else 0.0
-    snr = top / floor
-    if snr < 20:
-        raise InputError(f"{name} shows no lens lattice (strongest periodic peak only {snr:.1f}x the noise); "
-                         "calibrate with a sharp image of a white background taken through the lens array")
-    strong = peaks & (mag_hp >= max(0.12 * top, 20 * floor))
-    iy, ix = np.nonzero(strong)
-    pts = np.array([_refine_peak(mag, y, x) for y, x in zip(iy, ix)]) - size // 2  # (kx, ky) bins
-    order = np.argsort(np.hypot(pts[:, 0], pts[:, 1]))
-    pts = pts[order] / size  # cycles per pixel
-    g1 = pts[0]
-    rest = [g for g in pts[1:] if abs(g1[0] * g[1] - g1[1] * g[0]) > 0.5 * np.linalg.norm(g1) * np.linalg.norm(g)]
-    if not rest:
-        raise InputError(f"{name} shows stripes in one direction only; a square or hex lens array "
-                         "is periodic in two (lenticular sheets are not calibrated here)")
-    g2 = rest[0]
-    real = np.linalg.inv(np.stack([g1, g2]))  # columns: real basis (g_i . a_k = delta_ik)
-    b1, b2 = _reduce(real[:, 0], real[:, 1])
-    cosang = abs(float(b1 @ b2) / (np.linalg.norm(b1) * np.linalg.norm(b2)))
-    ratio = np.linalg.norm(b2) / np.linalg.norm(b1)
-    found = "square" if cosang < 0.2 else "hex" if 0.35 < cosang < 0.65 else None
-    if found is None or ratio > 1.1:
-        raise InputError(f"{name}: the lens lattice is neither square nor hexagonal (angle "
-                         f"{math.degrees(math.acos(cosang)):.1f} deg, side ratio {ratio:.3f}); check the image")
-    if lattice is not None and lattice != found:
-        raise InputError(f"{name} shows a {found} lens lattice, not {lattice}; drop --lattice or check the image")
-    pitch = float(np.linalg.norm(b1))
-    if pitch < MIN_PITCH_PX:
-        raise InputError(f"{name}: the lens pitch looks like {pitch:.2f} px; at least {MIN_PITCH_PX:g} px are needed")
-    return found, _canonical(b1, b2, found), snr
-
-
-# -- 2. offset: centre of symmetry of the folded cell ------------------------------
-def _fold_origin(img: np.ndarray, basis: np.ndarray, bins: int = 32) -> np.ndarray:
-    h, w = img.shape
-    size = min(h, w, 512)
-    crop, corner = _crop(img, size)
-    yy, xx = np.mgrid[0:size, 0:size]
-    pts = np.stack([xx.ravel(), yy.ravel()], axis=1) + corner
-    ref = corner + size / 2
-    q = (pts - ref) @ np.linalg.inv(basis)  # lattice coordinates
-    b = np.floor((q - np.floor(q)) * bins).astype(np.intp) % bins
-    flat = b[:, 1] * bins + b[:, 0]
-    num = np.bincount(flat, crop.ravel().astype(np.float64), bins * bins)
-    cnt = np.bincount(flat, minlength=bins * bins)
-    cell = np.where(cnt > 0, num / np.maximum(cnt, 1), np.nan).reshape(bins, bins)  # [n-bin, m-bin]
-    cell = np.where(np.isnan(cell), np.nanmean(cell), cell)
-    cell = cell - cell.mean()
-    conv = np.real(np.fft.ifft2(np.fft.fft2(cell) ** 2))
-    py, px = np.unravel_index(int(np.argmax(conv)), conv.shape)
-    fx, fy = _refine_peak(np.exp(conv / (np.abs(conv).max() + 1e-30) * 8), py, px)
-    # Bin b holds fraction (b + 1/2)/bins, so the symmetry centre c has 2 c bins - 1 = peak.
-    base = (np.array([fx, fy]) + 1) / (2 * bins)
-    smooth = ndimage.uniform_filter(cell, size=max(3, bins // 8), mode="wrap")
-    cands = [base + np.array([dm, dn]) for dm in (0, 0.5) for dn in (0, 0.5)]
-    bright = [ndimage.map_coordinates(smooth, [[(c[1] * bins - 0.5) % bins], [(c[0] * bins - 0.5) % bins]],
-                                      order=1, mode="grid-wrap")[0] for c in cands]
-    best = cands[int(np.argmax(bright))]
-    return ref + best @ basis
-
-
-# -- 3. per-lens centres against a self-made, point-symmetric template -------------------
-@dataclass(frozen=True)
-class Template:
-    """Mean micro-image ``values[y, x]`` at offsets ``(k - K//2) * step`` px from the lens centre."""
-
-    values: np.ndarray
-    step: float
-
-    @property
-    def radius(self) -> float:
-        return (self.values.shape[0] // 2) * self.step
-
-    def sample(self, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Bilinear value and gradient (per px) at offsets ``dx``, ``dy`` (same shape); edge-clamped."""
-        v = self.values.ravel().astype(dx.dtype)
-        k = self.values.shape[0]
-        inv = dx.dtype.type(1 / self.step)
-        fx = np.clip(dx * inv + k // 2, 0, k - 1.001)
-        fy = np.clip(dy * inv + k // 2, 0, k - 1.001)
-        x0 = fx.astype(np.intp)
-        y0 = fy.astype(np.intp)
-        tx = fx - x0
-        ty = fy - y0
-        i00 = y0 * k + x0
-        v00 = v[i00]
-        v01 = v[i00 + 1]
-        v10 = v[i00 + k]
-        v11 = v[i00 + k + 1]
-        top = v00 + (v01 - v00) * tx
-        bot = v10 + (v11 - v10) * tx
-        val = top + (bot - top) * ty
-        gx = ((v01 - v00) + ((v11 - v10) - (v01 - v00)) * ty) * inv
-        gy = (bot - top) * inv
-        return val, gx, gy
-
-
-def _patches(img: np.ndarray, centres: np.ndarray, half: int):
-    """Square pixel windows around ``centres``: (ok mask, patches (n, m, m), x (n, m), y (n, m))."""
-    h, w = img.shape
-    ix = np.rint(centres[:, 0]).astype(np.intp)
-    iy = np.rint(centres[:, 1]).astype(np.intp)
-    ok = (ix - half >= 0) & (ix + half < w) & (iy - half >= 0) & (iy + half < h)
-    offs = np.arange(-half, half + 1)
-    xs = ix[ok, None] + offs
-    ys = iy[ok, None] + offs
-    return ok, img[ys[:, :, None], xs[:, None, :]], xs.astype(np.float64), ys.astype(np.float64)
-
-
-def build_template(img: np.ndarray, centres: np.ndarray, gain: np.ndarray, background: np.ndarray,
-                   half: int, step: float = 0.25, unwarp: np.ndarray | None = None) -> Template:
-    """Average micro-image around ``centres`` (gain and background removed), made point-symmetric.
-
-    ``unwarp`` ``(n, 2, 2)`` maps each lens's pixel offsets to the ideal frame (the
-    inverse local Jacobian of the distortion), so micro-images squeezed by a barrel
-    lens average into one undistorted template.
-    """
-    ok, patch, xs, ys = _patches(img, centres, half)
-    c = centres[ok]
-    k = int(round((half + 2) / step)) * 2 + 1
-    mid = k // 2
-    dx, dy = np.broadcast_arrays(xs[:, None, :] - c[:, 0, None, None], ys[:, :, None] - c[:, 1, None, None])
-    if unwarp is not None:
-        u = unwarp[ok]
-        dx, dy = (u[:, 0, 0, None, None] * dx + u[:, 0, 1, None, None] * dy,
-                  u[:, 1, 0, None, None] * dx + u[:, 1, 1, None, None] * dy)
-    bx = np.rint(dx / step).astype(np.intp) + mid
-    by = np.rint(dy / step).astype(np.intp) + mid
-    vals = (patch - background[ok, None, None]) / gain[ok, None, None]
-    inside = (bx >= 0) & (bx < k) & (by >= 0) & (by < k)
-    flat = (by * k + bx)[inside]
-    num = np.bincount(flat, vals[inside].astype(np.float64), k * k).reshape(k, k)
-    cnt = np.bincount(flat, minlength=k * k).reshape(k, k).astype(np.float64)
-    # Few samples per bin leave holes: fill them by smoothing more.
-    sigma = 0.6 if vals.size / (k * k) >= 8 else 1.5
-    num = ndimage.gaussian_filter(num, sigma, mode="constant")
-    cnt = ndimage.gaussian_filter(cnt, sigma, mode="constant")
-    t = np.where(cnt > 1e-6, num / np.maximum(cnt, 1e-6), 0.0)
-    # The lens centre is the micro-image's point of symmetry: symmetrising pins it,
-    # so the template cannot drift with the centres it is built from.
-    return Template(0.5 * (t + t[::-1, ::-1]), step)
-
-
-@dataclass
-class Measured:
-    centres: np.ndarray  # (n, 2) px
-    gain: np.ndarray  # (n,)
-    background: np.ndarray  # (n,)
-    ok: np.ndarray  # (n,) bool, of the input lenses
-
-
-def _disc(half: int, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """Pixel offsets ``(dx, dy)`` within ``radius`` + 1.5 px: the window of any centre rounded to a pixel."""
-    offs = np.arange(-half, half + 1)
-    dy, dx = np.meshgrid(offs, offs, indexing="ij")
-    keep = dx * dx + dy * dy <= (radius + 1.5) ** 2
-    return dx[keep], dy[keep]
-
-
-def measure(img: np.ndarray, centres: np.ndarray, template: Template, half: int, radius: float,
-            iterations: int = 3, unwarp: np.ndarray | None = None) -> Measured:
-    """Centre of symmetry of each micro-image near ``centres`` (Gauss-Newton against ``template``).
-
-    Per lens, ``I = A T(x - c - delta) + B`` is linearised in ``delta`` and solved
-    with the gain ``A`` and background ``B`` over a disc of ``radius`` px.
-    """
-    h, w = img.shape
-    ix = np.rint(centres[:, 0]).astype(np.intp)
-    iy = np.rint(centres[:, 1]).astype(np.intp)
-    ok = (ix - half >= 0) & (ix + half < w) & (iy - half >= 0) & (iy + half < h)
-    ox, oy = _disc(half, radius)
-    px = ix[ok, None] + ox  # (n, p) pixel positions
-    py = iy[ok, None] + oy
-    values = img[py, px].astype(np.float32)[:, :, None]
-    px = px.astype(np.float32)
-    py = py.astype(np.float32)
-    c = centres[ok].copy()
-    n = len(c)
-    sol = np.zeros((n, 4))
-    design = np.empty((n, 4, px.shape[1]), dtype=np.float32)  # float32: half the memory traffic
-    design[:, 1] = 1.0
-    for _ in range(iterations):
-        dx = px - c[:, 0:1].astype(np.float32)
-        dy = py - c[:, 1:2].astype(np.float32)
-        if unwarp is None:
-            t, gx, gy = template.sample(dx, dy)
-        else:  # template in the ideal frame: T(U d), gradient U^T grad T
-            u = unwarp[ok].astype(np.float32)
-            t, ga, gb = template.sample(u[:, 0, 0:1] * dx + u[:, 0, 1:2] * dy, u[:, 1, 0:1] * dx + u[:, 1, 1:2] * dy)
-            gx = u[:, 0, 0:1] * ga + u[:, 1, 0:1] * gb
-            gy = u[:, 0, 1:2] * ga + u[:, 1, 1:2] * gb
-        wgt = np.clip(np.float32(radius + 1.0) - np.sqrt(dx * dx + dy * dy), 0.0, 1.0)
-        design[:, 0] = t
-        design[:, 2] = -gx
-        design[:, 3] = -gy
-        dw = design * wgt[:, None, :]
-        normal = (dw @ design.transpose(0, 2, 1)).astype(np.float64) + 1e-9 * np.eye(4)
-        rhs = (dw @ values)[..., 0].astype(np.float64)
-        sol = np.linalg.solve(normal, rhs[..., None])[..., 0]
-        amp = np.where(np.abs(sol[:, 0]) > 1e-9, sol[:, 0], 1e-9)
-        c += np.clip(sol[:, 2:4] / amp[:, None], -0.25 * radius, 0.25 * radius)
-    full = np.zeros_like(centres)
-    full[ok] = c
-    gain = np.zeros(len(centres))
-    gain[ok] = sol[:, 0]
-    bg = np.zeros(len(centres))
-    bg[ok] = sol[:, 1]
-    return Measured(full, gain, bg, ok)
+from .template import build_template, disc, measure
 
 
 # -- 4. the global model: lattice + Brown distortion -----------------------------------
+
 @dataclass
 class _Model:
     origin: np.ndarray  # ideal centre of lattice point (0, 0), px
@@ -434,7 +137,7 @@ def _table(model: _Model, lattice: str, shape: tuple[int, int]) -> tuple[np.ndar
         m_min, m_max = int(mn[:, 0].min()), int(mn[:, 0].max())
         origin = model.origin + m_min * a1 + n_min * a2
         return origin, model.basis, (n_max - n_min + 1, m_max - m_min + 1)
-    # Hex, CONVENTIONS layout: row i = n - n_min; along the row the lens sits at
+    # Hex, docs/geometry.md layout: row i = n - n_min; along the row the lens sits at
     # t = m + n/2 pitches, so j = t - (i mod 2)/2 - n_min/2 is whole.
     i = mn[:, 1] - n_min
     j = mn[:, 0] + (mn[:, 1] - n_min - (i % 2)) // 2
@@ -483,18 +186,18 @@ def calibrate(image: np.ndarray, *, lattice: str | None = None, distortion: bool
     if min(h, w) < 4 * MIN_PITCH_PX:
         raise InputError(f"{name} is {w}x{h} pixels, too small to hold two lenses of at least "
                          f"{MIN_PITCH_PX:g} px in each direction; use the camera's full image")
-    found, basis, snr = _fft_basis(img, lattice, name)
+    found, basis, snr = fft_basis(img, lattice, name)
     pitch = float(np.mean(np.linalg.norm(basis, axis=1)))
     if min(h, w) < 2 * pitch:
         raise InputError(f"{name} is {w}x{h} pixels, too small for two lenses of {pitch:.1f} px; "
                          "use the camera's full image")
-    origin = _fold_origin(img, basis)
+    origin = fold_origin(img, basis)
     model = _Model(origin, basis, np.zeros(2), np.array([(w - 1) / 2, (h - 1) / 2]), 0.5 * math.hypot(w, h))
 
     half = int(math.ceil(0.5 * pitch + 2))
     radius = 0.5 * pitch + 0.5
     # Work per pass is lenses x window pixels; large pitches need fewer lenses.
-    limit = max(200, min(max_lenses, int(WORK_PX / len(_disc(half, radius)[0]))))
+    limit = max(200, min(max_lenses, int(WORK_PX / len(disc(half, radius)[0]))))
     full = 0.5 * math.hypot(w, h)
     stage = 0.5 * min(h, w, FFT_CROP) * 0.95
     template = None

@@ -12,7 +12,7 @@ With a calibrated grid the micro-images are rarely whole pixels wide, turned
 interpolation in linear light.  The result is an H3D image with square,
 upright, ``N x N``-pixel micro-images on the lens table (the layout
 :func:`povh3d.image.interleave.extract` reads); lenses not wholly on the image are black.
-Hex tables keep CONVENTIONS' offset rows, tiled without the half-lens shift.
+Hex tables keep the conventions' offset rows, tiled without the half-lens shift.
 """
 
 from __future__ import annotations

@@ -1,8 +1,10 @@
 """The one-pass view bank traced only where objects can be: coverage, crop, paste.
 
-``crop.py`` decides which lenses of each view to keep; this module runs the
-renders that decision needs (through ``render.render_frames``, so every image
-is cached and every POV-Ray process goes through ``povray.py``):
+``geometry.crop`` decides which lenses of each view to keep; this module runs
+the renders that decision needs through the ``trace`` function the method
+runner hands it (``engine.frames.render_frames`` bound to the scene and
+settings), so every image is cached and every POV-Ray process goes through
+``povray.process``:
 
 1. the coverage, unless a bounding box was given: the same mesh camera at the
    same rays with ``+Q0 +UA -A`` and a transparent background appended after the
@@ -10,7 +12,7 @@ is cached and every POV-Ray process goes through ``povray.py``):
    glass) but intersects everything, so alpha is exactly "this ray met an object
    that is not ``no_image``";
 2. the cropped render: one quad per kept tile (per footprint sample, banks
-   stacked as in ``cameras.view_bank_mesh``);
+   stacked as in ``cameras.view_bank_frames``);
 3. the paste into a canvas of the background colour, read at the cuts.
 
 Returns None where cropping does not apply, with the reason, so the caller
@@ -20,20 +22,24 @@ renders the whole bank.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..geometry.cameras import stack_frames, view_bank_frames
-from ..geometry.crop import (CropPlan, CropSettings, bbox_hits, fill_colour, layout_independent,
+from ..geometry.crop import (CropSettings, bbox_hits, fill_colour, layout_independent,
     mask_hits, paste, plan_crop)
 from ..errors import InputError
 from ..geometry.footprint import CENTRE
 from ..geometry.lens_array import LensArray
-from .quality import Progress, RenderSettings
-from .frames import RenderStats, mesh_camera_batch, render_frames
 from ..scene.scene import Scene
+from .batch import FrameBatch, RenderStats, mesh_camera_batch
+from .quality import Progress, RenderSettings
+
+# trace(batch, label, progress) -> (images, stats): one batch rendered (``engine.frames.render_frames``).
+Trace = Callable[[FrameBatch, str, Progress | None], tuple[list[np.ndarray], RenderStats]]
 
 COVERAGE_OPTIONS = ("-A", "+Q0", "+UA")
 
@@ -47,21 +53,21 @@ class CroppedTiles:
     info: dict[str, Any]
 
 
-def coverage_mask(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
-                  header: dict[str, Any], samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
+def coverage_mask(trace: Trace, lens_array: LensArray, back_off: float,
+                  samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
     """(Ny*Ly, Nx*Lx) bool: the tiled image's pixels one of whose ``samples`` meets an object."""
     batch = mesh_camera_batch("coverage.pov.j2", view_bank_frames(lens_array, back_off, samples), COVERAGE_OPTIONS)
-    images, stats = render_frames(scene, batch, settings, method="multi-ortho coverage", header=header)
+    images, stats = trace(batch, "multi-ortho coverage", None)
     alpha = stack_frames(images)[..., -1]
     return (alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0), stats
 
 
-def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
-                         crop: CropSettings, header: dict[str, Any],
+def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, back_off: float,
+                         settings: RenderSettings, crop: CropSettings,
                          progress: Progress | None = None, samples: np.ndarray = CENTRE) -> CroppedTiles:
     """Render the one-pass view bank cropped to what the objects can reach.
 
-    ``samples`` are the footprint samples of ``view_bank_mesh``; each gets a
+    ``samples`` are the footprint samples of ``view_bank_frames``; each gets a
     bank, cropped alike, so the reach is that of the pixel's whole footprint.
 
     Raises
@@ -94,7 +100,7 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
         col_hits, row_hits = bbox_hits(lens_array, crop.bbox, angular=bool(np.any(samples[:, 2:])))
         info["source"] = "bbox"
     else:
-        mask, _ = coverage_mask(scene, lens_array, back_off, settings, header, samples)
+        mask, _ = coverage_mask(trace, lens_array, back_off, samples)
         col_hits, row_hits = mask_hits(mask, lens_array.views)
         info["source"] = "coverage pre-pass"
         info["coverage_fraction"] = round(float(mask.mean()), 6)
@@ -104,7 +110,9 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
     if plan.is_full:
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
 
-    tiled, stats = _render_plan(scene, lens_array, back_off, settings, plan, header, progress, samples)
+    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples, plan))
+    images, stats = trace(batch, "multi-ortho", progress)
+    tiled = stack_frames(images)
     banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])
     fills = [fill_colour(bank, plan) for bank in banks]
     fill = fills[0] if all(f is not None and np.array_equal(f, fills[0]) for f in fills) else None
@@ -117,12 +125,3 @@ def render_cropped_tiles(scene: Scene, lens_array: LensArray, back_off: float, s
                                          "reason": "the pixels at the crop edges differ: background not constant"})
     info.update(applied=True, fill=fill.tolist())
     return CroppedTiles(np.concatenate([paste(bank, plan, fill) for bank in banks]), stats, info)
-
-
-def _render_plan(scene: Scene, lens_array: LensArray, back_off: float, settings: RenderSettings,
-                 plan: CropPlan, header: dict[str, Any], progress: Progress | None, samples: np.ndarray
-                 ) -> tuple[np.ndarray, RenderStats]:
-    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples, plan))
-    images, stats = render_frames(scene, batch, settings, method="multi-ortho", header=header,
-                                  progress=progress)
-    return stack_frames(images), stats

@@ -35,7 +35,8 @@ from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
 from ..system import cpu_count
 from .cropped import render_cropped_tiles
-from .frames import FrameBatch, RenderStats, mesh_camera_batch, render_frames
+from .batch import FrameBatch, RenderStats, mesh_camera_batch
+from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
 from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
@@ -187,15 +188,18 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     settings_needed = quality_settings(scene.features, quality)
     if settings_needed:
         header["global_settings"] = settings_needed
+    def trace(batch: FrameBatch, label: str, progress: Progress | None) -> tuple[list[np.ndarray], RenderStats]:
+        return render_frames(scene, batch, settings, method=label, header=header, progress=progress)
+
     h3d, crop_info, record = None, None, None
     if method.crops and crop is not None:
-        tiles = render_cropped_tiles(scene, lens_array, back_off, settings, crop, header, progress, samples)
+        tiles = render_cropped_tiles(trace, scene, lens_array, back_off, settings, crop, progress, samples)
         crop_info = tiles.info
         if tiles.tiled is not None:
             h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats
     if h3d is None:
         plan = method.plan(lens_array, back_off, samples, **options)
-        images, stats = render_frames(scene, plan.batch, settings, method=name, header=header, progress=progress)
+        images, stats = trace(plan.batch, name, progress)
         h3d, record = plan.assemble(images), plan.record
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
     if h3d.shape[:2] != panel_shape:

@@ -17,7 +17,7 @@ from ..scene.features import Features, needed_settings
 
 @dataclass(frozen=True)
 class Quality:
-    """How densely a render samples each pixel's footprint (CONVENTIONS).
+    """How densely a render samples each pixel's footprint (docs/geometry.md).
 
     Attributes
     ----------

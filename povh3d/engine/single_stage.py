@@ -1,6 +1,6 @@
 """Single-stage rendering through a virtual lens array: geometry and assembly.
 
-The geometry (thesis 3.3, worked out against CONVENTIONS):
+The geometry (thesis 3.3, worked out against docs/geometry.md):
 
 1. **Capture panel and camera.**  One orthographic camera on the viewer's side
    (z < 0, looking +z) at the panel's pixel pitch: camera pixel ``(col, row)``
@@ -8,12 +8,12 @@ The geometry (thesis 3.3, worked out against CONVENTIONS):
    plays the panel (the thesis's CCD); its location only has to be in front of
    the lenses.
 2. **Lenslets.**  Plano-convex, flat face toward the camera, curved face toward
-   the scene (``optics.Lenslet``), at the lens centres ``c`` of CONVENTIONS.
+   the scene (``optics.Lenslet``), at the lens centres ``c`` of docs/geometry.md.
    A camera ray at offset ``w`` from ``c`` leaves the lens through the rear focal
    point ``c + f z`` (exactly for the conic lens, paraxially for the sphere)
    with direction ``(-w, f)``.
 3. **180-degree turn.**  The ray of the display pixel at offset ``u`` has
-   direction ``(u, f)`` (CONVENTIONS), so it is the camera ray at ``w = -u``:
+   direction ``(u, f)`` (docs/geometry.md), so it is the camera ray at ``w = -u``:
    each elemental image is turned by 180 degrees about its lens centre.  This is
    the pseudoscopic-to-orthoscopic conversion of integral imaging.
 4. **Depth re-centring.**  The rays of lens ``c`` must cross the display plane
@@ -66,7 +66,7 @@ from ..errors import ConfigError
 from ..geometry.lens_array import LensArray, Panel, pixel_rays
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet
-from .frames import FrameBatch
+from .batch import FrameBatch
 
 APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
 
@@ -185,7 +185,7 @@ class SingleStagePlan:
 
     Attributes
     ----------
-    lens_array : LensArray     the display's array (CONVENTIONS)
+    lens_array : LensArray     the display's array (docs/geometry.md)
     lenslet : Lenslet
     depth : float, mm          ``D``: the focal plane of the virtual array is ``z = -D``
     """
@@ -298,7 +298,7 @@ class SingleStagePlan:
         z_vertex = -self.depth - lenslet.focal
         half_x = cap.pitch_x / 2
         if cap.grid == "lenticular":
-            # One lens per column spanning every row (CONVENTIONS: v = 0).
+            # One lens per column spanning every row (docs/geometry.md: v = 0).
             lenses, pitch = (cap.lenses_x, 1), (cap.pitch_x, height_mm)
             half_y = height_mm / 2 + cap.panel.pitch_y
         else:

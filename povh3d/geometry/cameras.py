@@ -1,7 +1,7 @@
 """Camera geometry of each rendering method, as plain values for the templates.
 
 Pure: a LensArray in, NumPy arrays and numbers out.  Every camera here traces
-the ray of a pixel of CONVENTIONS.md: through the lens centre ``c`` with
+the ray of a pixel of docs/geometry.md: through the lens centre ``c`` with
 direction ``(u, v, f)``, starting ``back_off`` mm in front of the display plane
 so that objects floating in front of the screen are seen.
 """
@@ -141,11 +141,6 @@ class CameraMesh:
     image_size: tuple[int, int]
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
-    def in_mm(self) -> CameraMesh:
-        """The same camera with the scale applied: vertices in mm, normals the mm directions."""
-        scale = np.asarray(self.scale, dtype=np.float64)
-        return CameraMesh(self.vertices * scale, self.normals / scale, self.uvs, self.faces, self.image_size)
-
 
 # How far lens quads are moved off pixel centres that lie on lens borders, in
 # pixels: well above the error of POV-Ray's float32 UV lookup (about 1e-4 pixel
@@ -262,8 +257,17 @@ def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) ->
 
 def view_bank_frames(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None,
                      plan=None) -> list[CameraMesh]:
-    """The meshes of the frames that trace a view bank per footprint sample (``bank_groups``):
-    ``view_bank_mesh`` for each group, or ``cropped_view_bank_mesh`` over ``plan``'s tiles."""
+    """The meshes of the frames that trace a view bank per footprint sample (``bank_groups``).
+
+    Each mesh is the orthographic camera bank as one mesh camera, one quad per view
+    (or, with a ``crop.CropPlan``, per kept column segment times kept row segment):
+    the image is the views tiled side by side, ``tiled[l*Ly + i, k*Lx + j] =
+    view[l, k][i, j]``, one bank per footprint sample of the group, stacked top to
+    bottom.  Within a view the ray origin is linear in the lens index and the
+    direction constant, so one quad per view is exact; every corner is exact in
+    single precision (``bank_back_off``), so a cropped pixel gets the very ray the
+    uncropped mesh gives it.
+    """
     cols, rows, size = _bank_tiles(lens_array, plan)
     samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
     groups = bank_groups(samples, 2 * len(cols) * len(rows), size[0] * size[1])
@@ -280,42 +284,6 @@ def _bank_tiles(lens_array: LensArray, plan) -> tuple[np.ndarray, np.ndarray, tu
     cols = np.array([(k, 0, lx, k * lx) for k in range(nx)])
     rows = np.array([(l, 0, ly, l * ly) for l in range(ny)])
     return cols, rows, (lx * nx, ly * ny)
-
-
-def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None) -> CameraMesh:
-    """The orthographic camera bank as one mesh camera: one quad per view.
-
-    The image is the views tiled side by side, view ``(l, k)`` at rows
-    ``l*Ly .. (l+1)*Ly - 1`` and columns ``k*Lx .. (k+1)*Lx - 1``, so that
-    ``tiled[l*Ly + i, k*Lx + j] = view[l, k][i, j]``.  Within a view the ray
-    origin is linear in the lens index and the direction is constant, so a
-    single quad per view is exact: ``Nx*Ny`` quads instead of one per lens, which
-    keeps POV-Ray's per-pixel face lookup as cheap as a plain camera's.
-    Same lookup rules as ``camera_mesh`` (extra first row and last column).
-    Rays start ``bank_back_off`` in front of the screen (``back_off``, rounded up).
-
-    Parameters
-    ----------
-    samples : (K, 4) float, optional
-        Footprint samples (see ``povh3d.footprint``); each gets a whole bank,
-        the banks stacked top to bottom (bank ``b`` at rows ``b*Ny*Ly ..``), so
-        K samples of every pixel come out of one POV-Ray pass.  Default: the
-        pixel's own ray.
-    """
-    return _bank_mesh(lens_array, back_off, samples, *_bank_tiles(lens_array, None))
-
-
-def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan,
-                           samples: np.ndarray | None = None) -> CameraMesh:
-    """``view_bank_mesh`` over the columns and rows a ``crop.CropPlan`` keeps.
-
-    One quad per kept column segment times kept row segment (a segment is a
-    run of kept lenses within one view); the image is the uncropped tiled image
-    with the other columns and rows removed, one such bank per footprint sample.
-    Every corner is exact in single precision (``bank_back_off``), so a kept
-    pixel gets the very ray, to double rounding, that the uncropped mesh gives it.
-    """
-    return _bank_mesh(lens_array, back_off, samples, *_bank_tiles(lens_array, plan))
 
 
 def bank_back_off(lens_array: LensArray, back_off: float) -> float:
@@ -353,7 +321,7 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     l, i0, i1, row0 = (r[:, n:n + 1] for n in range(4))
     ax, ay, du, dv = (samples[b, n] for n in range(4))                   # (quads, 1) each
     # Corners counter-clockwise from bottom left, half a lens outside the kept lens
-    # centres, in lens pitches (CONVENTIONS' centres, on the 1/GRID grid: exact).
+    # centres, in lens pitches (the conventions' centres, on the 1/GRID grid: exact).
     centres = lens_array.lens_centres()
     cx = np.round(centres[0, :, 0] / px * GRID) / GRID
     cy = np.round(centres[:, 0, 1] / py * GRID) / GRID

@@ -274,13 +274,6 @@ def _keep(hits: np.ndarray, margin: int, block: int | None) -> np.ndarray:
     return keep
 
 
-def full_plan(lens_array: LensArray) -> CropPlan:
-    """The plan that crops nothing."""
-    ny, nx = lens_array.require_views()
-    lx, ly = lens_array.lenses_x, lens_array.lenses_y
-    return CropPlan(np.ones(nx * lx, bool), np.ones(ny * ly, bool), (lx, ly))
-
-
 # -- back to the full tiled image --------------------------------------------------------
 
 def cut_mask(plan: CropPlan) -> tuple[np.ndarray, np.ndarray]:

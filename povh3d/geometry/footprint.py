@@ -1,6 +1,6 @@
 """Where inside a pixel's footprint the rays of a render go (pure NumPy).
 
-CONVENTIONS, "Pixel footprint": a panel pixel behind a lens sends light
+docs/geometry.md, "Pixel footprint": a panel pixel behind a lens sends light
 through the whole lens aperture over the angular range of its own width.  A
 sample is one point of that 4D box, given as fractions in ``[-0.5, 0.5)``:
 ``(ax, ay)`` of the lens pitch across the aperture and ``(du, dv)`` of the

@@ -1,4 +1,4 @@
-"""Panel and lens-array model: the geometry of CONVENTIONS.md as frozen values.
+"""Panel and lens-array model: the geometry of docs/geometry.md as frozen values.
 
 Everything here is pure: parameters in, NumPy arrays or numbers out.  Positions
 are computed from indices (``(j + 0.5 - Lx/2) * px``), never by accumulating
@@ -82,7 +82,7 @@ class Panel:
 
 @dataclass(frozen=True)
 class LensArray:
-    """A lens array over a panel, following CONVENTIONS.md.
+    """A lens array over a panel, following docs/geometry.md.
 
     Parameters
     ----------
@@ -236,7 +236,7 @@ class LensArray:
         i = np.arange(self.lenses_y, dtype=np.float64)
         cx = np.broadcast_to((j + 0.5 - self.lenses_x / 2) * self.pitch_x, (self.lenses_y, self.lenses_x))
         if self.grid == "hex":
-            # CONVENTIONS literally: odd rows shifted right by px/2 from the square
+            # docs/geometry.md literally: odd rows shifted right by px/2 from the square
             # formula (so the array as a whole sits px/4 right of the origin).
             cx = cx + (np.arange(self.lenses_y) % 2)[:, None] * (self.pitch_x / 2)
         cy = np.broadcast_to(((self.lenses_y / 2 - i - 0.5) * self.pitch_y)[:, None], cx.shape)
@@ -286,7 +286,7 @@ class LensArray:
 
 
 def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The ray of every panel pixel (CONVENTIONS, "The ray of a pixel").
+    """The ray of every panel pixel (docs/geometry.md, "The ray of a pixel").
 
     A pixel belongs to the lens whose cell holds its centre (square and
     lenticular: the lens's pitch rectangle, a centre on its border going to the

@@ -7,7 +7,7 @@ rays cross the flat face undeviated and refract once, at the curved face.
 - Focal length: ``1/f = (n - 1)/R`` (lens-maker, ``r2 = inf``), exact also for a
   thick lens because the flat face has no power.  With the flat face first the
   rear principal plane touches the curved vertex, so the focus lies ``f`` past
-  the vertex whatever the thickness (thesis Eq. 3.1; CONVENTIONS).
+  the vertex whatever the thickness (thesis Eq. 3.1; docs/geometry.md).
 - Curved face, vertex at the origin, axis +z, glass at ``z < 0``:
   ``h^2 = 2 R s - (1 + K) s^2`` with sag ``s = -z`` at height ``h``.
   ``K = 0`` is a sphere; ``K = -n^2`` is the hyperboloid that focuses collimated
@@ -63,7 +63,7 @@ def default_ior(focal: float, rho: float, thinness: float = DEFAULT_THINNESS) ->
     The smallest index (at least ``GLASS_IOR``) whose paraxial sag at the
     aperture corner, ``rho^2 / (2 (n-1) f)``, is at most ``thinness * f``.  A
     virtual lens may have any index; a thin one traces the ray of a pixel
-    (CONVENTIONS) with little distortion, spherical or conic.  ``--ior 1.5``
+    (docs/geometry.md) with little distortion, spherical or conic.  ``--ior 1.5``
     simulates a real acrylic lenslet instead, distortion and all.
     """
     n = 1.0 + rho * rho / (2.0 * thinness * focal * focal)
@@ -197,37 +197,3 @@ class Lenslet:
                 "aperture_radius_mm": self.aperture_radius, "thickness_mm": self.thickness,
                 "corner_sag_mm": self.corner_sag, "tir_height_mm": (None if math.isinf(self.tir_height)
                                                                     else self.tir_height)}
-
-
-def trace_collimated(lenslet: Lenslet, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Trace collimated rays (flat face first) through the curved face with Snell's law.
-
-    An independent check of the surface: no paraxial formula, only the exact
-    surface normal and vector refraction.
-
-    Parameters
-    ----------
-    h : (n,) float, mm      ray heights (0 < h < aperture radius)
-
-    Returns
-    -------
-    z_axis : (n,) float, mm     where each ray crosses the axis, from the vertex (NaN: TIR)
-    tan_theta : (n,) float      slope of the exit ray toward the axis, ``-dx/dz``
-    """
-    h = np.asarray(h, dtype=np.float64)
-    n, R, K = lenslet.ior, lenslet.radius, lenslet.conic
-    s = sag(h, R, K)
-    # Surface F(h, z) = h^2 + (1+K) z^2 + 2 R z = 0 at z = -s; the gradient is the normal.
-    z = -s
-    normal = np.stack([2 * h, 2 * (1 + K) * z + 2 * R], axis=-1)
-    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)  # points out of the glass (+z)
-    d = np.array([0.0, 1.0])                                    # (h, z) components
-    cos_i = normal @ d
-    ratio = n  # glass -> air
-    k = 1 - ratio**2 * (1 - cos_i**2)
-    with np.errstate(invalid="ignore"):
-        t = ratio * d + (np.sqrt(k) - ratio * cos_i)[:, None] * normal
-    t = np.where((k >= 0)[:, None], t, np.nan)
-    tan_theta = -t[:, 0] / t[:, 1]
-    z_axis = z + h / tan_theta
-    return z_axis, tan_theta

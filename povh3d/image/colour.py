@@ -1,5 +1,5 @@
 """sRGB transfer functions, the one copy in povh3d: filtering that mixes pixels
-works in linear light, images are sRGB-encoded (CONVENTIONS, "Files")."""
+works in linear light, images are sRGB-encoded (docs/geometry.md, "Files")."""
 
 from __future__ import annotations
 

@@ -4,7 +4,7 @@ With whole pixels per lens on a square or lenticular grid every lens has the
 same pixel offsets and views are a reshape (``interleave.extract``).  Otherwise
 each lens sits at its own sub-pixel phase, so a view direction ``(u, v)`` falls
 between pixels, differently for every lens.  These functions sample an image
-at arbitrary panel points, bilinearly and in linear light (CONVENTIONS: filters
+at arbitrary panel points, bilinearly and in linear light (docs/geometry.md: filters
 that mix pixels work in linear light), from the pixels of one given lens only,
 so that neighbouring lenses (other views entirely) never bleed in.
 """
@@ -14,11 +14,11 @@ from __future__ import annotations
 import numpy as np
 
 from .colour import decode, encode, linear_to_srgb, srgb_to_linear
-from ..geometry.lens_array import LensArray, nearest_integer, pixel_rays
+from ..geometry.lens_array import LensArray, pixel_rays
 
 
 def lens_index_map(lens_array: LensArray) -> np.ndarray:
-    """The lens of every panel pixel, ``i * Lx + j`` (CONVENTIONS cells), -1 outside every lens.
+    """The lens of every panel pixel, ``i * Lx + j`` (docs/geometry.md cells), -1 outside every lens.
 
     Returns
     -------
@@ -77,30 +77,6 @@ def sample_in_lens(image: np.ndarray, lens_array: LensArray, points: np.ndarray,
     return np.rint(linear_to_srgb(value) * top).astype(image.dtype)
 
 
-def turn_elemental_images(capture: np.ndarray, lens_array: LensArray) -> np.ndarray:
-    """Turn every elemental image by 180 degrees about its lens centre.
-
-    Display pixel ``X`` of lens ``c`` takes the capture at ``2c - X``, which lies
-    in the same lens cell (a hexagon and a rectangle are point-symmetric).
-    Pixels outside every lens are black.
-
-    Parameters
-    ----------
-    capture : (H, W, C) array       the camera image through the virtual array
-    """
-    centres, _, inside = pixel_rays(lens_array)
-    X, Y = np.meshgrid(*lens_array.panel.pixel_centres())
-    lens_map = lens_index_map(lens_array)
-    pts = np.stack([2 * centres[..., 0] - X, 2 * centres[..., 1] - Y], axis=-1)
-    if lens_array.grid == "lenticular":
-        pts[..., 1] = Y  # a cylinder lens does not turn along its axis
-    pts = np.where(inside[..., None], pts, np.stack([X, Y], axis=-1))
-    out = sample_in_lens(capture, lens_array, pts[inside], lens_map[inside], lens_map)
-    result = np.zeros_like(capture)
-    result[inside] = out
-    return result
-
-
 def view_grid(lens_array: LensArray) -> tuple[int, int]:
     """Views ``(Ny, Nx)`` pulled from a resampled array: whole pixels per lens, rounded."""
     nx = max(1, round(lens_array.ppl_x))
@@ -139,11 +115,6 @@ def extract_views(h3d: np.ndarray, lens_array: LensArray, views: tuple[int, int]
     pts[..., 0] = centres[None, None, :, :, 0] + u[None, :, None, None]
     pts[..., 1] = centres[None, None, :, :, 1] + v[:, None, None, None]
     return sample_in_lens(h3d, lens_array, pts, np.broadcast_to(lens, pts.shape[:-1]))
-
-
-def is_resampled(lens_array: LensArray) -> bool:
-    """True when views cannot be pulled out by a reshape (hex, fractional PPL)."""
-    return lens_array.views is None or nearest_integer(lens_array.ppl_x) is None
 
 
 def cell_contains(grid: str, pitch_x: float, pitch_y: float, u: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -1,19 +1,20 @@
 """Views <-> H3D image, and elemental images -> H3D image.
 
-CONVENTIONS: ``H3D[i*Ny + l, j*Nx + k] = view[l, k][i, j]``.  ``interleave``
-and ``extract`` run the compiled row gather of ``_kernels`` (one table row: the
+docs/geometry.md: ``H3D[i*Ny + l, j*Nx + k] = view[l, k][i, j]``.  ``interleave``
+and ``extract`` run the compiled row gather of ``kernels`` (one table row: the
 layout of one lens row; one source offset per output row); arrays it does not
-take (non-contiguous, object dtypes) go through the NumPy reference path,
-``interleave_reference`` / ``extract_reference``, which the tests compare against.
+take (non-contiguous, object dtypes) are copied plane by plane in NumPy.  The
+tests compare both with a plain NumPy transpose (``tests/support/oracles.py``).
 """
 
 from __future__ import annotations
 
 import functools
-import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+
+from ..system import cpu_count
 
 
 def _with_channels(array: np.ndarray, ndim: int, name: str) -> tuple[np.ndarray, bool]:
@@ -39,7 +40,7 @@ def _copy_planes(dst: np.ndarray, src: np.ndarray) -> None:
     if ny * nx * c > 4096:
         np.copyto(dst, src)
         return
-    parts = min(_workers(), max(1, src.nbytes // _MIN_PART_BYTES), ly)
+    parts = min(cpu_count(), max(1, src.nbytes // _MIN_PART_BYTES), ly)
     if parts == 1:
         _copy_rows(dst, src, 0, ly)
         return
@@ -59,13 +60,8 @@ def _copy_rows(dst: np.ndarray, src: np.ndarray, start: int, stop: int) -> None:
 
 
 @functools.cache
-def _workers() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-
-
-@functools.cache
 def _pool() -> ThreadPoolExecutor:
-    return ThreadPoolExecutor(_workers(), thread_name_prefix="povh3d-interleave")
+    return ThreadPoolExecutor(cpu_count(), thread_name_prefix="povh3d-interleave")
 
 
 def interleave(views: np.ndarray) -> np.ndarray:
@@ -193,22 +189,3 @@ def untile_views(tiled: np.ndarray, views: tuple[int, int]) -> np.ndarray:
         raise ValueError(f"a tiled image of {w}x{h} does not hold {nx}x{ny} equal views")
     stack = t.reshape(ny, h // ny, nx, w // nx, c).transpose(0, 2, 1, 3, 4)
     return stack[..., 0] if squeeze else stack
-
-
-def interleave_reference(views: np.ndarray) -> np.ndarray:
-    """``interleave`` by NumPy plane copies alone (the oracle of the compiled path)."""
-    v, squeeze = _with_channels(np.asarray(views), 4, "views")
-    ny, nx, ly, lx, c = v.shape
-    h3d = np.empty((ly, ny, lx, nx, c), v.dtype)
-    _copy_planes(h3d.transpose(1, 3, 0, 2, 4), v)
-    h3d = h3d.reshape(ly * ny, lx * nx, c)
-    return h3d[..., 0] if squeeze else h3d
-
-
-def extract_reference(h3d: np.ndarray, ppl: tuple[int, int]) -> np.ndarray:
-    """``extract`` by one NumPy reshape-transpose-copy (the oracle of the compiled path)."""
-    img, squeeze = _with_channels(np.asarray(h3d), 2, "h3d")
-    ny, nx = ppl
-    h, w, c = img.shape
-    views = np.ascontiguousarray(img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))
-    return views[..., 0] if squeeze else views

@@ -1,7 +1,7 @@
 """PNG images and JSON sidecars, written atomically.
 
 8-bit PNGs go through Pillow (fast); 16-bit through pypng, because Pillow opens
-16-bit RGB PNGs as 8-bit without a word (CONVENTIONS, "Files").  Every write
+16-bit RGB PNGs as 8-bit without a word (docs/geometry.md, "Files").  Every write
 goes to a temporary file in the destination folder and is renamed into place,
 so a failure or Ctrl-C never leaves a half-written image.
 """
@@ -27,16 +27,9 @@ from ..errors import InputError, OutputError
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` on success."""
     path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise OutputError(f"output folder {str(folder)!r} does not exist; create it first")
+    tmp = _temp_beside(path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=folder)
-    except OSError as exc:
-        raise OutputError(f"cannot write in {str(folder)!r}: {exc.strerror}; choose a writable folder") from None
-    os.close(fd)
-    try:
-        yield Path(tmp)
+        yield tmp
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
@@ -53,6 +46,11 @@ def check_writable(path: str | Path) -> None:
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"the output {str(path)!r} is a folder; give a file name inside it")
+    os.unlink(_temp_beside(path))
+
+
+def _temp_beside(path: Path) -> Path:
+    """A new empty hidden file in ``path``'s folder (same file system: a rename is atomic)."""
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise OutputError(f"output folder {str(folder)!r} does not exist; create it first")
@@ -61,7 +59,7 @@ def check_writable(path: str | Path) -> None:
     except OSError as exc:
         raise OutputError(f"cannot write in {str(folder)!r}: {exc.strerror}; choose a writable folder") from None
     os.close(fd)
-    os.unlink(tmp)
+    return Path(tmp)
 
 
 def read_png(path: str | Path) -> np.ndarray:

@@ -1,7 +1,7 @@
 """What a viewer sees through the lens array while walking past it.
 
 A far viewer whose line of sight has direction ``(tan ax, tan ay, 1)`` sees,
-under each lens, the pixel whose ray (CONVENTIONS) points along it: the pixel
+under each lens, the pixel whose ray (docs/geometry.md) points along it: the pixel
 at offset ``(u, v) = f (tan ax, tan ay)`` from the lens centre.  A viewer
 standing left of the screen looks rightward and so sees pixels right of the
 lens centres.  Each preview frame takes, under every lens, the pixel nearest

@@ -3,7 +3,7 @@
 Views are tiled ``cols x rows``, view 0 at the bottom-left, left to right, then
 upward; the file name carries the grid and the view aspect: ``name_qs8x6a0.75.png``.
 View 0 of a quilt is the leftmost camera.  In an H3D image the pixel left of the
-lens centre (k = 0) shows the scene as seen from the right (CONVENTIONS), so
+lens centre (k = 0) shows the scene as seen from the right (docs/geometry.md), so
 quilt view q is camera-bank view ``k = Nx - 1 - q``.
 """
 

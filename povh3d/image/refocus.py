@@ -2,7 +2,7 @@
 
 A point at depth ``z`` (mm, > 0 behind the screen) and lateral position ``p``
 is seen by view ``(l, k)`` through the lens centre ``p - z (u_k, v_l) / f``
-(the ray of a pixel, CONVENTIONS).  So view ``(l, k)`` shifted by
+(the ray of a pixel, docs/geometry.md).  So view ``(l, k)`` shifted by
 ``(-z u_k / (f px), +z v_l / (f py))`` lenses (columns, rows) lines that plane
 up with every other view; averaging the shifted views focuses at ``z`` and
 blurs everything else.
@@ -11,8 +11,6 @@ blurs everything else.
 from __future__ import annotations
 
 import numpy as np
-
-from .colour import from_linear, to_linear
 
 
 def _shift_bilinear(image: np.ndarray, dy: float, dx: float) -> np.ndarray:
@@ -52,11 +50,6 @@ def refocus_linear(views_linear: np.ndarray, offsets: tuple[np.ndarray, np.ndarr
             acc += _shift_bilinear(views_linear[l, k], depth * v[l] / (focal * pitch[1]),
                                    -depth * u[k] / (focal * pitch[0]))
     return (acc / (nx * ny)).astype(np.float32)
-
-
-def refocus(views: np.ndarray, offsets, pitch, focal: float, depth: float) -> np.ndarray:
-    """``refocus_linear`` on sRGB-encoded views; returns the same dtype."""
-    return from_linear(refocus_linear(to_linear(views, np.float32), offsets, pitch, focal, depth), views.dtype)
 
 
 def gradient_energy(image: np.ndarray) -> float:

@@ -1,7 +1,7 @@
 """What every pixel mapping is: an index map from panel subpixels to view-space subpixels.
 
 A mapping reads the *unmapped* H3D image in view space (``rows x lenses*views``
-RGB pixels, the layout the camera bank renders and CONVENTIONS interleaves) and
+RGB pixels, the layout the camera bank renders and docs/geometry.md interleaves) and
 writes the panel image (``H x W`` RGB).  It is described once as an index map
 ``(H, W, 3)`` of flat indices into the source; applying it is then one
 fancy-indexing gather, so the per-image cost is one pass over the panel.

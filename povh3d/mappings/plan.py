@@ -128,14 +128,3 @@ def build_plan(sampling: Sampling) -> Plan:
     table = table.astype(np.int32 if table.max(initial=0) < 2**31 else np.int64)
     blacks = np.stack(black_rows) if blk is not None else None
     return Plan(unit, base, tid, table, blacks)
-
-
-def expand(plan: Plan) -> np.ndarray:
-    """The ``(H, Q*unit)`` flat index map a plan encodes (for tests; black items hold -1)."""
-    idx = plan.base[:, None] + plan.table[plan.tid].astype(np.int64)
-    if plan.black is not None:
-        idx = np.where(plan.black[plan.tid], -1, idx)
-    if plan.unit == 1:
-        return idx
-    full = idx[..., None] + np.arange(plan.unit)
-    return np.where(idx[..., None] < 0, -1, full).reshape(idx.shape[0], -1)

@@ -4,7 +4,7 @@ This module touches files (the model and what it names: MTL, textures, glTF
 buffers); the frame change itself is the pure ``to_pov_frame``.
 
 Handedness: the formats are right-handed, ``+y`` up, the viewer on ``+z``
-looking toward ``-z``.  POV-Ray (CONVENTIONS) is left-handed, ``+y`` up, the
+looking toward ``-z``.  POV-Ray (docs/geometry.md) is left-handed, ``+y`` up, the
 viewer on ``-z`` looking toward ``+z``.  Negating ``z`` maps one onto the other
 so that the viewer sees the same picture (x stays right, y stays up: nothing is
 mirrored) and the model's front, which faced its viewer, faces ours.  A

@@ -3,7 +3,7 @@
 ``povfmt.pov_vector_list`` builds one string per vector; a million-triangle
 mesh has millions of numbers, so here the whole array goes through a single
 ``%``-format whose ``%r`` is ``repr`` (the shortest text that reads back as the
-same double, locale-independent: CONVENTIONS, "Numbers") and whose ``%d`` is the
+same double, locale-independent: docs/geometry.md, "Numbers") and whose ``%d`` is the
 integer.  For plain vectors the text is byte-identical to ``pov_vector_list``
 (tested), so either can write any file.
 """

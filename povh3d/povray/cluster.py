@@ -31,7 +31,8 @@ from typing import Any
 
 from ..errors import ConfigError, InputError, PovrayError, PovrayNotFound, Povh3dError, RenderInterrupted
 from .format import pov_string
-from .process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
+from .job import JobResult, PovrayJob
+from .process import find_povray, povray_version, run_jobs
 
 __all__ = ["DaskRunner", "connect", "job_files"]
 

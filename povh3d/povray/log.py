@@ -174,3 +174,15 @@ def parse_render_time(log: str) -> float | None:
     times = [float(match["seconds"]) for line in unwrap(log)
              if (match := _SECONDS.match(line))]
     return sum(times) if times else None
+
+
+def describe_exit(code: int, log: str) -> str:
+    if code < 0:
+        return f"POV-Ray was killed by signal {-code}"
+    last = next((line.strip() for line in reversed(log.splitlines()) if line.strip()), "")
+    return f"POV-Ray exited with code {code}" + (f": {last}" if last else "")
+
+
+def tail(log: str, lines: int = 40) -> str:
+    """The last ``lines`` lines of a POV-Ray log (what an error carries)."""
+    return "\n".join(log.splitlines()[-lines:])

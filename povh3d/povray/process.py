@@ -1,4 +1,5 @@
-"""Every POV-Ray process povh3d starts: finding the binary and running jobs.
+"""Every POV-Ray process povh3d starts: finding the binary and running jobs
+(``job.PovrayJob``: what one run is, and its command line).
 
 This is the only module that starts processes.  Each job gets a fresh
 temporary folder that is the child's working folder and holds the scene, the
@@ -41,149 +42,21 @@ from typing import BinaryIO
 from . import sandbox
 from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
     RenderInterrupted)
-from .log import parse_error
-
-__all__ = ["PovrayJob", "JobResult", "find_povray", "povray_version",
-           "run_jobs", "build_command", "povray_conf"]
+from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
+                  povray_conf)
+from .log import describe_exit, parse_error, tail
 
 #: Environment variable naming the POV-Ray executable to use.
 ENV_VAR = "POVH3D_POVRAY"
 INSTALL_HINT = ("install it with 'sudo apt-get install -y povray' (Debian/Ubuntu) "
                 f"or set {ENV_VAR}=/path/to/povray")
-SCENE_FILE = "scene.pov"
-LOG_FILE = "povray.log"
-#: Output name: ``frame.png``, or ``frame1.png``... for an animation, where
-#: POV-Ray pads the number to the width of the last one (frame01..frame12).
-OUTPUT_STEM = "frame"
-_FRAME_NAME = re.compile(rf"{OUTPUT_STEM}(\d+)\.png")
 
 _DENIED = re.compile(r"Cannot (open|find)")
 _POLL_SECONDS = 0.02
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
-_TAIL_LINES = 40
 _PR_SET_PDEATHSIG = 1
 _LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") else None
-
-
-@dataclass(frozen=True)
-class PovrayJob:
-    """One POV-Ray run: a scene, its size and switches.
-
-    Parameters
-    ----------
-    name : str
-        Shown in progress and errors, e.g. ``"view 3,5"``.
-    script : str
-        The complete ``.pov`` text.
-    width, height : int
-        Image size, pixels.
-    frames : int
-        Above 1, an animation: ``frame_number`` runs 1..frames, one image each.
-    include_dirs : tuple of str
-        Library folders (``+L``), the scene's own folder first; POV-Ray may
-        read anything below them.  Relative paths are taken from the caller's
-        working folder.
-    options : tuple of str
-        Extra switches, appended last, e.g. ``("+A0.3", "+R3")``.
-    threads : int or None
-        Render threads (``+WT``); None for POV-Ray's default.
-    bit_depth : {8, 16}
-        Bits per PNG channel.
-    file_gamma : str
-        ``File_Gamma`` of the output, e.g. ``"sRGB"`` or ``"1.0"``.
-    timeout : float or None
-        Seconds this job may take.
-    start_row, end_row : int or None
-        Render only rows ``start_row <= row < end_row`` (0-based); the image
-        keeps its full size and the other rows are black.
-    read_files : tuple of str or None
-        The files the scene may read (the sandbox's allow-list), besides
-        POV-Ray's own; None allows everything below `include_dirs`.
-    """
-
-    name: str
-    script: str
-    width: int
-    height: int
-    frames: int = 1
-    include_dirs: tuple[str, ...] = ()
-    options: tuple[str, ...] = ()
-    threads: int | None = None
-    bit_depth: int = 8
-    file_gamma: str = "sRGB"
-    timeout: float | None = None
-    start_row: int | None = None
-    end_row: int | None = None
-    read_files: tuple[str, ...] | None = None
-
-    def __post_init__(self) -> None:
-        if self.read_files is not None:
-            if isinstance(self.read_files, (str, bytes)):
-                self._reject("read_files", "must be a sequence of paths", self.read_files)
-            object.__setattr__(self, "read_files",
-                               tuple(os.path.abspath(p) for p in self.read_files))
-        for name in ("include_dirs", "options"):
-            value = getattr(self, name)
-            if isinstance(value, (str, bytes)):
-                self._reject(name, "must be a sequence of strings", value)
-            # Lists are accepted for convenience; stored as tuples to stay hashable.
-            object.__setattr__(self, name, tuple(str(item) for item in value))
-        for name in ("width", "height", "frames"):
-            self._check_positive(name, getattr(self, name))
-        if self.threads is not None:
-            self._check_positive("threads", self.threads)
-        if self.bit_depth not in (8, 16):
-            self._reject("bit_depth", "must be 8 or 16", self.bit_depth)
-        if not self.file_gamma or any(c.isspace() for c in self.file_gamma):
-            self._reject("file_gamma", "must be a word such as 'sRGB' or '1.0'",
-                         self.file_gamma)
-        if self.timeout is not None and not self.timeout > 0:
-            self._reject("timeout", "must be positive seconds or None", self.timeout)
-        self._check_rows()
-
-    @property
-    def rows(self) -> tuple[int, int] | None:
-        """``(start, end)`` rows to render, 0-based, end exclusive; None for all."""
-        if self.start_row is None and self.end_row is None:
-            return None
-        start = 0 if self.start_row is None else self.start_row
-        return start, self.height if self.end_row is None else self.end_row
-
-    def _check_rows(self) -> None:
-        rows = self.rows
-        if rows is not None and not 0 <= rows[0] < rows[1] <= self.height:
-            self._reject("start_row, end_row",
-                         f"must satisfy 0 <= start_row < end_row <= height ({self.height})",
-                         rows)
-
-    def _check_positive(self, name: str, value: object) -> None:
-        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-            self._reject(name, "must be a positive integer", value)
-
-    def _reject(self, name: str, rule: str, value: object) -> None:
-        raise ConfigError(f"POV-Ray job {self.name!r}: {name} {rule}, got {value!r}.")
-
-
-@dataclass(frozen=True)
-class JobResult:
-    """A finished job, handed to ``on_result`` while its folder exists.
-
-    Parameters
-    ----------
-    job : PovrayJob
-    images : tuple of Path
-        One PNG per frame, in frame order; deleted after ``on_result`` returns.
-    seconds : float
-        Wall time of the POV-Ray process, s.
-    log : str
-        POV-Ray's console output (stdout and stderr).
-    """
-
-    job: PovrayJob
-    images: tuple[Path, ...]
-    seconds: float
-    log: str
 
 
 def find_povray() -> str:
@@ -232,74 +105,8 @@ def _version(binary: str) -> str:
     if match is None:
         raise PovrayError(f"{binary} --version did not report a POV-Ray version.",
                           command=command, returncode=done.returncode,
-                          log_tail=_tail(output))
+                          log_tail=tail(output))
     return match[1]
-
-
-def _image_buffer_mb(job: PovrayJob) -> int:
-    """Memory for POV-Ray's image buffer, MB (``+MI``, default 128).
-
-    Past it POV-Ray 3.7 backs the image with a file at the hard-wired path
-    ``/tmp/pov<pid>`` (not TMPDIR), outside the job folder: the sandbox refuses
-    it, and a crash would leave it behind.  It keeps about 5 floats a pixel;
-    give it twice that.
-    """
-    return max(128, -(-2 * 20 * job.width * job.height // (1 << 20)))
-
-
-def build_command(job: PovrayJob, binary: str) -> list[str]:
-    """Command line that renders `job` in its folder.
-
-    Paths of the scene and images are relative: the child runs in the job's
-    folder.  Include folders are made absolute here, from the caller's
-    working folder.
-    """
-    command = [binary, f"+I{SCENE_FILE}", f"+O{OUTPUT_STEM}.png",
-               f"+W{job.width}", f"+H{job.height}", f"+FN{job.bit_depth}",
-               f"File_Gamma={job.file_gamma}", "-D", "-V", f"+MI{_image_buffer_mb(job)}"]
-    # Unquoted, POV-Ray rejects a library path holding a space.
-    command += [f"+L{_quote(os.path.abspath(folder))}" for folder in job.include_dirs]
-    if job.threads is not None:
-        command.append(f"+WT{job.threads}")
-    if job.frames > 1:
-        command += ["+KFI1", f"+KFF{job.frames}"]
-    if job.rows is not None:
-        # POV-Ray reads a row of 1 or less as a fraction of the height (+ER1
-        # means the last row); "n.5" is above 1 and truncates to row n.
-        start, end = job.rows
-        command += [f"+SR{start + 1}.5", f"+ER{end}.5"]
-    return command + list(job.options)
-
-
-def povray_conf(read_dirs: Sequence[str], write_dir: str) -> str:
-    """Text of a user ``povray.conf`` for one job.
-
-    Parameters
-    ----------
-    read_dirs : sequence of str
-        Absolute folders POV-Ray may read, with everything below them.
-    write_dir : str
-        The job's folder, where it may also write.
-    """
-    lines = ["; Written by povh3d for one render; deleted with it.",
-             "[File I/O Security]", "restricted",
-             "[Shellout Security]", "forbidden",
-             "[Permitted Paths]",
-             # A user conf replaces the system's paths, so list those again.
-             'read* = "%INSTALLDIR%/include"', 'read* = "/etc/povray"']
-    lines += [f"read* = {_quote(folder)}" for folder in read_dirs]
-    lines += [f"read+write* = {_quote(write_dir)}", "read+write = ."]
-    return "\n".join(lines) + "\n"
-
-
-def _quote(path: str) -> str:
-    """`path` in the quotes POV-Ray accepts on its command line and in its conf."""
-    if '"' not in path:
-        return f'"{path}"'
-    if "'" not in path:
-        return f"'{path}'"
-    raise ConfigError(f"POV-Ray cannot take a folder whose name holds both "
-                      f"quote characters: {path!r}.")
 
 
 @dataclass(eq=False)
@@ -520,7 +327,7 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
     try:
         seconds = (child.ended or time.monotonic()) - child.started
         log = child.log
-        images = _collect_images(child.folder, child.job.frames)
+        images = collect_images(child.folder, child.job.frames)
         if child.process.returncode != 0 or images is None:
             raise _failure(child, log)
         if on_result is not None:
@@ -530,55 +337,26 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
         shutil.rmtree(child.folder, ignore_errors=True)
 
 
-def _collect_images(folder: Path, frames: int) -> tuple[Path, ...] | None:
-    """The output images in frame order, or None unless all are there."""
-    if frames == 1:
-        path = folder / f"{OUTPUT_STEM}.png"
-        return (path,) if path.is_file() else None
-    numbered = {int(match[1]): path for path in folder.glob(f"{OUTPUT_STEM}*.png")
-                if (match := _FRAME_NAME.fullmatch(path.name))}
-    if sorted(numbered) != list(range(1, frames + 1)):
-        return None
-    return tuple(numbered[number] for number in range(1, frames + 1))
-
-
 def _failure(child: _Child, log: str) -> PovrayError:
     code = child.process.returncode
     reason = parse_error(log)
     if reason is None and code != 0:
-        reason = _describe_exit(code, log)
+        reason = describe_exit(code, log)
     elif reason is None:
-        reason = f"POV-Ray finished without writing {_expected(child.job)}"
+        reason = f"POV-Ray finished without writing {expected_images(child.job)}"
     if code == 126 and not log.strip():
         reason = "the POV-Ray process could not enter its sandbox (Landlock); set POVH3D_SANDBOX=off to run unconfined"
     elif _DENIED.search(reason) and sandbox.landlock_abi() and sandbox.sandbox_mode() != "off":
         reason += (" (povh3d lets a scene read only its own files and POV-Ray's include files, "
                    "and write only in its job folder)")
     return PovrayError(f"{child.job.name}: {reason}", command=child.command,
-                       returncode=code, log_tail=_tail(log))
-
-
-def _expected(job: PovrayJob) -> str:
-    if job.frames == 1:
-        return f"{OUTPUT_STEM}.png"
-    return f"the {job.frames} frames {OUTPUT_STEM}1.png..{OUTPUT_STEM}{job.frames}.png"
-
-
-def _describe_exit(code: int, log: str) -> str:
-    if code < 0:
-        return f"POV-Ray was killed by signal {-code}"
-    last = next((line.strip() for line in reversed(log.splitlines()) if line.strip()), "")
-    return f"POV-Ray exited with code {code}" + (f": {last}" if last else "")
+                       returncode=code, log_tail=tail(log))
 
 
 def _timeout(child: _Child) -> PovrayTimeout:
     return PovrayTimeout(f"{child.job.name}: POV-Ray did not finish within "
                          f"{child.job.timeout:g} s (the job's timeout).",
-                         command=child.command, log_tail=_tail(child.log))
-
-
-def _tail(log: str) -> str:
-    return "\n".join(log.splitlines()[-_TAIL_LINES:])
+                         command=child.command, log_tail=tail(child.log))
 
 
 def _stop(children: list[_Child]) -> None:

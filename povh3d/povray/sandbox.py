@@ -8,7 +8,7 @@ compares each line with ``!=`` where it means ``==`` (``vfe/unix/unixoptions.cpp
 upstream issue POV-Ray/povray#158, FS#326), so ``restricted`` is read as
 "unset" wherever the file lies (``/etc/povray/3.7/povray.conf`` or
 ``$HOME/.povray/3.7/povray.conf``), and ``read+write`` paths are only ever
-added as read paths.  ``tests/test_sandbox.py`` shows both: with the conf in
+added as read paths.  ``tests/povray/test_sandbox.py`` shows both: with the conf in
 place and no Landlock, a scene still reads ``/etc/passwd`` and writes
 outside its folder.
 

@@ -1,7 +1,7 @@
 """The one Jinja environment: loads povh3d's POV-Ray templates, registers filters.
 
 Templates hold only loops and formatting; every number passes through the
-``pov`` filters so it round-trips (CONVENTIONS, "Numbers").
+``pov`` filters so it round-trips (docs/geometry.md, "Numbers").
 """
 
 from __future__ import annotations

@@ -30,7 +30,7 @@ global_settings { assumed_gamma 1.0 }
   no_shadow
   no_reflection
 }
-// Centres from indices (CONVENTIONS), never by accumulation: no drift.
+// Centres from indices (docs/geometry.md), never by accumulation: no drift.
 #declare Povh3d_I = 0;
 #while (Povh3d_I < 6)
   #declare Povh3d_Y = (6 / 2 - Povh3d_I - 0.5) * 0.5;

@@ -1,0 +1,163 @@
+"""The package tree tells the architecture (docs/architecture.md): no import cycles, a
+shallow import graph, small modules, and layers that import only downward.
+
+Cycles and layers count every import, at module level and inside functions (a
+function-level import must not hide a cycle or a layer break).  The depth counts
+what loading a module loads: its module-level imports (a function-level import is a
+command's own dependency, loaded when the command runs).  Left out everywhere: the
+lazy attribute table of ``povh3d/__init__.py`` and ``if TYPE_CHECKING:`` blocks,
+which import nothing at run time.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "povh3d"
+
+# Which top-level parts may import which (besides errors, _version and system,
+# which everything may use).  cli -> app -> engine -> povray, beside the libraries.
+LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration"}
+ALLOWED = {
+    "cli": {"app", "engine", "geometry", "mappings", "mesh", "scene", "image"},
+    "app": {"engine", "povray", *LIBRARIES},
+    "engine": {"povray", *LIBRARIES},
+    "povray": {"image", "scene"},
+    "mappings": {"geometry", "image"},
+    "mesh": {"geometry", "image", "povray"},
+    "calibration": {"image", "geometry"},
+    "image": {"geometry"},
+    "scene": set(),
+    "geometry": set(),
+}
+BASE = {"errors", "_version", "system"}
+
+
+def _modules() -> dict[str, Path]:
+    found = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        found[".".join(parts)] = path
+    return found
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    return isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING"
+
+
+def _imports(name: str, path: Path, modules: dict[str, Path], *, module_level: bool = False) -> set[str]:
+    """Modules of the package that ``name`` imports anywhere in its body (or at module level)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip = {id(n) for top in ast.walk(tree) if isinstance(top, ast.If) and _is_type_checking(top)
+            for n in ast.walk(top)}
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = set()
+    for node in (tree.body if module_level else ast.walk(tree)):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[:len(package.split(".")) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            for alias in node.names:
+                full = f"{target}.{alias.name}"
+                if full in modules:
+                    out.add(full)
+                elif target in modules:
+                    out.add(target)
+        elif isinstance(node, ast.Import):
+            out.update(a.name for a in node.names if a.name in modules)
+    out.discard(name)
+    return out
+
+
+def import_graph(*, module_level: bool = False) -> dict[str, set[str]]:
+    modules = _modules()
+    return {name: _imports(name, path, modules, module_level=module_level) for name, path in modules.items()}
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                return stack[stack.index(nxt):] + [nxt]
+            if nxt not in state and (found := visit(nxt)):
+                return found
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (found := visit(node)):
+            return found
+    return None
+
+
+def test_cycle_finder_finds_a_cycle():  # negative control for the test below
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set()}) is None
+
+
+def test_no_import_cycles():
+    assert _cycle(import_graph()) is None
+
+
+def test_import_graph_is_at_most_8_levels_deep():
+    graph = import_graph(module_level=True)
+    depth: dict[str, int] = {}
+
+    def level(node: str) -> int:
+        if node not in depth:
+            depth[node] = 1 + max((level(n) for n in graph[node]), default=0)
+        return depth[node]
+
+    deepest = max(graph, key=level)
+    chain = [deepest]
+    while graph[chain[-1]]:
+        chain.append(max(graph[chain[-1]], key=level))
+    assert len(chain) <= 8, " -> ".join(chain)
+
+
+def _part(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def test_layers_import_only_downward():
+    wrong = []
+    for module, targets in import_graph().items():
+        part = _part(module)
+        if part not in ALLOWED:
+            continue
+        for target in targets:
+            other = _part(target)
+            if other != part and other not in BASE and other not in ALLOWED[part]:
+                wrong.append(f"{module} -> {target}")
+    assert not wrong
+
+
+@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_modules_stay_under_400_lines(path):
+    assert len(path.read_text(encoding="utf-8").splitlines()) < 400
+
+
+def test_only_the_povray_runner_starts_processes():
+    starters = [str(p.relative_to(PACKAGE)) for p in PACKAGE.rglob("*.py")
+                if "subprocess" in p.read_text(encoding="utf-8")]
+    assert starters == ["povray/process.py"]
+
+
+def test_the_package_is_typed():
+    assert (PACKAGE / "py.typed").is_file()
