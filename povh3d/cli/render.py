@@ -114,7 +114,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     lens_array, _ = lens_array_from_args(args)
     scene = load_scene(args.scene, tuple(args.include))
     trials = default_trials(lens_array, args.methods.split(","))
-    update, close = progress_bar(not args.quiet and sys.stderr.isatty())
+    update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "trials")
     try:
         report = run_bench(scene, lens_array, trials, reference_samples=args.reference_samples,
                            on_trial=(lambda done, total, what: update(done, total)) if update else None)

@@ -45,6 +45,7 @@ from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, Pov
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
                   povray_conf)
 from .log import describe_exit, parse_error, tail
+from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, LogProgress, sleep_until_exit
 
 #: Environment variable naming the POV-Ray executable to use.
 ENV_VAR = "POVH3D_POVRAY"
@@ -52,7 +53,7 @@ INSTALL_HINT = ("install it with 'sudo apt-get install -y povray' (Debian/Ubuntu
                 f"or set {ENV_VAR}=/path/to/povray")
 
 _DENIED = re.compile(r"Cannot (open|find)")
-_POLL_SECONDS = 0.02
+_POLL_SECONDS = 0.02  # while stopping children
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
 _PR_SET_PDEATHSIG = 1
@@ -120,6 +121,10 @@ class _Child:
     process: subprocess.Popen[bytes]
     started: float
     ended: float | None = field(default=None)
+    progress: LogProgress = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.progress = LogProgress(self.folder / LOG_FILE, self.job.frames)
 
     @property
     def log(self) -> str:
@@ -132,7 +137,8 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
              on_progress: Callable[[int, int], None] | None = None,
              binary: str | None = None,
              workdir: str | Path | None = None,
-             should_stop: Callable[[], bool] | None = None) -> list[float]:
+             should_stop: Callable[[], bool] | None = None,
+             on_running: Callable[[dict[int, float]], None] | None = None) -> list[float]:
     """Render jobs with at most `processes` POV-Ray children at once.
 
     Parameters
@@ -153,6 +159,10 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
     should_stop : callable, optional
         Polled while children run; True stops them all and raises
         `RenderInterrupted` (a cancelled task on a Dask worker).
+    on_running : callable, optional
+        Called about every ``PROGRESS_SECONDS`` while children run, in this
+        thread, with ``{job index: frames rendered}`` of the running jobs, read
+        from their logs (a frame counts by its share of pixels rendered).
 
     Returns
     -------
@@ -190,7 +200,7 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
             while pending and len(running) < processes:
                 index, job = pending.popleft()
                 _start(index, job, binary, workdir, running)
-            for child in _wait_for_exits(running, should_stop):
+            for child in _wait_for_exits(running, should_stop, on_running):
                 running.remove(child)
                 seconds[child.index] = _finish(child, on_result)
                 done += 1
@@ -304,9 +314,9 @@ def _child_setup(parent: int, ruleset_fd: int | None = None) -> None:
         sandbox.restrict_self(ruleset_fd)
 
 
-def _wait_for_exits(running: list[_Child],
-                    should_stop: Callable[[], bool] | None = None) -> list[_Child]:
-    """Wait until a child exits; the exited ones.  Raises on a timeout or a stop."""
+def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | None = None,
+                    on_running: Callable[[dict[int, float]], None] | None = None) -> list[_Child]:
+    """Wait until a child exits (woken by it, not polling); the exited ones.  Raises on a timeout or a stop."""
     while True:
         if should_stop is not None and should_stop():
             raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
@@ -316,10 +326,16 @@ def _wait_for_exits(running: list[_Child],
             child.ended = now
         if exited:
             return exited
-        for child in running:
-            if child.job.timeout is not None and now - child.started > child.job.timeout:
+        wake = [child.started + child.job.timeout - now for child in running if child.job.timeout is not None]
+        for child, left in zip([c for c in running if c.job.timeout is not None], wake):
+            if left < 0:
                 raise _timeout(child)
-        time.sleep(_POLL_SECONDS)
+        if should_stop is not None:
+            wake.append(STOP_CHECK_SECONDS)
+        if on_running is not None:
+            on_running({child.index: child.progress.frames_rendered() for child in running})
+            wake.append(PROGRESS_SECONDS)
+        sleep_until_exit([child.process.pid for child in running], min(wake) if wake else None)
 
 
 def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> float:

@@ -119,7 +119,7 @@ def test_build_command() -> None:
                     start_row=0, end_row=1)
     command = build_command(job, "/usr/bin/povray")
     assert command[:11] == ["/usr/bin/povray", "+Iscene.pov", "+Oframe.png", "+W10",
-                            "+H6", "+FN16", "File_Gamma=1.0", "-D", "-V", "+MI128",
+                            "+H6", "+FN16", "File_Gamma=1.0", "-D", "+V", "+MI128",
                             '+L"/a b"']
     assert f'+L"{os.path.abspath("rel")}"' in command
     assert command[-6:] == ["+WT2", "+KFI1", "+KFF3", "+SR1.5", "+ER1.5", "+A0.3"]
