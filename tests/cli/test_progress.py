@@ -90,3 +90,13 @@ def test_status_line_redraws_in_place_and_erases_itself():
     quiet = io.StringIO()
     StatusLine(quiet).close()  # nothing drawn, nothing to erase
     assert quiet.getvalue() == ""
+
+
+def test_convert_mesh_shows_its_steps_on_a_terminal(tmp_path):
+    model = REPO / "sample_models" / "letter_l.stl"
+    code, text = run_in_pty(cli_command("convert-mesh", model, "-o", tmp_path / "l.inc"))
+    assert code == 0, text
+    assert re.search(r"povh3d: +\d+% \|[# ]+\| \d/4 steps", text), text
+    assert text.rsplit("\x1b[K", 1)[1].strip().startswith(str(tmp_path / "l.inc"))
+    code, text = run_in_pty(cli_command("convert-mesh", model, "-o", tmp_path / "q.inc", "-q"))
+    assert code == 0 and "steps" not in text and "\x1b[K" not in text
