@@ -3,7 +3,8 @@
 The line is redrawn in place (carriage return, erase to the end of the line)
 at most every ``interval`` seconds and erased when the command ends, so the
 result line that follows stands alone.  The time left is the time so far
-scaled by the share still to do.
+scaled by the share still to do; a new total (a new phase, such as the
+``--quality auto`` probe before the render) starts its own clock.
 """
 
 from __future__ import annotations
@@ -40,9 +41,13 @@ class StatusLine:
         self.start = time.monotonic()
         self.shown = -float("inf")
         self.drawn = False
+        self.total, self.done = 0.0, 0.0
 
     def __call__(self, done: float, total: float) -> None:
         now = time.monotonic()
+        if (total, done) < (self.total, self.done) or total != self.total:  # a new phase: its own clock
+            self.start, self.shown = now, -float("inf")
+        self.total, self.done = total, done
         if now - self.shown < self.interval and done < total:
             return
         self.shown = now

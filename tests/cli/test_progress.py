@@ -100,3 +100,15 @@ def test_convert_mesh_shows_its_steps_on_a_terminal(tmp_path):
     assert text.rsplit("\x1b[K", 1)[1].strip().startswith(str(tmp_path / "l.inc"))
     code, text = run_in_pty(cli_command("convert-mesh", model, "-o", tmp_path / "q.inc", "-q"))
     assert code == 0 and "steps" not in text and "\x1b[K" not in text
+
+
+def test_a_new_phase_starts_its_own_clock(monkeypatch):
+    clock = iter([0.0, 0.0, 10.0, 10.0, 12.0])
+    monkeypatch.setattr("povh3d.cli.progress.time.monotonic", lambda: next(clock))
+    stream = io.StringIO()
+    line = StatusLine(stream, interval=0.0)  # t = 0
+    line(1, 4)                               # t = 0: the probe's first render
+    line(4, 4)                               # t = 10
+    line(0, 1)                               # t = 10: the render itself, a new total
+    line(0.5, 1)                             # t = 12: 2 s for half: about 2 s left, not 12
+    assert stream.getvalue().rsplit("\r", 1)[1].startswith(status_text(0.5, 1, 2.0))
