@@ -39,7 +39,8 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 test: povray venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
 
-bench: povray venv ## measure H3D render time against a plain 2D render, the quality, mapping, Dask, single-stage, crop, mesh and calibration benchmarks
+bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the render breakdown, quality, mapping, Dask, single-stage, crop, mesh and calibration benchmarks
+	$(BIN)/python benchmarks/bench_command.py
 	$(BIN)/python benchmarks/bench_render.py
 	$(BIN)/python benchmarks/bench_quality.py
 	$(BIN)/python benchmarks/bench_mapping.py

@@ -13,6 +13,7 @@ import dataclasses
 import os
 import time
 from dataclasses import dataclass, field
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -95,7 +96,8 @@ def _warnings(report: CleanReport, parts: list[Part], missing: list[str], notes:
 
 def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: str | None = None,
                  unit: str | None = None, shading: str = "auto", fit_depth: float | None = None,
-                 center: bool = False, max_triangles: int | None = None) -> ConversionResult:
+                 center: bool = False, max_triangles: int | None = None,
+                 progress: Callable[[int, int], None] | None = None) -> ConversionResult:
     """Convert ``model`` into the include ``output`` (default: beside it, ``.inc``).
 
     Parameters
@@ -108,6 +110,7 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
     fit_depth : float or None   scale the model to this depth (z extent), mm
     center : bool           centre the model's bounding box on the origin
     max_triangles : int or None   simplify to at most this many triangles
+    progress : callable(done, total), optional   called after each of the 4 steps (read, clean, shade, write)
 
     Raises
     ------
@@ -126,7 +129,10 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
     if output.resolve() == model.resolve():
         raise ConfigError(f"the output {str(output)!r} would overwrite the model; choose another name")
 
+    step = progress or (lambda done, total: None)
+    step(0, 4)
     loaded = load_model(model, unit=unit)
+    step(1, 4)
     parts: list[Part] = []
     report = CleanReport()
     for raw in loaded.parts:
@@ -139,6 +145,7 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
         why = f" (all {dropped} were dropped as non-finite or degenerate)" if dropped else ""
         raise InputError(f"{str(model)!r} contains no triangles{why}; check the export")
 
+    step(2, 4)
     simplification = None
     if max_triangles is not None and sum(p.triangles for p in parts) > max_triangles:
         from ..mesh.simplify import simplify_parts
@@ -163,8 +170,10 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
         parts=len(parts), triangles=sum(p.triangles for p in parts),
         vertices=sum(len(p.vertices) for p in parts), smooth=smooth, files_read=loaded.files, clean=report,
         warnings=_warnings(report, loaded.parts, loaded.missing, loaded.warnings), simplification=simplification)
+    step(3, 4)
     text = include_text(blocks, ident, (lo, hi), source=model.name, summary=result.summary())
     _write_all(output, text, textures)
+    step(4, 4)
     result.seconds = time.perf_counter() - start
     return result
 

@@ -37,7 +37,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
     scene, model_record = load_content(request)
-    settings, auto = _resolve_quality(request, scene)
+    settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record)
     if request.frames is None:
         still = frame(None, progress)
@@ -60,13 +60,15 @@ def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
     return load_scene(stage, request.include_dirs), model_record
 
 
-def _resolve_quality(request: RenderRequest, scene: Scene) -> tuple[RenderSettings, AutoChoice | None]:
+def _resolve_quality(request: RenderRequest, scene: Scene,
+                     progress: Progress | None = None) -> tuple[RenderSettings, AutoChoice | None]:
     """``--quality auto`` chosen once for the whole request (on the first frame's clock)."""
     first_clock = None
     if request.frames is not None and scene.uses_clock:
         first_clock = request.frames.clock(request.frames.first)
     probe = replace(request.settings, clock=first_clock)
-    chosen, auto = resolve_auto(scene, request.render_array, request.method, probe, **request.method_options)
+    chosen, auto = resolve_auto(scene, request.render_array, request.method, probe, progress,
+                                **request.method_options)
     return replace(chosen, clock=None), auto
 
 

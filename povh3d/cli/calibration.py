@@ -8,17 +8,20 @@ from typing import Any
 
 def add_parsers(sub: Any) -> None:
     """Capture-side processing (thesis chapter 4): calibrate, undistort, borders, equalise, viewpoints, stitch."""
-    from ..app import calibration as c
-
     def run(fn, show):
-        return lambda args: (print(show(args, fn(args))), 0)[1]
+        def command(args):
+            from ..app import calibration  # scipy: imported by the command that runs, not the parser
+
+            print(show(args, fn(calibration, args)))
+            return 0
+        return command
 
     p = sub.add_parser("calibrate", help="find the lens grid in a white image -> grid.json")
     p.add_argument("white", help="PNG of a white background taken through the lens array")
     p.add_argument("-o", "--output", required=True, help="grid file to write (.json)")
     p.add_argument("--lattice", choices=("square", "hex"), help="expected lattice (default: detect)")
     p.add_argument("--no-distortion", action="store_true", help="fit a straight lattice (no Brown terms)")
-    p.set_defaults(func=run(lambda a: c.calibrate_file(a.white, a.output, lattice=a.lattice,
+    p.set_defaults(func=run(lambda c, a: c.calibrate_file(a.white, a.output, lattice=a.lattice,
                                                        distortion=not a.no_distortion),
                             lambda a, g: f"{a.output}  {g.lattice}  pitch {g.pitch_px:.4f} px  rotation "
                                          f"{g.rotation_deg:.4f} deg  {int(g.inside.sum())} lenses  k1 "
@@ -35,16 +38,16 @@ def add_parsers(sub: Any) -> None:
         p.set_defaults(func=run(fn, lambda a, r: f"{a.output}  {name}"))
 
     image_cmd("undistort", "remove the barrel/pincushion distortion of a capture",
-              lambda a: c.undistort_file(a.image, a.grid, a.output))
+              lambda c, a: c.undistort_file(a.image, a.grid, a.output))
     image_cmd("borders", "flat-field micro-images and clean the dark borders between them",
-              lambda a: c.borders_file(a.image, a.grid, a.output, threshold=a.threshold, fill=a.fill),
+              lambda c, a: c.borders_file(a.image, a.grid, a.output, threshold=a.threshold, fill=a.fill),
               [(("--threshold",), dict(type=float, default=0.5, help="border below this fraction of a lens's peak")),
                (("--fill",), dict(choices=("black", "nearest"), default="black"))])
     image_cmd("equalise", "resample every micro-image to one size (upright, square)",
-              lambda a: c.equalise_file(a.image, a.grid, a.output, size=a.size),
+              lambda c, a: c.equalise_file(a.image, a.grid, a.output, size=a.size),
               [(("--size",), dict(type=int, help="pixels per micro-image side (default: the mean size)"))])
     image_cmd("viewpoints", "extract viewpoint images (pixel a, b of every micro-image) into a folder",
-              lambda a: c.viewpoints_file(a.image, a.grid, a.output, ppl=a.ppl),
+              lambda c, a: c.viewpoints_file(a.image, a.grid, a.output, ppl=a.ppl),
               [(("--ppl",), dict(type=int, required=True, help="pixels per micro-image side to sample"))])
 
     p = sub.add_parser("stitch", help="join two captures taken a whole number of lenses apart")
@@ -52,7 +55,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("b")
     p.add_argument("--grid", required=True)
     p.add_argument("-o", "--output", required=True)
-    p.set_defaults(func=run(lambda a: c.stitch_files(a.a, a.b, a.grid, a.output),
+    p.set_defaults(func=run(lambda c, a: c.stitch_files(a.a, a.b, a.grid, a.output),
                             lambda a, r: f"{a.output}  {r['size_px'][0]}x{r['size_px'][1]}  B shifted "
                                          f"{r['shift_lenses']['rows']} rows, {r['shift_lenses']['cols']} columns "
                                          f"of lenses ({r['mode']})"))

@@ -60,19 +60,14 @@ def lens_array_from_args(args: argparse.Namespace):
     return lens_array_from_fields(fields), {"preset": args.preset, **describe_fields(fields)}
 
 
-def progress_bar(enabled: bool):
+def progress_bar(enabled: bool, unit: str = "frames"):
+    """``(update, close)``: a status line on stderr (``cli.progress``), or nothing when not `enabled`."""
     if not enabled:
         return None, lambda: None
-    from tqdm import tqdm
+    from .progress import StatusLine
 
-    bar = tqdm(total=0, unit="frame", file=sys.stderr, dynamic_ncols=True, leave=False)
-
-    def update(done: int, total: int) -> None:
-        bar.total = total
-        bar.n = done
-        bar.refresh()
-
-    return update, bar.close
+    line = StatusLine(sys.stderr, unit)
+    return line, line.close
 
 
 def warn(messages: list[str]) -> None:

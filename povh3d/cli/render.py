@@ -95,8 +95,12 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
         from ..mesh.simplify import auto_budget
 
         budget = auto_budget(lens_array_from_args(args)[0])
-    result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
-                          fit_depth=args.fit_depth, center=args.center, max_triangles=budget)
+    update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "steps")
+    try:
+        result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
+                              fit_depth=args.fit_depth, center=args.center, max_triangles=budget, progress=update)
+    finally:
+        close()
     warn(result.warnings)
     line = f"{result.include}  {result.ident}  {result.summary()}  {result.seconds:.2f} s"
     if result.simplification:
@@ -114,7 +118,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     lens_array, _ = lens_array_from_args(args)
     scene = load_scene(args.scene, tuple(args.include))
     trials = default_trials(lens_array, args.methods.split(","))
-    update, close = progress_bar(not args.quiet and sys.stderr.isatty())
+    update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "trials")
     try:
         report = run_bench(scene, lens_array, trials, reference_samples=args.reference_samples,
                            on_trial=(lambda done, total, what: update(done, total)) if update else None)
@@ -180,6 +184,7 @@ def add_parsers(sub: Any) -> None:
                    help="the model's unit (default: the file's, else mm; glTF: m)")
     p.add_argument("--fit-depth", type=float, metavar="MM", help="scale the model to this depth (z extent)")
     p.add_argument("--center", action="store_true", help="centre the model's bounding box on the origin")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress line")
     add_mesh_options(p)
     add_array_options(p)  # only for --max-triangles auto
     p.set_defaults(func=cmd_convert_mesh)

@@ -15,7 +15,7 @@ from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
 from .methods import METHODS, run_method
 from ..image.metrics import psnr
-from .quality import AUTO, QUALITY_LEVELS, Quality, RenderSettings
+from .quality import AUTO, QUALITY_LEVELS, Progress, Quality, RenderSettings
 from ..scene.scene import Scene
 
 
@@ -52,7 +52,7 @@ class AutoChoice:
 
 
 def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: RenderSettings,
-                 **options: Any) -> tuple[RenderSettings, AutoChoice | None]:
+                 progress: Progress | None = None, **options: Any) -> tuple[RenderSettings, AutoChoice | None]:
     """``settings`` with ``--quality auto`` replaced by the cheapest setting of
     ``AUTO_LADDER`` that reaches ``settings.max_error_db`` on a probe of the
     central lenses; unchanged (and None) for any other quality.
@@ -60,7 +60,8 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     The probe renders a footprint reference of the probe (cached like any render;
     ``probe_reference_samples`` for the target), then the ladder in order until
     one setting meets the target; a ConfigError if none does.  Methods without
-    footprint samples stop at antialiasing.
+    footprint samples stop at antialiasing.  ``progress(done, total)`` counts the
+    probe's renders (the reference, then each setting tried).
     """
     if settings.quality != AUTO:
         return settings, None
@@ -74,9 +75,14 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     reference = to_8bit(reference)
     takes_samples = METHODS[method].takes_samples(probe)
     tried: list[tuple[str, float]] = []
-    for quality in dict.fromkeys(q if takes_samples else q.point_sampled() for q in AUTO_LADDER):
+    ladder = list(dict.fromkeys(q if takes_samples else q.point_sampled() for q in AUTO_LADDER))
+    if progress is not None:
+        progress(1, 1 + len(ladder))
+    for quality in ladder:
         result = run_method(method, scene, probe, replace(base, quality=quality), **options)
         tried.append((quality.label, psnr(result.h3d, reference)))
+        if progress is not None:
+            progress(1 + len(tried), 1 + len(ladder))
         if tried[-1][1] >= target:
             choice = AutoChoice(quality, target, tuple(tried), (probe.lenses_x, probe.lenses_y),
                                 time.perf_counter() - start, samples)

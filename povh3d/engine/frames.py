@@ -22,6 +22,7 @@ from .cache import ImageCache, content_key, default_cache_dir
 from ..image.io import read_png
 from ..povray.process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
 from ..povray.sandbox import files_within
+from ..povray.version_memo import remembered_version
 from ..scene.scene import Scene
 from ..system import cpu_count
 from .batch import FrameBatch, RenderStats
@@ -33,11 +34,13 @@ class LocalRunner:
 
     def __init__(self, binary: str) -> None:
         self.binary = binary
-        self.version = povray_version(binary)
+        # Remembered across runs: a `povray --version` costs about 0.2 s a render.
+        self.version = remembered_version(binary, default_cache_dir(), povray_version)
 
-    def run(self, jobs: list[PovrayJob], *, processes: int,
-            on_result: Callable[[JobResult], None]) -> list[float]:
-        return run_jobs(jobs, processes=processes, on_result=on_result, binary=self.binary)
+    def run(self, jobs: list[PovrayJob], *, processes: int, on_result: Callable[[JobResult], None],
+            on_running: Callable[[dict[int, float]], None] | None = None) -> list[float]:
+        return run_jobs(jobs, processes=processes, on_result=on_result, binary=self.binary,
+                        on_running=on_running)
 
 
 def _canonical(value: Any) -> Any:
@@ -151,8 +154,13 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         if progress:
             progress(done, len(keys))
 
+    def running(rendered: dict[int, float]) -> None:
+        # Frames of the running jobs as POV-Ray reports them (share of pixels).
+        progress(done + sum(rendered.values()), len(keys))
+
     if jobs:
-        stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect)
+        extra = {"on_running": running} if progress and isinstance(runner, LocalRunner) else {}
+        stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
     for index, source in copies.items():
         if images[index] is None:
             images[index] = images[source]

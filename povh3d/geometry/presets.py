@@ -11,10 +11,12 @@ import math
 import tomllib
 from functools import cache
 from importlib import resources
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ConfigError
-from .lens_array import LensArray, Panel
+
+if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
+    from .lens_array import LensArray
 
 FIELDS = ("description", "grid", "panel", "pixel_pitch", "lens_pitch", "ppl", "lenses",
           "rows", "focal", "views", "slant_deg", "mapping")
@@ -108,6 +110,8 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     spans a fractional number of pixels; what gets rendered is the unmapped H3D
     image in view space: ``views`` pixels per lens, one pixel row per panel row.
     """
+    from .lens_array import LensArray, Panel
+
     grid = fields.get("grid", "square")
     if "focal" not in fields:
         raise ConfigError("the focal length is missing; give it with --focal (mm)")
@@ -175,6 +179,8 @@ def describe_fields(fields: dict[str, Any]) -> dict[str, Any]:
 
 def lens_array_from_record(record: dict[str, Any]) -> LensArray:
     """The LensArray a sidecar's ``lens_array`` entry (``LensArray.describe()``) describes."""
+    from .lens_array import LensArray, Panel
+
     try:
         panel = Panel(*record["panel"]["size_px"], *record["panel"]["pixel_pitch_mm"])
         return LensArray(record["grid"], *record["lenses"], *record["lens_pitch_mm"], record["focal_mm"], panel)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from skimage.metrics import structural_similarity
 
 
 def _unit(image: np.ndarray) -> np.ndarray:
@@ -22,6 +21,8 @@ def psnr(image: np.ndarray, reference: np.ndarray) -> float:
 def ssim(image: np.ndarray, reference: np.ndarray) -> float:
     """Structural similarity (scikit-image, 7x7 window) of two integer images, over channels."""
     a, b = _unit(image), _unit(reference)
+    from skimage.metrics import structural_similarity  # scipy: only when SSIM is asked for
+
     return float(structural_similarity(a, b, data_range=1.0, channel_axis=-1 if a.ndim == 3 else None))
 
 

@@ -38,14 +38,15 @@ def merge_equal_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.nd
     """Share vertices with bit-identical coordinates (STL stores every corner separately).
 
     Returns the unique vertices, in order of first use, and the re-indexed faces.
+    A hash table in compiled code (``kernels.first_of_equal_rows``): a sort of the
+    rows, as ``np.unique`` does, takes ten times as long on a million triangles.
     """
+    from .kernels import first_of_equal_rows
+
     v = np.ascontiguousarray(vertices, dtype=np.float64) + 0.0  # -0.0 -> 0.0, so equal points hash equal
-    rows = v.view(np.dtype((np.void, v.dtype.itemsize * 3))).ravel()
-    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
-    order = np.argsort(first)  # keep the file's vertex order (stable output, readable diffs)
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    return v[first[order]], rank[inverse.ravel()][faces]
+    first, inverse = first_of_equal_rows(v.view(np.uint64))
+    # groups are numbered in order of first appearance: the file's vertex order (stable, readable diffs)
+    return v[first], inverse[faces]
 
 
 def degenerate_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -85,7 +86,7 @@ def clean_part(part: Part, *, merge: bool = False) -> tuple[Part, CleanReport]:
 
     merged = 0
     if merge and normals is None and uv is None and colours is None and len(faces):
-        before = len(np.unique(faces))
+        before = int(np.count_nonzero(np.bincount(faces.ravel(), minlength=len(vertices))))
         vertices, faces = merge_equal_vertices(vertices, faces)
         merged = before - len(vertices)
 

@@ -149,6 +149,26 @@ def _check_stl(path: Path, data: bytes) -> None:
                          f"({expected} bytes) but the file has {len(data)} bytes; export it again")
 
 
+_STL_RECORD = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attributes", "<u2")])
+
+
+def _binary_stl(path: Path, data: bytes, fmt: MeshFormat, unit: str | None) -> LoadedModel | None:
+    """A plain binary STL read straight into a part (what trimesh gives, without its import and
+    copies); None for anything else (ASCII, colour attributes, trailing bytes): trimesh reads it."""
+    count = int.from_bytes(data[80:84], "little") if len(data) >= 84 else -1
+    if count <= 0 or len(data) != 84 + _STL_RECORD.itemsize * count or \
+            (data[:5].lower() == b"solid" and b"facet" in data[:4096].lower()):
+        return None
+    records = np.frombuffer(data, dtype=_STL_RECORD, count=count, offset=84)
+    if records["attributes"].any():  # per-face colours in some exporters' dialects
+        return None
+    faces = np.arange(3 * count, dtype=np.int64).reshape(-1, 3)
+    mm = UNITS[unit] if unit is not None else UNITS[fmt.unit]
+    v, f, _ = to_pov_frame(records["corners"].reshape(-1, 3), faces, None, mm)
+    part = Part(name=path.name, vertices=v, faces=f, colour_space=fmt.colour_space)
+    return LoadedModel([part], fmt, [path.resolve()], [], mm, [])
+
+
 def _units(scene, fmt: MeshFormat, unit: str | None) -> float:
     if unit is not None:
         return UNITS[unit]
@@ -216,6 +236,9 @@ def load_model(path: str | Path, *, unit: str | None = None) -> LoadedModel:
         raise InputError(f"{str(path)!r} is empty; export the model again")
     if fmt.file_type == "stl":
         _check_stl(path, data)
+
+    if fmt.file_type == "stl" and (fast := _binary_stl(path, data, fmt, unit)) is not None:
+        return fast
 
     import trimesh
 

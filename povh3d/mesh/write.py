@@ -16,6 +16,7 @@ from .._version import __version__
 from ..povray.format import pov_string, pov_vector
 from .load import Part
 from .numbers import format_rows, format_vectors, vector_item
+from .text32 import format_vectors32
 
 DEFAULT_FINISH = "finish { ambient 0.05 diffuse 0.85 specular 0.15 roughness 0.05 }"
 
@@ -60,10 +61,11 @@ def mesh2_text(part: Part, *, smooth: bool, normals: np.ndarray | None, texture_
     texture_file : str or None the image file name the part's UVs look up
     ident : str                the model's identifier (for ``IDENT_Dir``)
     """
+    # POV-Ray keeps vertices and normals as floats: their shortest float32 text (text32.py).
     out = [f"mesh2 {{  // {part.name}\n",
-           _block("vertex_vectors", len(part.vertices), format_vectors(part.vertices))]
+           _block("vertex_vectors", len(part.vertices), format_vectors32(part.vertices))]
     if smooth:
-        out.append(_block("normal_vectors", len(normals), format_vectors(normals)))
+        out.append(_block("normal_vectors", len(normals), format_vectors32(normals)))
     textured = texture_file is not None and part.uv is not None
     if textured:
         out.append(_block("uv_vectors", len(part.uv), format_vectors(part.uv)))
@@ -80,7 +82,7 @@ def mesh2_text(part: Part, *, smooth: bool, normals: np.ndarray | None, texture_
         rows = np.column_stack([faces, index.ravel()])
         out.append(_block("face_indices", len(faces), format_rows(rows, "<%d, %d, %d>, %d", 3)))
     else:
-        out.append(_block("face_indices", len(faces), format_vectors(faces)))
+        out.append(_block("face_indices", len(faces), format_vectors32(faces)))
 
     if textured:
         kind = "png"

@@ -158,9 +158,10 @@ def build_command(job: PovrayJob, binary: str) -> list[str]:
     folder.  Include folders are made absolute here, from the caller's
     working folder.
     """
+    # +V: POV-Ray logs "Rendered N of M pixels" as it goes, which the progress display reads.
     command = [binary, f"+I{SCENE_FILE}", f"+O{OUTPUT_STEM}.png",
                f"+W{job.width}", f"+H{job.height}", f"+FN{job.bit_depth}",
-               f"File_Gamma={job.file_gamma}", "-D", "-V", f"+MI{_image_buffer_mb(job)}"]
+               f"File_Gamma={job.file_gamma}", "-D", "+V", f"+MI{_image_buffer_mb(job)}"]
     # Unquoted, POV-Ray rejects a library path holding a space.
     command += [f"+L{_quote(os.path.abspath(folder))}" for folder in job.include_dirs]
     if job.threads is not None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["parse_error", "parse_render_time", "unwrap"]
+__all__ = ["parse_error", "parse_progress", "parse_render_time", "unwrap"]
 
 #: Column at which POV-Ray wraps its console output.
 WRAP_WIDTH = 80
@@ -33,6 +33,10 @@ _ACCESS = re.compile(r"IO Restrictions prohibit|is not permitted|Permission deni
 _PLAIN = ("Failed to parse command-line option",
           "Cannot create render state output file",
           "Cannot open input file")
+# Verbose (+V) progress: "Rendering frame 2 of 8" (animations), then
+# "Rendered 1024 of 480000 pixels (0%)" lines, ended by \r on a console.
+_PROGRESS = re.compile(r"Rendering frame (?P<frame>\d+) of \d+|Rendered (?P<done>\d+) of (?P<total>\d+) pixels")
+_PIXEL_LINE = re.compile(r"Rendered \d+ of \d+ pixels")
 _SECONDS = re.compile(
     r"^\s*(?:Photon|Radiosity|Trace) Time:.*\((?P<seconds>\d+(?:\.\d+)?) seconds\)")
 
@@ -176,13 +180,45 @@ def parse_render_time(log: str) -> float | None:
     return sum(times) if times else None
 
 
+def parse_progress(text: str, frame: int = 1, share: float = 0.0) -> tuple[int, float]:
+    """Where a verbose (``+V``) POV-Ray run is, after reading `text` of its log.
+
+    Parameters
+    ----------
+    text : str
+        Whole lines of the log, read since the state (`frame`, `share`) was taken.
+    frame : int
+        The frame being rendered, 1-based (1 for a still).
+    share : float
+        Share of that frame's pixels reported rendered, in ``[0, 1]``.
+
+    Returns
+    -------
+    (frame, share) : (int, float)
+        The state after `text`: ``frame - 1 + share`` frames are rendered.
+    """
+    for match in _PROGRESS.finditer(text):
+        if match["frame"] is not None:
+            new = int(match["frame"])
+            if new != frame:  # POV-Ray prints the frame line twice
+                frame, share = new, 0.0
+        elif int(match["total"]) > 0:
+            share = min(1.0, int(match["done"]) / int(match["total"]))
+    return frame, share
+
+
+def _messages(log: str) -> list[str]:
+    """The log's lines without the verbose per-block progress lines."""
+    return [line for line in log.splitlines() if not _PIXEL_LINE.match(line.strip())]
+
+
 def describe_exit(code: int, log: str) -> str:
     if code < 0:
         return f"POV-Ray was killed by signal {-code}"
-    last = next((line.strip() for line in reversed(log.splitlines()) if line.strip()), "")
+    last = next((line.strip() for line in reversed(_messages(log)) if line.strip()), "")
     return f"POV-Ray exited with code {code}" + (f": {last}" if last else "")
 
 
 def tail(log: str, lines: int = 40) -> str:
     """The last ``lines`` lines of a POV-Ray log (what an error carries)."""
-    return "\n".join(log.splitlines()[-lines:])
+    return "\n".join(_messages(log)[-lines:])

@@ -45,6 +45,7 @@ from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, Pov
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
                   povray_conf)
 from .log import describe_exit, parse_error, tail
+from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
 
 #: Environment variable naming the POV-Ray executable to use.
 ENV_VAR = "POVH3D_POVRAY"
@@ -52,7 +53,6 @@ INSTALL_HINT = ("install it with 'sudo apt-get install -y povray' (Debian/Ubuntu
                 f"or set {ENV_VAR}=/path/to/povray")
 
 _DENIED = re.compile(r"Cannot (open|find)")
-_POLL_SECONDS = 0.02
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
 _PR_SET_PDEATHSIG = 1
@@ -119,6 +119,7 @@ class _Child:
     command: list[str]
     process: subprocess.Popen[bytes]
     started: float
+    watch: JobWatch  # its log and images; `early` once stopped with its images complete
     ended: float | None = field(default=None)
 
     @property
@@ -132,7 +133,8 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
              on_progress: Callable[[int, int], None] | None = None,
              binary: str | None = None,
              workdir: str | Path | None = None,
-             should_stop: Callable[[], bool] | None = None) -> list[float]:
+             should_stop: Callable[[], bool] | None = None,
+             on_running: Callable[[dict[int, float]], None] | None = None) -> list[float]:
     """Render jobs with at most `processes` POV-Ray children at once.
 
     Parameters
@@ -153,6 +155,8 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
     should_stop : callable, optional
         Polled while children run; True stops them all and raises
         `RenderInterrupted` (a cancelled task on a Dask worker).
+    on_running : callable, optional
+        Called every ``PROGRESS_SECONDS`` with ``{job index: frames rendered}`` (``watch.LogProgress``).
 
     Returns
     -------
@@ -190,7 +194,7 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
             while pending and len(running) < processes:
                 index, job = pending.popleft()
                 _start(index, job, binary, workdir, running)
-            for child in _wait_for_exits(running, should_stop):
+            for child in _wait_for_exits(running, should_stop, on_running):
                 running.remove(child)
                 seconds[child.index] = _finish(child, on_result)
                 done += 1
@@ -202,6 +206,7 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
     finally:
         _stop(running)
         for child in running:
+            child.watch.close()
             shutil.rmtree(child.folder, ignore_errors=True)
     return seconds
 
@@ -217,7 +222,8 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
         with open(folder / LOG_FILE, "wb") as log, _confinement(job, binary, folder) as fd, \
                 _deferred_interrupt():
             process = _spawn(command, folder, env, log, fd)
-            running.append(_Child(index, job, folder, command, process, time.monotonic()))
+            watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job.frames))
+            running.append(_Child(index, job, folder, command, process, time.monotonic(), watch))
             registered = True
     except BaseException:
         if not registered:
@@ -304,22 +310,33 @@ def _child_setup(parent: int, ruleset_fd: int | None = None) -> None:
         sandbox.restrict_self(ruleset_fd)
 
 
-def _wait_for_exits(running: list[_Child],
-                    should_stop: Callable[[], bool] | None = None) -> list[_Child]:
-    """Wait until a child exits; the exited ones.  Raises on a timeout or a stop."""
+def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | None = None,
+                    on_running: Callable[[dict[int, float]], None] | None = None) -> list[_Child]:
+    """Wait until a child exits (woken by it, not polling); the exited ones.  Raises on a timeout or a stop."""
     while True:
         if should_stop is not None and should_stop():
             raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
+        for child in running:
+            if child.process.poll() is None and child.watch.images_done():
+                _signal_groups([child], signal.SIGKILL)  # only its shutdown is left (JobWatch)
+                child.watch.early = child.process.wait() is not None
         now = time.monotonic()
         exited = [child for child in running if child.process.poll() is not None]
         for child in exited:
             child.ended = now
         if exited:
             return exited
-        for child in running:
-            if child.job.timeout is not None and now - child.started > child.job.timeout:
-                raise _timeout(child)
-        time.sleep(_POLL_SECONDS)
+        timed = [child for child in running if child.job.timeout is not None]
+        wake = [child.started + child.job.timeout - now for child in timed]
+        if any(left < 0 for left in wake):
+            raise _timeout(timed[[left < 0 for left in wake].index(True)])
+        if should_stop is not None:
+            wake.append(STOP_CHECK_SECONDS)
+        if on_running is not None:
+            on_running({child.index: child.watch.progress.frames_rendered() for child in running})
+            wake.append(PROGRESS_SECONDS)
+        wake += [child.watch.recheck for child in running if child.watch.written]
+        sleep_until_exit([c.process.pid for c in running], min(wake, default=None), [c.watch.fd for c in running])
 
 
 def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> float:
@@ -328,12 +345,13 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
         seconds = (child.ended or time.monotonic()) - child.started
         log = child.log
         images = collect_images(child.folder, child.job.frames)
-        if child.process.returncode != 0 or images is None:
+        if (child.process.returncode != 0 and not child.watch.early) or images is None:
             raise _failure(child, log)
         if on_result is not None:
             on_result(JobResult(child.job, images, seconds, log))
         return seconds
     finally:
+        child.watch.close()
         shutil.rmtree(child.folder, ignore_errors=True)
 
 
@@ -366,7 +384,7 @@ def _stop(children: list[_Child]) -> None:
     deadline = time.monotonic() + _GRACE_SECONDS
     try:
         while time.monotonic() < deadline and any(c.process.poll() is None for c in live):
-            time.sleep(_POLL_SECONDS)
+            sleep_until_exit([c.process.pid for c in live if c.process.poll() is None], deadline - time.monotonic())
     except KeyboardInterrupt:
         pass  # a second Ctrl-C: no more grace
     _signal_groups([c for c in live if c.process.poll() is None], signal.SIGKILL)

@@ -59,9 +59,13 @@ def textured(tmp_path_factory):
 
 def test_auto_quality_takes_the_first_rung_that_meets_the_target(textured):
     la = square_array(lx=10, ly=8, nx=4, ny=4)
-    settings, choice = resolve_auto(textured, la, "multi-ortho", RenderSettings(quality="auto", max_error_db=30))
+    reports: list[tuple[int, int]] = []
+    settings, choice = resolve_auto(textured, la, "multi-ortho", RenderSettings(quality="auto", max_error_db=30),
+                                    lambda done, total: reports.append((done, total)))
     assert settings.quality == choice.quality and settings.max_error_db is None
     psnrs = [p for _, p in choice.tried]
+    # the probe's progress: the reference, then each rung tried, out of the whole ladder
+    assert reports == [(k, 1 + len(AUTO_LADDER)) for k in range(1, 2 + len(psnrs))]
     assert psnrs[-1] >= 30 and all(p < 30 for p in psnrs[:-1])
     assert choice.quality == AUTO_LADDER[len(psnrs) - 1]
     with pytest.raises(ConfigError, match="lower --max-error"):

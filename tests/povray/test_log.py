@@ -479,3 +479,30 @@ def test_unwrap_inverts_wrapping(words: list[str]) -> None:
                      "Fatal error in parser: Cannot parse input.", "Render failed"])
     assert unwrap(log) == ["==== [Parsing...] ====", message,
                            "Fatal error in parser: Cannot parse input.", "Render failed"]
+
+
+# Verbose (+V) output of Debian's POV-Ray 3.7.0.10 rendering frames 1..3 of 200x100 (abridged).
+VERBOSE_ANIMATION = ("Rendering frame 1 of 3\nRendering frame 1 of 3\n==== [Parsing...] ====\n"
+                     "Rendered 4096 of 20000 pixels (20%)\rRendered 20000 of 20000 pixels (100%)\n"
+                     "Render Statistics\nRendering frame 2 of 3\n==== [Parsing...] ====\n"
+                     "Rendered 1024 of 20000 pixels (5%)\rRendered 5000 of 20000 pixels (25%)\r")
+
+
+def test_parse_progress_counts_finished_frames_and_the_current_share():
+    from povh3d.povray.log import parse_progress
+
+    assert parse_progress("") == (1, 0.0)
+    assert parse_progress(VERBOSE_ANIMATION) == (2, 0.25)
+    # read in pieces, carrying the state: the same answer
+    first, rest = VERBOSE_ANIMATION[:120], VERBOSE_ANIMATION[120:]
+    assert parse_progress(rest, *parse_progress(first)) == (2, 0.25)
+    # the repeated "frame 1" line does not reset the share already read
+    assert parse_progress("Rendering frame 1 of 3\n", 1, 0.5) == (1, 0.5)
+
+
+def test_error_tail_leaves_out_the_pixel_counts():
+    from povh3d.povray.log import describe_exit, tail
+
+    log = VERBOSE_ANIMATION + "\nFatal error in renderer: Out of memory.\n"
+    assert "Rendered" not in tail(log) and "Out of memory" in tail(log)
+    assert describe_exit(1, VERBOSE_ANIMATION) == "POV-Ray exited with code 1: ==== [Parsing...] ===="

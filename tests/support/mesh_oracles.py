@@ -2,6 +2,8 @@
 
 The parser is written from POV-Ray's mesh2 syntax, not from the writer's code:
 it reads numbers with ``float``/``int`` and returns arrays to compare exactly.
+Vertices and normals are kept as POV-Ray keeps them, in single precision
+(``pov_single``: each number parsed to a double, then rounded to a float).
 """
 
 from __future__ import annotations
@@ -15,6 +17,11 @@ from povh3d.mesh.raster import Window
 from povh3d.povray.process import PovrayJob, run_jobs
 
 _VEC = re.compile(r"<([^<>]*)>")
+
+
+def pov_single(values) -> np.ndarray:
+    """``values`` as POV-Ray stores a mesh2's vertices and normals: float32, returned as float64."""
+    return np.asarray(values, dtype=np.float64).astype(np.float32).astype(np.float64)
 
 
 def _numbers(text: str, kind=float) -> list[list]:
@@ -35,7 +42,7 @@ def parse_mesh2(body: str) -> dict:
             count, text = found
             arr = np.array(_numbers(text, kind), dtype=np.float64).reshape(-1, width)
             assert len(arr) == count, f"{key}: count {count} but {len(arr)} vectors"
-            out[key] = arr
+            out[key] = arr if key == "uv_vectors" else pov_single(arr)
     count, text = _block(body, "face_indices")
     # "<a, b, c>" optionally followed by 1 or 3 texture indices.
     rows = re.findall(r"<([^<>]*)>((?:\s*,\s*\d+){0,3})", text)

@@ -1,0 +1,75 @@
+"""POV-Ray's version remembered across runs, so a render does not start
+``povray --version`` (about 0.2 s) every time.
+
+The version of a binary is stored in a small JSON file of the cache folder,
+keyed on the binary's resolved path, size and modification time: replacing
+or upgrading POV-Ray changes the key, so a stale version is never used.  The
+memory is only an optimisation: an unreadable or unwritable file is ignored
+and the version is asked again.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+FILE_NAME = "povray-version.json"
+#: Entries kept: one per binary seen, a handful at most on any machine.
+_MAX_ENTRIES = 16
+
+
+def binary_key(binary: str) -> str | None:
+    """``"path|size|mtime_ns"`` of the file `binary` resolves to; None if it cannot be read."""
+    try:
+        path = os.path.realpath(binary)
+        stat = os.stat(path)
+    except OSError:
+        return None
+    return f"{path}|{stat.st_size}|{stat.st_mtime_ns}"
+
+
+def remembered_version(binary: str, folder: str | Path, ask: Callable[[str], str]) -> str:
+    """The version of `binary`: from ``folder/povray-version.json`` if known, else ``ask(binary)``,
+    then remembered there (best effort)."""
+    key = binary_key(binary)
+    if key is None:
+        return ask(binary)
+    path = Path(folder) / FILE_NAME
+    known = _read(path)
+    version = known.get(key)
+    if isinstance(version, str) and version:
+        return version
+    version = ask(binary)
+    known = {k: v for k, v in known.items() if k != key}
+    kept = dict(list(known.items())[-(_MAX_ENTRIES - 1):])
+    _write(path, {**kept, key: version})
+    return version
+
+
+def _read(path: Path) -> dict[str, object]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _write(path: Path, data: dict[str, object]) -> None:
+    """Atomically (a rename), so parallel renders never read half a file; errors ignored."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=".version-", dir=path.parent)
+    except OSError:
+        return
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            json.dump(data, f)
+        os.replace(tmp, path)
+    except OSError:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass

@@ -1,0 +1,62 @@
+"""POV-Ray's version remembered across runs, per binary (issue 17)."""
+
+from __future__ import annotations
+
+import json
+import os
+
+from povh3d.engine.frames import LocalRunner
+from povh3d.povray import process
+from povh3d.povray.version_memo import FILE_NAME, remembered_version
+
+
+def _fake_povray(tmp_path, version="3.7.0.10.unofficial"):
+    """A stand-in ``povray`` that prints a version and counts its runs."""
+    binary = tmp_path / "povray"
+    binary.write_text(f"#!/bin/sh\necho x >> {tmp_path / 'runs'}\necho 'POV-Ray {version}' >&2\n")
+    binary.chmod(0o755)
+    return binary
+
+
+def _runs(tmp_path) -> int:
+    path = tmp_path / "runs"
+    return len(path.read_text().splitlines()) if path.exists() else 0
+
+
+def test_asked_once_then_remembered_until_the_binary_changes(tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("POVH3D_CACHE", str(cache))
+    binary = _fake_povray(tmp_path)
+    for _ in range(3):  # three "processes": the in-process memory is cleared each time
+        process._version.cache_clear()
+        assert LocalRunner(str(binary)).version == "3.7.0.10.unofficial"
+    assert _runs(tmp_path) == 1
+    assert list(json.loads((cache / FILE_NAME).read_text()).values()) == ["3.7.0.10.unofficial"]
+    # an upgrade in place changes the binary's size and mtime: asked again
+    _fake_povray(tmp_path, "3.7.1.0")
+    os.utime(binary, ns=(1, 10**18))
+    process._version.cache_clear()
+    assert LocalRunner(str(binary)).version == "3.7.1.0"
+    assert _runs(tmp_path) == 2
+
+
+def test_an_unwritable_or_corrupt_memory_is_ignored(tmp_path):
+    asked = []
+
+    def ask(binary):
+        asked.append(binary)
+        return "3.7.0.10"
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    # the folder cannot be created (a file is in the way): the version is still found, each time
+    assert remembered_version("/bin/sh", blocker / "cache", ask) == "3.7.0.10"
+    assert remembered_version("/bin/sh", blocker / "cache", ask) == "3.7.0.10"
+    assert len(asked) == 2
+    (tmp_path / FILE_NAME).write_text("{not json")
+    assert remembered_version("/bin/sh", tmp_path, ask) == "3.7.0.10"
+    assert remembered_version("/bin/sh", tmp_path, ask) == "3.7.0.10"
+    assert len(asked) == 3  # rewritten after the corrupt read, then used
+    # a binary that cannot be found is not remembered, only asked
+    assert remembered_version(str(tmp_path / "nowhere"), tmp_path, ask) == "3.7.0.10"
+    assert len(asked) == 4

@@ -1,0 +1,115 @@
+"""Waiting on POV-Ray children without polling, and reading their progress (issue 17)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+
+from povh3d.povray.job import collect_images
+from povh3d.povray.watch import LogProgress, sleep_until_exit
+
+
+def _child(seconds: float) -> int:
+    """A child process that sleeps `seconds` and exits (not reaped until the test waits)."""
+    pid = os.fork()
+    if pid == 0:
+        time.sleep(seconds)
+        os._exit(0)
+    return pid
+
+
+def test_an_exit_wakes_the_wait_at_once():
+    pid = _child(0.3)
+    try:
+        start = time.monotonic()
+        sleep_until_exit([pid], 20.0)
+        woke = time.monotonic() - start
+        assert 0.2 < woke < 5.0  # woken by the exit, not by the 20 s limit
+    finally:
+        os.waitpid(pid, 0)
+
+
+def test_the_limit_ends_the_wait_while_children_run():
+    pid = _child(30.0)
+    try:
+        start = time.monotonic()
+        sleep_until_exit([pid], 0.2)
+        assert 0.15 < time.monotonic() - start < 5.0
+    finally:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+
+
+def test_an_exited_unreaped_child_returns_at_once():
+    pid = _child(0.0)
+    time.sleep(0.3)  # a zombie now
+    try:
+        start = time.monotonic()
+        sleep_until_exit([pid], None)
+        assert time.monotonic() - start < 1.0
+    finally:
+        os.waitpid(pid, 0)
+
+
+def test_log_progress_reads_whole_lines_as_they_come(tmp_path):
+    log = tmp_path / "povray.log"
+    progress = LogProgress(log, frames=2)
+    assert progress.frames_rendered() == 0.0  # no log yet
+    with open(log, "w") as f:
+        f.write("Rendering frame 1 of 2\nRendered 50 of 100 pixels (50%)\rRendered 7")
+        f.flush()
+        assert progress.frames_rendered() == 0.5  # "Rendered 7" is not a whole line yet
+        f.write("5 of 100 pixels (75%)\r")
+        f.flush()
+        assert progress.frames_rendered() == 0.75
+        f.write("Rendered 100 of 100 pixels (100%)\nRendering frame 2 of 2\nRendered 10 of 100 pixels (10%)\r")
+        f.flush()
+        assert abs(progress.frames_rendered() - 1.1) < 1e-12
+
+
+def _png_bytes() -> bytes:
+    import io
+
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    Image.new("RGB", (2, 2)).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def test_images_done_needs_complete_images_and_the_log_s_last_count(tmp_path):
+    from povh3d.povray.watch import JobWatch
+
+    watch = JobWatch(tmp_path / "povray.log", 1, lambda: collect_images(tmp_path, 1))
+    assert watch.fd is not None  # Linux: inotify
+    try:
+        assert not watch.images_done()  # nothing written
+        png = _png_bytes()
+        (tmp_path / "frame.png").write_bytes(png[:-4])  # cut short: no complete end chunk
+        assert not watch.images_done()
+        (tmp_path / "povray.log").write_text("Rendered 2 of 4 pixels (50%)\n")
+        (tmp_path / "frame.png").write_bytes(png)
+        assert not watch.images_done()  # the image is there, the log not at 100 % yet
+        with open(tmp_path / "povray.log", "a") as f:
+            f.write("Rendered 4 of 4 pixels (100%)\n")
+        assert watch.images_done()
+    finally:
+        watch.close()
+
+
+def test_images_done_gives_up_without_the_log_s_confirmation(tmp_path):
+    from povh3d.povray.watch import JobWatch
+
+    watch = JobWatch(tmp_path / "povray.log", 2, lambda: collect_images(tmp_path, 2))
+    try:
+        (tmp_path / "frame1.png").write_bytes(_png_bytes())
+        assert not watch.images_done() and not watch.written  # one of two frames
+        (tmp_path / "frame2.png").write_bytes(_png_bytes())
+        (tmp_path / "povray.log").write_text("Rendering frame 1 of 2\nRendered 4 of 4 pixels (100%)\n")
+        results = [watch.images_done() for _ in range(100)]
+        assert not any(results)  # frame 2 never reported: the runner waits for the exit instead
+        assert watch.fd is None and not watch.written
+    finally:
+        watch.close()
