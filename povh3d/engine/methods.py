@@ -38,7 +38,7 @@ from .cropped import render_cropped_tiles
 from .batch import FrameBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
-from .single_stage import SingleStagePlan, default_depth, lenslet_for
+from .single_stage import SingleStagePlan, default_depth, lenslet_for, supersamples
 
 
 @dataclass(frozen=True)
@@ -98,8 +98,8 @@ def _pinhole(lens_array: LensArray, back_off: float, samples: np.ndarray) -> Met
 
 
 def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *,
-                  lenslet: str, ior: float | None) -> MethodPlan:
-    plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off)
+                  lenslet: str, ior: float | None, supersample: int = 1) -> MethodPlan:
+    plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off, supersample)
     return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
 
 
@@ -121,6 +121,9 @@ class Method:
     takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
     # Whether it can trace only the lenses objects can reach (``cropped``).
     crops: bool = False
+    # Methods that antialias inside each pixel themselves: sub-samples per axis for a
+    # quality, passed to ``plan`` as ``supersample`` while POV-Ray traces point-sampled.
+    supersamples: Callable[[Quality], int] | None = None
 
     def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
         """``given`` (None values count as not given) over the defaults; unknown names refused."""
@@ -141,7 +144,8 @@ METHODS: dict[str, Method] = {
                           round_back_off=lambda la, b: bank_back_off(la, b) if la.views else b),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
-    "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth),
+    "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
+                           supersamples=supersamples),
 }
 
 
@@ -179,9 +183,16 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     """
     method = get_method(name)
     options = method.resolve_options(name, options)
+    asked = settings.spec
     back_off = method.round_back_off(lens_array, settings.back_off or method.default_back_off(lens_array))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if quality != settings.spec:
+        settings = replace(settings, quality=quality)
+    plan_options = dict(options)
+    if method.supersamples is not None:
+        # POV-Ray point-samples; the method spreads its own samples inside each pixel.
+        plan_options["supersample"] = method.supersamples(asked)
+        quality = Quality(max_trace_level=quality.max_trace_level)
         settings = replace(settings, quality=quality)
     samples = quality.samples()
     header = display_header(lens_array)
@@ -198,7 +209,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         if tiles.tiled is not None:
             h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats
     if h3d is None:
-        plan = method.plan(lens_array, back_off, samples, **options)
+        plan = method.plan(lens_array, back_off, samples, **plan_options)
         images, stats = trace(plan.batch, name, progress)
         h3d, record = plan.assemble(images), plan.record
     panel_shape = (lens_array.panel.height, lens_array.panel.width)

@@ -64,9 +64,11 @@ from fractions import Fraction
 from ..image.elemental import cell_contains, sample_turned_bank
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray, Panel, pixel_rays
+from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet
 from .batch import FrameBatch
+from .quality import Quality
 
 APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
 
@@ -139,10 +141,10 @@ def _unit(grid: str, xs: set, pairs: set) -> int:
     return math.lcm(*(f.denominator for f in terms))
 
 
-def capture_bank(lens_array: LensArray) -> CaptureBank:
+def capture_bank(lens_array: LensArray, density: int = 1) -> CaptureBank:
     """The capture grid and re-centring unit of a hex or fractional-PPL array.
 
-    Among the candidate grids (``N, M`` from the PPL up, both phases) the one
+    Among the candidate grids (``N, M`` from ``density`` samples per pixel up, both phases) the one
     with the fewest capture pixels at one unit of depth, halved for grids that
     hit every display offset exactly (no direction interpolation left).
     """
@@ -152,8 +154,8 @@ def capture_bank(lens_array: LensArray) -> CaptureBank:
     du = ((X - centres[..., 0]) / la.pitch_x)[inside]
     dv = ((Y - centres[..., 1]) / la.pitch_y)[inside]
     lent = la.grid == "lenticular"
-    xs = _axis_candidates(la.ppl_x, du, even=la.grid == "hex")
-    ys = [(1, 0.0, True)] if lent else _axis_candidates(la.ppl_y, dv, even=False)
+    xs = _axis_candidates(la.ppl_x * density, du, even=la.grid == "hex")
+    ys = [(1, 0.0, True)] if lent else _axis_candidates(la.ppl_y * density, dv, even=False)
     best = None
     for n, a, ex_x in xs:
         for m, b, ex_y in ys:
@@ -174,6 +176,24 @@ def capture_bank(lens_array: LensArray) -> CaptureBank:
     return best[1]
 
 
+def supersamples(quality: Quality) -> int:
+    """Sub-pixel samples per axis with which single-stage antialiases at ``quality``.
+
+    POV-Ray's adaptive antialiasing samples pixel corners, and every corner of a
+    capture pixel at a lens border lies on that border, so its rays graze the
+    neighbouring lenslet and the border pixels come out a mix of two views.  The
+    method therefore renders point-sampled and supersamples itself, strictly
+    inside each pixel's own lens: ``k x k`` sub-pixel-centred samples (``+R``
+    of the adaptive levels, 4 for footprint-sampled levels, the sub-views per
+    axis where a level asks for them), averaged in linear light.
+    """
+    if quality.footprint:
+        return 4
+    if quality.subviews > 1:
+        return quality.subviews
+    return quality.aa_depth if quality.antialias is not None else 1
+
+
 def default_depth(lens_array: LensArray) -> float:
     """Default re-centring depth: one unit (module doc, 4 and 5)."""
     return recentre_unit(lens_array)
@@ -188,14 +208,22 @@ class SingleStagePlan:
     lens_array : LensArray     the display's array (docs/geometry.md)
     lenslet : Lenslet
     depth : float, mm          ``D``: the focal plane of the virtual array is ``z = -D``
+    supersample : int          ``k``: sub-pixel samples per axis, averaged in linear light
+                               (``supersamples``); whole PPL: ``k x k`` capture pixels per
+                               pixel; hex / fractional: ``k`` times denser capture samples,
+                               each display pixel the mean of ``k x k`` sub-directions
     """
 
     lens_array: LensArray
     lenslet: Lenslet
     depth: float = 0.0
+    supersample: int = 1
 
     def __post_init__(self) -> None:
-        unit = recentre_unit(self.lens_array)
+        if isinstance(self.supersample, bool) or not isinstance(self.supersample, int) or self.supersample < 1:
+            raise ConfigError(f"single-stage supersampling must be a whole number of at least 1, got {self.supersample!r}")
+        unit = (self.lens_array.focal * capture_bank(self.lens_array, self.supersample).unit
+                if self.lens_array.views is None else recentre_unit(self.lens_array))
         if self.depth < 0 or not math.isfinite(self.depth):
             raise ConfigError(f"the front clearance must be 0 or more mm, got {self.depth!r}")
         if self.depth > 0:
@@ -204,12 +232,16 @@ class SingleStagePlan:
                 raise ConfigError(f"single-stage depth {self.depth!r} mm is not a multiple of {unit!r} mm")
 
     @classmethod
-    def for_clearance(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float) -> SingleStagePlan:
+    def for_clearance(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float,
+                      supersample: int = 1) -> SingleStagePlan:
         """The plan whose depth is the smallest exact ``D >= clearance`` (0 for no clearance)."""
-        unit = recentre_unit(lens_array)
+        if lens_array.views is None:
+            unit = lens_array.focal * capture_bank(lens_array, supersample).unit
+        else:
+            unit = recentre_unit(lens_array)
         if clearance <= 0:
-            return cls(lens_array, lenslet, 0.0)
-        return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9))
+            return cls(lens_array, lenslet, 0.0, supersample)
+        return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9), supersample)
 
     # -- view shifts ------------------------------------------------------------
     @cached_property
@@ -233,7 +265,7 @@ class SingleStagePlan:
     @cached_property
     def bank(self) -> CaptureBank | None:
         """The lens-aligned capture grid (hex, fractional PPL), None with whole PPL."""
-        return capture_bank(self.lens_array) if self.lens_array.views is None else None
+        return capture_bank(self.lens_array, self.supersample) if self.lens_array.views is None else None
 
     @property
     def extension(self) -> tuple[int, int]:
@@ -316,10 +348,16 @@ class SingleStagePlan:
             "right": (width_mm, 0.0, 0.0), "up": (0.0, height_mm, 0.0),
         }
 
+    @property
+    def camera_supersample(self) -> int:
+        """Capture pixels per panel pixel and axis: ``k`` with whole PPL, else 1 (denser bank)."""
+        return self.supersample if self.bank is None else 1
+
     def batch(self) -> FrameBatch:
-        panel = self.capture_array.panel
+        panel, k = self.capture_array.panel, self.camera_supersample
+        # The camera keeps its mm extent: k x k sub-pixels tile each pixel, centred in it.
         return FrameBatch("single_stage.pov.j2", self.template_context(), [{}],
-                          panel.width, panel.height, processes=1)
+                          panel.width * k, panel.height * k, processes=1)
 
     # -- from the capture to the H3D image ------------------------------------------
     def assemble(self, capture: np.ndarray) -> np.ndarray:
@@ -338,7 +376,13 @@ class SingleStagePlan:
         if self.bank is not None:
             cap = self.capture_array.panel
             return sample_turned_bank(capture, la, (cap.pitch_x, cap.pitch_y), self.bank.phase,
-                                      1 + self.depth / la.focal, self.camera_offset)
+                                      1 + self.depth / la.focal, self.camera_offset, self.supersample)
+        k = self.camera_supersample
+        if k > 1:
+            # Every sub-pixel lies strictly inside its pixel, so inside its lens.
+            h, w, c = capture.shape
+            blocks = capture.reshape(h // k, k, w // k, k, c).transpose(1, 3, 0, 2, 4)
+            capture = mean_in_linear_light(blocks.reshape(k * k, h // k, w // k, c))
         ny, nx = la.views
         cap = self.capture_array
         c = capture.shape[2]
@@ -359,6 +403,8 @@ class SingleStagePlan:
         return {"lenslet": self.lenslet.describe(), "focal_plane_z_mm": -self.depth,
                 "principal_plane_z_mm": -self.depth - self.lenslet.focal,
                 "capture_lenses": [cap.lenses_x, cap.lenses_y],
-                "capture_size_px": [cap.panel.width, cap.panel.height],
+                "capture_size_px": [cap.panel.width * self.camera_supersample,
+                                    cap.panel.height * self.camera_supersample],
+                "supersamples_per_pixel": [self.supersample, self.supersample],
                 **({"capture_samples_per_lens": list(self.bank.samples),
                     "capture_sample_phase": list(self.bank.phase)} if self.bank is not None else {})}
