@@ -51,11 +51,10 @@ class MethodPlan:
 
 
 def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
-    if lens_array.grid == "hex":
-        lens_array.require_views()  # raises "render hex with single-stage"
-    if not lens_array.views:  # fractional PPL: one quad per lens
-        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [camera_mesh(lens_array, back_off)]),
-                          stack_frames)
+    if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
+        mesh = camera_mesh(lens_array, back_off)
+        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
+                          lambda images: mesh.crop(stack_frames(images)))
     # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples)),
                       lambda images: banks_to_h3d(lens_array, stack_frames(images)))

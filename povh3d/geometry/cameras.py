@@ -9,13 +9,13 @@ so that objects floating in front of the screen are seen.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import ConfigError
 from .footprint import CENTRE, GRID
-from .lens_array import LensArray
+from .lens_array import LensArray, pixel_rays
 
 # POV-Ray 3.7 ignores surfaces nearer than 1e-4 mm or further than 1e7 mm along a
 # ray from its start (measured with a plane: missed at 0.95e-4 mm, seen at
@@ -140,6 +140,15 @@ class CameraMesh:
     faces: np.ndarray
     image_size: tuple[int, int]
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    margin: tuple[int, int] = (0, 0)  # (columns, rows) of canvas around the panel, cut off after
+
+    def crop(self, image: np.ndarray) -> np.ndarray:
+        """The panel out of a rendered frame (extra first row and last column already cut)."""
+        mx, my = self.margin
+        if not (mx or my):
+            return image
+        w, h = self.image_size
+        return image[my:h - 1 - my, mx:w - 1 - mx]
 
 
 # How far lens quads are moved off pixel centres that lie on lens borders, in
@@ -171,6 +180,8 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     by about 0.006 pixel (6.5 PPL, f = 1.5 mm, s = 0.1 mm).
     """
     check_clearance(lens_array, back_off)
+    if lens_array.rotation or lens_array.grid == "hex":
+        return lattice_mesh(lens_array, back_off)
     panel = lens_array.panel
     W, H = panel.width, panel.height
     sx, sy = panel.pitch_x, panel.pitch_y
@@ -210,6 +221,74 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     return _quad_mesh(origin_x, origin_y, u, v, col, row, (W, H), back_off, f)
 
 
+def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+    """``camera_mesh`` of a rotated lattice, or a hex one: one polygon per lens cell.
+
+    The cell of every lens (square: its pitch rectangle; hex: its hexagon, all six
+    corners ``px / sqrt(3)`` from the centre; lenticular: a strip ``px`` wide along
+    the lenticule, past the panel at both ends) is laid out in the lattice's own
+    frame and turned by ``rotation``.  Origin and direction stay linear in the
+    offset ``(u, v)`` and every corner offset of a lens has one length, so the face
+    interpolation is exact as in ``camera_mesh``.  A pixel centre lies on a cell
+    edge only by accident of a rotated lattice, and no tie shift is made for it.
+
+    Only cells that own a pixel are written.  POV-Ray aborts on UV outside 0..1,
+    and cells at the panel's edge reach past it, so the image is a canvas
+    ``margin`` pixels larger on every side (``CameraMesh.crop`` cuts it back).
+    """
+    la = lens_array
+    panel = la.panel
+    W, H = panel.width, panel.height
+    f = la.focal
+    hx, hy = la.pitch_x / 2, la.pitch_y / 2
+    X, Y = la.to_lattice(*np.meshgrid(*panel.pixel_centres()))
+    owner, inside = _pixel_owners(la, X, Y)
+    if la.grid == "lenticular":
+        # Each strip runs along its lenticule as far as its pixels, and a pixel diagonal on.
+        cx = la.lattice_centres()[0, :, 0]
+        keep = np.unique(owner[inside] % la.lenses_x)
+        ends = np.array([(Y[inside][owner[inside] % la.lenses_x == j].min(),
+                          Y[inside][owner[inside] % la.lenses_x == j].max()) for j in keep])
+        reach = math.hypot(panel.pitch_x, panel.pitch_y)
+        cx = cx[keep]
+        cu = np.array([-hx, hx, hx, -hx])
+        lx = cx[:, None] + cu[None, :]
+        ly = np.stack([ends[:, 0] - reach] * 2 + [ends[:, 1] + reach] * 2, axis=1)  # along the lenticule
+        ou, ov = np.broadcast_to(cu, lx.shape), np.zeros(lx.shape)  # v across the lenticule is 0
+        olx, oly = cx[:, None] - ou * (back_off / f), ly
+    else:
+        c = la.lattice_centres().reshape(-1, 2)[np.unique(owner[inside])]
+        if la.grid == "hex":
+            r = la.pitch_x / math.sqrt(3)
+            cu = np.array([-hx, 0.0, hx, hx, 0.0, -hx])
+            cv = np.array([-r / 2, -r, -r / 2, r / 2, r, r / 2])
+        else:
+            cu, cv = np.array([-hx, hx, hx, -hx]), np.array([-hy, -hy, hy, hy])
+        lx, ly = c[:, 0:1] + cu[None, :], c[:, 1:2] + cv[None, :]
+        ou, ov = np.broadcast_to(cu, lx.shape), np.broadcast_to(cv, lx.shape)
+        olx, oly = c[:, 0:1] - ou * (back_off / f), c[:, 1:2] - ov * (back_off / f)
+    x, y = la.from_lattice(lx, ly)
+    u, v = la.from_lattice(ou, ov)
+    origin_x, origin_y = la.from_lattice(olx, oly)
+    col = x / panel.pitch_x + W / 2 - 0.5
+    row = H / 2 - 0.5 - y / panel.pitch_y
+    mx = max(0, math.ceil(max(-col.min(), col.max() - (W - 1)))) + 1
+    my = max(0, math.ceil(max(-row.min(), row.max() - (H - 1)))) + 1
+    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), back_off, f)
+    return replace(mesh, margin=(mx, my))
+
+
+def _pixel_owners(la: LensArray, X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Flat lens index ``i * Lx + j`` of the lens owning each pixel, and whether one does."""
+    centres, _, inside = pixel_rays(la)
+    lattice = la.lattice_centres()
+    cx, cy = la.to_lattice(centres[..., 0], centres[..., 1])
+    j = np.rint((cx - lattice[0, 0, 0]) / la.pitch_x - (np.rint((lattice[0, 0, 1] - cy) / la.pitch_y) % 2) * 0.5 * (la.grid == "hex"))
+    i = np.zeros_like(j) if la.grid == "lenticular" else np.rint((lattice[0, 0, 1] - cy) / la.pitch_y)
+    owner = np.where(inside, i * la.lenses_x + j, -1)
+    return owner.astype(np.int64), inside
+
+
 def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.ndarray,
                col: np.ndarray, row: np.ndarray, size: tuple[int, int], back_off: float,
                focal: float, scale: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> CameraMesh:
@@ -227,8 +306,10 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
     uv = np.stack(full(col / (W + 1), 1.0 - (row + 1.0) / (H + 1)), axis=-1)
     vertices = np.stack(full(origin_x, origin_y, -back_off), axis=-1).reshape(-1, 3)
     normals = np.stack(full(u, v, focal), axis=-1).reshape(-1, 3)
-    base = 4 * np.arange(shape[0])[:, None]
-    faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
+    # A convex polygon per lens (quads; hexagons) as a fan of triangles from corner 0.
+    n = shape[1]
+    base = n * np.arange(shape[0])[:, None]
+    faces = np.concatenate([base + [0, t, t + 1] for t in range(1, n - 1)], axis=1).reshape(-1, 3)
     return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1),
                       tuple(float(a) for a in scale))
 
