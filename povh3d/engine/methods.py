@@ -26,9 +26,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
-from ..geometry.cameras import (bank_back_off, camera_mesh, check_clearance, default_back_off,
+from ..geometry.cameras import (bank_back_off, check_clearance, default_back_off,
                                 ortho_view_frames, pinhole_frames, stack_frames, view_bank_frames)
 from ..geometry.crop import CropSettings
+from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
@@ -38,7 +39,7 @@ from .cropped import render_cropped_tiles
 from .batch import FrameBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
-from .single_stage import SingleStagePlan, default_depth, lenslet_for, supersamples
+from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
 
 @dataclass(frozen=True)
@@ -52,7 +53,7 @@ class MethodPlan:
 
 def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
     if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
-        mesh = camera_mesh(lens_array, back_off)
+        mesh = lens_mesh(lens_array, back_off)
         return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
                           lambda images: mesh.crop(stack_frames(images)))
     # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
@@ -102,6 +103,24 @@ def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *
     return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
 
 
+def single_stage_supersamples(quality: Quality) -> int:
+    """Sub-pixel samples per axis with which single-stage antialiases at ``quality``.
+
+    POV-Ray's adaptive antialiasing samples pixel corners, and every corner of a
+    capture pixel at a lens border lies on that border, so its rays graze the
+    neighbouring lenslet and the border pixels come out a mix of two views.  The
+    method therefore renders point-sampled and supersamples itself, strictly
+    inside each pixel's own lens: ``k x k`` sub-pixel-centred samples (``+R``
+    of the adaptive levels, 4 for footprint-sampled levels, the sub-views per
+    axis where a level asks for them), averaged in linear light.
+    """
+    if quality.footprint:
+        return 4
+    if quality.subviews > 1:
+        return quality.subviews
+    return quality.aa_depth if quality.antialias is not None else 1
+
+
 @dataclass(frozen=True)
 class Method:
     """A rendering method and what it supports.
@@ -144,7 +163,7 @@ METHODS: dict[str, Method] = {
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
-                           supersamples=supersamples),
+                           supersamples=single_stage_supersamples),
 }
 
 

@@ -68,7 +68,6 @@ from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet
 from .batch import FrameBatch
-from .quality import Quality
 
 APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
 
@@ -79,7 +78,7 @@ def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None =
                    lens_array.pitch_y, lens_array.focal, ior)
 
 
-def recentre_unit(lens_array: LensArray) -> float:
+def recentre_unit(lens_array: LensArray, density: int = 1) -> float:
     """Smallest depth ``D`` (mm) at which every view shifts by whole lenses; 0 if none.
 
     ``u_k D / (f px) = (k + 0.5 - Nx/2) D / (f Nx)`` is whole for every ``k`` when
@@ -87,8 +86,8 @@ def recentre_unit(lens_array: LensArray) -> float:
     vertically (not for lenticular sheets, whose rays keep their row).
     """
     views = lens_array.views
-    if views is None:
-        return lens_array.focal * capture_bank(lens_array).unit
+    if views is None:  # the capture bank's, at ``density`` samples per pixel
+        return lens_array.focal * capture_bank(lens_array, density).unit
     ny, nx = views
     steps = [nx if nx % 2 else 2 * nx]
     if not lens_array.unidirectional:
@@ -151,8 +150,9 @@ def capture_bank(lens_array: LensArray, density: int = 1) -> CaptureBank:
     la = lens_array
     centres, _, inside = pixel_rays(la)
     X, Y = np.meshgrid(*la.panel.pixel_centres())
-    du = ((X - centres[..., 0]) / la.pitch_x)[inside]
-    dv = ((Y - centres[..., 1]) / la.pitch_y)[inside]
+    # Offsets in the lattice's own frame: the capture grid is aligned to the (turned) lenses.
+    du, dv = la.to_lattice(X - centres[..., 0], Y - centres[..., 1])
+    du, dv = (du / la.pitch_x)[inside], (dv / la.pitch_y)[inside]
     lent = la.grid == "lenticular"
     xs = _axis_candidates(la.ppl_x * density, du, even=la.grid == "hex")
     ys = [(1, 0.0, True)] if lent else _axis_candidates(la.ppl_y * density, dv, even=False)
@@ -174,24 +174,6 @@ def capture_bank(lens_array: LensArray, density: int = 1) -> CaptureBank:
             if best is None or cost < best[0]:
                 best = (cost, CaptureBank((n, m), (a, b), t, offsets))
     return best[1]
-
-
-def supersamples(quality: Quality) -> int:
-    """Sub-pixel samples per axis with which single-stage antialiases at ``quality``.
-
-    POV-Ray's adaptive antialiasing samples pixel corners, and every corner of a
-    capture pixel at a lens border lies on that border, so its rays graze the
-    neighbouring lenslet and the border pixels come out a mix of two views.  The
-    method therefore renders point-sampled and supersamples itself, strictly
-    inside each pixel's own lens: ``k x k`` sub-pixel-centred samples (``+R``
-    of the adaptive levels, 4 for footprint-sampled levels, the sub-views per
-    axis where a level asks for them), averaged in linear light.
-    """
-    if quality.footprint:
-        return 4
-    if quality.subviews > 1:
-        return quality.subviews
-    return quality.aa_depth if quality.antialias is not None else 1
 
 
 def default_depth(lens_array: LensArray) -> float:
@@ -220,10 +202,10 @@ class SingleStagePlan:
     supersample: int = 1
 
     def __post_init__(self) -> None:
-        if isinstance(self.supersample, bool) or not isinstance(self.supersample, int) or self.supersample < 1:
-            raise ConfigError(f"single-stage supersampling must be a whole number of at least 1, got {self.supersample!r}")
-        unit = (self.lens_array.focal * capture_bank(self.lens_array, self.supersample).unit
-                if self.lens_array.views is None else recentre_unit(self.lens_array))
+        k = self.supersample
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+            raise ConfigError(f"single-stage supersampling must be a whole number of at least 1, got {k!r}")
+        unit = recentre_unit(self.lens_array, self.supersample)
         if self.depth < 0 or not math.isfinite(self.depth):
             raise ConfigError(f"the front clearance must be 0 or more mm, got {self.depth!r}")
         if self.depth > 0:
@@ -235,10 +217,7 @@ class SingleStagePlan:
     def for_clearance(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float,
                       supersample: int = 1) -> SingleStagePlan:
         """The plan whose depth is the smallest exact ``D >= clearance`` (0 for no clearance)."""
-        if lens_array.views is None:
-            unit = lens_array.focal * capture_bank(lens_array, supersample).unit
-        else:
-            unit = recentre_unit(lens_array)
+        unit = recentre_unit(lens_array, supersample)
         if clearance <= 0:
             return cls(lens_array, lenslet, 0.0, supersample)
         return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9), supersample)
@@ -295,13 +274,19 @@ class SingleStagePlan:
             ex, ey = self.extension
             lx, ly = la.lenses_x + 2 * ex, la.lenses_y + 2 * ey
             if la.grid == "lenticular":
-                panel = Panel(lx * n + 2, la.panel.height, la.pitch_x / n, la.panel.pitch_y)
+                rows = la.panel.height
+                if la.rotation:  # the turned panel reaches further along the lenticules
+                    (w_mm, h_mm), t = la.panel.size_mm, math.radians(la.rotation)
+                    rows = math.ceil((w_mm * abs(math.sin(t)) + h_mm * math.cos(t)) / la.panel.pitch_y) + 2
+                    rows += (rows - la.panel.height) % 2  # keep rows centred as the panel's
+                ly = rows
+                panel = Panel(lx * n + 2, rows, la.pitch_x / n, la.panel.pitch_y)
             else:
                 extra = n // 2 if la.grid == "hex" and ly > 1 else 0
                 # Hex cells reach 2/3 of a row pitch past their centre, 1/6 past the row.
                 tips = 2 * math.ceil(m / 6) if la.grid == "hex" else 0
                 panel = Panel(lx * n + extra + 2, ly * m + tips + 2, la.pitch_x / n, la.pitch_y / m)
-            return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, panel)
+            return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
         ny, nx = la.views
         ex, ey = self.extension
         lx, ly = la.lenses_x + 2 * ex, la.lenses_y + 2 * ey
@@ -315,7 +300,7 @@ class SingleStagePlan:
             return 0.0, 0.0
         cap, (a, b) = self.capture_array, self.bank.phase
         sx, sy = cap.panel.pitch_x, cap.panel.pitch_y
-        c0 = cap.lens_centres()[0, 0]
+        c0 = cap.lattice_centres()[0, 0]  # the camera turns with the lattice
         # Pixel centres x0 + (col + 1/2 - Wc/2) sx must include c0 + a sx (likewise y).
         rx = (c0[0] / sx + a + cap.panel.width / 2 - 0.5) % 1.0
         ry = 0.0 if cap.grid == "lenticular" else (c0[1] / sy + b - cap.panel.height / 2 + 0.5) % 1.0
@@ -346,6 +331,7 @@ class SingleStagePlan:
             "z_vertex": z_vertex, "z_flat": z_vertex - lenslet.thickness, "z_focus": -self.depth,
             "z_camera": z_vertex - lenslet.thickness - lenslet.focal, "camera_xy": self.camera_offset,
             "right": (width_mm, 0.0, 0.0), "up": (0.0, height_mm, 0.0),
+            "rotation": cap.rotation,
         }
 
     @property

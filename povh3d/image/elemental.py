@@ -164,8 +164,9 @@ def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[
 
     la = lens_array
     centres, _, inside = pixel_rays(la)
-    X, Y = np.meshgrid(*la.panel.pixel_centres())
-    cx, cy = centres[inside, 0], centres[inside, 1]
+    # The capture grid is aligned to the lattice: work in its own frame (turned back).
+    X, Y = la.to_lattice(*np.meshgrid(*la.panel.pixel_centres()))
+    cx, cy = la.to_lattice(centres[inside, 0], centres[inside, 1])
     lin = decode(capture)
     lent = la.grid == "lenticular"
     k = supersample
@@ -205,7 +206,11 @@ def _turned_samples(lin: np.ndarray, la: LensArray, pitch: tuple[float, float], 
             row = hc / 2 - 0.5 - (cy - ov * gain - camera[1]) / sy
             ci, ri = np.rint(col).astype(np.int64), np.rint(row).astype(np.int64)
             # The capture grid is built lens-aligned: every valid sample is a pixel centre.
-            assert np.all(~valid | ((np.abs(col - ci) < 1e-6) & (np.abs(row - ri) < 1e-6))), "capture grid misaligned"
+            # Along a slanted lenticule the display pixel's point has no capture row of its
+            # own: the nearest row is taken, within half a row along the lenticule.
+            row_ok = la.grid == "lenticular" and la.rotation != 0.0
+            assert np.all(~valid | ((np.abs(col - ci) < 1e-6) & (row_ok | (np.abs(row - ri) < 1e-6)))), \
+                "capture grid misaligned"
             assert np.all(~valid | ((ci >= 0) & (ci < wc) & (ri >= 0) & (ri < hc))), "capture too small"
             value = lin[np.clip(ri, 0, hc - 1), np.clip(ci, 0, wc - 1)]
             if dk in (0, 1) and dm in (0, 1):

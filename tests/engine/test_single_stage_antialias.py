@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from povh3d.engine.frames import render_frames
-from povh3d.engine.methods import display_header, run_method
+from povh3d.engine.methods import display_header, run_method, single_stage_supersamples as supersamples
 from povh3d.engine.quality import QUALITY_LEVELS, Quality, RenderSettings
-from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_for, supersamples
+from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_for
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.scene.scene import load_scene
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from povh3d.errors import ConfigError
-from povh3d.geometry.cameras import camera_mesh
+from povh3d.geometry.lattice_mesh import lens_mesh
 from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
 
 PANEL = Panel(60, 45, 0.1, 0.1)
@@ -109,7 +109,7 @@ def simulate_lookup(mesh):
 def test_mesh_camera_traces_the_ray_of_every_rotated_pixel(grid, rotation):
     la = rotated(grid, rotation)
     back_off = 20.0
-    mesh = camera_mesh(la, back_off)
+    mesh = lens_mesh(la, back_off)
     assert mesh.uvs.min() > 0 and mesh.uvs.max() < 1, "POV-Ray aborts on UV outside 0..1"
     origin, normal, found = simulate_lookup(mesh)
     crop = lambda a: mesh.crop(a[1:, :-1])  # noqa: E731  (as the method assembles it)
