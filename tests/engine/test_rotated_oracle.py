@@ -74,3 +74,22 @@ def test_unrotated_hex_through_the_mesh_camera(tmp_path):
     scene = load_scene(write_checker_plane(tmp_path, -6.0, PERIOD))
     expected, clear = checker_oracle(la, -6.0, PERIOD)
     assert match(classify(run_method("multi-ortho", scene, la, DRAFT).h3d), expected, clear) >= 0.995
+
+
+@pytest.mark.parametrize("rotation", ["-45", "45.5", "nan", "inf"])
+def test_cli_refuses_a_rotation_outside_the_range(tmp_path, cli, rotation):
+    from tests.support.cli import one_error_line
+
+    out = tmp_path / "out.png"
+    scene = write_checker_plane(tmp_path, 6.0, PERIOD)
+    line = one_error_line(cli("render", scene, "-o", out, "--quality", "draft", f"--lens-rotation={rotation}"))
+    assert "(-45, 45]" in line and not out.exists()
+
+
+def test_cli_renders_a_turned_preset_and_records_it(tmp_path, cli):
+    out = tmp_path / "out.png"
+    scene = write_checker_plane(tmp_path, 6.0, PERIOD)
+    assert cli("render", scene, "-o", out, "--quality", "draft", "--lens-rotation", "6.34", "-q").code == 0
+    import json
+    record = json.loads(out.with_suffix(".json").read_text())
+    assert record["lens_array"]["rotation_deg"] == 6.34
