@@ -39,6 +39,7 @@ from .cropped import render_cropped_tiles
 from .batch import FrameBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
+from . import subpixel
 from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
 
@@ -121,6 +122,13 @@ def single_stage_supersamples(quality: Quality) -> int:
     return quality.aa_depth if quality.antialias is not None else 1
 
 
+def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+    mesh = lens_mesh(subpixel.subpixel_array(lens_array), back_off)
+    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
+                      lambda images: subpixel.subpixels_to_panel(mesh.crop(stack_frames(images))),
+                      subpixel.describe(lens_array))
+
+
 @dataclass(frozen=True)
 class Method:
     """A rendering method and what it supports.
@@ -164,6 +172,7 @@ METHODS: dict[str, Method] = {
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
                            supersamples=single_stage_supersamples),
+    "subpixel": Method(_subpixel),
 }
 
 
