@@ -176,7 +176,6 @@ def calibrate_lenticular(image: np.ndarray, *, distortion: bool = True, name: st
                          "give a white image taken through the lenticular sheet")
     if k[0] < 0 or (k[0] == 0 and k[1] > 0):
         k = -k
-    centre = np.array([(w - 1) / 2, (h - 1) / 2])
     psi, k1, resid = 0.0, 0.0, np.zeros(1)
     for _ in range(2):
         pts, phases, amps = _tile_phases(img, k)

@@ -9,6 +9,9 @@
 - ``single-stage``: a virtual array of CSG lenslets with an index of
   refraction, rendered by one orthographic camera (thesis 3.3): a physical
   simulation, compared with the others by an error figure (``single_stage``).
+- ``subpixel``: a slanted lenticular panel with every R, G and B subpixel's own
+  ray through its lenticule, in one pass at ``3W x H``, written as the panel
+  image directly (``subpixel``).
 
 Every method traces the ray of a pixel (docs/geometry.md); point-sampled they
 agree.  A method is pure around the renderer: its ``plan`` says which frames to

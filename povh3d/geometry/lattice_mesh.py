@@ -44,14 +44,23 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     W, H = panel.width, panel.height
     f = la.focal
     hx, hy = la.pitch_x / 2, la.pitch_y / 2
-    X, Y = la.to_lattice(*np.meshgrid(*panel.pixel_centres()))
-    owner, inside = _pixel_owners(la, X, Y)
     if la.grid == "lenticular":
         # Each strip runs along its lenticule as far as its pixels, and a pixel diagonal on.
+        # Along a strip the extremes of the panel's pixels lie on the panel's border (the
+        # strip and the panel are convex), so only border pixels are looked at.
+        xs, ys = panel.pixel_centres()
+        border = np.concatenate([np.stack(np.broadcast_arrays(xs, ys[0]), -1), np.stack(np.broadcast_arrays(xs, ys[-1]), -1),
+                                 np.stack(np.broadcast_arrays(xs[0], ys), -1), np.stack(np.broadcast_arrays(xs[-1], ys), -1)])
+        bx, by = la.to_lattice(border[:, 0], border[:, 1])
+        col = np.floor(bx / la.pitch_x + la.lenses_x / 2 + 1e-9).astype(np.int64)  # pixel_rays' rule
+        ok = (col >= 0) & (col < la.lenses_x)
+        col, by = col[ok], by[ok]
         cx = la.lattice_centres()[0, :, 0]
-        keep = np.unique(owner[inside] % la.lenses_x)
-        ends = np.array([(Y[inside][owner[inside] % la.lenses_x == j].min(),
-                          Y[inside][owner[inside] % la.lenses_x == j].max()) for j in keep])
+        low, high = np.full(la.lenses_x, np.inf), np.full(la.lenses_x, -np.inf)
+        np.minimum.at(low, col, by)
+        np.maximum.at(high, col, by)
+        keep = np.flatnonzero(np.isfinite(low))
+        ends = np.stack([low[keep], high[keep]], axis=1)
         reach = math.hypot(panel.pitch_x, panel.pitch_y)
         cx = cx[keep]
         cu = np.array([-hx, hx, hx, -hx])
@@ -60,6 +69,8 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         ou, ov = np.broadcast_to(cu, lx.shape), np.zeros(lx.shape)  # v across the lenticule is 0
         olx, oly = cx[:, None] - ou * (back_off / f), ly
     else:
+        X, Y = la.to_lattice(*np.meshgrid(*panel.pixel_centres()))
+        owner, inside = _pixel_owners(la, X, Y)
         c = la.lattice_centres().reshape(-1, 2)[np.unique(owner[inside])]
         if la.grid == "hex":
             r = la.pitch_x / math.sqrt(3)
