@@ -5,6 +5,7 @@ What the CLI calls; the image work itself is pure (the other modules here).
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 from typing import Any
@@ -12,13 +13,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
-from ..image.io import check_writable, read_png
+from ..image.io import atomic_path, check_writable, read_png
 from .records import base_record, png_output, write_image
 from ..calibration.borders import correct_borders
 from ..calibration.distortion import undistort_image
 from ..calibration.equalise import equalise
 from ..calibration.gridfile import Grid, read_grid, write_grid
 from ..calibration.lattice import calibrate
+from ..calibration.lenticular import calibrate_lenticular
 from ..calibration.stitch import stitch
 from ..calibration.viewpoints import viewpoints
 
@@ -44,6 +46,24 @@ def calibrate_file(white: str | Path, output: str | Path, *, lattice: str | None
     grid.extra["white_image"] = str(Path(white).resolve())
     write_grid(output, grid)
     return grid
+
+
+def calibrate_lenticular_file(white: str | Path, output: str | Path, *, dpi: float | None = None,
+                              distortion: bool = True) -> dict[str, Any]:
+    """Pitch, slant and phase of a lenticular sheet -> a calibration JSON (with the Looking
+    Glass fields when ``dpi`` is given, which ``map --calibration`` reads)."""
+    _json_path(output)
+    if dpi is not None and not (np.isfinite(dpi) and dpi > 0):
+        raise ConfigError(f"--dpi must be a positive number of pixels per inch, got {dpi!r}")
+    image = read_png(white)
+    check_writable(output)
+    t = time.perf_counter()
+    fit = calibrate_lenticular(image, distortion=distortion, name=repr(str(white)))
+    record = {**fit.to_dict(dpi), "seconds": round(time.perf_counter() - t, 3),
+              "white_image": str(Path(white).resolve())}
+    with atomic_path(output) as tmp:
+        tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
+    return record
 
 
 def _load(image_path: str | Path, grid_path: str | Path) -> tuple[np.ndarray, Grid]:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from ..errors import ConfigError
+
 
 def add_parsers(sub: Any) -> None:
     """Capture-side processing (thesis chapter 4): calibrate, undistort, borders, equalise, viewpoints, stitch."""
@@ -19,14 +21,27 @@ def add_parsers(sub: Any) -> None:
     p = sub.add_parser("calibrate", help="find the lens grid in a white image -> grid.json")
     p.add_argument("white", help="PNG of a white background taken through the lens array")
     p.add_argument("-o", "--output", required=True, help="grid file to write (.json)")
-    p.add_argument("--lattice", choices=("square", "hex"), help="expected lattice (default: detect)")
+    p.add_argument("--lattice", choices=("square", "hex", "lenticular"),
+                   help="expected lattice (default: detect square or hex); lenticular: a slanted sheet")
     p.add_argument("--no-distortion", action="store_true", help="fit a straight lattice (no Brown terms)")
-    p.set_defaults(func=run(lambda c, a: c.calibrate_file(a.white, a.output, lattice=a.lattice,
-                                                       distortion=not a.no_distortion),
-                            lambda a, g: f"{a.output}  {g.lattice}  pitch {g.pitch_px:.4f} px  rotation "
-                                         f"{g.rotation_deg:.4f} deg  {int(g.inside.sum())} lenses  k1 "
-                                         f"{g.distortion.k1:.3g}  residual {g.residual_px:.4f} px  "
-                                         f"confidence {g.confidence:.3f}"))
+    p.add_argument("--dpi", type=float, help="lenticular: panel pixels per inch, to write the Looking Glass "
+                                             "fields that 'map --calibration' reads")
+
+    def calibrate(c, a):
+        if a.lattice == "lenticular":
+            return c.calibrate_lenticular_file(a.white, a.output, dpi=a.dpi, distortion=not a.no_distortion)
+        if a.dpi is not None:
+            raise ConfigError("--dpi only applies to --lattice lenticular")
+        return c.calibrate_file(a.white, a.output, lattice=a.lattice, distortion=not a.no_distortion)
+
+    def show(a, g):
+        if isinstance(g, dict):
+            return (f"{a.output}  lenticular  pitch {g['pitch_px']:.5f} px  slant {g['slant_deg']:.5f} deg  "
+                    f"phase {g['phase_px']:.4f} px  k1 {g['k1']:.3g}  residual {g['residual_rad']:.4f} rad")
+        return (f"{a.output}  {g.lattice}  pitch {g.pitch_px:.4f} px  rotation "
+                f"{g.rotation_deg:.4f} deg  {int(g.inside.sum())} lenses  k1 "
+                f"{g.distortion.k1:.3g}  residual {g.residual_px:.4f} px  confidence {g.confidence:.3f}")
+    p.set_defaults(func=run(calibrate, show))
 
     def image_cmd(name, help_text, fn, extra=()):
         p = sub.add_parser(name, help=help_text)

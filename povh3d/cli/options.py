@@ -40,6 +40,8 @@ def add_array_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--focal", type=float, help="lens focal length, mm")
     g.add_argument("--rows", type=int, help="panel height in pixel rows (lenticular)")
     g.add_argument("--panel", help="panel size WxH in pixels")
+    g.add_argument("--lens-rotation", type=float, metavar="DEG",
+                   help="turn the lens lattice by DEG within (-45, 45], counter-clockwise (slanted sheets)")
 
 
 def lens_array_from_args(args: argparse.Namespace):
@@ -53,6 +55,7 @@ def lens_array_from_args(args: argparse.Namespace):
         "focal": args.focal,
         "rows": args.rows,
         "panel": parse_pair(args.panel, "--panel", integral=True) if args.panel else None,
+        "lens_rotation": getattr(args, "lens_rotation", None),
     }
     if overrides["panel"] is not None and not isinstance(overrides["panel"], tuple):
         raise ConfigError(f"--panel takes WxH like 1920x1080, got {args.panel!r}")

@@ -12,7 +12,7 @@ from ..errors import ConfigError
 from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args,
                       mapping_from_args, max_triangles, progress_bar, warn)
 
-METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage")
+METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage", "subpixel")
 QUALITY_NAMES = ("draft", "normal", "high", "auto")
 
 

@@ -9,6 +9,9 @@
 - ``single-stage``: a virtual array of CSG lenslets with an index of
   refraction, rendered by one orthographic camera (thesis 3.3): a physical
   simulation, compared with the others by an error figure (``single_stage``).
+- ``subpixel``: a slanted lenticular panel with every R, G and B subpixel's own
+  ray through its lenticule, in one pass at ``3W x H``, written as the panel
+  image directly (``subpixel``).
 
 Every method traces the ray of a pixel (docs/geometry.md); point-sampled they
 agree.  A method is pure around the renderer: its ``plan`` says which frames to
@@ -26,9 +29,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
-from ..geometry.cameras import (bank_back_off, camera_mesh, check_clearance, default_back_off,
+from ..geometry.cameras import (bank_back_off, check_clearance, default_back_off,
                                 ortho_view_frames, pinhole_frames, stack_frames, view_bank_frames)
 from ..geometry.crop import CropSettings
+from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
@@ -38,6 +42,7 @@ from .cropped import render_cropped_tiles
 from .batch import FrameBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
+from . import subpixel
 from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
 
@@ -51,11 +56,10 @@ class MethodPlan:
 
 
 def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
-    if lens_array.grid == "hex":
-        lens_array.require_views()  # raises "render hex with single-stage"
-    if not lens_array.views:  # fractional PPL: one quad per lens
-        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [camera_mesh(lens_array, back_off)]),
-                          stack_frames)
+    if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
+        mesh = lens_mesh(lens_array, back_off)
+        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
+                          lambda images: mesh.crop(stack_frames(images)))
     # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples)),
                       lambda images: banks_to_h3d(lens_array, stack_frames(images)))
@@ -98,9 +102,34 @@ def _pinhole(lens_array: LensArray, back_off: float, samples: np.ndarray) -> Met
 
 
 def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *,
-                  lenslet: str, ior: float | None) -> MethodPlan:
-    plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off)
+                  lenslet: str, ior: float | None, supersample: int = 1) -> MethodPlan:
+    plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off, supersample)
     return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
+
+
+def single_stage_supersamples(quality: Quality) -> int:
+    """Sub-pixel samples per axis with which single-stage antialiases at ``quality``.
+
+    POV-Ray's adaptive antialiasing samples pixel corners, and every corner of a
+    capture pixel at a lens border lies on that border, so its rays graze the
+    neighbouring lenslet and the border pixels come out a mix of two views.  The
+    method therefore renders point-sampled and supersamples itself, strictly
+    inside each pixel's own lens: ``k x k`` sub-pixel-centred samples (``+R``
+    of the adaptive levels, 4 for footprint-sampled levels, the sub-views per
+    axis where a level asks for them), averaged in linear light.
+    """
+    if quality.footprint:
+        return 4
+    if quality.subviews > 1:
+        return quality.subviews
+    return quality.aa_depth if quality.antialias is not None else 1
+
+
+def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+    mesh = lens_mesh(subpixel.subpixel_array(lens_array), back_off)
+    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
+                      lambda images: subpixel.subpixels_to_panel(mesh.crop(stack_frames(images))),
+                      subpixel.describe(lens_array))
 
 
 @dataclass(frozen=True)
@@ -121,6 +150,9 @@ class Method:
     takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
     # Whether it can trace only the lenses objects can reach (``cropped``).
     crops: bool = False
+    # Methods that antialias inside each pixel themselves: sub-samples per axis for a
+    # quality, passed to ``plan`` as ``supersample`` while POV-Ray traces point-sampled.
+    supersamples: Callable[[Quality], int] | None = None
 
     def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
         """``given`` (None values count as not given) over the defaults; unknown names refused."""
@@ -141,7 +173,9 @@ METHODS: dict[str, Method] = {
                           round_back_off=lambda la, b: bank_back_off(la, b) if la.views else b),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
-    "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth),
+    "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
+                           supersamples=single_stage_supersamples),
+    "subpixel": Method(_subpixel),
 }
 
 
@@ -179,9 +213,16 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     """
     method = get_method(name)
     options = method.resolve_options(name, options)
+    asked = settings.spec
     back_off = method.round_back_off(lens_array, settings.back_off or method.default_back_off(lens_array))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if quality != settings.spec:
+        settings = replace(settings, quality=quality)
+    plan_options = dict(options)
+    if method.supersamples is not None:
+        # POV-Ray point-samples; the method spreads its own samples inside each pixel.
+        plan_options["supersample"] = method.supersamples(asked)
+        quality = Quality(max_trace_level=quality.max_trace_level)
         settings = replace(settings, quality=quality)
     samples = quality.samples()
     header = display_header(lens_array)
@@ -198,7 +239,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         if tiles.tiled is not None:
             h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats
     if h3d is None:
-        plan = method.plan(lens_array, back_off, samples, **options)
+        plan = method.plan(lens_array, back_off, samples, **plan_options)
         images, stats = trace(plan.batch, name, progress)
         h3d, record = plan.assemble(images), plan.record
     panel_shape = (lens_array.panel.height, lens_array.panel.width)

@@ -64,6 +64,7 @@ from fractions import Fraction
 from ..image.elemental import cell_contains, sample_turned_bank
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray, Panel, pixel_rays
+from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet
 from .batch import FrameBatch
@@ -77,7 +78,7 @@ def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None =
                    lens_array.pitch_y, lens_array.focal, ior)
 
 
-def recentre_unit(lens_array: LensArray) -> float:
+def recentre_unit(lens_array: LensArray, density: int = 1) -> float:
     """Smallest depth ``D`` (mm) at which every view shifts by whole lenses; 0 if none.
 
     ``u_k D / (f px) = (k + 0.5 - Nx/2) D / (f Nx)`` is whole for every ``k`` when
@@ -85,8 +86,8 @@ def recentre_unit(lens_array: LensArray) -> float:
     vertically (not for lenticular sheets, whose rays keep their row).
     """
     views = lens_array.views
-    if views is None:
-        return lens_array.focal * capture_bank(lens_array).unit
+    if views is None:  # the capture bank's, at ``density`` samples per pixel
+        return lens_array.focal * capture_bank(lens_array, density).unit
     ny, nx = views
     steps = [nx if nx % 2 else 2 * nx]
     if not lens_array.unidirectional:
@@ -139,21 +140,22 @@ def _unit(grid: str, xs: set, pairs: set) -> int:
     return math.lcm(*(f.denominator for f in terms))
 
 
-def capture_bank(lens_array: LensArray) -> CaptureBank:
+def capture_bank(lens_array: LensArray, density: int = 1) -> CaptureBank:
     """The capture grid and re-centring unit of a hex or fractional-PPL array.
 
-    Among the candidate grids (``N, M`` from the PPL up, both phases) the one
+    Among the candidate grids (``N, M`` from ``density`` samples per pixel up, both phases) the one
     with the fewest capture pixels at one unit of depth, halved for grids that
     hit every display offset exactly (no direction interpolation left).
     """
     la = lens_array
     centres, _, inside = pixel_rays(la)
     X, Y = np.meshgrid(*la.panel.pixel_centres())
-    du = ((X - centres[..., 0]) / la.pitch_x)[inside]
-    dv = ((Y - centres[..., 1]) / la.pitch_y)[inside]
+    # Offsets in the lattice's own frame: the capture grid is aligned to the (turned) lenses.
+    du, dv = la.to_lattice(X - centres[..., 0], Y - centres[..., 1])
+    du, dv = (du / la.pitch_x)[inside], (dv / la.pitch_y)[inside]
     lent = la.grid == "lenticular"
-    xs = _axis_candidates(la.ppl_x, du, even=la.grid == "hex")
-    ys = [(1, 0.0, True)] if lent else _axis_candidates(la.ppl_y, dv, even=False)
+    xs = _axis_candidates(la.ppl_x * density, du, even=la.grid == "hex")
+    ys = [(1, 0.0, True)] if lent else _axis_candidates(la.ppl_y * density, dv, even=False)
     best = None
     for n, a, ex_x in xs:
         for m, b, ex_y in ys:
@@ -188,14 +190,22 @@ class SingleStagePlan:
     lens_array : LensArray     the display's array (docs/geometry.md)
     lenslet : Lenslet
     depth : float, mm          ``D``: the focal plane of the virtual array is ``z = -D``
+    supersample : int          ``k``: sub-pixel samples per axis, averaged in linear light
+                               (``supersamples``); whole PPL: ``k x k`` capture pixels per
+                               pixel; hex / fractional: ``k`` times denser capture samples,
+                               each display pixel the mean of ``k x k`` sub-directions
     """
 
     lens_array: LensArray
     lenslet: Lenslet
     depth: float = 0.0
+    supersample: int = 1
 
     def __post_init__(self) -> None:
-        unit = recentre_unit(self.lens_array)
+        k = self.supersample
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+            raise ConfigError(f"single-stage supersampling must be a whole number of at least 1, got {k!r}")
+        unit = recentre_unit(self.lens_array, self.supersample)
         if self.depth < 0 or not math.isfinite(self.depth):
             raise ConfigError(f"the front clearance must be 0 or more mm, got {self.depth!r}")
         if self.depth > 0:
@@ -204,12 +214,13 @@ class SingleStagePlan:
                 raise ConfigError(f"single-stage depth {self.depth!r} mm is not a multiple of {unit!r} mm")
 
     @classmethod
-    def for_clearance(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float) -> SingleStagePlan:
+    def for_clearance(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float,
+                      supersample: int = 1) -> SingleStagePlan:
         """The plan whose depth is the smallest exact ``D >= clearance`` (0 for no clearance)."""
-        unit = recentre_unit(lens_array)
+        unit = recentre_unit(lens_array, supersample)
         if clearance <= 0:
-            return cls(lens_array, lenslet, 0.0)
-        return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9))
+            return cls(lens_array, lenslet, 0.0, supersample)
+        return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9), supersample)
 
     # -- view shifts ------------------------------------------------------------
     @cached_property
@@ -233,7 +244,7 @@ class SingleStagePlan:
     @cached_property
     def bank(self) -> CaptureBank | None:
         """The lens-aligned capture grid (hex, fractional PPL), None with whole PPL."""
-        return capture_bank(self.lens_array) if self.lens_array.views is None else None
+        return capture_bank(self.lens_array, self.supersample) if self.lens_array.views is None else None
 
     @property
     def extension(self) -> tuple[int, int]:
@@ -263,13 +274,19 @@ class SingleStagePlan:
             ex, ey = self.extension
             lx, ly = la.lenses_x + 2 * ex, la.lenses_y + 2 * ey
             if la.grid == "lenticular":
-                panel = Panel(lx * n + 2, la.panel.height, la.pitch_x / n, la.panel.pitch_y)
+                rows = la.panel.height
+                if la.rotation:  # the turned panel reaches further along the lenticules
+                    (w_mm, h_mm), t = la.panel.size_mm, math.radians(la.rotation)
+                    rows = math.ceil((w_mm * abs(math.sin(t)) + h_mm * math.cos(t)) / la.panel.pitch_y) + 2
+                    rows += (rows - la.panel.height) % 2  # keep rows centred as the panel's
+                ly = rows
+                panel = Panel(lx * n + 2, rows, la.pitch_x / n, la.panel.pitch_y)
             else:
                 extra = n // 2 if la.grid == "hex" and ly > 1 else 0
                 # Hex cells reach 2/3 of a row pitch past their centre, 1/6 past the row.
                 tips = 2 * math.ceil(m / 6) if la.grid == "hex" else 0
                 panel = Panel(lx * n + extra + 2, ly * m + tips + 2, la.pitch_x / n, la.pitch_y / m)
-            return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, panel)
+            return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
         ny, nx = la.views
         ex, ey = self.extension
         lx, ly = la.lenses_x + 2 * ex, la.lenses_y + 2 * ey
@@ -283,7 +300,7 @@ class SingleStagePlan:
             return 0.0, 0.0
         cap, (a, b) = self.capture_array, self.bank.phase
         sx, sy = cap.panel.pitch_x, cap.panel.pitch_y
-        c0 = cap.lens_centres()[0, 0]
+        c0 = cap.lattice_centres()[0, 0]  # the camera turns with the lattice
         # Pixel centres x0 + (col + 1/2 - Wc/2) sx must include c0 + a sx (likewise y).
         rx = (c0[0] / sx + a + cap.panel.width / 2 - 0.5) % 1.0
         ry = 0.0 if cap.grid == "lenticular" else (c0[1] / sy + b - cap.panel.height / 2 + 0.5) % 1.0
@@ -314,12 +331,19 @@ class SingleStagePlan:
             "z_vertex": z_vertex, "z_flat": z_vertex - lenslet.thickness, "z_focus": -self.depth,
             "z_camera": z_vertex - lenslet.thickness - lenslet.focal, "camera_xy": self.camera_offset,
             "right": (width_mm, 0.0, 0.0), "up": (0.0, height_mm, 0.0),
+            "rotation": cap.rotation,
         }
 
+    @property
+    def camera_supersample(self) -> int:
+        """Capture pixels per panel pixel and axis: ``k`` with whole PPL, else 1 (denser bank)."""
+        return self.supersample if self.bank is None else 1
+
     def batch(self) -> FrameBatch:
-        panel = self.capture_array.panel
+        panel, k = self.capture_array.panel, self.camera_supersample
+        # The camera keeps its mm extent: k x k sub-pixels tile each pixel, centred in it.
         return FrameBatch("single_stage.pov.j2", self.template_context(), [{}],
-                          panel.width, panel.height, processes=1)
+                          panel.width * k, panel.height * k, processes=1)
 
     # -- from the capture to the H3D image ------------------------------------------
     def assemble(self, capture: np.ndarray) -> np.ndarray:
@@ -338,7 +362,13 @@ class SingleStagePlan:
         if self.bank is not None:
             cap = self.capture_array.panel
             return sample_turned_bank(capture, la, (cap.pitch_x, cap.pitch_y), self.bank.phase,
-                                      1 + self.depth / la.focal, self.camera_offset)
+                                      1 + self.depth / la.focal, self.camera_offset, self.supersample)
+        k = self.camera_supersample
+        if k > 1:
+            # Every sub-pixel lies strictly inside its pixel, so inside its lens.
+            h, w, c = capture.shape
+            blocks = capture.reshape(h // k, k, w // k, k, c).transpose(1, 3, 0, 2, 4)
+            capture = mean_in_linear_light(blocks.reshape(k * k, h // k, w // k, c))
         ny, nx = la.views
         cap = self.capture_array
         c = capture.shape[2]
@@ -359,6 +389,8 @@ class SingleStagePlan:
         return {"lenslet": self.lenslet.describe(), "focal_plane_z_mm": -self.depth,
                 "principal_plane_z_mm": -self.depth - self.lenslet.focal,
                 "capture_lenses": [cap.lenses_x, cap.lenses_y],
-                "capture_size_px": [cap.panel.width, cap.panel.height],
+                "capture_size_px": [cap.panel.width * self.camera_supersample,
+                                    cap.panel.height * self.camera_supersample],
+                "supersamples_per_pixel": [self.supersample, self.supersample],
                 **({"capture_samples_per_lens": list(self.bank.samples),
                     "capture_sample_phase": list(self.bank.phase)} if self.bank is not None else {})}

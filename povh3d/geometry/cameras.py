@@ -140,6 +140,15 @@ class CameraMesh:
     faces: np.ndarray
     image_size: tuple[int, int]
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    margin: tuple[int, int] = (0, 0)  # (columns, rows) of canvas around the panel, cut off after
+
+    def crop(self, image: np.ndarray) -> np.ndarray:
+        """The panel out of a rendered frame (extra first row and last column already cut)."""
+        mx, my = self.margin
+        if not (mx or my):
+            return image
+        w, h = self.image_size
+        return image[my:h - 1 - my, mx:w - 1 - mx]
 
 
 # How far lens quads are moved off pixel centres that lie on lens borders, in
@@ -171,6 +180,8 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     by about 0.006 pixel (6.5 PPL, f = 1.5 mm, s = 0.1 mm).
     """
     check_clearance(lens_array, back_off)
+    if lens_array.rotation or lens_array.grid == "hex":
+        raise ConfigError("a turned or hex lattice has one cell per lens; use lattice_mesh.lens_mesh")
     panel = lens_array.panel
     W, H = panel.width, panel.height
     sx, sy = panel.pitch_x, panel.pitch_y
@@ -227,8 +238,10 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
     uv = np.stack(full(col / (W + 1), 1.0 - (row + 1.0) / (H + 1)), axis=-1)
     vertices = np.stack(full(origin_x, origin_y, -back_off), axis=-1).reshape(-1, 3)
     normals = np.stack(full(u, v, focal), axis=-1).reshape(-1, 3)
-    base = 4 * np.arange(shape[0])[:, None]
-    faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
+    # A convex polygon per lens (quads; hexagons) as a fan of triangles from corner 0.
+    n = shape[1]
+    base = n * np.arange(shape[0])[:, None]
+    faces = np.concatenate([base + [0, t, t + 1] for t in range(1, n - 1)], axis=1).reshape(-1, 3)
     return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1),
                       tuple(float(a) for a in scale))
 

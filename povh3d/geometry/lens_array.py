@@ -95,6 +95,10 @@ class LensArray:
     focal : float, mm
         Focal length: the gap between the lens array and the panel.
     panel : Panel
+    rotation : float, degrees
+        The lattice turned by this angle about the origin, counter-clockwise as the
+        viewer sees it (x right, y up), within (-45, 45]; a slanted lenticular sheet
+        leans its lenticules this far from vertical (docs/geometry.md, "Rotated lattices").
     """
 
     grid: str
@@ -104,8 +108,14 @@ class LensArray:
     pitch_y: float
     focal: float
     panel: Panel
+    rotation: float = 0.0
 
     def __post_init__(self) -> None:
+        rot = self.rotation
+        if isinstance(rot, bool) or not isinstance(rot, (int, float)) or not math.isfinite(rot) or not -45 < rot <= 45:
+            raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {rot!r}; "
+                              "a lattice turned further is the same lattice turned less (--lens-rotation)")
+        object.__setattr__(self, "rotation", float(rot))
         if self.grid not in GRIDS:
             raise ConfigError(f"grid must be one of {', '.join(GRIDS)}, got {self.grid!r}; pick one with --grid")
         object.__setattr__(self, "lenses_x", _count("lens count", self.lenses_x, "give it as --lenses 60x40 (lenticular: --lenses 60)"))
@@ -127,7 +137,8 @@ class LensArray:
         array_w = self.lenses_x * self.pitch_x + (self.pitch_x / 2 if self.grid == "hex" and self.lenses_y > 1 else 0)
         array_h = self.lenses_y * self.pitch_y
         slack = 1e-9 * max(width_mm, height_mm)
-        if array_w > width_mm + slack or array_h > height_mm + slack:
+        # A rotated lattice is cut by the panel's edges, as a real slanted sheet is.
+        if self.rotation == 0.0 and (array_w > width_mm + slack or array_h > height_mm + slack):
             raise ConfigError(
                 f"the lens array ({array_w:.6g} x {array_h:.6g} mm) is larger than the panel "
                 f"({width_mm:.6g} x {height_mm:.6g} mm); use fewer lenses (--lenses) or a larger panel (--panel)")
@@ -150,7 +161,7 @@ class LensArray:
     @cached_property
     def views(self) -> tuple[int, int] | None:
         """``(Ny, Nx)`` views of the camera bank, or None when the PPL is not whole."""
-        if self.grid == "hex":
+        if self.grid == "hex" or self.rotation:
             return None
         nx, ny = nearest_integer(self.ppl_x), nearest_integer(self.ppl_y)
         if nx is None or ny is None:
@@ -224,14 +235,34 @@ class LensArray:
         return (np.degrees(np.arctan2(u, self.focal)), np.degrees(np.arctan2(v, self.focal)))
 
     # -- lens centres ------------------------------------------------------------
+    def to_lattice(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Panel coordinates (mm) in the lattice's own frame: turned back by ``-rotation``."""
+        if not self.rotation:
+            return x, y
+        c, s = math.cos(math.radians(self.rotation)), math.sin(math.radians(self.rotation))
+        return c * x + s * y, -s * x + c * y
+
+    def from_lattice(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lattice-frame coordinates (or offsets) in the panel frame: turned by ``rotation``."""
+        if not self.rotation:
+            return x, y
+        c, s = math.cos(math.radians(self.rotation)), math.sin(math.radians(self.rotation))
+        return c * x - s * y, s * x + c * y
+
     def lens_centres(self) -> np.ndarray:
         """Centre of every lens on the display plane.
 
         Returns
         -------
         (Ly, Lx, 2) float, mm
-            ``(cx, cy)`` of lens ``(j, i)`` at ``[i, j]``; hex odd rows shifted by ``px/2``.
+            ``(cx, cy)`` of lens ``(j, i)`` at ``[i, j]``; hex odd rows shifted by ``px/2``;
+            turned by ``rotation`` about the origin.
         """
+        c = self.lattice_centres()
+        return np.stack(self.from_lattice(c[..., 0], c[..., 1]), axis=-1)
+
+    def lattice_centres(self) -> np.ndarray:
+        """``lens_centres`` in the lattice's own frame (before the rotation), ``(Ly, Lx, 2)`` mm."""
         j = np.arange(self.lenses_x, dtype=np.float64)
         i = np.arange(self.lenses_y, dtype=np.float64)
         cx = np.broadcast_to((j + 0.5 - self.lenses_x / 2) * self.pitch_x, (self.lenses_y, self.lenses_x))
@@ -269,6 +300,7 @@ class LensArray:
                       "pixel_pitch_mm": [self.panel.pitch_x, self.panel.pitch_y],
                       "size_mm": list(self.panel.size_mm)},
             "ppl": [self.ppl_x, self.ppl_y],
+            **({"rotation_deg": self.rotation} if self.rotation else {}),
             "viewing_angle_deg": self.viewing_angle_deg,
             "resolution_3d": list(self.resolution_3d),
             "pixel_distance_3d_mm": [self.pitch_x, self.pitch_y],
@@ -295,7 +327,8 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     Returns
     -------
     centres : (H, W, 2) float, mm
-        Centre ``(cx, cy)`` of the pixel's lens.
+        Centre ``(cx, cy)`` of the pixel's lens (lenticular: the point of the
+        lenticule's axis nearest the pixel centre, so that ``v`` across it is 0).
     directions : (H, W, 3) float
         Unit direction ``normalize(u, v, f)`` with ``(u, v)`` the pixel's offset.
     inside : (H, W) bool
@@ -303,8 +336,9 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     """
     panel = lens_array.panel
     X, Y = panel.pixel_centres()
-    X, Y = np.meshgrid(X, Y)  # (H, W)
-    centres = lens_array.lens_centres()
+    # A rotated lattice is worked out in its own frame and turned back at the end.
+    X, Y = lens_array.to_lattice(*np.meshgrid(X, Y))  # (H, W)
+    centres = lens_array.lattice_centres()
     Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
     px, py = lens_array.pitch_x, lens_array.pitch_y
     if lens_array.grid == "hex":
@@ -332,10 +366,16 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
         fi = Ly / 2 - Y / py + 1e-9
         j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
         inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
+        if lens_array.grid == "lenticular" and lens_array.rotation:
+            inside = (j >= 0) & (j < Lx)  # a slanted lenticule runs across every row
         j, i = np.clip(j, 0, Lx - 1), np.clip(i, 0, Ly - 1)
-    c = centres[i, j]
+    c = centres[i, j].copy()
+    if lens_array.grid == "lenticular":
+        c[..., 1] = Y  # the point of the lenticule's axis beside the pixel (unrotated: its row)
     u = X - c[..., 0]
-    v = np.zeros_like(u) if lens_array.grid == "lenticular" else Y - c[..., 1]
+    v = Y - c[..., 1]
+    c = np.stack(lens_array.from_lattice(c[..., 0], c[..., 1]), axis=-1)
+    u, v = lens_array.from_lattice(u, v)
     d = np.stack([u, v, np.full(u.shape, lens_array.focal)], axis=-1)
     d /= np.linalg.norm(d, axis=-1, keepdims=True)
     c = np.where(inside[..., None], c, np.nan)

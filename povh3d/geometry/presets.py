@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
     from .lens_array import LensArray
 
 FIELDS = ("description", "grid", "panel", "pixel_pitch", "lens_pitch", "ppl", "lenses",
-          "rows", "focal", "views", "slant_deg", "mapping")
+          "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation")
 
 # Overriding any of these re-derives the panel from the lens array, unless the
 # panel itself is given.
@@ -156,6 +156,9 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     else:
         raise ConfigError("the lens count is missing; give it with --lenses")
     lx, ly = int(lx), int(ly)
+    rotation = fields.get("lens_rotation", 0.0)
+    if rotation and "lenses" not in fields and panel_size is not None:
+        lx, ly = _covering_counts(grid, rotation, panel_size[0] * sx, panel_size[1] * sy, px, py, lx, ly)
     if grid == "lenticular" and rows is not None:
         ly = int(rows)
 
@@ -165,7 +168,19 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
         extra = px / 2 if grid == "hex" and ly > 1 else 0.0
         w = math.ceil((lx * px + extra) / sx - _EPS)
         h = ly if grid == "lenticular" else math.ceil(ly * py / sy - _EPS)
-    return LensArray(grid, lx, ly, px, py, float(fields["focal"]), Panel(w, h, sx, sy))
+    return LensArray(grid, lx, ly, px, py, float(fields["focal"]), Panel(w, h, sx, sy), rotation)
+
+
+def _covering_counts(grid: str, rotation: Any, width: float, height: float, px: float, py: float,
+                     lx: int, ly: int) -> tuple[int, int]:
+    """Lens counts of a turned lattice that covers a ``width x height`` mm panel (odd counts
+    keep a lens centred as in the upright array only by chance; every pixel gets a lens)."""
+    if not isinstance(rotation, (int, float)) or isinstance(rotation, bool) or not math.isfinite(rotation):
+        return lx, ly  # LensArray refuses it with the one-line message
+    c, s = abs(math.cos(math.radians(rotation))), abs(math.sin(math.radians(rotation)))
+    reach_x, reach_y = width * c + height * s, width * s + height * c
+    lx = math.ceil(reach_x / px - _EPS) + (2 if grid == "hex" else 1)
+    return lx, (ly if grid == "lenticular" else math.ceil(reach_y / py - _EPS) + 1)
 
 
 def describe_fields(fields: dict[str, Any]) -> dict[str, Any]:
@@ -183,6 +198,7 @@ def lens_array_from_record(record: dict[str, Any]) -> LensArray:
 
     try:
         panel = Panel(*record["panel"]["size_px"], *record["panel"]["pixel_pitch_mm"])
-        return LensArray(record["grid"], *record["lenses"], *record["lens_pitch_mm"], record["focal_mm"], panel)
+        return LensArray(record["grid"], *record["lenses"], *record["lens_pitch_mm"], record["focal_mm"], panel,
+                         record.get("rotation_deg", 0.0))
     except (KeyError, TypeError) as exc:
         raise ConfigError(f"the sidecar's lens array is incomplete ({exc}); give --ppl NxxNy") from None

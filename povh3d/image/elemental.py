@@ -132,7 +132,8 @@ def cell_contains(grid: str, pitch_x: float, pitch_y: float, u: np.ndarray, v: n
 
 
 def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[float, float],
-                       phase: tuple[float, float], gain: float, camera: tuple[float, float]) -> np.ndarray:
+                       phase: tuple[float, float], gain: float, camera: tuple[float, float],
+                       supersample: int = 1) -> np.ndarray:
     """The display image from a capture sampled on a lens-aligned grid (single-stage, any grid).
 
     Every capture lens ``c'`` is sampled at offsets ``w = ((k + phase_x) sx, (m + phase_y) sy)``,
@@ -151,6 +152,10 @@ def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[
     phase : (phase_x, phase_y)                  0 or 1/2: where samples sit relative to lens centres
     gain : float                                ``1 + D / f``
     camera : (x0, y0), mm                       centre of the capture camera's image
+    supersample : int                           ``k``: each display pixel is the mean, in linear
+                                                light, of ``k x k`` sub-pixel-centred directions
+                                                (``k`` across a lenticular pixel), each one
+                                                interpolated from the samples of the pixel's own lens
 
     Returns
     -------
@@ -158,21 +163,39 @@ def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[
     """
 
     la = lens_array
-    hc, wc = capture.shape[:2]
-    sx, sy = pitch
     centres, _, inside = pixel_rays(la)
-    X, Y = np.meshgrid(*la.panel.pixel_centres())
-    cx, cy = centres[inside, 0], centres[inside, 1]
-    u = X[inside] - cx
-    v = np.zeros_like(u) if la.grid == "lenticular" else Y[inside] - cy
+    # The capture grid is aligned to the lattice: work in its own frame (turned back).
+    X, Y = la.to_lattice(*np.meshgrid(*la.panel.pixel_centres()))
+    cx, cy = la.to_lattice(centres[inside, 0], centres[inside, 1])
+    lin = decode(capture)
+    lent = la.grid == "lenticular"
+    k = supersample
+    d = (np.arange(k) + 0.5) / k - 0.5  # sub-pixel centres, in pixels
+    total = np.zeros((cx.size, capture.shape[2]))
+    for du in d * la.panel.pitch_x:
+        for dv in ((0.0,) if lent else d * la.panel.pitch_y):
+            u = X[inside] - cx + du
+            v = np.zeros_like(u) if lent else Y[inside] - cy + dv
+            total += _turned_samples(lin, la, pitch, phase, gain, camera, cx, cy, u, v)
+    value = total / (k if lent else k * k)
+    out = np.zeros((la.panel.height, la.panel.width, capture.shape[2]), capture.dtype)
+    out[inside] = encode(value, capture.dtype)
+    return out
+
+
+def _turned_samples(lin: np.ndarray, la: LensArray, pitch: tuple[float, float], phase: tuple[float, float],
+                    gain: float, camera: tuple[float, float], cx: np.ndarray, cy: np.ndarray,
+                    u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Linear values ``(P, C)`` at offsets ``(u, v)`` from lens centres ``(cx, cy)`` (``sample_turned_bank``)."""
+    hc, wc = lin.shape[:2]
+    sx, sy = pitch
     a, b = u / sx - phase[0], v / sy - phase[1]
     k0, m0 = np.floor(a), np.floor(b)
     fa, fb = a - k0, b - m0
-    lin = decode(capture)
-    acc = np.zeros((u.size, capture.shape[2]))
+    acc = np.zeros((u.size, lin.shape[2]))
     total = np.zeros(u.size)
     best = np.full(u.size, np.inf)
-    nearest = np.zeros((u.size, capture.shape[2]))
+    nearest = np.zeros((u.size, lin.shape[2]))
     for dk in (-1, 0, 1, 2):
         for dm in ((0,) if la.grid == "lenticular" else (-1, 0, 1, 2)):
             ou, ov = (k0 + dk + phase[0]) * sx, (m0 + dm + phase[1]) * sy
@@ -183,7 +206,11 @@ def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[
             row = hc / 2 - 0.5 - (cy - ov * gain - camera[1]) / sy
             ci, ri = np.rint(col).astype(np.int64), np.rint(row).astype(np.int64)
             # The capture grid is built lens-aligned: every valid sample is a pixel centre.
-            assert np.all(~valid | ((np.abs(col - ci) < 1e-6) & (np.abs(row - ri) < 1e-6))), "capture grid misaligned"
+            # Along a slanted lenticule the display pixel's point has no capture row of its
+            # own: the nearest row is taken, within half a row along the lenticule.
+            row_ok = la.grid == "lenticular" and la.rotation != 0.0
+            assert np.all(~valid | ((np.abs(col - ci) < 1e-6) & (row_ok | (np.abs(row - ri) < 1e-6)))), \
+                "capture grid misaligned"
             assert np.all(~valid | ((ci >= 0) & (ci < wc) & (ri >= 0) & (ri < hc))), "capture too small"
             value = lin[np.clip(ri, 0, hc - 1), np.clip(ci, 0, wc - 1)]
             if dk in (0, 1) and dm in (0, 1):
@@ -196,7 +223,4 @@ def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[
             best = np.where(closer, d, best)
             nearest = np.where(closer[:, None], value, nearest)
     with np.errstate(invalid="ignore", divide="ignore"):
-        value = np.where((total > 1e-12)[:, None], acc / total[:, None], nearest)
-    out = np.zeros((la.panel.height, la.panel.width, capture.shape[2]), capture.dtype)
-    out[inside] = encode(value, capture.dtype)
-    return out
+        return np.where((total > 1e-12)[:, None], acc / total[:, None], nearest)

@@ -245,8 +245,30 @@ def looking_glass(calibration: dict[str, Any], views: int, *, blend: bool = Fals
     width, height = get("screenW"), get("screenH")
     if pitch <= 0 or dpi <= 0 or slope == 0 or width < 1 or height < 1:
         raise ConfigError("calibration pitch, DPI, screenW and screenH must be positive and slope non-zero")
+    _check_sheet_fields(calibration, pitch, slope, dpi, width, height)
     lenses_across = pitch * width / dpi * math.cos(math.atan(1.0 / slope))
     per_lens = 3 * width / lenses_across
     offset = 1.5 + 3 * (height - 0.5) / slope - center * per_lens
     return Slanted("slanted", per_lens, int(views), 3.0 / slope, offset % per_lens, 1,
                    bool(inv), blend)
+
+
+def _check_sheet_fields(calibration: dict[str, Any], pitch: float, slope: float, dpi: float,
+                        width: float, height: float) -> None:
+    """A ``povh3d calibrate --lattice lenticular`` file also holds the sheet in pixels; they must agree."""
+    checks = []
+    if "pitch_px" in calibration:
+        checks.append(("pitch_px", calibration["pitch_px"], dpi / pitch, "DPI / pitch"))
+    if "slant_deg" in calibration:
+        checks.append(("slant_deg", calibration["slant_deg"], math.degrees(math.atan(1.0 / slope)), "atan(1 / slope)"))
+    if "image_size" in calibration:
+        size = calibration["image_size"]
+        if not (isinstance(size, list) and len(size) == 2 and size == [width, height]):
+            raise ConfigError(f"the calibration contradicts itself: image_size {size!r} but screenW x screenH "
+                              f"{width:g} x {height:g}; calibrate again")
+    for key, value, derived, how in checks:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ConfigError(f"calibration field {key!r} must be a number, got {value!r}")
+        if not math.isclose(value, derived, rel_tol=1e-6, abs_tol=1e-9):
+            raise ConfigError(f"the calibration contradicts itself: {key} is {value!r} but {how} gives "
+                              f"{derived!r}; calibrate again")

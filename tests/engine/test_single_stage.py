@@ -199,7 +199,7 @@ def test_resampled_arrays_place_depth_like_the_oracle(tmp_path, la, z0):
     plan = SingleStagePlan.for_clearance(la, lenslet_for(la), default_depth(la))
     assert plan.depth > abs(z0) > 3.5 * la.focal
     parity, clear = checker_oracle(la, z0, 2.5)
-    assert clear.sum() > 1000
+    assert clear.sum() > 800  # hex: the clear footprint bounds the whole hexagon (px / sqrt 3)
     assert (classify(got)[clear] == parity[clear]).mean() > 0.99
     # Negative control: rays through the lens centres at the focal plane z = -D
     # instead of at z = 0 (no re-centring) would show another checker.

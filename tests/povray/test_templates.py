@@ -14,6 +14,8 @@ from povh3d.geometry.footprint import CENTRE
 from povh3d.engine.methods import METHODS, display_header
 from povh3d.engine.frames import build_script
 
+from povh3d.geometry.lens_array import LensArray, Panel
+
 from tests.support.arrays import square_array
 
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"  # tests/golden/
@@ -21,7 +23,9 @@ GOLDEN = Path(__file__).resolve().parents[1] / "golden"  # tests/golden/
 
 @pytest.mark.parametrize("name", list(METHODS))
 def test_script_matches_golden(name):
-    la = square_array(lx=2, ly=2, nx=2, ny=2, s=0.25, f=1.5)
+    # subpixel renders lenticular sheets only: a slanted one.
+    la = (LensArray("lenticular", 3, 2, 0.5, 0.25, 1.5, Panel(4, 2, 0.25, 0.25), 9.46) if name == "subpixel"
+          else square_array(lx=2, ly=2, nx=2, ny=2, s=0.25, f=1.5))
     batch = METHODS[name].plan(la, 10.0, CENTRE, **METHODS[name].options).batch
     script = build_script(batch, batch.frames, method=name, scene_path="/scenes/tiny.pov",
                           add_assumed_gamma=True, header=display_header(la))

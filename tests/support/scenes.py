@@ -29,22 +29,32 @@ plane {{ z, {z0!r}
     return path
 
 
-def checker_oracle(lens_array: LensArray, z0: float, period: float) -> tuple[np.ndarray, np.ndarray]:
+def checker_oracle(lens_array: LensArray, z0: float, period: float,
+                   pseudoscopic: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Expected checker parity (0 = A, 1 = B) of every pixel, and whether its footprint is clear of edges.
 
     The ray of a pixel (docs/geometry.md) meets ``z = z0`` at ``c + (u, v) z0 / f``.  The
-    footprint spans the lens aperture times the pixel's angular width.
+    footprint spans the lens aperture times the pixel's angular width; on a rotated
+    lattice the aperture's bounding box in panel axes.  ``pseudoscopic``: the parity
+    the depth-reversed image would show (every ray's ``(u, v)`` negated), a negative control.
     """
     centres, dirs, inside = pixel_rays(lens_array)
     t = z0 / dirs[..., 2]
-    hit = centres + dirs[..., :2] * t[..., None]
-    if lens_array.grid == "lenticular":
-        _, Y = lens_array.panel.pixel_centres()
-        hit[..., 1] = Y[:, None]
+    sign = -1.0 if pseudoscopic else 1.0
+    hit = centres + sign * dirs[..., :2] * t[..., None]
     parity = (np.floor(hit[..., 0] / period) + np.floor(hit[..., 1] / period)) % 2
-    s = lens_array.panel.pitch_x
-    half_x = lens_array.pitch_x / 2 + abs(z0) * (s / 2) / lens_array.focal
-    half_y = (lens_array.pitch_y / 2 + abs(z0) * (lens_array.panel.pitch_y / 2) / lens_array.focal)
+    la = lens_array
+    theta = np.radians(la.rotation)
+    c, s_ = abs(np.cos(theta)), abs(np.sin(theta))
+    if la.grid == "hex":
+        ax = ay = la.pitch_x / np.sqrt(3)  # circumradius: bounds the hexagon at any angle
+    else:
+        # Lenticular: across the lenticule, and the pixel's own height along it.
+        hy = la.panel.pitch_y / 2 if la.grid == "lenticular" else la.pitch_y / 2
+        hx = la.pitch_x / 2
+        ax, ay = c * hx + s_ * hy, s_ * hx + c * hy
+    half_x = ax + abs(z0) * (la.panel.pitch_x / 2) / la.focal
+    half_y = ay + abs(z0) * (la.panel.pitch_y / 2) / la.focal
 
     def clear(coord, half):
         return np.floor((coord - half) / period) == np.floor((coord + half) / period)

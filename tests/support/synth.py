@@ -214,3 +214,43 @@ def to_uint(image: np.ndarray, bits: int = 16) -> np.ndarray:
     from povh3d.image.colour import from_linear
 
     return from_linear(np.clip(image, 0, 1), np.uint16 if bits == 16 else np.uint8)
+
+
+def render_lenticular_white(size: tuple[int, int], pitch_px: float, slant_deg: float, phase_px: float, *,
+                            k1: float = 0.0, vignetting: float = 0.0, noise: float = 0.0,
+                            border_px: float = 1.0, supersample: int = 4, seed: int = 0) -> np.ndarray:
+    """A white image ``(H, W)`` float of a slanted lenticular sheet (``calibration.lenticular`` conventions).
+
+    Each lenticule is bright on its axis with a cos^2 fall-off and a dark border
+    ``border_px`` wide; a Brown ``k1`` maps ideal to image positions; cos^4
+    vignetting keeps ``1 - vignetting`` at the corners; every pixel integrates its
+    square footprint.  Axes lie where ``n . (q - c) = phase + m pitch`` with
+    ``n = (cos t, -sin t)`` (image y down), ``c`` the image centre.
+    """
+    w, h = size
+    s = int(supersample)
+    sub = (np.arange(s) + 0.5) / s - 0.5
+    t = math.radians(slant_deg)
+    n = np.array([math.cos(t), -math.sin(t)])
+    centre = np.array([(w - 1) / 2, (h - 1) / 2])
+    dist = Brown.for_image(w, h, k1=k1)
+    xs = (np.arange(w)[:, None] + sub[None, :]).ravel()
+    out = np.empty((h, w))
+    for r0 in range(0, h, 64):
+        r1 = min(h, r0 + 64)
+        ys = (np.arange(r0, r1)[:, None] + sub[None, :]).ravel()
+        pts = np.stack(np.broadcast_arrays(xs[None, :], ys[:, None]), axis=-1)
+        q = pts if dist.is_identity else dist.undistort(pts)
+        d = (q - centre) @ n - phase_px
+        d = d - pitch_px * np.round(d / pitch_px)  # from the nearest axis
+        value = np.cos(np.pi * d / (1.6 * pitch_px)) ** 2 * _ramp(pitch_px / 2 - border_px / 2 - np.abs(d), 0.6)
+        out[r0:r1] = value.reshape(r1 - r0, s, w, s).mean(axis=(1, 3))
+    if vignetting > 0:
+        yy, xx = np.mgrid[0:h, 0:w]
+        r = np.hypot(xx - centre[0], yy - centre[1])
+        F = 0.5 * math.hypot(w, h) / math.sqrt((1 - vignetting) ** -0.5 - 1)
+        out *= (1 + (r / F) ** 2) ** -2
+    out *= 0.9
+    if noise > 0:
+        out += np.random.default_rng(seed).normal(0.0, noise * 0.9, out.shape)
+    return out.astype(np.float32)

@@ -1,0 +1,103 @@
+"""The mesh camera of any lattice: one polygon per lens cell, turned with the lattice.
+
+``cameras.camera_mesh`` lays out upright square and lenticular arrays; this
+module adds hex cells (hexagons) and turned lattices (docs/geometry.md,
+"Rotated lattices"), and ``lens_mesh`` picks between the two.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from .cameras import CameraMesh, _quad_mesh, camera_mesh, check_clearance
+from .lens_array import LensArray, pixel_rays
+
+
+def lens_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+    """One cell per lens: ``lattice_mesh`` for hex or turned lattices, else ``camera_mesh``."""
+    if lens_array.rotation or lens_array.grid == "hex":
+        return lattice_mesh(lens_array, back_off)
+    return camera_mesh(lens_array, back_off)
+
+
+def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+    """``camera_mesh`` of a rotated lattice, or a hex one: one polygon per lens cell.
+
+    The cell of every lens (square: its pitch rectangle; hex: its hexagon, all six
+    corners ``px / sqrt(3)`` from the centre; lenticular: a strip ``px`` wide along
+    the lenticule, past the panel at both ends) is laid out in the lattice's own
+    frame and turned by ``rotation``.  Origin and direction stay linear in the
+    offset ``(u, v)`` and every corner offset of a lens has one length, so the face
+    interpolation is exact as in ``camera_mesh``.  A pixel centre lies on a cell
+    edge only by accident of a rotated lattice, and no tie shift is made for it.
+
+    Only cells that own a pixel are written.  POV-Ray aborts on UV outside 0..1,
+    and cells at the panel's edge reach past it, so the image is a canvas
+    ``margin`` pixels larger on every side (``CameraMesh.crop`` cuts it back).
+    """
+    check_clearance(lens_array, back_off)
+    la = lens_array
+    panel = la.panel
+    W, H = panel.width, panel.height
+    f = la.focal
+    hx, hy = la.pitch_x / 2, la.pitch_y / 2
+    if la.grid == "lenticular":
+        # Each strip runs along its lenticule as far as its pixels, and a pixel diagonal on.
+        # Along a strip the extremes of the panel's pixels lie on the panel's border (the
+        # strip and the panel are convex), so only border pixels are looked at.
+        xs, ys = panel.pixel_centres()
+        border = np.concatenate([np.stack(np.broadcast_arrays(xs, ys[0]), -1), np.stack(np.broadcast_arrays(xs, ys[-1]), -1),
+                                 np.stack(np.broadcast_arrays(xs[0], ys), -1), np.stack(np.broadcast_arrays(xs[-1], ys), -1)])
+        bx, by = la.to_lattice(border[:, 0], border[:, 1])
+        col = np.floor(bx / la.pitch_x + la.lenses_x / 2 + 1e-9).astype(np.int64)  # pixel_rays' rule
+        ok = (col >= 0) & (col < la.lenses_x)
+        col, by = col[ok], by[ok]
+        cx = la.lattice_centres()[0, :, 0]
+        low, high = np.full(la.lenses_x, np.inf), np.full(la.lenses_x, -np.inf)
+        np.minimum.at(low, col, by)
+        np.maximum.at(high, col, by)
+        keep = np.flatnonzero(np.isfinite(low))
+        ends = np.stack([low[keep], high[keep]], axis=1)
+        reach = math.hypot(panel.pitch_x, panel.pitch_y)
+        cx = cx[keep]
+        cu = np.array([-hx, hx, hx, -hx])
+        lx = cx[:, None] + cu[None, :]
+        ly = np.stack([ends[:, 0] - reach] * 2 + [ends[:, 1] + reach] * 2, axis=1)  # along the lenticule
+        ou, ov = np.broadcast_to(cu, lx.shape), np.zeros(lx.shape)  # v across the lenticule is 0
+        olx, oly = cx[:, None] - ou * (back_off / f), ly
+    else:
+        X, Y = la.to_lattice(*np.meshgrid(*panel.pixel_centres()))
+        owner, inside = _pixel_owners(la, X, Y)
+        c = la.lattice_centres().reshape(-1, 2)[np.unique(owner[inside])]
+        if la.grid == "hex":
+            r = la.pitch_x / math.sqrt(3)
+            cu = np.array([-hx, 0.0, hx, hx, 0.0, -hx])
+            cv = np.array([-r / 2, -r, -r / 2, r / 2, r, r / 2])
+        else:
+            cu, cv = np.array([-hx, hx, hx, -hx]), np.array([-hy, -hy, hy, hy])
+        lx, ly = c[:, 0:1] + cu[None, :], c[:, 1:2] + cv[None, :]
+        ou, ov = np.broadcast_to(cu, lx.shape), np.broadcast_to(cv, lx.shape)
+        olx, oly = c[:, 0:1] - ou * (back_off / f), c[:, 1:2] - ov * (back_off / f)
+    x, y = la.from_lattice(lx, ly)
+    u, v = la.from_lattice(ou, ov)
+    origin_x, origin_y = la.from_lattice(olx, oly)
+    col = x / panel.pitch_x + W / 2 - 0.5
+    row = H / 2 - 0.5 - y / panel.pitch_y
+    mx = max(0, math.ceil(max(-col.min(), col.max() - (W - 1)))) + 1
+    my = max(0, math.ceil(max(-row.min(), row.max() - (H - 1)))) + 1
+    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), back_off, f)
+    return replace(mesh, margin=(mx, my))
+
+
+def _pixel_owners(la: LensArray, X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Flat lens index ``i * Lx + j`` of the lens owning each pixel, and whether one does."""
+    centres, _, inside = pixel_rays(la)
+    lattice = la.lattice_centres()
+    cx, cy = la.to_lattice(centres[..., 0], centres[..., 1])
+    j = np.rint((cx - lattice[0, 0, 0]) / la.pitch_x - (np.rint((lattice[0, 0, 1] - cy) / la.pitch_y) % 2) * 0.5 * (la.grid == "hex"))
+    i = np.zeros_like(j) if la.grid == "lenticular" else np.rint((lattice[0, 0, 1] - cy) / la.pitch_y)
+    owner = np.where(inside, i * la.lenses_x + j, -1)
+    return owner.astype(np.int64), inside
