@@ -19,7 +19,9 @@ from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..image.interleave import extract
-from .stage import prepare_stage
+from .stage import depth_budget_mm, prepare_stage
+from .frame import resolve_frame
+from ..geometry.frame import NATIVE
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import Frame, render_sequence
@@ -37,8 +39,10 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
     scene, model_record = load_content(request)
+    request, frame_record = _place_display(request, scene)
     settings, auto = _resolve_quality(request, scene)
-    frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record)
+    frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record,
+                    display_frame=frame_record)
     if request.frames is None:
         still = frame(None, progress)
         if still.views is not None:
@@ -60,6 +64,19 @@ def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
     return load_scene(stage, request.include_dirs), model_record
 
 
+def _place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any]]:
+    """The request with its display frame resolved into the settings, and the frame's record."""
+    if request.is_model:  # the stage is built in display mm
+        return request, {**NATIVE.as_record(), "note": "a mesh model staged in display mm", "warnings": []}
+    s = request.settings
+    placed, record = resolve_frame(request.display_frame, scene, request.render_array,
+                                   cache_dir=s.cache_dir, use_cache=s.use_cache)
+    matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
+    budget = depth_budget_mm(request.render_array)
+    record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
+    return replace(request, settings=replace(s, frame=matrix)), record
+
+
 def _resolve_quality(request: RenderRequest, scene: Scene) -> tuple[RenderSettings, AutoChoice | None]:
     """``--quality auto`` chosen once for the whole request (on the first frame's clock)."""
     first_clock = None
@@ -72,7 +89,7 @@ def _resolve_quality(request: RenderRequest, scene: Scene) -> tuple[RenderSettin
 
 def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                  progress: Progress | None = None, *, auto: AutoChoice | None = None,
-                 model: dict[str, Any] | None = None) -> Frame:
+                 model: dict[str, Any] | None = None, display_frame: dict[str, Any] | None = None) -> Frame:
     """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default)."""
     array = request.render_array
     start = time.perf_counter()
@@ -101,6 +118,8 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
         record["crop"] = result.crop
     if model is not None:
         record["model"] = model
+    if display_frame is not None:
+        record["display_frame"] = display_frame
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
     if request.mapping is not None:
         h3d = request.mapping.apply(h3d, request.image_size)

@@ -24,6 +24,7 @@ from ..image.video import check_video_path
 from ..mappings.base import Mapping
 from ..mesh.formats import is_mesh_file
 from .animation import FrameRange
+from .frame import FrameOptions
 
 SHADINGS = ("auto", "smooth", "flat")
 
@@ -77,6 +78,7 @@ class RenderRequest:
     frames : FrameRange or None    render an animation: one image per clock value
     video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
     fps : float                    video frames per second
+    display_frame : FrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
     """
 
     source: Path
@@ -95,6 +97,7 @@ class RenderRequest:
     frames: FrameRange | None = None
     video: Path | None = None
     fps: float = 24.0
+    display_frame: FrameOptions = field(default_factory=FrameOptions)
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)

@@ -46,7 +46,29 @@ def request_from_args(args: argparse.Namespace) -> Any:
         mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
         views_dir=Path(args.views_dir) if args.views_dir else None,
         model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles)),
-        frames=frames, video=Path(args.video) if args.video else None, fps=args.fps)
+        frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
+        display_frame=frame_options_from_args(args))
+
+
+def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3:
+        raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
+def frame_options_from_args(args: argparse.Namespace) -> Any:
+    """``FrameOptions`` from --display-frame and the explicit --display-* options."""
+    from ..app.frame import FrameOptions
+
+    return FrameOptions(args.display_frame, _triple(args.display_center, "--display-center"),
+                        _triple(args.display_normal, "--display-normal"), _triple(args.display_up, "--display-up"),
+                        args.display_width)
 
 
 def _method_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -79,12 +101,23 @@ def cmd_render(args: argparse.Namespace) -> int:
         return 0
     if "model" in result:
         warn(result["model"]["warnings"])
+    placed = result.get("display_frame", {})
+    warn(placed.get("warnings", []))
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.mapping.name}" if request.mapping else ""
-    print(f"{request.output}  {w}x{h}  {request.method}{mapping}  "
+    print(f"{request.output}  {w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return 0
+
+
+def frame_phrase(record: dict[str, Any]) -> str:
+    """The display frame in a few words: where it came from, its centre and scale."""
+    source = record.get("source", "native")
+    if source == "native":
+        return "frame native (mm, z = 0)"
+    centre = ",".join(f"{v:.4g}" for v in record["centre"])
+    return f"frame {source} (centre {centre}, {record['units_per_mm']:.4g} units/mm)"
 
 
 def cmd_convert_mesh(args: argparse.Namespace) -> int:
@@ -167,6 +200,15 @@ def add_parsers(sub: Any) -> None:
                    "follows from the lens-maker equation (default: an optically thin lens)")
     p.add_argument("--depth", type=float, metavar="MM",
                    help="a model's depth on the display (default: the depth budget the lens array shows sharply)")
+    g = p.add_argument_group("display frame (where the display sits in the scene)")
+    g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
+                   help="camera: the scene's camera places the display (look_at on the screen, its field "
+                   "across the panel); native: the scene is in mm around the screen z = 0; auto (default): "
+                   "camera when the scene has one, else native")
+    g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
+    g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
+    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
+    g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)

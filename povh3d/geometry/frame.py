@@ -171,7 +171,7 @@ def camera_frame(location: Any, direction: Any, right: Any, up: Any, look_at: An
     if not distance > 0:
         raise ConfigError(f"the scene's camera looks away from its centre (distance {distance:.4g}); "
                           f"place the display with {EXPLICIT_OPTIONS}")
-    centre = loc + distance * z
+    centre = _vec(look_at, "look_at") if look_at is not None else loc + distance * z
     x = r - np.dot(r, z) * z
     if not np.linalg.norm(x) > 1e-12 * np.linalg.norm(r):
         raise ConfigError(f"the scene camera's right is parallel to its direction; use {EXPLICIT_OPTIONS}")

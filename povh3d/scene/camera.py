@@ -169,6 +169,8 @@ def _rewrite(body: str) -> str:
                 i = j + 1
                 continue
             j = i + 1
+            if t in ("#debug", "#warning", "#error") and j < len(toks):
+                j += 1  # its message: a string, or a call such as concat(...)
             if j < len(toks) and toks[j].text == "(" and t not in ("#else", "#end", "#break"):
                 depth = 0
                 while j < len(toks):
@@ -180,12 +182,10 @@ def _rewrite(body: str) -> str:
             i = j
         elif t in _VECTORS:
             expr, i = expression(i + 1)
-            out.append(f'#declare Povh3d_Cam_V = <0, 0, 0> + ({expr}\n);\n'
-                       f'#debug concat("{TAG} {t} ", vstr(3, Povh3d_Cam_V, " ", 0, 17), "\\n")')
+            out.append(f'#declare Povh3d_Cam_V = <0, 0, 0> + ({expr}\n);\n' + _debug(t, "Povh3d_Cam_V"))
         elif t == "angle":
             expr, i = expression(i + 1)
-            out.append(f'#declare Povh3d_Cam_F = ({expr}\n);\n'
-                       f'#debug concat("{TAG} angle ", str(Povh3d_Cam_F, 0, 17), "\\n")')
+            out.append(f'#declare Povh3d_Cam_F = ({expr}\n);\n' + _debug("angle", "Povh3d_Cam_F", 1))
         elif t in _TRANSFORMS:
             expr, i = expression(i + 1)
             out.append(f"#declare Povh3d_Cam_T = transform {{ transform Povh3d_Cam_T {t} {expr}\n}}")
@@ -200,11 +200,16 @@ def _rewrite(body: str) -> str:
             raise _cannot(f"povh3d does not know the camera modifier {t!r}")
     # transforms.inc's vtransform, inlined: the scene need not include it.
     out.append("#declare Povh3d_Cam_Fn = function { transform { Povh3d_Cam_T } }")
-    points = ", ".join(f'vstr(3, Povh3d_Cam_Fn({p}), " ", 0, 17), " "'
-                       for p in ("0, 0, 0", "1, 0, 0", "0, 1, 0", "0, 0, 1"))
-    out.append(f'#debug concat("{TAG} transform ", {points}, "\\n")')
+    for p in ("0, 0, 0", "1, 0, 0", "0, 1, 0", "0, 0, 1"):
+        out.append(f"#declare Povh3d_Cam_V = Povh3d_Cam_Fn({p});\n" + _debug("transform", "Povh3d_Cam_V"))
     out.append(f'#debug "{TAG} end\\n"')
     return "\n".join(out)
+
+
+def _debug(key: str, name: str, n: int = 3) -> str:
+    """``#debug`` lines of one value, a number a line: POV-Ray wraps its console at 80 columns."""
+    parts = [f"{name}.{c}" for c in "xyz"] if n == 3 else [name]
+    return "\n".join(f'#debug concat("{TAG} {key} ", str({p}, 0, 17), "\\n")' for p in parts)
 
 
 @dataclass(frozen=True)
@@ -245,8 +250,13 @@ def parse_log(log: str) -> list[tuple[str, list[float] | str]]:
             items.append((key, rest[0] if rest else "perspective"))
         elif key == "end":
             items.append((key, ""))
-        else:
-            items.append((key, [float(v) for v in rest]))
+        else:  # a number a line: three make a vector (twelve the transform)
+            size = {"angle": 1, "transform": 12}.get(key, 3)
+            last = items[-1] if items else None
+            if last is not None and last[0] == key and isinstance(last[1], list) and len(last[1]) < size:
+                last[1].append(float(rest[0]))
+            else:
+                items.append((key, [float(rest[0])]))
     return items
 
 
