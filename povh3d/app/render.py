@@ -69,6 +69,8 @@ def _place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest,
     if request.is_model:  # the stage is built in display mm
         return request, {**NATIVE.as_record(), "note": "a mesh model staged in display mm", "warnings": []}
     s = request.settings
+    if s.frame is not None:  # the Python API gave the matrix itself: use it, and say so
+        return request, {"source": "matrix", "matrix": list(s.frame), "warnings": []}
     placed, record = resolve_frame(request.display_frame, scene, request.render_array,
                                    cache_dir=s.cache_dir, use_cache=s.use_cache)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
