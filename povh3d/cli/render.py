@@ -161,7 +161,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("render", help="render a POV-Ray scene to an H3D image")
-    p.add_argument("scene", help="POV-Ray scene without a camera (.pov), or a mesh model (.obj .stl .ply ...)")
+    p.add_argument("scene", help="POV-Ray scene (.pov; its camera places the display), or a mesh model (.obj .stl .ply ...)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
     p.add_argument("--quality", choices=QUALITY_NAMES, default="normal",

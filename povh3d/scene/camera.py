@@ -103,9 +103,11 @@ def camera_statements(toks: list[Token]) -> list[CameraStatement]:
     return found
 
 
-def _cannot(reason: str) -> CameraError:
-    from ..geometry.frame import EXPLICIT_OPTIONS
+#: The same words as ``geometry.frame.EXPLICIT_OPTIONS`` (scene/ does not import geometry/).
+EXPLICIT_OPTIONS = "--display-center X,Y,Z --display-normal X,Y,Z [--display-up X,Y,Z] --display-width UNITS"
 
+
+def _cannot(reason: str) -> CameraError:
     return CameraError(f"cannot use the scene's camera ({reason}); place the display with "
                        f"{EXPLICIT_OPTIONS}, or --display-frame native")
 
