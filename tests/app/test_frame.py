@@ -118,10 +118,8 @@ def test_views_equal_oblique_orthographic_renders(tmp_path, name):
         flipped = max(flipped, int((np.abs(views[l, k].astype(int) - oracle).max(-1) > 8).sum()))
         if (l, k) == (0, 0):  # negative control: the mirror view differs
             assert psnr(views[ny - 1, nx - 1], oracle) < 35
-    # inches.pov: >= 40 dB.  tilted.pov (checkers at grazing angles, 24 x 18 views): one or two
-    # pixels of a view flip at a checker edge, 31-34 dB; bounded here, not yet the 40 dB.
-    assert worst >= (40 if name == "inches.pov" else 30)
-    assert flipped <= 2
+    assert worst >= 40
+    assert flipped == 0
 
 
 def test_moved_scene_and_frame_give_the_same_pixels(tmp_path):

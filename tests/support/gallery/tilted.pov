@@ -20,4 +20,5 @@ sky_sphere { pigment { gradient y color_map { [0 rgb <0.75, 0.85, 1>] [1 rgb <0.
 plane { y, 0 pigment { checker rgb 0.85 rgb 0.25 scale 0.25 } }
 sphere { <0.35, 0.42, -0.10>, 0.42 pigment { checker rgb <0.9, 0.35, 0.1> rgb <0.2, 0.2, 0.6> scale 0.12 } }
 box { <-0.9, 0, 0.3>, <-0.3, 0.6, 0.9> rotate 20 * y pigment { rgb <0.2, 0.7, 0.3> } }
-cylinder { <1.1, 0, 0.2>, <1.1, 0.9, 0.2>, 0.15 pigment { gradient y color_map { [0.5 rgb 1] [0.5 rgb <0.7, 0.1, 0.1>] } scale 0.15 } }
+cylinder { <1.1, 0, 0.2>, <1.1, 0.95, 0.2>, 0.15 // top cap off the stripes' colour boundaries (multiples of 0.15)
+  pigment { gradient y color_map { [0.5 rgb 1] [0.5 rgb <0.7, 0.1, 0.1>] } scale 0.15 } }
