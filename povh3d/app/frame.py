@@ -41,6 +41,7 @@ class FrameOptions:
     mode : {'auto', 'camera', 'native'}   ignored when ``center`` is given (explicit)
     center, normal, up : (3,) floats or None, scene units
     width : float or None, scene units    the panel's width in the scene
+    fit_depth : 'auto', float (mm) or None  scale the frame so the measured depth fits
     """
 
     mode: str = "auto"
@@ -48,8 +49,13 @@ class FrameOptions:
     normal: tuple[float, float, float] | None = None
     up: tuple[float, float, float] | None = None
     width: float | None = None
+    fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the frame to fit
 
     def __post_init__(self) -> None:
+        f = self.fit_depth
+        if f is not None and f != "auto" and (isinstance(f, bool) or not isinstance(f, (int, float))
+                                              or not (f > 0 and f < float("inf"))):
+            raise ConfigError(f"--fit-depth takes 'auto' or a positive number of mm, got {f!r}")
         if self.mode not in FRAME_MODES:
             raise ConfigError(f"--display-frame must be one of {', '.join(FRAME_MODES)}, got {self.mode!r}")
         given = [n for n in ("center", "normal", "width") if getattr(self, n) is not None]

@@ -19,9 +19,8 @@ from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..image.interleave import extract
-from .stage import depth_budget_mm, prepare_stage
-from .frame import resolve_frame
-from ..geometry.frame import NATIVE
+from .stage import prepare_stage
+from .placement import place_display
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import Frame, render_sequence
@@ -39,7 +38,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
     scene, model_record = load_content(request)
-    request, frame_record = _place_display(request, scene)
+    request, frame_record = place_display(request, scene)
     settings, auto = _resolve_quality(request, scene)
     frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record,
                     display_frame=frame_record)
@@ -62,21 +61,6 @@ def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
     stage, model_record = prepare_stage(request.source, request.render_array, depth=m.depth, shading=m.shading,
                                         max_triangles=m.max_triangles, cache_dir=request.settings.cache_dir)
     return load_scene(stage, request.include_dirs), model_record
-
-
-def _place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any]]:
-    """The request with its display frame resolved into the settings, and the frame's record."""
-    if request.is_model:  # the stage is built in display mm
-        return request, {**NATIVE.as_record(), "note": "a mesh model staged in display mm", "warnings": []}
-    s = request.settings
-    if s.frame is not None:  # the Python API gave the matrix itself: use it, and say so
-        return request, {"source": "matrix", "matrix": list(s.frame), "warnings": []}
-    placed, record = resolve_frame(request.display_frame, scene, request.render_array,
-                                   cache_dir=s.cache_dir, use_cache=s.use_cache)
-    matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-    budget = depth_budget_mm(request.render_array)
-    record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
-    return replace(request, settings=replace(s, frame=matrix)), record
 
 
 def _resolve_quality(request: RenderRequest, scene: Scene) -> tuple[RenderSettings, AutoChoice | None]:

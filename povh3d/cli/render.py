@@ -66,9 +66,15 @@ def frame_options_from_args(args: argparse.Namespace) -> Any:
     """``FrameOptions`` from --display-frame and the explicit --display-* options."""
     from ..app.frame import FrameOptions
 
+    fit = args.fit_depth
+    if fit is not None and fit != "auto":
+        try:
+            fit = float(fit)
+        except ValueError:
+            raise ConfigError(f"--fit-depth takes 'auto' or a number of mm, got {fit!r}") from None
     return FrameOptions(args.display_frame, _triple(args.display_center, "--display-center"),
                         _triple(args.display_normal, "--display-normal"), _triple(args.display_up, "--display-up"),
-                        args.display_width)
+                        args.display_width, fit)
 
 
 def _method_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -115,9 +121,18 @@ def frame_phrase(record: dict[str, Any]) -> str:
     """The display frame in a few words: where it came from, its centre and scale."""
     source = record.get("source", "native")
     if source == "native":
-        return "frame native (mm, z = 0)"
-    centre = ",".join(f"{v:.4g}" for v in record["centre"])
-    return f"frame {source} (centre {centre}, {record['units_per_mm']:.4g} units/mm)"
+        text = "frame native (mm, z = 0)"
+    elif source == "matrix":
+        text = "frame matrix"
+    else:
+        centre = ",".join(f"{v:.4g}" for v in record["centre"])
+        text = f"frame {source} (centre {centre}, {record['units_per_mm']:.4g} units/mm)"
+    depth = record.get("depth")
+    if depth and not depth.get("empty"):
+        fit = f", fitted x{depth['fit']['factor']:.3g}" if depth.get("fit") else ""
+        text += (f"  depth {depth['near_mm']:.3g}..{depth['far_mm']:.3g} mm of +-"
+                 f"{record['depth_budget_mm'] / 2:.3g}{fit}")
+    return text
 
 
 def cmd_convert_mesh(args: argparse.Namespace) -> int:
@@ -209,6 +224,9 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
     g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
     g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
+    g.add_argument("--fit-depth", metavar="auto|MM",
+                   help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
+                   "display's depth budget (auto: 2 N f) or MM")
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)
