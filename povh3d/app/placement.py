@@ -104,3 +104,21 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, back_off
     after["field_within_budget"] = bool(-half <= after["field_near_mm"] and after["field_far_mm"] <= half)
     fitted = frame.scaled(factor) if factor > 1 else frame
     return fitted, {**after, "before_fit": depth, "fit": {"target_mm": target, "factor": factor}}
+
+
+def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: tuple = ()) -> dict[str, Any]:
+    """``povh3d info SCENE``: the frame the scene would render with and its depth against the budget."""
+    from ..engine.quality import RenderSettings
+    from ..scene.scene import load_scene
+    from .frame import FrameOptions
+
+    scene = load_scene(path, include_dirs)
+    options = options or FrameOptions()
+    placed, record = resolve_frame(options, scene, lens_array)
+    budget = depth_budget_mm(lens_array)
+    back_off = _clearance(placed, record, get_method("multi-ortho").default_back_off(lens_array))
+    matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
+    depth = depth_pass(scene, lens_array, RenderSettings(frame=matrix), back_off, placed.units_per_mm)
+    return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
+            "depth": depth.summary(budget), "depth_budget_mm": budget,
+            "depth_budget_scene_units": budget * placed.units_per_mm}
