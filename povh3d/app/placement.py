@@ -10,7 +10,7 @@ frame in its settings and the record for the sidecar.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,8 +20,10 @@ from ..errors import ConfigError
 from ..geometry.frame import NATIVE, DisplayFrame
 from ..scene.scene import Scene
 from .frame import resolve_frame
-from .request import RenderRequest
 from .stage import depth_budget_mm
+
+if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from .request import RenderRequest
 
 
 def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any]]:

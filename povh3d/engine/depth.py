@@ -25,7 +25,6 @@ from ..image.colour import decode
 from ..scene.scene import Scene
 from .batch import FrameBatch
 from .frames import render_frames
-from .methods import display_header
 from .quality import RenderSettings
 
 MAX_WIDTH = 160     # pixels across the depth pass
@@ -73,7 +72,8 @@ def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, ba
     w = min(MAX_WIDTH, lens_array.lenses_x * 2)
     h = max(1, round(w * height_mm / width_mm))
     fog = back_off * units_per_mm   # scene units: t = 1/e at the screen
-    header = display_header(lens_array)
+    header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
+                              "focal": lens_array.focal}   # as methods.display_header
     if settings.frame is not None:
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
     batch = FrameBatch("depth.pov.j2", {"fog_distance": fog, "back_off": back_off, "right": (width_mm, 0.0, 0.0),

@@ -57,4 +57,4 @@ def test_info_reports_the_scene_depth_against_the_budget(cli):
     assert "frame camera" in result.out and "depth budget +-12 mm" in result.out   # 2 N f = 2 * 6 * 2 = 24
     data = cli("info", str(GALLERY / "tilted.pov"), "--json", *ARRAY)
     report = json.loads(data.out)["scene"]
-    assert report["depth_budget_mm"] == 24.0 and report["depth"]["empty"] is False
+    assert report["depth_budget_mm"] == pytest.approx(24.0) and report["depth"]["empty"] is False
