@@ -59,7 +59,8 @@ def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
         return load_scene(request.source, request.include_dirs), None
     m = request.model
     stage, model_record = prepare_stage(request.source, request.render_array, depth=m.depth, shading=m.shading,
-                                        max_triangles=m.max_triangles, cache_dir=request.settings.cache_dir)
+                                        max_triangles=m.max_triangles, cache_dir=request.settings.cache_dir,
+                                        up=m.up, rotate=m.rotate, unit=m.unit)
     return load_scene(stage, request.include_dirs), model_record
 
 
@@ -106,6 +107,12 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
         record["model"] = model
     if display_frame is not None:
         record["display_frame"] = display_frame
+    bank = h3d[array.bank_region]
+    if bank.size and int(bank.max()) == int(bank.min()):
+        # One flat colour: no ray hit anything (a frame that misses the scene, a model in odd units).
+        record.setdefault("warnings", []).append(
+            "the image is one flat colour: no ray hit anything; check the display frame (--display-*) "
+            "or the model's units and orientation (--unit, --up)")
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
     if request.mapping is not None:
         h3d = request.mapping.apply(h3d, request.image_size)

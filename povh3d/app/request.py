@@ -38,11 +38,18 @@ class ModelOptions:
     depth : float or None, mm      the model's depth (None: the display's depth budget)
     shading : {'auto', 'smooth', 'flat'}
     max_triangles : int, 'auto' or None   simplify to this many triangles
+    up : {'x', 'y', 'z', '-x', '-y', '-z'} or None   the model's up axis (None: the format's, or detected)
+    rotate : (3,) degrees or None  turn the model (POV-Ray's ``rotate``) after ``up``
+    unit : {'mm', 'cm', 'm', 'in'} or None   the model's unit (None: the file's); only the record
+                                   shows it, since the stage scales the model to the panel
     """
 
     depth: float | None = None
     shading: str = "auto"
     max_triangles: int | str | None = None
+    up: str | None = None
+    rotate: tuple[float, float, float] | None = None
+    unit: str | None = None
 
     def __post_init__(self) -> None:
         if self.depth is not None and not (math.isfinite(self.depth) and self.depth > 0):
@@ -52,6 +59,10 @@ class ModelOptions:
         m = self.max_triangles
         if m is not None and m != "auto" and (isinstance(m, bool) or not isinstance(m, int) or m < 4):
             raise ConfigError(f"--max-triangles takes a whole number >= 4 or 'auto', got {m!r}")
+        if self.up is not None and self.up not in ("x", "y", "z", "-x", "-y", "-z"):
+            raise ConfigError(f"--up must be one of x, y, z, -x, -y, -z, got {self.up!r}")
+        if self.rotate is not None and (len(self.rotate) != 3 or not all(math.isfinite(a) for a in self.rotate)):
+            raise ConfigError(f"--rotate takes three angles X,Y,Z in degrees, got {self.rotate!r}")
 
 
 @dataclass(frozen=True)

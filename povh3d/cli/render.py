@@ -45,7 +45,8 @@ def request_from_args(args: argparse.Namespace) -> Any:
         crop=CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None),
         mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
         views_dir=Path(args.views_dir) if args.views_dir else None,
-        model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles)),
+        model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles), args.up,
+                           _triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=frame_options_from_args(args))
 
@@ -109,9 +110,12 @@ def cmd_render(args: argparse.Namespace) -> int:
         warn(result["model"]["warnings"])
     placed = result.get("display_frame", {})
     warn(placed.get("warnings", []))
+    warn(result.get("warnings", []))
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.mapping.name}" if request.mapping else ""
+    if "model" in result:
+        mapping += f"  up {result['model']['up']} ({result['model']['up_reason']})"
     print(f"{request.output}  {w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return 0
@@ -144,9 +148,11 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
 
         budget = auto_budget(lens_array_from_args(args)[0])
     result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
-                          fit_depth=args.fit_depth, center=args.center, max_triangles=budget)
+                          fit_depth=args.fit_depth, center=args.center, max_triangles=budget, up=args.up,
+                          rotate=_triple(args.rotate, "--rotate"))
     warn(result.warnings)
-    line = f"{result.include}  {result.ident}  {result.summary()}  {result.seconds:.2f} s"
+    line = f"{result.include}  {result.ident}  {result.summary()}, up {result.up} ({result.up_reason})  " \
+           f"{result.seconds:.2f} s"
     if result.simplification:
         s = result.simplification
         line += (f"  (simplified from {s['triangles_before']} triangles; "
@@ -172,6 +178,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
     print(format_table(report))
     print(f"\n{paths['csv']}  {paths['table']}  {paths['plot']}")
     return 0
+
+
+def _add_orientation(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--up", choices=("x", "y", "z", "-x", "-y", "-z"),
+                   help="the model's up axis (default: the format's: y for glTF and OBJ, z for 3MF; STL, PLY, "
+                   "OFF: z when the model stands on z = 0, else y); the front then faces the viewer")
+    p.add_argument("--rotate", metavar="X,Y,Z", help="then turn the model by these angles (degrees, as POV-Ray's rotate)")
 
 
 def add_parsers(sub: Any) -> None:
@@ -214,7 +227,11 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--ior", type=float, help="single-stage lenslet index of refraction; the radius "
                    "follows from the lens-maker equation (default: an optically thin lens)")
     p.add_argument("--depth", type=float, metavar="MM",
-                   help="a model's depth on the display (default: the depth budget the lens array shows sharply)")
+                   help="a model's depth on the display (default: as deep as filling the panel makes it; "
+                   "a warning says when that passes the depth budget)")
+    _add_orientation(p)
+    p.add_argument("--unit", choices=("mm", "cm", "m", "in"),
+                   help="a model's unit (default: the file's); the stage scales the model to the panel anyway")
     g = p.add_argument_group("display frame (where the display sits in the scene)")
     g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
                    help="camera: the scene's camera places the display (look_at on the screen, its field "
@@ -240,6 +257,7 @@ def add_parsers(sub: Any) -> None:
                    help="the model's unit (default: the file's, else mm; glTF: m)")
     p.add_argument("--fit-depth", type=float, metavar="MM", help="scale the model to this depth (z extent)")
     p.add_argument("--center", action="store_true", help="centre the model's bounding box on the origin")
+    _add_orientation(p)
     add_mesh_options(p)
     add_array_options(p)  # only for --max-triangles auto
     p.set_defaults(func=cmd_convert_mesh)
