@@ -15,12 +15,16 @@ from dataclasses import replace
 from functools import partial
 from typing import Any
 
+import numpy as np
+
 from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
+from .depth_maps import check_depth_dir, write_depth_maps
+from ..engine.depth import view_depth_maps
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import Frame, render_sequence
@@ -37,6 +41,8 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     output = png_output(request.output)
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
+    if request.depth_maps is not None:
+        check_depth_dir(request.depth_maps)
     scene, model_record = load_content(request)
     request, frame_record = place_display(request, scene)
     settings, auto = _resolve_quality(request, scene)
@@ -46,6 +52,13 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         still = frame(None, progress)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
+        if request.depth_maps is not None:
+            units = frame_record.get("units_per_mm", 1.0)
+            depth = view_depth_maps(scene, request.render_array, settings,
+                                    still.record["quality"]["front_clearance_mm"], units)
+            write_depth_maps(request.depth_maps, depth, request.render_array, still.record)
+            still.record["depth_maps"] = {"folder": str(request.depth_maps),
+                                          "nan_fraction": float(np.isnan(depth).mean())}
         write_image(output, still.image, still.record)
         return still.record
     return render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,

@@ -90,6 +90,7 @@ class RenderRequest:
     video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
     fps : float                    video frames per second
     display_frame : FrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
+    depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
     """
 
     source: Path
@@ -109,6 +110,7 @@ class RenderRequest:
     video: Path | None = None
     fps: float = 24.0
     display_frame: FrameOptions = field(default_factory=FrameOptions)
+    depth_maps: Path | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
@@ -137,6 +139,11 @@ class RenderRequest:
         if not (isinstance(self.fps, (int, float)) and math.isfinite(self.fps) and self.fps > 0):
             raise ConfigError(f"--fps must be a positive number, got {self.fps}")
         if self.views_dir is not None:
+            self.render_array.require_views()
+        if self.depth_maps is not None:
+            set_("depth_maps", Path(self.depth_maps))
+            if self.frames is not None:
+                raise ConfigError("--depth-maps cannot be combined with --frames; render one frame for them")
             self.render_array.require_views()
 
     @property

@@ -65,6 +65,40 @@ class DepthMap:
                 "field_within_budget": bool(-half <= field_near and field_far <= half)}
 
 
+def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, back_off: float,
+               fog: float, width: int, height: int) -> FrameBatch:
+    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames."""
+    right = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0)
+    up = (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
+    frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
+    return FrameBatch("depth.pov.j2", {"fog_distance": fog, "back_off": back_off, "right": right, "up": up},
+                      frames, width, height, frames_per_job=max(2, min(400, len(frames))), processes=1,
+                      options=("-A",))
+
+
+def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: FrameBatch,
+                 fog: float) -> tuple[np.ndarray, np.ndarray]:
+    """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, clipped, unmeasured)
+    and the fraction of unmeasured pixels per direction."""
+    header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
+                              "focal": lens_array.focal}   # as methods.display_header
+    if settings.frame is not None:
+        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
+    pass_settings = replace(settings, quality="draft", bit_depth=16)
+    images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
+    dark = np.stack([decode(img[..., :3]) for img in images[0::2]])
+    light = np.stack([decode(img[..., :3]) for img in images[1::2]])
+    clipped = np.any(light >= 0.9999, axis=-1)
+    t = np.clip(1.0 - np.median(light - dark, axis=-1), 0.0, 1.0)
+    with np.errstate(divide="ignore"):
+        d = -fog * np.log(t)
+    # t = 1 at a surface: no fog there.  POV-Ray applies no fog to a ray that starts inside a
+    # solid (non-hollow) object, e.g. behind a plane whose inside faces the viewer.
+    unmeasured = t > 1 - 1e-6
+    d[(t < T_MIN) | clipped | unmeasured] = np.nan
+    return d, unmeasured.mean(axis=(1, 2))
+
+
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
                units_per_mm: float) -> DepthMap:
     """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
@@ -72,24 +106,29 @@ def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, ba
     w = min(MAX_WIDTH, lens_array.lenses_x * 2)
     h = max(1, round(w * height_mm / width_mm))
     fog = back_off * units_per_mm   # scene units: t = 1/e at the screen
-    header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
-                              "focal": lens_array.focal}   # as methods.display_header
-    if settings.frame is not None:
-        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
-    batch = FrameBatch("depth.pov.j2", {"fog_distance": fog, "back_off": back_off, "right": (width_mm, 0.0, 0.0),
-                                        "up": (0.0, height_mm, 0.0)},
-                       [{"fog": 0}, {"fog": 1}], w, h, frames_per_job=2, processes=1, options=("-A",))
-    pass_settings = replace(settings, quality="draft", bit_depth=16)
-    images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
-    dark, light = (decode(img[..., :3]) for img in images)
-    clipped = np.any(light >= 0.9999, axis=-1)
-    one_minus_t = np.median(light - dark, axis=-1)
-    t = np.clip(1.0 - one_minus_t, 0.0, 1.0)
-    with np.errstate(divide="ignore"):
-        d_scene = -fog * np.log(t)
-    z = d_scene / units_per_mm - back_off
-    # t = 1 at a surface: no fog there.  POV-Ray applies no fog to a ray that starts inside a
-    # solid (non-hollow) object, e.g. behind a plane whose inside faces the viewer.
-    unmeasured = t > 1 - 1e-6
-    z[(t < T_MIN) | clipped | unmeasured] = np.nan
-    return DepthMap(z, width_mm, height_mm, float(unmeasured.mean()))
+    d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
+                                                                          back_off, fog, w, h), fog)
+    return DepthMap(d[0] / units_per_mm - back_off, width_mm, height_mm, float(unmeasured[0]))
+
+
+def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
+                    units_per_mm: float) -> np.ndarray:
+    """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
+    (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
+
+    Returns
+    -------
+    (Ny, Nx, Ly, Lx) float32, mm; NaN where nothing is hit (or it cannot be measured).
+    """
+    ny, nx = lens_array.require_views()
+    s, f = lens_array.panel.pitch_x, lens_array.focal
+    sy = lens_array.panel.pitch_y
+    slopes = [((k + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f) for l in range(ny) for k in range(nx)]
+    directions = [(a, b, 1.0) for a, b in slopes]
+    fog = back_off * units_per_mm
+    batch = _fog_batch(directions, lens_array, back_off, fog, lens_array.lenses_x, lens_array.lenses_y)
+    d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
+    # The ray starts back_off * |(a, b, 1)| before the screen.
+    lengths = np.array([np.sqrt(a * a + b * b + 1.0) for a, b in slopes])
+    out = d / units_per_mm - back_off * lengths[:, None, None]
+    return out.reshape(ny, nx, *out.shape[1:]).astype(np.float32)

@@ -58,3 +58,21 @@ def test_info_reports_the_scene_depth_against_the_budget(cli):
     data = cli("info", str(GALLERY / "tilted.pov"), "--json", *ARRAY)
     report = json.loads(data.out)["scene"]
     assert report["depth_budget_mm"] == pytest.approx(24.0) and report["depth"]["empty"] is False
+
+
+def test_depth_maps_are_written_per_view_with_their_disparity(cli, tmp_path):
+    import numpy as np
+
+    folder = tmp_path / "depth"
+    result = cli("render", str(GALLERY / "inches.pov"), "-o", str(tmp_path / "i.png"), "--quality", "draft",
+                 "--depth-maps", str(folder), *ARRAY)
+    assert result.code == 0, result.err
+    info = json.loads((folder / "depth_maps.json").read_text())
+    assert info["views"] == [6, 6] and info["display_frame"]["source"] == "camera"
+    d = np.load(folder / "d_000_005.npy")
+    p = np.load(folder / "p_000_005.npy")
+    assert d.shape == (18, 24) and np.isfinite(d).mean() > 0.5
+    a, b = (5 + 0.5 - 3) * 0.2 / 2, (3 - 0 - 0.5) * 0.2 / 2
+    np.testing.assert_allclose(p, d / np.sqrt(a * a + b * b + 1) * 0.2 / (2 * 1.2), rtol=1e-5)
+    assert sorted(x.name for x in folder.iterdir())[:2] == ["d_000_000.npy", "d_000_001.npy"]
+    assert len(list(folder.glob("*.npy"))) == 2 * 36

@@ -72,3 +72,34 @@ def test_a_viewpoint_inside_a_solid_is_unmeasured(tmp_path):
     scene.write_text(SCENE.format(far=5.0).replace("plane { -z, -5", "plane { z, 5"))
     depth = depth_pass(load_scene(scene), array(), RenderSettings(), 128.0, 1.0)
     assert depth.unmeasured > 0.9 and not np.isfinite(depth.z).any()
+
+
+def test_view_depth_maps_against_ray_sphere_and_plane(tmp_path):
+    """Every view's depth map: the distance along its rays (through the lens centres) to the sphere or plane."""
+    from povh3d.engine.depth import view_depth_maps
+
+    far = 5.0
+    scene = tmp_path / "s.pov"
+    scene.write_text(SCENE.format(far=far))
+    a = LensArray(grid="square", lenses_x=24, lenses_y=18, pitch_x=1.2, pitch_y=1.2, focal=2.0,
+                  panel=Panel(96, 72, 0.3, 0.3))
+    maps = view_depth_maps(load_scene(scene), a, RenderSettings(), 40.0, 1.0)
+    ny, nx = a.require_views()
+    assert maps.shape == (ny, nx, 18, 24)
+    cx = (np.arange(24) + 0.5 - 12) * 1.2
+    cy = (9 - np.arange(18) - 0.5) * 1.2
+    c = np.stack([*np.meshgrid(cx, cy), np.zeros((18, 24))], axis=-1)
+    worst = 0.0
+    for l, k in [(0, 0), (ny // 2, nx // 2), (ny - 1, 1)]:
+        d = np.array([(k + 0.5 - nx / 2) * 0.3 / 2.0, (ny / 2 - l - 0.5) * 0.3 / 2.0, 1.0])
+        d /= np.linalg.norm(d)
+        # sphere |c + t d| = 6: t = -(c.d) - sqrt((c.d)^2 - |c|^2 + 36), the nearer root
+        cd = c @ d
+        disc = cd ** 2 - (c ** 2).sum(-1) + 36
+        t_sphere = np.where(disc > 0, -cd - np.sqrt(np.clip(disc, 0, None)), np.inf)
+        t_plane = (far - c[..., 2]) / d[2]
+        expected = np.minimum(t_sphere, t_plane)
+        clean = (np.abs(disc) > 1.0) & np.isfinite(maps[l, k])
+        assert clean.mean() > 0.8
+        worst = max(worst, float(np.abs(maps[l, k] - expected)[clean].max()))
+    assert worst < 0.02   # mm
