@@ -48,6 +48,7 @@ bench: povray venv ## measure H3D render time against a plain 2D render, the qua
 	$(BIN)/python benchmarks/bench_skip.py
 	$(BIN)/python benchmarks/bench_mesh.py
 	$(BIN)/python benchmarks/bench_calibrate.py
+	$(BIN)/python benchmarks/bench_frame.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out

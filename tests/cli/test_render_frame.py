@@ -76,3 +76,13 @@ def test_depth_maps_are_written_per_view_with_their_disparity(cli, tmp_path):
     np.testing.assert_allclose(p, d / np.sqrt(a * a + b * b + 1) * 0.2 / (2 * 1.2), rtol=1e-5)
     assert sorted(x.name for x in folder.iterdir())[:2] == ["d_000_000.npy", "d_000_001.npy"]
     assert len(list(folder.glob("*.npy"))) == 2 * 36
+
+
+def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path):
+    scene = tmp_path / "inside.pov"   # the viewpoint inside a solid: no fog, nothing measured
+    scene.write_text("#version 3.7;\nlight_source { <0, 9, -9> rgb 1 }\nplane { z, 10 pigment { rgb 1 } }\n"
+                     "sphere { 0, 3 pigment { rgb 0.5 } }\n")
+    out = tmp_path / "x.png"
+    result = cli("render", str(scene), "-o", str(out), "--quality", "draft", "--fit-depth", "auto", *ARRAY)
+    assert result.code == 2 and "--fit-depth cannot fit" in result.err
+    assert result.err.strip().count("\n") == 0 and not out.exists() and not out.with_suffix(".json").exists()
