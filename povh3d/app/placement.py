@@ -35,6 +35,7 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
                          "depth_budget_mm": budget, "warnings": []}
     s = request.settings
     if s.frame is not None:  # the Python API gave the matrix itself: use it, and say so
+        _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
     options = request.display_frame
     placed, record = resolve_frame(options, scene, array, cache_dir=s.cache_dir, use_cache=s.use_cache)
@@ -63,6 +64,17 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
     if limited:
         record["front_clearance_note"] = "limited to 0.9 of the scene camera's distance"
     return replace(request, settings=settings), record
+
+
+def _check_similarity(matrix: tuple[float, ...]) -> None:
+    """A frame matrix must be a rotation (or mirror) times one scale: POV-Ray's mesh camera turns its
+    normals as surface normals (inverse transpose), so a shear or a depth-only scale would bend its rays."""
+    m = np.asarray(matrix, dtype=np.float64).reshape(4, 3)[:3]
+    gram = m @ m.T
+    scale = float(np.trace(gram)) / 3
+    if not (scale > 0 and np.allclose(gram, scale * np.eye(3), rtol=0, atol=1e-9 * scale)):
+        raise ConfigError("the display frame matrix must be a rotation times one uniform scale (no shear, "
+                          "no depth-only scale); build it with povh3d.geometry.frame.DisplayFrame")
 
 
 def _clearance(frame: DisplayFrame, record: dict[str, Any], default: float) -> float:

@@ -195,3 +195,13 @@ def test_camera_evaluation_is_cached_by_scene_digest():
     assert again["evaluation_seconds"] < 0.05
     assert any("2 cameras" in w for w in first["warnings"])
     assert first["centre"] == [0.0, 1.0, 0.0]   # the last camera counts
+
+
+def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
+    """The mesh camera turns normals as normals: a depth-only scale would bend multi-ortho's rays."""
+    matrix = np.eye(4, 3)
+    matrix[2] *= 2.5
+    with pytest.raises(ConfigError, match="uniform scale"):
+        render(GALLERY / "inches.pov", small_array(), tmp_path / "x.png",
+               settings=RenderSettings(quality="draft", frame=tuple(matrix.ravel())))
+    assert not (tmp_path / "x.png").exists()
