@@ -120,7 +120,7 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
         record["model"] = model
     if display_frame is not None:
         record["display_frame"] = display_frame
-    bank = h3d[array.bank_region]
+    bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
     if bank.size and int(bank.max()) == int(bank.min()):
         # One flat colour: no ray hit anything (a frame that misses the scene, a model in odd units).
         record.setdefault("warnings", []).append(
