@@ -125,7 +125,7 @@ def cmd_render(args: argparse.Namespace) -> int:
 def frame_phrase(record: dict[str, Any]) -> str:
     """The display frame in a few words: where it came from, its centre and scale."""
     source = record.get("source", "native")
-    if source == "native":
+    if source == "native" and record.get("units_per_mm", 1.0) == 1.0:
         text = "frame native (mm, z = 0)"
     elif source == "matrix":
         text = "frame matrix"

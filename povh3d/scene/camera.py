@@ -130,6 +130,12 @@ def evaluation_script(text: str) -> CameraScript | None:
                           "cannot isolate")
         return None
     last = statements[-1]
+    versions = [t for t in toks if t.text == "#version" and t.start < last.start]
+    if versions:
+        number = re.match(r"\s*([0-9.]+)", text[versions[-1].end:])
+        if number and _version(number[1]) < (3, 5):
+            raise _cannot(f"the scene declares #version {number[1]}, whose camera rules (modifiers applied "
+                          f"in order) povh3d does not reproduce")
     if last.directive_depth:
         raise _cannot("its last camera sits inside an #if, #while or #macro")
     # A camera after the last top-level one, inside a directive, would be the one POV-Ray uses.
@@ -137,6 +143,11 @@ def evaluation_script(text: str) -> CameraScript | None:
         raise _cannot("a camera after the last top-level one is built by a directive or macro")
     body = text[last.body[0]:last.body[1]]
     return CameraScript(text[:last.start] + "\n" + _rewrite(body) + "\n", len(statements))
+
+
+def _version(text: str) -> tuple[int, ...]:
+    parts = [p for p in text.strip(".").split(".") if p.isdigit()]
+    return tuple(int(p) for p in parts[:2]) or (0,)
 
 
 def _rewrite(body: str) -> str:

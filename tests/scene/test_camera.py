@@ -20,6 +20,12 @@ def test_the_last_top_level_camera_is_rewritten_with_directives_in_place():
     assert evaluation_script("sphere { 0, 1 }") is None
 
 
+def test_an_old_version_scene_is_refused():
+    with pytest.raises(CameraError, match="#version 3.1"):
+        evaluation_script("#version 3.1;\ncamera { location -5*z look_at 0 }\n")
+    assert evaluation_script("#version 3.7;\ncamera { location -5*z look_at 0 }\n") is not None
+
+
 def test_a_camera_inside_a_macro_cannot_be_isolated():
     with pytest.raises(CameraError, match="--display-center"):
         evaluation_script("#macro Cam() camera { location -5*z } #end\nCam()\n")
