@@ -142,7 +142,45 @@ def evaluation_script(text: str) -> CameraScript | None:
     if any(t.text == "camera" and t.start > last.body[1] for t in toks):
         raise _cannot("a camera after the last top-level one is built by a directive or macro")
     body = text[last.body[0]:last.body[1]]
+    inner = tokens(body)
+    if inner and inner[0].text not in _KEYWORDS and not inner[0].text.startswith("#"):
+        # camera { Name mods }: the camera declared as Name, then (POV-Ray >= 3.5) transforms only.
+        declared = _declared_camera(toks, text, inner[0].text, last.start)
+        body = declared + "\n" + body[inner[0].end:]
     return CameraScript(text[:last.start] + "\n" + _rewrite(body) + "\n", len(statements))
+
+
+def _declared_camera(toks: list[Token], text: str, name: str, before: int) -> str:
+    """The body of the last top-level ``#declare name = camera { ... }`` before ``before``."""
+    found, braces, directives = None, 0, 0
+    for i, tok in enumerate(toks):
+        if tok.start >= before:
+            break
+        t = tok.text
+        if t in _OPENERS:
+            directives += 1
+        elif t == "#end":
+            directives = max(0, directives - 1)
+        elif t == "{":
+            braces += 1
+        elif t == "}":
+            braces -= 1
+        elif (t in ("#declare", "#local") and braces == 0 and i + 4 < len(toks) and toks[i + 1].text == name
+              and toks[i + 2].text == "=" and toks[i + 3].text == "camera" and toks[i + 4].text == "{"):
+            found = (i + 4, directives)
+    if found is None:
+        raise _cannot(f"it starts from the camera identifier {name!r}, whose top-level declaration "
+                      f"povh3d cannot find")
+    start, depth_at = found
+    if depth_at:
+        raise _cannot(f"its camera identifier {name!r} is declared inside an #if, #while or #macro")
+    depth, j = 0, start
+    while j < len(toks):
+        depth += {"{": 1, "}": -1}.get(toks[j].text, 0)
+        if depth == 0:
+            break
+        j += 1
+    return text[toks[start].end:toks[j].start]
 
 
 def _version(text: str) -> tuple[int, ...]:
@@ -171,9 +209,11 @@ def _rewrite(body: str) -> str:
 
     if toks and toks[0].text not in _KEYWORDS and not toks[0].text.startswith("#"):
         raise _cannot(f"it starts from the camera identifier {toks[0].text!r}")
+    open_directives = 0
     while i < len(toks):
         t = toks[i].text
         if t.startswith("#"):
+            open_directives += 1 if t in _OPENERS else -1 if t == "#end" else 0
             if t in ("#declare", "#local"):
                 j = i
                 while j < len(toks) and toks[j].text != ";":
@@ -204,6 +244,8 @@ def _rewrite(body: str) -> str:
             out.append(f"#declare Povh3d_Cam_T = transform {{ transform Povh3d_Cam_T {t} {expr}\n}}")
         elif t in _TYPES:
             out.append(f'#debug "{TAG} type {t}\\n"')
+            if t != "perspective" and not open_directives:
+                break   # not a perspective camera: its other modifiers (two angles...) need no values
             i += 1
             if i < len(toks) and (t in ("cylinder", "mesh_camera", "user_defined")):
                 _, i = expression(i)
@@ -307,7 +349,7 @@ def camera_from_log(log: str, cameras: int = 1) -> SceneCamera:
         d = d / np.linalg.norm(d)
         new_r = np.cross(sky, d)
         if np.all(np.abs(new_r) < 1e-10):
-            raise _cannot("its sky is parallel to its view direction")
+            new_r = r   # POV-Ray warns and keeps the supplied right vector
         r = new_r / np.linalg.norm(new_r)
         u = np.cross(d, r)
         d, r, u = d * dl, r * (rl if handed > 0 else -rl), u * ul

@@ -50,3 +50,19 @@ def test_look_at_angle_and_sky_follow_povray_rules():
     assert flipped.right[0] < 0   # a right-handed scene keeps its mirror
     with pytest.raises(CameraError, match="look_at"):
         camera_from_log(_log(location=[1, 1, 1], look_at=[1, 1, 1]))
+
+
+def test_a_camera_from_an_identifier_uses_its_declaration():
+    text = ("#declare Camera_0 = camera { location <1, 2, -9> look_at <0, 1, 0> }\n"
+            "camera { Camera_0 rotate 30*y }\nsphere { 0, 1 }\n")
+    script = evaluation_script(text).script
+    assert "<1, 2, -9>" in script and "rotate 30*y" in script
+    with pytest.raises(CameraError, match="cannot find"):
+        evaluation_script("camera { Elsewhere }\n")
+
+
+def test_sky_along_the_view_keeps_the_supplied_right_as_povray_does():
+    cam = camera_from_log(_log(location=[0, 10, 0], look_at=[0, 0, 0], right=[1.5, 0, 0]))
+    np.testing.assert_allclose(cam.direction, [0, -1, 0])
+    np.testing.assert_allclose(cam.right, [1.5, 0, 0])
+    np.testing.assert_allclose(cam.up, [0, 0, 1])   # direction x right
