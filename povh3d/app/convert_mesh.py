@@ -45,6 +45,9 @@ class ConversionResult:
     warnings: list[str] = field(default_factory=list)
     simplification: dict | None = None
     seconds: float = 0.0
+    up: str = "y"                 # the model's up axis taken (``mesh.orient``)
+    up_reason: str = ""
+    scale: float = 1.0            # applied to the model's mm (``normalize``: 1 / its largest extent)
 
     def summary(self) -> str:
         return (f"{self.parts} part{'s' if self.parts != 1 else ''}, {self.triangles} triangles, "
@@ -57,19 +60,27 @@ def _positive(name: str, value: float | None) -> float | None:
     return value
 
 
-def place(parts: list[Part], *, fit_depth: float | None, center: bool) -> list[Part]:
-    """Scale uniformly so the model is ``fit_depth`` mm deep, then centre its box on the origin."""
+def place(parts: list[Part], *, fit_depth: float | None, center: bool,
+          normalize: bool = False) -> tuple[list[Part], float]:
+    """Scale uniformly so the model is ``fit_depth`` mm deep (``normalize``: its largest extent 1),
+    then centre its box on the origin; in double precision, before any number reaches POV-Ray.
+    Returns the parts and the scale applied."""
     lo, hi = model_bounds(parts)
     scale = 1.0
-    if fit_depth is not None:
+    if normalize:
+        extent = float(np.max(hi - lo))
+        if not (np.isfinite(extent) and extent > 0):
+            raise ConfigError("the model is a single point; it cannot be scaled to the display")
+        scale = 1.0 / extent
+    elif fit_depth is not None:
         depth = hi[2] - lo[2]
         if not depth > 0:
             raise ConfigError("--fit-depth cannot scale a model that is flat in z (zero depth); leave it out")
         scale = fit_depth / depth
     shift = -(lo + hi) / 2 * scale if center else np.zeros(3)
     if scale == 1.0 and not shift.any():
-        return parts
-    return [dataclasses.replace(p, vertices=p.vertices * scale + shift) for p in parts]
+        return parts, scale
+    return [dataclasses.replace(p, vertices=p.vertices * scale + shift) for p in parts], scale
 
 
 def model_bounds(parts: list[Part]) -> tuple[np.ndarray, np.ndarray]:
@@ -96,7 +107,8 @@ def _warnings(report: CleanReport, parts: list[Part], missing: list[str], notes:
 
 def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: str | None = None,
                  unit: str | None = None, shading: str = "auto", fit_depth: float | None = None,
-                 center: bool = False, max_triangles: int | None = None,
+                 center: bool = False, max_triangles: int | None = None, up: str | None = None,
+                 rotate: tuple[float, float, float] | None = None, normalize: bool = False,
                  progress: Callable[[int, int], None] | None = None) -> ConversionResult:
     """Convert ``model`` into the include ``output`` (default: beside it, ``.inc``).
 
@@ -110,6 +122,9 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
     fit_depth : float or None   scale the model to this depth (z extent), mm
     center : bool           centre the model's bounding box on the origin
     max_triangles : int or None   simplify to at most this many triangles
+    up : {'x', 'y', 'z', '-x', '-y', '-z'} or None   the model's up axis (None: the format's, or detected)
+    rotate : (3,) degrees or None   then turn it as POV-Ray's ``rotate`` would
+    normalize : bool        scale the model so its largest extent is 1 (the stage scales it to the display)
     progress : callable(done, total), optional   called after each of the 4 steps (read, clean, shade, write)
 
     Raises
@@ -146,12 +161,19 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
         raise InputError(f"{str(model)!r} contains no triangles{why}; check the export")
 
     step(2, 4)
+    from ..mesh.orient import detect_up, reorient
+
+    if up is None:
+        up, up_reason = detect_up(model.suffix, *model_bounds(parts))
+    else:
+        up_reason = "--up"
+    parts = reorient(parts, up, rotate)
     simplification = None
     if max_triangles is not None and sum(p.triangles for p in parts) > max_triangles:
         from ..mesh.simplify import simplify_parts
 
         parts, simplification = simplify_parts(parts, max_triangles)
-    parts = place(parts, fit_depth=fit_depth, center=center)
+    parts, scale = place(parts, fit_depth=fit_depth, center=center, normalize=normalize)
 
     smooth = shading == "smooth" or (shading == "auto" and not loaded.format.soup)
     blocks, textures = [], []
@@ -169,7 +191,8 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
         ident=ident, include=output, textures=[p for p, _ in textures], bounds=(lo.tolist(), hi.tolist()),
         parts=len(parts), triangles=sum(p.triangles for p in parts),
         vertices=sum(len(p.vertices) for p in parts), smooth=smooth, files_read=loaded.files, clean=report,
-        warnings=_warnings(report, loaded.parts, loaded.missing, loaded.warnings), simplification=simplification)
+        warnings=_warnings(report, loaded.parts, loaded.missing, loaded.warnings), simplification=simplification,
+        up=up, up_reason=up_reason, scale=scale)
     step(3, 4)
     text = include_text(blocks, ident, (lo, hi), source=model.name, summary=result.summary())
     _write_all(output, text, textures)

@@ -15,11 +15,16 @@ from dataclasses import replace
 from functools import partial
 from typing import Any
 
+import numpy as np
+
 from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..image.interleave import extract
 from .stage import prepare_stage
+from .placement import place_display
+from .depth_maps import check_depth_dir, write_depth_maps
+from ..engine.depth import view_depth_maps
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import Frame, render_sequence
@@ -36,13 +41,24 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     output = png_output(request.output)
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
+    if request.depth_maps is not None:
+        check_depth_dir(request.depth_maps)
     scene, model_record = load_content(request)
+    request, frame_record = place_display(request, scene)
     settings, auto = _resolve_quality(request, scene, progress)
-    frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record)
+    frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record,
+                    display_frame=frame_record)
     if request.frames is None:
         still = frame(None, progress)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
+        if request.depth_maps is not None:
+            units = frame_record.get("units_per_mm", 1.0)
+            depth = view_depth_maps(scene, request.render_array, settings,
+                                    still.record["quality"]["front_clearance_mm"], units)
+            write_depth_maps(request.depth_maps, depth, request.render_array, still.record)
+            still.record["depth_maps"] = {"folder": str(request.depth_maps),
+                                          "nan_fraction": float(np.isnan(depth).mean())}
         write_image(output, still.image, still.record)
         return still.record
     return render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
@@ -56,7 +72,8 @@ def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
         return load_scene(request.source, request.include_dirs), None
     m = request.model
     stage, model_record = prepare_stage(request.source, request.render_array, depth=m.depth, shading=m.shading,
-                                        max_triangles=m.max_triangles, cache_dir=request.settings.cache_dir)
+                                        max_triangles=m.max_triangles, cache_dir=request.settings.cache_dir,
+                                        up=m.up, rotate=m.rotate, unit=m.unit)
     return load_scene(stage, request.include_dirs), model_record
 
 
@@ -74,7 +91,7 @@ def _resolve_quality(request: RenderRequest, scene: Scene,
 
 def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                  progress: Progress | None = None, *, auto: AutoChoice | None = None,
-                 model: dict[str, Any] | None = None) -> Frame:
+                 model: dict[str, Any] | None = None, display_frame: dict[str, Any] | None = None) -> Frame:
     """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default)."""
     array = request.render_array
     start = time.perf_counter()
@@ -103,6 +120,14 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
         record["crop"] = result.crop
     if model is not None:
         record["model"] = model
+    if display_frame is not None:
+        record["display_frame"] = display_frame
+    bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
+    if bank.size and int(bank.max()) == int(bank.min()):
+        # One flat colour: no ray hit anything (a frame that misses the scene, a model in odd units).
+        record.setdefault("warnings", []).append(
+            "the image is one flat colour: no ray hit anything; check the display frame (--display-*) "
+            "or the model's units and orientation (--unit, --up)")
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
     if request.mapping is not None:
         h3d = request.mapping.apply(h3d, request.image_size)

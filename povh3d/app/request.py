@@ -24,6 +24,7 @@ from ..image.video import check_video_path
 from ..mappings.base import Mapping
 from ..mesh.formats import is_mesh_file
 from .animation import FrameRange
+from .frame import FrameOptions
 
 SHADINGS = ("auto", "smooth", "flat")
 
@@ -37,11 +38,18 @@ class ModelOptions:
     depth : float or None, mm      the model's depth (None: the display's depth budget)
     shading : {'auto', 'smooth', 'flat'}
     max_triangles : int, 'auto' or None   simplify to this many triangles
+    up : {'x', 'y', 'z', '-x', '-y', '-z'} or None   the model's up axis (None: the format's, or detected)
+    rotate : (3,) degrees or None  turn the model (POV-Ray's ``rotate``) after ``up``
+    unit : {'mm', 'cm', 'm', 'in'} or None   the model's unit (None: the file's); only the record
+                                   shows it, since the stage scales the model to the panel
     """
 
     depth: float | None = None
     shading: str = "auto"
     max_triangles: int | str | None = None
+    up: str | None = None
+    rotate: tuple[float, float, float] | None = None
+    unit: str | None = None
 
     def __post_init__(self) -> None:
         if self.depth is not None and not (math.isfinite(self.depth) and self.depth > 0):
@@ -51,6 +59,10 @@ class ModelOptions:
         m = self.max_triangles
         if m is not None and m != "auto" and (isinstance(m, bool) or not isinstance(m, int) or m < 4):
             raise ConfigError(f"--max-triangles takes a whole number >= 4 or 'auto', got {m!r}")
+        if self.up is not None and self.up not in ("x", "y", "z", "-x", "-y", "-z"):
+            raise ConfigError(f"--up must be one of x, y, z, -x, -y, -z, got {self.up!r}")
+        if self.rotate is not None and (len(self.rotate) != 3 or not all(math.isfinite(a) for a in self.rotate)):
+            raise ConfigError(f"--rotate takes three angles X,Y,Z in degrees, got {self.rotate!r}")
 
 
 @dataclass(frozen=True)
@@ -77,6 +89,8 @@ class RenderRequest:
     frames : FrameRange or None    render an animation: one image per clock value
     video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
     fps : float                    video frames per second
+    display_frame : FrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
+    depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
     """
 
     source: Path
@@ -95,6 +109,8 @@ class RenderRequest:
     frames: FrameRange | None = None
     video: Path | None = None
     fps: float = 24.0
+    display_frame: FrameOptions = field(default_factory=FrameOptions)
+    depth_maps: Path | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
@@ -123,6 +139,11 @@ class RenderRequest:
         if not (isinstance(self.fps, (int, float)) and math.isfinite(self.fps) and self.fps > 0):
             raise ConfigError(f"--fps must be a positive number, got {self.fps}")
         if self.views_dir is not None:
+            self.render_array.require_views()
+        if self.depth_maps is not None:
+            set_("depth_maps", Path(self.depth_maps))
+            if self.frames is not None:
+                raise ConfigError("--depth-maps cannot be combined with --frames; render one frame for them")
             self.render_array.require_views()
 
     @property

@@ -66,12 +66,13 @@ class Placement:
 
 def fit_to_display(lo: np.ndarray, hi: np.ndarray, lens_array: LensArray, *,
                    depth: float | None = None, fill: float = FILL) -> Placement:
-    """Scale the box ``lo..hi`` (mm) uniformly to fill the display's field and depth budget.
+    """Scale the box ``lo..hi`` (mm) uniformly to fill the display's panel.
 
     The model keeps its proportions: the scale is the largest that fits
-    ``fill`` of the panel's width and height and the depth budget (``depth``
-    overrides it), and the box is centred on the origin, so the model straddles
-    the screen ``z = 0``.
+    ``fill`` of the panel's width and height (and, with ``depth``, that depth
+    in mm), and the box is centred on the origin, so the model straddles the
+    screen ``z = 0``.  Without ``depth`` a deep model may reach past the depth
+    budget: ``Placement.depth`` is the budget, ``size[2]`` what the model takes.
     """
     if depth is not None and not (np.isfinite(depth) and depth > 0):
         raise ConfigError(f"--depth must be a positive number of mm, got {depth!r}")
@@ -79,7 +80,7 @@ def fit_to_display(lo: np.ndarray, hi: np.ndarray, lens_array: LensArray, *,
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     size = hi - lo
     width, height = lens_array.panel.size_mm
-    limits = {"width": fill * width, "height": fill * height, "depth": budget}
+    limits = {"width": fill * width, "height": fill * height, "depth": depth if depth is not None else np.inf}
     scales = {k: limits[k] / s for k, s in zip(limits, size) if s > 0}
     if not scales:
         raise ConfigError("the model is a single point; it cannot be scaled to the display")
@@ -104,10 +105,13 @@ def _sha256(path: Path) -> str:
 
 
 def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: int | None = None,
-                   cache_dir: Path | None = None) -> tuple[Path, dict]:
+                   cache_dir: Path | None = None, up: str | None = None,
+                   rotate: tuple[float, float, float] | None = None, unit: str | None = None) -> tuple[Path, dict]:
     """The model converted into the cache (``meshes/KEY/``), converting only when needed.
 
-    The key is the model's content and the options; a manifest lists every file
+    The model is turned (``up``, ``rotate``), centred and scaled to a largest
+    extent of 1 in Python, in double precision, so a model in any unit (a
+    planet in metres) reaches POV-Ray as numbers near 1.  The key is the model's content and the options; a manifest lists every file
     the conversion read (MTL, textures, buffers) with its hash, and the entry is
     used only while they all still match.  Returns the include and the manifest.
     """
@@ -119,7 +123,7 @@ def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: i
         from ..errors import InputError
 
         raise InputError(f"model file {str(model)!r} does not exist; check the path")
-    key = content_key("mesh", __version__, _sha256(model), shading, max_triangles)
+    key = content_key("mesh", __version__, _sha256(model), shading, max_triangles, up, rotate, unit, "normalized")
     folder = (cache_dir or default_cache_dir()) / "meshes" / key[:2] / key
     manifest_path = folder / "manifest.json"
     if manifest_path.is_file():
@@ -130,10 +134,12 @@ def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: i
             return folder / manifest["include"], manifest
     folder.mkdir(parents=True, exist_ok=True)
     ident = identifier_from_path(model)
-    result = convert_mesh(model, folder / f"{ident}.inc", shading=shading, max_triangles=max_triangles)
+    result = convert_mesh(model, folder / f"{ident}.inc", shading=shading, max_triangles=max_triangles,
+                          up=up, rotate=rotate, unit=unit, center=True, normalize=True)
     manifest = {"include": result.include.name, "ident": result.ident, "bounds": result.bounds,
                 "triangles": result.triangles, "parts": result.parts, "warnings": result.warnings,
                 "simplification": result.simplification, "model": str(model.resolve()),
+                "up": result.up, "up_reason": result.up_reason, "mm_per_unit_size": 1.0 / result.scale,
                 "files": {str(p): _sha256(p) for p in result.files_read if p.is_file()}}
     with atomic_path(manifest_path) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
@@ -143,7 +149,8 @@ def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: i
 
 def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | None = None,
                   shading: str = "auto", max_triangles: int | str | None = None,
-                  cache_dir: Path | None = None) -> tuple[Path, dict]:
+                  cache_dir: Path | None = None, up: str | None = None,
+                  rotate: tuple[float, float, float] | None = None, unit: str | None = None) -> tuple[Path, dict]:
     """Convert (cached) and write the stage scene beside the include; returns its path and a record.
 
     ``max_triangles`` may be ``'auto'``: the budget from the display's 3D resolution.
@@ -152,7 +159,8 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
 
     if max_triangles == "auto":
         max_triangles = auto_budget(lens_array)
-    include, manifest = cached_include(model, shading=shading, max_triangles=max_triangles, cache_dir=cache_dir)
+    include, manifest = cached_include(model, shading=shading, max_triangles=max_triangles, cache_dir=cache_dir,
+                                       up=up, rotate=rotate, unit=unit)
     lo, hi = (np.asarray(b, dtype=np.float64) for b in manifest["bounds"])
     placement = fit_to_display(lo, hi, lens_array, depth=depth)
     text = stage_text(include.name, manifest["ident"], placement, lens_array, model=Path(model).name)
@@ -160,8 +168,14 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
     if not stage.is_file():
         with atomic_path(stage) as tmp:
             tmp.write_text(text, encoding="utf-8")
+    warnings = list(manifest["warnings"])
+    if placement.size[2] > placement.depth * (1 + 1e-9):
+        warnings.append(f"the model is {placement.size[2]:.3g} mm deep at this size, beyond the depth budget "
+                        f"of {placement.depth:.3g} mm (2 N f): its front and back look blurred; "
+                        f"--depth {placement.depth:.3g} fits it")
     record = {"model": str(Path(model)), "include": str(include), "triangles": manifest["triangles"],
-              "conversion_from_cache": manifest["from_cache"], "warnings": manifest["warnings"],
+              "conversion_from_cache": manifest["from_cache"], "warnings": warnings,
+              "up": manifest.get("up"), "up_reason": manifest.get("up_reason"),
               "simplification": manifest["simplification"],
               "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
                             "depth_budget_mm": placement.depth}}

@@ -49,14 +49,36 @@ def cmd_info(args: argparse.Namespace) -> int:
     if args.mapping:
         mapping, panel = mapping_from_args(args, lens_array, display)
         info.update(mapping.figures(panel))
+    if args.scene:  # where the display sits in this scene, and its depth against the budget
+        from ..app.placement import scene_report
+
+        info["scene"] = scene_report(args.scene, lens_array)
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
     for key, value in info.items():
+        if key == "scene":
+            continue
         if key == "view_angles_deg":
             value = {k: [round(a, 3) for a in v] for k, v in value.items()}
         print(f"{key:22s} {value}")
+    if args.scene:
+        _print_scene(info["scene"])
     return 0
+
+
+def _print_scene(report: dict) -> None:
+    from .render import frame_phrase
+
+    print(f"{'scene':22s} {report['scene']}")
+    print(f"{'display frame':22s} {frame_phrase({**report['display_frame'], 'depth': None})}")
+    d, half = report["depth"], report["depth_budget_mm"] / 2
+    if d.get("empty"):
+        print(f"{'scene depth':22s} nothing hit in the middle of the framed field")
+        return
+    verdict = "within" if d["within_budget"] else "BEYOND"
+    print(f"{'scene depth':22s} subject z = {d['near_mm']:.3g} .. {d['far_mm']:.3g} mm, whole field "
+          f"{d['field_near_mm']:.3g} .. {d['field_far_mm']:.3g} mm; {verdict} the depth budget +-{half:.3g} mm")
 
 
 def cmd_map(args: argparse.Namespace) -> int:
@@ -149,6 +171,8 @@ def add_parsers(sub: Any) -> None:
     p.set_defaults(func=cmd_presets)
 
     p = sub.add_parser("info", help="derived values of a display / lens array")
+    p.add_argument("scene", nargs="?", help="also: where the display sits in this scene, and its depth "
+                   "against the display's depth budget")
     p.add_argument("--json", action="store_true")
     add_array_options(p)
     add_mapping_options(p)

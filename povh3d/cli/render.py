@@ -45,8 +45,38 @@ def request_from_args(args: argparse.Namespace) -> Any:
         crop=CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None),
         mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
         views_dir=Path(args.views_dir) if args.views_dir else None,
-        model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles)),
-        frames=frames, video=Path(args.video) if args.video else None, fps=args.fps)
+        model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles), args.up,
+                           _triple(args.rotate, "--rotate"), args.unit),
+        frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
+        display_frame=frame_options_from_args(args),
+        depth_maps=Path(args.depth_maps) if args.depth_maps else None)
+
+
+def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3:
+        raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
+def frame_options_from_args(args: argparse.Namespace) -> Any:
+    """``FrameOptions`` from --display-frame and the explicit --display-* options."""
+    from ..app.frame import FrameOptions
+
+    fit = args.fit_depth
+    if fit is not None and fit != "auto":
+        try:
+            fit = float(fit)
+        except ValueError:
+            raise ConfigError(f"--fit-depth takes 'auto' or a number of mm, got {fit!r}") from None
+    return FrameOptions(args.display_frame, _triple(args.display_center, "--display-center"),
+                        _triple(args.display_normal, "--display-normal"), _triple(args.display_up, "--display-up"),
+                        args.display_width, fit)
 
 
 def _method_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -79,12 +109,35 @@ def cmd_render(args: argparse.Namespace) -> int:
         return 0
     if "model" in result:
         warn(result["model"]["warnings"])
+    placed = result.get("display_frame", {})
+    warn(placed.get("warnings", []))
+    warn(result.get("warnings", []))
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.mapping.name}" if request.mapping else ""
-    print(f"{request.output}  {w}x{h}  {request.method}{mapping}  "
+    if "model" in result:
+        mapping += f"  up {result['model']['up']} ({result['model']['up_reason']})"
+    print(f"{request.output}  {w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return 0
+
+
+def frame_phrase(record: dict[str, Any]) -> str:
+    """The display frame in a few words: where it came from, its centre and scale."""
+    source = record.get("source", "native")
+    if source == "native" and record.get("units_per_mm", 1.0) == 1.0:
+        text = "frame native (mm, z = 0)"
+    elif source == "matrix":
+        text = "frame matrix"
+    else:
+        centre = ",".join(f"{v:.4g}" for v in record["centre"])
+        text = f"frame {source} (centre {centre}, {record['units_per_mm']:.4g} units/mm)"
+    depth = record.get("depth")
+    if depth and not depth.get("empty"):
+        fit = f", fitted x{depth['fit']['factor']:.3g}" if depth.get("fit") else ""
+        text += (f"  depth {depth['near_mm']:.3g}..{depth['far_mm']:.3g} mm of +-"
+                 f"{record['depth_budget_mm'] / 2:.3g}{fit}")
+    return text
 
 
 def cmd_convert_mesh(args: argparse.Namespace) -> int:
@@ -98,11 +151,13 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
     update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "steps")
     try:
         result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
-                              fit_depth=args.fit_depth, center=args.center, max_triangles=budget, progress=update)
+                              fit_depth=args.fit_depth, center=args.center, max_triangles=budget, up=args.up,
+                              rotate=_triple(args.rotate, "--rotate"), progress=update)
     finally:
         close()
     warn(result.warnings)
-    line = f"{result.include}  {result.ident}  {result.summary()}  {result.seconds:.2f} s"
+    line = f"{result.include}  {result.ident}  {result.summary()}, up {result.up} ({result.up_reason})  " \
+           f"{result.seconds:.2f} s"
     if result.simplification:
         s = result.simplification
         line += (f"  (simplified from {s['triangles_before']} triangles; "
@@ -130,9 +185,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_orientation(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--up", choices=("x", "y", "z", "-x", "-y", "-z"),
+                   help="the model's up axis (default: the format's: y for glTF and OBJ, z for 3MF; STL, PLY, "
+                   "OFF: z when the model stands on z = 0, else y); the front then faces the viewer")
+    p.add_argument("--rotate", metavar="X,Y,Z", help="then turn the model by these angles (degrees, as POV-Ray's rotate)")
+
+
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("render", help="render a POV-Ray scene to an H3D image")
-    p.add_argument("scene", help="POV-Ray scene without a camera (.pov), or a mesh model (.obj .stl .ply ...)")
+    p.add_argument("scene", help="POV-Ray scene (.pov; its camera places the display), or a mesh model (.obj .stl .ply ...)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
     p.add_argument("--quality", choices=QUALITY_NAMES, default="normal",
@@ -144,6 +206,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--threads", type=int, help="POV-Ray threads per process")
     p.add_argument("--timeout", type=float, help="seconds allowed to each POV-Ray run")
     p.add_argument("--views-dir", help="also write the view stack here (v_LLL_KKK.png)")
+    p.add_argument("--depth-maps", metavar="DIR", help="also write per view the distance along each ray to the "
+                   "first surface (d_LLL_KKK.npy, mm) and its disparity (p_LLL_KKK.npy, lenses per view step)")
     p.add_argument("--no-cache", action="store_true", help="render everything again, ignore the cache")
     p.add_argument("--bit-depth", type=int, choices=(8, 16), default=8)
     p.add_argument("--front-clearance", type=float, metavar="MM",
@@ -170,7 +234,23 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--ior", type=float, help="single-stage lenslet index of refraction; the radius "
                    "follows from the lens-maker equation (default: an optically thin lens)")
     p.add_argument("--depth", type=float, metavar="MM",
-                   help="a model's depth on the display (default: the depth budget the lens array shows sharply)")
+                   help="a model's depth on the display (default: as deep as filling the panel makes it; "
+                   "a warning says when that passes the depth budget)")
+    _add_orientation(p)
+    p.add_argument("--unit", choices=("mm", "cm", "m", "in"),
+                   help="a model's unit (default: the file's); the stage scales the model to the panel anyway")
+    g = p.add_argument_group("display frame (where the display sits in the scene)")
+    g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
+                   help="camera: the scene's camera places the display (look_at on the screen, its field "
+                   "across the panel); native: the scene is in mm around the screen z = 0; auto (default): "
+                   "camera when the scene has one, else native")
+    g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
+    g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
+    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
+    g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
+    g.add_argument("--fit-depth", metavar="auto|MM",
+                   help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
+                   "display's depth budget (auto: 2 N f) or MM")
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)
@@ -185,6 +265,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--fit-depth", type=float, metavar="MM", help="scale the model to this depth (z extent)")
     p.add_argument("--center", action="store_true", help="centre the model's bounding box on the origin")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress line")
+    _add_orientation(p)
     add_mesh_options(p)
     add_array_options(p)  # only for --max-triangles auto
     p.set_defaults(func=cmd_convert_mesh)

@@ -226,6 +226,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         settings = replace(settings, quality=quality)
     samples = quality.samples()
     header = display_header(lens_array)
+    if settings.frame is not None:  # move every camera (and a lens array) into the scene
+        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
     settings_needed = quality_settings(scene.features, quality)
     if settings_needed:
         header["global_settings"] = settings_needed

@@ -130,6 +130,8 @@ class RenderSettings:
                                 set only for scenes that read it (see animation.py)
     scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
     max_error_db : float or None   with quality 'auto': the lowest PSNR against the reference to accept
+    frame : tuple of 12 floats or None   the display frame's POV-Ray ``matrix`` (display mm -> scene
+                                units, ``geometry.frame.DisplayFrame.matrix``); None: native
     """
 
     quality: str | Quality = "normal"
@@ -143,8 +145,11 @@ class RenderSettings:
     clock: float | None = None
     scheduler: str | None = None
     max_error_db: float | None = None
+    frame: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
+        if self.frame is not None and len(self.frame) != 12:
+            raise ConfigError(f"the display frame is a matrix of 12 numbers, got {len(self.frame)}")
         if not isinstance(self.quality, Quality) and self.quality not in (*QUALITY_LEVELS, AUTO):
             raise ConfigError(f"quality must be one of {', '.join(QUALITY_LEVELS)} or auto, got {self.quality!r}")
         if (self.quality == AUTO) != (self.max_error_db is not None):

@@ -1,0 +1,138 @@
+"""Place the display in the scene for a request: the frame, the front clearance, the depth.
+
+``place_display`` resolves the frame (``app.frame``), keeps the rays' start in
+front of the scene's camera, measures the scene's depth in the frame
+(``engine.depth``: only for a frame other than native, or with ``--fit-depth``),
+scales the frame when ``--fit-depth`` asks, and returns the request with the
+frame in its settings and the record for the sidecar.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..engine.depth import depth_pass
+from ..engine.methods import get_method
+from ..errors import ConfigError
+from ..geometry.frame import NATIVE, DisplayFrame
+from ..scene.scene import Scene
+from .frame import resolve_frame
+from .stage import depth_budget_mm
+
+if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from .request import RenderRequest
+
+
+def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any]]:
+    """The request with its display frame (and clearance) resolved into the settings, and the record."""
+    array = request.render_array
+    budget = depth_budget_mm(array)
+    if request.is_model:  # the stage is built in display mm
+        return request, {**NATIVE.as_record(), "note": "a mesh model staged in display mm",
+                         "depth_budget_mm": budget, "warnings": []}
+    s = request.settings
+    if s.frame is not None:  # the Python API gave the matrix itself: use it, and say so
+        _check_similarity(s.frame)
+        return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
+    options = request.display_frame
+    placed, record = resolve_frame(options, scene, array, cache_dir=s.cache_dir, use_cache=s.use_cache)
+    default = get_method(request.method).default_back_off(array)
+    back_off = s.back_off or _clearance(placed, record, default)
+    if not placed.is_native or options.fit_depth is not None:
+        placed, depth = _measure(request, scene, placed, back_off, budget, options.fit_depth)
+        record = {**record, **placed.as_record(), "depth": depth}
+        if not depth.get("empty") and not depth.get("within_budget", True):
+            record["warnings"].append(
+                f"the framed scene spans z = {depth['near_mm']:.3g} .. {depth['far_mm']:.3g} mm, beyond the "
+                f"depth budget of +-{budget / 2:.3g} mm (2 N f): it looks blurred there; "
+                f"--fit-depth auto scales the frame to fit")
+        elif not depth.get("empty") and not depth["field_within_budget"]:
+            record["warnings"].append(
+                f"something beyond the framed subject (a ground plane or a backdrop?) reaches z = "
+                f"{depth['field_near_mm']:.3g} .. {depth['field_far_mm']:.3g} mm, past the depth budget of "
+                f"+-{budget / 2:.3g} mm: it looks blurred there")
+        if depth.get("empty"):
+            record["warnings"].append("the depth pass hit nothing in the middle of the framed field: "
+                                      "check the frame")
+    record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
+    matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
+    limited = s.back_off is None and _clearance(placed, record, default) < default
+    settings = replace(s, frame=matrix, back_off=_clearance(placed, record, default) if limited else s.back_off)
+    if limited:
+        record["front_clearance_note"] = "limited to 0.9 of the scene camera's distance"
+    return replace(request, settings=settings), record
+
+
+def _check_similarity(matrix: tuple[float, ...]) -> None:
+    """A frame matrix must be a rotation (or mirror) times one scale: POV-Ray's mesh camera turns its
+    normals as surface normals (inverse transpose), so a shear or a depth-only scale would bend its rays."""
+    m = np.asarray(matrix, dtype=np.float64).reshape(4, 3)[:3]
+    gram = m @ m.T
+    scale = float(np.trace(gram)) / 3
+    if not (scale > 0 and np.allclose(gram, scale * np.eye(3), rtol=0, atol=1e-9 * scale)):
+        raise ConfigError("the display frame matrix must be a rotation times one uniform scale (no shear, "
+                          "no depth-only scale); build it with povh3d.geometry.frame.DisplayFrame")
+
+
+def _clearance(frame: DisplayFrame, record: dict[str, Any], default: float) -> float:
+    """The front clearance (mm): the method's default, but for a camera frame no farther out than
+    0.9 of the scene camera's distance, since what lies behind the camera (walls) is no part of the view."""
+    camera = record.get("camera")
+    if frame.source != "camera" or camera is None:
+        return default
+    target = camera["look_at"] if camera["look_at"] is not None else frame.centre
+    distance = float(np.linalg.norm(np.subtract(target, camera["location"])))
+    return min(default, 0.9 * distance / frame.units_per_mm)
+
+
+def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, back_off: float, budget: float,
+             fit: str | float | None) -> tuple[DisplayFrame, dict[str, Any]]:
+    """The depth summary in ``frame``; with ``fit``, the frame scaled so the depth fits first."""
+    array, s = request.render_array, request.settings
+
+    def measure(f: DisplayFrame) -> dict[str, Any]:
+        matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
+        return depth_pass(scene, array, replace(s, frame=matrix), back_off, f.units_per_mm).summary(budget)
+
+    depth = measure(frame)
+    if fit is None:
+        return frame, depth
+    target = budget if fit == "auto" else float(fit)
+    if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
+        raise ConfigError("--fit-depth cannot fit: the depth pass measured nothing in the framed field "
+                          "(nothing hit, or the viewpoint inside a solid object); place the display with "
+                          "--display-center/--display-normal/--display-width instead")
+    reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
+    if not reach > 0:
+        return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}
+    factor = max(1.0, reach / (target / 2))   # only ever shrink the scene onto the display
+    # Display z scales as 1 / factor for the same scene points (the frame scales about its centre):
+    # the subject measured before fits exactly; a re-measure would see a wider field, not the same subject.
+    keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
+    after = {**depth, **{k: depth[k] / factor for k in keys}}
+    half = budget / 2
+    after["within_budget"] = bool(-half <= after["near_mm"] + 1e-9 and after["far_mm"] - 1e-9 <= half)
+    after["field_within_budget"] = bool(-half <= after["field_near_mm"] and after["field_far_mm"] <= half)
+    fitted = frame.scaled(factor) if factor > 1 else frame
+    return fitted, {**after, "before_fit": depth, "fit": {"target_mm": target, "factor": factor}}
+
+
+def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: tuple = ()) -> dict[str, Any]:
+    """``povh3d info SCENE``: the frame the scene would render with and its depth against the budget."""
+    from ..engine.quality import RenderSettings
+    from ..scene.scene import load_scene
+    from .frame import FrameOptions
+
+    scene = load_scene(path, include_dirs)
+    options = options or FrameOptions()
+    placed, record = resolve_frame(options, scene, lens_array)
+    budget = depth_budget_mm(lens_array)
+    back_off = _clearance(placed, record, get_method("multi-ortho").default_back_off(lens_array))
+    matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
+    depth = depth_pass(scene, lens_array, RenderSettings(frame=matrix), back_off, placed.units_per_mm)
+    return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
+            "depth": depth.summary(budget), "depth_budget_mm": budget,
+            "depth_budget_scene_units": budget * placed.units_per_mm}

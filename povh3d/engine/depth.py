@@ -1,0 +1,134 @@
+"""The scene's depth along the display normal, measured by POV-Ray: a low-resolution depth pass.
+
+An orthographic camera looks along the display normal from ``back_off`` mm in
+front of the screen, over the lens array's field.  It renders the scene twice
+with a constant ``fog`` (``fog_type 1``) of colour 0 and of colour 1: POV-Ray
+blends a pixel of surface colour ``c`` as ``c t + fog (1 - t)`` with
+``t = exp(-d / D)`` for a ray of length ``d`` (scene units) and fog distance
+``D``, so the difference of the two renders is ``1 - t``, independent of ``c``,
+and ``d = -D ln t``.  In linear light at 16 bits the depth resolution is about
+``D / 65535 / t``.  Pixels where nothing is hit (``t`` about 0), or that clip in
+the fog-1 render (a surface brighter than 1), are left out.
+
+The pass is cached like any frame (the scene's digest, the frame, the size).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..geometry.lens_array import LensArray
+from ..image.colour import decode
+from ..scene.scene import Scene
+from .batch import FrameBatch
+from .frames import render_frames
+from .quality import RenderSettings
+
+MAX_WIDTH = 160     # pixels across the depth pass
+T_MIN = 1e-3        # below this transmittance a pixel counts as "nothing hit"
+
+
+@dataclass(frozen=True)
+class DepthMap:
+    """Display-frame depth ``z`` (mm, screen 0, viewer at -z) of each pixel; NaN where nothing is hit."""
+
+    z: np.ndarray          # (H, W) float, mm
+    width_mm: float
+    height_mm: float
+    unmeasured: float = 0.0   # fraction of pixels the fog did not reach (the viewpoint inside a solid)
+
+    def summary(self, budget_mm: float) -> dict[str, Any]:
+        """The framed subject's near and far z against the budget (``2 N f``, centred on the screen).
+
+        The subject is what the middle half of the field (in width and height) shows,
+        between its 5th and 95th percentiles: a ground plane or a backdrop that runs
+        out of the field does not count there, but its reach over the whole field
+        (``field_near_mm``, ``field_far_mm``: 1st and 99th percentiles) is reported.
+        """
+        h, w = self.z.shape
+        hit = self.z[np.isfinite(self.z)]
+        middle = self.z[h // 4:h - h // 4, w // 4:w - w // 4]
+        middle = middle[np.isfinite(middle)]
+        record: dict[str, Any] = {"depth_budget_mm": budget_mm, "hit_fraction": float(hit.size / self.z.size),
+                                  "unmeasured_fraction": self.unmeasured, "pixels": [w, h]}
+        if middle.size == 0:
+            return {**record, "empty": True, "within_budget": True}
+        near, far = (float(v) for v in np.percentile(middle, [5, 95]))
+        field_near, field_far = (float(v) for v in np.percentile(hit, [1, 99]))
+        half = budget_mm / 2
+        return {**record, "empty": False, "near_mm": near, "far_mm": far, "depth_mm": far - near,
+                "field_near_mm": field_near, "field_far_mm": field_far,
+                "within_budget": bool(-half <= near and far <= half),
+                "field_within_budget": bool(-half <= field_near and field_far <= half)}
+
+
+def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, back_off: float,
+               fog: float, width: int, height: int) -> FrameBatch:
+    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames."""
+    right = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0)
+    up = (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
+    frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
+    return FrameBatch("depth.pov.j2", {"fog_distance": fog, "back_off": back_off, "right": right, "up": up},
+                      frames, width, height, frames_per_job=max(2, min(400, len(frames))), processes=1,
+                      options=("-A",))
+
+
+def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: FrameBatch,
+                 fog: float) -> tuple[np.ndarray, np.ndarray]:
+    """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, clipped, unmeasured)
+    and the fraction of unmeasured pixels per direction."""
+    header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
+                              "focal": lens_array.focal}   # as methods.display_header
+    if settings.frame is not None:
+        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
+    pass_settings = replace(settings, quality="draft", bit_depth=16)
+    images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
+    dark = np.stack([decode(img[..., :3]) for img in images[0::2]])
+    light = np.stack([decode(img[..., :3]) for img in images[1::2]])
+    clipped = np.any(light >= 0.9999, axis=-1)
+    t = np.clip(1.0 - np.median(light - dark, axis=-1), 0.0, 1.0)
+    with np.errstate(divide="ignore"):
+        d = -fog * np.log(t)
+    # t = 1 at a surface: no fog there.  POV-Ray applies no fog to a ray that starts inside a
+    # solid (non-hollow) object, e.g. behind a plane whose inside faces the viewer.
+    unmeasured = t > 1 - 1e-6
+    d[(t < T_MIN) | clipped | unmeasured] = np.nan
+    return d, unmeasured.mean(axis=(1, 2))
+
+
+def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
+               units_per_mm: float) -> DepthMap:
+    """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
+    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
+    w = min(MAX_WIDTH, lens_array.lenses_x * 2)
+    h = max(1, round(w * height_mm / width_mm))
+    fog = back_off * units_per_mm   # scene units: t = 1/e at the screen
+    d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
+                                                                          back_off, fog, w, h), fog)
+    return DepthMap(d[0] / units_per_mm - back_off, width_mm, height_mm, float(unmeasured[0]))
+
+
+def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
+                    units_per_mm: float) -> np.ndarray:
+    """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
+    (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
+
+    Returns
+    -------
+    (Ny, Nx, Ly, Lx) float32, mm; NaN where nothing is hit (or it cannot be measured).
+    """
+    ny, nx = lens_array.require_views()
+    s, f = lens_array.panel.pitch_x, lens_array.focal
+    sy = lens_array.panel.pitch_y
+    slopes = [((k + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f) for l in range(ny) for k in range(nx)]
+    directions = [(a, b, 1.0) for a, b in slopes]
+    fog = back_off * units_per_mm
+    batch = _fog_batch(directions, lens_array, back_off, fog, lens_array.lenses_x, lens_array.lenses_y)
+    d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
+    # The ray starts back_off * |(a, b, 1)| before the screen.
+    lengths = np.array([np.sqrt(a * a + b * b + 1.0) for a, b in slopes])
+    out = d / units_per_mm - back_off * lengths[:, None, None]
+    return out.reshape(ny, nx, *out.shape[1:]).astype(np.float32)

@@ -1,0 +1,207 @@
+"""The display frame on scenes with their own camera (issue 13).
+
+Oracles: the frame against the scene's declared identifiers (analytic); every
+view extracted from the H3D image against a plain POV-Ray render through an
+oblique orthographic camera placed by the frame in NumPy (PSNR >= 40 dB,
+point-sampled); the camera's vectors against POV-Ray's own render through
+the scene's camera; a scene moved by a transform and the display moved by
+the same frame give the same pixels.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from povh3d.app.frame import FrameOptions, resolve_frame
+from povh3d.engine.quality import RenderSettings
+from povh3d.errors import ConfigError
+from povh3d.geometry.frame import DisplayFrame, explicit_frame
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.image.interleave import extract
+from povh3d.image.io import read_png
+from povh3d.image.metrics import psnr
+from povh3d.povray.format import pov_vector
+from povh3d.povray.process import PovrayJob, run_jobs
+from povh3d.scene.camera import CameraError
+from povh3d.scene.scene import load_scene
+from tests.support.render import render
+
+GALLERY = Path(__file__).resolve().parents[1] / "support" / "gallery"
+
+
+def small_array() -> LensArray:
+    return LensArray(grid="square", lenses_x=24, lenses_y=18, pitch_x=1.2, pitch_y=1.2, focal=2.0,
+                     panel=Panel(144, 108, 0.2, 0.2))
+
+
+def _povray(script: str, width: int, height: int, include: Path) -> np.ndarray:
+    images: list[np.ndarray] = []
+    job = PovrayJob(name="oracle", script=script, width=width, height=height, include_dirs=(str(include),),
+                    options=("-A",))
+    run_jobs([job], processes=1, on_result=lambda r: images.append(read_png(r.images[0])))
+    return images[0]
+
+
+def _frame(record: dict) -> DisplayFrame:
+    return DisplayFrame(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
+                        tuple(record["normal"]), record["units_per_mm"], record["source"])
+
+
+def test_frame_follows_the_declared_camera():
+    """Centre at look_at, normal along look_at - location, y along the rolled sky, width = field."""
+    array = small_array()
+    frame, record = resolve_frame(FrameOptions(), load_scene(GALLERY / "tilted.pov"), array)
+    target = np.array([0.35, 0.42, -0.10])
+    el, az = np.radians(28), np.radians(-37)
+    # vrotate(<0,0,-d>, <el, az, 0>) in POV-Ray's left-handed frame: about x, then y.
+    p = np.array([0, 3.2 * np.sin(el), -3.2 * np.cos(el)])
+    location = target + np.array([p[0] * np.cos(az) + p[2] * np.sin(az), p[1],
+                                  -p[0] * np.sin(az) + p[2] * np.cos(az)])
+    assert record["source"] == "camera"
+    np.testing.assert_allclose(frame.centre, target, atol=1e-12)
+    normal = (target - location) / np.linalg.norm(target - location)
+    np.testing.assert_allclose(frame.axis_z, normal, atol=1e-9)
+    # The roll: the display's up is the world's up rolled 12 degrees about the view axis.
+    flat_up = np.array([0.0, 1, 0]) - normal[1] * normal
+    flat_up /= np.linalg.norm(flat_up)
+    assert np.degrees(np.arccos(np.clip(np.dot(frame.axis_y, flat_up), -1, 1))) == pytest.approx(12, abs=1e-6)
+    width_units = 2 * 3.2 * np.tan(np.radians(16))   # angle 32 at the look_at distance
+    assert frame.units_per_mm * array.panel.size_mm[0] == pytest.approx(width_units, rel=1e-12)
+    # Negative control: a frame that ignored the roll would fail the angle check above.
+    assert np.dot(frame.axis_y, flat_up) < np.cos(np.radians(11))
+
+
+def test_camera_vectors_reproduce_povray_render(tmp_path):
+    """POV-Ray through the scene's own camera == through a camera written from povh3d's vectors."""
+    scene = GALLERY / "tilted.pov"
+    _, record = resolve_frame(FrameOptions(), load_scene(scene), small_array())
+    cam = record["camera"]
+    own = _povray(f'#include "{scene.name}"\n', 144, 108, GALLERY)
+    ours = _povray(f'#include "{scene.name}"\ncamera {{ location {pov_vector(cam["location"])} '
+                   f'direction {pov_vector(cam["direction"])} right {pov_vector(cam["right"])} '
+                   f'up {pov_vector(cam["up"])} }}\n', 144, 108, GALLERY)
+    assert psnr(ours, own) > 40   # a few checker-edge pixels differ in the last bits of the vectors
+    assert (np.abs(ours.astype(int) - own).max(-1) > 8).mean() < 0.002
+    wrong = _povray(f'#include "{scene.name}"\ncamera {{ location {pov_vector(cam["location"])} '
+                    f'direction {pov_vector(cam["direction"])} right {pov_vector(cam["right"])} '
+                    f'up {pov_vector(np.negative(cam["up"]))} }}\n', 144, 108, GALLERY)
+    assert psnr(wrong, own) < 25  # negative control
+
+
+@pytest.mark.parametrize("name", ["tilted.pov", "inches.pov"])
+def test_views_equal_oblique_orthographic_renders(tmp_path, name):
+    """Every view (a sample of them) equals POV-Ray's oblique orthographic render placed by the frame."""
+    array = small_array()
+    record = render(GALLERY / name, array, tmp_path / "h3d.png", settings=RenderSettings(quality="draft"))
+    frame = _frame(record["display_frame"])
+    assert record["display_frame"]["source"] == "camera"
+    back_off = record["quality"]["front_clearance_mm"]
+    views = extract(read_png(tmp_path / "h3d.png"), array.require_views())
+    ny, nx = array.require_views()
+    s, f = array.panel.pitch_x, array.focal
+    worst, flipped = np.inf, 0
+    for l, k in [(0, 0), (ny // 2, nx // 2), (ny - 1, nx - 1), (1, nx - 2)]:
+        u, v = (k + 0.5 - nx / 2) * s, (ny / 2 - l - 0.5) * s
+        d = np.array([u / f, v / f, 1.0])
+        # The ray of docs/geometry.md in display mm, carried into scene units by the frame in NumPy.
+        location = frame.to_scene(-back_off * d)
+        direction = frame.directions_to_scene(d)
+        right = frame.directions_to_scene([array.lenses_x * array.pitch_x, 0, 0])
+        up = frame.directions_to_scene([0, array.lenses_y * array.pitch_y, 0])
+        script = (f'#include "{name}"\ncamera {{ orthographic location {pov_vector(location)} '
+                  f'direction {pov_vector(direction)} right {pov_vector(right)} up {pov_vector(up)} }}\n')
+        oracle = _povray(script, array.lenses_x, array.lenses_y, GALLERY)
+        worst = min(worst, psnr(views[l, k], oracle))
+        flipped = max(flipped, int((np.abs(views[l, k].astype(int) - oracle).max(-1) > 8).sum()))
+        if (l, k) == (0, 0):  # negative control: the mirror view differs
+            assert psnr(views[ny - 1, nx - 1], oracle) < 35
+    assert worst >= 40
+    assert flipped == 0
+
+
+def test_moved_scene_and_frame_give_the_same_pixels(tmp_path):
+    """A scene moved by T, rendered through the frame T, equals the scene in place (every method)."""
+    base = tmp_path / "base.pov"
+    base.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#ifndef (T) #declare T = '
+                    'transform { scale 1 } #end\nbackground { rgb 0.1 }\n'
+                    'light_source { <-40, 60, -80> rgb 1 transform T }\n'
+                    'sphere { <1, 0.5, -1>, 2.5 pigment { checker rgb <0.9,0.4,0.1> rgb 0.2 scale 0.7 } transform T }\n'
+                    'plane { z, 3 pigment { checker rgb 0.9 rgb 0.3 scale 1.1 } transform T }\n')
+    moved = tmp_path / "moved.pov"
+    moved.write_text('#declare T = transform { rotate <20, -35, 10> scale 2.5 translate <100, -40, 300> }\n'
+                     '#include "base.pov"\n')
+    ax, ay, az = np.radians([20, -35, 10])
+    rx = np.array([[1, 0, 0], [0, np.cos(ax), np.sin(ax)], [0, -np.sin(ax), np.cos(ax)]])
+    ry = np.array([[np.cos(ay), 0, -np.sin(ay)], [0, 1, 0], [np.sin(ay), 0, np.cos(ay)]])
+    rz = np.array([[np.cos(az), np.sin(az), 0], [-np.sin(az), np.cos(az), 0], [0, 0, 1]])
+    r = rx @ ry @ rz   # POV-Ray's rotate <a,b,c> on row vectors
+    frame = DisplayFrame((100, -40, 300), r[0], r[1], r[2], 2.5, "explicit")
+    array = small_array()
+    for method in ("multi-ortho", "pinhole"):
+        a = render(base, array, tmp_path / f"a-{method}.png", method=method,
+                   settings=RenderSettings(quality="draft"))
+        b = render(moved, array, tmp_path / f"b-{method}.png", method=method,
+                   settings=RenderSettings(quality="draft", frame=tuple(frame.matrix().ravel())))
+        assert psnr(read_png(tmp_path / f"a-{method}.png"), read_png(tmp_path / f"b-{method}.png")) > 60
+        assert a["display_frame"]["source"] == "native" and b["display_frame"]["source"] == "matrix"
+    c = render(moved, array, tmp_path / "c.png", settings=RenderSettings(quality="draft"))
+    assert psnr(read_png(tmp_path / "a-multi-ortho.png"), read_png(tmp_path / "c.png")) < 20  # control
+    assert c["display_frame"]["source"] == "native"
+
+
+def _scene(tmp_path: Path, camera: str) -> Path:
+    path = tmp_path / "s.pov"
+    path.write_text(f"#version 3.7;\n#declare Use_A = 1;\n{camera}\nsphere {{ 0, 1 pigment {{ rgb 1 }} }}\n")
+    return path
+
+
+@pytest.mark.parametrize("camera, words", [
+    ("#if (Use_A) camera { location <0,0,-5> look_at 0 } #end", "inside an #if"),
+    ("camera { location <0,0,-5> look_at <0,0,-5> }", "location equals its look_at"),
+    ("camera { orthographic location <0,0,-5> look_at 0 }", "orthographic"),
+    ("#if (Use_A) #declare C = camera { location <0,0,-5> } #end\ncamera { C }", "identifier 'C' is declared inside"),
+])
+def test_camera_that_cannot_be_used_is_one_line_naming_the_options(tmp_path, camera, words):
+    with pytest.raises(CameraError) as info:
+        resolve_frame(FrameOptions(), load_scene(_scene(tmp_path, camera)), small_array())
+    message = str(info.value)
+    assert words in message and "--display-center" in message and "\n" not in message
+
+
+def test_explicit_and_native_frames(tmp_path):
+    scene = load_scene(_scene(tmp_path, "camera { location <0,0,-5> look_at 0 }"))
+    array = small_array()
+    frame, _ = resolve_frame(FrameOptions("native"), scene, array)
+    assert frame.is_native
+    frame, record = resolve_frame(FrameOptions(center=(1, 2, 3), normal=(0, 0, 2), width=28.8), scene, array)
+    assert record["source"] == "explicit" and frame.units_per_mm == pytest.approx(1.0)
+    np.testing.assert_allclose(frame.to_scene([0, 0, 0]), [1, 2, 3])
+    with pytest.raises(ConfigError, match="parallel"):
+        explicit_frame((0, 0, 0), (0, 1, 0), 10, 28.8, up=(0, 2, 0))
+    with pytest.raises(ConfigError, match="positive"):
+        explicit_frame((0, 0, 0), (0, 0, 1), 0, 28.8)
+    with pytest.raises(ConfigError, match="needs all"):
+        FrameOptions(center=(0, 0, 0))
+
+
+def test_camera_evaluation_is_cached_by_scene_digest():
+    scene, array = load_scene(GALLERY / "inches.pov"), small_array()
+    _, first = resolve_frame(FrameOptions(), scene, array)
+    _, again = resolve_frame(FrameOptions(), scene, array)
+    assert not first["evaluation_from_cache"] and again["evaluation_from_cache"]
+    assert again["evaluation_seconds"] < 0.05
+    assert any("2 cameras" in w for w in first["warnings"])
+    assert first["centre"] == [0.0, 1.0, 0.0]   # the last camera counts
+
+
+def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
+    """The mesh camera turns normals as normals: a depth-only scale would bend multi-ortho's rays."""
+    matrix = np.eye(4, 3)
+    matrix[2] *= 2.5
+    with pytest.raises(ConfigError, match="uniform scale"):
+        render(GALLERY / "inches.pov", small_array(), tmp_path / "x.png",
+               settings=RenderSettings(quality="draft", frame=tuple(matrix.ravel())))
+    assert not (tmp_path / "x.png").exists()

@@ -1,0 +1,88 @@
+"""``povh3d render`` on scenes with their own camera: the summary line names the frame and the
+depth, ``--fit-depth`` fits, bad frame options are one line and a non-zero exit."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+GALLERY = Path(__file__).resolve().parents[1] / "support" / "gallery"
+ARRAY = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch", "0.2", "--focal", "2")
+
+
+def test_summary_names_the_camera_frame_and_fit_depth_fits(cli, tmp_path):
+    out = tmp_path / "t.png"
+    plain = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", *ARRAY)
+    assert plain.code == 0, plain.err
+    assert "frame camera (centre 0.35,0.42,-0.1" in plain.out and "depth" in plain.out
+    record = json.loads(out.with_suffix(".json").read_text())["display_frame"]
+    assert record["source"] == "camera" and record["depth"]["empty"] is False
+    fitted = cli("render", str(GALLERY / "tilted.pov"), "-o", str(tmp_path / "f.png"), "--quality", "draft",
+                 "--fit-depth", "auto", *ARRAY)
+    assert fitted.code == 0, fitted.err
+    depth = json.loads((tmp_path / "f.json").read_text())["display_frame"]["depth"]
+    assert depth["within_budget"]
+    half = depth["depth_budget_mm"] / 2
+    assert max(abs(depth["near_mm"]), abs(depth["far_mm"])) == pytest.approx(half, rel=1e-9) \
+        or depth["fit"]["factor"] == 1.0
+
+
+def test_native_scene_summary(cli, tmp_path):
+    scene = tmp_path / "s.pov"
+    scene.write_text("#version 3.7;\nsphere { <0, 0, 0>, 3 pigment { rgb 1 } }\nlight_source { <0, 9, -9> rgb 1 }\n")
+    result = cli("render", str(scene), "-o", str(tmp_path / "s.png"), "--quality", "draft", *ARRAY)
+    assert result.code == 0 and "frame native" in result.out
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--display-center", "0,0,0"), "needs all"),
+    (("--display-center", "0,0,0", "--display-normal", "0,1,0", "--display-up", "0,1,0",
+      "--display-width", "2"), "parallel"),
+    (("--display-center", "0,0", "--display-normal", "0,0,1", "--display-width", "2"), "three numbers"),
+    (("--fit-depth", "deep"), "--fit-depth"),
+    (("--display-frame", "camera", "--display-center", "0,0,0", "--display-normal", "0,0,1",
+      "--display-width", "2"), "cannot be combined"),
+])
+def test_bad_frame_options_are_one_line(cli, tmp_path, args, words):
+    result = cli("render", str(GALLERY / "tilted.pov"), "-o", str(tmp_path / "x.png"), *args, *ARRAY)
+    assert result.code == 2 and words in result.err and result.err.strip().count("\n") == 0
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_info_reports_the_scene_depth_against_the_budget(cli):
+    result = cli("info", str(GALLERY / "tilted.pov"), *ARRAY)
+    assert result.code == 0, result.err
+    assert "frame camera" in result.out and "depth budget +-12 mm" in result.out   # 2 N f = 2 * 6 * 2 = 24
+    data = cli("info", str(GALLERY / "tilted.pov"), "--json", *ARRAY)
+    report = json.loads(data.out)["scene"]
+    assert report["depth_budget_mm"] == pytest.approx(24.0) and report["depth"]["empty"] is False
+
+
+def test_depth_maps_are_written_per_view_with_their_disparity(cli, tmp_path):
+    import numpy as np
+
+    folder = tmp_path / "depth"
+    result = cli("render", str(GALLERY / "inches.pov"), "-o", str(tmp_path / "i.png"), "--quality", "draft",
+                 "--depth-maps", str(folder), *ARRAY)
+    assert result.code == 0, result.err
+    info = json.loads((folder / "depth_maps.json").read_text())
+    assert info["views"] == [6, 6] and info["display_frame"]["source"] == "camera"
+    d = np.load(folder / "d_000_005.npy")
+    p = np.load(folder / "p_000_005.npy")
+    assert d.shape == (18, 24) and np.isfinite(d).mean() > 0.5
+    a, b = (5 + 0.5 - 3) * 0.2 / 2, (3 - 0 - 0.5) * 0.2 / 2
+    np.testing.assert_allclose(p, d / np.sqrt(a * a + b * b + 1) * 0.2 / (2 * 1.2), rtol=1e-5)
+    assert sorted(x.name for x in folder.iterdir())[:2] == ["d_000_000.npy", "d_000_001.npy"]
+    assert len(list(folder.glob("*.npy"))) == 2 * 36
+
+
+def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path):
+    scene = tmp_path / "inside.pov"   # the viewpoint inside a solid: no fog, nothing measured
+    scene.write_text("#version 3.7;\nlight_source { <0, 9, -9> rgb 1 }\nplane { z, 10 pigment { rgb 1 } }\n"
+                     "sphere { 0, 3 pigment { rgb 0.5 } }\n")
+    out = tmp_path / "x.png"
+    result = cli("render", str(scene), "-o", str(out), "--quality", "draft", "--fit-depth", "auto", *ARRAY)
+    assert result.code == 2 and "--fit-depth cannot fit" in result.err
+    assert result.err.strip().count("\n") == 0 and not out.exists() and not out.with_suffix(".json").exists()

@@ -1,0 +1,105 @@
+"""The depth pass against analytic depths: a plane and a sphere, native and through a frame."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from povh3d.engine.depth import depth_pass
+from povh3d.engine.quality import RenderSettings
+from povh3d.geometry.frame import DisplayFrame
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.scene.scene import load_scene
+
+SCENE = """#version 3.7;
+global_settings {{ assumed_gamma 1.0 }}
+#ifndef (T) #declare T = transform {{ scale 1 }} #end
+light_source {{ <-40, 60, -80> rgb 1 transform T }}
+sphere {{ <0, 0, 0>, 6 pigment {{ rgb <0.9, 0.4, 0.1> }} transform T }}
+plane {{ -z, -{far} pigment {{ checker rgb 0.9 rgb 0 scale 3 }} transform T }}
+"""
+
+
+def array() -> LensArray:
+    return LensArray(grid="square", lenses_x=40, lenses_y=30, pitch_x=0.8, pitch_y=0.8, focal=1.5,
+                     panel=Panel(320, 240, 0.1, 0.1))
+
+
+def expected(shape: tuple[int, int], width: float, height: float, far: float) -> tuple[np.ndarray, np.ndarray]:
+    h, w = shape
+    x = ((np.arange(w) + 0.5) / w - 0.5) * width
+    y = (0.5 - (np.arange(h) + 0.5) / h) * height
+    xx, yy = np.meshgrid(x, y)
+    r2 = xx ** 2 + yy ** 2
+    z = np.where(r2 < 36, -np.sqrt(np.clip(36 - r2, 0, None)), far)
+    return z, np.abs(np.sqrt(r2) - 6) > 0.3   # away from the silhouette
+
+
+@pytest.mark.parametrize("moved", [False, True])
+def test_depth_of_a_sphere_before_a_plane(tmp_path, moved):
+    far = 5.0
+    scene = tmp_path / "s.pov"
+    text = SCENE.format(far=far)
+    settings = RenderSettings()
+    units = 1.0
+    if moved:  # the same scene moved and scaled, measured through the same map as a frame
+        text = "#declare T = transform { rotate <10, 30, 0> scale 40 translate <500, 20, -70> }\n" + text
+        ax, ay = np.radians([10, 30])
+        rx = np.array([[1, 0, 0], [0, np.cos(ax), np.sin(ax)], [0, -np.sin(ax), np.cos(ax)]])
+        ry = np.array([[np.cos(ay), 0, -np.sin(ay)], [0, 1, 0], [np.sin(ay), 0, np.cos(ay)]])
+        r = rx @ ry
+        frame = DisplayFrame((500, 20, -70), r[0], r[1], r[2], 40.0, "explicit")
+        settings = RenderSettings(frame=tuple(frame.matrix().ravel()))
+        units = 40.0
+    scene.write_text(text)
+    a = array()
+    depth = depth_pass(load_scene(scene), a, settings, 4 * 32.0, units)
+    z, clean = expected(depth.z.shape, depth.width_mm, depth.height_mm, far)
+    ok = clean & np.isfinite(depth.z)
+    assert ok.mean() > 0.9
+    assert np.abs(depth.z - z)[ok].max() < 0.02      # mm
+    s = depth.summary(12.0)
+    h, w = z.shape
+    middle = z[h // 4:h - h // 4, w // 4:w - w // 4]
+    assert s["near_mm"] == pytest.approx(np.percentile(middle, 5), abs=0.05)
+    assert s["far_mm"] == pytest.approx(np.percentile(middle, 95), abs=0.05)
+    assert s["within_budget"]
+    assert not depth.summary(8.0)["within_budget"]   # negative control: a tighter budget
+
+
+def test_a_viewpoint_inside_a_solid_is_unmeasured(tmp_path):
+    scene = tmp_path / "s.pov"
+    scene.write_text(SCENE.format(far=5.0).replace("plane { -z, -5", "plane { z, 5"))
+    depth = depth_pass(load_scene(scene), array(), RenderSettings(), 128.0, 1.0)
+    assert depth.unmeasured > 0.9 and not np.isfinite(depth.z).any()
+
+
+def test_view_depth_maps_against_ray_sphere_and_plane(tmp_path):
+    """Every view's depth map: the distance along its rays (through the lens centres) to the sphere or plane."""
+    from povh3d.engine.depth import view_depth_maps
+
+    far = 5.0
+    scene = tmp_path / "s.pov"
+    scene.write_text(SCENE.format(far=far))
+    a = LensArray(grid="square", lenses_x=24, lenses_y=18, pitch_x=1.2, pitch_y=1.2, focal=2.0,
+                  panel=Panel(96, 72, 0.3, 0.3))
+    maps = view_depth_maps(load_scene(scene), a, RenderSettings(), 40.0, 1.0)
+    ny, nx = a.require_views()
+    assert maps.shape == (ny, nx, 18, 24)
+    cx = (np.arange(24) + 0.5 - 12) * 1.2
+    cy = (9 - np.arange(18) - 0.5) * 1.2
+    c = np.stack([*np.meshgrid(cx, cy), np.zeros((18, 24))], axis=-1)
+    worst = 0.0
+    for l, k in [(0, 0), (ny // 2, nx // 2), (ny - 1, 1)]:
+        d = np.array([(k + 0.5 - nx / 2) * 0.3 / 2.0, (ny / 2 - l - 0.5) * 0.3 / 2.0, 1.0])
+        d /= np.linalg.norm(d)
+        # sphere |c + t d| = 6: t = -(c.d) - sqrt((c.d)^2 - |c|^2 + 36), the nearer root
+        cd = c @ d
+        disc = cd ** 2 - (c ** 2).sum(-1) + 36
+        t_sphere = np.where(disc > 0, -cd - np.sqrt(np.clip(disc, 0, None)), np.inf)
+        t_plane = (far - c[..., 2]) / d[2]
+        expected = np.minimum(t_sphere, t_plane)
+        clean = (np.abs(disc) > 1.0) & np.isfinite(maps[l, k])
+        assert clean.mean() > 0.8
+        worst = max(worst, float(np.abs(maps[l, k] - expected)[clean].max()))
+    assert worst < 0.02   # mm
