@@ -186,8 +186,9 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
         finals = [frame_path(output, n, digits) for n in frames.numbers]
         for n, final in zip(frames.numbers, finals):
             staged = frame_path(staging / output.name, n, digits)
-            staged.with_suffix(".json").replace(final.with_suffix(".json"))
+            # image first, sidecar last (image.io: a new sidecar never describes an old image)
             staged.replace(final)
+            staged.with_suffix(".json").replace(final.with_suffix(".json"))
         report["frames"] = [str(p) for p in finals]
         if video is not None:
             write_video([read_png(p) for p in finals], video, fps=fps)

@@ -16,8 +16,8 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..geometry.lens_array import Panel
-from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png, write_sidecar
-from .records import base_record, png_output
+from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from .records import base_record, png_output, write_image
 from ..image.interleave import extract, interleave
 from ..mappings import Mapping
 from ..mappings.sampling import Source
@@ -88,8 +88,7 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
     mapped = mapping.apply(image, panel)  # raises before anything is written
     record = base_record("panel", mapping=mapping.name, mapping_parameters=_params(mapping),
                      source=str(Path(input_path).resolve()), size_px=list(panel), output_gamma="sRGB")
-    write_png(out, mapped)
-    write_sidecar(out, record)
+    write_image(out, mapped, record)
     return record
 
 
@@ -117,8 +116,7 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
     if mode == "lenses":
         record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
                             "focal_scale": ppl_out[1] / ppl_in[1]}
-    write_png(out, result)
-    write_sidecar(out, record)
+    write_image(out, result, record)
     return record
 
 
@@ -141,9 +139,9 @@ def export_quilt(h3d_path: str | Path, ppl: int, grid: tuple[int, int], output_d
     folder.mkdir(parents=True, exist_ok=True)
     out = folder / quilt_name(Path(h3d_path).stem, grid[0], grid[1], aspect)
     check_writable(out)
-    write_png(out, views_to_quilt(views, *grid))
-    write_sidecar(out, base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
-                               source=str(Path(h3d_path).resolve())))
+    write_image(out, views_to_quilt(views, *grid),
+                base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
+                            source=str(Path(h3d_path).resolve())))
     return out
 
 
@@ -161,8 +159,7 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
                      source=str(Path(quilt_path).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
                      output_gamma="sRGB")
-    write_png(out, h3d)
-    write_sidecar(out, record)
+    write_image(out, h3d, record)
     return record
 
 
@@ -201,13 +198,12 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
                      gradient_energy=energy, output_gamma="sRGB")
     encoded = [from_linear(p, image.dtype) for p in planes]
     if sweep is None:
-        write_png(out, encoded[0])
+        write_image(out, encoded[0], record)
     else:
         for n, img in enumerate(encoded):
             write_png(out.with_name(f"{out.stem}_{n:03d}.png"), img)
-        write_png(out, contact_sheet(encoded))
         record["sharpest_depth_mm"] = depths[int(np.argmax(energy))]
-    write_sidecar(out, record)
+        write_image(out, contact_sheet(encoded), record)
     return record
 
 
