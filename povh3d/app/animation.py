@@ -41,6 +41,7 @@ from ..engine.quality import Progress
 from ..errors import ConfigError, OutputError
 from ..image.io import read_png, write_sidecar
 from ..image.video import write_video
+from ..system import owned_prefix, sweep_orphans
 from .records import write_image
 
 _RANGE = re.compile(r"^\s*(\d+)\s*:\s*(\d+)\s*$")
@@ -154,8 +155,10 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
     """
     digits = max(4, len(str(frames.last)))
     folder = output.parent if str(output.parent) else Path(".")
+    prefix = f".{output.stem}-frames-"
+    sweep_orphans(folder, prefix)  # staging folders of a killed run (system.sweep_orphans)
     try:
-        staging = Path(tempfile.mkdtemp(prefix=f".{output.stem}-frames-", dir=folder))
+        staging = Path(tempfile.mkdtemp(prefix=owned_prefix(prefix), dir=folder))
     except OSError as error:
         raise OutputError(f"cannot write into {str(folder)!r}: {error.strerror}") from None
 

@@ -7,6 +7,7 @@ decided by ``povh3d.app`` and below.
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 from typing import Any
@@ -23,6 +24,8 @@ def parse_pair(text: str, option: str, *, integral: bool) -> tuple[float, float]
     if not m:
         raise ConfigError(f"{option} takes a number or WxH like {example}, got {text!r}")
     values = [float(g) for g in m.groups() if g is not None]
+    if any(not math.isfinite(v) or v <= 0 for v in values):
+        raise ConfigError(f"{option} takes positive numbers like {example}, got {text!r}")
     if integral and any(v != int(v) for v in values):
         raise ConfigError(f"{option} takes whole numbers like {example}, got {text!r}")
     if integral:

@@ -44,6 +44,7 @@ from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, Pov
     RenderInterrupted)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
                   povray_conf)
+from ..system import owned_prefix, sweep_orphans
 from .log import describe_exit, parse_error, tail
 
 #: Environment variable naming the POV-Ray executable to use.
@@ -251,9 +252,18 @@ def _spawn(command: list[str], folder: Path, env: dict[str, str],
                              f"{error.strerror}; {INSTALL_HINT}.") from None
 
 
+JOB_PREFIX = "povh3d-"  # job folders: povh3d-<owner pid>-<random>
+_SWEPT: set[str] = set()
+
+
 def _make_folder(workdir: str | Path | None) -> Path:
+    # Job folders name their owner's pid; those of a killed povh3d are swept once per folder.
+    base = str(workdir or tempfile.gettempdir())
+    if base not in _SWEPT:
+        _SWEPT.add(base)
+        sweep_orphans(base, JOB_PREFIX)
     try:
-        return Path(tempfile.mkdtemp(prefix="povh3d-", dir=workdir))
+        return Path(tempfile.mkdtemp(prefix=owned_prefix(JOB_PREFIX), dir=workdir))
     except OSError as error:
         raise OutputError(f"Cannot create a temporary folder in "
                           f"{workdir or tempfile.gettempdir()}: {error.strerror}.") from None
