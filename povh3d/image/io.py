@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import io
 import json
 import os
 import tempfile
@@ -119,22 +120,27 @@ def read_png(path: str | Path) -> np.ndarray:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"image {str(path)!r} does not exist; check the path")
+    return decode_png(path, str(path))
+
+
+def decode_png(source: Path | bytes, name: str) -> np.ndarray:
+    """A PNG file or PNG bytes as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
     try:
-        reader = png.Reader(filename=str(path))
+        reader = png.Reader(filename=str(source)) if isinstance(source, Path) else png.Reader(bytes=source)
         width, height, rows, info = reader.asDirect()
         if info["bitdepth"] > 8:
             planes = info["planes"]
             data = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows])
             return data.reshape(height, width, planes)
-        with Image.open(path) as im:
+        with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
             im.load()
             if im.mode not in ("RGB", "RGBA", "L", "LA"):
                 im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
             arr = np.asarray(im)
     except MemoryError:
-        raise InputError(f"{str(path)!r} is too large to read into memory") from None
+        raise InputError(f"{name!r} is too large to read into memory") from None
     except Exception as exc:  # noqa: BLE001 - pypng and Pillow raise many kinds on a damaged file
-        raise InputError(f"cannot read {str(path)!r} as a PNG image ({type(exc).__name__}: {exc}); "
+        raise InputError(f"cannot read {name!r} as a PNG image ({type(exc).__name__}: {exc}); "
                          "check that it is a complete PNG file") from None
     return arr[..., None] if arr.ndim == 2 else arr
 

@@ -42,7 +42,7 @@ from typing import BinaryIO
 from . import sandbox
 from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
     RenderInterrupted)
-from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
+from .job import (ascii_paths, LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
                   povray_conf)
 from ..system import owned_prefix, sweep_orphans
 from .log import describe_exit, parse_error, tail
@@ -213,9 +213,10 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
     folder = _make_folder(workdir)
     registered = False  # once True, run_jobs owns the folder and the child
     try:
-        command = build_command(job, binary)
-        env = _prepare(folder, job)
-        with open(folder / LOG_FILE, "wb") as log, _confinement(job, binary, folder) as fd, \
+        run = ascii_paths(job, folder)  # what POV-Ray is given; results stay the caller's `job`'s
+        command = build_command(run, binary)
+        env = _prepare(folder, run)
+        with open(folder / LOG_FILE, "wb") as log, _confinement(run, binary, folder) as fd, \
                 _deferred_interrupt():
             process = _spawn(command, folder, env, log, fd)
             running.append(_Child(index, job, folder, command, process, time.monotonic()))

@@ -121,6 +121,11 @@ def sandbox_mode() -> str:
     return mode
 
 
+def confines() -> bool:
+    """Whether POV-Ray runs here can read only the files a scene was found to read."""
+    return sandbox_mode() != "off" and landlock_abi() > 0
+
+
 def describe() -> str:
     """One line for sidecars: how POV-Ray runs are confined here."""
     mode, abi = sandbox_mode(), landlock_abi()
