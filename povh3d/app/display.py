@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from PIL import Image
+
 from ..errors import ConfigError, InputError
 from ..geometry.lens_array import Panel
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
@@ -33,6 +35,10 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
               pixel_pitch: float | None) -> dict[str, Any]:
     """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
     side = (read_sidecar(h3d_path) or {}).get("lens_array") or {}
+    check_against_sidecar(h3d_path, side)
+    if ppl is not None and side.get("views") and list(side["views"]) != [ppl[1], ppl[0]]:
+        raise ConfigError(f"--ppl {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
+                          f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
     if ppl is None and side.get("views"):
         ppl = (int(side["views"][1]), int(side["views"][0]))
     if ppl is None:
@@ -42,6 +48,30 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
         pixel_pitch = side["panel"]["pixel_pitch_mm"][0]
     return {"ppl": ppl, "focal": focal, "pixel_pitch": pixel_pitch,
             "pixel_pitch_y": (side.get("panel") or {}).get("pixel_pitch_mm", [None, pixel_pitch])[1] or pixel_pitch}
+
+
+def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
+    """Refuse an image whose size is not the panel its sidecar's lens array describes."""
+    size = (lens_array.get("panel") or {}).get("size_px")
+    if not size:
+        return
+    try:
+        with Image.open(path) as im:
+            width, height = im.size
+    except Exception:  # noqa: BLE001 - not an image: read_png says so, with its own message
+        return
+    if [width, height] != list(size):
+        raise InputError(f"{str(path)!r} is {width}x{height} but its sidecar describes a {size[0]}x{size[1]} "
+                         "panel: the image was changed after its sidecar; render it again or delete the sidecar")
+
+
+def is_lenticular(path: str | Path) -> bool:
+    """Whether the sidecar of ``path`` describes a lenticular (horizontal-only) lens array."""
+    try:
+        side = (read_sidecar(path) or {}).get("lens_array") or {}
+    except InputError:
+        return False
+    return side.get("grid") == "lenticular"
 
 
 def _need(value: Any, what: str, flag: str) -> Any:
@@ -79,11 +109,21 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
              panel: tuple[int, int] | None = None) -> dict[str, Any]:
     """Map an unmapped view-space H3D PNG onto a panel and write ``output`` with its sidecar."""
     image = read_png(input_path)
+    side = (read_sidecar(input_path) or {}).get("lens_array") or {}
+    if side.get("grid") not in (None, "lenticular"):
+        views = "x".join(map(str, side.get("views") or [])) or "its"
+        raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
+                          "unmapped lenticular image (one row of views): render with the display's preset or "
+                          "--mapping instead")
     if panel is None:
         panel = infer_panel(mapping, image.shape[:2])
         if panel is None:
             raise ConfigError(f"no panel size fits a {image.shape[1]}x{image.shape[0]} image under mapping "
-                              f"{mapping.name!r}; give it with --panel WxH")
+                              f"{mapping.name!r}; give it with --panel-size WxH")
+    src = mapping.source(panel)
+    if side.get("views") and side["views"][0] != src.views:
+        raise ConfigError(f"{str(input_path)!r} has {side['views'][0]} views per lens but mapping {mapping.name!r} "
+                          f"reads {src.views}; check --mapping and its options")
     out = png_output(output)
     mapped = mapping.apply(image, panel)  # raises before anything is written
     record = base_record("panel", mapping=mapping.name, mapping_parameters=_params(mapping),
@@ -116,8 +156,32 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
     if mode == "lenses":
         record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
                             "focal_scale": ppl_out[1] / ppl_in[1]}
+    else:
+        resampled = _resampled_array(input_path, result.shape[:2], ppl_out)
+        if resampled is not None:
+            record["lens_array"] = resampled.describe()
     write_image(out, result, record)
     return record
+
+
+def _resampled_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tuple[int, int]) -> Any:
+    """The input's lens array with ``ppl_out`` pixels under each lens (same lenses, same
+    physical panel), or None when the input has none or it does not fit ``shape``."""
+    from ..geometry.lens_array import LensArray
+    from ..geometry.presets import lens_array_from_record
+
+    side = (read_sidecar(input_path) or {}).get("lens_array")
+    if not side:
+        return None
+    try:
+        a = lens_array_from_record(side)
+        ny, nx = ppl_out
+        panel = Panel(a.lenses_x * nx, a.lenses_y * ny if a.grid != "lenticular" else a.panel.height,
+                      a.pitch_x / nx, a.pitch_y / ny if a.grid != "lenticular" else a.panel.pitch_y)
+        out = LensArray(a.grid, a.lenses_x, a.lenses_y, a.pitch_x, a.pitch_y, a.focal, panel)
+    except ConfigError:
+        return None
+    return out if (out.panel.height, out.panel.width) == tuple(shape) else None
 
 
 # -- quilts ------------------------------------------------------------------------------------------
