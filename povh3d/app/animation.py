@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from ..engine.quality import Progress
-from ..errors import ConfigError, OutputError
+from ..errors import ConfigError, OutputError, PovrayError
 from ..image.io import read_png, write_sidecar
 from ..image.video import write_video
 from ..system import owned_prefix, sweep_orphans
@@ -174,8 +174,12 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
             info = {"frame": n, "clock": frames.clock(n), "frames": [frames.first, frames.last],
                     "clock_range": [frames.clock_start, frames.clock_end], "scene_uses_clock": uses_clock}
             if uses_clock or first is None:
-                frame = render_frame(frames.clock(n) if uses_clock else None,
-                                     _frame_progress(progress, index, total, scale))
+                try:
+                    frame = render_frame(frames.clock(n) if uses_clock else None,
+                                         _frame_progress(progress, index, total, scale))
+                except PovrayError as exc:  # name the animation frame, not only POV-Ray's camera batch
+                    raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {exc}", command=exc.command,
+                                    returncode=exc.returncode, log_tail=exc.log_tail) from None
                 report["from_cache" if frame.from_cache else "rendered"] += 1
                 write_image(staged, frame.image, {**frame.record, "animation": info})
                 first = first or (frame, staged)

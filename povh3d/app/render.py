@@ -18,6 +18,7 @@ from typing import Any
 from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
+from ..errors import warn
 from ..image.interleave import extract
 from .stage import prepare_stage
 from ..povray.sandbox import describe as describe_sandbox
@@ -39,14 +40,28 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     scene, model_record = load_content(request)
     settings, auto = _resolve_quality(request, scene)
     frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record)
+    if not scene.lit:
+        warn(f"{scene.path.name} has no light_source (and no emission): its objects will show only their "
+             "ambient colour, nearly black; add a light_source")
     if request.frames is None:
         still = frame(None, progress)
+        warn_if_empty(still.image, request)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
         write_image(output, still.image, still.record)
         return still.record
     return render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
                            video=request.video, fps=request.fps)
+
+
+def warn_if_empty(image, request: RenderRequest) -> None:
+    """One warning when every pixel has the same colour: no ray met anything."""
+    flat = image.reshape(-1, image.shape[-1])
+    if (flat == flat[0]).all():
+        w, h = request.lens_array.panel.size_mm
+        warn(f"every pixel of {request.output.name} is the same colour: no ray met an object. The display "
+             f"spans {w:.4g} x {h:.4g} mm around the origin and rays start in front of z = 0: model in mm "
+             "around z = 0 (the viewer is on -z)")
 
 
 def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:

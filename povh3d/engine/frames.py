@@ -141,7 +141,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         script = build_script(batch, [batch.frames[i] for i in chunk], method=method,
                               scene_path=str(scene.path), add_assumed_gamma=not scene.sets_assumed_gamma,
                               header=header)
-        name = f"{method} frame {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
+        name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
         jobs.append(PovrayJob(name=name, script=script, width=batch.width, height=batch.height,
                               frames=len(chunk), include_dirs=tuple(str(d) for d in scene.include_dirs),
                               options=settings.options + batch.options, threads=threads, bit_depth=settings.bit_depth,

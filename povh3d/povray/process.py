@@ -45,7 +45,7 @@ from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, Pov
 from .job import (ascii_paths, LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
                   povray_conf)
 from ..system import owned_prefix, sweep_orphans
-from .log import describe_exit, parse_error, tail
+from .log import denied_note, describe_exit, parse_error, tail
 
 #: Environment variable naming the POV-Ray executable to use.
 ENV_VAR = "POVH3D_POVRAY"
@@ -358,8 +358,7 @@ def _failure(child: _Child, log: str) -> PovrayError:
     if code == 126 and not log.strip():
         reason = "the POV-Ray process could not enter its sandbox (Landlock); set POVH3D_SANDBOX=off to run unconfined"
     elif _DENIED.search(reason) and sandbox.landlock_abi() and sandbox.sandbox_mode() != "off":
-        reason += (" (povh3d lets a scene read only its own files and POV-Ray's include files, "
-                   "and write only in its job folder)")
+        reason += denied_note(reason, child.job.include_dirs)
     return PovrayError(f"{child.job.name}: {reason}", command=child.command,
                        returncode=code, log_tail=tail(log))
 

@@ -66,6 +66,7 @@ class Scene:
     uses_clock : bool         whether any of those sources reads the animation clock
     computed_names : bool     whether the scene's own sources read a file through a name
                               computed at parse time (not in ``files`` nor the digest)
+    lit : bool                whether its sources mention a light_source, emission or radiosity
     """
 
     path: Path
@@ -76,6 +77,11 @@ class Scene:
     features: Features = Features(frozenset())
     uses_clock: bool = False
     computed_names: bool = False
+    lit: bool = True
+
+
+# A scene with neither shows its objects in their ambient colour only (nearly black).
+_LIGHT = re.compile(r"\b(?:light_source|emission|radiosity)\b")
 
 
 @cache
@@ -163,4 +169,5 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         h.update(f.read_bytes())
         h.update(b"\0")
     return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
-                 features_of_text(sources), any(_CLOCK_WORDS.search(t) for t in sources), computed)
+                 features_of_text(sources), any(_CLOCK_WORDS.search(t) for t in sources), computed,
+                 any(_LIGHT.search(t) for t in sources))
