@@ -203,9 +203,12 @@ def export_quilt(h3d_path: str | Path, ppl: int, grid: tuple[int, int], output_d
     folder.mkdir(parents=True, exist_ok=True)
     out = folder / quilt_name(Path(h3d_path).stem, grid[0], grid[1], aspect)
     check_writable(out)
-    write_image(out, views_to_quilt(views, *grid),
-                base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
-                            source=str(Path(h3d_path).resolve())))
+    record = base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
+                         source=str(Path(h3d_path).resolve()))
+    side = (read_sidecar(h3d_path) or {}).get("lens_array")
+    if side:  # so that importing the quilt gives back the H3D image with its lens array
+        record["source_lens_array"] = side
+    write_image(out, views_to_quilt(views, *grid), record)
     return out
 
 
@@ -223,6 +226,10 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
                      source=str(Path(quilt_path).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
                      output_gamma="sRGB")
+    side = (read_sidecar(quilt_path) or {}).get("source_lens_array") or {}
+    if side.get("views") == [int(views.shape[0]), 1] and side.get("panel", {}).get("size_px") == \
+            [h3d.shape[1], h3d.shape[0]]:
+        record["lens_array"] = side
     write_image(out, h3d, record)
     return record
 

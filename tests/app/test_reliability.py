@@ -297,3 +297,18 @@ def test_scene_under_a_non_ascii_folder_renders(tmp_path, cli):
     assert result.code == 0, result.err
     image = read_png(folder / "sortie é.png")
     assert image.max() > 200, "the include was read: the sphere is there"
+
+
+def test_quilt_round_trip_keeps_the_lens_array(tmp_path, cli):
+    from povh3d.geometry.lens_array import LensArray, Panel
+
+    array = LensArray("lenticular", 4, 6, 0.8, 0.1, 1.5, Panel(32, 6, 0.1, 0.1))
+    write_image(tmp_path / "len.png", _noise((6, 32, 3), seed=5), base_record("h3d", array))
+    assert cli("quilt", tmp_path / "len.png", "--quilt", "4x2", "-o", tmp_path / "q").code == 0
+    (quilt,) = (tmp_path / "q").glob("*.png")
+    result = cli("quilt", quilt, "--import", "-o", tmp_path / "back.png")
+    assert result.code == 0, result.err
+    assert np.array_equal(read_png(tmp_path / "back.png"), read_png(tmp_path / "len.png"))
+    assert read_sidecar(tmp_path / "back.png")["lens_array"]["views"] == [8, 1]
+    result = cli("extract", tmp_path / "back.png", "-o", tmp_path / "v")  # no --ppl: from the sidecar
+    assert result.code == 0, result.err
