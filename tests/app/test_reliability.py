@@ -312,3 +312,16 @@ def test_quilt_round_trip_keeps_the_lens_array(tmp_path, cli):
     assert read_sidecar(tmp_path / "back.png")["lens_array"]["views"] == [8, 1]
     result = cli("extract", tmp_path / "back.png", "-o", tmp_path / "v")  # no --ppl: from the sidecar
     assert result.code == 0, result.err
+
+
+def test_unusable_cache_with_a_mesh_model(tmp_path, cli):
+    from tests.conftest import SAMPLES
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder")
+    result = cli("render", SAMPLES / "letter_l.stl", "-o", tmp_path / "m.png", *TINY,
+                 env={"POVH3D_CACHE": str(blocker / "cache")})
+    assert result.code == 0, result.err
+    lines = [line for line in result.err.splitlines() if line.strip()]
+    assert lines and all(line.startswith("povh3d: warning: ") and "cache" in line for line in lines)
+    assert read_png(tmp_path / "m.png").shape == (16, 24, 3)
