@@ -40,18 +40,25 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     scene, model_record = load_content(request)
     settings, auto = _resolve_quality(request, scene)
     frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record)
-    if not scene.lit:
-        warn(f"{scene.path.name} has no light_source (and no emission): its objects will show only their "
-             "ambient colour, nearly black; add a light_source")
     if request.frames is None:
         still = frame(None, progress)
+        _warn_unlit(scene)
         warn_if_empty(still.image, request)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
         write_image(output, still.image, still.record)
         return still.record
-    return render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
-                           video=request.video, fps=request.fps)
+    report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
+                             video=request.video, fps=request.fps)
+    _warn_unlit(scene)
+    return report
+
+
+def _warn_unlit(scene: Scene) -> None:
+    # After the render: a scene that fails says only why it failed.
+    if not scene.lit:
+        warn(f"{scene.path.name} has no light_source (and no emission): its objects show only their "
+             "ambient colour, nearly black; add a light_source")
 
 
 def warn_if_empty(image, request: RenderRequest) -> None:

@@ -24,7 +24,7 @@ _INTEGRAL_TOLERANCE = 1e-6
 
 # Lengths (pitches, focal lengths) outside this range in mm are typing errors, and
 # products of them would overflow or lose every digit: refused on entry.
-LENGTH_RANGE_MM = (1e-9, 1e6)
+LENGTH_RANGE_MM = (1e-9, 1e9)
 # The largest panel povh3d accepts (2^30 pixels: 32768 x 32768), checked before
 # anything is allocated; 16K displays have a sixth of that.
 MAX_PANEL_PIXELS = 1 << 30

@@ -21,7 +21,7 @@ TINY = ["--preset", "demo", "--lenses", "6x4", "--ppl", "4", "--quality", "draft
     (["--pixel-pitch", "0"], "pixel pitch (--pixel-pitch) must be positive"),
     (["--pixel-pitch", "nan"], "--pixel-pitch: takes a finite number"),
     (["--pixel-pitch", "inf"], "--pixel-pitch: takes a finite number"),
-    (["--pixel-pitch", "1e300"], "between 1e-09 and 1e+06 mm"),
+    (["--pixel-pitch", "1e300"], "between 1e-09 and 1e+09 mm"),
     (["--focal", "1e308"], "focal length must be between"),
     (["--lenses", "0x0"], "--lenses takes positive numbers"),
     (["--lenses", "100000x100000"], "use fewer lenses (--lenses)"),
@@ -32,6 +32,12 @@ def test_bad_numbers_are_one_line(tmp_path, cli, args, expected):
     assert expected in line and "--panel " not in line
     assert time.perf_counter() - start < 2  # refused before any allocation or render
     assert not list(tmp_path.iterdir())
+
+
+def test_a_display_beyond_povray_reach_does_not_suggest_an_empty_range(tmp_path, cli):
+    line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", "--quality", "draft", "--pixel-pitch", "100",
+                              "--focal", "1e-9"), 2)
+    assert "whatever the front clearance" in line and "between 0.01 and 0.0" not in line
 
 
 def test_info_with_a_nan_pitch(cli):
