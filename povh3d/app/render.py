@@ -18,7 +18,8 @@ from typing import Any
 from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
-from ..errors import warn
+from ..errors import ConfigError, warn
+from ..system import available_memory
 from ..image.interleave import extract
 from .stage import prepare_stage
 from ..povray.sandbox import describe as describe_sandbox
@@ -34,6 +35,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
 
     Every output is checked before any work and written atomically.
     """
+    check_memory(request)
     output = png_output(request.output)
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
@@ -59,6 +61,22 @@ def _warn_unlit(scene: Scene) -> None:
     if not scene.lit:
         warn(f"{scene.path.name} has no light_source (and no emission): its objects show only their "
              "ambient colour, nearly black; add a light_source")
+
+
+# Bytes a render holds per panel pixel at least: a ray (centre, direction: 5 float64), the
+# image in linear light (3 float64) and its encoded copies; measured peaks are higher.
+BYTES_PER_PIXEL = 96
+
+
+def check_memory(request: RenderRequest) -> None:
+    """Refuse, before any allocation, a panel whose arrays cannot fit in the memory available."""
+    w, h = request.image_size
+    rw, rh = request.render_array.panel.width, request.render_array.panel.height
+    need = max(w * h, rw * rh) * BYTES_PER_PIXEL
+    free = available_memory()
+    if free is not None and need > free:
+        raise ConfigError(f"a {rw}x{rh} pixel render needs at least {need / 2**30:.3g} GiB of memory, more than "
+                          f"the {free / 2**30:.3g} GiB available; use fewer lenses (--lenses) or pixels per lens (--ppl)")
 
 
 def warn_if_empty(image, request: RenderRequest) -> None:

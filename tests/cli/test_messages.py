@@ -132,3 +132,13 @@ def test_empty_render_and_no_light_warn(tmp_path, cli, text, expected):
 def test_a_lit_scene_has_no_warning(tmp_path, cli):  # negative control of the two above
     result = cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY)
     assert result.code == 0 and "warning" not in result.err
+
+
+def test_a_panel_larger_than_memory_is_refused_before_rendering(tmp_path, cli, monkeypatch):
+    import povh3d.app.render as render_module
+
+    monkeypatch.setattr(render_module, "available_memory", lambda: 2**20)  # 1 MiB free
+    line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", "--quality", "draft"), 2)
+    assert "320x240 pixel render needs at least" in line and "available" in line
+    monkeypatch.setattr(render_module, "available_memory", lambda: 2**34)  # negative control: 16 GiB
+    assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY).code == 0
