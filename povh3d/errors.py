@@ -59,3 +59,16 @@ class RenderInterrupted(Povh3dError):
     """The user interrupted a render (Ctrl-C); every child was stopped."""
 
     exit_code = 130
+
+
+class Povh3dWarning(UserWarning):
+    """Something the user should know that does not stop the work (an empty render, a
+    cache that cannot be used).  Library code issues it with ``warnings.warn``; the
+    CLI prints it as one yellow line."""
+
+
+def warn(message: str) -> None:
+    """Issue ``message`` as a ``Povh3dWarning`` (the one channel for warnings)."""
+    import warnings
+
+    warnings.warn(message, Povh3dWarning, stacklevel=2)

@@ -13,3 +13,76 @@ def cpu_count() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # not Linux
         return os.cpu_count() or 1
+
+
+# -- temporary folders that name their owner -------------------------------------------------------
+# A temporary folder povh3d makes (a POV-Ray job's, an animation's staging folder)
+# carries the pid of the process that owns it: ``PREFIX<pid>-<random>``.  The
+# owner removes it on exit; when the owner was killed (kill -9, a power cut), the
+# next povh3d run finds it by name and removes it once no process has that pid.
+# A folder whose pid was reused by another process is removed after STALE_SECONDS.
+STALE_SECONDS = 7 * 24 * 3600
+
+
+def owned_prefix(prefix: str) -> str:
+    """``prefix`` + this process's pid + ``-``: the name start of a folder this process owns."""
+    return f"{prefix}{os.getpid()}-"
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, another user's
+        return True
+    return True
+
+
+def sweep_orphans(folder: str | os.PathLike[str], prefix: str) -> list[str]:
+    """Remove ``prefix<pid>-*`` folders in ``folder`` left by a povh3d process that is gone.
+
+    Only folders of this user whose owner pid is not running (or that are older
+    than ``STALE_SECONDS``) are removed; the folders removed are returned.  Never
+    raises: a folder that cannot be listed or removed is left.
+    """
+    import re
+    import shutil
+    import time
+
+    pattern = re.compile(re.escape(prefix) + r"(\d+)-")
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    now = time.time()
+    for entry in entries:
+        match = pattern.match(entry.name)
+        if not match or not entry.is_dir(follow_symlinks=False):
+            continue
+        try:
+            info = entry.stat(follow_symlinks=False)
+        except OSError:
+            continue
+        if info.st_uid != os.getuid():
+            continue
+        pid = int(match[1])
+        if pid == os.getpid():
+            continue
+        if not _pid_alive(pid) or now - info.st_mtime > STALE_SECONDS:
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed.append(entry.path)
+    return removed
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to new allocations (Linux ``MemAvailable``), or None."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None

@@ -38,9 +38,10 @@ from typing import Any
 import numpy as np
 
 from ..engine.quality import Progress
-from ..errors import ConfigError, OutputError
+from ..errors import ConfigError, OutputError, PovrayError
 from ..image.io import read_png, write_sidecar
 from ..image.video import write_video
+from ..system import owned_prefix, sweep_orphans
 from .records import write_image
 
 _RANGE = re.compile(r"^\s*(\d+)\s*:\s*(\d+)\s*$")
@@ -154,8 +155,10 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
     """
     digits = max(4, len(str(frames.last)))
     folder = output.parent if str(output.parent) else Path(".")
+    prefix = f".{output.stem}-frames-"
+    sweep_orphans(folder, prefix)  # staging folders of a killed run (system.sweep_orphans)
     try:
-        staging = Path(tempfile.mkdtemp(prefix=f".{output.stem}-frames-", dir=folder))
+        staging = Path(tempfile.mkdtemp(prefix=owned_prefix(prefix), dir=folder))
     except OSError as error:
         raise OutputError(f"cannot write into {str(folder)!r}: {error.strerror}") from None
 
@@ -171,8 +174,12 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
             info = {"frame": n, "clock": frames.clock(n), "frames": [frames.first, frames.last],
                     "clock_range": [frames.clock_start, frames.clock_end], "scene_uses_clock": uses_clock}
             if uses_clock or first is None:
-                frame = render_frame(frames.clock(n) if uses_clock else None,
-                                     _frame_progress(progress, index, total, scale))
+                try:
+                    frame = render_frame(frames.clock(n) if uses_clock else None,
+                                         _frame_progress(progress, index, total, scale))
+                except PovrayError as exc:  # name the animation frame, not only POV-Ray's camera batch
+                    raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {exc}", command=exc.command,
+                                    returncode=exc.returncode, log_tail=exc.log_tail) from None
                 report["from_cache" if frame.from_cache else "rendered"] += 1
                 write_image(staged, frame.image, {**frame.record, "animation": info})
                 first = first or (frame, staged)
@@ -186,8 +193,9 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
         finals = [frame_path(output, n, digits) for n in frames.numbers]
         for n, final in zip(frames.numbers, finals):
             staged = frame_path(staging / output.name, n, digits)
-            staged.with_suffix(".json").replace(final.with_suffix(".json"))
+            # image first, sidecar last (image.io: a new sidecar never describes an old image)
             staged.replace(final)
+            staged.with_suffix(".json").replace(final.with_suffix(".json"))
         report["frames"] = [str(p) for p in finals]
         if video is not None:
             write_video([read_png(p) for p in finals], video, fps=fps)

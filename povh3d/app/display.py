@@ -14,10 +14,12 @@ from typing import Any
 
 import numpy as np
 
+from PIL import Image
+
 from ..errors import ConfigError, InputError
 from ..geometry.lens_array import Panel
-from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png, write_sidecar
-from .records import base_record, png_output
+from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from .records import base_record, png_output, write_image
 from ..image.interleave import extract, interleave
 from ..mappings import Mapping
 from ..mappings.sampling import Source
@@ -33,6 +35,10 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
               pixel_pitch: float | None) -> dict[str, Any]:
     """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
     side = (read_sidecar(h3d_path) or {}).get("lens_array") or {}
+    check_against_sidecar(h3d_path, side)
+    if ppl is not None and side.get("views") and list(side["views"]) != [ppl[1], ppl[0]]:
+        raise ConfigError(f"--ppl {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
+                          f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
     if ppl is None and side.get("views"):
         ppl = (int(side["views"][1]), int(side["views"][0]))
     if ppl is None:
@@ -42,6 +48,30 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
         pixel_pitch = side["panel"]["pixel_pitch_mm"][0]
     return {"ppl": ppl, "focal": focal, "pixel_pitch": pixel_pitch,
             "pixel_pitch_y": (side.get("panel") or {}).get("pixel_pitch_mm", [None, pixel_pitch])[1] or pixel_pitch}
+
+
+def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
+    """Refuse an image whose size is not the panel its sidecar's lens array describes."""
+    size = (lens_array.get("panel") or {}).get("size_px")
+    if not size:
+        return
+    try:
+        with Image.open(path) as im:
+            width, height = im.size
+    except Exception:  # noqa: BLE001 - not an image: read_png says so, with its own message
+        return
+    if [width, height] != list(size):
+        raise InputError(f"{str(path)!r} is {width}x{height} but its sidecar describes a {size[0]}x{size[1]} "
+                         "panel: the image was changed after its sidecar; render it again or delete the sidecar")
+
+
+def is_lenticular(path: str | Path) -> bool:
+    """Whether the sidecar of ``path`` describes a lenticular (horizontal-only) lens array."""
+    try:
+        side = (read_sidecar(path) or {}).get("lens_array") or {}
+    except InputError:
+        return False
+    return side.get("grid") == "lenticular"
 
 
 def _need(value: Any, what: str, flag: str) -> Any:
@@ -79,17 +109,26 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
              panel: tuple[int, int] | None = None) -> dict[str, Any]:
     """Map an unmapped view-space H3D PNG onto a panel and write ``output`` with its sidecar."""
     image = read_png(input_path)
+    side = (read_sidecar(input_path) or {}).get("lens_array") or {}
+    if side.get("grid") not in (None, "lenticular"):
+        views = "x".join(map(str, side.get("views") or [])) or "its"
+        raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
+                          "unmapped lenticular image (one row of views): render with the display's preset or "
+                          "--mapping instead")
     if panel is None:
         panel = infer_panel(mapping, image.shape[:2])
         if panel is None:
             raise ConfigError(f"no panel size fits a {image.shape[1]}x{image.shape[0]} image under mapping "
-                              f"{mapping.name!r}; give it with --panel WxH")
+                              f"{mapping.name!r}; give it with --panel-size WxH")
+    src = mapping.source(panel)
+    if side.get("views") and side["views"][0] != src.views:
+        raise ConfigError(f"{str(input_path)!r} has {side['views'][0]} views per lens but mapping {mapping.name!r} "
+                          f"reads {src.views}; check --mapping and its options")
     out = png_output(output)
     mapped = mapping.apply(image, panel)  # raises before anything is written
     record = base_record("panel", mapping=mapping.name, mapping_parameters=_params(mapping),
                      source=str(Path(input_path).resolve()), size_px=list(panel), output_gamma="sRGB")
-    write_png(out, mapped)
-    write_sidecar(out, record)
+    write_image(out, mapped, record)
     return record
 
 
@@ -117,9 +156,32 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
     if mode == "lenses":
         record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
                             "focal_scale": ppl_out[1] / ppl_in[1]}
-    write_png(out, result)
-    write_sidecar(out, record)
+    else:
+        resampled = _resampled_array(input_path, result.shape[:2], ppl_out)
+        if resampled is not None:
+            record["lens_array"] = resampled.describe()
+    write_image(out, result, record)
     return record
+
+
+def _resampled_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tuple[int, int]) -> Any:
+    """The input's lens array with ``ppl_out`` pixels under each lens (same lenses, same
+    physical panel), or None when the input has none or it does not fit ``shape``."""
+    from ..geometry.lens_array import LensArray
+    from ..geometry.presets import lens_array_from_record
+
+    side = (read_sidecar(input_path) or {}).get("lens_array")
+    if not side:
+        return None
+    try:
+        a = lens_array_from_record(side)
+        ny, nx = ppl_out
+        panel = Panel(a.lenses_x * nx, a.lenses_y * ny if a.grid != "lenticular" else a.panel.height,
+                      a.pitch_x / nx, a.pitch_y / ny if a.grid != "lenticular" else a.panel.pitch_y)
+        out = LensArray(a.grid, a.lenses_x, a.lenses_y, a.pitch_x, a.pitch_y, a.focal, panel)
+    except ConfigError:
+        return None
+    return out if (out.panel.height, out.panel.width) == tuple(shape) else None
 
 
 # -- quilts ------------------------------------------------------------------------------------------
@@ -141,9 +203,12 @@ def export_quilt(h3d_path: str | Path, ppl: int, grid: tuple[int, int], output_d
     folder.mkdir(parents=True, exist_ok=True)
     out = folder / quilt_name(Path(h3d_path).stem, grid[0], grid[1], aspect)
     check_writable(out)
-    write_png(out, views_to_quilt(views, *grid))
-    write_sidecar(out, base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
-                               source=str(Path(h3d_path).resolve())))
+    record = base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
+                         source=str(Path(h3d_path).resolve()))
+    side = (read_sidecar(h3d_path) or {}).get("lens_array")
+    if side:  # so that importing the quilt gives back the H3D image with its lens array
+        record["source_lens_array"] = side
+    write_image(out, views_to_quilt(views, *grid), record)
     return out
 
 
@@ -161,8 +226,11 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
                      source=str(Path(quilt_path).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
                      output_gamma="sRGB")
-    write_png(out, h3d)
-    write_sidecar(out, record)
+    side = (read_sidecar(quilt_path) or {}).get("source_lens_array") or {}
+    if side.get("views") == [int(views.shape[0]), 1] and side.get("panel", {}).get("size_px") == \
+            [h3d.shape[1], h3d.shape[0]]:
+        record["lens_array"] = side
+    write_image(out, h3d, record)
     return record
 
 
@@ -201,13 +269,12 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
                      gradient_energy=energy, output_gamma="sRGB")
     encoded = [from_linear(p, image.dtype) for p in planes]
     if sweep is None:
-        write_png(out, encoded[0])
+        write_image(out, encoded[0], record)
     else:
         for n, img in enumerate(encoded):
             write_png(out.with_name(f"{out.stem}_{n:03d}.png"), img)
-        write_png(out, contact_sheet(encoded))
         record["sharpest_depth_mm"] = depths[int(np.argmax(energy))]
-    write_sidecar(out, record)
+        write_image(out, contact_sheet(encoded), record)
     return record
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
-from ..image.io import check_writable, write_png, write_sidecar
+from ..image.io import check_writable, write_image_pair
 
 
 def base_record(kind: str, lens_array: LensArray | None = None, **extra: Any) -> dict[str, Any]:
@@ -37,6 +37,6 @@ def png_output(path: str | Path, what: str = "output") -> Path:
 
 
 def write_image(path: str | Path, image: np.ndarray, record: dict[str, Any]) -> None:
-    """Write ``image`` and its sidecar ``record`` beside it."""
-    write_png(path, image)
-    write_sidecar(path, record)
+    """Write ``image`` and its sidecar ``record`` beside it, replaced as a pair
+    (``image.io.write_image_pair``: a sidecar always describes the image beside it)."""
+    write_image_pair(path, image, record)

@@ -20,6 +20,8 @@ import numpy as np
 from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
+from ..errors import ConfigError, warn
+from ..system import available_memory
 from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
@@ -38,6 +40,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
 
     Every output is checked before any work and written atomically.
     """
+    check_memory(request)
     output = png_output(request.output)
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
@@ -50,6 +53,8 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
                     display_frame=frame_record)
     if request.frames is None:
         still = frame(None, progress)
+        _warn_unlit(scene)
+        warn_if_empty(still.image, request)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
         if request.depth_maps is not None:
@@ -61,8 +66,43 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
                                           "nan_fraction": float(np.isnan(depth).mean())}
         write_image(output, still.image, still.record)
         return still.record
-    return render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
-                           video=request.video, fps=request.fps)
+    report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
+                             video=request.video, fps=request.fps)
+    _warn_unlit(scene)
+    return report
+
+
+def _warn_unlit(scene: Scene) -> None:
+    # After the render: a scene that fails says only why it failed.
+    if not scene.lit:
+        warn(f"{scene.path.name} has no light_source (and no emission): its objects show only their "
+             "ambient colour, nearly black; add a light_source")
+
+
+# Bytes a render holds per panel pixel at least: a ray (centre, direction: 5 float64), the
+# image in linear light (3 float64) and its encoded copies; measured peaks are higher.
+BYTES_PER_PIXEL = 96
+
+
+def check_memory(request: RenderRequest) -> None:
+    """Refuse, before any allocation, a panel whose arrays cannot fit in the memory available."""
+    w, h = request.image_size
+    rw, rh = request.render_array.panel.width, request.render_array.panel.height
+    need = max(w * h, rw * rh) * BYTES_PER_PIXEL
+    free = available_memory()
+    if free is not None and need > free:
+        raise ConfigError(f"a {rw}x{rh} pixel render needs at least {need / 2**30:.3g} GiB of memory, more than "
+                          f"the {free / 2**30:.3g} GiB available; use fewer lenses (--lenses) or pixels per lens (--ppl)")
+
+
+def warn_if_empty(image, request: RenderRequest) -> None:
+    """One warning when every pixel has the same colour: no ray met anything."""
+    flat = image.reshape(-1, image.shape[-1])
+    if (flat == flat[0]).all():
+        w, h = request.lens_array.panel.size_mm
+        warn(f"every pixel of {request.output.name} is the same colour: no ray met an object. The display "
+             f"spans {w:.4g} x {h:.4g} mm around the origin and rays start in front of z = 0: model in mm "
+             "around z = 0 (the viewer is on -z)")
 
 
 def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:

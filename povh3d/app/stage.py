@@ -31,7 +31,8 @@ from .._version import __version__
 from ..engine.cache import content_key, default_cache_dir
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
-from ..image.io import atomic_path
+from ..errors import OutputError
+from ..image.io import atomic_path, check_writable
 from ..povray.templates import render_template
 
 FILL = 0.9  # of the display's width and height: a margin so the model is not cut at the edge
@@ -126,13 +127,27 @@ def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: i
     key = content_key("mesh", __version__, _sha256(model), shading, max_triangles, up, rotate, unit, "normalized")
     folder = (cache_dir or default_cache_dir()) / "meshes" / key[:2] / key
     manifest_path = folder / "manifest.json"
-    if manifest_path.is_file():
-        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
+    try:  # a damaged manifest is a cache miss, converted again
+        manifest = json.loads(manifest_path.read_text(encoding="utf-8")) if manifest_path.is_file() else None
+    except (OSError, ValueError):
+        manifest = None
+    if isinstance(manifest, dict) and isinstance(manifest.get("files", {}), dict) and "include" in manifest:
         deps = manifest.get("files", {})
         if all(Path(p).is_file() and _sha256(Path(p)) == h for p, h in deps.items()):
             manifest["from_cache"] = True
             return folder / manifest["include"], manifest
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        check_writable(folder / "manifest.json")
+    except (OSError, OutputError) as exc:  # an unusable cache: convert into a folder of this run
+        import tempfile
+
+        from ..errors import warn
+        from ..system import owned_prefix
+
+        warn(f"the mesh cache {str(folder.parent.parent)!r} cannot be used ({exc}); converting without it")
+        folder = Path(tempfile.mkdtemp(prefix=owned_prefix("povh3d-")))  # swept after this run ends
+        manifest_path = folder / "manifest.json"
     ident = identifier_from_path(model)
     result = convert_mesh(model, folder / f"{ident}.inc", shading=shading, max_triangles=max_triangles,
                           up=up, rotate=rotate, unit=unit, center=True, normalize=True)

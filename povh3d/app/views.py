@@ -36,15 +36,39 @@ def check_views_dir(views_dir: str | Path) -> Path:
 
 def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray | None,
                 source: dict[str, Any] | None = None) -> None:
-    """Write a ``(Ny, Nx, Ly, Lx, C)`` view stack as ``v_{l:03d}_{k:03d}.png`` plus ``views.json``."""
+    """Write a ``(Ny, Nx, Ly, Lx, C)`` view stack as ``v_{l:03d}_{k:03d}.png`` plus ``views.json``.
+
+    A views folder holds one render: ``views.json`` (the manifest) is removed
+    first and written last, and the views of an earlier render that this one
+    does not overwrite (another PPL) are removed, so an interrupted write leaves
+    a folder without a manifest, never a manifest over mixed views.
+    """
     folder = check_views_dir(views_dir)
     ny, nx = views.shape[:2]
+    manifest = folder / "views.json"
+    try:
+        manifest.unlink(missing_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot replace {str(manifest)!r}: {exc.strerror}") from None
     for l in range(ny):
         for k in range(nx):
             write_png(folder / VIEW_NAME.format(l=l, k=k), views[l, k])
-    record = base_record("views", lens_array, views=[nx, ny], source=source or {})
-    with atomic_path(folder / "views.json") as tmp:
+    for (l, k), path in _view_files(folder).items():
+        if l >= ny or k >= nx:
+            path.unlink(missing_ok=True)
+    record = base_record("views", lens_array, views=[nx, ny], view_size_px=[views.shape[3], views.shape[2]],
+                         source=source or {})
+    with atomic_path(manifest) as tmp:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+
+
+def _view_files(folder: Path) -> dict[tuple[int, int], Path]:
+    found = {}
+    for p in folder.iterdir():
+        m = _VIEW_RE.match(p.name)
+        if m:
+            found[(int(m.group(1)), int(m.group(2)))] = p
+    return found
 
 
 def read_views(views_dir: str | Path) -> np.ndarray:
@@ -52,11 +76,7 @@ def read_views(views_dir: str | Path) -> np.ndarray:
     folder = Path(views_dir)
     if not folder.is_dir():
         raise InputError(f"views folder {str(folder)!r} does not exist; check the path")
-    found = {}
-    for p in folder.iterdir():
-        m = _VIEW_RE.match(p.name)
-        if m:
-            found[(int(m.group(1)), int(m.group(2)))] = p
+    found = _view_files(folder)
     if not found:
         raise InputError(f"no view images (v_LLL_KKK.png) in {str(folder)!r}; render with --views-dir first")
     ny = max(l for l, _ in found) + 1
@@ -66,10 +86,19 @@ def read_views(views_dir: str | Path) -> np.ndarray:
         l, k = absent[0]
         raise InputError(f"{len(absent)} views missing in {str(folder)!r}, first {VIEW_NAME.format(l=l, k=k)}; "
                          "the stack must be a full Ny x Nx grid")
+    manifest = read_sidecar(folder / "views.json") or {}
+    grid = manifest.get("views")
+    if grid is not None and list(grid) != [nx, ny]:
+        raise InputError(f"{str(folder)!r} holds {nx}x{ny} views but its views.json describes {grid[0]}x{grid[1]}: "
+                         "views of two renders are mixed; render again into an empty folder")
     images = [read_png(found[(l, k)]) for l in range(ny) for k in range(nx)]
     shapes = {img.shape for img in images}
     if len(shapes) != 1:
         raise InputError(f"the views in {str(folder)!r} differ in size or channels: {sorted(shapes)}")
+    size = manifest.get("view_size_px")
+    if size is not None and images and list(size) != [images[0].shape[1], images[0].shape[0]]:
+        raise InputError(f"the views in {str(folder)!r} are {images[0].shape[1]}x{images[0].shape[0]} but views.json "
+                         f"describes {size[0]}x{size[1]}; render again into an empty folder")
     dtypes = {img.dtype for img in images}
     if len(dtypes) != 1:
         raise InputError(f"the views in {str(folder)!r} mix 8-bit and 16-bit images")

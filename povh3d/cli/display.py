@@ -28,11 +28,18 @@ def cmd_extract(args: argparse.Namespace) -> int:
         record = extract_file(args.h3d, None, args.output)
         nx, ny = record["views"]
     else:
-        ppl = parse_pair(args.ppl, "--ppl", integral=True)
-        nx, ny = ppl if isinstance(ppl, tuple) else (ppl, 1)
+        from ..app.display import is_lenticular
+
+        ny, nx = ppl_arg(args.ppl, lenticular=is_lenticular(args.h3d))
         record = extract_file(args.h3d, (ny, nx), args.output)
     print(f"{args.output}  {nx}x{ny} views of {record['view_size_px'][0]}x{record['view_size_px'][1]}")
     return 0
+
+
+def _lenticular(path: str) -> bool:
+    from ..app.display import is_lenticular
+
+    return is_lenticular(path)
 
 
 def cmd_presets(args: argparse.Namespace) -> int:
@@ -97,12 +104,11 @@ def cmd_map(args: argparse.Namespace) -> int:
 def cmd_resample(args: argparse.Namespace) -> int:
     from ..app.display import lens_info, resample_file
 
-    info = lens_info(args.input, ppl_arg(args.ppl), None, None)
-    ppl_out = ppl_arg(args.ppl_out, "--ppl-out")
-    if info["ppl"][0] == 1 and ppl_out[0] == 1:
-        pass
-    elif len(str(args.ppl_out).lower().split("x")) == 1:
-        ppl_out = (ppl_out[1], ppl_out[1])  # an omnidirectional image: N means NxN
+    from ..app.display import is_lenticular
+
+    lenticular = is_lenticular(args.input)
+    info = lens_info(args.input, ppl_arg(args.ppl, lenticular=lenticular), None, None)
+    ppl_out = ppl_arg(args.ppl_out, "--ppl-out", lenticular=lenticular or info["ppl"][0] == 1)
     record = resample_file(args.input, args.output, info["ppl"], ppl_out, args.mode)
     print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {args.mode}")
     return 0
@@ -120,7 +126,7 @@ def cmd_quilt(args: argparse.Namespace) -> int:
         return 0
     if grid is None:
         raise ConfigError("give the quilt grid with --quilt COLSxROWS, e.g. --quilt 8x6")
-    ppl = lens_info(args.input, ppl_arg(args.ppl), None, None)["ppl"]
+    ppl = lens_info(args.input, ppl_arg(args.ppl, lenticular=True), None, None)["ppl"]  # quilts: one row
     if ppl[0] != 1:
         raise ConfigError("a quilt holds one row of views: use a lenticular (horizontal-only) H3D image")
     out = export_quilt(args.input, ppl[1], grid, args.output, args.aspect)
@@ -131,7 +137,8 @@ def cmd_quilt(args: argparse.Namespace) -> int:
 def cmd_refocus(args: argparse.Namespace) -> int:
     from ..app.display import lens_info, refocus_file
 
-    info = lens_info(args.input, ppl_arg(args.ppl), args.focal, args.pixel_pitch)
+    info = lens_info(args.input, ppl_arg(args.ppl, lenticular=_lenticular(args.input)), args.focal,
+                     args.pixel_pitch)
     if (args.depth is None) == (args.sweep is None):
         raise ConfigError("give one of --depth MM or --sweep N")
     sweep = None
@@ -148,7 +155,8 @@ def cmd_refocus(args: argparse.Namespace) -> int:
 def cmd_preview(args: argparse.Namespace) -> int:
     from ..app.display import lens_info, preview_file
 
-    info = lens_info(args.input, ppl_arg(args.ppl), args.focal, args.pixel_pitch)
+    info = lens_info(args.input, ppl_arg(args.ppl, lenticular=_lenticular(args.input)), args.focal,
+                     args.pixel_pitch)
     preview_file(args.input, args.output, info, frames=args.frames, scale=args.scale)
     print(f"{args.output}  {args.frames} frames, contact sheet {Path(args.output).with_suffix('.png')}")
     return 0

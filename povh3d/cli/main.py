@@ -7,16 +7,38 @@ never a traceback.  Progress goes to stderr, results to stdout.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import math
+import os
+import signal
 import sys
+import threading
+import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
 from .._version import __version__
-from ..errors import Povh3dError, RenderInterrupted
+from ..errors import Povh3dError, Povh3dWarning, RenderInterrupted
 from . import calibration, display, render
+from .options import warn
+
+
+def _finite_float(text: str) -> float:
+    """``type=float`` of every option: a finite number (``nan`` and ``inf`` are refused here)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"takes a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"takes a finite number, got {text!r}")
+    return value
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.register("type", float, _finite_float)
+
     def error(self, message: str) -> NoReturn:  # one line, not usage + message
         fail(f"{message} (see '{self.prog} --help')", 2)
 
@@ -44,13 +66,58 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     try:
-        return args.func(args)
+        with _signals_as_interrupt(), _warnings_as_lines():
+            return args.func(args)
     except RenderInterrupted as exc:
         fail(str(exc) or "interrupted; every POV-Ray process was stopped", exc.exit_code)
     except KeyboardInterrupt:
         fail("interrupted", 130)
     except Povh3dError as exc:
         fail(str(exc), exc.exit_code)
+    except MemoryError:
+        fail("out of memory; use a smaller panel (--lenses, --ppl) or close other programs", 1)
+    except OSError as exc:  # the environment's fault (a full disk, a permission), not the user's input
+        where = f" {exc.filename!s}:" if exc.filename else ""
+        fail(f"{where} {exc.strerror or exc}".strip(), 1)
+    except Exception as exc:  # noqa: BLE001 - a bug: still one line, the traceback on request
+        if os.environ.get("POVH3D_DEBUG"):
+            raise
+        fail(f"internal error (a bug in povh3d, please report it): {type(exc).__name__}: {exc}; "
+             "set POVH3D_DEBUG=1 for the traceback", 70)
+
+
+@contextlib.contextmanager
+def _signals_as_interrupt():
+    """SIGTERM and SIGHUP stop a run as Ctrl-C does: every child stopped, every temporary
+    folder removed, no output replaced (they re-raise SIGINT, so a handler that holds
+    Ctrl-C while a child starts holds them too)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {}
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        previous[signum] = signal.signal(signum, lambda *_: signal.raise_signal(signal.SIGINT))
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+@contextlib.contextmanager
+def _warnings_as_lines():
+    """Print every ``Povh3dWarning`` as one yellow line (library code never prints)."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, Povh3dWarning):
+            warn([str(message)])
+        else:
+            original(message, category, filename, lineno, file, line)
+
+    with warnings.catch_warnings():
+        original = warnings.showwarning
+        warnings.simplefilter("always", Povh3dWarning)
+        warnings.showwarning = show
+        yield
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ decided by ``povh3d.app`` and below.
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 from typing import Any
@@ -23,6 +24,8 @@ def parse_pair(text: str, option: str, *, integral: bool) -> tuple[float, float]
     if not m:
         raise ConfigError(f"{option} takes a number or WxH like {example}, got {text!r}")
     values = [float(g) for g in m.groups() if g is not None]
+    if any(not math.isfinite(v) or v <= 0 for v in values):
+        raise ConfigError(f"{option} takes positive numbers like {example}, got {text!r}")
     if integral and any(v != int(v) for v in values):
         raise ConfigError(f"{option} takes whole numbers like {example}, got {text!r}")
     if integral:
@@ -127,11 +130,15 @@ def mapping_from_args(args: argparse.Namespace, lens_array, display):
                                reverse=args.reverse_views or None, blend=args.blend or None)
 
 
-def ppl_arg(text: str | None, option: str = "--ppl") -> tuple[int, int] | None:
+def ppl_arg(text: str | None, option: str = "--ppl", *, lenticular: bool = False) -> tuple[int, int] | None:
+    """``(Ny, Nx)`` from ``NxxNy`` or ``N``.  One number means what it means in ``render``:
+    N x N pixels per lens, or N x 1 on a lenticular array (which has one row of views)."""
     if text is None:
         return None
     ppl = parse_pair(text, option, integral=True)
-    return (ppl[1], ppl[0]) if isinstance(ppl, tuple) else (1, ppl)
+    if isinstance(ppl, tuple):
+        return (ppl[1], ppl[0])
+    return (1, ppl) if lenticular else (ppl, ppl)
 
 
 def add_image_lens_options(p: argparse.ArgumentParser) -> None:

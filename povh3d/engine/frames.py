@@ -21,13 +21,17 @@ from .._version import __version__
 from .cache import ImageCache, content_key, default_cache_dir
 from ..image.io import read_png
 from ..povray.process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
-from ..povray.sandbox import files_within
+from ..povray.sandbox import confines, files_within
 from ..povray.version_memo import remembered_version
+from ..errors import warn
 from ..scene.scene import Scene
 from ..system import cpu_count
 from .batch import FrameBatch, RenderStats
 from .quality import Progress, RenderSettings
 from ..povray.templates import render_template, templates_dir
+
+RESUME_SPLIT = 4  # jobs per method batch when caching (see render_frames)
+
 
 class LocalRunner:
     """Runs jobs as POV-Ray processes on this machine (``dask_backend.DaskRunner``: on a cluster)."""
@@ -99,6 +103,12 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         runner = LocalRunner(find_povray())
     stats = RenderStats(frames=len(batch.frames), povray_version=runner.version)
     cache = ImageCache(settings.cache_dir or default_cache_dir()) if settings.use_cache else None
+    if cache is not None and scene.computed_names and not confines():
+        # Unconfined, POV-Ray may read files whose names povh3d cannot know: no key covers them.
+        warn(f"{scene.path.name} reads a file whose name is computed while POV-Ray parses, and POV-Ray "
+             "runs unconfined here (POVH3D_SANDBOX=off or no Landlock), so povh3d cannot know every file "
+             "it reads: not using the image cache for it")
+        cache = None
 
     common_key = content_key(__version__, stats.povray_version, scene.digest, batch.template,
                              _template_digest(batch.template), _canonical(batch.context),
@@ -108,9 +118,9 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
     images: list[np.ndarray | None] = [None] * len(keys)
     missing: list[int] = []
     for index, key in enumerate(keys):
-        hit = cache.get(key) if cache else None
+        hit = cache.load(key) if cache else None
         if hit is not None:
-            images[index] = read_png(hit)
+            images[index] = hit
         else:
             missing.append(index)
     stats.cached = len(keys) - len(missing)
@@ -120,7 +130,10 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
     missing = [i for i in missing if copies[i] == i]
     n_copies = Counter(copies.values())
 
-    chunks = [missing[i:i + batch.frames_per_job] for i in range(0, len(missing), batch.frames_per_job)]
+    # A job's frames reach the cache when the job ends: a quarter of the method's
+    # batch per job, so a run stopped (Ctrl-C, timeout, crash) keeps most of its work.
+    per_job = max(1, -(-batch.frames_per_job // RESUME_SPLIT)) if cache is not None else batch.frames_per_job
+    chunks = [missing[i:i + per_job] for i in range(0, len(missing), per_job)]
     cores = cpu_count()
     processes = max(1, min(len(chunks) or 1, settings.jobs or batch.processes or cores))
     threads = settings.threads or max(1, cores // processes)
@@ -131,7 +144,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         script = build_script(batch, [batch.frames[i] for i in chunk], method=method,
                               scene_path=str(scene.path), add_assumed_gamma=not scene.sets_assumed_gamma,
                               header=header)
-        name = f"{method} frame {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
+        name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
         jobs.append(PovrayJob(name=name, script=script, width=batch.width, height=batch.height,
                               frames=len(chunk), include_dirs=tuple(str(d) for d in scene.include_dirs),
                               options=settings.options + batch.options, threads=threads, bit_depth=settings.bit_depth,
@@ -149,7 +162,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         for index, image_path in zip(chunk_of_job[id(result.job)], result.images):
             images[index] = read_png(image_path)
             if cache is not None:
-                cache.put(keys[index], image_path)
+                cache.store(keys[index], image_path)
             done += n_copies.get(index, 1)
         if progress:
             progress(done, len(keys))

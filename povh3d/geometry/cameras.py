@@ -70,6 +70,12 @@ def check_clearance(lens_array: LensArray, back_off: float) -> None:
     stretch = ray_stretch(lens_array)
     if back_off * stretch > POVRAY_MAX_DEPTH / 2:
         most = POVRAY_MAX_DEPTH / 2 / stretch
+        if most < MIN_CLEARANCE:  # no clearance works: the display itself is out of POV-Ray's reach
+            w, h = lens_array.panel.size_mm
+            raise ConfigError(
+                f"a {w:.4g} x {h:.4g} mm display with rays this oblique is beyond POV-Ray's {POVRAY_MAX_DEPTH:g} mm "
+                "ray length whatever the front clearance; check --pixel-pitch and --focal (mm), or model the "
+                "scene and the display in larger units (smaller numbers)")
         raise ConfigError(
             f"rays starting {back_off:.6g} mm in front of the screen travel {back_off * stretch:.4g} mm to reach it, "
             f"over half of POV-Ray's {POVRAY_MAX_DEPTH:g} mm ray length, so the scene behind it would vanish; "

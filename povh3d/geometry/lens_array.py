@@ -22,18 +22,31 @@ GRIDS = ("square", "lenticular", "hex")
 _INTEGRAL_TOLERANCE = 1e-6
 
 
+# Lengths (pitches, focal lengths) outside this range in mm are typing errors, and
+# products of them would overflow or lose every digit: refused on entry.
+LENGTH_RANGE_MM = (1e-9, 1e9)
+# The largest panel povh3d accepts (2^30 pixels: 32768 x 32768), checked before
+# anything is allocated; 16K displays have a sixth of that.
+MAX_PANEL_PIXELS = 1 << 30
+
+
 def _positive(name: str, value: float, fix: str) -> float:
-    if not isinstance(value, (int, float)) or isinstance(value, bool):
+    if not isinstance(value, (int, float, np.floating, np.integer)) or isinstance(value, bool):
         raise ConfigError(f"{name} must be a number, got {value!r}; {fix}")
     value = float(value)
     if not math.isfinite(value) or value <= 0:
         raise ConfigError(f"{name} must be a positive finite number, got {value!r}; {fix}")
+    low, high = LENGTH_RANGE_MM
+    if not low <= value <= high:
+        raise ConfigError(f"{name} must be between {low:g} and {high:g} mm, got {value:g}; {fix}")
     return value
 
 
 def _count(name: str, value: int, fix: str) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ConfigError(f"{name} must be a whole number of at least 1, got {value!r}; {fix}")
+    if value > MAX_PANEL_PIXELS:
+        raise ConfigError(f"{name} {value} is too large; {fix}")
     return int(value)
 
 
@@ -59,6 +72,10 @@ class Panel:
         object.__setattr__(self, "height", _count("panel height", self.height, "give the panel size as WxH pixels, e.g. --panel 1920x1080"))
         object.__setattr__(self, "pitch_x", _positive("pixel pitch", self.pitch_x, "give it in mm, e.g. --pixel-pitch 0.1"))
         object.__setattr__(self, "pitch_y", _positive("vertical pixel pitch", self.pitch_y, "give it in mm, e.g. --pixel-pitch 0.1"))
+        if self.width * self.height > MAX_PANEL_PIXELS:
+            raise ConfigError(f"a {self.width}x{self.height} panel has {self.width * self.height:.3g} pixels, over "
+                              f"povh3d's limit of {MAX_PANEL_PIXELS:.3g} (32768x32768); use fewer lenses (--lenses) "
+                              "or fewer pixels per lens (--ppl)")
 
     @property
     def size_mm(self) -> tuple[float, float]:

@@ -69,6 +69,8 @@ def _pair(name: str, value: Any, *, integral: bool = False) -> tuple[float, floa
     for v in (x, y):
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise ConfigError(f"{name} must be numbers, got {value!r}")
+        if not math.isfinite(float(v)) or v <= 0:
+            raise ConfigError(f"{name} must be positive finite numbers, got {value!r}")
         if integral and float(v) != int(v):
             raise ConfigError(f"{name} must be whole numbers, got {value!r}")
     return (x, y)
@@ -110,15 +112,15 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     spans a fractional number of pixels; what gets rendered is the unmapped H3D
     image in view space: ``views`` pixels per lens, one pixel row per panel row.
     """
-    from .lens_array import LensArray, Panel
+    from .lens_array import MAX_PANEL_PIXELS, LensArray, Panel
 
     grid = fields.get("grid", "square")
     if "focal" not in fields:
         raise ConfigError("the focal length is missing; give it with --focal (mm)")
     if "pixel_pitch" not in fields:
         raise ConfigError("the pixel pitch is missing; give it with --pixel-pitch (mm)")
-    sx, sy = _pair("pixel pitch", fields["pixel_pitch"])
-    panel_size = _pair("panel", fields["panel"], integral=True) if "panel" in fields else None
+    sx, sy = _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
+    panel_size = _pair("panel size (--panel)", fields["panel"], integral=True) if "panel" in fields else None
 
     if fields.get("views") and fields.get("mapping") and panel_size is not None and "lens_pitch" in fields:
         views = int(fields["views"])
@@ -131,7 +133,7 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
         nx, ny = _pair("pixels per lens (--ppl)", fields["ppl"])
         px, py = nx * sx, ny * sy
     elif "lens_pitch" in fields:
-        px = py = float(fields["lens_pitch"])
+        px = py = _pair("lens pitch", fields["lens_pitch"])[0]
     else:
         raise ConfigError("the lens pitch is missing; give pixels per lens with --ppl")
     if grid == "lenticular":
@@ -155,12 +157,19 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
         ly = panel_size[1] if grid == "lenticular" else math.floor(panel_size[1] * sy / py + _EPS)
     else:
         raise ConfigError("the lens count is missing; give it with --lenses")
+    if grid == "lenticular" and rows is not None:
+        ly = rows
     lx, ly = int(lx), int(ly)
     rotation = fields.get("lens_rotation", 0.0)
     if rotation and "lenses" not in fields and panel_size is not None:
         lx, ly = _covering_counts(grid, rotation, panel_size[0] * sx, panel_size[1] * sy, px, py, lx, ly)
-    if grid == "lenticular" and rows is not None:
-        ly = int(rows)
+    if lx < 1 or ly < 1:
+        raise ConfigError(f"the lens array would have {lx}x{ly} lenses; it needs at least one each way: give "
+                          "--lenses (and --rows for lenticular), a larger --panel or fewer pixels per lens (--ppl)")
+    for length in (sx, sy, px, py):
+        _length(length)
+    if lx * ly > MAX_PANEL_PIXELS:
+        raise ConfigError(f"{lx}x{ly} lenses are more than povh3d can render; use fewer lenses (--lenses)")
 
     if panel_size is not None:
         w, h = int(panel_size[0]), int(panel_size[1])
@@ -183,11 +192,21 @@ def _covering_counts(grid: str, rotation: Any, width: float, height: float, px: 
     return lx, (ly if grid == "lenticular" else math.ceil(reach_y / py - _EPS) + 1)
 
 
+def _length(value: float) -> None:
+    """A pitch in the range LensArray accepts, checked before a panel size is derived from it."""
+    from .lens_array import LENGTH_RANGE_MM
+
+    low, high = LENGTH_RANGE_MM
+    if not low <= value <= high:
+        raise ConfigError(f"pitches must be between {low:g} and {high:g} mm, got {value:g}; "
+                          "check --pixel-pitch and --ppl")
+
+
 def describe_fields(fields: dict[str, Any]) -> dict[str, Any]:
     """The display fields that are not geometry (mapping, slant, physical panel)."""
     out = {k: fields[k] for k in ("description", "views", "slant_deg", "mapping") if k in fields}
     if "panel" in fields and fields.get("mapping"):
-        sx, sy = _pair("pixel pitch", fields["pixel_pitch"])
+        sx, sy = _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
         out["physical_panel"] = {"size_px": list(fields["panel"]), "pixel_pitch_mm": [sx, sy]}
     return out
 

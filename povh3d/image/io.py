@@ -3,12 +3,23 @@
 8-bit PNGs go through Pillow (fast); 16-bit through pypng, because Pillow opens
 16-bit RGB PNGs as 8-bit without a word (docs/geometry.md, "Files").  Every write
 goes to a temporary file in the destination folder and is renamed into place,
-so a failure or Ctrl-C never leaves a half-written image.
+so a failure or Ctrl-C never leaves a half-written image, and the file gets the
+mode the umask gives (``0o666 & ~umask``), like any file the user's programs
+write.
+
+An image and its sidecar are replaced as a pair (``write_image_pair``): both are
+written to temporary names, then the image is renamed into place and the sidecar
+last.  The sidecar records the SHA-256 of its image (``image_sha256``) and
+``read_sidecar`` checks it, so a crash between the two renames (new image, old
+sidecar) is detected on read, and a new sidecar can never sit beside an old
+image: it is renamed only after its image is in place.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import io
 import json
 import os
 import tempfile
@@ -25,16 +36,58 @@ from ..errors import InputError, OutputError
 
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; rename it onto ``path`` on success."""
+    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+
+    An ``OSError`` while writing (a full disk, a file-size limit) becomes an
+    ``OutputError`` naming ``path``; the existing ``path`` is left as it was.
+    """
     path = Path(path)
     tmp = _temp_beside(path)
     try:
         yield tmp
+        _chmod(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise _write_error(path, exc) from None
         raise
+
+
+def _write_error(path: Path, exc: OSError) -> OutputError:
+    why = exc.strerror or str(exc)
+    return OutputError(f"cannot write {str(path)!r}: {why}; free some space or choose another folder "
+                       "(the previous file, if any, is unchanged)")
+
+
+def file_mode() -> int:
+    """The mode a new file gets under the current umask (``0o666 & ~umask``)."""
+    try:  # Linux >= 4.7: read it without changing it (os.umask is process-wide)
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return 0o666 & ~int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def _chmod(path: Path) -> None:
+    # mkstemp creates 0600; the finished file gets what the umask gives.
+    with contextlib.suppress(OSError):
+        os.chmod(path, file_mode())
+
+
+def file_sha256(path: str | Path) -> str:
+    """The SHA-256 of a file's bytes, hex."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def check_writable(path: str | Path) -> None:
@@ -67,39 +120,70 @@ def read_png(path: str | Path) -> np.ndarray:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"image {str(path)!r} does not exist; check the path")
+    return decode_png(path, str(path))
+
+
+def decode_png(source: Path | bytes, name: str) -> np.ndarray:
+    """A PNG file or PNG bytes as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
     try:
-        reader = png.Reader(filename=str(path))
+        reader = png.Reader(filename=str(source)) if isinstance(source, Path) else png.Reader(bytes=source)
         width, height, rows, info = reader.asDirect()
         if info["bitdepth"] > 8:
             planes = info["planes"]
             data = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows])
             return data.reshape(height, width, planes)
-        with Image.open(path) as im:
+        with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
             im.load()
             if im.mode not in ("RGB", "RGBA", "L", "LA"):
                 im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
             arr = np.asarray(im)
-    except (png.FormatError, png.ChunkError, OSError, ValueError) as exc:
-        raise InputError(f"cannot read {str(path)!r} as a PNG image: {exc}") from None
+    except MemoryError:
+        raise InputError(f"{name!r} is too large to read into memory") from None
+    except Exception as exc:  # noqa: BLE001 - pypng and Pillow raise many kinds on a damaged file
+        raise InputError(f"cannot read {name!r} as a PNG image ({type(exc).__name__}: {exc}); "
+                         "check that it is a complete PNG file") from None
     return arr[..., None] if arr.ndim == 2 else arr
 
 
 def write_png(path: str | Path, image: np.ndarray) -> None:
     """Write ``(H, W[, C])`` uint8 or uint16 as PNG, atomically."""
+    with atomic_path(path) as tmp:
+        _encode_png(tmp, image)
+
+
+def _encode_png(path: Path, image: np.ndarray) -> None:
     image = np.asarray(image)
     if image.ndim == 3 and image.shape[2] == 1:
         image = image[..., 0]
     if image.dtype == np.uint8:
-        with atomic_path(path) as tmp:
-            Image.fromarray(image).save(tmp, format="PNG", compress_level=1)
+        Image.fromarray(image).save(path, format="PNG", compress_level=1)
     elif image.dtype == np.uint16:
         planes = 1 if image.ndim == 2 else image.shape[2]
         writer = png.Writer(width=image.shape[1], height=image.shape[0], bitdepth=16,
                             greyscale=planes in (1, 2), alpha=planes in (2, 4), compression=1)
-        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        with open(path, "wb") as fh:
             writer.write(fh, image.reshape(image.shape[0], -1))
     else:
         raise ValueError(f"write_png takes uint8 or uint16 images, got {image.dtype}")
+
+
+def write_image_pair(path: str | Path, image: np.ndarray, record: dict[str, Any]) -> None:
+    """Replace ``path`` and its sidecar together (see the module docstring for the order).
+
+    Both are written to temporary names first; on any failure neither the old
+    image nor the old sidecar is touched.
+    """
+    path = Path(path)
+    side = sidecar_path(path)
+    with atomic_path(side) as side_tmp:
+        with atomic_path(path) as image_tmp:
+            _encode_png(image_tmp, image)
+            _write_json(side_tmp, {**record, "image_sha256": file_sha256(image_tmp)})
+        # the image is in place; the sidecar is renamed when this block ends
+
+
+def _write_json(path: Path, record: dict[str, Any]) -> None:
+    path.write_text(json.dumps(record, indent=2, sort_keys=False) + "\n", encoding="utf-8")
 
 
 def sidecar_path(image_path: str | Path) -> Path:
@@ -108,17 +192,37 @@ def sidecar_path(image_path: str | Path) -> Path:
 
 
 def write_sidecar(image_path: str | Path, record: dict[str, Any]) -> Path:
+    """Write the sidecar of an image already in place (it records the image's SHA-256)."""
     path = sidecar_path(image_path)
+    if Path(image_path).is_file():
+        record = {**record, "image_sha256": file_sha256(image_path)}
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(record, indent=2, sort_keys=False) + "\n", encoding="utf-8")
+        _write_json(tmp, record)
     return path
 
 
 def read_sidecar(image_path: str | Path) -> dict[str, Any] | None:
+    """The sidecar of ``image_path``; None when there is none.
+
+    An unreadable or malformed sidecar, or one whose ``image_sha256`` is not the
+    image's (the image was replaced after it), is an ``InputError``: a sidecar
+    that describes another image must not be trusted.
+    """
     path = sidecar_path(image_path)
     if not path.is_file():
         return None
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(f"cannot read the sidecar {str(path)!r}: {exc.strerror}") from None
+    except ValueError as exc:
+        raise InputError(f"the sidecar {str(path)!r} is corrupt ({exc}); delete it or write it again") from None
+    if not isinstance(record, dict):
+        raise InputError(f"the sidecar {str(path)!r} is corrupt (not a JSON object); delete it or write it again")
+    digest = record.get("image_sha256")
+    image = Path(image_path)
+    if isinstance(digest, str) and image.suffix.lower() != ".json" and image.is_file() \
+            and file_sha256(image) != digest:
+        raise InputError(f"the sidecar {str(path)!r} describes another image than {str(image)!r} "
+                         "(the image was replaced); delete the sidecar or render the image again")
+    return record

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._version import __version__
+from ..image.colour import srgb_to_linear
 from ..povray.format import pov_string, pov_vector
 from .load import Part
 from .numbers import format_rows, format_vectors, vector_item
@@ -22,20 +23,29 @@ DEFAULT_FINISH = "finish { ambient 0.05 diffuse 0.85 specular 0.15 roughness 0.0
 
 
 def colour_keyword(colour_space: str, alpha: bool) -> str:
-    """``srgb``/``srgbt`` for display-encoded 8-bit colours, ``rgb``/``rgbt`` for linear ones."""
-    return ("srgb" if colour_space == "srgb" else "rgb") + ("t" if alpha else "")
+    """``rgb``/``rgbt``: colours are written linear whatever the file held.
+
+    POV-Ray's ``srgb`` keyword needs ``assumed_gamma`` set before it is parsed
+    ("Cannot parse sRGB colors before assumed_gamma has been set"); an include
+    must parse in any scene, so sRGB colours are decoded here instead (exact under
+    ``assumed_gamma 1.0``, which povh3d adds to a scene that sets none).
+    """
+    return "rgb" + ("t" if alpha else "")
 
 
-def colour_values(rgba: np.ndarray, alpha: bool) -> np.ndarray:
-    """``(k, 4)`` uint8 RGBA -> ``(k, 3|4)`` float64: ``c / 255``, transmit ``1 - a / 255``."""
+def colour_values(rgba: np.ndarray, alpha: bool, colour_space: str = "linear") -> np.ndarray:
+    """``(k, 4)`` uint8 RGBA -> ``(k, 3|4)`` float64 linear light: ``c / 255`` decoded from sRGB
+    when ``colour_space`` is ``'srgb'``; transmit ``1 - a / 255``."""
     rgba = np.asarray(rgba, dtype=np.float64).reshape(-1, 4)
     rgb = rgba[:, :3] / 255.0
+    if colour_space == "srgb":
+        rgb = srgb_to_linear(rgb)
     return np.column_stack([rgb, (255.0 - rgba[:, 3]) / 255.0]) if alpha else rgb
 
 
 def _pigment_literal(rgba: np.ndarray, colour_space: str) -> str:
     alpha = bool(rgba[3] < 255)
-    return f"{colour_keyword(colour_space, alpha)} {pov_vector(colour_values(rgba, alpha)[0])}"
+    return f"{colour_keyword(colour_space, alpha)} {pov_vector(colour_values(rgba, alpha, colour_space)[0])}"
 
 
 def _block(keyword: str, count: int, body: str) -> str:
@@ -46,7 +56,7 @@ def _texture_list(colours: np.ndarray, colour_space: str) -> str:
     alpha = bool((colours[:, 3] < 255).any())
     item = ("texture { pigment { " + colour_keyword(colour_space, alpha) + " "
             + vector_item(4 if alpha else 3) + " } finish { Povh3d_Mesh_Finish } }")
-    return _block("texture_list", len(colours), format_rows(colour_values(colours, alpha), item, per_line=1))
+    return _block("texture_list", len(colours), format_rows(colour_values(colours, alpha, colour_space), item, per_line=1))
 
 
 def mesh2_text(part: Part, *, smooth: bool, normals: np.ndarray | None, texture_file: str | None,

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import ConfigError
@@ -223,3 +223,32 @@ def expected_images(job: PovrayJob) -> str:
     if job.frames == 1:
         return f"{OUTPUT_STEM}.png"
     return f"the {job.frames} frames {OUTPUT_STEM}1.png..{OUTPUT_STEM}{job.frames}.png"
+
+
+_LITERAL = re.compile(r'"([^"\n]*[^\x00-\x7f][^"\n]*)"')
+
+
+def ascii_paths(job: PovrayJob, folder: Path) -> PovrayJob:
+    """`job` with every non-ASCII path replaced by an ASCII symlink in its `folder`.
+
+    POV-Ray 3.7 reads strings in scripts and on its command line as ASCII and
+    replaces other characters by spaces ("Cannot open include file .../T  l");
+    a link named ``povh3d-link-N`` in the job folder reaches the same file.  The
+    sandbox and POV-Ray's own I/O rules still apply: the links sit in the job
+    folder and resolve to the files the job may read.
+    """
+    links: dict[str, str] = {}
+
+    def alias(path: str) -> str:
+        if path not in links:
+            link = folder / f"povh3d-link-{len(links)}{Path(path).suffix if os.path.isfile(path) else ''}"
+            os.symlink(path, link)
+            links[path] = str(link)
+        return links[path]
+
+    dirs = tuple(alias(os.path.abspath(d)) if not d.isascii() and os.path.isdir(d) else d
+                 for d in job.include_dirs)
+    script = _LITERAL.sub(lambda m: f'"{alias(m[1])}"' if os.path.exists(m[1]) else m[0], job.script)
+    if not links:
+        return job
+    return replace(job, include_dirs=dirs, script=script)

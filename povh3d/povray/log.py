@@ -10,6 +10,7 @@ column 80.  `unwrap` undoes both, so a message is one line again.
 
 from __future__ import annotations
 
+import os
 import re
 
 __all__ = ["parse_error", "parse_progress", "parse_render_time", "unwrap"]
@@ -222,3 +223,19 @@ def describe_exit(code: int, log: str) -> str:
 def tail(log: str, lines: int = 40) -> str:
     """The last ``lines`` lines of a POV-Ray log (what an error carries)."""
     return "\n".join(_messages(log)[-lines:])
+
+
+_INCLUDE_NAME = re.compile(r"Cannot open include file (.+?)\.?\s*$", re.M)
+
+
+def denied_note(reason: str, include_dirs: tuple[str, ...]) -> str:
+    """What to add to a "cannot open" error: the sandbox note only when the file exists
+    (so the sandbox refused it); otherwise that it is not there."""
+    match = _INCLUDE_NAME.search(reason)
+    if match:
+        name = match[1].strip()
+        if not any(os.path.exists(os.path.join(d, name)) for d in (*include_dirs, ".")):
+            return (f" ({name} is neither beside the scene nor in an --include folder; check the name, "
+                    "or add its folder with --include)")
+    return (" (povh3d lets a scene read only its own files and POV-Ray's include files, "
+            "and write only in its job folder)")

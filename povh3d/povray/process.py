@@ -22,14 +22,12 @@ output goes to a log file, so no pipe can fill up and block them.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import functools
 import os
 import re
 import shutil
 import signal
 import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -42,9 +40,10 @@ from typing import BinaryIO
 from . import sandbox
 from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
     RenderInterrupted)
-from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, build_command, collect_images, expected_images,
-                  povray_conf)
-from .log import describe_exit, parse_error, tail
+from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
+                  expected_images, povray_conf)
+from ..system import owned_prefix, sweep_orphans
+from .log import denied_note, describe_exit, parse_error, tail
 from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
 
 #: Environment variable naming the POV-Ray executable to use.
@@ -55,8 +54,6 @@ INSTALL_HINT = ("install it with 'sudo apt-get install -y povray' (Debian/Ubuntu
 _DENIED = re.compile(r"Cannot (open|find)")
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
-_PR_SET_PDEATHSIG = 1
-_LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") else None
 
 
 def find_povray() -> str:
@@ -217,9 +214,10 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
     folder = _make_folder(workdir)
     registered = False  # once True, run_jobs owns the folder and the child
     try:
-        command = build_command(job, binary)
-        env = _prepare(folder, job)
-        with open(folder / LOG_FILE, "wb") as log, _confinement(job, binary, folder) as fd, \
+        run = ascii_paths(job, folder)  # what POV-Ray is given; results stay the caller's `job`'s
+        command = build_command(run, binary)
+        env = _prepare(folder, run)
+        with open(folder / LOG_FILE, "wb") as log, sandbox.confinement(binary, _inputs(run), folder) as fd, \
                 _deferred_interrupt():
             process = _spawn(command, folder, env, log, fd)
             watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job.frames))
@@ -231,18 +229,9 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
         raise
 
 
-@contextlib.contextmanager
-def _confinement(job: PovrayJob, binary: str, folder: Path) -> Iterator[int | None]:
-    """The Landlock ruleset fd of `job` while its child starts (None: unconfined)."""
-    inputs = job.read_files if job.read_files is not None else \
-        tuple(os.path.abspath(d) for d in job.include_dirs)
-    policy = sandbox.Policy(sandbox.system_read_paths(binary) + inputs, (str(folder),))
-    ruleset = sandbox.build_ruleset(policy)
-    try:
-        yield None if ruleset is None else ruleset.fd
-    finally:
-        if ruleset is not None:
-            ruleset.close()
+def _inputs(job: PovrayJob) -> tuple[str, ...]:
+    """What the job's POV-Ray may read besides its own files: the scene's files, else its include folders."""
+    return job.read_files if job.read_files is not None else tuple(os.path.abspath(d) for d in job.include_dirs)
 
 
 def _spawn(command: list[str], folder: Path, env: dict[str, str],
@@ -251,15 +240,24 @@ def _spawn(command: list[str], folder: Path, env: dict[str, str],
         return subprocess.Popen(
             command, cwd=folder, env=env, stdin=subprocess.DEVNULL, stdout=log,
             stderr=subprocess.STDOUT, start_new_session=True,
-            preexec_fn=functools.partial(_child_setup, os.getpid(), ruleset_fd))
+            preexec_fn=functools.partial(sandbox.child_setup, os.getpid(), ruleset_fd))
     except OSError as error:
         raise PovrayNotFound(f"Cannot run POV-Ray at {command[0]}: "
                              f"{error.strerror}; {INSTALL_HINT}.") from None
 
 
+JOB_PREFIX = "povh3d-"  # job folders: povh3d-<owner pid>-<random>
+_SWEPT: set[str] = set()
+
+
 def _make_folder(workdir: str | Path | None) -> Path:
+    # Job folders name their owner's pid; those of a killed povh3d are swept once per folder.
+    base = str(workdir or tempfile.gettempdir())
+    if base not in _SWEPT:
+        _SWEPT.add(base)
+        sweep_orphans(base, JOB_PREFIX)
     try:
-        return Path(tempfile.mkdtemp(prefix="povh3d-", dir=workdir))
+        return Path(tempfile.mkdtemp(prefix=owned_prefix(JOB_PREFIX), dir=workdir))
     except OSError as error:
         raise OutputError(f"Cannot create a temporary folder in "
                           f"{workdir or tempfile.gettempdir()}: {error.strerror}.") from None
@@ -298,16 +296,6 @@ def _deferred_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
         if caught and callable(previous):
             previous(signal.SIGINT, None)  # the default handler raises KeyboardInterrupt
-
-
-def _child_setup(parent: int, ruleset_fd: int | None = None) -> None:
-    """Run in the child before exec: die with the parent (Linux), enter the sandbox."""
-    if _LIBC is not None:
-        _LIBC.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-        if os.getppid() != parent:  # the parent died before prctl took effect
-            os._exit(1)
-    if ruleset_fd is not None:
-        sandbox.restrict_self(ruleset_fd)
 
 
 def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | None = None,
@@ -365,8 +353,7 @@ def _failure(child: _Child, log: str) -> PovrayError:
     if code == 126 and not log.strip():
         reason = "the POV-Ray process could not enter its sandbox (Landlock); set POVH3D_SANDBOX=off to run unconfined"
     elif _DENIED.search(reason) and sandbox.landlock_abi() and sandbox.sandbox_mode() != "off":
-        reason += (" (povh3d lets a scene read only its own files and POV-Ray's include files, "
-                   "and write only in its job folder)")
+        reason += denied_note(reason, child.job.include_dirs)
     return PovrayError(f"{child.job.name}: {reason}", command=child.command,
                        returncode=code, log_tail=tail(log))
 

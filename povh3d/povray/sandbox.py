@@ -28,13 +28,16 @@ Landlock), ``require`` (fail when it has not) or ``off``.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import platform
+import signal
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 
 from ..errors import ConfigError, OutputError
 
@@ -67,6 +70,7 @@ _WRITE = (_READ | _WRITE_FILE | _REMOVE_DIR | _REMOVE_FILE | _MAKE_DIR | _MAKE_R
           | _MAKE_SYM | _REFER | _TRUNCATE)
 
 _LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") else None
+_PR_SET_PDEATHSIG = 1
 
 
 class _RulesetAttr(ctypes.Structure):
@@ -119,6 +123,11 @@ def sandbox_mode() -> str:
     if mode not in MODES:
         raise ConfigError(f"{ENV_VAR}={mode!r} is not one of {', '.join(MODES)}")
     return mode
+
+
+def confines() -> bool:
+    """Whether POV-Ray runs here can read only the files a scene was found to read."""
+    return sandbox_mode() != "off" and landlock_abi() > 0
 
 
 def describe() -> str:
@@ -243,3 +252,25 @@ def restrict_self(fd: int) -> None:
     if _LIBC.prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 or \
             _LIBC.syscall(_SYS_RESTRICT_SELF, fd, 0) != 0:
         os._exit(126)
+
+
+@contextlib.contextmanager
+def confinement(binary: str, inputs: Iterable[str], folder: Path) -> Iterator[int | None]:
+    """The Landlock ruleset fd for a POV-Ray child while it starts (None: unconfined):
+    it may read POV-Ray's own files and ``inputs``, and write only in ``folder``."""
+    ruleset = build_ruleset(Policy(system_read_paths(binary) + tuple(inputs), (str(folder),)))
+    try:
+        yield None if ruleset is None else ruleset.fd
+    finally:
+        if ruleset is not None:
+            ruleset.close()
+
+
+def child_setup(parent: int, ruleset_fd: int | None = None) -> None:
+    """Run in the child before exec: die with the parent (Linux), enter the sandbox."""
+    if _LIBC is not None:
+        _LIBC.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        if os.getppid() != parent:  # the parent died before prctl took effect
+            os._exit(1)
+    if ruleset_fd is not None:
+        restrict_self(ruleset_fd)

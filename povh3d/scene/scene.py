@@ -14,7 +14,11 @@ renders:
   settings a quality level may add;
 - whether it reads the animation clock: a scene that never mentions ``clock``
   or the other animation identifiers looks the same at every clock value;
-- whether it sets ``assumed_gamma`` (povh3d adds one where it does not).
+- whether it sets ``assumed_gamma`` (povh3d adds one where it does not);
+- whether it reads a file whose name is computed while POV-Ray parses
+  (``#include concat(...)``): such a file cannot be found by this walk, so it
+  is not in the digest; confined by the sandbox POV-Ray cannot read it, but
+  unconfined it can, and the cache must not be used (``engine.frames``).
 
 Comments do not count; a mention anywhere else, even in a string, does: a false
 alarm only costs work, a miss would give wrong pixels.
@@ -34,6 +38,9 @@ from ..errors import InputError
 from .features import Features, features_of_text, strip_comments
 
 _STRING = re.compile(r'"([^"\n]{1,400})"')
+# A directive or file keyword followed by anything but a string literal: a name computed at parse time.
+_COMPUTED_NAME = re.compile(r'#\s*(?:include|fopen\s+\w+|read_file)\s+[^"\s]|'
+                            r'\b(?:png|jpeg|tga|gif|iff|ppm|pgm|sys|exr|hdr|tiff|df3|ttf)\s+[A-Za-z_(]')
 _GAMMA = re.compile(r"\bassumed_gamma\b")
 # Every identifier through which a scene can see the animation.
 _CLOCK_WORDS = re.compile(r"\b(clock|clock_delta|clock_on|frame_number|initial_frame|"
@@ -57,6 +64,9 @@ class Scene:
     sets_assumed_gamma : bool
     features : Features       found in its sources and the POV-Ray include files they name
     uses_clock : bool         whether any of those sources reads the animation clock
+    computed_names : bool     whether the scene's own sources read a file through a name
+                              computed at parse time (not in ``files`` nor the digest)
+    lit : bool                whether its sources mention a light_source, emission or radiosity
     """
 
     path: Path
@@ -66,6 +76,12 @@ class Scene:
     sets_assumed_gamma: bool
     features: Features = Features(frozenset())
     uses_clock: bool = False
+    computed_names: bool = False
+    lit: bool = True
+
+
+# A scene with neither shows its objects in their ambient colour only (nearly black).
+_LIGHT = re.compile(r"\b(?:light_source|emission|radiosity)\b")
 
 
 @cache
@@ -122,7 +138,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     seen: set[Path] = set()
     sources: list[str] = []           # POV-Ray source texts, the scene's and the system's
     pending = [(scene, True)]
-    sets_gamma = False
+    sets_gamma = computed = False
     while pending:
         current, is_own = pending.pop()
         if current in seen:
@@ -138,6 +154,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
             sources.append(text)
         if is_own:
             sets_gamma = sets_gamma or bool(_GAMMA.search(text))
+            computed = computed or (suffix in _SOURCE_SUFFIXES and bool(_COMPUTED_NAME.search(text)))
         for name in _STRING.findall(text):
             found = _find(name, [current.parent, *dirs] if is_own else [current.parent, *system])
             if found is not None:
@@ -152,4 +169,5 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         h.update(f.read_bytes())
         h.update(b"\0")
     return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
-                 features_of_text(sources), any(_CLOCK_WORDS.search(t) for t in sources))
+                 features_of_text(sources), any(_CLOCK_WORDS.search(t) for t in sources), computed,
+                 any(_LIGHT.search(t) for t in sources))

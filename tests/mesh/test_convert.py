@@ -14,6 +14,7 @@ from PIL import Image
 
 from povh3d.app.convert_mesh import convert_mesh
 from povh3d.mesh import FORMATS
+from povh3d.image.colour import linear_to_srgb, srgb_to_linear
 from povh3d.mesh.load import to_pov_frame
 from tests.support.mesh_oracles import parse_include, pov_single
 
@@ -140,7 +141,8 @@ def test_stl_is_flat_by_default_and_merged(tmp_path):
 
 
 def _srgb_back(values) -> np.ndarray:
-    return np.rint(np.asarray(values) * 255).astype(int)
+    """The 8-bit sRGB codes of linear colours (the include holds them decoded, as rgb)."""
+    return np.rint(linear_to_srgb(np.asarray(values)) * 255).astype(int)
 
 
 def test_vertex_colours_exact(tmp_path):
@@ -153,13 +155,13 @@ def test_vertex_colours_exact(tmp_path):
     convert_mesh(path, tmp_path / "c.inc")
     part = parse_include((tmp_path / "c.inc").read_text())["parts"][0]
     table = np.array([v for _, v in part["texture_list"]])
-    assert {k for k, _ in part["texture_list"]} == {"srgb"}
+    assert {k for k, _ in part["texture_list"]} == {"rgb"}
     per_corner = _srgb_back(table)[part["face_textures"]]  # (m, 3, 3)
     loaded = trimesh.load(str(path), process=False)
     expected = loaded.visual.vertex_colors[loaded.faces][:, [0, 2, 1], :3]
     np.testing.assert_array_equal(per_corner, expected)
-    # The text holds c / 255 exactly (repr round-trips), not a rounded decimal.
-    np.testing.assert_array_equal(table, _srgb_back(table) / 255.0)
+    # The text holds the decoded c / 255 exactly (repr round-trips), not a rounded decimal.
+    np.testing.assert_array_equal(table, srgb_to_linear(_srgb_back(table) / 255.0))
 
 
 def test_face_colours_with_alpha(tmp_path):
@@ -170,9 +172,9 @@ def test_face_colours_with_alpha(tmp_path):
     path = export(mesh, tmp_path, "f.ply")
     convert_mesh(path, tmp_path / "f.inc")
     part = parse_include((tmp_path / "f.inc").read_text())["parts"][0]
-    assert {k for k, _ in part["texture_list"]} == {"srgbt"}
+    assert {k for k, _ in part["texture_list"]} == {"rgbt"}
     table = np.array([v for _, v in part["texture_list"]])
-    rgba = np.column_stack([_srgb_back(table[:, :3]), 255 - _srgb_back(table[:, 3])])
+    rgba = np.column_stack([_srgb_back(table[:, :3]), 255 - np.rint(table[:, 3] * 255).astype(int)])
     np.testing.assert_array_equal(rgba[part["face_textures"][:, 0]], colours)
 
 
@@ -205,7 +207,7 @@ def test_uv_texture_and_base_colour(tmp_path):
     part = parse_include((tmp_path / "gone.inc").read_text())["parts"][0]
     assert "uv_vectors" not in part and "image" not in part
     kind, value = part["base"]
-    assert kind == "srgb" and _srgb_back(value).tolist() == loaded.visual.material.main_color[:3].tolist()
+    assert kind == "rgb" and _srgb_back(value).tolist() == loaded.visual.material.main_color[:3].tolist()
     assert any("missing" in w and "base colour" in w for w in result.warnings)
 
 

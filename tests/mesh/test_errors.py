@@ -8,6 +8,7 @@ import pytest
 import trimesh
 
 from povh3d.errors import ConfigError, InputError, OutputError
+from povh3d.image.colour import srgb_to_linear
 from povh3d.app.convert_mesh import convert_mesh
 from povh3d.mesh.identifiers import check_identifier, identifier_from_path, pov_keywords
 from tests.conftest import SAMPLES
@@ -87,7 +88,8 @@ def test_missing_texture_warns_and_uses_base_colour(tmp_path, cli):
     err = result.err
     assert "texture 'letter_f.png' named by the model is missing; rendering with the base colour" in err
     text = (tmp_path / "letter_f.inc").read_text()
-    assert "image_map" not in text and "srgb <0.8, 0.8, 0.8>" in text
+    assert "image_map" not in text and "srgb" not in text
+    assert f"rgb <{float(srgb_to_linear(0.8))!r}, " in text  # the base colour, decoded: parses in any scene
 
 
 @pytest.mark.parametrize("name", ["sphere", "mesh2", "x", "pi", "clock", "rgb", "union", "texture"])
@@ -146,3 +148,20 @@ def test_bad_options(tmp_path):
     with pytest.raises(ConfigError, match="flat in z"):
         convert_mesh(flat, tmp_path / "x.inc", fit_depth=5.0)
     assert only(tmp_path) == {"flat.obj"}
+
+
+def test_converted_include_parses_in_a_scene_without_assumed_gamma(tmp_path):
+    """POV-Ray refuses ``srgb`` before ``assumed_gamma`` is set; a converted include must
+    parse in any scene, here one with no global_settings at all (POV-Ray run directly)."""
+    import subprocess
+
+    for name in ("letter_f.obj", "letter_f.mtl"):
+        (tmp_path / name).write_bytes((SAMPLES / name).read_bytes())  # no texture: the base colour
+    convert_mesh(tmp_path / "letter_f.obj", tmp_path / "letter_f.inc", name="Letter")
+    (tmp_path / "s.pov").write_text('#version 3.7;\ncamera { location <0, 0, -100> look_at 0 }\n'
+                                    'light_source { <0, 0, -100> rgb 1 }\n#include "letter_f.inc"\n'
+                                    'object { Letter }\n')
+    done = subprocess.run(["povray", "+Is.pov", "+Oout.png", "+W16", "+H16", "-D", "-V"], cwd=tmp_path,
+                          capture_output=True, text=True, check=False, timeout=60)
+    assert done.returncode == 0, done.stderr[-800:]
+    assert "sRGB" not in done.stderr and (tmp_path / "out.png").is_file()

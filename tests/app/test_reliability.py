@@ -1,0 +1,327 @@
+"""Faults injected on purpose, and what survives them (docs/reliability.md): a failure
+between the two renames of an image and its sidecar, a full disk, a kill -9 or a SIGTERM
+mid-render, an unusable or damaged cache, stale views, a bad sidecar, hostile paths."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from povh3d.app.records import base_record, write_image
+from povh3d.engine.cache import ImageCache
+from povh3d.errors import InputError
+from povh3d.image import io as image_io
+from povh3d.image.io import read_png, read_sidecar
+from povh3d.system import sweep_orphans
+from tests.conftest import SAMPLE
+from tests.support.cli import cli_command, one_error_line
+
+TINY = ["--preset", "demo", "--lenses", "6x4", "--ppl", "4", "--quality", "draft", "-q"]
+
+
+def _noise(shape=(24, 32, 3), seed=0) -> np.ndarray:
+    return np.random.default_rng(seed).integers(0, 256, shape, dtype=np.uint8)
+
+
+# -- outputs: replaced as a pair, never removed ----------------------------------------------------
+def test_sidecar_always_describes_the_image_beside_it(tmp_path, monkeypatch):
+    out = tmp_path / "a.png"
+    write_image(out, _noise(seed=1), base_record("h3d", note="old"))
+    assert read_sidecar(out)["note"] == "old"
+    real = os.replace
+    calls = []
+
+    def fail_second(src, dst):  # a crash after the image is in place, before the sidecar
+        calls.append(dst)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(src, dst)
+
+    monkeypatch.setattr(image_io.os, "replace", fail_second)
+    with pytest.raises(KeyboardInterrupt):
+        write_image(out, _noise(seed=2), base_record("h3d", note="new"))
+    monkeypatch.setattr(image_io.os, "replace", real)
+    assert [Path(c).suffix for c in calls] == [".png", ".json"]  # image first, sidecar last
+    assert np.array_equal(read_png(out), _noise(seed=2))
+    with pytest.raises(InputError, match="describes another image"):
+        read_sidecar(out)  # the old sidecar is not trusted beside the new image
+    assert not list(tmp_path.glob(".*.part"))
+
+
+def test_a_failure_before_the_renames_leaves_both_files(tmp_path, monkeypatch):
+    out = tmp_path / "a.png"
+    write_image(out, _noise(seed=1), base_record("h3d", note="old"))
+    before = out.read_bytes(), out.with_suffix(".json").read_bytes()
+    monkeypatch.setattr(image_io, "_encode_png", lambda path, image: (_ for _ in ()).throw(OSError(28, "No space left on device")))
+    with pytest.raises(Exception, match="No space left on device"):
+        write_image(out, _noise(seed=2), base_record("h3d", note="new"))
+    assert (out.read_bytes(), out.with_suffix(".json").read_bytes()) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "a.png"]
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027, 0o002])
+def test_modes_follow_the_umask(tmp_path, umask):
+    old = os.umask(umask)
+    try:
+        write_image(tmp_path / "a.png", _noise(), base_record("h3d"))
+    finally:
+        os.umask(old)
+    for name in ("a.png", "a.json"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_full_disk_keeps_the_previous_output(tmp_path):
+    """RLIMIT_FSIZE stands in for a full disk: the write fails, good.png and good.json stay."""
+    views = tmp_path / "views"
+    views.mkdir()
+    for l in range(2):
+        for k in range(2):
+            Image = _noise((64, 64, 3), seed=l * 2 + k)
+            image_io.write_png(views / f"v_{l:03d}_{k:03d}.png", Image)
+    write_image(tmp_path / "good.png", _noise(seed=9), base_record("h3d"))
+    before = (tmp_path / "good.png").read_bytes(), (tmp_path / "good.json").read_bytes()
+    code = ("import resource, signal, sys; signal.signal(signal.SIGXFSZ, signal.SIG_IGN); "
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (8000, 8000)); "
+            "from povh3d.cli.main import main; sys.exit(main(sys.argv[1:]))")
+    done = subprocess.run([sys.executable, "-c", code, "interleave", str(views), "-o", str(tmp_path / "good.png")],
+                          capture_output=True, text=True, timeout=120, check=False)
+    line = one_error_line(_result(done), 4)
+    assert "cannot write" in line and "unchanged" in line
+    assert ((tmp_path / "good.png").read_bytes(), (tmp_path / "good.json").read_bytes()) == before
+    assert not list(tmp_path.glob(".*.part"))
+
+
+def _result(done):
+    from tests.support.cli import Result
+    return Result(done.returncode, done.stdout, done.stderr)
+
+
+# -- signals -------------------------------------------------------------------------------------------
+def _start_slow_render(tmp_path: Path, out: Path) -> tuple[subprocess.Popen, Path]:
+    tmp = tmp_path / "tmp"
+    tmp.mkdir(exist_ok=True)
+    env = {**os.environ, "TMPDIR": str(tmp), "POVH3D_CACHE": str(tmp_path / "cache")}
+    proc = subprocess.Popen(cli_command("render", SAMPLE, "-o", out, "--preset", "demo", "--quality", "high",
+                                        "-q", "--jobs", "1"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.monotonic() + 60
+    while not list(tmp.glob(f"povh3d-{proc.pid}-*/frame*")) and not list(tmp.glob(f"povh3d-{proc.pid}-*/*.log")):
+        assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
+        time.sleep(0.05)
+    time.sleep(0.3)
+    return proc, tmp
+
+
+def _povray_children_of(pid: int) -> list[int]:
+    found = []
+    for status in Path("/proc").glob("[0-9]*/status"):
+        try:
+            text = status.read_text()
+        except OSError:
+            continue
+        fields = dict(line.split(":\t", 1) for line in text.splitlines() if ":\t" in line)
+        if fields.get("Name", "").strip() == "povray" and fields.get("PPid", "").strip() == str(pid):
+            found.append(int(status.parent.name))
+    return found
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
+def test_sigterm_and_sighup_stop_like_ctrl_c(tmp_path, signum):
+    out = tmp_path / "good.png"
+    write_image(out, _noise(seed=3), base_record("h3d", note="old"))
+    proc, tmp = _start_slow_render(tmp_path, out)
+    assert _povray_children_of(proc.pid)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1].startswith("povh3d: error: ") and "Traceback" not in err
+    assert not list(tmp.glob(f"povh3d-{proc.pid}-*")), "the job folders are removed"
+    assert read_sidecar(out)["note"] == "old" and np.array_equal(read_png(out), _noise(seed=3))
+
+
+def test_kill_9_leaves_the_output_and_the_next_run_sweeps_its_folders(tmp_path):
+    out = tmp_path / "good.png"
+    write_image(out, _noise(seed=4), base_record("h3d", note="old"))
+    proc, tmp = _start_slow_render(tmp_path, out)
+    proc.kill()
+    proc.communicate(timeout=30)
+    time.sleep(0.5)
+    assert list(tmp.glob(f"povh3d-{proc.pid}-*")), "kill -9: nobody could remove the job folder"
+    assert not _povray_children_of(proc.pid)
+    deadline = time.monotonic() + 10  # POV-Ray got SIGKILL with its parent (PR_SET_PDEATHSIG)
+    while any(Path(f"/proc/{p}").exists() for p in _povray_children_of(1)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert read_sidecar(out)["note"] == "old"
+    env = {**os.environ, "TMPDIR": str(tmp), "POVH3D_CACHE": str(tmp_path / "cache")}
+    done = subprocess.run(cli_command("render", SAMPLE, "-o", tmp_path / "next.png", *TINY), env=env,
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    assert not list(tmp.glob(f"povh3d-{proc.pid}-*")), "swept at the next start"
+
+
+def test_sweep_keeps_folders_of_live_owners(tmp_path):
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    (tmp_path / f"povh3d-{dead.pid}-abc").mkdir()
+    (tmp_path / f"povh3d-{os.getppid()}-abc").mkdir()  # a live process
+    (tmp_path / "povh3d-xyz").mkdir()                     # no owner in the name: not ours to judge
+    removed = sweep_orphans(tmp_path, "povh3d-")
+    assert [Path(r).name for r in removed] == [f"povh3d-{dead.pid}-abc"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([f"povh3d-{os.getppid()}-abc", "povh3d-xyz"])
+
+
+# -- the cache ---------------------------------------------------------------------------------------
+def _entries(cache: Path) -> list[Path]:
+    return sorted(cache.rglob("*.entry"))
+
+
+@pytest.mark.parametrize("damage", ["truncate", "empty", "same-size", "foreign"])
+def test_damaged_cache_entry_is_reported_removed_and_rendered_again(tmp_path, cli, damage):
+    cache = tmp_path / "cache"
+    env = {"POVH3D_CACHE": str(cache)}
+    assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, env=env).code == 0
+    (entry,) = _entries(cache)
+    data = entry.read_bytes()
+    if damage == "truncate":
+        entry.write_bytes(data[: len(data) // 2])
+    elif damage == "empty":
+        entry.write_bytes(b"")
+    elif damage == "same-size":  # flip pixels' bytes, same length: only the hash can tell
+        entry.write_bytes(data[:-40] + bytes(b ^ 0xFF for b in data[-40:]))
+    else:
+        entry.write_bytes(_noise().tobytes())
+    result = cli("render", SAMPLE, "-o", tmp_path / "b.png", *TINY, env=env)
+    assert result.code == 0, result.err
+    warnings = [line for line in result.err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "damaged" in warnings[0], result.err
+    assert np.array_equal(read_png(tmp_path / "b.png"), read_png(tmp_path / "a.png"))
+    assert json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] == 0
+    (again,) = _entries(cache)
+    assert ImageCache(cache).load(again.stem) is not None  # stored again, whole
+    result = cli("render", SAMPLE, "-o", tmp_path / "c.png", *TINY, env=env)
+    assert "warning" not in result.err and json.loads((tmp_path / "c.json").read_text())["timings"]["frames_from_cache"] == 1
+
+
+@pytest.mark.parametrize("where", ["POVH3D_CACHE", "HOME"])
+def test_unusable_cache_is_one_warning_and_the_render_goes_on(tmp_path, cli, where):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder")
+    env = {"POVH3D_CACHE": str(blocker / "cache")} if where == "POVH3D_CACHE" else \
+        {"POVH3D_CACHE": "", "XDG_CACHE_HOME": "", "HOME": str(blocker)}
+    result = cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert result.code == 0, result.err
+    warnings = [line for line in result.err.splitlines() if line.strip()]
+    assert len(warnings) == 1 and "cache" in warnings[0] and "without it" in warnings[0], result.err
+    assert read_png(tmp_path / "a.png").shape == (16, 24, 3)
+
+
+def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, monkeypatch):
+    """Frames reach the cache job by job: stop after the first job's frames, and the re-run
+    takes them from the cache (pinhole: one frame per lens, several jobs)."""
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    args = ["render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--method", "pinhole", "--jobs", "1"]
+    real = ImageCache.store
+    stored = []
+
+    def store_then_stop(self, key, source):
+        real(self, key, source)
+        stored.append(key)
+        if len(stored) == 3:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(ImageCache, "store", store_then_stop)
+    result = cli(*args, env=env)
+    assert result.code == 130 and not (tmp_path / "a.png").exists()
+    monkeypatch.setattr(ImageCache, "store", real)
+    result = cli(*args, env=env)
+    assert result.code == 0, result.err
+    timings = json.loads((tmp_path / "a.json").read_text())["timings"]
+    assert timings["frames_from_cache"] >= 3 and timings["frames"] == 24
+
+
+def test_computed_include_with_the_sandbox_off_is_not_cached(tmp_path, cli):
+    (tmp_path / "part.inc").write_text("sphere { <0, 0, 3>, 5 pigment { rgb 1 } finish { emission 1 } }\n")
+    scene = tmp_path / "s.pov"
+    scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#declare N = "part";\n'
+                     '#include concat(N, ".inc")\n')
+    env = {"POVH3D_SANDBOX": "off", "POVH3D_CACHE": str(tmp_path / "cache")}
+    first = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert first.code == 0 and "computed" in first.err, first.err
+    (tmp_path / "part.inc").write_text("sphere { <0, 0, 3>, 5 pigment { rgb <1, 0, 0> } finish { emission 1 } }\n")
+    second = cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env)
+    assert second.code == 0
+    a, b = read_png(tmp_path / "a.png"), read_png(tmp_path / "b.png")
+    assert not np.array_equal(a, b), "the edit shows: no stale frame from the cache"
+    assert not _entries(tmp_path / "cache")
+
+
+# -- stale data and hostile paths ----------------------------------------------------------------------
+def test_a_views_folder_holds_one_render(tmp_path, cli):
+    views = tmp_path / "views"
+    assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--views-dir", views).code == 0
+    assert len(list(views.glob("v_*.png"))) == 16
+    small = [*TINY[:5], "2", *TINY[6:]]
+    assert cli("render", SAMPLE, "-o", tmp_path / "b.png", *small, "--views-dir", views).code == 0
+    assert len(list(views.glob("v_*.png"))) == 4, "the 4x4 views of the first render are gone"
+    assert cli("interleave", views, "-o", tmp_path / "c.png").code == 0
+    assert np.array_equal(read_png(tmp_path / "c.png"), read_png(tmp_path / "b.png"))
+    for l in range(4):  # views of another render copied in by hand: a full 4x4 grid of the same size
+        for k in range(4):
+            if not (views / f"v_{l:03d}_{k:03d}.png").exists():
+                image_io.write_png(views / f"v_{l:03d}_{k:03d}.png", _noise((4, 6, 3), seed=l * 4 + k))
+    line = one_error_line(cli("interleave", views, "-o", tmp_path / "d.png"), 3)
+    assert "mixed" in line and not (tmp_path / "d.png").exists()
+
+
+def test_corrupt_sidecar_is_reported_as_corrupt(tmp_path, cli):
+    write_image(tmp_path / "a.png", _noise(), base_record("h3d"))
+    (tmp_path / "a.json").write_text('{"lens_array": ')
+    line = one_error_line(cli("extract", tmp_path / "a.png", "-o", tmp_path / "v"), 3)
+    assert "corrupt" in line and "no sidecar" not in line
+
+
+def test_scene_under_a_non_ascii_folder_renders(tmp_path, cli):
+    folder = tmp_path / "Téléchargements" / "mes scènes"
+    folder.mkdir(parents=True)
+    (folder / "part.inc").write_text("sphere { <0, 0, 3>, 5 pigment { rgb 1 } finish { emission 1 } }\n")
+    (folder / "scène 1.pov").write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#include "part.inc"\n')
+    result = cli("render", folder / "scène 1.pov", "-o", folder / "sortie é.png", *TINY, "--no-cache")
+    assert result.code == 0, result.err
+    image = read_png(folder / "sortie é.png")
+    assert image.max() > 200, "the include was read: the sphere is there"
+
+
+def test_quilt_round_trip_keeps_the_lens_array(tmp_path, cli):
+    from povh3d.geometry.lens_array import LensArray, Panel
+
+    array = LensArray("lenticular", 4, 6, 0.8, 0.1, 1.5, Panel(32, 6, 0.1, 0.1))
+    write_image(tmp_path / "len.png", _noise((6, 32, 3), seed=5), base_record("h3d", array))
+    assert cli("quilt", tmp_path / "len.png", "--quilt", "4x2", "-o", tmp_path / "q").code == 0
+    (quilt,) = (tmp_path / "q").glob("*.png")
+    result = cli("quilt", quilt, "--import", "-o", tmp_path / "back.png")
+    assert result.code == 0, result.err
+    assert np.array_equal(read_png(tmp_path / "back.png"), read_png(tmp_path / "len.png"))
+    assert read_sidecar(tmp_path / "back.png")["lens_array"]["views"] == [8, 1]
+    result = cli("extract", tmp_path / "back.png", "-o", tmp_path / "v")  # no --ppl: from the sidecar
+    assert result.code == 0, result.err
+
+
+def test_unusable_cache_with_a_mesh_model(tmp_path, cli):
+    from tests.conftest import SAMPLES
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder")
+    result = cli("render", SAMPLES / "letter_l.stl", "-o", tmp_path / "m.png", *TINY,
+                 env={"POVH3D_CACHE": str(blocker / "cache")})
+    assert result.code == 0, result.err
+    lines = [line for line in result.err.splitlines() if line.strip()]
+    assert lines and all(line.startswith("povh3d: warning: ") and "cache" in line for line in lines)
+    assert read_png(tmp_path / "m.png").shape == (16, 24, 3)

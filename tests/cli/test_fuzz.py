@@ -1,0 +1,225 @@
+"""Hostile command lines: every subcommand, driven by hypothesis with random and hostile
+arguments and files, ends in one line and an exit code, never a traceback, and never
+changes or removes a file that was there before unless it succeeded in writing that
+very output.
+
+The files are empty, truncated, of the wrong type, claim a huge size, and sit under
+non-ASCII and space-containing paths.  Renders use a tiny panel and draft quality so
+that the few command lines that succeed stay fast.  ``CASES`` counts the command lines
+run (docs/reliability.md quotes it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import shutil
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from povh3d.app.records import base_record, write_image
+from povh3d.app.views import write_views
+from povh3d.cli.main import build_parser
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.image.interleave import extract
+from povh3d.calibration.gridfile import write_grid
+from povh3d.calibration.lattice import calibrate
+from tests.support.cli import run_in_process
+from tests.support.synth import WhiteSpec, render_white, to_uint
+
+EXAMPLES = int(os.environ.get("POVH3D_FUZZ_EXAMPLES", "250"))
+TINY = ["--preset", "demo", "--lenses", "4x3", "--ppl", "2", "--quality", "draft", "-q", "--timeout", "5"]
+# Options whose real values would leave this machine or run for minutes; the fuzz
+# gives them only values that must be refused.
+SLOW = {"--scheduler", "--reference-samples", "--max-error", "--fps"}
+NUMBERS = ["0", "-1", "1", "2", "3", "2x2", "4x3", "0.5", "-0.5", "nan", "inf", "-inf", "1e308", "1e-308",
+           "100000x100000", "", " ", "abc", "é", "8x", "x8", "1:2", "2:1", "0:1", "0x0", "3.5x2"]
+FILES = ["white.png", "grid.json", "good.png", "good.json", "empty.png", "truncated.png", "text.png", "huge.png", "scene.pov",
+         "broken.pov", "Téléchargements/scène 1.pov", "model.obj", "bad.obj", "garbage.json", "views",
+         "dossier é", "missing.png", "missing/x.png", "sub dir/é.png", "out.png", "out.gif", "out.json",
+         "out dir", "new views"]
+OUTPUTS = ["out.png", "good.png", "sub dir/é.png", "missing/out.png", "dossier é", "out.json", "out.gif",
+           "new views", "views", "out.inc", "out.mp4"]
+# Values that make sense, so that half the cases get past parsing into the work itself.
+GOOD = {
+    "--ppl": ["8x8", "8", "2", "4x4"], "--ppl-out": ["4", "4x4", "2"], "--quilt": ["8x8", "4x2", "2x2"],
+    "--mapping": ["alioscopy", "philips", "slanted", "smart:4"], "--grid": ["grid.json"],
+    "--depth": ["2", "-1", "0"], "--lenses": ["4x3", "3x2"], "--panel-size": ["32x24", "64x48"],
+    "--views-dir": ["new views", "views", "Téléchargements"], "--frames": ["0:1", "1:0", "0:2"],
+    "--clock": ["0:1", "1:1"], "--pixel-pitch": ["0.1", "0.05"], "--focal": ["1.5", "3"],
+    "--sweep": ["2", "3"], "--near": ["-1"], "--far": ["1"], "--timeout": ["0.01", "2"],
+    # pinhole runs one camera per lens and multi-ortho-views one per view: slow, and
+    # their failures are those of multi-ortho
+    "--method": ["multi-ortho", "single-stage", "bogus"],
+    "--include": ["Téléchargements", "dossier é"], "--video": ["out.mp4", "out.gif"],
+}
+GOOD_POSITIONAL = {"render": ["scene.pov", "Téléchargements/scène 1.pov", "model.obj", "broken.pov"],
+                   "convert-mesh": ["model.obj", "bad.obj"], "interleave": ["views"]}
+GOOD_OUTPUT = {"render": ["out.png", "good.png", "sub dir/é.png"], "extract": ["new views", "views"],
+               "quilt": ["dossier é", "new views"], "viewpoints": ["new views"], "calibrate": ["out.json"],
+               "preview": ["out.gif"], "convert-mesh": ["out.inc", "sub dir/é.inc"]}
+CASES = {"run": 0, "failed": 0}
+
+
+def _png_header(width: int, height: int) -> bytes:
+    """A PNG signature and IHDR claiming ``width x height`` RGB pixels, with no pixel data."""
+    body = b"IHDR" + struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + struct.pack(">I", 13) + body + struct.pack(">I", zlib.crc32(body))
+
+
+def _make_files(root: Path) -> None:
+    array = LensArray("square", 4, 3, 0.8, 0.8, 1.5, Panel(32, 24, 0.1, 0.1))
+    rng = np.random.default_rng(7)
+    image = rng.integers(0, 256, (24, 32, 3), dtype=np.uint8)
+    write_image(root / "good.png", image, base_record("h3d", array))
+    write_views(root / "views", extract(image, (8, 8)), array)
+    data = (root / "good.png").read_bytes()
+    (root / "empty.png").write_bytes(b"")
+    (root / "truncated.png").write_bytes(data[: len(data) // 2])
+    (root / "text.png").write_text("not a picture\n")
+    (root / "huge.png").write_bytes(_png_header(100000, 100000))
+    scene = ("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\nlight_source { <0, 0, -50> rgb 1 }\n"
+             "sphere { <0, 0, 0>, 1 pigment { rgb 1 } }\n")
+    (root / "scene.pov").write_text(scene)
+    (root / "broken.pov").write_text("sphere { <0, 0, 0>, \n")
+    (root / "Téléchargements").mkdir()
+    (root / "Téléchargements" / "pièce.inc").write_text("sphere { <0, 0, 0>, 1 pigment { rgb 1 } }\n")
+    (root / "Téléchargements" / "scène 1.pov").write_text(
+        "#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\nlight_source { <0, 0, -50> rgb 1 }\n"
+        '#include "pièce.inc"\n')
+    (root / "model.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    (root / "bad.obj").write_bytes(b"\x00\xff garbage\nf 1 2 3\n")
+    (root / "garbage.json").write_text("{not json")
+    (root / "dossier é").mkdir()
+    white = to_uint(render_white(WhiteSpec((96, 72), pitch_px=6.37, supersample=2)))
+    write_image(root / "white.png", white, base_record("capture"))
+    write_grid(root / "grid.json", calibrate(white))
+    (root / "sub dir").mkdir()
+
+
+def _snapshot(root: Path) -> dict[str, tuple[str, int]]:
+    out = {}
+    for path in root.rglob("*"):
+        if path.is_file():
+            out[str(path.relative_to(root))] = (hashlib.sha256(path.read_bytes()).hexdigest(),
+                                                path.stat().st_mode)
+    return out
+
+
+def _commands() -> dict[str, argparse.ArgumentParser]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return dict(sub.choices)
+
+
+COMMANDS = _commands()
+
+
+@st.composite
+def command_lines(draw) -> list[str]:
+    name = draw(st.sampled_from(sorted(COMMANDS)))
+    parser = COMMANDS[name]
+    args = [name]
+    options = [a for a in parser._actions if a.option_strings and a.dest not in ("help",)]
+    positionals = [a for a in parser._actions if not a.option_strings]
+    for action in positionals:
+        args.append(draw(st.sampled_from(GOOD_POSITIONAL.get(name, ["good.png"])) | st.sampled_from(FILES)))
+    if name == "render":
+        args += TINY
+    if any("-o" in a.option_strings for a in options):
+        args += ["-o", draw(st.sampled_from(GOOD_OUTPUT.get(name, ["out.png"])) | st.sampled_from(OUTPUTS))]
+    required = [a for a in options if a.required and "-o" not in a.option_strings]
+    chosen = draw(st.lists(st.sampled_from(options), max_size=3)) if options else []
+    for action in required + chosen:
+        flag = next((f for f in action.option_strings if f.startswith("--")), action.option_strings[-1])
+        if action.nargs == 0:
+            args.append(flag)
+        elif action.choices and flag not in ("--quality", "--method"):
+            args += [flag, draw(st.sampled_from([*map(str, action.choices), "bogus"]))]
+        elif flag == "--method":
+            args += [flag, draw(st.sampled_from(GOOD[flag]))]
+        elif flag == "--quality":
+            args += [flag, draw(st.sampled_from(["draft", "bogus", "normal"]))]
+        elif flag in SLOW:
+            args += [flag, draw(st.sampled_from(["nan", "-1", "", "abc"]))]
+        elif flag in GOOD and draw(st.booleans()):
+            args += [flag, draw(st.sampled_from(GOOD[flag]))]
+        else:
+            args += [flag, draw(st.sampled_from(NUMBERS) | st.sampled_from(FILES))]
+    if name == "bench":  # the bench renders every method at every quality: only its failures here
+        args[1] = draw(st.sampled_from(["broken.pov", "missing.png", "garbage.json", "huge.png"]))
+    return args
+
+
+def _changed(before: dict, after: dict) -> list[str]:
+    return sorted(name for name, value in before.items() if after.get(name) != value)
+
+
+def _may_change(name: str, args: list[str]) -> bool:
+    """A run that succeeded may replace what it was asked to write (and the sidecar beside it)."""
+    path = Path(name)
+    named = {Path(a) for a in args}
+    return path in named or path.with_suffix(".png") in named or path.with_suffix(".gif") in named \
+        or any(parent in named for parent in path.parents if str(parent) != ".")
+
+
+@pytest.fixture(scope="module")
+def pristine(tmp_path_factory):
+    root = tmp_path_factory.mktemp("fuzz-pristine")
+    _make_files(root)
+    return root
+
+
+@settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(args=command_lines())
+def test_hostile_command_lines_end_in_one_line(args, pristine, tmp_path, monkeypatch):
+    work = tmp_path / "w"
+    if work.exists():
+        shutil.rmtree(work)
+    shutil.copytree(pristine, work)
+    before = _snapshot(work)
+    if os.environ.get("POVH3D_FUZZ_LOG"):
+        with open(os.environ["POVH3D_FUZZ_LOG"], "a", encoding="utf-8") as log:
+            log.write(f"run\t{args}\n")
+    with monkeypatch.context() as patch:
+        patch.chdir(work)
+        result = run_in_process(*args)  # an exception escaping main fails the test here
+    after = _snapshot(work)
+    CASES["run"] += 1
+    if os.environ.get("POVH3D_FUZZ_LOG"):  # to see what the cases reach: one line per case
+        with open(os.environ["POVH3D_FUZZ_LOG"], "a", encoding="utf-8") as log:
+            log.write(f"{result.code}\t{args}\t{(result.err.strip().splitlines() or [''])[-1]}\n")
+    CASES["failed"] += result.code != 0
+    assert "Traceback" not in result.err, (args, result.err)
+    assert "internal error" not in result.err, (args, result.err)
+    if result.code != 0:
+        lines = [line for line in result.err.splitlines() if line.strip()]
+        errors = [line for line in lines if line.startswith("povh3d: error: ")]
+        assert len(errors) == 1 and errors[0] == lines[-1], (args, result.err)
+        assert not _changed(before, after), (args, _changed(before, after), result.err)
+    else:
+        assert all(_may_change(name, args) for name in _changed(before, after)), \
+            (args, _changed(before, after))
+
+
+def test_fuzz_ran_every_case():
+    # pytest runs this module's tests in order: the count of the hypothesis test above.
+    assert CASES["run"] >= EXAMPLES * 0.9, CASES
+    print(f"fuzz: {CASES['run']} command lines, {CASES['failed']} refused, 0 tracebacks")
+
+
+def test_negative_control_a_removed_file_is_seen(tmp_path):
+    (tmp_path / "a.png").write_bytes(b"x")
+    before = _snapshot(tmp_path)
+    (tmp_path / "a.png").unlink()
+    assert _changed(before, _snapshot(tmp_path)) == ["a.png"]
+    assert not _may_change("a.png", ["render", "s.pov", "-o", "b.png"])
+    assert _may_change("b.json", ["render", "s.pov", "-o", "b.png"])
