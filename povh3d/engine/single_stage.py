@@ -63,7 +63,8 @@ from fractions import Fraction
 
 from ..image.elemental import cell_contains, sample_turned_bank
 from ..errors import ConfigError
-from ..geometry.lens_array import LensArray, Panel, pixel_rays
+from ..geometry.lens_array import LensArray, Panel
+from ..geometry.rays import pixel_rays
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet

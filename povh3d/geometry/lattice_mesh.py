@@ -13,7 +13,8 @@ from dataclasses import replace
 import numpy as np
 
 from .cameras import CameraMesh, _quad_mesh, camera_mesh, check_clearance
-from .lens_array import LensArray, pixel_rays
+from .lens_array import LensArray
+from .rays import pixel_rays
 
 
 def lens_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:

@@ -14,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from .colour import decode, encode, linear_to_srgb, srgb_to_linear
-from ..geometry.lens_array import LensArray, pixel_rays
+from ..geometry.lens_array import LensArray
+from ..geometry.rays import pixel_rays
 
 
 def lens_index_map(lens_array: LensArray) -> np.ndarray:

@@ -7,7 +7,6 @@ import io
 import os
 import pty
 import re
-import sys
 
 import pytest
 

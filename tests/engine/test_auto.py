@@ -6,7 +6,7 @@ import pytest
 from povh3d.image.colour import decode
 from povh3d.errors import ConfigError
 from povh3d.geometry.footprint import latin_hypercube
-from povh3d.geometry.lens_array import pixel_rays
+from povh3d.geometry.rays import pixel_rays
 from povh3d.engine.methods import run_method
 from povh3d.engine.auto import AUTO_LADDER, resolve_auto
 from povh3d.engine.quality import Quality, RenderSettings

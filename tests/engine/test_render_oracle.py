@@ -8,7 +8,9 @@ A pseudoscopic image (views in reverse order) must fail the same check.
 import numpy as np
 import pytest
 
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+
+from povh3d.geometry.rays import pixel_rays
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import RenderSettings
 from povh3d.scene.scene import load_scene

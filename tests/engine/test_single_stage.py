@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 
 from povh3d.errors import ConfigError
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.rays import pixel_rays
 from povh3d.image.io import read_png
 from povh3d.engine.methods import display_header, run_method
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs

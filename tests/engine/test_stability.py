@@ -20,7 +20,8 @@ from tests.support.render import render
 from povh3d.geometry.cameras import MIN_CLEARANCE
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.geometry.footprint import CENTRE, angular_grid
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.rays import pixel_rays
 from povh3d.engine.methods import METHODS, display_header, run_method
 from povh3d.povray.format import pov_number
 from povh3d.povray.process import PovrayJob, run_jobs

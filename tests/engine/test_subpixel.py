@@ -23,7 +23,8 @@ from povh3d.engine.quality import RenderSettings
 from povh3d.engine.subpixel import subpixel_array, subpixels_to_panel
 from povh3d.errors import ConfigError
 from povh3d.geometry.cameras import stack_frames
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.rays import pixel_rays
 from povh3d.geometry.lattice_mesh import lens_mesh
 from povh3d.image.io import read_png
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from povh3d.geometry.cameras import camera_mesh, ortho_view_frames, pinhole_frames
-from povh3d.geometry.lens_array import pixel_rays
+from povh3d.geometry.rays import pixel_rays
 
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.oracles import mesh_in_mm, view_bank_mesh

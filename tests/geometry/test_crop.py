@@ -14,7 +14,7 @@ from povh3d.geometry.cameras import default_back_off
 from povh3d.geometry.crop import (CropSettings, bbox_hits, cut_mask, fill_colour, layout_independent,
     parse_bbox, paste, plan_crop)
 from povh3d.geometry.footprint import latin_hypercube
-from povh3d.geometry.lens_array import pixel_rays
+from povh3d.geometry.rays import pixel_rays
 from povh3d.image.interleave import extract
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.oracles import cropped_view_bank_mesh, view_bank_mesh

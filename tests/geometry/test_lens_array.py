@@ -6,7 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from povh3d.errors import ConfigError
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.rays import pixel_rays
 
 from tests.support.arrays import lenticular_array, square_array
 

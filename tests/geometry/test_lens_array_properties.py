@@ -19,7 +19,8 @@ from hypothesis import strategies as st
 from povh3d.geometry.cameras import (TIE_SHIFT, MIN_CLEARANCE, POVRAY_MAX_DEPTH, camera_mesh,
     check_clearance, bank_back_off, default_back_off, ortho_view_frames, pinhole_frames, ray_stretch)
 from povh3d.errors import ConfigError
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.rays import pixel_rays
 from tests.support.oracles import mesh_in_mm, view_bank_mesh
 
 MAX_ANGLE = 80.0  # degrees: the widest view the issue asks for

@@ -15,7 +15,8 @@ import pytest
 
 from povh3d.errors import ConfigError
 from povh3d.geometry.lattice_mesh import lens_mesh
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.rays import pixel_rays
 
 PANEL = Panel(60, 45, 0.1, 0.1)
 SQRT3_2 = math.sqrt(3) / 2

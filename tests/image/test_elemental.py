@@ -66,7 +66,7 @@ def test_hex_inside_is_the_true_hexagon():
     # pixel_rays: a pixel is inside when it lies in its lens's hexagon (flat sides
     # at |dx| = px/2, slanted |dx|/2 + sqrt(3)/2 |dy| = px/2); the circumradius disc
     # used before wrongly took about 2,300 hex-5.6 pixels past the outer rows.
-    from povh3d.geometry.lens_array import pixel_rays
+    from povh3d.geometry.rays import pixel_rays
 
     la = lens_array_from_fields(get_preset("hex-5.6"))
     centres, _, inside = pixel_rays(la)

@@ -1,7 +1,9 @@
 import numpy as np
 import pytest
 
-from povh3d.geometry.lens_array import LensArray, Panel, pixel_rays
+from povh3d.geometry.lens_array import LensArray, Panel
+
+from povh3d.geometry.rays import pixel_rays
 from povh3d.image.interleave import interleave
 from povh3d.image.preview import preview_frames, viewer_angles
 

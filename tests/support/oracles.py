@@ -12,7 +12,8 @@ from povh3d.calibration.distortion import Brown
 from povh3d.calibration.gridfile import LATTICES, Grid
 from povh3d.errors import ConfigError
 from povh3d.geometry.cameras import CameraMesh, _bank_mesh, _bank_tiles
-from povh3d.geometry.lens_array import LensArray, pixel_rays
+from povh3d.geometry.lens_array import LensArray
+from povh3d.geometry.rays import pixel_rays
 from povh3d.geometry.optics import Lenslet, sag
 from povh3d.image.elemental import lens_index_map, sample_in_lens
 from povh3d.mappings.plan import Plan

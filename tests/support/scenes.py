@@ -6,7 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
-from povh3d.geometry.lens_array import LensArray, pixel_rays
+from povh3d.geometry.lens_array import LensArray
+
+from povh3d.geometry.rays import pixel_rays
 
 COLOUR_A = (1.0, 0.2, 0.0)
 COLOUR_B = (0.0, 0.3, 1.0)

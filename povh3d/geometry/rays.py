@@ -1,0 +1,77 @@
+"""The ray of every panel pixel (docs/geometry.md, "The ray of a pixel"): the one
+definition every renderer, interleaver, mapping and test derives from."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # only its attributes are read: the rays need no more than NumPy
+    from .lens_array import LensArray
+
+
+def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ray of every panel pixel (docs/geometry.md, "The ray of a pixel").
+
+    A pixel belongs to the lens whose cell holds its centre (square and
+    lenticular: the lens's pitch rectangle, a centre on its border going to the
+    lens on the right or below; hex: the nearest centre).
+
+    Returns
+    -------
+    centres : (H, W, 2) float, mm
+        Centre ``(cx, cy)`` of the pixel's lens (lenticular: the point of the
+        lenticule's axis nearest the pixel centre, so that ``v`` across it is 0).
+    directions : (H, W, 3) float
+        Unit direction ``normalize(u, v, f)`` with ``(u, v)`` the pixel's offset.
+    inside : (H, W) bool
+        False for pixels outside every lens (their rays are undefined: NaN).
+    """
+    panel = lens_array.panel
+    X, Y = panel.pixel_centres()
+    # A rotated lattice is worked out in its own frame and turned back at the end.
+    X, Y = lens_array.to_lattice(*np.meshgrid(X, Y))  # (H, W)
+    centres = lens_array.lattice_centres()
+    Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
+    px, py = lens_array.pitch_x, lens_array.pitch_y
+    if lens_array.grid == "hex":
+        i0 = np.rint(Ly / 2 - 0.5 - Y / py).astype(np.int64)
+        best_d = np.full(X.shape, np.inf)
+        best_i = np.zeros(X.shape, np.int64)
+        best_j = np.zeros(X.shape, np.int64)
+        for di in (-1, 0, 1):  # the nearest centre lies in the nearest row or one beside it
+            i = np.clip(i0 + di, 0, Ly - 1)
+            j = np.clip(np.rint(X / px + Lx / 2 - 0.5 - (i % 2) / 2).astype(np.int64), 0, Lx - 1)
+            d = (X - centres[i, j, 0]) ** 2 + (Y - centres[i, j, 1]) ** 2
+            better = d < best_d
+            best_d, best_i, best_j = np.where(better, d, best_d), np.where(better, i, best_i), np.where(better, j, best_j)
+        i, j = best_i, best_j
+        # Inside the true hexagon (flat sides at |dx| = px/2, slanted sides at
+        # |dx|/2 + sqrt(3)/2 |dy| = px/2), not its circumradius disc: the disc pokes
+        # out past the slanted sides on the outer rows, where no lens lies.
+        dx, dy = np.abs(X - centres[i, j, 0]), np.abs(Y - centres[i, j, 1])
+        half = px / 2 * (1 + 1e-9)
+        inside = (dx <= half) & (dx / 2 + np.sqrt(3) / 2 * dy <= half)
+    else:
+        # A pixel centre on a lens border (fractional PPL) belongs to the lens on
+        # its right (below); the tolerance keeps rounding from deciding.
+        fj = X / px + Lx / 2 + 1e-9
+        fi = Ly / 2 - Y / py + 1e-9
+        j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
+        inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
+        if lens_array.grid == "lenticular" and lens_array.rotation:
+            inside = (j >= 0) & (j < Lx)  # a slanted lenticule runs across every row
+        j, i = np.clip(j, 0, Lx - 1), np.clip(i, 0, Ly - 1)
+    c = centres[i, j].copy()
+    if lens_array.grid == "lenticular":
+        c[..., 1] = Y  # the point of the lenticule's axis beside the pixel (unrotated: its row)
+    u = X - c[..., 0]
+    v = Y - c[..., 1]
+    c = np.stack(lens_array.from_lattice(c[..., 0], c[..., 1]), axis=-1)
+    u, v = lens_array.from_lattice(u, v)
+    d = np.stack([u, v, np.full(u.shape, lens_array.focal)], axis=-1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    c = np.where(inside[..., None], c, np.nan)
+    d = np.where(inside[..., None], d, np.nan)
+    return c, d, inside
