@@ -54,7 +54,6 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.frames is None:
         still = frame(None, progress)
         _warn_unlit(scene)
-        warn_if_empty(still.image, request)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
         if request.depth_maps is not None:
@@ -93,16 +92,6 @@ def check_memory(request: RenderRequest) -> None:
     if free is not None and need > free:
         raise ConfigError(f"a {rw}x{rh} pixel render needs at least {need / 2**30:.3g} GiB of memory, more than "
                           f"the {free / 2**30:.3g} GiB available; use fewer lenses (--lenses) or pixels per lens (--ppl)")
-
-
-def warn_if_empty(image, request: RenderRequest) -> None:
-    """One warning when every pixel has the same colour: no ray met anything."""
-    flat = image.reshape(-1, image.shape[-1])
-    if (flat == flat[0]).all():
-        w, h = request.lens_array.panel.size_mm
-        warn(f"every pixel of {request.output.name} is the same colour: no ray met an object. The display "
-             f"spans {w:.4g} x {h:.4g} mm around the origin and rays start in front of z = 0: model in mm "
-             "around z = 0 (the viewer is on -z)")
 
 
 def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
@@ -163,11 +152,14 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if display_frame is not None:
         record["display_frame"] = display_frame
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
-    if bank.size and int(bank.max()) == int(bank.min()):
-        # One flat colour: no ray hit anything (a frame that misses the scene, a model in odd units).
-        record.setdefault("warnings", []).append(
-            "the image is one flat colour: no ray hit anything; check the display frame (--display-*) "
-            "or the model's units and orientation (--unit, --up)")
+    first = request.frames is None or clock is None or clock == request.frames.clock(request.frames.first)
+    if first and bank.size and int(bank.max()) == int(bank.min()):
+        # One flat colour: most likely no ray hit anything (a frame that misses the scene, a model in odd
+        # units); said once per request, not per animation frame.
+        w, h = array.panel.size_mm
+        warn(f"every pixel of {request.output.name} is the same colour, as if no ray hit anything; check the display "
+             "frame (--display-*) or the model's units and orientation (--unit, --up); a scene without a "
+             f"camera is modelled in mm around z = 0, viewer on -z, the display spanning {w:.4g} x {h:.4g} mm")
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
     if request.mapping is not None:
         h3d = request.mapping.apply(h3d, request.image_size)

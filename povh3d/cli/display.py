@@ -10,7 +10,7 @@ from typing import Any
 
 from ..errors import ConfigError
 from .options import (add_array_options, add_image_lens_options, add_mapping_options, lens_array_from_args,
-                      mapping_from_args, parse_pair, ppl_arg)
+                      mapping_from_args, parse_pair, positive_int, ppl_arg)
 
 
 def cmd_interleave(args: argparse.Namespace) -> int:
@@ -225,7 +225,7 @@ def add_parsers(sub: Any) -> None:
     p = sub.add_parser("preview", help="what a viewer sees across the viewing angle (GIF + contact sheet)")
     p.add_argument("input")
     p.add_argument("-o", "--output", required=True, help="preview .gif (the contact sheet goes beside it as .png)")
-    p.add_argument("--frames", type=int, default=12)
-    p.add_argument("--scale", type=int, help="enlarge each lens to this many pixels")
+    p.add_argument("--frames", type=positive_int, default=12)
+    p.add_argument("--scale", type=positive_int, help="enlarge each lens to this many pixels")
     add_image_lens_options(p)
     p.set_defaults(func=cmd_preview)

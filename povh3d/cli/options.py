@@ -43,7 +43,7 @@ def add_array_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--focal", type=float, help="lens focal length, mm")
     g.add_argument("--rows", type=int, help="panel height in pixel rows (lenticular)")
     g.add_argument("--panel", help="panel size WxH in pixels")
-    g.add_argument("--lens-rotation", type=float, metavar="DEG",
+    g.add_argument("--lens-rotation", type=rotation_degrees, metavar="DEG",
                    help="turn the lens lattice by DEG within (-45, 45], counter-clockwise (slanted sheets)")
 
 
@@ -145,3 +145,25 @@ def add_image_lens_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ppl", help="pixels per lens NxxNy (lenticular: Nx); default: from the sidecar")
     p.add_argument("--focal", type=float, help="focal length, mm (default: from the sidecar)")
     p.add_argument("--pixel-pitch", type=float, help="pixel pitch, mm (default: from the sidecar)")
+
+
+def rotation_degrees(text: str) -> float:
+    """``--lens-rotation``: degrees within (-45, 45] (the range itself is LensArray's to check)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"takes degrees within (-45, 45], got {text!r}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """A whole number of at least 1 (``--scale``, ``--frames`` counts)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"takes a whole number of at least 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"takes a whole number of at least 1, got {text!r}")
+    return value

@@ -110,7 +110,7 @@ def test_missing_include_is_not_blamed_on_the_sandbox(tmp_path, cli):
 def test_animation_error_names_the_animation_frame(tmp_path, cli):
     scene = tmp_path / "a.pov"
     scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#if (clock > 0.6) #error "late" #end\n'
-                     "sphere { <0, 0, 3>, 5 pigment { rgb 1 } finish { emission 1 } }\n")
+                     "sphere { <0, 0, 3>, 5 pigment { checker rgb 1 rgb 0 scale 0.1 } finish { emission 1 } }\n")
     line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY, "--frames", "0:4"), 6)
     assert "animation frame 3 (clock 0.75)" in line
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "no staging folder left"
@@ -118,7 +118,7 @@ def test_animation_error_names_the_animation_frame(tmp_path, cli):
 
 @pytest.mark.parametrize("text, expected", [
     ("sphere { <0, 0, 3>, 0.5 pigment { rgb 1 } }\n", "has no light_source"),
-    ("light_source { <0, 0, -50> rgb 1 }\nsphere { <5000, 0, 3>, 1 pigment { rgb 1 } }\n", "no ray met an object"),
+    ("light_source { <0, 0, -50> rgb 1 }\nsphere { <5000, 0, 3>, 1 pigment { rgb 1 } }\n", "as if no ray hit anything"),
 ])
 def test_empty_render_and_no_light_warn(tmp_path, cli, text, expected):
     scene = tmp_path / "s.pov"
