@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..errors import ConfigError
+from .options import positive_int
 
 
 def add_parsers(sub: Any) -> None:
@@ -60,10 +61,10 @@ def add_parsers(sub: Any) -> None:
                (("--fill",), dict(choices=("black", "nearest"), default="black"))])
     image_cmd("equalise", "resample every micro-image to one size (upright, square)",
               lambda c, a: c.equalise_file(a.image, a.grid, a.output, size=a.size),
-              [(("--size",), dict(type=int, help="pixels per micro-image side (default: the mean size)"))])
+              [(("--size",), dict(type=positive_int, help="pixels per micro-image side (default: the mean size)"))])
     image_cmd("viewpoints", "extract viewpoint images (pixel a, b of every micro-image) into a folder",
               lambda c, a: c.viewpoints_file(a.image, a.grid, a.output, ppl=a.ppl),
-              [(("--ppl",), dict(type=int, required=True, help="pixels per micro-image side to sample"))])
+              [(("--ppl",), dict(type=positive_int, required=True, help="pixels per micro-image side to sample"))])
 
     p = sub.add_parser("stitch", help="join two captures taken a whole number of lenses apart")
     p.add_argument("a")

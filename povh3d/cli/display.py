@@ -208,7 +208,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--quilt", metavar="COLSxROWS", help="grid, e.g. 8x6 (import: default from the name)")
     p.add_argument("--import", dest="import_quilt", action="store_true", help="quilt -> H3D image")
     p.add_argument("--ppl", help="pixels per lens (default: from the sidecar)")
-    p.add_argument("--views", type=int, help="import: how many tiles hold views (default: all)")
+    p.add_argument("--views", type=positive_int, help="import: how many tiles hold views (default: all)")
     p.add_argument("--aspect", type=float, help="export: view aspect for the name (default: tile w/h)")
     p.set_defaults(func=cmd_quilt)
 
@@ -216,7 +216,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("input")
     p.add_argument("-o", "--output", required=True)
     p.add_argument("--depth", type=float, metavar="MM", help="depth of the focal plane (> 0 behind the screen)")
-    p.add_argument("--sweep", type=int, metavar="N", help="N planes from --near to --far, with a contact sheet")
+    p.add_argument("--sweep", type=positive_int, metavar="N",
+                   help="N planes from --near to --far, with a contact sheet")
     p.add_argument("--near", type=float, metavar="MM")
     p.add_argument("--far", type=float, metavar="MM")
     add_image_lens_options(p)

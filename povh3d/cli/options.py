@@ -41,7 +41,7 @@ def add_array_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--ppl", help="pixels per lens, NxxNy (lenticular: Nx)")
     g.add_argument("--pixel-pitch", type=float, help="pixel pitch, mm")
     g.add_argument("--focal", type=float, help="lens focal length, mm")
-    g.add_argument("--rows", type=int, help="panel height in pixel rows (lenticular)")
+    g.add_argument("--rows", type=positive_int, help="panel height in pixel rows (lenticular)")
     g.add_argument("--panel", help="panel size WxH in pixels")
     g.add_argument("--lens-rotation", type=rotation_degrees, metavar="DEG",
                    help="turn the lens lattice by DEG within (-45, 45], counter-clockwise (slanted sheets)")
@@ -108,11 +108,11 @@ def add_mapping_options(p: argparse.ArgumentParser, required: bool = False) -> N
     g.add_argument("--mapping", required=required, metavar="NAME",
                    help="alioscopy, philips, slanted, triangular, distributed, smart:N, distributed-smart:N")
     g.add_argument("--subpixels-per-lens", type=float, metavar="X", help="slanted: subpixels under one lens")
-    g.add_argument("--views", type=int, metavar="N", help="slanted: view count")
+    g.add_argument("--views", type=positive_int, metavar="N", help="slanted: view count")
     g.add_argument("--slant-tan", type=float, metavar="T", help="slanted: tan a (1/3 for 18.43 deg)")
     g.add_argument("--slant-deg", type=float, metavar="DEG", help="slanted: slant angle in degrees")
     g.add_argument("--offset", type=float, default=0.0, metavar="K", help="slanted: k_off in subpixels")
-    g.add_argument("--rows-per-view", type=int, metavar="B", help="slanted: panel rows per view row")
+    g.add_argument("--rows-per-view", type=positive_int, metavar="B", help="slanted: panel rows per view row")
     g.add_argument("--reverse-views", action="store_true", help="slanted: view N-1-v")
     g.add_argument("--blend", action="store_true", help="slanted: blend fractional views (linear light)")
     g.add_argument("--calibration", metavar="JSON", help="slanted: Looking Glass calibration (visual.json)")

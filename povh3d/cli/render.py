@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
-from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args,
+from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args, positive_int,
                       mapping_from_args, max_triangles, progress_bar, warn)
 
 METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage", "subpixel")
@@ -202,8 +202,8 @@ def add_parsers(sub: Any) -> None:
                    "converged; auto: the fastest that meets --max-error (see 'povh3d bench')")
     p.add_argument("--max-error", type=float, metavar="DB",
                    help="with --quality auto: the lowest PSNR against a converged reference to accept")
-    p.add_argument("--jobs", type=int, help="parallel POV-Ray processes")
-    p.add_argument("--threads", type=int, help="POV-Ray threads per process")
+    p.add_argument("--jobs", type=positive_int, help="parallel POV-Ray processes")
+    p.add_argument("--threads", type=positive_int, help="POV-Ray threads per process")
     p.add_argument("--timeout", type=float, help="seconds allowed to each POV-Ray run")
     p.add_argument("--views-dir", help="also write the view stack here (v_LLL_KKK.png)")
     p.add_argument("--depth-maps", metavar="DIR", help="also write per view the distance along each ray to the "
@@ -276,7 +276,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--methods", default="multi-ortho,pinhole",
                    help="comma-separated methods to bench, e.g. multi-ortho,pinhole,single-stage:conic,"
                    "single-stage:spherical (default: multi-ortho,pinhole)")
-    p.add_argument("--reference-samples", type=int, default=256, metavar="N",
+    p.add_argument("--reference-samples", type=positive_int, default=256, metavar="N",
                    help="footprint samples per pixel of the reference (default 256)")
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
