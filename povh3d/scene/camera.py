@@ -23,6 +23,7 @@ Pure: text in, text out; the run itself is the caller's.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -73,12 +74,12 @@ class CameraStatement:
     directive_depth: int   # open #if/#while/#macro... around it
 
 
-def camera_statements(toks: list[Token]) -> list[CameraStatement]:
-    """Every ``camera {`` at brace depth 0 that is not a ``#declare X = camera`` value."""
-    found, braces, directives = [], 0, 0
-    i = 0
-    while i < len(toks):
-        t = toks[i].text
+def _depths(toks: list[Token]) -> Iterator[tuple[int, int, int]]:
+    """``(index, brace depth, directive depth)`` of every token, the depths before it."""
+    braces = directives = 0
+    for i, tok in enumerate(toks):
+        yield i, braces, directives
+        t = tok.text
         if t in _OPENERS:
             directives += 1
         elif t == "#end":
@@ -87,19 +88,26 @@ def camera_statements(toks: list[Token]) -> list[CameraStatement]:
             braces += 1
         elif t == "}":
             braces -= 1
-        elif (t == "camera" and braces == 0 and (i == 0 or toks[i - 1].text != "=")
-              and i + 1 < len(toks) and toks[i + 1].text == "{"):
-            depth, j = 0, i + 1
-            while j < len(toks):
-                depth += {"{": 1, "}": -1}.get(toks[j].text, 0)
-                if depth == 0:
-                    break
-                j += 1
-            if j == len(toks):
-                raise CameraError("the scene's camera block has no closing brace; fix the scene")
+
+
+def _closing_brace(toks: list[Token], opening: int) -> int:
+    """Index of the ``}`` that closes the ``{`` at ``opening``."""
+    depth = 0
+    for j in range(opening, len(toks)):
+        depth += {"{": 1, "}": -1}.get(toks[j].text, 0)
+        if depth == 0:
+            return j
+    raise CameraError("the scene's camera block has no closing brace; fix the scene")
+
+
+def camera_statements(toks: list[Token]) -> list[CameraStatement]:
+    """Every ``camera {`` at brace depth 0 that is not a ``#declare X = camera`` value."""
+    found = []
+    for i, braces, directives in _depths(toks):
+        if (toks[i].text == "camera" and braces == 0 and (i == 0 or toks[i - 1].text != "=")
+                and i + 1 < len(toks) and toks[i + 1].text == "{"):
+            j = _closing_brace(toks, i + 1)
             found.append(CameraStatement(toks[i].start, (toks[i + 1].end, toks[j].start), directives))
-            i = j
-        i += 1
     return found
 
 
@@ -152,21 +160,13 @@ def evaluation_script(text: str) -> CameraScript | None:
 
 def _declared_camera(toks: list[Token], text: str, name: str, before: int) -> str:
     """The body of the last top-level ``#declare name = camera { ... }`` before ``before``."""
-    found, braces, directives = None, 0, 0
-    for i, tok in enumerate(toks):
-        if tok.start >= before:
+    found = None
+    for i, braces, directives in _depths(toks):
+        if toks[i].start >= before:
             break
-        t = tok.text
-        if t in _OPENERS:
-            directives += 1
-        elif t == "#end":
-            directives = max(0, directives - 1)
-        elif t == "{":
-            braces += 1
-        elif t == "}":
-            braces -= 1
-        elif (t in ("#declare", "#local") and braces == 0 and i + 4 < len(toks) and toks[i + 1].text == name
-              and toks[i + 2].text == "=" and toks[i + 3].text == "camera" and toks[i + 4].text == "{"):
+        if (toks[i].text in ("#declare", "#local") and braces == 0 and i + 4 < len(toks)
+                and toks[i + 1].text == name and toks[i + 2].text == "=" and toks[i + 3].text == "camera"
+                and toks[i + 4].text == "{"):
             found = (i + 4, directives)
     if found is None:
         raise _cannot(f"it starts from the camera identifier {name!r}, whose top-level declaration "
@@ -174,13 +174,7 @@ def _declared_camera(toks: list[Token], text: str, name: str, before: int) -> st
     start, depth_at = found
     if depth_at:
         raise _cannot(f"its camera identifier {name!r} is declared inside an #if, #while or #macro")
-    depth, j = 0, start
-    while j < len(toks):
-        depth += {"{": 1, "}": -1}.get(toks[j].text, 0)
-        if depth == 0:
-            break
-        j += 1
-    return text[toks[start].end:toks[j].start]
+    return text[toks[start].end:toks[_closing_brace(toks, start)].start]
 
 
 def _version(text: str) -> tuple[int, ...]:
