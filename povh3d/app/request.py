@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping as MappingABC
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -163,7 +163,3 @@ class RenderRequest:
         """``(W, H)`` of the image written: the mapped panel, or the H3D image."""
         panel = self.mapped_panel or self.lens_array.panel
         return panel.width, panel.height
-
-
-def request_fields() -> tuple[str, ...]:
-    return tuple(f.name for f in fields(RenderRequest))
