@@ -25,13 +25,12 @@ import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
-
-import numpy as np
-import png
-from PIL import Image
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError, OutputError
+
+if TYPE_CHECKING:  # NumPy, Pillow and pypng are imported where images are coded: a cached
+    import numpy as np  # output is copied as bytes without them (app/output_cache.py)
 
 
 @contextlib.contextmanager
@@ -125,6 +124,10 @@ def read_png(path: str | Path) -> np.ndarray:
 
 def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     """A PNG file or PNG bytes as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
+    import numpy as np
+    import png
+    from PIL import Image
+
     try:
         reader = png.Reader(filename=str(source)) if isinstance(source, Path) else png.Reader(bytes=source)
         width, height, rows, info = reader.asDirect()
@@ -152,6 +155,10 @@ def write_png(path: str | Path, image: np.ndarray) -> None:
 
 
 def _encode_png(path: Path, image: np.ndarray) -> None:
+    import numpy as np
+    import png
+    from PIL import Image
+
     image = np.asarray(image)
     if image.ndim == 3 and image.shape[2] == 1:
         image = image[..., 0]
@@ -173,11 +180,19 @@ def write_image_pair(path: str | Path, image: np.ndarray, record: dict[str, Any]
     Both are written to temporary names first; on any failure neither the old
     image nor the old sidecar is touched.
     """
-    path = Path(path)
+    _replace_pair(Path(path), lambda tmp: _encode_png(tmp, image), record)
+
+
+def write_png_bytes_pair(path: str | Path, data: bytes, record: dict[str, Any]) -> None:
+    """``write_image_pair`` for an image already encoded: ``data`` are the PNG file's bytes."""
+    _replace_pair(Path(path), lambda tmp: tmp.write_bytes(data), record)
+
+
+def _replace_pair(path: Path, write: Any, record: dict[str, Any]) -> None:
     side = sidecar_path(path)
     with atomic_path(side) as side_tmp:
         with atomic_path(path) as image_tmp:
-            _encode_png(image_tmp, image)
+            write(image_tmp)
             _write_json(side_tmp, {**record, "image_sha256": file_sha256(image_tmp)})
         # the image is in place; the sidecar is renamed when this block ends
 
