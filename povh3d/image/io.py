@@ -1,7 +1,8 @@
 """PNG images and JSON sidecars, written atomically.
 
-8-bit PNGs go through Pillow (fast); 16-bit through pypng, because Pillow opens
-16-bit RGB PNGs as 8-bit without a word (docs/geometry.md, "Files").  Every write
+8-bit PNGs go through Pillow (fast); 16-bit through ``png16`` (zlib and NumPy),
+because Pillow opens 16-bit RGB PNGs as 8-bit without a word (docs/geometry.md,
+"Files"), and pypng, which reads them right, took seconds per megapixel.  Every write
 goes to a temporary file in the destination folder and is renamed into place,
 so a failure or Ctrl-C never leaves a half-written image, and the file gets the
 mode the umask gives (``0o666 & ~umask``), like any file the user's programs
@@ -125,27 +126,38 @@ def read_png(path: str | Path) -> np.ndarray:
 def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     """A PNG file or PNG bytes as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
     import numpy as np
-    import png
     from PIL import Image
 
     try:
-        reader = png.Reader(filename=str(source)) if isinstance(source, Path) else png.Reader(bytes=source)
-        width, height, rows, info = reader.asDirect()
-        if info["bitdepth"] > 8:
-            planes = info["planes"]
-            data = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows])
-            return data.reshape(height, width, planes)
-        with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
-            im.load()
-            if im.mode not in ("RGB", "RGBA", "L", "LA"):
-                im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
-            arr = np.asarray(im)
+        data = source.read_bytes() if isinstance(source, Path) else source
+        if data[24:25] == b"\x10":  # IHDR's bit depth: 16
+            arr = _decode_png16(data)
+        else:
+            with Image.open(io.BytesIO(data)) as im:
+                im.load()
+                if im.mode not in ("RGB", "RGBA", "L", "LA"):
+                    im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
+                arr = np.asarray(im)
     except MemoryError:
         raise InputError(f"{name!r} is too large to read into memory") from None
-    except Exception as exc:  # noqa: BLE001 - pypng and Pillow raise many kinds on a damaged file
+    except Exception as exc:  # noqa: BLE001 - zlib, pypng and Pillow raise many kinds on a damaged file
         raise InputError(f"cannot read {name!r} as a PNG image ({type(exc).__name__}: {exc}); "
                          "check that it is a complete PNG file") from None
     return arr[..., None] if arr.ndim == 2 else arr
+
+
+def _decode_png16(data: bytes) -> np.ndarray:
+    """16 bits per channel: ``png16`` (zlib and NumPy), pypng for the layouts it leaves (interlaced, palette)."""
+    import numpy as np
+    import png
+
+    from . import png16
+
+    arr = png16.decode(data)
+    if arr is None:
+        width, height, rows, info = png.Reader(bytes=data).asDirect()
+        arr = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows]).reshape(height, width, info["planes"])
+    return arr
 
 
 def write_png(path: str | Path, image: np.ndarray) -> None:
@@ -156,7 +168,6 @@ def write_png(path: str | Path, image: np.ndarray) -> None:
 
 def _encode_png(path: Path, image: np.ndarray) -> None:
     import numpy as np
-    import png
     from PIL import Image
 
     image = np.asarray(image)
@@ -165,11 +176,10 @@ def _encode_png(path: Path, image: np.ndarray) -> None:
     if image.dtype == np.uint8:
         Image.fromarray(image).save(path, format="PNG", compress_level=1)
     elif image.dtype == np.uint16:
-        planes = 1 if image.ndim == 2 else image.shape[2]
-        writer = png.Writer(width=image.shape[1], height=image.shape[0], bitdepth=16,
-                            greyscale=planes in (1, 2), alpha=planes in (2, 4), compression=1)
+        from . import png16
+
         with open(path, "wb") as fh:
-            writer.write(fh, image.reshape(image.shape[0], -1))
+            png16.encode(fh, image)
     else:
         raise ValueError(f"write_png takes uint8 or uint16 images, got {image.dtype}")
 
