@@ -1,8 +1,9 @@
 """PNG images and JSON sidecars, written atomically.
 
-8-bit PNGs go through Pillow (fast); 16-bit through ``png16`` (zlib and NumPy),
-because Pillow opens 16-bit RGB PNGs as 8-bit without a word (docs/geometry.md,
-"Files"), and pypng, which reads them right, took seconds per megapixel.  Every write
+8-bit PNGs are read by Pillow (fast); 16-bit ones by ``png_codec`` (zlib and
+NumPy), because Pillow opens 16-bit RGB PNGs as 8-bit without a word
+(docs/geometry.md, "Files"), and pypng, which reads them right, took seconds per
+megapixel.  ``png_codec`` writes both.  Every write
 goes to a temporary file in the destination folder and is renamed into place,
 so a failure or Ctrl-C never leaves a half-written image, and the file gets the
 mode the umask gives (``0o666 & ~umask``), like any file the user's programs
@@ -131,7 +132,7 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     try:
         data = source.read_bytes() if isinstance(source, Path) else source
         if data[24:25] == b"\x10":  # IHDR's bit depth: 16
-            arr = _decode_png16(data)
+            arr = _decode_png_codec(data)
         else:
             with Image.open(io.BytesIO(data)) as im:
                 im.load()
@@ -146,14 +147,14 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     return arr[..., None] if arr.ndim == 2 else arr
 
 
-def _decode_png16(data: bytes) -> np.ndarray:
-    """16 bits per channel: ``png16`` (zlib and NumPy), pypng for the layouts it leaves (interlaced, palette)."""
+def _decode_png_codec(data: bytes) -> np.ndarray:
+    """16 bits per channel: ``png_codec`` (zlib and NumPy), pypng for the layouts it leaves (interlaced, palette)."""
     import numpy as np
     import png
 
-    from . import png16
+    from . import png_codec
 
-    arr = png16.decode(data)
+    arr = png_codec.decode(data)
     if arr is None:
         width, height, rows, info = png.Reader(bytes=data).asDirect()
         arr = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows]).reshape(height, width, info["planes"])
@@ -168,18 +169,15 @@ def write_png(path: str | Path, image: np.ndarray) -> None:
 
 def _encode_png(path: Path, image: np.ndarray) -> None:
     import numpy as np
-    from PIL import Image
 
     image = np.asarray(image)
     if image.ndim == 3 and image.shape[2] == 1:
         image = image[..., 0]
-    if image.dtype == np.uint8:
-        Image.fromarray(image).save(path, format="PNG", compress_level=1)
-    elif image.dtype == np.uint16:
-        from . import png16
+    if image.dtype in (np.uint8, np.uint16) and image.ndim in (2, 3):
+        from . import png_codec
 
         with open(path, "wb") as fh:
-            png16.encode(fh, image)
+            png_codec.encode(fh, image)
     else:
         raise ValueError(f"write_png takes uint8 or uint16 images, got {image.dtype}")
 

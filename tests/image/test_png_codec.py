@@ -1,5 +1,5 @@
-"""16-bit PNG coding (image/png16.py) against pypng and against the PNG specification's
-filters written out independently here; POV-Ray's own 16-bit output read both ways."""
+"""PNG coding (image/png_codec.py) against pypng, Pillow and the PNG specification's filters
+written out independently here; POV-Ray's own 16-bit output read both ways."""
 
 from __future__ import annotations
 
@@ -11,9 +11,10 @@ import zlib
 import numpy as np
 import png
 import pytest
+from PIL import Image
 
 from povh3d.errors import InputError
-from povh3d.image import png16
+from povh3d.image import png_codec
 from povh3d.image.io import decode_png, read_png, write_png
 from povh3d.povray.process import find_povray
 
@@ -25,26 +26,38 @@ def _pypng_read(data: bytes) -> np.ndarray:
 
 def _encoded(image: np.ndarray) -> bytes:
     out = io.BytesIO()
-    png16.encode(out, image)
+    png_codec.encode(out, image)
     return out.getvalue()
 
 
 @pytest.mark.parametrize("planes", [1, 2, 3, 4])
 @pytest.mark.parametrize("shape", [(1, 1), (7, 13), (64, 33)])
 def test_round_trip_and_pypng_agree(planes, shape, monkeypatch):
-    monkeypatch.setattr(png16, "_BLOCK_BYTES", 100)  # many blocks: the Up filter across block edges
+    monkeypatch.setattr(png_codec, "_BLOCK_BYTES", 100)  # many blocks: the Up filter across block edges
     rng = np.random.default_rng(planes * 100 + shape[0])
     image = rng.integers(0, 65536, (*shape, planes), dtype=np.uint16)
     data = _encoded(image)
-    assert np.array_equal(png16.decode(data), image)
+    assert np.array_equal(png_codec.decode(data), image)
     assert np.array_equal(_pypng_read(data), image)  # another reader agrees
+
+
+@pytest.mark.parametrize("planes", [1, 2, 3, 4])
+def test_8_bit_files_read_by_pillow_and_pypng(planes, monkeypatch):
+    monkeypatch.setattr(png_codec, "_BLOCK_BYTES", 64)
+    image = np.random.default_rng(planes).integers(0, 256, (23, 17, planes), dtype=np.uint8)
+    image[5:9] = 7  # runs, for the run-length matching
+    data = _encoded(image)
+    with Image.open(io.BytesIO(data)) as im:
+        assert np.array_equal(np.asarray(im).reshape(image.shape), image)
+    assert np.array_equal(_pypng_read(data), image)
+    assert np.array_equal(decode_png(data, "x.png"), image)
 
 
 def test_reads_pypng_files():
     image = np.random.default_rng(1).integers(0, 65536, (9, 11, 3), dtype=np.uint16)
     out = io.BytesIO()
     png.Writer(11, 9, bitdepth=16, greyscale=False).write(out, image.reshape(9, -1))
-    assert np.array_equal(png16.decode(out.getvalue()), image)
+    assert np.array_equal(png_codec.decode(out.getvalue()), image)
 
 
 def _paeth(a: int, b: int, c: int) -> int:
@@ -79,7 +92,7 @@ def test_every_filter_type_is_undone(planes):
     rng = np.random.default_rng(planes)
     image = rng.integers(0, 65536, (10, 6, planes), dtype=np.uint16)
     data = _spec_filtered_png(image, [4, 0, 1, 2, 3, 4, 4, 3, 2, 1])
-    assert np.array_equal(png16.decode(data), image)
+    assert np.array_equal(png_codec.decode(data), image)
     assert np.array_equal(_pypng_read(data), image)  # the oracle encoder itself is right
 
 
@@ -92,7 +105,7 @@ def test_povray_16_bit_output(tmp_path):
     subprocess.run([find_povray(), f"+I{scene}", f"+O{tmp_path / 'o.png'}", "+W97", "+H61", "+FN16", "-D", "-GA",
                     "+A0.1"], check=True, capture_output=True, cwd=tmp_path, timeout=120)
     data = (tmp_path / "o.png").read_bytes()
-    ours = png16.decode(data)
+    ours = png_codec.decode(data)
     assert ours.shape == (61, 97, 3) and len(np.unique(ours)) > 1000  # a real 16-bit image
     assert np.array_equal(ours, _pypng_read(data))
 
