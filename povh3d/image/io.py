@@ -130,11 +130,15 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     from PIL import Image
 
     try:
-        data = source.read_bytes() if isinstance(source, Path) else source
-        if data[24:25] == b"\x10":  # IHDR's bit depth: 16
-            arr = _decode_png_codec(data)
+        if isinstance(source, Path):
+            with open(source, "rb") as fh:
+                head = fh.read(25)
         else:
-            with Image.open(io.BytesIO(data)) as im:
+            head = source[:25]
+        if head[24:25] == b"\x10":  # IHDR's bit depth: 16
+            arr = _decode_png16(source.read_bytes() if isinstance(source, Path) else source)
+        else:  # Pillow reads a file by parts: no copy of its bytes beside the image
+            with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
                 im.load()
                 if im.mode not in ("RGB", "RGBA", "L", "LA"):
                     im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
@@ -147,7 +151,7 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     return arr[..., None] if arr.ndim == 2 else arr
 
 
-def _decode_png_codec(data: bytes) -> np.ndarray:
+def _decode_png16(data: bytes) -> np.ndarray:
     """16 bits per channel: ``png_codec`` (zlib and NumPy), pypng for the layouts it leaves (interlaced, palette)."""
     import numpy as np
     import png
