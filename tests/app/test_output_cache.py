@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from povh3d.image.io import file_sha256, read_png
-from tests.support.cli import REPO
+from tests.support.cli import REPO, one_error_line
 
 TINY = ["--lenses", "6x4", "--ppl", "4x4", "--quality", "draft", "-q"]
 
@@ -103,3 +103,28 @@ def test_a_hit_imports_no_numpy(tmp_path):
     done = subprocess.run(command, check=True, env=env, capture_output=True, text=True)
     assert "output from cache" in done.stdout
     assert done.stdout.strip().splitlines()[-1] == "False False False"
+
+
+def test_errors_stay_one_line_on_the_fast_path(tmp_path, cli):
+    scene, out = _scene(tmp_path, "1, 0, 0"), tmp_path / "o.png"
+    assert cli("render", scene, "-o", out, *TINY).code == 0
+    elsewhere = cli("render", scene, "-o", tmp_path / "missing" / "o.png", *TINY)  # a key of its own: a miss
+    assert elsewhere.code != 0 and one_error_line(elsewhere).count("does not exist") == 1
+    (tmp_path / "colour.inc").unlink()  # what the scene includes is gone: no answer from the cache
+    gone = cli("render", scene, "-o", out, *TINY)
+    assert gone.code != 0 and "output from cache" not in gone.out
+    assert "colour.inc" in one_error_line(gone)
+    scene.unlink()
+    missing = cli("render", scene, "-o", out, *TINY)
+    assert missing.code != 0 and "does not exist" in one_error_line(missing)
+
+
+def test_a_hit_into_a_removed_folder_is_one_error(tmp_path, cli):
+    scene, folder = _scene(tmp_path, "1, 0, 0"), tmp_path / "out"
+    folder.mkdir()
+    assert cli("render", scene, "-o", folder / "o.png", *TINY).code == 0
+    for path in folder.iterdir():
+        path.unlink()
+    folder.rmdir()
+    result = cli("render", scene, "-o", folder / "o.png", *TINY)
+    assert "does not exist" in one_error_line(result) and not folder.exists()
