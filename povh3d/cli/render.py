@@ -4,11 +4,15 @@ request, hand it to ``povh3d.app``, print one summary line."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
+import time
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, Povh3dWarning
 from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args, positive_int,
                       mapping_from_args, max_triangles, progress_bar, warn)
 
@@ -91,6 +95,28 @@ def _method_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
+    from ..app import output_cache
+
+    key = output_cache.request_key(args)
+    output = Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png")
+    if key is not None:
+        start = time.perf_counter()
+        hit = output_cache.answer(key, output)
+        if hit is not None:
+            warn(list(hit.warnings))
+            print(f"{output}  {hit.summary}  {time.perf_counter() - start:.2f} s (output from cache)")
+            return 0
+    with _warnings_kept() as given:
+        summary = _render(args)
+    # A scene edited while it rendered: the image is of neither version's key.
+    if key is not None and summary is not None and output_cache.request_key(args) == key:
+        output_cache.keep(key, output, summary[0], summary[1] + given)
+    return 0
+
+
+def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
+    """Render; print the warnings of the sidecar and the summary line.  For a still, return
+    what follows the output name in that line and those warnings."""
     from ..app.render import render
 
     request = request_from_args(args)
@@ -106,20 +132,38 @@ def cmd_render(args: argparse.Namespace) -> int:
               f"{'reads' if result['scene_uses_clock'] else 'ignores'} the clock)  {result['seconds']:.2f} s")
         if result["video"]:
             print(result["video"])
-        return 0
-    if "model" in result:
-        warn(result["model"]["warnings"])
+        return None
     placed = result.get("display_frame", {})
-    warn(placed.get("warnings", []))
-    warn(result.get("warnings", []))
+    noted = [*result.get("model", {}).get("warnings", []), *placed.get("warnings", []), *result.get("warnings", [])]
+    warn(noted)
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.mapping.name}" if request.mapping else ""
     if "model" in result:
         mapping += f"  up {result['model']['up']} ({result['model']['up_reason']})"
-    print(f"{request.output}  {w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  "
+    summary = f"{w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}"
+    print(f"{request.output}  {summary}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
-    return 0
+    return summary, noted
+
+
+@contextlib.contextmanager
+def _warnings_kept() -> Iterator[list[str]]:
+    """The lines of the warnings a render gives (still shown as they come), for the output cache
+    to give again; with the sidecar's own warnings, which the summary prints."""
+    given: list[str] = []
+    shown = warnings.showwarning
+
+    def keep(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, Povh3dWarning):
+            given.append(str(message))
+        shown(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = keep
+    try:
+        yield given
+    finally:
+        warnings.showwarning = shown
 
 
 def frame_phrase(record: dict[str, Any]) -> str:
