@@ -185,13 +185,13 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
 def read_volume_content(path: Path, lens_array: LensArray, *, spacing: Any = None, series: str | None = None,
                         **placement: Any) -> Content:
     """Read a volume file or DICOM folder (``volume.read``) and place it (``volume_content``)."""
+    if not path.exists():
+        raise InputError(f"volume {str(path)!r} does not exist; check the path")
     try:
         from ..volume.read import read_volume
     except ImportError:
         raise ConfigError(f"reading volumes ({path.name}) is not available in this povh3d; "
                           "give a scene or a mesh model") from None
-    if not path.exists():
-        raise InputError(f"volume {str(path)!r} does not exist; check the path")
     return volume_content(read_volume(path, spacing=spacing, series=series), lens_array, **placement)
 
 
