@@ -103,7 +103,12 @@ def scene_content(path: Path, lens_array: LensArray, frame_options: Any = None, 
     points = depth_points(depth.z, depth.width_mm, depth.height_mm)
     faces = _grid_faces(depth.z, depth.width_mm / depth.z.shape[1], depth_budget_mm(lens_array))
     summary = depth.summary(depth_budget_mm(lens_array))
-    record = {**record, "depth": summary}
+    warnings = list(record.get("warnings", []))
+    if depth.unmeasured > 0.05:
+        warnings.append(f"the depth pass could not measure {100 * depth.unmeasured:.0f} % of the field: the "
+                        f"viewpoint is inside a solid object there (a plane or a box whose inside faces the "
+                        f"viewer); declaring it 'hollow' lets the picture show it")
+    record = {**record, "depth": summary, "warnings": warnings}
     return Content("scene", path.name, points, faces, points[:, 2], units_per_mm=units, record=record)
 
 

@@ -112,11 +112,18 @@ def _legend_text(content: Any, setup: SetUp, lens_array: LensArray, numbers: dic
              + f"; every lens in view from {setup.viewing_distance_mm:.4g} mm",
              f"depth budget 2 N f = {setup.budget_mm:.4g} mm: z {-half:+.4g} .. {half:+.4g} mm"]
     if numbers.get("points"):
+        what = "of its depth" if content.box is not None else "of its points"
         lines.append(f"content z {numbers['near_mm']:+.4g} .. {numbers['far_mm']:+.4g} mm, "
-                     f"{100 * numbers['outside']:.0f} % outside the budget "
+                     f"{100 * numbers['outside']:.0f} % {what} outside the budget "
                      f"({100 * numbers['front_outside']:.0f} % in front, {100 * numbers['behind_outside']:.0f} % behind)")
     else:
         lines.append("content: nothing seen by the display")
+    subject = content.record.get("depth", {})
+    if subject.get("near_mm") is not None:   # a scene: what 'render' and 'info' call the framed subject
+        lines.append(f"subject (middle of the field) z {subject['near_mm']:+.4g} .. {subject['far_mm']:+.4g} mm")
+    if content.record.get("depth", {}).get("unmeasured_fraction", 0) > 0.05:
+        lines.append(f"depth pass: {100 * subject['unmeasured_fraction']:.0f} % of the field unmeasured "
+                     "(viewpoint inside a solid)")
     lines.append(f"frame: {content.units_per_mm:.4g} scene units per mm"
                  + (f" ({content.record.get('source')})" if content.record.get("source") else ""))
     notes = []
@@ -154,7 +161,7 @@ def draw(content: Any, setup: SetUp, lens_array: LensArray, numbers: dict, *, si
         _add_content(pv, plot, content, setup, scale)
         _add_axes(pv, plot, setup, scale)
         text = _legend_text(content, setup, lens_array, numbers, display, cone_length, step)
-        plot.add_text(text, position="upper_left", font_size=max(6, round(9 * scale)), color="black",
+        plot.add_text(text, position="upper_left", font_size=max(7, round(11 * scale)), color="black",
                       font="courier")
         plot.add_legend(labels=[["screen (panel)", _rgb(SCREEN)], ["lens array", _rgb(ARRAY)],
                                 ["depth budget, front", _rgb(SLAB_FRONT)], ["depth budget, behind", _rgb(SLAB_BACK)],
@@ -227,4 +234,5 @@ def _place_camera(plot: Any, content: Any, setup: SetUp, cone_length: float) -> 
     radius = float(np.linalg.norm(b - a)) / 2
     plot.camera_position = [tuple(centre + direction * radius * 3.2), tuple(centre), (0.0, 1.0, 0.0)]
     plot.camera.view_angle = 30.0
+    plot.camera.SetWindowCenter(0.12, 0.05)   # the drawing a little left and down: the legend is at lower right
     plot.reset_camera_clipping_range()

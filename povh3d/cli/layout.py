@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 
 from ..errors import ConfigError
-from .options import add_array_options, lens_array_from_args, parse_pair
+from .options import add_array_options, lens_array_from_args, parse_pair, warn
 
 ORIENTATIONS = ("coronal", "axial", "sagittal")   # volume.orient's presets (named here: no import for --help)
 
@@ -40,6 +40,7 @@ def cmd_layout(args: argparse.Namespace) -> int:
     record = layout(args.source, args.output, lens_array, display=display, frame_options=frame_options_from_args(args),
                     include_dirs=tuple(args.include), model=model, volume=volume, size=size,
                     use_cache=not args.no_cache)
+    warn(record["content"].get("warnings", []))
     depth = record["content_depth"]
     reach = (f"content z {depth['near_mm']:+.3g}..{depth['far_mm']:+.3g} mm, {100 * depth['outside']:.0f} % "
              f"outside" if depth.get("points") else "content: nothing seen")
