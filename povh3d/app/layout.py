@@ -35,6 +35,7 @@ from .stage import FILL, depth_budget_mm, fit_to_display
 VOLUME_SUFFIXES = (".vti", ".vtk", ".nrrd", ".nhdr", ".mha", ".mhd", ".nii", ".nii.gz", ".npy", ".dcm")
 SCENE_SUFFIXES = (".pov",)
 MIN_SIZE, MAX_SIZE = 200, 8000   # picture pixels on a side
+PREVIEW_VOXELS = 96              # voxels on a side of a volume's shape in the picture
 
 
 @dataclass
@@ -160,9 +161,43 @@ def model_content(path: Path, lens_array: LensArray, *, depth: float | None = No
     return Content("model", path.name, vertices, faces, vertices[:, 2], record=record)
 
 
+def volume_shape(volume: Any, iso: tuple[float, ...] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """A coarse surface of what the volume holds, world mm (LPS), for the picture only.
+
+    VTK's contour of the volume taken at every ``k``-th voxel (at most
+    ``PREVIEW_VOXELS`` a side) at the ``iso`` values; without them, a label
+    volume (integers) shows the boundary of its non-zero voxels and scalar data
+    shows nothing.  Returns ``(vertices (n, 3), faces (m, 3))`` or None.
+    """
+    from .layout_picture import quiet_pyvista
+
+    values = np.asarray(volume.values)
+    if iso is None:
+        if not np.issubdtype(values.dtype, np.integer):
+            return None
+        values, iso = (values != 0).astype(np.float32), (0.5,)
+    else:
+        lo, hi = volume.value_range()
+        wrong = [v for v in iso if not lo <= v <= hi]
+        if wrong:
+            raise ConfigError(f"--iso {wrong[0]:g} is outside the volume's values, {lo:g} .. {hi:g}")
+    step = max(1, -(-max(values.shape) // PREVIEW_VOXELS))
+    values = np.ascontiguousarray(values[::step, ::step, ::step], dtype=np.float32)
+    pv = quiet_pyvista()
+    grid = pv.ImageData(dimensions=values.shape, spacing=tuple(step * np.asarray(volume.spacing, dtype=float)))
+    grid.point_data["v"] = values.ravel(order="F")   # i fastest, as VTK stores a grid
+    surface = grid.contour(list(iso), scalars="v").triangulate()
+    if surface.n_points == 0 or surface.n_cells == 0:
+        return None
+    # grid points are spacing * (i, j, k): world = origin + direction @ that
+    world = np.asarray(surface.points, dtype=np.float64) @ np.asarray(volume.direction, dtype=float).T + volume.origin
+    return world, surface.faces.reshape(-1, 4)[:, 1:].astype(np.int64)
+
+
 def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "coronal", rotate: Any = None,
-                   depth: float | None = None) -> Content:
-    """A volume's physical box, turned by the orientation preset and ``rotate``, fitted to the display."""
+                   depth: float | None = None, iso: tuple[float, ...] | None = None) -> Content:
+    """A volume's physical box, turned by the orientation preset and ``rotate``, fitted to the display,
+    with a coarse surface of what it holds (``volume_shape``)."""
     from ..volume.orient import display_box, volume_to_display, world_to_display
 
     matrix = volume_to_display(orientation, rotate)
@@ -180,11 +215,14 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
         world[axis] = sign * half[axis] * 1.08
         marks.append((label, centre + m[:3, :3] @ world))
     zs = np.linspace(box[:, 2].min(), box[:, 2].max(), 1001)   # the box's depth, evenly
+    vertices, faces = np.empty((0, 3)), np.empty((0, 3), dtype=np.int64)
+    shape = volume_shape(volume, iso)
+    if shape is not None:
+        vertices, faces = shape[0] @ m[:3, :3].T + m[:3, 3], shape[1]
     record = {"volume": volume.describe(), "orientation": orientation, "rotate": list(rotate) if rotate else None,
-              "world_to_display": m.round(12).tolist(),
+              "world_to_display": m.round(12).tolist(), "shape": "iso" if iso else ("labels" if shape else None),
               "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit}}
-    return Content("volume", volume.name, np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), zs, box=box,
-                   marks=marks, record=record)
+    return Content("volume", volume.name, vertices, faces, zs, box=box, marks=marks, record=record)
 
 
 def read_volume_content(path: Path, lens_array: LensArray, *, spacing: Any = None, series: str | None = None,

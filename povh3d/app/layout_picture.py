@@ -31,7 +31,7 @@ MAX_GRID_LINES = 40      # lens-array lines drawn on a side (every k-th lens bey
 CONE_REACH = 0.75        # the cone is drawn at most this many screen sizes long
 
 
-def _quiet_vtk() -> Any:
+def quiet_pyvista() -> Any:
     """PyVista with VTK's log and warnings off (no X display is expected here)."""
     from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
 
@@ -139,7 +139,7 @@ def _legend_text(content: Any, setup: SetUp, lens_array: LensArray, numbers: dic
 def draw(content: Any, setup: SetUp, lens_array: LensArray, numbers: dict, *, size: tuple[int, int],
          display: dict) -> np.ndarray:
     """The set-up picture: ``(size[1], size[0], 3)`` uint8 RGB."""
-    pv = _quiet_vtk()
+    pv = quiet_pyvista()
     width, height = size
     plot = pv.Plotter(off_screen=True, window_size=[width, height])
     try:
@@ -183,7 +183,7 @@ def _add_content(pv: Any, plot: Any, content: Any, setup: SetUp, scale: float) -
         faces = np.hstack([[4, *q] for q in quads])
         box = pv.PolyData(_v(content.box), faces=faces)
         kind = classify(content.box[:, 2], setup.budget_mm)
-        plot.add_mesh(box, color=_rgb(CONTENT[INSIDE]), opacity=0.35, show_edges=False)
+        plot.add_mesh(box, color=_rgb(CONTENT[INSIDE]), opacity=0.1 if len(content.faces) else 0.35)
         plot.add_mesh(box.extract_all_edges(), scalars=np.array([CONTENT[k] for k in kind], dtype=np.uint8),
                       rgb=True, line_width=max(2, round(3 * scale)), lighting=False)
         if content.marks:

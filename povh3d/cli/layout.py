@@ -24,6 +24,18 @@ def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
     return values  # type: ignore[return-value]
 
 
+def _iso(text: str | None) -> tuple[float, ...] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if not values or not all(abs(v) < float("inf") for v in values):
+        raise ConfigError(f"--iso takes numbers VALUE[,VALUE...], got {text!r}")
+    return values
+
+
 def cmd_layout(args: argparse.Namespace) -> int:
     from ..app.layout import layout
     from .render import frame_options_from_args
@@ -36,7 +48,7 @@ def cmd_layout(args: argparse.Namespace) -> int:
     rotate = _triple(args.rotate, "--rotate")
     model: dict[str, Any] = {"depth": args.depth, "up": args.up, "rotate": rotate, "unit": args.unit}
     volume: dict[str, Any] = {"orientation": args.orientation, "rotate": rotate, "depth": args.depth,
-                              "spacing": spacing, "series": args.series}
+                              "spacing": spacing, "series": args.series, "iso": _iso(args.iso)}
     record = layout(args.source, args.output, lens_array, display=display, frame_options=frame_options_from_args(args),
                     include_dirs=tuple(args.include), model=model, volume=volume, size=size,
                     use_cache=not args.no_cache)
@@ -77,6 +89,8 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--orientation", choices=ORIENTATIONS, default="coronal",
                    help="how a volume faces the viewer (radiological views; default coronal)")
     g.add_argument("--spacing", metavar="SX,SY,SZ", help="a volume's voxel size in mm (.npy)")
+    g.add_argument("--iso", metavar="VALUE[,VALUE...]", help="show a volume's iso-surfaces at these values "
+                   "(default: a label volume shows its non-zero voxels' boundary)")
     g.add_argument("--series", metavar="UID", help="the DICOM series to read from a folder of several")
     add_array_options(p)
     p.set_defaults(func=cmd_layout)

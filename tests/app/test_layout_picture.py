@@ -150,3 +150,33 @@ def test_the_command_is_quiet_headless(tmp_path):
     assert done.returncode == 0, done.stderr
     assert done.stderr.strip() == "", done.stderr
     assert out.is_file() and done.stdout.startswith(str(out))
+
+
+def frog() -> Volume:
+    """PyVista's segmented frog (500 x 470 x 136 voxels, 30 labels), read here with PyVista itself."""
+    grid = pv.read(Path(pv.__file__).parent / "examples" / "frog_tissues.vti")
+    values = np.asarray(grid.point_data[grid.array_names[0]]).reshape(grid.dimensions, order="F")
+    return Volume(values, tuple(grid.spacing), tuple(grid.origin), name="frog_tissues.vti")
+
+
+def test_frog_tissues_layout_shows_its_labels_inside_its_box(tmp_path):
+    a = lens_array("demo")
+    content = volume_content(frog(), a, orientation="axial")
+    write_layout(content, a, tmp_path / "frog.png", size=SIZE)
+    check_picture(tmp_path / "frog.png")
+    assert len(content.faces) > 1000 and content.record["shape"] == "labels"
+    lo, hi = content.box.min(axis=0), content.box.max(axis=0)
+    assert np.all(content.vertices >= lo - 1e-9) and np.all(content.vertices <= hi + 1e-9)
+    # the labels fill most of the box's width (the frog is not a speck in a corner)
+    assert np.ptp(content.vertices[:, 0]) > 0.6 * (hi[0] - lo[0])
+
+
+def test_an_iso_value_outside_the_data_names_the_range():
+    from povh3d.errors import ConfigError
+
+    volume = Volume(np.linspace(-5, 5, 6 * 7 * 8).reshape(6, 7, 8), (1.0, 1.0, 1.0))
+    with pytest.raises(ConfigError, match=r"-5 \.\. 5"):
+        volume_content(volume, lens_array("demo"), iso=(9.0,))
+    # scalar values rising through the box: the iso-surface at 0 crosses it
+    content = volume_content(volume, lens_array("demo"), iso=(0.0,))
+    assert len(content.faces) > 0 and content.record["shape"] == "iso"
