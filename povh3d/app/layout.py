@@ -35,6 +35,8 @@ from .stage import FILL, depth_budget_mm, fit_to_display
 VOLUME_SUFFIXES = (".vti", ".vtk", ".nrrd", ".nhdr", ".mha", ".mhd", ".nii", ".nii.gz", ".npy", ".dcm")
 SCENE_SUFFIXES = (".pov",)
 MIN_SIZE, MAX_SIZE = 200, 8000   # picture pixels on a side
+#: What the share outside the depth budget is a share of.
+COUNTED = {"scene": "of the field it covers", "model": "of its surface", "volume": "of its box's depth"}
 PREVIEW_VOXELS = 96              # voxels on a side of a volume's shape in the picture
 
 
@@ -48,7 +50,8 @@ class Content:
     name : str
     vertices : (n, 3) float, mm      surface vertices (a scene: its depth-pass hit points)
     faces : (m, 3) int               triangles into ``vertices`` (may be empty: points only)
-    z_samples : (k,) float, mm       what the depth figures count: the points, or a box's depth
+    z_samples : (k,) float, mm       what the depth figures count: a scene's hits (even over the field),
+                                     points even over a model's surface, or a volume box's depth
     box : (8, 3) float or None       a volume's physical box (``Volume.corners`` order)
     marks : list of (label, (3,) mm) the patient's directions on a volume's box
     units_per_mm : float             the display frame's scene units per mm (1 for models, volumes)
@@ -155,10 +158,22 @@ def model_content(path: Path, lens_array: LensArray, *, depth: float | None = No
     offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
     vertices = (np.concatenate([p.vertices for p in parts]) + placement.shift) * placement.scale
     faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets)])
-    record = {"up": up, "up_reason": reason, "triangles": int(len(faces)),
+    record = {"up": up, "up_reason": reason, "triangles": len(faces),
               "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
                             "fill": FILL}}
-    return Content("model", path.name, vertices, faces, vertices[:, 2], record=record)
+    return Content("model", path.name, vertices, faces, _surface_z(vertices, faces), record=record)
+
+
+def _surface_z(vertices: np.ndarray, faces: np.ndarray, count: int = 20000) -> np.ndarray:
+    """``z`` of points spread evenly over the surface (by area, seeded): the share of a model
+    outside the budget is a share of its surface, not of its vertices (a long triangle has three)."""
+    import trimesh
+
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    if not mesh.area > 0:
+        return vertices[:, 2]
+    points, _ = trimesh.sample.sample_surface(mesh, count, seed=0)
+    return np.asarray(points)[:, 2]
 
 
 def volume_shape(volume: Any, iso: tuple[float, ...] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
@@ -247,8 +262,11 @@ def picture_size(size: tuple[int, int]) -> tuple[int, int]:
 
 def figures(content: Content, setup: SetUp) -> dict[str, Any]:
     """The content's depth against the budget, as the legend and the sidecar give it."""
-    return {**depth_figures(content.z_samples, setup.budget_mm),
-            "counted": "share of the box's depth" if content.kind == "volume" else "share of the points"}
+    out = {**depth_figures(content.z_samples, setup.budget_mm), "counted": COUNTED[content.kind]}
+    if out["points"] and len(content.vertices):   # the reach is the vertices' (samples miss the tips)
+        z = np.concatenate([content.z_samples, content.vertices[:, 2]])
+        out.update(near_mm=float(z.min()), far_mm=float(z.max()), depth_mm=float(z.max() - z.min()))
+    return out
 
 
 def write_layout(content: Content, lens_array: LensArray, output: str | Path, *, display: dict | None = None,

@@ -76,7 +76,14 @@ def _lens_grid(pv: Any, lens_array: LensArray, outline: np.ndarray) -> tuple[Any
             segments += [(lo_x, y), (hi_x, y)]
     seg = np.asarray(segments, dtype=np.float64)
     x, y = lens_array.from_lattice(seg[:, 0], seg[:, 1])
-    return pv.line_segments_from_points(_v(np.stack([x, y, np.zeros_like(x)], -1))), step
+    lines = pv.line_segments_from_points(_v(np.stack([x, y, np.zeros_like(x)], -1)))
+    return (_cut(lines, lens_array) if lens_array.rotation else lines), step
+
+
+def _cut(lines: Any, lens_array: LensArray) -> Any:
+    """A turned lattice is cut by the panel's edges, as a real slanted sheet is."""
+    w, h = lens_array.panel.size_mm
+    return lines.clip_box((-w / 2, w / 2, -h / 2, h / 2, -1.0, 1.0), invert=False)
 
 
 def _cone(pv: Any, setup: SetUp, reach: float) -> tuple[Any, Any, float]:
@@ -112,10 +119,11 @@ def _legend_text(content: Any, setup: SetUp, lens_array: LensArray, numbers: dic
              + f"; every lens in view from {setup.viewing_distance_mm:.4g} mm",
              f"depth budget 2 N f = {setup.budget_mm:.4g} mm: z {-half:+.4g} .. {half:+.4g} mm"]
     if numbers.get("points"):
-        what = "of its depth" if content.box is not None else "of its points"
+        what = numbers.get("counted", "")
         lines.append(f"content z {numbers['near_mm']:+.4g} .. {numbers['far_mm']:+.4g} mm, "
                      f"{100 * numbers['outside']:.0f} % {what} outside the budget "
-                     f"({100 * numbers['front_outside']:.0f} % in front, {100 * numbers['behind_outside']:.0f} % behind)")
+                     f"({100 * numbers['front_outside']:.0f} % in front, "
+                     f"{100 * numbers['behind_outside']:.0f} % behind)")
     else:
         lines.append("content: nothing seen by the display")
     subject = content.record.get("depth", {})
@@ -130,7 +138,7 @@ def _legend_text(content: Any, setup: SetUp, lens_array: LensArray, numbers: dic
     if cone_length < setup.viewing_distance_mm:
         notes.append(f"cone drawn to {cone_length:.3g} mm")
     if grid_step > 1:
-        notes.append(f"grid: every {grid_step}th lens")
+        notes.append(f"grid: a line every {grid_step} lenses")
     if notes:
         lines.append("; ".join(notes))
     return "\n".join(lines)
@@ -151,8 +159,11 @@ def draw(content: Any, setup: SetUp, lens_array: LensArray, numbers: dict, *, si
         plot.add_mesh(_box(pv, (lo[0], lo[1], 0.0), hi), color=_rgb(SLAB_BACK), opacity=0.15, lighting=False)
         plot.add_mesh(_box(pv, lo, hi).extract_all_edges(), color=_rgb(SLAB_BACK), line_width=1, lighting=False)
         grid, step = _lens_grid(pv, lens_array, setup.array)
-        plot.add_mesh(grid, color=_rgb(ARRAY), line_width=1, lighting=False)
-        plot.add_mesh(_loop(pv, setup.array), color=_rgb(ARRAY), line_width=max(1, round(2 * scale)), lighting=False)
+        outline = _loop(pv, setup.array)
+        outline = _cut(outline, lens_array) if lens_array.rotation else outline
+        for lines, width in ((grid, 1), (outline, max(1, round(2 * scale)))):
+            if lines.n_points:   # a turned lattice covering the whole panel has no outline inside it
+                plot.add_mesh(lines, color=_rgb(ARRAY), line_width=width, lighting=False)
         plot.add_mesh(_loop(pv, setup.screen), color=_rgb(SCREEN), line_width=max(3, round(4 * scale)),
                       lighting=False)
         cone, edges, cone_length = _cone(pv, setup, CONE_REACH * max(w, h))

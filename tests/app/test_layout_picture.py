@@ -144,7 +144,7 @@ def test_the_command_is_quiet_headless(tmp_path):
     # a separate process with no display: VTK's X-server complaint must not reach the user
     out = tmp_path / "ant.png"
     done = subprocess.run([sys.executable, "-m", "povh3d.cli", "layout", str(ANT), "-o", str(out),
-                           "--size", "400x300"], capture_output=True, text=True, timeout=120,
+                           "--size", "400x300"], capture_output=True, text=True, timeout=120, check=False,
                           env={"PATH": "/usr/bin:/bin", "PYTHONPATH": str(Path(__file__).resolve().parents[2]),
                                "HOME": str(tmp_path)})
     assert done.returncode == 0, done.stderr
@@ -180,3 +180,27 @@ def test_an_iso_value_outside_the_data_names_the_range():
     # scalar values rising through the box: the iso-surface at 0 crosses it
     content = volume_content(volume, lens_array("demo"), iso=(0.0,))
     assert len(content.faces) > 0 and content.record["shape"] == "iso"
+
+
+@pytest.mark.parametrize("preset, overrides", [("alioscopy-42", {}), ("hex-5.6", {}),
+                                               ("demo", {"lens_rotation": 10.0})])
+def test_lenticular_hex_and_rotated_arrays_are_drawn(tmp_path, preset, overrides):
+    (tmp_path / "tet.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    a = lens_array(preset, **overrides)
+    record = check_picture_of(layout(tmp_path / "tet.obj", tmp_path / "tet.png", a, size=SIZE),
+                              tmp_path / "tet.png")
+    assert record["kind"] == "layout"
+    assert record["setup"]["cone_half_angles_deg"][0] == pytest.approx(a.viewing_angle_deg / 2)
+    assert (record["setup"]["cone_half_angles_deg"][1] is None) == (a.grid == "lenticular")
+
+
+def test_the_share_outside_is_a_share_of_the_surface(tmp_path):
+    # a flat square (two triangles) in the plane x = 0, 1 wide in y and 4 deep in z, centred:
+    # scaled to fill 0.9 of the panel's height (21.6 mm) it is 86.4 mm deep, and the budget
+    # (24 mm) holds 24 / 86.4 of it: the rest lies outside, half in front and half behind
+    (tmp_path / "sq.obj").write_text("v 0 -0.5 -2\nv 0 0.5 -2\nv 0 0.5 2\nv 0 -0.5 2\nf 1 2 3\nf 1 3 4\n")
+    record = layout(tmp_path / "sq.obj", tmp_path / "sq.png", lens_array("demo"), size=SIZE, model={"up": "y"})
+    depth = record["content_depth"]
+    assert depth["depth_mm"] == pytest.approx(86.4)
+    assert depth["outside"] == pytest.approx(1 - 24 / 86.4, abs=0.01)
+    assert depth["front_outside"] == pytest.approx(depth["behind_outside"], abs=0.015)

@@ -10,7 +10,16 @@ import pytest
 from povh3d.app.stage import depth_budget_mm
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.presets import lens_array, names
-from povh3d.geometry.setup import BEHIND, FRONT, INSIDE, array_outline, classify, depth_figures, depth_points, set_up
+from povh3d.geometry.setup import (
+    BEHIND,
+    FRONT,
+    INSIDE,
+    array_outline,
+    classify,
+    depth_figures,
+    depth_points,
+    set_up,
+)
 
 
 @pytest.mark.parametrize("preset", names())
