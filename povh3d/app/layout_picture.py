@@ -63,7 +63,8 @@ def _loop(pv: Any, corners: np.ndarray) -> Any:
 
 def _lens_grid(pv: Any, lens_array: LensArray, outline: np.ndarray) -> tuple[Any, int]:
     """Lines between lens cells (every ``step``-th), in the lattice's frame, turned with it."""
-    step = max(1, math.ceil(max(lens_array.lenses_x, lens_array.lenses_y) / MAX_GRID_LINES))
+    counts = (lens_array.lenses_x,) if lens_array.unidirectional else (lens_array.lenses_x, lens_array.lenses_y)
+    step = max(1, math.ceil(max(counts) / MAX_GRID_LINES))
     lo_x, hi_x = lens_array.to_lattice(outline[:, 0], outline[:, 1])[0][[0, 1]]
     lo_y, hi_y = lens_array.to_lattice(outline[:, 0], outline[:, 1])[1][[0, 2]]
     segments = []
