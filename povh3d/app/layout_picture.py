@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import Povh3dError
 from ..geometry.lens_array import LensArray
 from ..geometry.setup import BEHIND, FRONT, INSIDE, SetUp, classify
 
@@ -41,6 +42,25 @@ def quiet_pyvista() -> Any:
 
     pv.OFF_SCREEN = True
     return pv
+
+
+def check_opengl() -> None:
+    """Refuse to draw where VTK has no OpenGL to draw with (it would crash the process).
+
+    VTK picks its window when one is made: X with a display, else EGL when an
+    EGL driver answers, else OSMesa, which it loads only when drawing starts.
+    """
+    import ctypes.util
+
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL windows)
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
+
+    window = vtkRenderWindow()
+    chosen = type(window).__name__
+    window.Finalize()
+    if chosen == "vtkOSOpenGLRenderWindow" and ctypes.util.find_library("OSMesa") is None:
+        raise Povh3dError("povh3d layout cannot draw: no OpenGL to draw off screen with (no EGL driver, no "
+                          "OSMesa); install Mesa's with 'make opengl' or apt-get install libegl1 libegl-mesa0")
 
 
 def _v(points: np.ndarray) -> np.ndarray:
@@ -149,6 +169,7 @@ def draw(content: Any, setup: SetUp, lens_array: LensArray, numbers: dict, *, si
          display: dict) -> np.ndarray:
     """The set-up picture: ``(size[1], size[0], 3)`` uint8 RGB."""
     pv = quiet_pyvista()
+    check_opengl()
     width, height = size
     plot = pv.Plotter(off_screen=True, window_size=[width, height])
     try:

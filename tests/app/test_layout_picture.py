@@ -204,3 +204,19 @@ def test_the_share_outside_is_a_share_of_the_surface(tmp_path):
     assert depth["depth_mm"] == pytest.approx(86.4)
     assert depth["outside"] == pytest.approx(1 - 24 / 86.4, abs=0.01)
     assert depth["front_outside"] == pytest.approx(depth["behind_outside"], abs=0.015)
+
+
+def test_no_opengl_is_one_line_not_a_crash(tmp_path):
+    # glvnd finds no EGL driver: VTK falls back to OSMesa, which segfaults the process when it is
+    # missing too; povh3d must refuse with one line instead (or draw, where OSMesa is installed)
+    out = tmp_path / "ant.png"
+    done = subprocess.run([sys.executable, "-m", "povh3d.cli", "layout", str(ANT), "-o", str(out),
+                           "--size", "300x200"], capture_output=True, text=True, timeout=120, check=False,
+                          env={"PATH": "/usr/bin:/bin", "PYTHONPATH": str(Path(__file__).resolve().parents[2]),
+                               "HOME": str(tmp_path), "__EGL_VENDOR_LIBRARY_FILENAMES": "/nonexistent.json"})
+    assert done.returncode in (0, 1), (done.returncode, done.stderr)
+    if done.returncode == 1:
+        assert done.stderr.strip().splitlines() == [done.stderr.strip()] and "cannot draw" in done.stderr
+        assert not out.exists()
+    else:
+        assert out.is_file()
