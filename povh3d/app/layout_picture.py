@@ -153,8 +153,12 @@ def _legend_text(content: Any, setup: SetUp, lens_array: LensArray, numbers: dic
     if content.record.get("depth", {}).get("unmeasured_fraction", 0) > 0.05:
         lines.append(f"depth pass: {100 * subject['unmeasured_fraction']:.0f} % of the field unmeasured "
                      "(viewpoint inside a solid)")
-    lines.append(f"frame: {content.units_per_mm:.4g} scene units per mm"
-                 + (f" ({content.record.get('source')})" if content.record.get("source") else ""))
+    placement = content.record.get("placement")
+    if content.kind == "scene":
+        lines.append(f"frame: {content.units_per_mm:.4g} scene units per mm ({content.record.get('source', 'native')})")
+    elif placement:   # a model or a volume, staged in display mm
+        limit = "--depth" if placement["limit"] == "depth" else f"the panel's {placement['limit']}"
+        lines.append(f"placed at {placement['scale']:.4g} display mm per {content.kind} mm, limited by {limit}")
     notes = []
     if cone_length < setup.viewing_distance_mm:
         notes.append(f"cone drawn to {cone_length:.3g} mm")
@@ -183,9 +187,9 @@ def draw(content: Any, setup: SetUp, lens_array: LensArray, numbers: dict, *, si
         grid, step = _lens_grid(pv, lens_array, setup.array)
         outline = _loop(pv, setup.array)
         outline = _cut(outline, lens_array) if lens_array.rotation else outline
-        for lines, width in ((grid, 1), (outline, max(1, round(2 * scale)))):
+        for lines, line_width in ((grid, 1), (outline, max(1, round(2 * scale)))):
             if lines.n_points:   # a turned lattice covering the whole panel has no outline inside it
-                plot.add_mesh(lines, color=_rgb(ARRAY), line_width=width, lighting=False)
+                plot.add_mesh(lines, color=_rgb(ARRAY), line_width=line_width, lighting=False)
         plot.add_mesh(_loop(pv, setup.screen), color=_rgb(SCREEN), line_width=max(3, round(4 * scale)),
                       lighting=False)
         cone, edges, cone_length = _cone(pv, setup, CONE_REACH * max(w, h))
