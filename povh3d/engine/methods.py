@@ -126,10 +126,9 @@ def single_stage_supersamples(quality: Quality) -> int:
 
 
 def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
-    mesh = lens_mesh(subpixel.subpixel_array(lens_array), back_off)
+    mesh, tiles = subpixel.subpixel_mesh(lens_array, back_off)
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
-                      lambda images: subpixel.subpixels_to_panel(mesh.crop(stack_frames(images))),
-                      subpixel.describe(lens_array))
+                      lambda images: subpixel.assemble(lens_array, mesh, tiles, images), subpixel.describe(lens_array))
 
 
 @dataclass(frozen=True)

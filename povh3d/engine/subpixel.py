@@ -24,7 +24,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
+from ..geometry.cameras import CameraMesh, stack_frames
+from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray, Panel
+from ..geometry.phase_tiles import PhaseTiles, phase_tiles, tiles_mesh, uncovered
 
 
 def subpixel_array(lens_array: LensArray) -> LensArray:
@@ -38,6 +41,37 @@ def subpixel_array(lens_array: LensArray) -> LensArray:
     return LensArray("lenticular", la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
 
 
+def subpixel_mesh(lens_array: LensArray, back_off: float) -> tuple[CameraMesh, PhaseTiles | None]:
+    """The mesh camera of the subpixel panel: phase tiles where the sheet is rational, else strips."""
+    sub = subpixel_array(lens_array)
+    tiles = phase_tiles(sub)
+    if tiles is None:
+        return lens_mesh(sub, back_off), None
+    return tiles_mesh(sub, tiles, back_off), tiles
+
+
+def subpixel_image(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray]) -> np.ndarray:
+    """The ``(H, 3W, C)`` image of every subpixel's ray out of the rendered frame."""
+    image = stack_frames(images)
+    return mesh.crop(image) if tiles is None else tiles.to_panel(image)
+
+
+def assemble(lens_array: LensArray, mesh: CameraMesh, tiles: PhaseTiles | None,
+             images: list[np.ndarray]) -> np.ndarray:
+    """The ``(H, W, 3)`` panel image from the rendered subpixel frame (tiles: in one gather)."""
+    if tiles is None:  # strips: a subpixel outside every lenticule found no face and is black
+        return subpixels_to_panel(subpixel_image(mesh, tiles, images))
+    image = stack_frames(images)
+    rows, cols = tiles.panel_index()          # of every subpixel column 3 col + c
+    w = cols.size // 3
+    channel = np.arange(3)
+    panel = image[rows[:, None, None], cols.reshape(w, 3)[None], channel[None, None, :]]
+    outside = uncovered(subpixel_array(lens_array))  # a tile's rays run on past the sheet's edge
+    if outside is not None:
+        panel[outside.reshape(len(rows), w, 3)] = 0
+    return panel
+
+
 def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     """``(H, 3W, C)`` subpixel image -> ``(H, W, 3)`` panel: channel ``c`` from column ``3 col + c``."""
     h, w3 = image.shape[:2]
@@ -49,5 +83,7 @@ def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
 
 def describe(lens_array: LensArray) -> dict[str, Any]:
     sub = subpixel_array(lens_array)
+    tiles = phase_tiles(sub)
     return {"subpixel_panel_px": [sub.panel.width, sub.panel.height],
-            "slant_deg": lens_array.rotation, "subpixels_per_lens": 3 * lens_array.ppl_x}
+            "slant_deg": lens_array.rotation, "subpixels_per_lens": 3 * lens_array.ppl_x,
+            "camera": (f"phase tiles {tiles.period[0]}x{tiles.period[1]}" if tiles else "one strip per lenticule")}
