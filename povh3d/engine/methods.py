@@ -34,6 +34,7 @@ from ..geometry.cameras import (bank_back_off, check_clearance, default_back_off
 from ..geometry.crop import CropSettings
 from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray
+from ..geometry.phase_tiles import phase_tiles, tiles_mesh, uncovered
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
@@ -126,9 +127,14 @@ def single_stage_supersamples(quality: Quality) -> int:
 
 
 def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
-    mesh, tiles = subpixel.subpixel_mesh(lens_array, back_off)
+    # A rational sheet (every real panel): one quad per phase coset; else one strip per lenticule.
+    sub = subpixel.subpixel_array(lens_array)
+    tiles = phase_tiles(sub)
+    mesh = lens_mesh(sub, back_off) if tiles is None else tiles_mesh(sub, tiles, back_off)
+    outside = uncovered(sub) if tiles is not None else None
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
-                      lambda images: subpixel.assemble(lens_array, mesh, tiles, images), subpixel.describe(lens_array))
+                      lambda images: subpixel.assemble(mesh, tiles, images, outside),
+                      subpixel.describe(lens_array, tiles))
 
 
 @dataclass(frozen=True)

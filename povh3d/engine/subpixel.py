@@ -19,15 +19,16 @@ own ray instead (docs/geometry.md, "Rotated lattices"):
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import ConfigError
 from ..geometry.cameras import CameraMesh, stack_frames
-from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray, Panel
-from ..geometry.phase_tiles import PhaseTiles, phase_tiles, tiles_mesh, uncovered
+
+if TYPE_CHECKING:  # the method (engine.methods) builds the camera; this module only reads it
+    from ..geometry.phase_tiles import PhaseTiles
 
 
 def subpixel_array(lens_array: LensArray) -> LensArray:
@@ -41,32 +42,26 @@ def subpixel_array(lens_array: LensArray) -> LensArray:
     return LensArray("lenticular", la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
 
 
-def subpixel_mesh(lens_array: LensArray, back_off: float) -> tuple[CameraMesh, PhaseTiles | None]:
-    """The mesh camera of the subpixel panel: phase tiles where the sheet is rational, else strips."""
-    sub = subpixel_array(lens_array)
-    tiles = phase_tiles(sub)
-    if tiles is None:
-        return lens_mesh(sub, back_off), None
-    return tiles_mesh(sub, tiles, back_off), tiles
-
-
 def subpixel_image(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray]) -> np.ndarray:
     """The ``(H, 3W, C)`` image of every subpixel's ray out of the rendered frame."""
     image = stack_frames(images)
     return mesh.crop(image) if tiles is None else tiles.to_panel(image)
 
 
-def assemble(lens_array: LensArray, mesh: CameraMesh, tiles: PhaseTiles | None,
-             images: list[np.ndarray]) -> np.ndarray:
-    """The ``(H, W, 3)`` panel image from the rendered subpixel frame (tiles: in one gather)."""
-    if tiles is None:  # strips: a subpixel outside every lenticule found no face and is black
+def assemble(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray],
+             outside: np.ndarray | None = None) -> np.ndarray:
+    """The ``(H, W, 3)`` panel image from the rendered subpixel frame (tiles: in one gather).
+
+    ``outside`` (``(H, 3W)`` bool, tiles only): subpixels outside every lenticule, made
+    black (a tile's rays run on past the sheet's edge; a strip camera finds no face there).
+    """
+    if tiles is None:
         return subpixels_to_panel(subpixel_image(mesh, tiles, images))
     image = stack_frames(images)
     rows, cols = tiles.panel_index()          # of every subpixel column 3 col + c
     w = cols.size // 3
     channel = np.arange(3)
     panel = image[rows[:, None, None], cols.reshape(w, 3)[None], channel[None, None, :]]
-    outside = uncovered(subpixel_array(lens_array))  # a tile's rays run on past the sheet's edge
     if outside is not None:
         panel[outside.reshape(len(rows), w, 3)] = 0
     return panel
@@ -81,9 +76,8 @@ def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.einsum("hwcc->hwc", cells))
 
 
-def describe(lens_array: LensArray) -> dict[str, Any]:
+def describe(lens_array: LensArray, tiles: PhaseTiles | None) -> dict[str, Any]:
     sub = subpixel_array(lens_array)
-    tiles = phase_tiles(sub)
     return {"subpixel_panel_px": [sub.panel.width, sub.panel.height],
             "slant_deg": lens_array.rotation, "subpixels_per_lens": 3 * lens_array.ppl_x,
             "camera": (f"phase tiles {tiles.period[0]}x{tiles.period[1]}" if tiles else "one strip per lenticule")}

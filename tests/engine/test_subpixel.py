@@ -22,9 +22,10 @@ import pytest
 from povh3d.engine.frames import build_script
 from povh3d.engine.methods import METHODS, display_header, run_method
 from povh3d.engine.quality import RenderSettings
-from povh3d.engine.subpixel import subpixel_array, subpixel_image, subpixel_mesh, subpixels_to_panel
+from povh3d.engine.subpixel import subpixel_array, subpixel_image, subpixels_to_panel
 from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.phase_tiles import phase_tiles
 from povh3d.geometry.rays import pixel_rays
 from povh3d.image.io import read_png
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs
@@ -64,10 +65,16 @@ def test_panel_takes_channel_c_of_subpixel_c():
         np.testing.assert_array_equal(panel[..., c], image[:, c::3, c])
 
 
+def _camera(sheet: LensArray, back_off: float):
+    """The method's own mesh camera and its phase tiles (None: strips)."""
+    plan = METHODS["subpixel"].plan(sheet, back_off, np.zeros((1, 4)))
+    return plan.batch.context["mesh"], phase_tiles(subpixel_array(sheet))
+
+
 @SHEETS
 def test_every_subpixel_ray_in_numpy(sheet):
     sub = subpixel_array(sheet)
-    mesh, tiles = subpixel_mesh(sheet, 10.0)
+    mesh, tiles = _camera(sheet, 10.0)
     assert (tiles is None) == (sheet is SHEET)
     origin, normal, found = (subpixel_image(mesh, tiles, [a]) for a in simulate_lookup(mesh))
     centres, dirs, inside = pixel_rays(sub)
@@ -83,7 +90,7 @@ def test_every_subpixel_ray_in_numpy(sheet):
 def _subpixel_hits(tmp_path, la: LensArray, z0: float, half: float) -> np.ndarray:
     """Render the raw subpixel image of a position-coded plane (linear, 16 bit): hit (x, y) mm."""
     plan = METHODS["subpixel"].plan(la, 10.0, np.zeros((1, 4)))
-    mesh, tiles = plan.batch.context["mesh"], subpixel_mesh(la, 10.0)[1]   # the method's own camera
+    mesh, tiles = _camera(la, 10.0)
     scene = write_position_plane(tmp_path, z0, half)
     script = build_script(plan.batch, plan.batch.frames, method="subpixel", scene_path=str(scene),
                           add_assumed_gamma=False, header=display_header(la))
