@@ -19,6 +19,7 @@ own ray instead (docs/geometry.md, "Rotated lattices"):
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -26,6 +27,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..geometry.cameras import CameraMesh, stack_frames
 from ..geometry.lens_array import LensArray, Panel
+from ..mappings import Mapping, Slanted
 
 if TYPE_CHECKING:  # the method (engine.methods) builds the camera; this module only reads it
     from ..geometry.phase_tiles import PhaseTiles
@@ -40,6 +42,30 @@ def subpixel_array(lens_array: LensArray) -> LensArray:
     p = la.panel
     panel = Panel(3 * p.width, p.height, p.pitch_x / 3, p.pitch_y)
     return LensArray("lenticular", la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
+
+
+def slanted_sheet(mapping: Mapping, panel: Panel, focal: float) -> tuple[LensArray, float]:
+    """The lens sheet a slanted subpixel mapping describes, centred on its panel, and the
+    mapping offset ``k_off`` that puts the mapping's sheet where this one lies.
+
+    The mapping's sheet spans ``X`` subpixels along a row and moves ``slope`` subpixels
+    right per row down (``mappings.slanted``): it leans ``atan(slope s_x / (3 s_y))`` from
+    vertical (counter-clockwise, as ``--lens-rotation``), ``X s_x/3 cos a`` mm across.
+    A subpixel whose centre lies ``t`` lens pitches across the centred sheet has the
+    mapping's phase ``X t - 1/2`` (the phase is its left edge), hence ``k_off``.
+    """
+    if not isinstance(mapping, Slanted) or mapping.unit != "subpixel" or mapping.reverse:
+        raise ConfigError(f"--method subpixel traces the sheet of a slanted subpixel mapping; {mapping.name!r} "
+                          "is not one: give the sheet with --grid lenticular --ppl --lens-rotation instead")
+    sx, sy = panel.pitch_x, panel.pitch_y
+    turn = math.atan(mapping.slope * sx / (3 * sy))
+    pitch = mapping.per_lens * sx / 3 * math.cos(turn)
+    reach = panel.width * sx * math.cos(turn) + panel.height * sy * abs(math.sin(turn))
+    sheet = LensArray("lenticular", math.ceil(reach / pitch) + 1, panel.height, pitch, sy, focal, panel,
+                      math.degrees(turn))
+    x, _ = sheet.to_lattice(np.array((0.5 / 3 - panel.width / 2) * sx), np.array((panel.height / 2 - 0.5) * sy))
+    t = float(x) / pitch + sheet.lenses_x / 2          # subpixel (0, 0), across the sheet
+    return sheet, round((mapping.per_lens * t - 0.5) % mapping.per_lens, 9) % mapping.per_lens
 
 
 def subpixel_image(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray]) -> np.ndarray:
@@ -79,5 +105,6 @@ def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
 def describe(lens_array: LensArray, tiles: PhaseTiles | None) -> dict[str, Any]:
     sub = subpixel_array(lens_array)
     return {"subpixel_panel_px": [sub.panel.width, sub.panel.height],
-            "slant_deg": lens_array.rotation, "subpixels_per_lens": 3 * lens_array.ppl_x,
+            "slant_deg": lens_array.rotation,
+            "subpixels_per_lens_along_row": 3 * lens_array.ppl_x / math.cos(math.radians(lens_array.rotation)),
             "camera": (f"phase tiles {tiles.period[0]}x{tiles.period[1]}" if tiles else "one strip per lenticule")}
