@@ -27,10 +27,10 @@ import numpy as np
 from ..errors import ConfigError
 from ..geometry.cameras import CameraMesh, stack_frames
 from ..geometry.lens_array import LensArray, Panel
-from ..mappings import Mapping, Slanted
 
 if TYPE_CHECKING:  # the method (engine.methods) builds the camera; this module only reads it
     from ..geometry.phase_tiles import PhaseTiles
+    from ..mappings import Mapping
 
 
 def subpixel_array(lens_array: LensArray) -> LensArray:
@@ -54,6 +54,8 @@ def slanted_sheet(mapping: Mapping, panel: Panel, focal: float) -> tuple[LensArr
     A subpixel whose centre lies ``t`` lens pitches across the centred sheet has the
     mapping's phase ``X t - 1/2`` (the phase is its left edge), hence ``k_off``.
     """
+    from ..mappings.slanted import Slanted  # only the CLI asks: keeps the render's import chain short
+
     if not isinstance(mapping, Slanted) or mapping.unit != "subpixel" or mapping.reverse:
         raise ConfigError(f"--method subpixel traces the sheet of a slanted subpixel mapping; {mapping.name!r} "
                           "is not one: give the sheet with --grid lenticular --ppl --lens-rotation instead")
