@@ -27,6 +27,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..geometry.cameras import CameraMesh, stack_frames
 from ..geometry.lens_array import LensArray, Panel
+from ..image.colour import mean_in_linear_light
 
 if TYPE_CHECKING:  # the method (engine.methods) builds the camera; this module only reads it
     from ..geometry.phase_tiles import PhaseTiles
@@ -78,18 +79,20 @@ def subpixel_image(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.n
 
 def assemble(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray],
              outside: np.ndarray | None = None) -> np.ndarray:
-    """The ``(H, W, 3)`` panel image from the rendered subpixel frame (tiles: in one gather).
+    """The ``(H, W, 3)`` panel image from the rendered subpixel frames (tiles: one gather a
+    frame; several frames are footprint samples, averaged in linear light).
 
     ``outside`` (``(H, 3W)`` bool, tiles only): subpixels outside every lenticule, made
     black (a tile's rays run on past the sheet's edge; a strip camera finds no face there).
     """
     if tiles is None:
         return subpixels_to_panel(subpixel_image(mesh, tiles, images))
-    image = stack_frames(images)
     rows, cols = tiles.panel_index()          # of every subpixel column 3 col + c
     w = cols.size // 3
     channel = np.arange(3)
-    panel = image[rows[:, None, None], cols.reshape(w, 3)[None], channel[None, None, :]]
+    panels = np.stack([image[1:, :-1][rows[:, None, None], cols.reshape(w, 3)[None], channel[None, None, :]]
+                       for image in images])
+    panel = mean_in_linear_light(panels) if len(panels) > 1 else panels[0]
     if outside is not None:
         panel[outside.reshape(len(rows), w, 3)] = 0
     return panel
@@ -104,9 +107,10 @@ def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.einsum("hwcc->hwc", cells))
 
 
-def describe(lens_array: LensArray, tiles: PhaseTiles | None) -> dict[str, Any]:
+def describe(lens_array: LensArray, tiles: PhaseTiles | None, samples: int = 1) -> dict[str, Any]:
     sub = subpixel_array(lens_array)
     return {"subpixel_panel_px": [sub.panel.width, sub.panel.height],
             "slant_deg": lens_array.rotation,
             "subpixels_per_lens_along_row": 3 * lens_array.ppl_x / math.cos(math.radians(lens_array.rotation)),
-            "camera": (f"phase tiles {tiles.period[0]}x{tiles.period[1]}" if tiles else "one strip per lenticule")}
+            "camera": (f"phase tiles {tiles.period[0]}x{tiles.period[1]}" if tiles else "one strip per lenticule"),
+            "footprint_samples": samples}

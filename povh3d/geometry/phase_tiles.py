@@ -109,12 +109,19 @@ def uncovered(lens_array: LensArray) -> np.ndarray | None:
     return (j < 0) | (j >= la.lenses_x)
 
 
-def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float) -> CameraMesh:
+def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float,
+               sample: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)) -> CameraMesh:
     """The mesh camera of ``tiles``: one quad per coset, the quad edges half a pixel outside its pixels.
 
     A corner at fractional coset position ``(m, i)`` carries the affine extension of the
     coset's rays: panel point of column ``a + A m``, row ``b + B i``; lens ``n_ab + m nA + i nB``;
     through that lens's axis beside the point, square to it, at the coset's one offset ``u``.
+
+    ``sample`` is a point ``(ax, ay, du, dv)`` of every pixel's footprint (``geometry.footprint``,
+    docs/geometry.md "Pixel footprint"): the light of the point ``(du, dv)`` pixel pitches from the
+    pixel's centre, which picks the lens and the direction, through the point ``(ax, ay)`` of that
+    lens's aperture (lens pitch across, pixel pitch along).  The whole coset shares one phase, so
+    its sample still shares one lens offset and one direction: one quad stays exact.
     """
     check_clearance(lens_array, back_off)
     la = lens_array
@@ -122,9 +129,11 @@ def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float) -> Cam
     W, H = la.panel.width, la.panel.height
     t0, gk, gl = _phase_gradient(la)
     nA, nB = round(A * gk), round(B * gl)
+    ax, ay, du, dv = (float(v) for v in sample)
+    dx, dy = la.to_lattice(du * la.panel.pitch_x, dv * la.panel.pitch_y)  # the emitting point's offset
     a, b = (g.ravel()[:, None] for g in np.meshgrid(np.arange(A), np.arange(B)))   # (A B, 1) cosets
-    # pixel_rays' rule: a centre on a lens border belongs to the lens on its right.
-    n = np.floor(t0 + a * gk + b * gl + 1e-9)
+    # pixel_rays' rule: a point on a lens border belongs to the lens on its right.
+    n = np.floor(t0 + a * gk + b * gl + dx / la.pitch_x + 1e-9)
     m = np.array([-0.5, M - 0.5, M - 0.5, -0.5])[None, :]           # corners: bottom left, counter-clockwise
     i = np.array([I - 0.5, I - 0.5, -0.5, -0.5])[None, :]
     k, l = a + A * m, b + B * i                                       # fractional panel column and row
@@ -132,8 +141,10 @@ def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float) -> Cam
     Y = (H / 2 - l - 0.5) * la.panel.pitch_y
     xl, yl = la.to_lattice(X, Y)
     cx = (n + m * nA + i * nB + 0.5 - la.lenses_x / 2) * la.pitch_x  # the lens axis, lattice frame
-    u = xl - cx
-    ox, oy = la.from_lattice(cx - u * (back_off / la.focal), yl)
-    ux, uy = la.from_lattice(u, np.zeros_like(u))
+    u = xl + dx - cx
+    v = np.full_like(u, dy)
+    ox, oy = la.from_lattice(cx + ax * la.pitch_x - u * (back_off / la.focal),
+                             yl + ay * la.pitch_y - v * (back_off / la.focal))
+    ux, uy = la.from_lattice(u, v)
     col, row = a * M + m, b * I + i
     return _quad_mesh(ox, oy, ux, uy, col, row, tiles.image_size, back_off, la.focal)
