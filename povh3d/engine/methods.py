@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, warn
 from ..geometry.cameras import (bank_back_off, check_clearance, default_back_off,
                                 ortho_view_frames, pinhole_frames, stack_frames, view_bank_frames)
 from ..geometry.crop import CropSettings
@@ -134,6 +134,9 @@ def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray, *, su
     sub = subpixel.subpixel_array(lens_array)
     tiles = phase_tiles(sub)
     if tiles is None:
+        if supersample > 1:
+            warn("this lens sheet's phases do not repeat within 64 subpixels and rows, so --method subpixel "
+                 "traces it point-sampled (one strip per lenticule); give a rational sheet to antialias")
         meshes = [lens_mesh(sub, back_off)]
     else:
         points = latin_hypercube(supersample * supersample) if supersample > 1 else CENTRE
