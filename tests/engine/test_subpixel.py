@@ -23,7 +23,7 @@ from povh3d.engine.frames import build_script
 from povh3d.engine.methods import METHODS, display_header, run_method
 from povh3d.engine.quality import RenderSettings
 from povh3d.engine.subpixel import subpixel_array, subpixel_image, subpixels_to_panel
-from povh3d.errors import ConfigError
+from povh3d.errors import ConfigError, Povh3dWarning
 from povh3d.geometry.footprint import latin_hypercube
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.phase_tiles import phase_tiles
@@ -170,3 +170,10 @@ def test_antialiased_render_averages_footprint_samples(tmp_path):
     centres, dirs, _ = pixel_rays(sub)
     point = centres + dirs[..., :2] * (z0 / dirs[..., 2])[..., None]
     assert np.abs(coded[..., 0] - point[:, 0::3, 0]).max() > 5 * err
+
+
+def test_strips_cannot_antialias_and_say_so(tmp_path):
+    scene = load_scene(write_checker_plane(tmp_path, 5.0, 2.0))
+    with pytest.warns(Povh3dWarning, match="point-sampled"):
+        result = run_method("subpixel", scene, SHEET, RenderSettings(quality="normal", use_cache=False))
+    assert result.record["footprint_samples"] == 1 and result.record["camera"] == "one strip per lenticule"
