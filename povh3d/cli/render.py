@@ -29,7 +29,9 @@ def request_from_args(args: argparse.Namespace) -> Any:
 
     lens_array, display = lens_array_from_args(args)
     mapping = panel = None
-    if args.mapping:  # render exactly the views the mapping reads, then map them
+    if args.method == "subpixel":
+        lens_array, display = _subpixel_sheet(args, lens_array, display)
+    elif args.mapping:  # render exactly the views the mapping reads, then map them
         mapping, panel = mapping_from_args(args, lens_array, display)
         display = {**display, "mapping": mapping.name}
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
@@ -54,6 +56,25 @@ def request_from_args(args: argparse.Namespace) -> Any:
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None)
+
+
+def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``--method subpixel`` on a display with a slanted mapping (alioscopy-42, philips-20): the
+    sheet that mapping describes, traced subpixel by subpixel straight to the panel image."""
+    if args.mapping:
+        raise ConfigError("--method subpixel writes the panel image itself; drop --mapping (a preset's "
+                          "slanted mapping gives the sheet it traces)")
+    if not display.get("mapping"):
+        return lens_array, display
+    if args.offset:
+        raise ConfigError("--method subpixel traces the sheet centred on the panel; drop --offset (the sidecar "
+                          "records the mapping offset that addresses the same sheet)")
+    from ..engine.subpixel import slanted_sheet
+
+    mapping, panel = mapping_from_args(argparse.Namespace(**{**vars(args), "mapping": display["mapping"]}),
+                                       lens_array, display)
+    sheet, offset = slanted_sheet(mapping, panel, lens_array.focal)
+    return sheet, {**display, "sheet": {"from_mapping": mapping.name, "mapping_offset": offset}}
 
 
 def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
