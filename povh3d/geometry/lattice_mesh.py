@@ -12,7 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .cameras import CameraMesh, _quad_mesh, camera_mesh, check_clearance
+from .cameras import TIE_SHIFT, CameraMesh, _quad_mesh, camera_mesh, check_clearance
 from .lattice import lattice_coordinates
 from .lens_array import LensArray
 from .rays import pixel_rays
@@ -77,8 +77,9 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         c = la.lattice_centres().reshape(-1, 2)[np.unique(owner[inside])]
         if la.grid == "lattice":  # the parallelogram spanned by the two vectors
             (a1x, a1y), (a2x, a2y) = la.basis
-            cu, cv = np.array([-1, 1, 1, -1]) * a1x / 2 + np.array([-1, -1, 1, 1]) * a2x / 2, \
-                np.array([-1, 1, 1, -1]) * a1y / 2 + np.array([-1, -1, 1, 1]) * a2y / 2
+            cs, ct = np.array([-0.5, 0.5, 0.5, -0.5]), np.array([-0.5, -0.5, 0.5, 0.5])
+            cs, ct = cs - _tie_shift(la, X, Y, 0), ct + _tie_shift(la, X, Y, 1)
+            cu, cv = cs * a1x + ct * a2x, cs * a1y + ct * a2y
         elif la.grid == "hex":
             r = la.pitch_x / math.sqrt(3)
             cu = np.array([-hx, 0.0, hx, hx, 0.0, -hx])
@@ -100,6 +101,17 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         shear, origin_x, origin_y, u, v = _unshear(la, origin_x, origin_y, u, v)
     mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), back_off, f)
     return replace(mesh, margin=(mx, my), shear=shear)
+
+
+def _tie_shift(la: LensArray, X: np.ndarray, Y: np.ndarray, axis: int) -> float:
+    """How far (in lattice units along ``a1`` or ``a2``) to move every cell off pixel centres
+    that lie on its edges: ``TIE_SHIFT`` of a pixel, so that such a pixel is looked up inside
+    the lens ``pixel_rays`` gives it (right, below), as ``camera_mesh`` does; 0 without ties."""
+    st = lattice_coordinates(*np.array(la.basis), X, Y)[axis]
+    edge = st + (la.lenses_x if axis == 0 else la.lenses_y) / 2
+    if not np.any(np.abs(edge - np.rint(edge)) < 1e-7):
+        return 0.0
+    return TIE_SHIFT * la.panel.pitch_x / float(np.hypot(*la.basis[axis]))
 
 
 def _unshear(la: LensArray, ox: np.ndarray, oy: np.ndarray, u: np.ndarray, v: np.ndarray):

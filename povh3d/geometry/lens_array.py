@@ -180,7 +180,7 @@ class LensArray:
         if self.rotation:
             raise ConfigError("a lattice given by its vectors is not turned again (--lens-rotation); "
                               "turn its vectors instead")
-        object.__setattr__(self, "basis", (tuple(a1), tuple(a2)))
+        object.__setattr__(self, "basis", (tuple(map(float, a1)), tuple(map(float, a2))))
         px, py = cell_widths(a1, a2)
         if not (math.isclose(self.pitch_x, px, rel_tol=1e-9) and math.isclose(self.pitch_y, py, rel_tol=1e-9)):
             raise ConfigError(f"a lattice's pitches are its cell widths ({px:.9g} x {py:.9g} mm), got "
