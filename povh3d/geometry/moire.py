@@ -175,7 +175,18 @@ def _spectrum_peak(b: np.ndarray, lens_array: LensArray, blur: float) -> tuple[n
     weighted = spec * weight
     weighted[0, 0] = 0
     i, j = np.unravel_index(np.argmax(weighted), weighted.shape)
-    return k[i, j], float(weighted[i, j])
+    # Sub-bin peak: a parabola through the log magnitudes either side, along each index axis.
+    log = np.log(np.maximum(weighted, 1e-300))
+    ni, nj = weighted.shape
+
+    def vertex(left: float, centre: float, right: float) -> float:
+        den = left - 2 * centre + right
+        return 0.0 if den >= 0 else float(np.clip(0.5 * (left - right) / den, -0.5, 0.5))
+
+    di = vertex(log[(i - 1) % ni, j], log[i, j], log[(i + 1) % ni, j])
+    dj = vertex(log[i, (j - 1) % nj], log[i, j], log[i, (j + 1) % nj])
+    nu_i0, nu_j0 = np.fft.fftfreq(ni)[i] + di / ni, np.fft.fftfreq(nj)[j] + dj / nj
+    return shortest_alias(a1, a2, _wave_vectors(a1, a2, np.float64(nu_j0), np.float64(nu_i0))), float(weighted[i, j])
 
 
 def _wave_vectors(a1: np.ndarray, a2: np.ndarray, nu_j: np.ndarray, nu_i: np.ndarray) -> np.ndarray:
