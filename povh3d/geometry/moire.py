@@ -145,6 +145,7 @@ def measure(brightness: np.ndarray, lens_array: LensArray, blur: float = 1.5) ->
     """Contrast and period of the moire in ``brightness`` (``(Ly, Lx)``, one value per lens)."""
     from scipy.ndimage import gaussian_filter
 
+    lattice_basis(lens_array)  # a sheet whose moire is modelled, else the one-line error
     b = np.asarray(brightness, dtype=np.float64)
     if b.shape != (lens_array.lenses_y, lens_array.lenses_x):
         raise ValueError(f"brightness must be (Ly, Lx) = {(lens_array.lenses_y, lens_array.lenses_x)}, got {b.shape}")
