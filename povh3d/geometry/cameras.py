@@ -50,10 +50,9 @@ def ray_stretch(lens_array: LensArray) -> float:
     f = lens_array.focal
     if lens_array.grid == "hex":
         hx, hy = lens_array.pitch_x / np.sqrt(3), 0.0
-    elif lens_array.grid == "lattice":  # the longer half-diagonal of the parallelogram
-        (a1x, a1y), (a2x, a2y) = lens_array.basis
-        hx, hy = max((abs(a1x + a2x) / 2, abs(a1y + a2y) / 2), (abs(a1x - a2x) / 2, abs(a1y - a2y) / 2),
-                     key=lambda h: h[0] ** 2 + h[1] ** 2)
+    elif lens_array.grid == "lattice":
+        a1, a2 = np.array(lens_array.basis)
+        hx, hy = max(abs(a1 + a2) / 2, abs(a1 - a2) / 2, key=lambda h: float(h @ h))
     else:
         hx = lens_array.pitch_x / 2
         hy = 0.0 if lens_array.grid == "lenticular" else lens_array.pitch_y / 2
@@ -152,8 +151,7 @@ class CameraMesh:
     image_size: tuple[int, int]
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
     margin: tuple[int, int] = (0, 0)  # (columns, rows) of canvas around the panel, cut off after
-    # A linear map ``K`` (2 x 2, row-major) of x and y applied to the mesh after ``scale``:
-    # origins move by K, directions by K^-T (general lattices, ``lattice_mesh``).
+    # x, y map K (2 x 2, row-major) after ``scale``: origins by K, directions by K^-T (``lattice_mesh``).
     shear: tuple[float, float, float, float] | None = None
 
     def crop(self, image: np.ndarray) -> np.ndarray:

@@ -14,7 +14,6 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ConfigError
-from .lattice import cell_widths, lattice_vectors
 
 GRIDS = ("square", "lenticular", "hex", "lattice")
 
@@ -172,6 +171,8 @@ class LensArray:
                 f"({width_mm:.6g} x {height_mm:.6g} mm); use fewer lenses (--lenses) or a larger panel (--panel)")
 
     def _check_basis(self) -> None:
+        from .lattice import cell_widths, lattice_vectors  # here: keeps lens_array's imports shallow
+
         if self.grid != "lattice":
             if self.basis is not None:
                 raise ConfigError(f"lattice vectors are for grid 'lattice', not {self.grid!r}; drop --lattice or --grid")
@@ -370,6 +371,8 @@ class LensArray:
 
 def lattice_array(basis, lenses_x: int, lenses_y: int, focal: float, panel: Panel) -> LensArray:
     """The ``grid='lattice'`` LensArray of two lattice vectors (pitches worked out from them)."""
+    from .lattice import cell_widths, lattice_vectors
+
     a1, a2 = lattice_vectors(basis)
     px, py = cell_widths(a1, a2)
     return LensArray("lattice", lenses_x, lenses_y, px, py, focal, panel, 0.0, (tuple(a1), tuple(a2)))

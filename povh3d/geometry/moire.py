@@ -243,8 +243,10 @@ class SlantSweep:
     contrast: np.ndarray          # total brightness
     row_contrast: np.ndarray      # the panel's rows alone (the black matrix between them)
     column_contrast: np.ndarray   # the panel's columns alone (R, G, B stripes and the lines between)
-    period_mm: np.ndarray
+    period_mm: np.ndarray         # of the total
     direction_deg: np.ndarray
+    row_period_mm: np.ndarray     # of the rows' moire, measured
+    row_predicted_mm: np.ndarray  # of the rows' moire, ``predicted_moire``
 
 
 def cross_sheet(pitch: float, slant: float, focal: float, lenses: tuple[int, int], pattern: PanelPattern,
@@ -271,13 +273,16 @@ def slant_sweep(pattern: PanelPattern, pitch: float, focal: float, slants_deg, v
     rows alone are what the horizontal sheet beats with, columns what the vertical one does.
     """
     slants = np.asarray(slants_deg, dtype=np.float64)
-    out = {k: np.empty(len(slants)) for k in ("contrast", "row_contrast", "column_contrast", "period_mm", "direction_deg")}
+    out = {k: np.empty(len(slants)) for k in ("contrast", "row_contrast", "column_contrast", "period_mm",
+                                              "direction_deg", "row_period_mm", "row_predicted_mm")}
     for n, slant in enumerate(slants):
         la = cross_sheet(pitch, float(slant), focal, lenses, pattern, turn=turn)
         p = seen_points(la, viewer)
         columns, rows = pattern.columns(p[..., 0], spot) @ LUMINANCE, pattern.rows(p[..., 1], spot)
         m = measure(columns * rows, la, blur)
         out["contrast"][n], out["period_mm"][n], out["direction_deg"][n] = m.contrast, m.period_mm, m.direction_deg
-        out["row_contrast"][n] = measure(rows, la, blur).contrast
+        m = measure(rows, la, blur)
+        out["row_contrast"][n], out["row_period_mm"][n] = m.contrast, m.period_mm
+        out["row_predicted_mm"][n] = 1 / np.hypot(*predicted_moire(la, (0.0, 1 / pattern.pitch_y), viewer[2]))
         out["column_contrast"][n] = measure(columns, la, blur).contrast
     return SlantSweep(slants, **out)

@@ -7,8 +7,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .lattice import lattice_coordinates
-
 if TYPE_CHECKING:  # only its attributes are read: the rays need no more than NumPy
     from .lens_array import LensArray
 
@@ -62,6 +60,8 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
         fj = X / px + Lx / 2 + 1e-9
         fi = Ly / 2 - Y / py + 1e-9
         if lens_array.grid == "lattice":  # the parallelogram cell: lattice coordinates, as square
+            from .lattice import lattice_coordinates  # here: keeps the rays' imports shallow
+
             s, t = lattice_coordinates(*np.array(lens_array.basis), X, Y)
             fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
         j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
