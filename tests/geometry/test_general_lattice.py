@@ -143,3 +143,15 @@ def test_lattice_with_grid_options_is_refused():
         LensArray("lattice", 4, 4, 0.6, 0.6, 1.5, PANEL, 5.0, ((0.6, 0.0), (0.0, 0.6)))
     with pytest.raises(ConfigError, match="build it with lattice_array"):
         LensArray("lattice", 4, 4, 0.6, 0.6, 1.5, PANEL, 0.0, ((0.6, 0.1), (0.0, 0.7)))
+
+
+@pytest.mark.parametrize("name", BASES)
+def test_lens_index_map_names_the_owning_lens(name):
+    # extract / preview / refocus read each lens from its own pixels (image/elemental.py).
+    from povh3d.image.elemental import lens_index_map
+
+    la = lattice(name)
+    centres, _, inside = pixel_rays(la)
+    index = lens_index_map(la)
+    np.testing.assert_array_equal(index >= 0, inside)
+    np.testing.assert_allclose(la.lens_centres().reshape(-1, 2)[index[inside]], centres[inside], atol=1e-12)
