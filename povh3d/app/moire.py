@@ -43,7 +43,8 @@ def moire_sweep_file(lens_array: LensArray, slants: np.ndarray, output: str | Pa
     pattern = PanelPattern(panel.pitch_x, panel.pitch_y)
     pitch = lens_array.pitch_x
     width, height = panel.size_mm
-    lenses = (max(16, math.ceil(width / pitch)), max(16, math.ceil(height / pitch)))
+    least = max(16, 4 * math.ceil(2 * blur) + 8)  # room for the edges the low-pass cuts off
+    lenses = (max(least, math.ceil(width / pitch)), max(least, math.ceil(height / pitch)))
     sweep = slant_sweep(pattern, pitch, lens_array.focal, slants, (0.0, 0.0, distance), lenses,
                         turn=turn, spot=spot, blur=blur)
     record = base_record("moire", lens_array, moire={

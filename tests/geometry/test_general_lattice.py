@@ -155,3 +155,12 @@ def test_lens_index_map_names_the_owning_lens(name):
     index = lens_index_map(la)
     np.testing.assert_array_equal(index >= 0, inside)
     np.testing.assert_allclose(la.lens_centres().reshape(-1, 2)[index[inside]], centres[inside], atol=1e-12)
+
+
+def test_lens_count_gives_the_panel_that_holds_every_cell():
+    la = preset_array("demo", lattice="cross:0.8,6.34", lenses=[10, 8])
+    assert (la.lenses_x, la.lenses_y) == (10, 8)
+    w, h = la.panel.size_mm
+    corners = la.lens_centres()[..., None, :] + np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) @ np.array(la.basis) / 2
+    assert np.all(np.abs(corners[..., 0]) <= w / 2 + 1e-9) and np.all(np.abs(corners[..., 1]) <= h / 2 + 1e-9)
+    assert w / 2 - np.abs(corners[..., 0]).max() < la.panel.pitch_x  # and no more than that
