@@ -43,7 +43,7 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 test: povray opengl venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
 
-bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the render breakdown, quality, mapping, Dask, single-stage, crop, mesh, large-panel and calibration benchmarks
+bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the render breakdown, quality, mapping, Dask, single-stage, crop, mesh, large-panel, calibration and moire benchmarks
 	$(BIN)/python benchmarks/bench_command.py
 	$(BIN)/python benchmarks/bench_render.py
 	$(BIN)/python benchmarks/bench_quality.py
@@ -56,6 +56,7 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_calibrate.py
 	$(BIN)/python benchmarks/bench_subpixel.py
 	$(BIN)/python benchmarks/bench_frame.py
+	$(BIN)/python benchmarks/bench_moire.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out
