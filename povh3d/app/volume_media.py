@@ -27,10 +27,10 @@ from ..volume.df3 import SAMPLE_SHIFT, df3_bytes, padded_shape, quantise
 from ..volume.grid import Volume
 from ..volume.transfer import MAX_LABEL_ENTRIES, Transfer, load_transfer
 
-#: POV-Ray's ``samples`` for method 3: it splits each interval into max(2, samples // 2 + 1)
-#: sub-intervals (media.cpp, ComputeMediaAdaptiveSampling); 3 gives 2, sampled at 5 points.
-SAMPLES = 3
-SUB_INTERVALS = 2
+#: POV-Ray 3.7 holds at most 256 media intervals per ray (MEDIA_INTERVAL_VECTOR_SIZE; more is
+#: "internal nesting limit reached"), two of which it may add itself; finer sampling takes more
+#: samples per interval instead.
+MAX_INTERVALS = 250
 
 
 def uniform_scale(world_to_display: np.ndarray) -> float:
@@ -57,6 +57,18 @@ def _present_labels(values: np.ndarray) -> np.ndarray:
     if np.issubdtype(values.dtype, np.integer) and values.min() >= 0:
         return np.flatnonzero(np.bincount(values.ravel()))
     return np.unique(values)
+
+
+def _window_samples(values: np.ndarray, lo: float, hi: float, bits: int) -> np.ndarray:
+    """``(values - lo) / (hi - lo)`` quantised, a slab of slices at a time (a CT is hundreds of MB
+    as float32); NaN counts as ``lo``."""
+    samples = np.empty(values.shape, dtype=np.uint8 if bits == 8 else np.uint16)
+    slab = max(1, 4_000_000 // max(1, values.shape[0] * values.shape[1]))
+    for k in range(0, values.shape[2], slab):
+        fractions = np.asarray(values[:, :, k:k + slab], dtype=np.float32) - np.float32(lo)
+        fractions /= np.float32(hi - lo)
+        samples[:, :, k:k + slab] = quantise(np.nan_to_num(fractions, copy=False), bits)
+    return samples
 
 
 def classify(volume: Volume, transfer: Transfer, bits: int) -> dict[str, Any]:
@@ -93,10 +105,7 @@ def classify(volume: Volume, transfer: Transfer, bits: int) -> dict[str, Any]:
     else:
         control = transfer.data_values(values)
         lo, hi = float(control[0]), float(control[-1])
-        fractions = np.asarray(values, dtype=np.float32) - np.float32(lo)
-        fractions /= np.float32(hi - lo)
-        samples = quantise(fractions, bits)
-        del fractions
+        samples = _window_samples(values, lo, hi, bits)
         positions = (control - lo) / (hi - lo)
         positions[0], positions[-1] = 0.0, 1.0
         window = [lo, hi]
@@ -108,19 +117,29 @@ def classify(volume: Volume, transfer: Transfer, bits: int) -> dict[str, Any]:
             "extinction_map": [(float(t), float(s)) for t, s in extinction_map]}
 
 
-def intervals_for(volume: Volume, step: float) -> int:
-    """POV-Ray ``intervals`` such that the longest chord through the box is cut into sub-intervals
-    of at most ``step`` of the smallest voxel side (POV-Ray spreads a fixed count over each chord)."""
+def sub_intervals(samples: int) -> int:
+    """How many sub-intervals POV-Ray's method 3 cuts an interval into for ``samples`` (media.cpp,
+    ComputeMediaAdaptiveSampling: ``max(2, samples // 2 + 1)``)."""
+    return max(2, samples // 2 + 1)
+
+
+def sampling_for(volume: Volume, step: float) -> tuple[int, int]:
+    """POV-Ray's ``intervals`` and ``samples`` that cut the longest chord through the box into
+    sub-intervals of at most ``step`` of the smallest voxel side (POV-Ray spreads a fixed count
+    over every chord, so shorter chords are sampled more finely)."""
     if not (np.isfinite(step) and step > 0):
         raise ConfigError(f"the media step must be a positive number of voxels, got {step!r}")
     size = np.asarray(volume.shape, dtype=np.float64) * np.asarray(volume.spacing, dtype=np.float64)
-    chord = float(np.linalg.norm(size))
-    sub = chord / (step * min(volume.spacing))
-    return max(1, int(np.ceil(sub / SUB_INTERVALS)))
+    sub = int(np.ceil(float(np.linalg.norm(size)) / (step * min(volume.spacing))))
+    intervals = max(1, min(MAX_INTERVALS, -(-sub // 2)))
+    per = max(2, -(-sub // intervals))
+    samples = 2 * (per - 1)
+    assert sub_intervals(samples) == per
+    return intervals, samples
 
 
 def stage_text(volume: Volume, world_to_display: np.ndarray, classified: dict[str, Any], transfer: Transfer, *,
-               df3_name: str, intervals: int, background: tuple[float, float, float]) -> str:
+               df3_name: str, intervals: int, samples: int, background: tuple[float, float, float]) -> str:
     scale = uniform_scale(world_to_display)
     index_to_display = np.asarray(world_to_display, dtype=np.float64) @ volume.index_to_world()
     n = np.asarray(volume.shape, dtype=np.float64)
@@ -128,7 +147,7 @@ def stage_text(volume: Volume, world_to_display: np.ndarray, classified: dict[st
     return render_template(
         "volume_media.pov.j2", version=__version__, volume_name=volume.name, transfer=transfer.name,
         interpolate=classified["interpolate"], scale=scale, background=background, df3=df3_name,
-        grid=padded_shape(volume.shape), offset=offset, intervals=intervals, samples=SAMPLES,
+        grid=padded_shape(volume.shape), offset=offset, intervals=intervals, samples=samples,
         box_lo=(-0.5, -0.5, -0.5), box_hi=tuple((n - 0.5).tolist()), coefficient=1.0 / scale,
         emission_map=classified["emission_map"], extinction_map=classified["extinction_map"],
         matrix=pov_matrix(index_to_display))
@@ -161,15 +180,15 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
     uniform_scale(world_to_display)
     classified = classify(volume, transfer, bits)
     data = df3_bytes(classified.pop("samples"), bits)
-    classify_seconds = time.perf_counter() - started
+    encoded = time.perf_counter()
     digest = hashlib.sha256(data).hexdigest()[:16]
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     df3_path = folder / f"volume-{digest}.df3"
     _write_once(df3_path, data)
-    intervals = intervals_for(volume, step)
+    intervals, samples = sampling_for(volume, step)
     text = stage_text(volume, world_to_display, classified, transfer, df3_name=df3_path.name,
-                      intervals=intervals, background=tuple(float(c) for c in background))
+                      intervals=intervals, samples=samples, background=tuple(float(c) for c in background))
     stage = folder / f"volume-media-{hashlib.sha256(text.encode()).hexdigest()[:16]}.pov"
     _write_once(stage, text.encode())
     record = {"kind": "media", "volume": volume.describe(), "transfer": transfer.record(),
@@ -177,8 +196,9 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
                       "bytes": len(data), "interpolate": classified["interpolate"],
                       "window": classified["window"]},
               "scale": uniform_scale(world_to_display), "media": {
-                  "method": 3, "intervals": intervals, "samples": SAMPLES, "step_voxels": float(step)},
+                  "method": 3, "intervals": intervals, "samples": samples,
+                  "sub_intervals": intervals * sub_intervals(samples), "step_voxels": float(step)},
               "display_lenses": [lens_array.lenses_x, lens_array.lenses_y],
-              "seconds": {"classify": round(classify_seconds, 4),
-                          "total": round(time.perf_counter() - started, 4)}}
+              "seconds": {"df3_encode": round(encoded - started, 4),
+                          "write": round(time.perf_counter() - encoded, 4)}}
     return stage, record
