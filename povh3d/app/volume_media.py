@@ -25,7 +25,7 @@ from ..image.io import atomic_path
 from ..povray.templates import render_template
 from ..volume.df3 import SAMPLE_SHIFT, df3_bytes, padded_shape, quantise
 from ..volume.grid import Volume
-from ..volume.transfer import MAX_LABEL_ENTRIES, Transfer, load_transfer
+from ..volume.transfer import AUTO, MAX_LABEL_ENTRIES, Transfer, auto_transfer, load_transfer
 
 #: POV-Ray 3.7 holds at most 256 media intervals per ray (MEDIA_INTERVAL_VECTOR_SIZE; more is
 #: "internal nesting limit reached"), two of which it may add itself; finer sampling takes more
@@ -55,14 +55,14 @@ def pov_matrix(m: np.ndarray) -> list[float]:
 
 def _present_labels(values: np.ndarray) -> np.ndarray:
     if np.issubdtype(values.dtype, np.integer) and values.min() >= 0:
-        return np.flatnonzero(np.bincount(values.ravel()))
+        return np.flatnonzero(np.bincount(values.ravel(order="K")))  # K: no copy of a VTK (Fortran) array
     return np.unique(values)
 
 
 def _window_samples(values: np.ndarray, lo: float, hi: float, bits: int) -> np.ndarray:
     """``(values - lo) / (hi - lo)`` quantised, a slab of slices at a time (a CT is hundreds of MB
     as float32); NaN counts as ``lo``."""
-    samples = np.empty(values.shape, dtype=np.uint8 if bits == 8 else np.uint16)
+    samples = np.empty(values.shape, dtype=np.uint8 if bits == 8 else np.uint16, order="F")  # as df3 is laid out
     slab = max(1, 4_000_000 // max(1, values.shape[0] * values.shape[1]))
     for k in range(0, values.shape[2], slab):
         fractions = np.asarray(values[:, :, k:k + slab], dtype=np.float32) - np.float32(lo)
@@ -173,6 +173,8 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
     """
     started = time.perf_counter()
     if not isinstance(transfer, Transfer):
+        if str(transfer) == AUTO:
+            transfer = auto_transfer(volume.values, bool(volume.label_names))
         labels = _present_labels(volume.values).tolist() if str(transfer) == "labels" else None
         transfer = load_transfer(transfer, labels)
     if bits not in (8, 16):

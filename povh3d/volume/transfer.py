@@ -72,7 +72,7 @@ class Transfer:
 
     def window(self, values: np.ndarray) -> tuple[float, float]:
         """Data values ``(lo, hi)`` that relative control values 0 and 1 stand for."""
-        flat = np.asarray(values).ravel()
+        flat = np.asarray(values).ravel(order="K")
         sample = flat[::max(1, flat.size // 1_000_000)]  # a percentile of a million voxels is plenty
         lo, hi = float(np.nanmin(flat)), float(np.nanpercentile(sample, RELATIVE_PERCENTILE))
         return (lo, hi) if hi > lo else (lo, lo + 1.0)
@@ -113,7 +113,12 @@ PRESETS: dict[str, Transfer] = {
 }
 #: Named transfers that depend on the volume: ``labels`` colours every label present.
 BUILT_FOR_VOLUME = ("labels",)
-NAMES = (*PRESETS, *BUILT_FOR_VOLUME)
+AUTO = "auto"
+NAMES = (*PRESETS, *BUILT_FOR_VOLUME, AUTO)
+#: A non-negative integer volume with at most this many distinct values is taken as a segmentation.
+MAX_AUTO_LABELS = 64
+#: A minimum at or below this is air in Hounsfield units: a CT.
+CT_AIR = -500.0
 
 # Twelve well-separated colours (Paul Tol's "muted" and "bright" schemes), linear RGB.
 _PALETTE = (np.array([
@@ -133,6 +138,18 @@ def label_transfer(labels: list[int], *, extinction: float = 0.05) -> Transfer:
     colour = _PALETTE[np.arange(len(labels)) % len(_PALETTE)]
     return Transfer("labels", "labels", np.array(labels, dtype=np.float64), colour,
                     np.full(len(labels), float(extinction)))
+
+
+def auto_transfer(values: np.ndarray, has_label_table: bool = False) -> str:
+    """The preset that suits ``values``: ``labels`` for a segmentation (a label table, or few
+    non-negative integers), ``ct-soft`` for Hounsfield units (air below -500), else ``mri``."""
+    values = np.asarray(values)
+    if np.issubdtype(values.dtype, np.integer):
+        lo, hi = int(values.min()), int(values.max())
+        if has_label_table or (lo >= 0 and hi < 1 << 20
+                               and np.count_nonzero(np.bincount(values.ravel(order="K"))) <= MAX_AUTO_LABELS):
+            return "labels"
+    return "ct-soft" if float(np.nanmin(values)) <= CT_AIR else "mri"
 
 
 def parse_transfer(text: str, name: str) -> Transfer:
@@ -190,6 +207,8 @@ def load_transfer(spec: str | Path, labels: list[int] | None = None) -> Transfer
     spec_text = str(spec)
     if spec_text in PRESETS:
         return PRESETS[spec_text]
+    if spec_text == AUTO:
+        raise ConfigError("the 'auto' transfer is chosen from the volume (auto_transfer)")
     if spec_text == "labels":
         if labels is None:
             raise ConfigError("the 'labels' transfer needs a label volume")

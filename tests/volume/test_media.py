@@ -153,3 +153,11 @@ def test_bad_input_writes_nothing(tmp_path):
 
 def test_uniform_scale_of_a_mirror():
     assert uniform_scale(world_to_display(volume_to_display("axial"), (1, 2, 3), 0.25)) == pytest.approx(0.25)
+
+
+def test_auto_transfer_draws_a_segmentation_as_labels(tmp_path):
+    volume = tissues()
+    stage, record = media_stage(volume, placement(volume, "coronal", None), ARRAY, transfer="auto", bits=8,
+                                folder=tmp_path)
+    assert record["transfer"]["name"] == "labels" and "interpolate 0" in stage.read_text()
+    assert record["transfer"]["points"][0][0] == 1.0  # label 0, the background, is not drawn

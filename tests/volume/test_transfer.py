@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from povh3d.errors import ConfigError, InputError
-from povh3d.volume.transfer import NAMES, PRESETS, label_transfer, load_transfer, parse_transfer
+from povh3d.volume.transfer import NAMES, PRESETS, auto_transfer, label_transfer, load_transfer, parse_transfer
 
 EXAMPLE = """\
 # bone and soft tissue of a CT, in HU
@@ -83,9 +83,22 @@ def test_errors_name_the_line(text, message):
 
 
 def test_unknown_name_lists_presets(tmp_path):
-    with pytest.raises(InputError, match="ct-bone, ct-soft, mri, labels"):
+    with pytest.raises(InputError, match="ct-bone, ct-soft, mri, labels, auto"):
         load_transfer(tmp_path / "nope.tf")
     with pytest.raises(ConfigError, match="label volume"):
         load_transfer("labels")
     with pytest.raises(ConfigError, match="no labels other than 0"):
         label_transfer([0])
+
+
+def test_auto_choice():
+    rng = np.random.default_rng(1)
+    segmentation = rng.integers(0, 30, size=(20, 20, 20)).astype(np.uint8)
+    ct = rng.integers(-1024, 2000, size=(20, 20, 20)).astype(np.int16)
+    mri = rng.integers(0, 4000, size=(20, 20, 20)).astype(np.uint16)
+    assert auto_transfer(segmentation) == "labels"
+    assert auto_transfer(ct) == "ct-soft" and auto_transfer(ct.astype(np.float32)) == "ct-soft"
+    assert auto_transfer(mri) == "mri" and auto_transfer(mri.astype(np.float64) / 7) == "mri"
+    assert auto_transfer(mri, has_label_table=True) == "labels"
+    with pytest.raises(ConfigError, match="chosen from the volume"):
+        load_transfer("auto")
