@@ -39,7 +39,7 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 test: povray venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
 
-bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the render breakdown, quality, mapping, Dask, single-stage, crop, mesh and calibration benchmarks
+bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the render breakdown, quality, mapping, Dask, single-stage, crop, mesh, calibration and volume media benchmarks
 	$(BIN)/python benchmarks/bench_command.py
 	$(BIN)/python benchmarks/bench_render.py
 	$(BIN)/python benchmarks/bench_quality.py
@@ -51,6 +51,7 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_calibrate.py
 	$(BIN)/python benchmarks/bench_subpixel.py
 	$(BIN)/python benchmarks/bench_frame.py
+	$(BIN)/python benchmarks/bench_volume_media.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out

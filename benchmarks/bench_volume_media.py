@@ -8,7 +8,7 @@ Reported: the df3 encode and write times and size, POV-Ray's parse time for the
 stage (reading the df3), and the whole render, for the media step given.
 
     .venv/bin/python benchmarks/bench_volume_media.py [--preset demo] [--quality draft] [--step 1]
-                                                      [--bits 8] [--save IMAGE.png]
+                                                      [--bits 8 16] [--repeats 2] [--save IMAGE.png]
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import statistics
 import tempfile
 import time
 from pathlib import Path
@@ -55,14 +56,35 @@ def parse_seconds(stage: Path) -> float:
     return float(m.group(1)) if m else float("nan")
 
 
+def run_once(volume: Volume, w2d: np.ndarray, la, bits: int, args: argparse.Namespace) -> dict[str, float]:
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        stage, record = media_stage(volume, w2d, la, transfer="labels", bits=bits, folder=Path(tmp), step=args.step)
+        staged = time.perf_counter() - t
+        parse = parse_seconds(stage)
+        t = time.perf_counter()
+        result = run_method("multi-ortho", load_scene(stage), la, RenderSettings(quality=args.quality, use_cache=False))
+        wall = time.perf_counter() - t
+        if args.save:
+            from povh3d.image.io import write_png
+
+            write_png(args.save.with_name(f"{args.save.stem}-{bits}bit{args.save.suffix}"), result.h3d)
+    media = record["media"]
+    return {"mb": record["df3"]["bytes"] / 1e6, "encode": record["seconds"]["df3_encode"],
+            "write": record["seconds"]["write"], "stage": staged, "parse": parse, "render": wall,
+            "povray": sum(result.stats.povray_seconds), "intervals": media["intervals"],
+            "sub": media["sub_intervals"] // media["intervals"]}
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--preset", default="demo")
     p.add_argument("--quality", default="draft")
     p.add_argument("--step", type=float, default=1.0, help="media samples along a ray, in voxels")
-    p.add_argument("--bits", type=int, default=8)
+    p.add_argument("--bits", type=int, nargs="+", default=[8, 16])
+    p.add_argument("--repeats", type=int, default=2, help="runs of each bit depth, interleaved")
     p.add_argument("--orientation", default="coronal")
-    p.add_argument("--save", type=Path, help="write the H3D image here (PNG)")
+    p.add_argument("--save", type=Path, help="write the H3D images beside this name (PNG)")
     args = p.parse_args()
     la = lens_array(args.preset)
     t = time.perf_counter()
@@ -72,33 +94,29 @@ def main() -> int:
     lo, hi = display_box(volume.corners(), turn)
     placement = fit_to_display(lo, hi, la)
     w2d = world_to_display(turn, placement.shift, placement.scale)
-    print(f"frog_tissues {volume.shape} voxels, spacing {volume.spacing} mm, labels {len(volume.labels())}; "
-          f"preset {args.preset}, {args.orientation}, scale {placement.scale:.4g}, quality {args.quality}, "
-          f"step {args.step} voxel; load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    print(f"  read with PyVista: {load:.2f} s")
-    with tempfile.TemporaryDirectory() as tmp:
-        t = time.perf_counter()
-        stage, record = media_stage(volume, w2d, la, transfer="labels", bits=args.bits, folder=Path(tmp),
-                                    step=args.step)
-        total = time.perf_counter() - t
-        seconds = record["seconds"]
-        print(f"  df3 ({args.bits} bit, {record['df3']['bytes'] / 1e6:.1f} MB): encode {seconds['df3_encode']:.2f} s, "
-              f"write {seconds['write']:.2f} s, media_stage total {total:.2f} s; "
-              f"{record['media']['intervals']} intervals x {record['media']['sub_intervals'] // record['media']['intervals']} sub-intervals per ray")
-        parse = parse_seconds(stage)
-        print(f"  POV-Ray parse (reads the df3): {parse:.2f} s")
-        t = time.perf_counter()
-        result = run_method("multi-ortho", load_scene(stage), la,
-                            RenderSettings(quality=args.quality, use_cache=False))
-        wall = time.perf_counter() - t
-        stats = result.stats
-        print(f"  render {result.h3d.shape[1]}x{result.h3d.shape[0]}: {wall:.1f} s wall, POV-Ray "
-              f"{sum(stats.povray_seconds):.1f} s in {stats.jobs} job(s) x {stats.threads} thread(s)")
-        if args.save:
-            from povh3d.image.io import write_png
+    before = os.getloadavg()[0]
+    runs: dict[int, list[dict[str, float]]] = {bits: [] for bits in args.bits}
+    for _ in range(args.repeats):
+        for bits in args.bits:
+            runs[bits].append(run_once(volume, w2d, la, bits, args))
+    print(f"frog_tissues {volume.shape} voxels, spacing {volume.spacing} mm, read with PyVista in {load:.2f} s; "
+          f"preset {args.preset} ({la.panel.width}x{la.panel.height}), {args.orientation}, scale {placement.scale:.4g}, "
+          f"labels transfer, multi-ortho, quality {args.quality}, step {args.step} voxel; median (min-max) of "
+          f"{args.repeats} interleaved runs; load average {before:.2f} before, {os.getloadavg()[0]:.2f} after, "
+          f"{os.cpu_count()} cores")
 
-            write_png(args.save, result.h3d)
-            print(f"  wrote {args.save}")
+    def cell(bits: int, key: str) -> str:
+        values = [r[key] for r in runs[bits]]
+        return f"{statistics.median(values):.2f} s ({min(values):.2f}-{max(values):.2f})"
+
+    print("| | " + " | ".join(f"{b} bit" for b in args.bits) + " |")
+    print("|---|" + "---|" * len(args.bits))
+    print("| df3 size | " + " | ".join(f"{runs[b][0]['mb']:.1f} MB" for b in args.bits) + " |")
+    for key, label in (("encode", "df3 encode"), ("write", "df3 write"), ("stage", "media_stage in all"),
+                       ("parse", "POV-Ray parse (reads the df3)"), ("render", "render (whole multi-ortho run)")):
+        print(f"| {label} | " + " | ".join(cell(b, key) for b in args.bits) + " |")
+    r = runs[args.bits[0]][0]
+    print(f"({r['intervals']} intervals x {r['sub']} sub-intervals per ray)")
     return 0
 
 
