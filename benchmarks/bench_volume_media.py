@@ -1,7 +1,8 @@
 """Benchmark: frog_tissues (PyVista's segmented frog) as POV-Ray media on a display preset.
 
 The volume (500 x 470 x 136 voxels, spacing 1 x 1 x 1.5 mm, 30 tissue labels)
-is read with PyVista, faced coronally and fitted to the display, then written
+is read with PyVista, seen along its z axis (the ``axial`` preset: the file has
+no patient frame, so its axes are taken as LPS) and fitted to the display, then written
 as a df3 file and a media stage (``povh3d.app.volume_media.media_stage``) with
 the ``labels`` transfer, and rendered as an H3D image by ``multi-ortho``.
 Reported: the df3 encode and write times and size, POV-Ray's parse time for the
@@ -29,6 +30,7 @@ from povh3d.app.stage import fit_to_display
 from povh3d.app.volume_media import media_stage
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import RenderSettings
+from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.presets import lens_array
 from povh3d.povray.process import PovrayJob, run_jobs
 from povh3d.scene.scene import load_scene
@@ -83,10 +85,14 @@ def main() -> int:
     p.add_argument("--step", type=float, default=1.0, help="media samples along a ray, in voxels")
     p.add_argument("--bits", type=int, nargs="+", default=[8, 16])
     p.add_argument("--repeats", type=int, default=2, help="runs of each bit depth, interleaved")
-    p.add_argument("--orientation", default="coronal")
+    p.add_argument("--orientation", default="axial")
     p.add_argument("--save", type=Path, help="write the H3D images beside this name (PNG)")
+    p.add_argument("--picture", type=Path, help="only render one 400x300 orthographic view (a lens array of "
+                   "one pixel per lens) to this PNG: the picture in docs/volume-rendering.md")
     args = p.parse_args()
     la = lens_array(args.preset)
+    if args.picture:
+        la = LensArray("square", 400, 300, 0.1, 0.1, 1.5, Panel(400, 300, 0.1, 0.1))
     t = time.perf_counter()
     volume = read_frog()
     load = time.perf_counter() - t
@@ -95,6 +101,14 @@ def main() -> int:
     placement = fit_to_display(lo, hi, la)
     w2d = world_to_display(turn, placement.shift, placement.scale)
     before = os.getloadavg()[0]
+    if args.picture:
+        with tempfile.TemporaryDirectory() as tmp:
+            stage, _ = media_stage(volume, w2d, la, transfer="labels", bits=8, folder=Path(tmp), step=args.step)
+            result = run_method("multi-ortho", load_scene(stage), la, RenderSettings(quality="draft", use_cache=False))
+        from povh3d.image.io import write_png
+
+        write_png(args.picture, result.h3d)
+        return 0
     runs: dict[int, list[dict[str, float]]] = {bits: [] for bits in args.bits}
     for _ in range(args.repeats):
         for bits in args.bits:
