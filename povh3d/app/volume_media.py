@@ -179,7 +179,11 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
         transfer = load_transfer(transfer, labels)
     if bits not in (8, 16):
         raise ConfigError(f"--df3-bits must be 8 or 16, got {bits!r}")
-    uniform_scale(world_to_display)
+    scale = uniform_scale(world_to_display)
+    intervals, samples = sampling_for(volume, step)
+    background = tuple(float(c) for c in np.broadcast_to(np.asarray(background, dtype=np.float64), 3))
+    if not all(np.isfinite(background)) or min(background) < 0:
+        raise ConfigError(f"the background must be three non-negative numbers, got {background}")
     classified = classify(volume, transfer, bits)
     data = df3_bytes(classified.pop("samples"), bits)
     encoded = time.perf_counter()
@@ -188,19 +192,19 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
     folder.mkdir(parents=True, exist_ok=True)
     df3_path = folder / f"volume-{digest}.df3"
     _write_once(df3_path, data)
-    intervals, samples = sampling_for(volume, step)
     text = stage_text(volume, world_to_display, classified, transfer, df3_name=df3_path.name,
-                      intervals=intervals, samples=samples, background=tuple(float(c) for c in background))
+                      intervals=intervals, samples=samples, background=background)
     stage = folder / f"volume-media-{hashlib.sha256(text.encode()).hexdigest()[:16]}.pov"
     _write_once(stage, text.encode())
     record = {"kind": "media", "volume": volume.describe(), "transfer": transfer.record(),
               "df3": {"path": str(df3_path), "bits": bits, "shape": list(padded_shape(volume.shape)),
                       "bytes": len(data), "interpolate": classified["interpolate"],
                       "window": classified["window"]},
-              "scale": uniform_scale(world_to_display), "media": {
+              "scale": scale, "media": {
                   "method": 3, "intervals": intervals, "samples": samples,
                   "sub_intervals": intervals * sub_intervals(samples), "step_voxels": float(step)},
-              "display_lenses": [lens_array.lenses_x, lens_array.lenses_y],
+              # How many voxels one lens (the display's 3D pixel) spans: detail finer than that is lost.
+              "voxels_per_lens": round(lens_array.pitch_x / (min(volume.spacing) * scale), 3),
               "seconds": {"df3_encode": round(encoded - started, 4),
                           "write": round(time.perf_counter() - encoded, 4)}}
     return stage, record

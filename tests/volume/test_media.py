@@ -145,6 +145,8 @@ def test_bad_input_writes_nothing(tmp_path):
     squash = w2d @ np.diag([1.0, 2.0, 1.0, 1.0])
     with pytest.raises(ConfigError, match="uniform scale"):
         media_stage(volume, squash, ARRAY, folder=folder)
+    with pytest.raises(ConfigError, match="media step"):
+        media_stage(volume, w2d, ARRAY, step=0, folder=folder)
     big = Volume(np.full((3, 3, 3), 300, dtype=np.uint16), SPACING)
     with pytest.raises(ConfigError, match="--df3-bits 16"):
         media_stage(big, w2d, ARRAY, transfer=LABELS, bits=8, folder=folder)
@@ -161,3 +163,13 @@ def test_auto_transfer_draws_a_segmentation_as_labels(tmp_path):
                                 folder=tmp_path)
     assert record["transfer"]["name"] == "labels" and "interpolate 0" in stage.read_text()
     assert record["transfer"]["points"][0][0] == 1.0  # label 0, the background, is not drawn
+
+
+def test_relative_transfer_window(tmp_path):
+    volume = blob()
+    _, record = media_stage(volume, placement(volume, "coronal", None), ARRAY, transfer="mri", folder=tmp_path)
+    lo, hi = record["df3"]["window"]
+    assert lo == pytest.approx(float(volume.values.min()))
+    assert hi == pytest.approx(float(np.percentile(volume.values, 99.5)), rel=1e-6)
+    # 0.8 of the panel height (9.6 mm) spans the box's largest side (24 mm): 0.32 mm per 1 mm voxel.
+    assert record["voxels_per_lens"] == pytest.approx(0.6 / (0.8 * 9.6 / 24), rel=1e-3)
