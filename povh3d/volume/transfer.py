@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
+from ..image.colour import srgb_to_linear
 
 KINDS = ("absolute", "relative", "labels")
 #: The largest label a labels transfer draws: POV-Ray's colour maps hold 256 entries.
@@ -120,11 +121,11 @@ MAX_AUTO_LABELS = 64
 #: A minimum at or below this is air in Hounsfield units: a CT.
 CT_AIR = -500.0
 
-# Twelve well-separated colours (Paul Tol's "muted" and "bright" schemes), linear RGB.
-_PALETTE = (np.array([
+# Twelve well-separated colours (Paul Tol's "muted" and "bright" schemes), sRGB; used decoded to linear.
+_PALETTE_SRGB = np.array([
     [204, 102, 119], [51, 34, 136], [221, 204, 119], [17, 119, 51], [136, 204, 238], [136, 34, 85],
     [68, 170, 153], [153, 153, 51], [170, 68, 153], [238, 102, 119], [34, 136, 51], [204, 187, 68],
-]) / 255.0) ** 2.2
+]) / 255.0
 
 
 def label_transfer(labels: list[int], *, extinction: float = 0.05) -> Transfer:
@@ -135,7 +136,7 @@ def label_transfer(labels: list[int], *, extinction: float = 0.05) -> Transfer:
     if len(labels) >= MAX_LABEL_ENTRIES:
         raise ConfigError(f"the volume has {len(labels)} labels; direct volume rendering draws at most "
                           f"{MAX_LABEL_ENTRIES - 1}: render surfaces with --labels instead")
-    colour = _PALETTE[np.arange(len(labels)) % len(_PALETTE)]
+    colour = srgb_to_linear(_PALETTE_SRGB[np.arange(len(labels)) % len(_PALETTE_SRGB)])
     return Transfer("labels", "labels", np.array(labels, dtype=np.float64), colour,
                     np.full(len(labels), float(extinction)))
 
