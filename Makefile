@@ -43,7 +43,7 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 test: povray opengl venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
 
-bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the render breakdown, quality, mapping, Dask, single-stage, crop, mesh, large-panel, calibration and moire benchmarks
+bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py
 	$(BIN)/python benchmarks/bench_render.py
 	$(BIN)/python benchmarks/bench_quality.py
@@ -57,6 +57,7 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_subpixel.py
 	$(BIN)/python benchmarks/bench_frame.py
 	$(BIN)/python benchmarks/bench_moire.py
+	$(BIN)/python benchmarks/bench_volume_media.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out
