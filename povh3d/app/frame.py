@@ -42,6 +42,8 @@ class FrameOptions:
     center, normal, up : (3,) floats or None, scene units
     width : float or None, scene units    the panel's width in the scene
     fit_depth : 'auto', float (mm) or None  scale the frame so the measured depth fits
+    depth_scale : float, 'fit' or None   compress depth alone along the normal by this factor (a
+                                         distortion); 'fit': the factor --fit-depth chooses
     """
 
     mode: str = "auto"
@@ -50,8 +52,18 @@ class FrameOptions:
     up: tuple[float, float, float] | None = None
     width: float | None = None
     fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the frame to fit
+    depth_scale: str | float | None = None  # a factor, or 'fit' (with fit_depth: compress depth to fit)
 
     def __post_init__(self) -> None:
+        k = self.depth_scale
+        if k == "fit" and self.fit_depth is None:
+            raise ConfigError("--depth-scale without a factor needs --fit-depth auto|MM (which then chooses "
+                              "it); or give the factor, e.g. --depth-scale 0.5")
+        if k not in (None, "fit") and self.fit_depth is not None:
+            raise ConfigError(f"--depth-scale {k} and --fit-depth both set the depth; give --fit-depth with a "
+                              "bare --depth-scale to compress depth until it fits, or the factor alone")
+        if k not in (None, "fit") and (isinstance(k, bool) or not isinstance(k, (int, float))):
+            raise ConfigError(f"--depth-scale takes a positive factor or nothing (with --fit-depth), got {k!r}")
         f = self.fit_depth
         if f is not None and f != "auto" and (isinstance(f, bool) or not isinstance(f, (int, float))
                                               or not (f > 0 and f < float("inf"))):

@@ -74,9 +74,15 @@ def frame_options_from_args(args: argparse.Namespace) -> Any:
             fit = float(fit)
         except ValueError:
             raise ConfigError(f"--fit-depth takes 'auto' or a number of mm, got {fit!r}") from None
+    scale = args.depth_scale
+    if scale not in (None, "fit"):
+        try:
+            scale = float(scale)
+        except ValueError:
+            raise ConfigError(f"--depth-scale takes a factor (e.g. 0.5) or nothing, got {scale!r}") from None
     return FrameOptions(args.display_frame, _triple(args.display_center, "--display-center"),
                         _triple(args.display_normal, "--display-normal"), _triple(args.display_up, "--display-up"),
-                        args.display_width, fit)
+                        args.display_width, fit, scale)
 
 
 def _method_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -135,6 +141,8 @@ def frame_phrase(record: dict[str, Any]) -> str:
     depth = record.get("depth")
     if depth and not depth.get("empty"):
         fit = f", fitted x{depth['fit']['factor']:.3g}" if depth.get("fit") else ""
+        if record.get("depth_scale", 1) != 1:
+            fit += f", depth x{record['depth_scale']:.3g} (distorted)"
         text += (f"  depth {depth['near_mm']:.3g}..{depth['far_mm']:.3g} mm of +-"
                  f"{record['depth_budget_mm'] / 2:.3g}{fit}")
     return text
@@ -251,6 +259,9 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--fit-depth", metavar="auto|MM",
                    help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
                    "display's depth budget (auto: 2 N f) or MM")
+    g.add_argument("--depth-scale", nargs="?", const="fit", metavar="K",
+                   help="compress depth alone along the display normal by K, keeping lateral sizes (a distortion); "
+                   "bare, with --fit-depth: the K that makes the depth fit, instead of shrinking the whole scene")
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)

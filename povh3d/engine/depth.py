@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..geometry.lens_array import LensArray
+from ..geometry.rays import depth_scaled_rays
 from ..image.colour import decode
 from ..scene.scene import Scene
 from .batch import FrameBatch
@@ -116,19 +117,27 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
     (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
 
+    With ``settings.depth_scale`` k the maps are the compressed scene's, as the display
+    shows it: the rays traced have slopes ``k (u, v) / f`` (``depth_scaled_rays``), a hit at
+    depth ``z`` of the scene shows at ``k z``.
+
     Returns
     -------
     (Ny, Nx, Ly, Lx) float32, mm; NaN where nothing is hit (or it cannot be measured).
     """
     ny, nx = lens_array.require_views()
-    s, f = lens_array.panel.pitch_x, lens_array.focal
-    sy = lens_array.panel.pitch_y
-    slopes = [((k + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f) for l in range(ny) for k in range(nx)]
-    directions = [(a, b, 1.0) for a, b in slopes]
+    s, sy = lens_array.panel.pitch_x, lens_array.panel.pitch_y
+    k = settings.depth_scale
+    f = depth_scaled_rays(lens_array, k).focal
+    slopes = np.array([((j + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f)
+                       for l in range(ny) for j in range(nx)])
+    directions = [(a, b, 1.0) for a, b in slopes.tolist()]
     fog = back_off * units_per_mm
     batch = _fog_batch(directions, lens_array, back_off, fog, lens_array.lenses_x, lens_array.lenses_y)
     d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
-    # The ray starts back_off * |(a, b, 1)| before the screen.
-    lengths = np.array([np.sqrt(a * a + b * b + 1.0) for a, b in slopes])
-    out = d / units_per_mm - back_off * lengths[:, None, None]
+    # The ray starts back_off * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
+    lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
+    z = d / units_per_mm / lengths - back_off
+    shown = np.sqrt(((slopes / k) ** 2).sum(axis=1) + 1.0)   # the display's own ray, slope (u, v) / f
+    out = k * z * shown[:, None, None]
     return out.reshape(ny, nx, *out.shape[1:]).astype(np.float32)
