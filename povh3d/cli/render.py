@@ -141,8 +141,8 @@ def frame_phrase(record: dict[str, Any]) -> str:
     depth = record.get("depth")
     if depth and not depth.get("empty"):
         fit = f", fitted x{depth['fit']['factor']:.3g}" if depth.get("fit") else ""
-        if record.get("depth_scale", 1) != 1:
-            fit += f", depth x{record['depth_scale']:.3g} (distorted)"
+        if record.get("depth_scale", 1) != 1:   # fitted by it, or given
+            fit = f", {'fitted: ' if fit else ''}depth x{record['depth_scale']:.3g} (distorted)"
         text += (f"  depth {depth['near_mm']:.3g}..{depth['far_mm']:.3g} mm of +-"
                  f"{record['depth_budget_mm'] / 2:.3g}{fit}")
     return text

@@ -87,6 +87,23 @@ def test_compressed_render_equals_the_physically_compressed_scene(tmp_path, meth
     assert ours["lens_array"]["focal_mm"] == array.focal   # the display is recorded as it is
 
 
+def test_single_stage_lenslets_of_focal_f_over_k(tmp_path):
+    """Single-stage is a physical simulation (aberrations): compared by an error figure, not identity."""
+    from povh3d.image.metrics import psnr
+
+    k = 0.35
+    scene = tmp_path / "s.pov"
+    scene.write_text(SCENE.format(far=6))
+    squashed = tmp_path / "squashed.pov"
+    squashed.write_text(f"#declare K = {k!r};\n#include \"s.pov\"\n")
+    for name, path, scale in (("a", scene, k), ("b", squashed, 1.0), ("c", scene, 1.0)):
+        render(path, small(), tmp_path / f"{name}.png", method="single-stage",
+               settings=RenderSettings(quality="draft", depth_scale=scale))
+    a, b, c = (read_png(tmp_path / f"{n}.png") for n in "abc")
+    assert psnr(a, b) > 35      # measured 39.7 dB
+    assert psnr(c, b) < 15      # negative control: uncompressed (8 dB)
+
+
 def test_pinhole_behind_the_screen(tmp_path):
     """Pinhole cameras see only z > 0: a scene wholly behind the screen, compressed both ways."""
     k = 0.5
