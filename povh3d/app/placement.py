@@ -14,13 +14,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine.depth import depth_pass
+from ..engine.depth import DepthMap, depth_pass
 from ..engine.methods import get_method
 from ..engine.quality import DEPTH_SCALE_RANGE
 from ..errors import ConfigError
 from ..geometry.frame import NATIVE, DisplayFrame
 from ..scene.scene import Scene
-from .frame import resolve_frame
+from .frame import resolve_frame_and_depth
 from .stage import depth_budget_mm
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -39,13 +39,16 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
     options = request.display_frame
-    placed, record = resolve_frame(options, scene, array, cache_dir=s.cache_dir, use_cache=s.use_cache)
     default = get_method(request.method).default_back_off(array)
+    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
+    placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
+                                                   use_cache=s.use_cache, back_off=s.back_off or default)
     back_off = s.back_off or _clearance(placed, record, default)
     scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
     if not placed.is_native or options.fit_depth is not None or scale != 1:
         placed, depth, scale = _measure(request, scene, placed, back_off, budget, options.fit_depth,
-                                        scale, options.depth_scale == "fit")
+                                        scale, options.depth_scale == "fit",
+                                        seen.depth(placed, back_off, array) if seen else None)
         record = {**record, **placed.as_record(), "depth": depth}
         if not depth.get("empty") and not depth.get("within_budget", True):
             record["warnings"].append(
@@ -97,14 +100,19 @@ def _clearance(frame: DisplayFrame, record: dict[str, Any], default: float) -> f
 
 
 def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, back_off: float, budget: float,
-             fit: str | float | None, scale: float = 1.0,
-             fit_scale: bool = False) -> tuple[DisplayFrame, dict[str, Any], float]:
+             fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
+             seen: DepthMap | None = None
+             ) -> tuple[DisplayFrame, dict[str, Any], float]:
     """The depth summary in ``frame`` as the display shows it (depth times ``scale``); with ``fit``, the
-    frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first."""
+    frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
+    ``seen``: the depth map of ``frame`` made in the run that evaluated the scene's camera; else a depth
+    pass of its own."""
     array, s = request.render_array, request.settings
     keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
 
     def measure(f: DisplayFrame) -> dict[str, Any]:
+        if seen is not None and f is frame:
+            return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
         return depth_pass(scene, array, replace(s, frame=matrix), back_off, f.units_per_mm).summary(budget)
 
@@ -153,11 +161,13 @@ def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: 
 
     scene = load_scene(path, include_dirs)
     options = options or FrameOptions()
-    placed, record = resolve_frame(options, scene, lens_array)
+    default = get_method("multi-ortho").default_back_off(lens_array)
+    placed, record, seen = resolve_frame_and_depth(options, scene, lens_array, back_off=default)
     budget = depth_budget_mm(lens_array)
-    back_off = _clearance(placed, record, get_method("multi-ortho").default_back_off(lens_array))
+    back_off = _clearance(placed, record, default)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-    depth = depth_pass(scene, lens_array, RenderSettings(frame=matrix), back_off, placed.units_per_mm)
+    depth = (seen.depth(placed, back_off, lens_array) if seen else None) or depth_pass(
+        scene, lens_array, RenderSettings(frame=matrix), back_off, placed.units_per_mm)
     return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
             "depth": depth.summary(budget), "depth_budget_mm": budget,
             "depth_budget_scene_units": budget * placed.units_per_mm}

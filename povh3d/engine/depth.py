@@ -87,8 +87,15 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
     pass_settings = replace(settings, quality="draft", bit_depth=16)
     images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
-    dark = np.stack([decode(img[..., :3]) for img in images[0::2]])
-    light = np.stack([decode(img[..., :3]) for img in images[1::2]])
+    return fog_distances(images[0::2], images[1::2], fog)
+
+
+def fog_distances(dark_images: list[np.ndarray], light_images: list[np.ndarray],
+                  fog: float) -> tuple[np.ndarray, np.ndarray]:
+    """(n, H, W) ray lengths (scene units) from renders with fog colour 0 and 1 (sRGB-encoded PNG
+    pixels), NaN where nothing is hit, clipped or unmeasured; and the unmeasured fraction per render."""
+    dark = np.stack([decode(img[..., :3]) for img in dark_images])
+    light = np.stack([decode(img[..., :3]) for img in light_images])
     clipped = np.any(light >= 0.9999, axis=-1)
     t = np.clip(1.0 - np.median(light - dark, axis=-1), 0.0, 1.0)
     with np.errstate(divide="ignore"):
@@ -100,16 +107,28 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
     return d, unmeasured.mean(axis=(1, 2))
 
 
+def pass_size(lens_array: LensArray) -> tuple[int, int]:
+    """The depth pass's image size: at most ``MAX_WIDTH`` wide, two pixels a lens, the field's aspect."""
+    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
+    w = min(MAX_WIDTH, lens_array.lenses_x * 2)
+    return w, max(1, round(w * height_mm / width_mm))
+
+
+def depth_map(distances: np.ndarray, lens_array: LensArray, back_off: float, units_per_mm: float,
+              unmeasured: float = 0.0) -> DepthMap:
+    """The depth map of ray lengths (scene units) of a pass along the normal from ``back_off`` mm."""
+    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
+    return DepthMap(distances / units_per_mm - back_off, width_mm, height_mm, unmeasured)
+
+
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
                units_per_mm: float) -> DepthMap:
     """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
-    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
-    w = min(MAX_WIDTH, lens_array.lenses_x * 2)
-    h = max(1, round(w * height_mm / width_mm))
+    w, h = pass_size(lens_array)
     fog = back_off * units_per_mm   # scene units: t = 1/e at the screen
     d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
                                                                           back_off, fog, w, h), fog)
-    return DepthMap(d[0] / units_per_mm - back_off, width_mm, height_mm, float(unmeasured[0]))
+    return depth_map(d[0], lens_array, back_off, units_per_mm, float(unmeasured[0]))
 
 
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
