@@ -21,7 +21,7 @@ import math
 import re
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -31,10 +31,12 @@ from ..errors import ConfigError
 from ..geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame
 from ..geometry.lens_array import LensArray
 from ..image.io import atomic_path
-from ..engine.depth import DepthMap, depth_map, fog_distances, pass_size
 from ..scene.camera import (CameraError, CameraScript, camera_from_log, camera_statements, evaluation_script,
                             parse_log, tokens)
 from ..scene.scene import Scene
+
+if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from ..engine.depth import DepthMap
 
 FRAME_MODES = ("auto", "camera", "native")
 
@@ -218,6 +220,7 @@ def _evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensAr
     which works out the frame and the clearance from the declared values, prints them and renders
     the two fog frames (``engine.depth``).  Cached by the scene's digest, the panel and ``back_off``.
     None when the camera needs a run at the panel's own size (``measured_size``)."""
+    from ..engine.depth import fog_distances, pass_size
     from ..image.io import read_png
     from ..povray.process import PovrayJob, run_jobs
     from ..povray.sandbox import files_within
@@ -278,6 +281,8 @@ class Seen:
 
     def depth(self, frame: DisplayFrame, back_off: float, lens_array: LensArray) -> DepthMap | None:
         """The depth map, if the pass was made in ``frame`` with ``back_off``; else None (measure again)."""
+        from ..engine.depth import depth_map
+
         expected = [*frame.centre, *frame.axis_x, *frame.axis_y, *frame.axis_z, frame.units_per_mm, back_off]
         size = max(1.0, *(abs(v) for v in frame.centre))
         if not (np.allclose(self.printed[:3], expected[:3], rtol=0, atol=1e-9 * size)
