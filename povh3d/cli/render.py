@@ -49,7 +49,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
                            _triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=frame_options_from_args(args),
-        depth_maps=Path(args.depth_maps) if args.depth_maps else None)
+        depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format)
 
 
 def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
@@ -216,6 +216,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--views-dir", help="also write the view stack here (v_LLL_KKK.png)")
     p.add_argument("--depth-maps", metavar="DIR", help="also write per view the distance along each ray to the "
                    "first surface (d_LLL_KKK.npy, mm) and its disparity (p_LLL_KKK.npy, lenses per view step)")
+    p.add_argument("--depth-format", choices=("npy", "png"), default="npy",
+                   help="depth maps as float32 .npy (default) or 16-bit PNG (scale and offset in depth_maps.json)")
     p.add_argument("--no-cache", action="store_true", help="render everything again, ignore the cache")
     p.add_argument("--bit-depth", type=int, choices=(8, 16), default=8)
     p.add_argument("--front-clearance", type=float, metavar="MM",

@@ -186,3 +186,4 @@ def test_depth_maps_show_the_compressed_depth(tmp_path):
         expected = k * far * np.sqrt(a * a + b * b + 1)
         assert np.nanmax(np.abs(maps[l, j] - expected)) < 0.02
         assert np.isfinite(maps[l, j]).all()
+

@@ -86,3 +86,27 @@ def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path
     result = cli("render", str(scene), "-o", str(out), "--quality", "draft", "--fit-depth", "auto", *ARRAY)
     assert result.code == 2 and "--fit-depth cannot fit" in result.err
     assert result.err.strip().count("\n") == 0 and not out.exists() and not out.with_suffix(".json").exists()
+
+
+def test_depth_maps_as_16_bit_png_decode_to_the_npy_maps(cli, tmp_path):
+    import numpy as np
+
+    from povh3d.app.depth_maps import dequantise
+    from povh3d.image.io import read_png
+
+    for fmt in ("npy", "png"):
+        result = cli("render", str(GALLERY / "inches.pov"), "-o", str(tmp_path / f"{fmt}.png"), "--quality",
+                     "draft", "--depth-maps", str(tmp_path / fmt), "--depth-format", fmt, *ARRAY)
+        assert result.code == 0, result.err
+    info = json.loads((tmp_path / "png" / "depth_maps.json").read_text())
+    assert info["format"] == "png" and "code 0" in info["png"]["decode"]
+    assert not list((tmp_path / "png").glob("*.npy")) and len(list((tmp_path / "png").glob("*.png"))) == 72
+    for prefix, kind in (("d", "depth"), ("p", "disparity")):
+        scale, offset = info["png"][kind]["scale"], info["png"][kind]["offset"]
+        for view in ("000_000", "003_002", "005_005"):
+            codes = read_png(tmp_path / "png" / f"{prefix}_{view}.png")[..., 0]
+            assert codes.dtype == np.uint16
+            exact = np.load(tmp_path / "npy" / f"{prefix}_{view}.npy")
+            decoded = dequantise(codes, scale, offset)
+            np.testing.assert_array_equal(np.isnan(decoded), np.isnan(exact))   # no hit <-> code 0
+            assert np.nanmax(np.abs(decoded - exact)) <= scale / 2 * (1 + 1e-6) + 1e-6 * abs(offset)
