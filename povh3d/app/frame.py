@@ -71,8 +71,13 @@ class FrameOptions:
         if k not in (None, "fit") and self.fit_depth is not None:
             raise ConfigError(f"--depth-scale {k} and --fit-depth both set the depth; give --fit-depth with a "
                               "bare --depth-scale to compress depth until it fits, or the factor alone")
-        if k not in (None, "fit") and (isinstance(k, bool) or not isinstance(k, (int, float))):
-            raise ConfigError(f"--depth-scale takes a positive factor or nothing (with --fit-depth), got {k!r}")
+        if k not in (None, "fit"):
+            from ..engine.quality import DEPTH_SCALE_RANGE
+
+            low, high = DEPTH_SCALE_RANGE
+            if isinstance(k, bool) or not isinstance(k, (int, float)) or not low <= k <= high:
+                raise ConfigError(f"--depth-scale must be a number within {low:g}..{high:g} (or nothing, with "
+                                  f"--fit-depth), got {k!r}")
         f = self.fit_depth
         if f is not None and f != "auto" and (isinstance(f, bool) or not isinstance(f, (int, float))
                                               or not (f > 0 and f < float("inf"))):

@@ -42,6 +42,10 @@ def test_native_scene_summary(cli, tmp_path):
       "--display-width", "2"), "parallel"),
     (("--display-center", "0,0", "--display-normal", "0,0,1", "--display-width", "2"), "three numbers"),
     (("--fit-depth", "deep"), "--fit-depth"),
+    (("--depth-scale",), "needs --fit-depth"),
+    (("--depth-scale", "flat"), "--depth-scale takes a factor"),
+    (("--depth-scale", "0"), "--depth-scale must be a number within"),
+    (("--fit-depth", "auto", "--depth-scale", "0.5"), "both set the depth"),
     (("--display-frame", "camera", "--display-center", "0,0,0", "--display-normal", "0,0,1",
       "--display-width", "2"), "cannot be combined"),
 ])
