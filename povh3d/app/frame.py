@@ -27,7 +27,7 @@ import numpy as np
 
 from .._version import __version__
 from ..engine.cache import content_key, default_cache_dir
-from ..errors import ConfigError
+from ..errors import ConfigError, PovrayError, PovrayTimeout
 from ..geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame
 from ..geometry.lens_array import LensArray
 from ..image.io import atomic_path
@@ -126,8 +126,14 @@ def resolve_frame_and_depth(options: FrameOptions, scene: Scene, lens_array: Len
                               f"place the display with {EXPLICIT_OPTIONS}")
         note = "the scene has no camera: mm around the screen z = 0"
         return NATIVE, {**NATIVE.as_record(), "note": note, "warnings": []}, None
-    found = (_evaluate_and_measure(scene, script, lens_array, back_off, cache_dir, use_cache)
-             if back_off is not None else None)
+    try:
+        found = (_evaluate_and_measure(scene, script, lens_array, back_off, cache_dir, use_cache)
+                 if back_off is not None else None)
+    except PovrayError as exc:
+        if isinstance(exc, PovrayTimeout):
+            raise
+        found = None   # the camera alone, then a pass of its own, say what failed: the camera or the scene
+
     if found is None:
         camera, seconds, cached = _evaluate(scene, script.script, lens_array, script.cameras, cache_dir, use_cache)
         distances = None
