@@ -110,7 +110,7 @@ QUALITY_OPTIONS: dict[str, tuple[str, ...]] = {name: q.options for name, q in QU
 
 Progress = Callable[[int, int], None]
 #: --depth-scale: a compression beyond 1/1000 leaves nothing of the depth; an expansion past 100
-#: makes rays steeper than any lens can send.
+#: tilts rays further than any lens can.
 DEPTH_SCALE_RANGE = (1e-3, 100.0)
 
 

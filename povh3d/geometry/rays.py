@@ -91,7 +91,7 @@ def depth_scaled_rays(lens_array: LensArray, depth_scale: float) -> LensArray:
     orthographic views, pinholes, single-stage lenslets, subpixels) traces the
     compressed scene by tracing an array with focal length ``f / k``; the scene
     file stays as it is.  Lateral sizes in the screen plane are kept; shading
-    stays the uncompressed scene's, seen along the steeper rays.
+    stays the uncompressed scene's, seen along the rays of slope ``k (u, v) / f``.
     """
     if depth_scale == 1:
         return lens_array

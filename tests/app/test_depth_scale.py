@@ -1,4 +1,4 @@
-"""--depth-scale: depth compressed along the display normal, traced as steeper ray slopes.
+"""--depth-scale: depth compressed along the display normal, traced as ray slopes times k.
 
 Oracles: an uncompressed render of the same scene physically compressed by
 POV-Ray's own ``scale <1, 1, k>`` (every method point-sampled: identical pixels);
