@@ -114,3 +114,16 @@ def test_depth_maps_as_16_bit_png_decode_to_the_npy_maps(cli, tmp_path):
             decoded = dequantise(codes, scale, offset)
             np.testing.assert_array_equal(np.isnan(decoded), np.isnan(exact))   # no hit <-> code 0
             assert np.nanmax(np.abs(decoded - exact)) <= scale / 2 * (1 + 1e-6) + 1e-6 * abs(offset)
+
+
+def test_fit_depth_by_depth_scale_says_it_distorts(cli, tmp_path):
+    out = tmp_path / "k.png"
+    result = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", "--fit-depth", "auto",
+                 "--depth-scale", *ARRAY)
+    assert result.code == 0, result.err
+    record = json.loads(out.with_suffix(".json").read_text())
+    frame = record["display_frame"]
+    assert "(distorted)" in result.out and "distortion" in frame["depth_scale_note"]
+    assert frame["depth"]["fit"]["by"] == "depth_scale" and frame["depth"]["within_budget"]
+    assert frame["depth_scale"] == pytest.approx(1 / frame["depth"]["fit"]["factor"])
+    assert record["lens_array"]["focal_mm"] == 2.0   # the display as it is; only the rays are tilted less
