@@ -133,7 +133,6 @@ def resolve_frame_and_depth(options: FrameOptions, scene: Scene, lens_array: Len
         if isinstance(exc, PovrayTimeout):
             raise
         found = None   # the camera alone, then a pass of its own, say what failed: the camera or the scene
-
     if found is None:
         camera, seconds, cached = _evaluate(scene, script.script, lens_array, script.cameras, cache_dir, use_cache)
         distances = None
