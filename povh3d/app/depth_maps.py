@@ -9,6 +9,12 @@ matching disparity in view pixels (lenses) per view step, ``z s / (f p)`` with
 ``z`` the hit's depth ``d / |(u/f, v/f, 1)|``: a point at depth ``z`` moves by
 that many lenses from one view to the next.  ``depth_maps.json`` says all this
 and records the frame.  Every file is written atomically.
+
+With ``--depth-format png`` the maps are 16-bit greyscale PNGs instead
+(``d_LLL_KKK.png``, ``p_LLL_KKK.png``): code 0 is "nothing hit" (NaN), codes
+1..65535 are ``offset + (code - 1) * scale``, one scale and offset for all the
+views of a kind, recorded in ``depth_maps.json``; the rounding is at most half
+a ``scale``.
 """
 
 from __future__ import annotations
@@ -46,24 +52,62 @@ def disparity(depth: np.ndarray, lens_array: LensArray) -> np.ndarray:
     return (z * s / (f * p)).astype(np.float32)
 
 
-def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, record: dict[str, Any]) -> None:
-    """Write ``d_*.npy``, ``p_*.npy`` and ``depth_maps.json`` into ``folder``."""
+DEPTH_FORMATS = ("npy", "png")
+NO_HIT = 0          # the PNG code of a ray that hits nothing
+TOP = 65535
+
+
+def quantise(values: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Float values (NaN: none) -> uint16 codes (0: none, 1..65535 evenly over the finite range),
+    the scale and the offset: ``value = offset + (code - 1) * scale``, to within ``scale / 2``."""
+    finite = values[np.isfinite(values)]
+    offset = float(finite.min()) if finite.size else 0.0
+    span = float(finite.max()) - offset if finite.size else 0.0
+    scale = span / (TOP - 1) if span > 0 else 1.0
+    codes = np.full(values.shape, NO_HIT, np.uint16)
+    ok = np.isfinite(values)
+    codes[ok] = (np.rint((values[ok] - offset) / scale) + 1).clip(1, TOP).astype(np.uint16)
+    return codes, scale, offset
+
+
+def dequantise(codes: np.ndarray, scale: float, offset: float) -> np.ndarray:
+    """uint16 codes -> float64 values, NaN where the code is 0 (the inverse of ``quantise``)."""
+    return np.where(codes == NO_HIT, np.nan, offset + (codes.astype(np.float64) - 1) * scale)
+
+
+def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, record: dict[str, Any],
+                     fmt: str = "npy") -> None:
+    """Write ``d_*.npy``, ``p_*.npy`` (``fmt`` 'png': 16-bit PNGs) and ``depth_maps.json`` into ``folder``."""
+    from ..image.io import write_png
+
     par = disparity(depth, lens_array)
     ny, nx = depth.shape[:2]
+    codes = {"d": quantise(depth), "p": quantise(par)} if fmt == "png" else {}
     for l in range(ny):
         for k in range(nx):
             for prefix, data in (("d", depth[l, k]), ("p", par[l, k])):
+                if fmt == "png":
+                    write_png(folder / f"{prefix}_{l:03d}_{k:03d}.png", codes[prefix][0][l, k])
+                    continue
                 buffer = io.BytesIO()
                 np.save(buffer, data)
                 with atomic_path(folder / f"{prefix}_{l:03d}_{k:03d}.npy") as tmp:
                     tmp.write_bytes(buffer.getvalue())
-    info = {"views": [ny, nx], "size_px": [depth.shape[3], depth.shape[2]],
-            "depth": "d_LLL_KKK.npy: float32 mm of the display frame along each ray, from the screen "
+    info: dict[str, Any] = {
+            "views": [ny, nx], "size_px": [depth.shape[3], depth.shape[2]], "format": fmt,
+            "depth": "d_LLL_KKK: mm of the display frame along each ray, from the screen "
                      "(z = 0, at the lens centre) to the first surface; negative in front; NaN: nothing hit",
-            "disparity": "p_LLL_KKK.npy: float32 lenses per view step, z s / (f p), z = d / |(u/f, v/f, 1)|",
+            "disparity": "p_LLL_KKK: lenses per view step, z s / (f p), z = d / |(u/f, v/f, 1)|",
             "pixel_pitch_mm": lens_array.panel.pitch_x, "focal_mm": lens_array.focal,
             "lens_pitch_mm": lens_array.pitch_x, "display_frame": record.get("display_frame"),
             "method": "two renders per view with a constant fog of colour 0 and 1 (engine/depth.py)",
             "nan_fraction": float(np.isnan(depth).mean())}
+    if fmt == "png":
+        info["png"] = {name: {"scale": codes[p][1], "offset": codes[p][2]} for name, p in (("depth", "d"),
+                                                                                         ("disparity", "p"))}
+        info["png"]["decode"] = ("16-bit greyscale: code 0 = nothing hit (NaN); else value = offset + "
+                                 "(code - 1) * scale (mm for d_, lenses per view step for p_), within scale / 2")
+    else:
+        info["npy"] = "float32 arrays (numpy.load), NaN where nothing is hit"
     with atomic_path(folder / "depth_maps.json") as tmp:
         tmp.write_text(json.dumps(info, indent=2) + "\n", encoding="utf-8")

@@ -14,12 +14,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine.depth import depth_pass
+from ..engine.depth import DepthMap, depth_pass
 from ..engine.methods import get_method
+from ..engine.quality import DEPTH_SCALE_RANGE
 from ..errors import ConfigError
 from ..geometry.frame import NATIVE, DisplayFrame
 from ..scene.scene import Scene
-from .frame import resolve_frame
+from .frame import resolve_frame_and_depth
 from .stage import depth_budget_mm
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -38,11 +39,16 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
     options = request.display_frame
-    placed, record = resolve_frame(options, scene, array, cache_dir=s.cache_dir, use_cache=s.use_cache)
     default = get_method(request.method).default_back_off(array)
+    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
+    placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
+                                                   use_cache=s.use_cache, back_off=s.back_off or default)
     back_off = s.back_off or _clearance(placed, record, default)
-    if not placed.is_native or options.fit_depth is not None:
-        placed, depth = _measure(request, scene, placed, back_off, budget, options.fit_depth)
+    scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
+    if not placed.is_native or options.fit_depth is not None or scale != 1:
+        placed, depth, scale = _measure(request, scene, placed, back_off, budget, options.fit_depth,
+                                        scale, options.depth_scale == "fit",
+                                        seen.depth(placed, back_off, array) if seen else None)
         record = {**record, **placed.as_record(), "depth": depth}
         if not depth.get("empty") and not depth.get("within_budget", True):
             record["warnings"].append(
@@ -60,7 +66,12 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
     record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
     limited = s.back_off is None and _clearance(placed, record, default) < default
-    settings = replace(s, frame=matrix, back_off=_clearance(placed, record, default) if limited else s.back_off)
+    settings = replace(s, frame=matrix, back_off=_clearance(placed, record, default) if limited else s.back_off,
+                       depth_scale=scale)
+    if scale != 1:
+        record["depth_scale"] = scale
+        record["depth_scale_note"] = (f"a distortion: depth along the display normal shown {scale:.4g} times as "
+                                      "deep, lateral sizes kept (traced as every ray's slope times the factor)")
     if limited:
         record["front_clearance_note"] = "limited to 0.9 of the scene camera's distance"
     return replace(request, settings=settings), record
@@ -89,17 +100,35 @@ def _clearance(frame: DisplayFrame, record: dict[str, Any], default: float) -> f
 
 
 def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, back_off: float, budget: float,
-             fit: str | float | None) -> tuple[DisplayFrame, dict[str, Any]]:
-    """The depth summary in ``frame``; with ``fit``, the frame scaled so the depth fits first."""
+             fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
+             seen: DepthMap | None = None
+             ) -> tuple[DisplayFrame, dict[str, Any], float]:
+    """The depth summary in ``frame`` as the display shows it (depth times ``scale``); with ``fit``, the
+    frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
+    ``seen``: the depth map of ``frame`` made in the run that evaluated the scene's camera; else a depth
+    pass of its own."""
     array, s = request.render_array, request.settings
+    keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
 
     def measure(f: DisplayFrame) -> dict[str, Any]:
+        if seen is not None and f is frame:
+            return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
         return depth_pass(scene, array, replace(s, frame=matrix), back_off, f.units_per_mm).summary(budget)
 
+    def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
+        # The display shows the measured z times ``factor`` (a depth scale, or 1 / a frame's scale).
+        if depth.get("empty") or factor == 1:
+            return depth
+        after = {**depth, **{k: depth[k] * factor for k in keys}}
+        half = budget / 2
+        after["within_budget"] = bool(-half <= after["near_mm"] + 1e-9 and after["far_mm"] - 1e-9 <= half)
+        after["field_within_budget"] = bool(-half <= after["field_near_mm"] and after["field_far_mm"] <= half)
+        return after
+
     depth = measure(frame)
     if fit is None:
-        return frame, depth
+        return frame, ({**shown(depth, scale), "measured": depth} if scale != 1 else depth), scale
     target = budget if fit == "auto" else float(fit)
     if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
         raise ConfigError("--fit-depth cannot fit: the depth pass measured nothing in the framed field "
@@ -107,17 +136,21 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, back_off
                           "--display-center/--display-normal/--display-width instead")
     reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
     if not reach > 0:
-        return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}
+        return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}, scale
     factor = max(1.0, reach / (target / 2))   # only ever shrink the scene onto the display
+    if fit_scale:  # compress depth alone: the frame (lateral sizes) stays
+        scale = 1 / factor
+        if scale < DEPTH_SCALE_RANGE[0]:
+            raise ConfigError(f"--fit-depth cannot fit by --depth-scale: the scene reaches {reach:.4g} mm, "
+                              f"a compression of {scale:.3g} is under {DEPTH_SCALE_RANGE[0]:g}; drop --depth-scale "
+                              "to shrink the whole scene, or place the display with --display-*")
+        return frame, {**shown(depth, scale), "before_fit": depth,
+                       "fit": {"target_mm": target, "factor": factor, "by": "depth_scale"}}, scale
     # Display z scales as 1 / factor for the same scene points (the frame scales about its centre):
     # the subject measured before fits exactly; a re-measure would see a wider field, not the same subject.
-    keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
-    after = {**depth, **{k: depth[k] / factor for k in keys}}
-    half = budget / 2
-    after["within_budget"] = bool(-half <= after["near_mm"] + 1e-9 and after["far_mm"] - 1e-9 <= half)
-    after["field_within_budget"] = bool(-half <= after["field_near_mm"] and after["field_far_mm"] <= half)
     fitted = frame.scaled(factor) if factor > 1 else frame
-    return fitted, {**after, "before_fit": depth, "fit": {"target_mm": target, "factor": factor}}
+    return fitted, {**shown(depth, 1 / factor), "before_fit": depth,
+                    "fit": {"target_mm": target, "factor": factor, "by": "units_per_mm"}}, scale
 
 
 def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: tuple = ()) -> dict[str, Any]:
@@ -128,11 +161,13 @@ def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: 
 
     scene = load_scene(path, include_dirs)
     options = options or FrameOptions()
-    placed, record = resolve_frame(options, scene, lens_array)
+    default = get_method("multi-ortho").default_back_off(lens_array)
+    placed, record, seen = resolve_frame_and_depth(options, scene, lens_array, back_off=default)
     budget = depth_budget_mm(lens_array)
-    back_off = _clearance(placed, record, get_method("multi-ortho").default_back_off(lens_array))
+    back_off = _clearance(placed, record, default)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-    depth = depth_pass(scene, lens_array, RenderSettings(frame=matrix), back_off, placed.units_per_mm)
+    depth = (seen.depth(placed, back_off, lens_array) if seen else None) or depth_pass(
+        scene, lens_array, RenderSettings(frame=matrix), back_off, placed.units_per_mm)
     return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
             "depth": depth.summary(budget), "depth_budget_mm": budget,
             "depth_budget_scene_units": budget * placed.units_per_mm}

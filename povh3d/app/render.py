@@ -60,7 +60,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
             units = frame_record.get("units_per_mm", 1.0)
             depth = view_depth_maps(scene, request.render_array, settings,
                                     still.record["quality"]["front_clearance_mm"], units)
-            write_depth_maps(request.depth_maps, depth, request.render_array, still.record)
+            write_depth_maps(request.depth_maps, depth, request.render_array, still.record, request.depth_format)
             still.record["depth_maps"] = {"folder": str(request.depth_maps),
                                           "nan_fraction": float(np.isnan(depth).mean())}
         write_image(output, still.image, still.record)

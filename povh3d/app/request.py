@@ -91,6 +91,7 @@ class RenderRequest:
     fps : float                    video frames per second
     display_frame : FrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
     depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
+    depth_format : {'npy', 'png'}  float32 arrays, or 16-bit PNGs with the scale in depth_maps.json
     """
 
     source: Path
@@ -111,6 +112,7 @@ class RenderRequest:
     fps: float = 24.0
     display_frame: FrameOptions = field(default_factory=FrameOptions)
     depth_maps: Path | None = None
+    depth_format: str = "npy"
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
@@ -140,6 +142,8 @@ class RenderRequest:
             raise ConfigError(f"--fps must be a positive number, got {self.fps}")
         if self.views_dir is not None:
             self.render_array.require_views()
+        if self.depth_format not in ("npy", "png"):
+            raise ConfigError(f"--depth-format must be npy or png, got {self.depth_format!r}")
         if self.depth_maps is not None:
             set_("depth_maps", Path(self.depth_maps))
             if self.frames is not None:

@@ -55,7 +55,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
                            _triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=frame_options_from_args(args),
-        depth_maps=Path(args.depth_maps) if args.depth_maps else None)
+        depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format)
 
 
 def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
@@ -99,9 +99,15 @@ def frame_options_from_args(args: argparse.Namespace) -> Any:
             fit = float(fit)
         except ValueError:
             raise ConfigError(f"--fit-depth takes 'auto' or a number of mm, got {fit!r}") from None
+    scale = args.depth_scale
+    if scale not in (None, "fit"):
+        try:
+            scale = float(scale)
+        except ValueError:
+            raise ConfigError(f"--depth-scale takes a factor (e.g. 0.5) or nothing, got {scale!r}") from None
     return FrameOptions(args.display_frame, _triple(args.display_center, "--display-center"),
                         _triple(args.display_normal, "--display-normal"), _triple(args.display_up, "--display-up"),
-                        args.display_width, fit)
+                        args.display_width, fit, scale)
 
 
 def _method_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -200,6 +206,8 @@ def frame_phrase(record: dict[str, Any]) -> str:
     depth = record.get("depth")
     if depth and not depth.get("empty"):
         fit = f", fitted x{depth['fit']['factor']:.3g}" if depth.get("fit") else ""
+        if record.get("depth_scale", 1) != 1:   # fitted by it, or given
+            fit = f", {'fitted: ' if fit else ''}depth x{record['depth_scale']:.3g} (distorted)"
         text += (f"  depth {depth['near_mm']:.3g}..{depth['far_mm']:.3g} mm of +-"
                  f"{record['depth_budget_mm'] / 2:.3g}{fit}")
     return text
@@ -273,6 +281,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--views-dir", help="also write the view stack here (v_LLL_KKK.png)")
     p.add_argument("--depth-maps", metavar="DIR", help="also write per view the distance along each ray to the "
                    "first surface (d_LLL_KKK.npy, mm) and its disparity (p_LLL_KKK.npy, lenses per view step)")
+    p.add_argument("--depth-format", choices=("npy", "png"), default="npy",
+                   help="depth maps as float32 .npy (default) or 16-bit PNG (scale and offset in depth_maps.json)")
     p.add_argument("--no-cache", action="store_true", help="render everything again, ignore the cache")
     p.add_argument("--bit-depth", type=int, choices=(8, 16), default=8)
     p.add_argument("--front-clearance", type=float, metavar="MM",
@@ -316,6 +326,9 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--fit-depth", metavar="auto|MM",
                    help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
                    "display's depth budget (auto: 2 N f) or MM")
+    g.add_argument("--depth-scale", nargs="?", const="fit", metavar="K",
+                   help="compress depth alone along the display normal by K, keeping lateral sizes (a distortion); "
+                   "bare, with --fit-depth: the K that makes the depth fit, instead of shrinking the whole scene")
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..geometry.lens_array import LensArray
+from ..geometry.rays import depth_scaled_rays
 from ..image.colour import decode
 from ..scene.scene import Scene
 from .batch import FrameBatch
@@ -86,8 +87,15 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
     pass_settings = replace(settings, quality="draft", bit_depth=16)
     images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
-    dark = np.stack([decode(img[..., :3]) for img in images[0::2]])
-    light = np.stack([decode(img[..., :3]) for img in images[1::2]])
+    return fog_distances(images[0::2], images[1::2], fog)
+
+
+def fog_distances(dark_images: list[np.ndarray], light_images: list[np.ndarray],
+                  fog: float) -> tuple[np.ndarray, np.ndarray]:
+    """(n, H, W) ray lengths (scene units) from renders with fog colour 0 and 1 (sRGB-encoded PNG
+    pixels), NaN where nothing is hit, clipped or unmeasured; and the unmeasured fraction per render."""
+    dark = np.stack([decode(img[..., :3]) for img in dark_images])
+    light = np.stack([decode(img[..., :3]) for img in light_images])
     clipped = np.any(light >= 0.9999, axis=-1)
     t = np.clip(1.0 - np.median(light - dark, axis=-1), 0.0, 1.0)
     with np.errstate(divide="ignore"):
@@ -99,16 +107,28 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
     return d, unmeasured.mean(axis=(1, 2))
 
 
+def pass_size(lens_array: LensArray) -> tuple[int, int]:
+    """The depth pass's image size: at most ``MAX_WIDTH`` wide, two pixels a lens, the field's aspect."""
+    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
+    w = min(MAX_WIDTH, lens_array.lenses_x * 2)
+    return w, max(1, round(w * height_mm / width_mm))
+
+
+def depth_map(distances: np.ndarray, lens_array: LensArray, back_off: float, units_per_mm: float,
+              unmeasured: float = 0.0) -> DepthMap:
+    """The depth map of ray lengths (scene units) of a pass along the normal from ``back_off`` mm."""
+    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
+    return DepthMap(distances / units_per_mm - back_off, width_mm, height_mm, unmeasured)
+
+
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
                units_per_mm: float) -> DepthMap:
     """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
-    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
-    w = min(MAX_WIDTH, lens_array.lenses_x * 2)
-    h = max(1, round(w * height_mm / width_mm))
+    w, h = pass_size(lens_array)
     fog = back_off * units_per_mm   # scene units: t = 1/e at the screen
     d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
                                                                           back_off, fog, w, h), fog)
-    return DepthMap(d[0] / units_per_mm - back_off, width_mm, height_mm, float(unmeasured[0]))
+    return depth_map(d[0], lens_array, back_off, units_per_mm, float(unmeasured[0]))
 
 
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
@@ -116,19 +136,27 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
     (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
 
+    With ``settings.depth_scale`` k the maps are the compressed scene's, as the display
+    shows it: the rays traced have slopes ``k (u, v) / f`` (``depth_scaled_rays``), a hit at
+    depth ``z`` of the scene shows at ``k z``.
+
     Returns
     -------
     (Ny, Nx, Ly, Lx) float32, mm; NaN where nothing is hit (or it cannot be measured).
     """
     ny, nx = lens_array.require_views()
-    s, f = lens_array.panel.pitch_x, lens_array.focal
-    sy = lens_array.panel.pitch_y
-    slopes = [((k + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f) for l in range(ny) for k in range(nx)]
-    directions = [(a, b, 1.0) for a, b in slopes]
+    s, sy = lens_array.panel.pitch_x, lens_array.panel.pitch_y
+    k = settings.depth_scale
+    f = depth_scaled_rays(lens_array, k).focal
+    slopes = np.array([((j + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f)
+                       for l in range(ny) for j in range(nx)])
+    directions = [(a, b, 1.0) for a, b in slopes.tolist()]
     fog = back_off * units_per_mm
     batch = _fog_batch(directions, lens_array, back_off, fog, lens_array.lenses_x, lens_array.lenses_y)
     d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
-    # The ray starts back_off * |(a, b, 1)| before the screen.
-    lengths = np.array([np.sqrt(a * a + b * b + 1.0) for a, b in slopes])
-    out = d / units_per_mm - back_off * lengths[:, None, None]
+    # The ray starts back_off * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
+    lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
+    z = d / units_per_mm / lengths - back_off
+    shown = np.sqrt(((slopes / k) ** 2).sum(axis=1) + 1.0)   # the display's own ray, slope (u, v) / f
+    out = k * z * shown[:, None, None]
     return out.reshape(ny, nx, *out.shape[1:]).astype(np.float32)

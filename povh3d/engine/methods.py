@@ -36,6 +36,7 @@ from ..geometry.footprint import CENTRE, latin_hypercube
 from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray
 from ..geometry.phase_tiles import phase_tiles, tiles_mesh, uncovered
+from ..geometry.rays import depth_scaled_rays
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
@@ -232,6 +233,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     method = get_method(name)
     options = method.resolve_options(name, options)
     asked = settings.spec
+    header = display_header(lens_array)   # the display's own constants, whatever --depth-scale does
+    lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
     back_off = method.round_back_off(lens_array, settings.back_off or method.default_back_off(lens_array))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if quality != settings.spec:
@@ -243,7 +246,6 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         quality = Quality(max_trace_level=quality.max_trace_level)
         settings = replace(settings, quality=quality)
     samples = quality.samples()
-    header = display_header(lens_array)
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
     settings_needed = quality_settings(scene.features, quality)

@@ -109,6 +109,9 @@ AUTO = "auto"  # --quality auto --max-error DB: the fastest setting that meets D
 QUALITY_OPTIONS: dict[str, tuple[str, ...]] = {name: q.options for name, q in QUALITY_LEVELS.items()}
 
 Progress = Callable[[int, int], None]
+#: --depth-scale: a compression beyond 1/1000 leaves nothing of the depth; an expansion past 100
+#: tilts rays further than any lens can.
+DEPTH_SCALE_RANGE = (1e-3, 100.0)
 
 
 @dataclass(frozen=True)
@@ -132,6 +135,8 @@ class RenderSettings:
     max_error_db : float or None   with quality 'auto': the lowest PSNR against the reference to accept
     frame : tuple of 12 floats or None   the display frame's POV-Ray ``matrix`` (display mm -> scene
                                 units, ``geometry.frame.DisplayFrame.matrix``); None: native
+    depth_scale : float             compress depth along the display normal by this factor (1: none); a
+                                distortion, traced as every ray's slope times it (``depth_scaled_rays``)
     """
 
     quality: str | Quality = "normal"
@@ -146,8 +151,13 @@ class RenderSettings:
     scheduler: str | None = None
     max_error_db: float | None = None
     frame: tuple[float, ...] | None = None
+    depth_scale: float = 1.0
 
     def __post_init__(self) -> None:
+        k = self.depth_scale
+        if isinstance(k, bool) or not isinstance(k, (int, float)) or not DEPTH_SCALE_RANGE[0] <= k <= DEPTH_SCALE_RANGE[1]:
+            raise ConfigError(f"--depth-scale must be a number within {DEPTH_SCALE_RANGE[0]:g}..{DEPTH_SCALE_RANGE[1]:g}, "
+                              f"got {k!r}")
         if self.frame is not None and len(self.frame) != 12:
             raise ConfigError(f"the display frame is a matrix of 12 numbers, got {len(self.frame)}")
         if not isinstance(self.quality, Quality) and self.quality not in (*QUALITY_LEVELS, AUTO):

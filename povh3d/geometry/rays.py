@@ -3,6 +3,7 @@ definition every renderer, interleaver, mapping and test derives from."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -81,3 +82,23 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     c = np.where(inside[..., None], c, np.nan)
     d = np.where(inside[..., None], d, np.nan)
     return c, d, inside
+
+
+def depth_scaled_rays(lens_array: LensArray, depth_scale: float) -> LensArray:
+    """The array whose pixel rays show the scene with its depth compressed by ``depth_scale``.
+
+    Compressing the scene along the display normal, ``(x, y, z) -> (x, y, k z)``,
+    is the same, for every pixel ray, as keeping the scene and multiplying the
+    ray's lateral slope by ``k``: the ray through the lens centre ``c`` with slope
+    ``(u, v) / f`` meets the compressed point ``(x, y, k z)`` where
+    ``(x, y) = c + (u, v) k z / f``, which is where the ray with slope
+    ``k (u, v) / f`` meets the scene's own point ``(x, y, z)``.  That ray is the
+    one a lens of focal length ``f / k`` sends, so every method (mesh camera,
+    orthographic views, pinholes, single-stage lenslets, subpixels) traces the
+    compressed scene by tracing an array with focal length ``f / k``; the scene
+    file stays as it is.  Lateral sizes in the screen plane are kept; shading
+    stays the uncompressed scene's, seen along the rays of slope ``k (u, v) / f``.
+    """
+    if depth_scale == 1:
+        return lens_array
+    return replace(lens_array, focal=lens_array.focal / depth_scale)

@@ -126,6 +126,9 @@ class CameraScript:
 
     script: str
     cameras: int          # top-level camera statements in the scene file (the last counts)
+    rest: str = ""        # the scene after its last camera: appended, with a camera of povh3d's own
+                          # (``templates/camera_depth.pov.j2``), the same run renders the scene; the
+                          # block's last values stay declared as ``Povh3d_Cam_location``, ...
 
 
 def evaluation_script(text: str) -> CameraScript | None:
@@ -155,7 +158,7 @@ def evaluation_script(text: str) -> CameraScript | None:
         # camera { Name mods }: the camera declared as Name, then (POV-Ray >= 3.5) transforms only.
         declared = _declared_camera(toks, text, inner[0].text, last.start)
         body = declared + "\n" + body[inner[0].end:]
-    return CameraScript(text[:last.start] + "\n" + _rewrite(body) + "\n", len(statements))
+    return CameraScript(text[:last.start] + "\n" + _rewrite(body) + "\n", len(statements), text[last.body[1] + 1:])
 
 
 def _declared_camera(toks: list[Token], text: str, name: str, before: int) -> str:
@@ -230,9 +233,11 @@ def _rewrite(body: str) -> str:
         elif t in _VECTORS:
             expr, i = expression(i + 1)
             out.append(f'#declare Povh3d_Cam_V = <0, 0, 0> + ({expr}\n);\n' + _debug(t, "Povh3d_Cam_V"))
+            out.append(f"#declare Povh3d_Cam_{t} = Povh3d_Cam_V;")
         elif t == "angle":
             expr, i = expression(i + 1)
             out.append(f'#declare Povh3d_Cam_F = ({expr}\n);\n' + _debug("angle", "Povh3d_Cam_F", 1))
+            out.append("#declare Povh3d_Cam_angle = Povh3d_Cam_F;")
         elif t in _TRANSFORMS:
             expr, i = expression(i + 1)
             out.append(f"#declare Povh3d_Cam_T = transform {{ transform Povh3d_Cam_T {t} {expr}\n}}")
@@ -300,7 +305,7 @@ def parse_log(log: str) -> list[tuple[str, list[float] | str]]:
         elif key == "end":
             items.append((key, ""))
         else:  # a number a line: three make a vector (twelve the transform)
-            size = {"angle": 1, "transform": 12}.get(key, 3)
+            size = {"angle": 1, "transform": 12, "depth_frame": 14}.get(key, 3)
             last = items[-1] if items else None
             if last is not None and last[0] == key and isinstance(last[1], list) and len(last[1]) < size:
                 last[1].append(float(rest[0]))
@@ -312,6 +317,8 @@ def parse_log(log: str) -> list[tuple[str, list[float] | str]]:
 def camera_from_log(log: str, cameras: int = 1) -> SceneCamera:
     """POV-Ray 3.7's camera (``Parser::Parse_Camera``, version >= 3.5) from the evaluated modifiers."""
     items = parse_log(log)
+    ends = [i for i, (key, _) in enumerate(items) if key == "end"]
+    items = items[:ends[0] + 1] if ends else items   # a run of several frames prints it once a frame
     if not items or items[-1][0] != "end":
         raise _cannot("POV-Ray did not reach the end of its camera block")
     v = {"location": np.zeros(3), "direction": np.array([0.0, 0, 1]), "up": np.array([0.0, 1, 0]),

@@ -205,3 +205,46 @@ def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
         render(GALLERY / "inches.pov", small_array(), tmp_path / "x.png",
                settings=RenderSettings(quality="draft", frame=tuple(matrix.ravel())))
     assert not (tmp_path / "x.png").exists()
+
+
+def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
+    """The depth pass made in the camera's run equals a depth pass of its own in the same frame."""
+    import povh3d.app.placement as placement
+    from povh3d.app.frame import resolve_frame_and_depth
+    from povh3d.app.request import RenderRequest
+    from povh3d.engine.depth import depth_pass
+
+    scene, array = load_scene(GALLERY / "tilted.pov"), small_array()
+    settings = RenderSettings(quality="draft", cache_dir=tmp_path)
+    request = RenderRequest(source=scene.path, lens_array=array, output=tmp_path / "o.png", settings=settings)
+    monkeypatch.setattr(placement, "depth_pass", None)   # a separate pass would fail: none is run
+    _, record = placement.place_display(request, scene)
+    again = placement.place_display(request, scene)[1]
+    monkeypatch.undo()
+    assert record["depth"]["pass"] == "in the camera's evaluation run" and not record["evaluation_from_cache"]
+    assert again["evaluation_from_cache"] and again["evaluation_seconds"] < 0.05
+    frame = _frame(record)
+    own = depth_pass(scene, array, RenderSettings(frame=tuple(frame.matrix().ravel())), 4 * 28.8,
+                     frame.units_per_mm).summary(record["depth_budget_mm"])
+    for key in ("near_mm", "far_mm", "field_near_mm", "field_far_mm"):
+        assert record["depth"][key] == pytest.approx(own[key], abs=0.02), key
+    # The pass belongs to its frame and clearance: another one is measured again.
+    _, _, seen = resolve_frame_and_depth(FrameOptions(), scene, array, cache_dir=tmp_path, back_off=4 * 28.8)
+    clearance = placement._clearance(frame, record, 4 * 28.8)   # within 0.9 of the camera's distance
+    assert clearance < 4 * 28.8
+    assert seen.depth(frame, clearance, array) is not None
+    assert seen.depth(frame.scaled(1.001), clearance, array) is None
+    assert seen.depth(frame, clearance * 1.001, array) is None
+
+
+@pytest.mark.parametrize("camera, size, odd", [
+    ("camera { location -5*z look_at 0 }", (80, 60), (80, 62)),                                   # any size
+    ("camera { location -5*z right x*image_width/image_height look_at 0 }", (80, 60), (64, 50)),  # exact aspect
+    ("#declare IW = image_width;\ncamera { location -5*z right x*IW/100 look_at 0 }", None, None),  # own run
+])
+def test_the_camera_is_evaluated_at_a_size_it_cannot_tell_apart(tmp_path, camera, size, odd):
+    from povh3d.app.frame import measured_size
+
+    scene = load_scene(_scene(tmp_path, camera))
+    assert measured_size(scene, 320, 240, 80) == size
+    assert measured_size(scene, 320, 250, 80) == odd

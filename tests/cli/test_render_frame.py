@@ -42,6 +42,10 @@ def test_native_scene_summary(cli, tmp_path):
       "--display-width", "2"), "parallel"),
     (("--display-center", "0,0", "--display-normal", "0,0,1", "--display-width", "2"), "three numbers"),
     (("--fit-depth", "deep"), "--fit-depth"),
+    (("--depth-scale",), "needs --fit-depth"),
+    (("--depth-scale", "flat"), "--depth-scale takes a factor"),
+    (("--depth-scale", "0"), "--depth-scale must be a number within"),
+    (("--fit-depth", "auto", "--depth-scale", "0.5"), "both set the depth"),
     (("--display-frame", "camera", "--display-center", "0,0,0", "--display-normal", "0,0,1",
       "--display-width", "2"), "cannot be combined"),
 ])
@@ -86,3 +90,40 @@ def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path
     result = cli("render", str(scene), "-o", str(out), "--quality", "draft", "--fit-depth", "auto", *ARRAY)
     assert result.code == 2 and "--fit-depth cannot fit" in result.err
     assert result.err.strip().count("\n") == 0 and not out.exists() and not out.with_suffix(".json").exists()
+
+
+def test_depth_maps_as_16_bit_png_decode_to_the_npy_maps(cli, tmp_path):
+    import numpy as np
+
+    from povh3d.app.depth_maps import dequantise
+    from povh3d.image.io import read_png
+
+    for fmt in ("npy", "png"):
+        result = cli("render", str(GALLERY / "inches.pov"), "-o", str(tmp_path / f"{fmt}.png"), "--quality",
+                     "draft", "--depth-maps", str(tmp_path / fmt), "--depth-format", fmt, *ARRAY)
+        assert result.code == 0, result.err
+    info = json.loads((tmp_path / "png" / "depth_maps.json").read_text())
+    assert info["format"] == "png" and "code 0" in info["png"]["decode"]
+    assert not list((tmp_path / "png").glob("*.npy")) and len(list((tmp_path / "png").glob("*.png"))) == 72
+    for prefix, kind in (("d", "depth"), ("p", "disparity")):
+        scale, offset = info["png"][kind]["scale"], info["png"][kind]["offset"]
+        for view in ("000_000", "003_002", "005_005"):
+            codes = read_png(tmp_path / "png" / f"{prefix}_{view}.png")[..., 0]
+            assert codes.dtype == np.uint16
+            exact = np.load(tmp_path / "npy" / f"{prefix}_{view}.npy")
+            decoded = dequantise(codes, scale, offset)
+            np.testing.assert_array_equal(np.isnan(decoded), np.isnan(exact))   # no hit <-> code 0
+            assert np.nanmax(np.abs(decoded - exact)) <= scale / 2 * (1 + 1e-6) + 1e-6 * abs(offset)
+
+
+def test_fit_depth_by_depth_scale_says_it_distorts(cli, tmp_path):
+    out = tmp_path / "k.png"
+    result = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", "--fit-depth", "auto",
+                 "--depth-scale", *ARRAY)
+    assert result.code == 0, result.err
+    record = json.loads(out.with_suffix(".json").read_text())
+    frame = record["display_frame"]
+    assert "(distorted)" in result.out and "distortion" in frame["depth_scale_note"]
+    assert frame["depth"]["fit"]["by"] == "depth_scale" and frame["depth"]["within_budget"]
+    assert frame["depth_scale"] == pytest.approx(1 / frame["depth"]["fit"]["factor"])
+    assert record["lens_array"]["focal_mm"] == 2.0   # the display as it is; only the rays are tilted less
