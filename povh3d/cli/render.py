@@ -107,8 +107,6 @@ def cmd_render(args: argparse.Namespace) -> int:
         if result["video"]:
             print(result["video"])
         return 0
-    if "model" in result:
-        warn(result["model"]["warnings"])
     placed = result.get("display_frame", {})
     warn(placed.get("warnings", []))
     warn(result.get("warnings", []))
@@ -155,7 +153,6 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
                               rotate=_triple(args.rotate, "--rotate"), progress=update)
     finally:
         close()
-    warn(result.warnings)
     line = f"{result.include}  {result.ident}  {result.summary()}, up {result.up} ({result.up_reason})  " \
            f"{result.seconds:.2f} s"
     if result.simplification:

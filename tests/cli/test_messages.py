@@ -129,6 +129,34 @@ def test_empty_render_and_no_light_warn(tmp_path, cli, text, expected):
     assert len(lines) == 1 and lines[0].startswith("povh3d: warning: ") and expected in lines[0]
 
 
+@pytest.mark.parametrize("quiet", [[], ["-q"]], ids=["", "-q"])
+def test_mesh_warnings_are_one_line_each_and_kept_in_the_record(tmp_path, cli, quiet):
+    """A model whose texture is missing: one warning line from convert-mesh, one from render
+    MODEL (kept in the sidecar), said again when the conversion comes from the cache; -q only
+    hides the progress line."""
+    import json
+    import shutil
+
+    from tests.conftest import SAMPLES
+
+    for name in ("letter_f.obj", "letter_f.mtl"):  # its texture letter_f.png left behind
+        shutil.copy(SAMPLES / name, tmp_path / name)
+    model = tmp_path / "letter_f.obj"
+    missing = "texture 'letter_f.png' named by the model is missing"
+    result = cli("convert-mesh", model, *quiet)
+    lines = [line for line in result.err.splitlines() if line.strip()]
+    assert result.code == 0 and "letter_f.inc" in result.out
+    assert len(lines) == 1 and lines[0].startswith("povh3d: warning: ") and missing in lines[0], result.err
+    for run in ("converted", "from the cache"):
+        result = cli("render", model, "-o", tmp_path / "m.png", *TINY[:-1], *quiet)
+        lines = [line for line in result.err.splitlines() if line.strip()]
+        assert result.code == 0 and all(line.startswith("povh3d: warning: ") for line in lines), result.err
+        assert sum(missing in line for line in lines) == 1, (run, result.err)
+        model_record = json.loads((tmp_path / "m.json").read_text())["model"]
+        assert any(missing in w for w in model_record["warnings"])
+        assert model_record["conversion_from_cache"] == (run == "from the cache")
+
+
 def test_a_lit_scene_has_no_warning(tmp_path, cli):  # negative control of the two above
     result = cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY)
     assert result.code == 0 and "warning" not in result.err
