@@ -88,6 +88,10 @@ class PovrayJob:
                 self._reject(name, "must be a sequence of strings", value)
             # Lists are accepted for convenience; stored as tuples to stay hashable.
             object.__setattr__(self, name, tuple(str(item) for item in value))
+        object.__setattr__(self, "links", tuple((str(name), str(file)) for name, file in self.links))
+        for name, _ in self.links:  # a link stays inside the job folder
+            if not name or os.path.isabs(name) or ".." in Path(name).parts:
+                self._reject("links", "must name paths inside the job folder", name)
         for name in ("width", "height", "frames"):
             self._check_positive(name, getattr(self, name))
         if self.threads is not None:

@@ -118,8 +118,7 @@ class JobWatch:
         (open, write, close; the end chunk last), then logs the frame's last
         pixel count and starts the next frame.  A frame is complete when its
         file ends with the PNG end chunk and the log has reached its last pixel
-        or a later frame: a file still being written, or one left by a killed
-        process, is never reported.
+        or a later frame, so a file still being written is never reported.
         """
         if self.frame_image is None:
             return []

@@ -137,6 +137,7 @@ def test_povray_conf() -> None:
     {"width": 0}, {"height": -1}, {"frames": 0}, {"bit_depth": 12}, {"threads": 0},
     {"timeout": 0}, {"file_gamma": ""}, {"start_row": 3, "end_row": 3},
     {"end_row": 9}, {"start_row": -1}, {"include_dirs": "/one/dir"}, {"width": 2.5},
+    {"links": (("/etc/x", "/a"),)}, {"links": (("../x", "/a"),)}, {"links": (("", "/a"),)},
 ])
 def test_job_rejects_bad_values(change: dict) -> None:
     with pytest.raises(ConfigError):
