@@ -21,10 +21,12 @@ import numpy as np
 from .._version import __version__
 from .cache import ImageCache, content_key, default_cache_dir
 from ..image.io import read_png
+from ..povray.job import SCENE_FILE
+from ..povray.log import past_scene_end
 from ..povray.process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
 from ..povray.sandbox import confines, scene_inputs
 from ..povray.version_memo import remembered_version
-from ..errors import warn
+from ..errors import PovrayError, PovrayTimeout, warn
 from ..scene.scene import Scene
 from ..system import cpu_count
 from .batch import FrameBatch, RenderStats
@@ -184,7 +186,13 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         extra: dict[str, Any] = {"on_frame": frame_done} if isinstance(runner, LocalRunner) else {}
         if progress and isinstance(runner, LocalRunner):
             extra["on_running"] = running
-        stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
+        try:
+            stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
+        except PovrayError as exc:
+            if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
+                raise
+            raise PovrayError(past_scene_end(str(exc), scene.path.name, SCENE_FILE), command=exc.command,
+                              returncode=exc.returncode, log_tail=exc.log_tail) from None
     for index, source in copies.items():
         if images[index] is None:
             images[index] = images[source]

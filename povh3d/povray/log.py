@@ -261,3 +261,12 @@ def _replaced_non_ascii(reason: str, log: str) -> bool:
         if match and NON_ASCII_WARNING in match["message"] and f"{match['file']} line {match['line']}" == where:
             return True
     return False
+
+
+def past_scene_end(message: str, scene_name: str, script_name: str = "scene.pov") -> str:
+    """`message` with a location in povh3d's own script (`script_name`, which includes the
+    user's scene) said as what it means: POV-Ray read on past the end of `scene_name`,
+    so the cause is most likely there (an unclosed brace, a missing ';')."""
+    return re.sub(rf"(?<=: ){re.escape(script_name)} line \d+: ",
+                  f"POV-Ray read past the end of {scene_name} into povh3d's own script, so look at the end "
+                  f"of {scene_name} (an unclosed brace, a missing ';'): ", message, count=1)

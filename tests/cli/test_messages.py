@@ -116,6 +116,14 @@ def test_animation_error_names_the_animation_frame(tmp_path, cli):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "no staging folder left"
 
 
+def test_an_unclosed_brace_at_the_end_of_the_scene_names_the_scene(tmp_path, cli):
+    """POV-Ray notices it only in povh3d's own script (its ``scene.pov``), which the user never sees."""
+    scene = tmp_path / "mine.pov"
+    scene.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\nsphere { 0, 1 pigment { rgb 1 }\n")
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY), 6)
+    assert "past the end of mine.pov" in line and "No matching } in 'sphere'" in line and "scene.pov" not in line
+
+
 @pytest.mark.parametrize("text, expected", [
     ("sphere { <0, 0, 3>, 0.5 pigment { rgb 1 } }\n", "has no light_source"),
     ("light_source { <0, 0, -50> rgb 1 }\nsphere { <5000, 0, 3>, 1 pigment { rgb 1 } }\n", "as if no ray hit anything"),

@@ -532,3 +532,15 @@ def test_denied_note_names_povrays_ascii_file_names_only_on_the_failing_line() -
                                   "line 7: Parse Error: Cannot open include file nothere.inc")
     note = denied_note(parse_error(other), (), other, confined=False)
     assert "as ASCII" not in note and "neither beside the scene" in note
+
+
+def test_past_scene_end_rewrites_only_povh3ds_own_script() -> None:
+    from povh3d.povray.log import past_scene_end
+
+    ours = "pinhole camera 1: scene.pov line 87: Parse Error: No matching } in 'sphere', camera found instead"
+    assert past_scene_end(ours, "mine.pov") == ("pinhole camera 1: POV-Ray read past the end of mine.pov into "
+                                                "povh3d's own script, so look at the end of mine.pov (an unclosed "
+                                                "brace, a missing ';'): Parse Error: No matching } in 'sphere', "
+                                                "camera found instead")
+    theirs = "pinhole camera 1: /home/u/scene.pov line 3: Parse Error: Expected 'object'"  # the user's own scene.pov
+    assert past_scene_end(theirs, "scene.pov") == theirs
