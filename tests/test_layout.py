@@ -20,15 +20,16 @@ PACKAGE = Path(__file__).resolve().parents[1] / "povh3d"
 
 # Which top-level parts may import which (besides errors, _version and system,
 # which everything may use).  cli -> app -> engine -> povray, beside the libraries.
-LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration"}
+LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration", "volume"}
 ALLOWED = {
-    "cli": {"app", "engine", "geometry", "mappings", "mesh", "scene", "image"},
+    "cli": {"app", "engine", "geometry", "mappings", "mesh", "scene", "image", "volume"},
     "app": {"engine", "povray", *LIBRARIES},
     "engine": {"povray", *LIBRARIES},
     "povray": {"image", "scene"},
     "mappings": {"geometry", "image"},
     "mesh": {"geometry", "image", "povray"},
     "calibration": {"image", "geometry"},
+    "volume": {"geometry", "image", "mesh"},
     "image": {"geometry"},
     "scene": set(),
     "geometry": set(),
