@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, warn
 from ..image.io import atomic_path, write_png
 from ..mesh.clean import CleanReport, clean_part, vertex_normals
 from ..mesh.identifiers import check_identifier, identifier_from_path
@@ -30,7 +30,10 @@ SHADING = ("auto", "smooth", "flat")
 
 @dataclass
 class ConversionResult:
-    """What ``convert_mesh`` wrote and noticed (for the CLI and the stage)."""
+    """What ``convert_mesh`` wrote and noticed (for the CLI and the stage).
+
+    ``warnings`` were each issued once (``errors.warn``) when the include was written;
+    the list keeps them for a record (the stage's manifest, the render's sidecar)."""
 
     ident: str
     include: Path
@@ -196,6 +199,8 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
     step(3, 4)
     text = include_text(blocks, ident, (lo, hi), source=model.name, summary=result.summary())
     _write_all(output, text, textures)
+    for message in result.warnings:  # said through the one channel once written; kept for the records
+        warn(message)
     step(4, 4)
     result.seconds = time.perf_counter() - start
     return result

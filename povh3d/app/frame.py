@@ -174,7 +174,7 @@ def _evaluate(scene: Scene, script: str, lens_array: LensArray, cameras: int, ca
     the camera is the H3D image's aspect; it traces one row.
     """
     from ..povray.process import PovrayJob, run_jobs
-    from ..povray.sandbox import files_within
+    from ..povray.sandbox import scene_inputs
 
     start = time.perf_counter()
     w, h = lens_array.panel.width, lens_array.panel.height
@@ -183,8 +183,7 @@ def _evaluate(scene: Scene, script: str, lens_array: LensArray, cameras: int, ca
     if use_cache and path.is_file():
         return json.loads(path.read_text(encoding="utf-8")), time.perf_counter() - start, True
     job = PovrayJob(name="scene camera", script=script, width=w, height=h, start_row=0, end_row=1,
-                    include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), threads=1,
-                    read_files=files_within(scene.files, scene.include_dirs), timeout=120)
+                    options=("-A",), threads=1, timeout=120, **scene_inputs(scene))
     logs: list[str] = []
     run_jobs([job], processes=1, on_result=lambda result: logs.append(result.log))
     camera = camera_from_log(logs[0] if logs else "", cameras).as_record()

@@ -29,7 +29,7 @@ import numpy as np
 
 from .._version import __version__
 from ..engine.cache import content_key, default_cache_dir
-from ..errors import ConfigError
+from ..errors import ConfigError, warn
 from ..geometry.lens_array import LensArray
 from ..errors import OutputError
 from ..image.io import atomic_path, check_writable
@@ -142,7 +142,6 @@ def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: i
     except (OSError, OutputError) as exc:  # an unusable cache: convert into a folder of this run
         import tempfile
 
-        from ..errors import warn
         from ..system import owned_prefix
 
         warn(f"the mesh cache {str(folder.parent.parent)!r} cannot be used ({exc}); converting without it")
@@ -183,11 +182,15 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
     if not stage.is_file():
         with atomic_path(stage) as tmp:
             tmp.write_text(text, encoding="utf-8")
+    # The conversion's warnings were said when it ran; a converted model from the cache says them again.
+    said = [] if manifest["from_cache"] else list(manifest["warnings"])
     warnings = list(manifest["warnings"])
     if placement.size[2] > placement.depth * (1 + 1e-9):
         warnings.append(f"the model is {placement.size[2]:.3g} mm deep at this size, beyond the depth budget "
                         f"of {placement.depth:.3g} mm (2 N f): its front and back look blurred; "
                         f"--depth {placement.depth:.3g} fits it")
+    for message in warnings[len(said):]:
+        warn(message)
     record = {"model": str(Path(model)), "include": str(include), "triangles": manifest["triangles"],
               "conversion_from_cache": manifest["from_cache"], "warnings": warnings,
               "up": manifest.get("up"), "up_reason": manifest.get("up_reason"),

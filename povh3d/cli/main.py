@@ -90,14 +90,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 @contextlib.contextmanager
 def _signals_as_interrupt():
     """SIGTERM and SIGHUP stop a run as Ctrl-C does: every child stopped, every temporary
-    folder removed, no output replaced (they re-raise SIGINT, so a handler that holds
-    Ctrl-C while a child starts holds them too)."""
+    folder removed, no output replaced (they raise KeyboardInterrupt themselves: a shell
+    starts a background job with SIGINT ignored, and SIGTERM must still stop it)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     previous = {}
     for signum in (signal.SIGTERM, signal.SIGHUP):
-        previous[signum] = signal.signal(signum, lambda *_: signal.raise_signal(signal.SIGINT))
+        previous[signum] = signal.signal(signum, signal.default_int_handler)
     try:
         yield
     finally:

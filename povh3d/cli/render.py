@@ -161,7 +161,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
             print(result["video"])
         return None
     placed = result.get("display_frame", {})
-    noted = [*result.get("model", {}).get("warnings", []), *placed.get("warnings", []), *result.get("warnings", [])]
+    noted = [*placed.get("warnings", []), *result.get("warnings", [])]  # the model's come through the channel
     warn(noted)
     t = result["timings"]
     w, h = request.image_size
@@ -228,7 +228,6 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
                               rotate=_triple(args.rotate, "--rotate"), progress=update)
     finally:
         close()
-    warn(result.warnings)
     line = f"{result.include}  {result.ident}  {result.summary()}, up {result.up} ({result.up_reason})  " \
            f"{result.seconds:.2f} s"
     if result.simplification:

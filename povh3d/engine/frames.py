@@ -12,6 +12,7 @@ import hashlib
 import time
 from collections import Counter
 from collections.abc import Callable
+from pathlib import Path
 
 from typing import Any
 
@@ -20,17 +21,17 @@ import numpy as np
 from .._version import __version__
 from .cache import ImageCache, content_key, default_cache_dir
 from ..image.io import read_png
+from ..povray.job import SCENE_FILE
+from ..povray.log import past_scene_end
 from ..povray.process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
-from ..povray.sandbox import confines, files_within
+from ..povray.sandbox import confines, scene_inputs
 from ..povray.version_memo import remembered_version
-from ..errors import warn
+from ..errors import PovrayError, PovrayTimeout, warn
 from ..scene.scene import Scene
 from ..system import cpu_count
 from .batch import FrameBatch, RenderStats
 from .quality import Progress, RenderSettings
 from ..povray.templates import render_template, templates_dir
-
-RESUME_SPLIT = 4  # jobs per method batch when caching (see render_frames)
 
 
 class LocalRunner:
@@ -42,9 +43,10 @@ class LocalRunner:
         self.version = remembered_version(binary, default_cache_dir(), povray_version)
 
     def run(self, jobs: list[PovrayJob], *, processes: int, on_result: Callable[[JobResult], None],
-            on_running: Callable[[dict[int, float]], None] | None = None) -> list[float]:
+            on_running: Callable[[dict[int, float]], None] | None = None,
+            on_frame: Callable[[PovrayJob, int, Path], None] | None = None) -> list[float]:
         return run_jobs(jobs, processes=processes, on_result=on_result, binary=self.binary,
-                        on_running=on_running)
+                        on_running=on_running, on_frame=on_frame)
 
 
 def _canonical(value: Any) -> Any:
@@ -130,9 +132,9 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
     missing = [i for i in missing if copies[i] == i]
     n_copies = Counter(copies.values())
 
-    # A job's frames reach the cache when the job ends: a quarter of the method's
-    # batch per job, so a run stopped (Ctrl-C, timeout, crash) keeps most of its work.
-    per_job = max(1, -(-batch.frames_per_job // RESUME_SPLIT)) if cache is not None else batch.frames_per_job
+    # Frames reach the cache one by one as POV-Ray writes them (``take``), so the method's
+    # batching into runs costs nothing when a run is stopped (Ctrl-C, timeout, crash).
+    per_job = batch.frames_per_job
     chunks = [missing[i:i + per_job] for i in range(0, len(missing), per_job)]
     cores = cpu_count()
     processes = max(1, min(len(chunks) or 1, settings.jobs or batch.processes or cores))
@@ -146,24 +148,33 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
                               header=header)
         name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
         jobs.append(PovrayJob(name=name, script=script, width=batch.width, height=batch.height,
-                              frames=len(chunk), include_dirs=tuple(str(d) for d in scene.include_dirs),
-                              options=settings.options + batch.options, threads=threads, bit_depth=settings.bit_depth,
-                              file_gamma="sRGB", timeout=settings.timeout,
-                              read_files=files_within(scene.files, scene.include_dirs)))
+                              frames=len(chunk), options=settings.options + batch.options, threads=threads,
+                              bit_depth=settings.bit_depth, file_gamma="sRGB", timeout=settings.timeout,
+                              **scene_inputs(scene)))
     chunk_of_job = {id(job): chunk for job, chunk in zip(jobs, chunks)}
 
     done = stats.cached
     if progress:
         progress(done, len(keys))
 
-    def collect(result: JobResult) -> None:
-        # Jobs finish in any order; count the frames each one brings.
+    def take(index: int, image_path: Path) -> None:
         nonlocal done
+        images[index] = read_png(image_path)  # decoded whole: a complete PNG
+        if cache is not None:
+            cache.store(keys[index], image_path)
+        done += n_copies.get(index, 1)
+
+    def frame_done(job: PovrayJob, frame: int, image_path: Path) -> None:
+        # A frame of a running job, as soon as POV-Ray has written it.
+        take(chunk_of_job[id(job)][frame], image_path)
+        if progress:
+            progress(done, len(keys))
+
+    def collect(result: JobResult) -> None:
+        # Jobs finish in any order; take the frames not taken while the job ran.
         for index, image_path in zip(chunk_of_job[id(result.job)], result.images):
-            images[index] = read_png(image_path)
-            if cache is not None:
-                cache.store(keys[index], image_path)
-            done += n_copies.get(index, 1)
+            if images[index] is None:
+                take(index, image_path)
         if progress:
             progress(done, len(keys))
 
@@ -172,8 +183,16 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         progress(done + sum(rendered.values()), len(keys))
 
     if jobs:
-        extra = {"on_running": running} if progress and isinstance(runner, LocalRunner) else {}
-        stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
+        extra: dict[str, Any] = {"on_frame": frame_done} if isinstance(runner, LocalRunner) else {}
+        if progress and isinstance(runner, LocalRunner):
+            extra["on_running"] = running
+        try:
+            stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
+        except PovrayError as exc:
+            if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
+                raise
+            raise PovrayError(past_scene_end(str(exc), scene.path.name, SCENE_FILE), command=exc.command,
+                              returncode=exc.returncode, log_tail=exc.log_tail) from None
     for index, source in copies.items():
         if images[index] is None:
             images[index] = images[source]

@@ -126,7 +126,8 @@ def _on_worker(job: PovrayJob, files: _Files) -> tuple[list[bytes], float, str]:
         local = dataclasses.replace(
             job, script=script,
             include_dirs=tuple(here(d) for d in job.include_dirs),
-            read_files=None if job.read_files is None else tuple(here(p) for p in job.read_files))
+            read_files=None if job.read_files is None else tuple(here(p) for p in job.read_files),
+            links=tuple((name, here(target)) for name, target in job.links))
         for folder in local.include_dirs:
             os.makedirs(folder, exist_ok=True)
         out: list[tuple[list[bytes], float, str]] = []

@@ -54,6 +54,10 @@ class PovrayJob:
     read_files : tuple of str or None
         The files the scene may read (the sandbox's allow-list), besides
         POV-Ray's own; None allows everything below `include_dirs`.
+    links : tuple of (str, str)
+        ``(name, file)``: a link ``name`` (relative) in the job's folder, POV-Ray's
+        working folder, to ``file``: how a scene reaches a file it names with
+        non-ASCII characters (``scene.Scene.ascii_names``).
     """
 
     name: str
@@ -70,6 +74,7 @@ class PovrayJob:
     start_row: int | None = None
     end_row: int | None = None
     read_files: tuple[str, ...] | None = None
+    links: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         if self.read_files is not None:
@@ -83,6 +88,10 @@ class PovrayJob:
                 self._reject(name, "must be a sequence of strings", value)
             # Lists are accepted for convenience; stored as tuples to stay hashable.
             object.__setattr__(self, name, tuple(str(item) for item in value))
+        object.__setattr__(self, "links", tuple((str(name), str(file)) for name, file in self.links))
+        for name, _ in self.links:  # a link stays inside the job folder
+            if not name or os.path.isabs(name) or ".." in Path(name).parts:
+                self._reject("links", "must name paths inside the job folder", name)
         for name in ("width", "height", "frames"):
             self._check_positive(name, getattr(self, name))
         if self.threads is not None:
@@ -219,6 +228,13 @@ def collect_images(folder: Path, frames: int) -> tuple[Path, ...] | None:
     return tuple(numbered[number] for number in range(1, frames + 1))
 
 
+def frame_image(folder: Path, frames: int, number: int) -> Path:
+    """Where POV-Ray writes frame `number` (1-based) of a job of `frames` frames."""
+    if frames == 1:
+        return folder / f"{OUTPUT_STEM}.png"
+    return folder / f"{OUTPUT_STEM}{number:0{len(str(frames))}d}.png"
+
+
 def expected_images(job: PovrayJob) -> str:
     if job.frames == 1:
         return f"{OUTPUT_STEM}.png"
@@ -234,9 +250,14 @@ def ascii_paths(job: PovrayJob, folder: Path) -> PovrayJob:
     POV-Ray 3.7 reads strings in scripts and on its command line as ASCII and
     replaces other characters by spaces ("Cannot open include file .../T  l");
     a link named ``povh3d-link-N`` in the job folder reaches the same file.  The
+    scene's own non-ASCII names get links under the names POV-Ray will ask for
+    (`job.links`): the job folder is its working folder, searched first.  The
     sandbox and POV-Ray's own I/O rules still apply: the links sit in the job
     folder and resolve to the files the job may read.
     """
+    for name, target in job.links:
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        os.symlink(target, folder / name)
     links: dict[str, str] = {}
 
     def alias(path: str) -> str:
@@ -252,3 +273,10 @@ def ascii_paths(job: PovrayJob, folder: Path) -> PovrayJob:
     if not links:
         return job
     return replace(job, include_dirs=dirs, script=script)
+
+
+def original_names(text: str, folder: Path) -> str:
+    """`text` (an error) with the links `ascii_paths` made in `folder` named by what they stand for."""
+    for link in folder.glob("povh3d-link-*"):
+        text = text.replace(str(link), os.readlink(link))
+    return text

@@ -228,14 +228,45 @@ def tail(log: str, lines: int = 40) -> str:
 _INCLUDE_NAME = re.compile(r"Cannot open include file (.+?)\.?\s*$", re.M)
 
 
-def denied_note(reason: str, include_dirs: tuple[str, ...]) -> str:
-    """What to add to a "cannot open" error: the sandbox note only when the file exists
-    (so the sandbox refused it); otherwise that it is not there."""
+#: POV-Ray 3.7's warning where it turns a non-ASCII character of a string into a space.
+NON_ASCII_WARNING = "Non-ASCII character has been replaced"
+
+
+def denied_note(reason: str, include_dirs: tuple[str, ...], log: str = "", confined: bool = True) -> str:
+    """What to add to a "cannot open" error: POV-Ray's ASCII file names when it replaced
+    non-ASCII characters; that the file is not there; else, when `confined`, the sandbox
+    note (the file exists, so the sandbox refused it)."""
+    if _replaced_non_ascii(reason, log):
+        return (" (POV-Ray 3.7 reads the file names written in a scene as ASCII and turned each non-ASCII "
+                "character into a space; povh3d bridges that for names relative to the scene's folder or an "
+                "--include folder, not for absolute names, names with '..' or names computed while parsing: "
+                "rename the file and its folders with ASCII characters only)")
     match = _INCLUDE_NAME.search(reason)
     if match:
         name = match[1].strip()
         if not any(os.path.exists(os.path.join(d, name)) for d in (*include_dirs, ".")):
             return (f" ({name} is neither beside the scene nor in an --include folder; check the name, "
                     "or add its folder with --include)")
+    if not confined:
+        return ""
     return (" (povh3d lets a scene read only its own files and POV-Ray's include files, "
             "and write only in its job folder)")
+
+
+def _replaced_non_ascii(reason: str, log: str) -> bool:
+    """Whether POV-Ray replaced a non-ASCII character on the line that the error `reason` names."""
+    where = reason.split(": ", 1)[0]
+    for line in unwrap(log):
+        match = _LOCATION.match(line.strip())
+        if match and NON_ASCII_WARNING in match["message"] and f"{match['file']} line {match['line']}" == where:
+            return True
+    return False
+
+
+def past_scene_end(message: str, scene_name: str, script_name: str = "scene.pov") -> str:
+    """`message` with a location in povh3d's own script (`script_name`, which includes the
+    user's scene) said as what it means: POV-Ray read on past the end of `scene_name`,
+    so the cause is most likely there (an unclosed brace, a missing ';')."""
+    return re.sub(rf"(?<=: ){re.escape(script_name)} line \d+: ",
+                  f"POV-Ray read past the end of {scene_name} into povh3d's own script, so look at the end "
+                  f"of {scene_name} (an unclosed brace, a missing ';'): ", message, count=1)

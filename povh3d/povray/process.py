@@ -41,7 +41,7 @@ from . import sandbox
 from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
     RenderInterrupted)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
-                  expected_images, povray_conf)
+                  expected_images, frame_image, original_names, povray_conf)
 from ..system import owned_prefix, sweep_orphans
 from .log import denied_note, describe_exit, parse_error, tail
 from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
@@ -128,10 +128,10 @@ class _Child:
 def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
              on_result: Callable[[JobResult], None] | None = None,
              on_progress: Callable[[int, int], None] | None = None,
-             binary: str | None = None,
-             workdir: str | Path | None = None,
+             binary: str | None = None, workdir: str | Path | None = None,
              should_stop: Callable[[], bool] | None = None,
-             on_running: Callable[[dict[int, float]], None] | None = None) -> list[float]:
+             on_running: Callable[[dict[int, float]], None] | None = None,
+             on_frame: Callable[[PovrayJob, int, Path], None] | None = None) -> list[float]:
     """Render jobs with at most `processes` POV-Ray children at once.
 
     Parameters
@@ -141,8 +141,8 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
     processes : int
         Most children running at the same time.
     on_result : callable, optional
-        Called with each `JobResult` as its job finishes, in this thread,
-        while the job's images exist; they are deleted when it returns.
+        Called with each `JobResult` as its job finishes, in this thread, while
+        the job's images exist (deleted when it returns).
     on_progress : callable, optional
         Called as ``on_progress(done, total)`` after each job, in this thread.
     binary : str, optional
@@ -154,6 +154,9 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
         `RenderInterrupted` (a cancelled task on a Dask worker).
     on_running : callable, optional
         Called every ``PROGRESS_SECONDS`` with ``{job index: frames rendered}`` (``watch.LogProgress``).
+    on_frame : callable, optional
+        ``on_frame(job, frame index (0-based), image)`` as soon as a frame of a running job is complete
+        (``JobWatch.finished_frames``; `on_running` then omits it); `on_result` still gets every image.
 
     Returns
     -------
@@ -191,7 +194,7 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
             while pending and len(running) < processes:
                 index, job = pending.popleft()
                 _start(index, job, binary, workdir, running)
-            for child in _wait_for_exits(running, should_stop, on_running):
+            for child in _wait_for_exits(running, should_stop, on_running, on_frame):
                 running.remove(child)
                 seconds[child.index] = _finish(child, on_result)
                 done += 1
@@ -220,7 +223,8 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
         with open(folder / LOG_FILE, "wb") as log, sandbox.confinement(binary, _inputs(run), folder) as fd, \
                 _deferred_interrupt():
             process = _spawn(command, folder, env, log, fd)
-            watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job.frames))
+            watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job.frames),
+                             functools.partial(frame_image, folder, job.frames))
             running.append(_Child(index, job, folder, command, process, time.monotonic(), watch))
             registered = True
     except BaseException:
@@ -279,32 +283,39 @@ def _prepare(folder: Path, job: PovrayJob) -> dict[str, str]:
 
 @contextlib.contextmanager
 def _deferred_interrupt() -> Iterator[None]:
-    """Hold Ctrl-C while a child starts, so it is recorded before any interrupt.
+    """Hold Ctrl-C (and SIGTERM, SIGHUP where Python handles them) while a child starts,
+    so it is recorded before any interrupt.
 
     A KeyboardInterrupt raised inside Popen after the fork would leave a child
     nobody knows of.  Python raises it only in the main thread, where the
-    SIGINT handler may be swapped; elsewhere there is nothing to hold.
+    handlers may be swapped; elsewhere there is nothing to hold.  An ignored
+    signal stays ignored.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     caught: list[int] = []
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    held = [s for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP) if callable(signal.getsignal(s))]
+    previous = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s in held}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
-        if caught and callable(previous):
-            previous(signal.SIGINT, None)  # the default handler raises KeyboardInterrupt
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if caught:
+            previous[caught[0]](caught[0], None)  # e.g. the default SIGINT handler raises KeyboardInterrupt
 
 
 def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | None = None,
-                    on_running: Callable[[dict[int, float]], None] | None = None) -> list[_Child]:
+                    on_running: Callable[[dict[int, float]], None] | None = None,
+                    on_frame: Callable[[PovrayJob, int, Path], None] | None = None) -> list[_Child]:
     """Wait until a child exits (woken by it, not polling); the exited ones.  Raises on a timeout or a stop."""
     while True:
         if should_stop is not None and should_stop():
             raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
         for child in running:
+            for number in child.watch.finished_frames() if on_frame is not None else ():
+                on_frame(child.job, number - 1, child.watch.frame_image(number))
             if child.process.poll() is None and child.watch.images_done():
                 _signal_groups([child], signal.SIGKILL)  # only its shutdown is left (JobWatch)
                 child.watch.early = child.process.wait() is not None
@@ -321,9 +332,9 @@ def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | Non
         if should_stop is not None:
             wake.append(STOP_CHECK_SECONDS)
         if on_running is not None:
-            on_running({child.index: child.watch.progress.frames_rendered() for child in running})
+            on_running({c.index: c.watch.progress.frames_rendered() - c.watch.handed for c in running})
             wake.append(PROGRESS_SECONDS)
-        wake += [child.watch.recheck for child in running if child.watch.written]
+        wake += [child.watch.recheck for child in running if child.watch.written or child.watch.awaiting_log]
         sleep_until_exit([c.process.pid for c in running], min(wake, default=None), [c.watch.fd for c in running])
 
 
@@ -352,9 +363,9 @@ def _failure(child: _Child, log: str) -> PovrayError:
         reason = f"POV-Ray finished without writing {expected_images(child.job)}"
     if code == 126 and not log.strip():
         reason = "the POV-Ray process could not enter its sandbox (Landlock); set POVH3D_SANDBOX=off to run unconfined"
-    elif _DENIED.search(reason) and sandbox.landlock_abi() and sandbox.sandbox_mode() != "off":
-        reason += denied_note(reason, child.job.include_dirs)
-    return PovrayError(f"{child.job.name}: {reason}", command=child.command,
+    elif _DENIED.search(reason):
+        reason += denied_note(reason, child.job.include_dirs, log, sandbox.confines())
+    return PovrayError(f"{child.job.name}: {original_names(reason, child.folder)}", command=child.command,
                        returncode=code, log_tail=tail(log))
 
 

@@ -38,11 +38,15 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ConfigError, OutputError
 
+if TYPE_CHECKING:
+    from ..scene.scene import Scene
+
 __all__ = ["Policy", "Ruleset", "landlock_abi", "sandbox_mode", "system_read_paths",
-           "build_ruleset", "restrict_self", "describe", "files_within"]
+           "build_ruleset", "restrict_self", "describe", "files_within", "scene_inputs"]
 
 ENV_VAR = "POVH3D_SANDBOX"
 MODES = ("auto", "require", "off")
@@ -168,6 +172,14 @@ def files_within(files: Iterable[str | os.PathLike[str]],
         if any(os.path.commonpath([real, root]) == root for root in roots):
             kept.append(real)
     return tuple(kept)
+
+
+def scene_inputs(scene: Scene) -> dict[str, Any]:
+    """The `PovrayJob` fields through which a job reads `scene`: its include folders, its
+    allow-list (`files_within`), and links to the files it names with non-ASCII characters."""
+    return {"include_dirs": tuple(str(d) for d in scene.include_dirs),
+            "read_files": files_within(scene.files, scene.include_dirs),
+            "links": tuple((name, str(file)) for name, file in scene.ascii_names)}
 
 
 class Ruleset:

@@ -56,7 +56,12 @@ class JobWatch:
     """A running job's folder, watched (Linux inotify) for its images being written.
 
     `log` is the job's log in that folder, `images` returns its images in
-    frame order, or None until all are there (``job.collect_images``).
+    frame order, or None until all are there (``job.collect_images``), and
+    `frame_image` where frame n (1-based) is written (``job.frame_image``).
+
+    ``finished_frames`` tells which frames are complete while the job still
+    runs, so the runner can hand each one over (to the image cache) as soon as
+    POV-Ray has written it: a run stopped part way keeps every finished frame.
 
     POV-Ray spends about 0.3 s after writing its last image shutting its threads
     down (timed waits, then a 100 ms sleep) before it exits.  ``images_done``
@@ -66,8 +71,11 @@ class JobWatch:
     runner then waits for the exit as before).
     """
 
-    def __init__(self, log: Path, frames: int, images: Callable[[], Sequence[Path] | None]) -> None:
-        self.frames, self.images = frames, images
+    def __init__(self, log: Path, frames: int, images: Callable[[], Sequence[Path] | None],
+                 frame_image: Callable[[int], Path] | None = None) -> None:
+        self.frames, self.images, self.frame_image = frames, images, frame_image
+        self.handed = 0  # frames 1..handed were reported by finished_frames
+        self.waiting: float | None = None  # since when a written frame awaits the log's confirmation
         self.progress = LogProgress(log, frames)
         folder = log.parent
         self.fd: int | None = None
@@ -102,6 +110,38 @@ class JobWatch:
             self.written = False
             self.close()
         return False
+
+    def finished_frames(self) -> list[int]:
+        """The frames (1-based, in order) newly known complete since the last call.
+
+        POV-Ray 3.7 writes a frame's PNG in one go once the frame is traced
+        (open, write, close; the end chunk last), then logs the frame's last
+        pixel count and starts the next frame.  A frame is complete when its
+        file ends with the PNG end chunk and the log has reached its last pixel
+        or a later frame, so a file still being written is never reported.
+        """
+        if self.frame_image is None:
+            return []
+        self.progress.frames_rendered()
+        state = self.progress.frame, self.progress.share
+        done = []
+        while self.handed < self.frames:
+            number = self.handed + 1
+            if not _complete_png(self.frame_image(number)):
+                break
+            if not (state[0] > number or (state[0] == number and state[1] >= 1.0)):
+                # Written; the log follows within milliseconds (``awaiting_log``).
+                self.waiting = time.monotonic() if self.waiting is None else self.waiting
+                break
+            self.handed, self.waiting = number, None
+            done.append(number)
+        return done
+
+    @property
+    def awaiting_log(self) -> bool:
+        """A frame is written and its confirmation in the log is due any moment: look again
+        soon (``recheck``), for half a second at most (then at the next event, or the job's end)."""
+        return self.waiting is not None and time.monotonic() - self.waiting < 0.5
 
     def _drain(self) -> bool:
         events = False

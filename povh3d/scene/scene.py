@@ -18,7 +18,12 @@ renders:
 - whether it reads a file whose name is computed while POV-Ray parses
   (``#include concat(...)``): such a file cannot be found by this walk, so it
   is not in the digest; confined by the sandbox POV-Ray cannot read it, but
-  unconfined it can, and the cache must not be used (``engine.frames``).
+  unconfined it can, and the cache must not be used (``engine.frames``);
+- the names POV-Ray 3.7 will ask for where the scene names a file with
+  non-ASCII characters: it reads strings as ASCII and turns each non-ASCII
+  byte into a space (``#include "pièce.inc"`` opens ``"pi  ce.inc"``), so the
+  runner links those names to the real files in the job folder
+  (``povray.job.ascii_paths``).
 
 Comments do not count; a mention anywhere else, even in a string, does: a false
 alarm only costs work, a miss would give wrong pixels.
@@ -67,6 +72,8 @@ class Scene:
     computed_names : bool     whether the scene's own sources read a file through a name
                               computed at parse time (not in ``files`` nor the digest)
     lit : bool                whether its sources mention a light_source, emission or radiosity
+    ascii_names : tuple[tuple[str, Path], ...]   (the name POV-Ray 3.7 asks for, the file) for each
+                              file the scene names with non-ASCII characters (``pov_ascii_names``)
     """
 
     path: Path
@@ -78,6 +85,7 @@ class Scene:
     uses_clock: bool = False
     computed_names: bool = False
     lit: bool = True
+    ascii_names: tuple[tuple[str, Path], ...] = ()
 
 
 # A scene with neither shows its objects in their ambient colour only (nearly black).
@@ -106,11 +114,42 @@ def _read_text(path: Path) -> str:
 
 
 def _find(name: str, folders: list[Path]) -> Path | None:
+    name = os.fsdecode(name.encode("latin-1"))  # the text's bytes are the file's name
     for base in folders:
         candidate = base / name
         if candidate.is_file():
             return candidate.resolve()
     return None
+
+
+_NON_ASCII = re.compile(r"[^\x00-\x7f]")
+
+
+def pov_ascii_names(literal: str) -> list[str]:
+    """The names POV-Ray 3.7 opens for the file name `literal` (the latin-1 text of a string's bytes).
+
+    It replaces each non-ASCII byte by a space; after ``global_settings { charset utf8 }``,
+    each non-ASCII character.  Only names relative to its working folder can be given a
+    link there: an absolute name or one with ``..`` gets none.
+    """
+    names = {_NON_ASCII.sub(" ", literal)}
+    try:
+        names.add(_NON_ASCII.sub(" ", literal.encode("latin-1").decode("utf-8")))
+    except UnicodeDecodeError:
+        pass
+    return sorted(n for n in names if not (n.startswith("/") or ".." in n.split("/")))
+
+
+def _ascii_links(named: dict[str, Path]) -> tuple[tuple[str, Path], ...]:
+    """(name POV-Ray asks for, file) for the non-ASCII names; two files behind one name are refused."""
+    links: dict[str, Path] = {}
+    for literal, file in sorted(named.items()):
+        for name in pov_ascii_names(literal):
+            if links.setdefault(name, file) != file:
+                raise InputError(f"POV-Ray 3.7 reads file names as ASCII, so {str(links[name])!r} and "
+                                 f"{str(file)!r} both look like {name!r} to it; rename one of them with ASCII "
+                                 "characters only")
+    return tuple(sorted(links.items()))
 
 
 def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
@@ -139,6 +178,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     sources: list[str] = []           # POV-Ray source texts, the scene's and the system's
     pending = [(scene, True)]
     sets_gamma = computed = False
+    named: dict[str, Path] = {}       # non-ASCII file names in the scene's text, and their files
     while pending:
         current, is_own = pending.pop()
         if current in seen:
@@ -159,6 +199,8 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
             found = _find(name, [current.parent, *dirs] if is_own else [current.parent, *system])
             if found is not None:
                 pending.append((found, is_own))
+                if is_own and not name.isascii():
+                    named[name] = found
             elif (found := _find(name, system)) is not None:
                 pending.append((found, False))
 
@@ -170,4 +212,4 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         h.update(b"\0")
     return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
                  features_of_text(sources), any(_CLOCK_WORDS.search(t) for t in sources), computed,
-                 any(_LIGHT.search(t) for t in sources))
+                 any(_LIGHT.search(t) for t in sources), _ascii_links(named))

@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -112,13 +113,16 @@ def _result(done):
 
 
 # -- signals -------------------------------------------------------------------------------------------
-def _start_slow_render(tmp_path: Path, out: Path) -> tuple[subprocess.Popen, Path]:
+def _start_slow_render(tmp_path: Path, out: Path, ignore_sigint: bool = False) -> tuple[subprocess.Popen, Path]:
+    """`render` at --quality high in a child, once POV-Ray runs; `ignore_sigint`: started as a shell
+    starts a background job (`cmd &`), with SIGINT ignored."""
     tmp = tmp_path / "tmp"
     tmp.mkdir(exist_ok=True)
     env = {**os.environ, "TMPDIR": str(tmp), "POVH3D_CACHE": str(tmp_path / "cache")}
     proc = subprocess.Popen(cli_command("render", SAMPLE, "-o", out, "--preset", "demo", "--quality", "high",
                                         "-q", "--jobs", "1"),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=(lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignore_sigint else None)
     deadline = time.monotonic() + 60
     while not list(tmp.glob(f"povh3d-{proc.pid}-*/frame*")) and not list(tmp.glob(f"povh3d-{proc.pid}-*/*.log")):
         assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
@@ -140,11 +144,12 @@ def _povray_children_of(pid: int) -> list[int]:
     return found
 
 
-@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
-def test_sigterm_and_sighup_stop_like_ctrl_c(tmp_path, signum):
+@pytest.mark.parametrize("signum, background", [(signal.SIGTERM, False), (signal.SIGHUP, False),
+                                                (signal.SIGINT, False), (signal.SIGTERM, True)])
+def test_sigterm_and_sighup_stop_like_ctrl_c(tmp_path, signum, background):
     out = tmp_path / "good.png"
     write_image(out, _noise(seed=3), base_record("h3d", note="old"))
-    proc, tmp = _start_slow_render(tmp_path, out)
+    proc, tmp = _start_slow_render(tmp_path, out, ignore_sigint=background)
     assert _povray_children_of(proc.pid)
     proc.send_signal(signum)
     _, err = proc.communicate(timeout=30)
@@ -230,28 +235,52 @@ def test_unusable_cache_is_one_warning_and_the_render_goes_on(tmp_path, cli, whe
     assert read_png(tmp_path / "a.png").shape == (16, 24, 3)
 
 
-def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, monkeypatch):
-    """Frames reach the cache job by job: stop after the first job's frames, and the re-run
-    takes them from the cache (pinhole: one frame per lens, several jobs)."""
-    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
-    args = ["render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--method", "pinhole", "--jobs", "1"]
-    real = ImageCache.store
-    stored = []
+# Pinhole: one small frame per lens, 24 frames in POV-Ray runs of 6 (--jobs 1), about 0.25 s each.
+PACED = ["--preset", "demo", "--lenses", "6x4", "--ppl", "8", "--method", "pinhole", "--quality", "high",
+         "-q", "--jobs", "1"]
 
-    def store_then_stop(self, key, source):
-        real(self, key, source)
-        stored.append(key)
-        if len(stored) == 3:
-            raise KeyboardInterrupt
 
-    monkeypatch.setattr(ImageCache, "store", store_then_stop)
-    result = cli(*args, env=env)
-    assert result.code == 130 and not (tmp_path / "a.png").exists()
-    monkeypatch.setattr(ImageCache, "store", real)
-    result = cli(*args, env=env)
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory) -> np.ndarray:
+    folder = tmp_path_factory.mktemp("uninterrupted")
+    done = subprocess.run(cli_command("render", SAMPLE, "-o", folder / "a.png", *PACED, "--no-cache"),
+                          capture_output=True, text=True, timeout=300, check=False,
+                          env={**os.environ, "POVH3D_CACHE": str(folder / "cache")})
+    assert done.returncode == 0, done.stderr
+    return read_png(folder / "a.png")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
+def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, monkeypatch, uninterrupted, signum):
+    """Frames reach the cache one by one as POV-Ray writes them: stop a render in the middle
+    of its first POV-Ray run, and the re-run renders only the frames that are missing, into
+    the same pixels as a render never stopped."""
+    from povh3d.engine import frames
+
+    cache, out = tmp_path / "cache", tmp_path / "a.png"
+    env = {**os.environ, "POVH3D_CACHE": str(cache), "TMPDIR": str(tmp_path)}
+    proc = subprocess.Popen(cli_command("render", SAMPLE, "-o", out, *PACED), env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while len(_entries(cache)) < 3:  # 3 of the first run's 6 frames
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.01)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == (-signal.SIGKILL if signum == signal.SIGKILL else 130), err
+    kept = len(_entries(cache))
+    assert 3 <= kept < 24 and not out.exists()
+
+    asked: list[int] = []  # frames each POV-Ray run of the re-run is asked for
+    real = frames.run_jobs
+    monkeypatch.setattr(frames, "run_jobs", lambda jobs, **kw: asked.extend(j.frames for j in jobs) or real(jobs, **kw))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # where the re-run's job folders go (and are swept)
+    result = cli("render", SAMPLE, "-o", out, *PACED, env={"POVH3D_CACHE": str(cache)})
     assert result.code == 0, result.err
     timings = json.loads((tmp_path / "a.json").read_text())["timings"]
-    assert timings["frames_from_cache"] >= 3 and timings["frames"] == 24
+    assert sum(asked) == 24 - kept and timings["frames_from_cache"] == kept and timings["frames"] == 24
+    assert np.array_equal(read_png(out), uninterrupted)
+    assert not list(tmp_path.glob("povh3d-*")), "job folders removed (a killed run's swept by the re-run)"
 
 
 def test_computed_include_with_the_sandbox_off_is_not_cached(tmp_path, cli):
@@ -295,15 +324,39 @@ def test_corrupt_sidecar_is_reported_as_corrupt(tmp_path, cli):
     assert "corrupt" in line and "no sidecar" not in line
 
 
-def test_scene_under_a_non_ascii_folder_renders(tmp_path, cli):
+PART = "sphere { <0, 0, 3>, 5 pigment { checker rgb 1 rgb <0, 0.3, 1> scale 0.4 } finish { emission 1 } }\n"
+
+
+def _write_scene(folder: Path, scene: str, include: str, settings: str = "") -> Path:
+    (folder / include).parent.mkdir(parents=True, exist_ok=True)
+    (folder / include).write_text(PART)
+    (folder / scene).write_text(f'#version 3.7;\nglobal_settings {{ assumed_gamma 1.0 {settings}}}\n#include "{include}"\n')
+    return folder / scene
+
+
+@pytest.mark.parametrize("settings", ["", "charset utf8 "])
+def test_scene_and_includes_with_non_ascii_names_render(tmp_path, cli, settings):
+    """A scene under a non-ASCII folder that includes a non-ASCII file (POV-Ray 3.7 reads the name as
+    ASCII): the same pixels as the same scene with ASCII names."""
     folder = tmp_path / "Téléchargements" / "mes scènes"
     folder.mkdir(parents=True)
-    (folder / "part.inc").write_text("sphere { <0, 0, 3>, 5 pigment { rgb 1 } finish { emission 1 } }\n")
-    (folder / "scène 1.pov").write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#include "part.inc"\n')
-    result = cli("render", folder / "scène 1.pov", "-o", folder / "sortie é.png", *TINY, "--no-cache")
-    assert result.code == 0, result.err
+    scene = _write_scene(folder, "scène 1.pov", "modèles/pièce.inc", settings)
+    result = cli("render", scene, "-o", folder / "sortie é.png", *TINY)
+    assert result.code == 0 and not result.err, result.err
+    plain = _write_scene(tmp_path, "plain.pov", "models/part.inc", settings)
+    assert cli("render", plain, "-o", tmp_path / "plain.png", *TINY).code == 0
     image = read_png(folder / "sortie é.png")
-    assert image.max() > 200, "the include was read: the sphere is there"
+    assert np.array_equal(image, read_png(tmp_path / "plain.png")) and len(np.unique(image.reshape(-1, 3), axis=0)) > 1
+
+
+def test_an_absolute_non_ascii_include_is_one_line_naming_the_limit(tmp_path, cli):
+    folder = tmp_path / "modèles"
+    folder.mkdir()
+    (folder / "pièce.inc").write_text(PART)
+    scene = tmp_path / "s.pov"
+    scene.write_text(f'#version 3.7;\nglobal_settings {{ assumed_gamma 1.0 }}\n#include "{folder / "pièce.inc"}"\n')
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY), 6)
+    assert "s.pov line 3" in line and "as ASCII" in line and "rename the file" in line
 
 
 def test_quilt_round_trip_keeps_the_lens_array(tmp_path, cli):

@@ -116,6 +116,14 @@ def test_animation_error_names_the_animation_frame(tmp_path, cli):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "no staging folder left"
 
 
+def test_an_unclosed_brace_at_the_end_of_the_scene_names_the_scene(tmp_path, cli):
+    """POV-Ray notices it only in povh3d's own script (its ``scene.pov``), which the user never sees."""
+    scene = tmp_path / "mine.pov"
+    scene.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\nsphere { 0, 1 pigment { rgb 1 }\n")
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY), 6)
+    assert "past the end of mine.pov" in line and "No matching } in 'sphere'" in line and "scene.pov" not in line
+
+
 @pytest.mark.parametrize("text, expected", [
     ("sphere { <0, 0, 3>, 0.5 pigment { rgb 1 } }\n", "has no light_source"),
     ("light_source { <0, 0, -50> rgb 1 }\nsphere { <5000, 0, 3>, 1 pigment { rgb 1 } }\n", "as if no ray hit anything"),
@@ -127,6 +135,34 @@ def test_empty_render_and_no_light_warn(tmp_path, cli, text, expected):
     assert result.code == 0
     lines = [line for line in result.err.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("povh3d: warning: ") and expected in lines[0]
+
+
+@pytest.mark.parametrize("quiet", [[], ["-q"]], ids=["", "-q"])
+def test_mesh_warnings_are_one_line_each_and_kept_in_the_record(tmp_path, cli, quiet):
+    """A model whose texture is missing: one warning line from convert-mesh, one from render
+    MODEL (kept in the sidecar), said again when the conversion comes from the cache; -q only
+    hides the progress line."""
+    import json
+    import shutil
+
+    from tests.conftest import SAMPLES
+
+    for name in ("letter_f.obj", "letter_f.mtl"):  # its texture letter_f.png left behind
+        shutil.copy(SAMPLES / name, tmp_path / name)
+    model = tmp_path / "letter_f.obj"
+    missing = "texture 'letter_f.png' named by the model is missing"
+    result = cli("convert-mesh", model, *quiet)
+    lines = [line for line in result.err.splitlines() if line.strip()]
+    assert result.code == 0 and "letter_f.inc" in result.out
+    assert len(lines) == 1 and lines[0].startswith("povh3d: warning: ") and missing in lines[0], result.err
+    for run in ("converted", "from the cache"):
+        result = cli("render", model, "-o", tmp_path / "m.png", *TINY[:-1], *quiet)
+        lines = [line for line in result.err.splitlines() if line.strip()]
+        assert result.code == 0 and all(line.startswith("povh3d: warning: ") for line in lines), result.err
+        assert sum(missing in line for line in lines) == 1, (run, result.err)
+        model_record = json.loads((tmp_path / "m.json").read_text())["model"]
+        assert any(missing in w for w in model_record["warnings"])
+        assert model_record["conversion_from_cache"] == (run == "from the cache")
 
 
 def test_a_lit_scene_has_no_warning(tmp_path, cli):  # negative control of the two above

@@ -13,6 +13,7 @@ import trimesh
 from PIL import Image
 
 from povh3d.app.convert_mesh import convert_mesh
+from povh3d.errors import Povh3dWarning
 from povh3d.mesh import FORMATS
 from povh3d.image.colour import linear_to_srgb, srgb_to_linear
 from povh3d.mesh.load import to_pov_frame
@@ -203,7 +204,8 @@ def test_uv_texture_and_base_colour(tmp_path):
     for fname in files:
         if fname.endswith(".png"):
             (tmp_path / fname).unlink()
-    result = convert_mesh(obj, tmp_path / "gone.inc")
+    with pytest.warns(Povh3dWarning, match="missing; rendering with the base colour"):
+        result = convert_mesh(obj, tmp_path / "gone.inc")
     part = parse_include((tmp_path / "gone.inc").read_text())["parts"][0]
     assert "uv_vectors" not in part and "image" not in part
     kind, value = part["base"]

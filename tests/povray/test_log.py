@@ -506,3 +506,41 @@ def test_error_tail_leaves_out_the_pixel_counts():
     log = VERBOSE_ANIMATION + "\nFatal error in renderer: Out of memory.\n"
     assert "Rendered" not in tail(log) and "Out of memory" in tail(log)
     assert describe_exit(1, VERBOSE_ANIMATION) == "POV-Ray exited with code 1: ==== [Parsing...] ===="
+
+
+# POV-Ray 3.7.0.10's log for `#include "pièce.inc"` (pasted): it replaced each byte of "è".
+NON_ASCII_LOG = """==== [Parsing...] ==========================================================
+File 's.pov' line 5: Possible Parse Error: Non-ASCII character has been replaced
+ by space character.
+File 's.pov' line 5: Possible Parse Error: Non-ASCII character has been replaced
+ by space character.
+File 's.pov' line 5: Possible Parse Error: Cannot find file 'pi  ce.inc', even
+ after trying to append file type extension.
+File 's.pov' line 5: Parse Error: Cannot open include file pi  ce.inc.
+Fatal error in parser: Cannot parse input.
+"""
+
+
+def test_denied_note_names_povrays_ascii_file_names_only_on_the_failing_line() -> None:
+    from povh3d.povray.log import denied_note
+
+    reason = parse_error(NON_ASCII_LOG)
+    assert reason == "s.pov line 5: Parse Error: Cannot open include file pi  ce.inc."
+    assert "as ASCII" in denied_note(reason, (), NON_ASCII_LOG) and "rename the file" in denied_note(reason, (), NON_ASCII_LOG)
+    # A non-ASCII string on another line does not explain a missing include.
+    other = NON_ASCII_LOG.replace("line 5: Parse Error: Cannot open include file pi  ce.inc",
+                                  "line 7: Parse Error: Cannot open include file nothere.inc")
+    note = denied_note(parse_error(other), (), other, confined=False)
+    assert "as ASCII" not in note and "neither beside the scene" in note
+
+
+def test_past_scene_end_rewrites_only_povh3ds_own_script() -> None:
+    from povh3d.povray.log import past_scene_end
+
+    ours = "pinhole camera 1: scene.pov line 87: Parse Error: No matching } in 'sphere', camera found instead"
+    assert past_scene_end(ours, "mine.pov") == ("pinhole camera 1: POV-Ray read past the end of mine.pov into "
+                                                "povh3d's own script, so look at the end of mine.pov (an unclosed "
+                                                "brace, a missing ';'): Parse Error: No matching } in 'sphere', "
+                                                "camera found instead")
+    theirs = "pinhole camera 1: /home/u/scene.pov line 3: Parse Error: Expected 'object'"  # the user's own scene.pov
+    assert past_scene_end(theirs, "scene.pov") == theirs

@@ -137,6 +137,7 @@ def test_povray_conf() -> None:
     {"width": 0}, {"height": -1}, {"frames": 0}, {"bit_depth": 12}, {"threads": 0},
     {"timeout": 0}, {"file_gamma": ""}, {"start_row": 3, "end_row": 3},
     {"end_row": 9}, {"start_row": -1}, {"include_dirs": "/one/dir"}, {"width": 2.5},
+    {"links": (("/etc/x", "/a"),)}, {"links": (("../x", "/a"),)}, {"links": (("", "/a"),)},
 ])
 def test_job_rejects_bad_values(change: dict) -> None:
     with pytest.raises(ConfigError):
@@ -436,3 +437,43 @@ def test_children_die_with_python(workdir: Path) -> None:
         time.sleep(0.02)
     assert not any((stat := proc_stat(pid)) and stat[0] == "povray" and stat[1] != "Z"
                    for pid in children)
+
+
+# -- frames handed over one by one (a stopped run keeps every finished frame) --------------------
+
+def _paced(frames: int, last: str = "") -> str:
+    """An animation whose frame n is flat red n / frames after about 0.2 s of parsing;
+    `last` is appended to the last frame's text (an endless loop, a syntax error)."""
+    return (flat(f"rgb <frame_number / {frames}, 0, 0>")
+            + "#declare I = 0;\n#while (I < 150000)\n  #declare I = I + 1;\n#end\n"
+            + f"#if (frame_number = {frames})\n{last}\n#end\n")
+
+
+@needs_povray
+def test_each_frame_is_handed_over_while_the_job_runs(workdir: Path) -> None:
+    handed: list[tuple[int, int, bool]] = []
+    images: dict[str, list] = {}
+
+    def on_frame(job: PovrayJob, index: int, path: Path) -> None:
+        # The last frame's file does not exist yet while an earlier frame is handed over.
+        handed.append((index, Image.open(path).convert("RGB").getpixel((0, 0))[0],
+                       (path.parent / "frame4.png").exists()))
+
+    run_jobs([PovrayJob("anim", _paced(4), 2, 2, frames=4, file_gamma="1.0")], processes=1,
+             on_result=collect(images), on_frame=on_frame, workdir=workdir)
+    assert [index for index, _, _ in handed][:3] == [0, 1, 2]  # in order, the last one maybe at the end
+    assert [red for _, red, _ in handed] == [64, 128, 191, 255][:len(handed)]  # n / 4 of 255, gamma 1
+    assert not handed[0][2], "the first frame was handed over before the job wrote its last"
+    assert [image.getpixel((0, 0))[0] for _, image in images["anim"]] == [64, 128, 191, 255]
+    assert_clean(workdir)
+
+
+@needs_povray
+@pytest.mark.parametrize("fault, error", [("#while (1) #end", PovrayTimeout), ("Foo", PovrayError)])
+def test_frames_before_a_timeout_or_a_failure_are_kept(workdir: Path, fault: str, error: type) -> None:
+    handed: list[int] = []
+    job = PovrayJob("anim", _paced(3, fault), 2, 2, frames=3, timeout=4)
+    with pytest.raises(error):
+        run_jobs([job], processes=1, on_frame=lambda job, index, path: handed.append(index), workdir=workdir)
+    assert handed == [0, 1]
+    assert_clean(workdir)

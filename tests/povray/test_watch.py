@@ -112,3 +112,34 @@ def test_images_done_gives_up_without_the_log_s_confirmation(tmp_path):
         assert watch.fd is None and not watch.written
     finally:
         watch.close()
+
+
+def test_finished_frames_need_the_end_chunk_and_the_log_past_them(tmp_path):
+    from povh3d.povray.job import frame_image
+    from povh3d.povray.watch import JobWatch
+
+    watch = JobWatch(tmp_path / "povray.log", 12, lambda: collect_images(tmp_path, 12),
+                     lambda n: frame_image(tmp_path, 12, n))
+    png = _png_bytes()
+    log = tmp_path / "povray.log"
+    try:
+        log.write_text("Rendering frame 1 of 12\nRendered 2 of 4 pixels (50%)\n")
+        (tmp_path / "frame01.png").write_bytes(png[:-4])  # being written: no complete end chunk
+        assert watch.finished_frames() == []
+        (tmp_path / "frame01.png").write_bytes(png)
+        assert watch.finished_frames() == [] and watch.awaiting_log  # the log has not reached its end
+        with open(log, "a") as f:
+            f.write("Rendered 4 of 4 pixels (100%)\n")
+        assert watch.finished_frames() == [1] and not watch.awaiting_log
+        (tmp_path / "frame02.png").write_bytes(png)
+        (tmp_path / "frame03.png").write_bytes(png)  # left by an earlier run, say: not past frame 2 yet
+        with open(log, "a") as f:
+            f.write("Rendering frame 2 of 12\nRendered 4 of 4 pixels (100%)\n")
+        assert watch.finished_frames() == [2]
+        with open(log, "a") as f:
+            f.write("Rendering frame 3 of 12\nRendering frame 4 of 12\nRendered 1 of 4 pixels (25%)\n")
+        assert watch.finished_frames() == [3]  # frame 4 has no file yet
+        assert watch.finished_frames() == []  # each frame once
+        assert frame_image(tmp_path, 1, 1).name == "frame.png" and frame_image(tmp_path, 100, 7).name == "frame007.png"
+    finally:
+        watch.close()
