@@ -66,6 +66,54 @@ class ModelOptions:
 
 
 @dataclass(frozen=True)
+class VolumeOptions:
+    """How a volume is drawn and placed (``app.volume``).
+
+    Attributes
+    ----------
+    spacing : (3,) mm or None       voxel size (needed by ``.npy``; replaces a file's own)
+    series : str or None            the DICOM series UID, when a folder holds several
+    labels : tuple of int, 'all' or None   one surface per label (a segmentation)
+    iso : tuple of float or None    one surface per iso value (scalar data: CT in HU)
+    opacity : tuple of float or None   one for every surface, or one per surface in order
+    smoothing : int or None         smoothing iterations (None: 16 for labels, none for iso)
+    orientation : {'coronal', 'axial', 'sagittal'}   the radiological view (``volume.orient``)
+    rotate : (3,) degrees or None   then turned as POV-Ray's ``rotate``
+    volume : bool                   direct volume rendering (participating media) instead of surfaces
+    transfer : str                  its transfer function: a preset name or a file
+    df3_bits : {8, 16}              its density file's bits per voxel
+    """
+
+    spacing: tuple[float, float, float] | None = None
+    series: str | None = None
+    labels: tuple[int, ...] | str | None = None
+    iso: tuple[float, ...] | None = None
+    opacity: tuple[float, ...] | None = None
+    smoothing: int | None = None
+    orientation: str = "coronal"
+    rotate: tuple[float, float, float] | None = None
+    volume: bool = False
+    transfer: str = "ct-soft"
+    df3_bits: int = 16
+
+    def __post_init__(self) -> None:
+        from ..volume.orient import ORIENTATIONS
+
+        if self.orientation not in ORIENTATIONS:
+            raise ConfigError(f"--orientation must be one of {', '.join(ORIENTATIONS)}, got {self.orientation!r}")
+        chosen = [name for name, on in (("--labels", self.labels is not None), ("--iso", self.iso is not None),
+                                        ("--volume", self.volume)) if on]
+        if len(chosen) > 1:
+            raise ConfigError(f"{' and '.join(chosen)} exclude each other; choose one way to draw the volume")
+        if self.iso is not None and not (self.iso and all(math.isfinite(v) for v in self.iso)):
+            raise ConfigError(f"--iso takes numbers VALUE[,VALUE...], got {self.iso!r}")
+        if self.smoothing is not None and (isinstance(self.smoothing, bool) or self.smoothing < 0):
+            raise ConfigError(f"--smoothing takes a whole number of iterations >= 0, got {self.smoothing!r}")
+        if self.df3_bits not in (8, 16):
+            raise ConfigError(f"--df3-bits must be 8 or 16, got {self.df3_bits!r}")
+
+
+@dataclass(frozen=True)
 class RenderRequest:
     """Everything one render needs.
 
@@ -91,6 +139,7 @@ class RenderRequest:
     fps : float                    video frames per second
     display_frame : FrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
     depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
+    volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)
     """
 
     source: Path
@@ -111,6 +160,7 @@ class RenderRequest:
     fps: float = 24.0
     display_frame: FrameOptions = field(default_factory=FrameOptions)
     depth_maps: Path | None = None
+    volume: VolumeOptions = field(default_factory=VolumeOptions)
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
@@ -150,6 +200,13 @@ class RenderRequest:
     def is_model(self) -> bool:
         """Whether ``source`` is a mesh model (put on the default stage) rather than a scene."""
         return is_mesh_file(str(self.source))
+
+    @property
+    def is_volume(self) -> bool:
+        """Whether ``source`` is a volume (a volume file or a DICOM folder), put on the volume stage."""
+        from ..volume.read import is_volume_source
+
+        return is_volume_source(self.source)
 
     @property
     def render_array(self) -> LensArray:

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
+from .volume import add_volume_options, volume_options_from_args
 from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args, positive_int,
                       mapping_from_args, max_triangles, progress_bar, warn)
 
@@ -49,7 +50,8 @@ def request_from_args(args: argparse.Namespace) -> Any:
                            _triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=frame_options_from_args(args),
-        depth_maps=Path(args.depth_maps) if args.depth_maps else None)
+        depth_maps=Path(args.depth_maps) if args.depth_maps else None,
+        volume=volume_options_from_args(args, _triple(args.rotate, "--rotate")))
 
 
 def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
@@ -107,8 +109,8 @@ def cmd_render(args: argparse.Namespace) -> int:
         if result["video"]:
             print(result["video"])
         return 0
-    if "model" in result:
-        warn(result["model"]["warnings"])
+    for content in ("model", "volume"):
+        warn(result.get(content, {}).get("warnings", []))
     placed = result.get("display_frame", {})
     warn(placed.get("warnings", []))
     warn(result.get("warnings", []))
@@ -117,6 +119,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     mapping = f"  {request.mapping.name}" if request.mapping else ""
     if "model" in result:
         mapping += f"  up {result['model']['up']} ({result['model']['up_reason']})"
+    if "volume" in result:
+        v = result["volume"]
+        mapping += f"  {v['orientation']}, {len(v.get('surfaces', []))} surfaces, {v.get('triangles', 0)} triangles"
     print(f"{request.output}  {w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return 0
@@ -194,7 +199,8 @@ def _add_orientation(p: argparse.ArgumentParser) -> None:
 
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("render", help="render a POV-Ray scene to an H3D image")
-    p.add_argument("scene", help="POV-Ray scene (.pov; its camera places the display), or a mesh model (.obj .stl .ply ...)")
+    p.add_argument("scene", help="POV-Ray scene (.pov; its camera places the display), a mesh model (.obj .stl .ply ...), "
+                   "or a volume (.vti .nii .nrrd .mha ..., a DICOM folder)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
     p.add_argument("--quality", choices=QUALITY_NAMES, default="normal",
@@ -251,6 +257,7 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--fit-depth", metavar="auto|MM",
                    help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
                    "display's depth budget (auto: 2 N f) or MM")
+    add_volume_options(p)
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)
