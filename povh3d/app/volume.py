@@ -171,22 +171,21 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
 def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max_triangles: Any,
                 cache_dir: Path | None, rotate: Any) -> tuple[Path, dict[str, Any]]:
     """A polygon-mesh ``.vtk``: triangulated into a PLY in the cache, then staged as any model."""
-    import pyvista
+
+    import trimesh
+
+    from ..volume.read import read_vtk_mesh
 
     root = cache_dir or default_cache_dir()
     key = content_key("vtk-mesh", __version__, hashlib.sha256(source.read_bytes()).hexdigest())
     ply = root / "volumes" / key[:2] / key / f"{source.stem}.ply"
     if not ply.is_file():
-        import os
-
+        points, faces = read_vtk_mesh(source)
+        if not len(faces):
+            raise InputError(f"{str(source)!r} holds no polygons; check the file")
         ply.parent.mkdir(parents=True, exist_ok=True)
-        try:
-            mesh = pyvista.read(source).extract_surface().triangulate()
-        except Exception as exc:  # VTK's reader errors, in any of their types
-            raise InputError(f"cannot read the mesh {str(source)!r} ({type(exc).__name__}); check the file") from None
-        tmp = ply.with_name(f".{ply.stem}.{os.getpid()}.ply")  # PyVista picks the writer by the suffix
-        mesh.save(str(tmp))
-        os.replace(tmp, ply)
+        with atomic_path(ply) as tmp:
+            tmp.write_bytes(trimesh.Trimesh(points, faces, process=False).export(file_type="ply"))
     stage, record = prepare_stage(ply, lens_array, depth=depth, max_triangles=max_triangles, cache_dir=cache_dir,
                                   rotate=rotate)
     record["model"] = str(source)

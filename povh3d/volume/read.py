@@ -21,6 +21,8 @@ Heavy packages are imported inside the readers, so naming a source's kind
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -130,39 +132,71 @@ def _from_image(image: Any, name: str, label_names: dict | None = None) -> Volum
                   label_names or {})
 
 
-def _read_vtk(path: Path, spacing: Any) -> Volume:
+@contextmanager
+def _vtk_quiet() -> Iterator[None]:
+    """VTK's readers print their errors themselves (and go on with an empty output): silenced here,
+    the empty output becomes one ``InputError``."""
+    import vtk
+
+    shown, verbosity = vtk.vtkObject.GetGlobalWarningDisplay(), vtk.vtkLogger.GetCurrentVerbosityCutoff()
+    vtk.vtkObject.GlobalWarningDisplayOff()
+    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)
+    try:
+        yield
+    finally:
+        vtk.vtkObject.SetGlobalWarningDisplay(shown)
+        vtk.vtkLogger.SetStderrVerbosity(verbosity)
+
+
+def read_vtk_mesh(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A legacy ``.vtk`` polygon mesh: its triangulated surface's points and triangles."""
+    import vtk
+
+    mesh = _vtk_read(vtk.vtkPolyDataReader(), path, "a VTK polygon mesh")
+    mesh = mesh.extract_surface(algorithm="dataset_surface").triangulate()
+    return np.asarray(mesh.points, dtype=np.float64), np.asarray(mesh.regular_faces, dtype=np.int64)
+
+
+def _vtk_read(reader: Any, path: Path, what: str) -> Any:
+    """Run a VTK ``reader`` on ``path``; its output wrapped by PyVista, or an ``InputError``."""
     import pyvista
+
+    with _vtk_quiet():
+        reader.SetFileName(str(path))
+        reader.Update()
+        output = reader.GetOutput()
+    if output is None or (hasattr(output, "GetNumberOfPoints") and output.GetNumberOfPoints() == 0):
+        raise InputError(f"cannot read {path.name!r} as {what}; check that it is a complete file of that format")
+    return pyvista.wrap(output)
+
+
+def _read_vtk(path: Path, spacing: Any) -> Volume:
+    import vtk
 
     if is_polydata_vtk(path):
         raise InputError(f"{path.name!r} is a polygon mesh, not a volume; render it as a model")
-    data = pyvista.read(path)
-    if not isinstance(data, pyvista.ImageData):
-        raise InputError(f"{path.name!r} holds a {type(data).__name__}, not image data (a regular voxel grid)")
+    if path.suffix.lower() == ".vti":
+        return _from_image(_vtk_read(vtk.vtkXMLImageDataReader(), path, "VTK XML image data"), path.name)
+    data = _vtk_read(vtk.vtkDataSetReader(), path, "a legacy VTK file")
+    if not data.IsA("vtkImageData"):
+        raise InputError(f"{path.name!r} holds a {data.GetClassName()}, not image data (a regular voxel grid)")
     return _from_image(data, path.name)
 
 
 def _read_meta(path: Path, spacing: Any) -> Volume:
-    import pyvista
     import vtk
 
     reader = vtk.vtkMetaImageReader()
-    reader.SetFileName(str(path))
-    if not reader.CanReadFile(str(path)):
-        raise InputError(f"{path.name!r} is not a MetaImage file")
-    reader.Update()
-    return _from_image(pyvista.wrap(reader.GetOutput()), path.name)
+    if not reader.CanReadFile(str(path)):  # MetaIO prints its parse errors itself: ask first
+        raise InputError(f"{path.name!r} is not a MetaImage file (no valid header); check the file")
+    return _from_image(_vtk_read(reader, path, "a MetaImage file"), path.name)
 
 
 def _read_nifti(path: Path, spacing: Any) -> Volume:
-    import pyvista
     import vtk
 
     reader = vtk.vtkNIFTIImageReader()
-    if not reader.CanReadFile(str(path)):
-        raise InputError(f"{path.name!r} is not a NIfTI file")
-    reader.SetFileName(str(path))
-    reader.Update()
-    image = pyvista.wrap(reader.GetOutput())
+    image = _vtk_read(reader, path, "a NIfTI file")
     header = reader.GetNIFTIHeader()
     matrix = reader.GetSFormMatrix() if header.GetSFormCode() > 0 else reader.GetQFormMatrix()
     volume = _from_image(image, path.name)
