@@ -171,7 +171,6 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
 def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max_triangles: Any,
                 cache_dir: Path | None, rotate: Any) -> tuple[Path, dict[str, Any]]:
     """A polygon-mesh ``.vtk``: triangulated into a PLY in the cache, then staged as any model."""
-
     import trimesh
 
     from ..volume.read import read_vtk_mesh

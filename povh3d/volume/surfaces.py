@@ -111,7 +111,7 @@ def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing
     opacity = _per_surface(opacity, len(labels))
     iterations = LABEL_SMOOTHING if smoothing is None else int(smoothing)
     mesh = _image(volume, volume.values).contour_labels(
-        "all", select_outputs=labels, output_mesh_type="triangles", smoothing=iterations > 0,
+        "all", select_inputs=labels, output_mesh_type="triangles", smoothing=iterations > 0,
         smoothing_iterations=max(iterations, 1), scalars="values")
     faces = np.asarray(mesh.regular_faces, dtype=np.int64) if mesh.n_cells else np.zeros((0, 3), np.int64)
     pair = np.asarray(mesh.cell_data["boundary_labels"]) if mesh.n_cells else np.zeros((0, 2))

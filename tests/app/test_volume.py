@@ -1,0 +1,123 @@
+"""``povh3d render VOLUME``: radiological left/right on the screen, the stage and its cache, the frog."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from povh3d.image.interleave import extract
+from povh3d.image.io import read_png
+from povh3d.volume.orient import display_box, volume_to_display
+from tests.support.volumes import asymmetric_phantom, write_nifti, write_vti
+
+ARRAY = ("--grid", "square", "--lenses", "32x24", "--ppl", "4x4", "--pixel-pitch", "0.2", "--focal", "2",
+         "--quality", "draft")
+FROG = Path(__import__("pyvista").__file__).parent / "examples" / "frog_tissues.vti"
+
+
+def centre_view(path: Path) -> np.ndarray:
+    return extract(read_png(path), (4, 4))[2, 2].astype(int)
+
+
+def hue_centroid(view: np.ndarray, channel: int) -> np.ndarray:
+    """(row, column) centre of the pixels whose strongest channel is ``channel`` by a clear margin
+    (the palette: label 1 blue, 2 orange (red), 3 green; the background is grey)."""
+    others = np.delete(view, channel, axis=-1).max(axis=-1)
+    mask = view[..., channel] > others + 25
+    assert mask.sum() >= 2, "the marker is not in the view"
+    return np.argwhere(mask).mean(axis=0)
+
+
+@pytest.mark.parametrize("orientation", ["coronal", "axial"])
+def test_patients_left_is_on_the_screens_right(cli, tmp_path, orientation):
+    # Written as NIfTI (RAS on disk): the reader's LPS turn and the radiological preset together.
+    path = write_nifti(asymmetric_phantom(), tmp_path / "phantom.nii")
+    out = tmp_path / f"{orientation}.png"
+    result = cli("render", path, "-o", out, "--orientation", orientation, *ARRAY)
+    assert result.code == 0, result.err
+    assert "drawing every one" in result.err          # labels chosen, and said so
+    view = centre_view(out)
+    height, width = view.shape[:2]
+    body = hue_centroid(view, 2)           # label 1, blue
+    left_marker = hue_centroid(view, 0)    # label 2, orange
+    front_top = hue_centroid(view, 1)      # label 3, green: anterior and superior
+    assert left_marker[1] > body[1] + 0.15 * width    # on the screen's right
+    assert front_top[0] < body[0] - 0.1 * height      # coronal: superior up; axial: anterior up
+    record = json.loads(out.with_suffix(".json").read_text())["volume"]
+    assert [s["label"] for s in record["surfaces"]] == [1, 2, 3]
+    assert record["orientation"] == orientation and record["volume"]["shape"] == [24, 20, 16]
+
+
+def test_sagittal_and_rotate_turn_the_marker_away(cli, tmp_path):
+    # Negative control of the test above: rotated 180 degrees about y the left marker is on the left.
+    path = write_vti(asymmetric_phantom(), tmp_path / "phantom.vti")
+    out = tmp_path / "turned.png"
+    result = cli("render", path, "-o", out, "--labels", "1,2", "--rotate", "0,180,0", *ARRAY)
+    assert result.code == 0, result.err
+    view = centre_view(out)
+    assert hue_centroid(view, 0)[1] < hue_centroid(view, 2)[1] - 0.15 * view.shape[1]
+
+
+def test_stage_is_cached_and_decimated(cli, tmp_path):
+    path = write_vti(asymmetric_phantom(), tmp_path / "phantom.vti")
+    runs = []
+    for name in ("a", "b"):
+        result = cli("render", path, "-o", tmp_path / f"{name}.png", "--labels", "1", "--max-triangles", "100",
+                     "--opacity", "0.5", *ARRAY)
+        assert result.code == 0, result.err
+        runs.append(json.loads((tmp_path / f"{name}.json").read_text())["volume"])
+    assert [r["surfaces_from_cache"] for r in runs] == [False, True]
+    (surface,) = runs[0]["surfaces"]
+    assert surface["triangles_extracted"] > 100 >= surface["triangles"] * 0.9
+    assert surface["opacity"] == 0.5
+    include = Path(json.loads((tmp_path / "a.json").read_text())["scene"]).parent / "surfaces.inc"
+    assert "rgbt" in include.read_text()        # the opacity became POV-Ray's transmit
+
+
+def test_volume_rendering_gets_the_world_to_display_matrix(cli, tmp_path, monkeypatch):
+    # The direct volume render (app.volume_media) receives the matrix that puts the volume's box where
+    # the surfaces go: centred on the screen, scaled to the panel.
+    import povh3d.app.volume_media as media
+
+    seen = {}
+
+    def fake_media_stage(volume, world_to_display, lens_array, *, transfer, bits, folder):
+        seen.update(volume=volume, matrix=world_to_display, transfer=transfer, bits=bits)
+        stage = folder / "stage.pov"
+        stage.write_text("#version 3.7;\nbackground { rgb 0.5 }\nlight_source { <0, 0, -100> rgb 1 }\n"
+                         "sphere { 0, 2 pigment { rgb 1 } }\n")
+        return stage, {"fake": True}
+
+    monkeypatch.setattr(media, "media_stage", fake_media_stage)
+    phantom = asymmetric_phantom()
+    path = write_vti(phantom, tmp_path / "phantom.vti")
+    result = cli("render", path, "-o", tmp_path / "m.png", "--volume", "--transfer", "mri", "--df3-bits", "8",
+                 "--orientation", "axial", *ARRAY)
+    assert result.code == 0, result.err
+    assert (seen["transfer"], seen["bits"]) == ("mri", 8)
+    corners = np.c_[phantom.corners(), np.ones(8)] @ np.asarray(seen["matrix"]).T
+    lo, hi = corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)
+    assert lo + hi == pytest.approx([0, 0, 0], abs=1e-9)             # centred on the screen
+    width, height = 32 * 0.8, 24 * 0.8
+    assert max((hi - lo)[0] / width, (hi - lo)[1] / height) == pytest.approx(0.9)   # fills 90 % of the panel
+    # Its linear part is the preset's turn, scaled: the same box as display_box.
+    turned = display_box(phantom.corners(), volume_to_display("axial"))
+    assert (hi - lo) / (turned[1] - turned[0]) == pytest.approx([(hi - lo)[0] / (turned[1] - turned[0])[0]] * 3)
+    assert json.loads((tmp_path / "m.json").read_text())["volume"]["media"] == {"fake": True}
+
+
+def test_frog_tissues_renders(cli, tmp_path):
+    out = tmp_path / "frog.png"
+    result = cli("render", FROG, "-o", out, "--labels", "10,13,15", "--orientation", "axial", *ARRAY)
+    assert result.code == 0, result.err
+    record = json.loads(out.with_suffix(".json").read_text())["volume"]
+    assert record["volume"]["shape"] == [500, 470, 136] and record["volume"]["spacing_mm"] == [1.0, 1.0, 1.5]
+    surfaces = record["surfaces"]
+    assert [s["label"] for s in surfaces] == [10, 13, 15]
+    assert all(s["triangles_extracted"] > 10 * s["triangles"] for s in surfaces)   # decimated to the display
+    assert record["triangle_budget"] == 4 * 32 * 24
+    view = centre_view(out)
+    assert (np.abs(view - view[0, 0]).max(axis=-1) > 10).mean() > 0.05               # the frog is there
