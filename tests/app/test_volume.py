@@ -111,13 +111,37 @@ def test_volume_rendering_gets_the_world_to_display_matrix(cli, tmp_path, monkey
 
 def test_frog_tissues_renders(cli, tmp_path):
     out = tmp_path / "frog.png"
-    result = cli("render", FROG, "-o", out, "--labels", "10,13,15", "--orientation", "axial", *ARRAY)
+    result = cli("render", FROG, "-o", out, "--labels", "2,6,10", "--orientation", "axial", *ARRAY)
     assert result.code == 0, result.err
     record = json.loads(out.with_suffix(".json").read_text())["volume"]
     assert record["volume"]["shape"] == [500, 470, 136] and record["volume"]["spacing_mm"] == [1.0, 1.0, 1.5]
     surfaces = record["surfaces"]
-    assert [s["label"] for s in surfaces] == [10, 13, 15]
+    assert [s["label"] for s in surfaces] == [2, 6, 10]
     assert all(s["triangles_extracted"] > 10 * s["triangles"] for s in surfaces)   # decimated to the display
     assert record["triangle_budget"] == 4 * 32 * 24
+    # Where the tissues must appear: their voxels' box through the record's world-to-display matrix, in
+    # lenses of the centre view (x right, y up; 0.8 mm lenses, 32 x 24), a lens of slack for the view's slant.
+    from povh3d.volume.read import read_volume
+
+    frog = read_volume(FROG)
+    index = np.argwhere(np.isin(frog.values, (2, 6, 10)))
+    corners = np.array([[a, b, c, 1.0] for a in (index[:, 0].min(), index[:, 0].max())
+                        for b in (index[:, 1].min(), index[:, 1].max()) for c in (index[:, 2].min(), index[:, 2].max())])
+    display = corners @ (np.asarray(record["world_to_display"]) @ frog.index_to_world()).T
+    columns = (display[:, 0] + 12.8) / 0.8
+    rows = (9.6 - display[:, 1]) / 0.8
     view = centre_view(out)
-    assert (np.abs(view - view[0, 0]).max(axis=-1) > 10).mean() > 0.05               # the frog is there
+    drawn = np.argwhere(np.abs(view - view[0, 0]).max(axis=-1) > 10)
+    assert len(drawn) >= 15                                                           # the tissues are there
+    inside = ((drawn[:, 0] >= rows.min() - 1.5) & (drawn[:, 0] <= rows.max() + 0.5)
+              & (drawn[:, 1] >= columns.min() - 1.5) & (drawn[:, 1] <= columns.max() + 0.5))
+    assert inside.all()
+
+
+def test_python_api_takes_volume_options(tmp_path):
+    import povh3d
+
+    path = write_vti(asymmetric_phantom(), tmp_path / "phantom.vti")
+    record = povh3d.render(path, tmp_path / "api.png", lens_array=povh3d.presets.lens_array("demo", lenses=(16, 12)),
+                           quality="draft", volume=povh3d.VolumeOptions(iso=(1.5,), orientation="sagittal"))
+    assert record["volume"]["draw"] == "iso" and record["volume"]["surfaces"][0]["iso"] == 1.5
