@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping as MappingABC
 from dataclasses import dataclass, field
+from dataclasses import replace as _replace
 from pathlib import Path
 from typing import Any
 
@@ -195,11 +196,14 @@ class RenderRequest:
             if self.frames is not None:
                 raise ConfigError("--depth-maps cannot be combined with --frames; render one frame for them")
             self.render_array.require_views()
+        if not self.is_volume and _replace(self.volume, rotate=None) != VolumeOptions():
+            raise ConfigError(f"{self.source.name!r} is not a volume; the volume options (--labels, --iso, --volume, "
+                              "--orientation, --spacing, --series ...) apply to volume files and DICOM folders")
 
     @property
     def is_model(self) -> bool:
-        """Whether ``source`` is a mesh model (put on the default stage) rather than a scene."""
-        return is_mesh_file(str(self.source))
+        """Whether ``source`` is put on the default stage (a mesh model, or a volume) rather than a scene."""
+        return is_mesh_file(str(self.source)) or self.is_volume
 
     @property
     def is_volume(self) -> bool:

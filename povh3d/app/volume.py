@@ -14,6 +14,7 @@ model: it goes to the mesh path (``app.stage``) through a PLY copy in the cache.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 from pathlib import Path
@@ -75,6 +76,9 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
 
     options = options or VolumeOptions()
     if is_polydata_vtk(source):
+        if dataclasses.replace(options, rotate=None) != VolumeOptions():
+            raise ConfigError(f"{Path(source).name!r} is a polygon mesh, not a volume; the volume options (--labels, "
+                              "--iso, --volume, --orientation ...) do not apply to it")
         return _mesh_stage(Path(source), lens_array, depth=depth, max_triangles=max_triangles,
                            cache_dir=cache_dir, rotate=options.rotate)
     volume = read_volume(source, spacing=options.spacing, series=options.series)

@@ -15,6 +15,7 @@ from tests.support.volumes import asymmetric_phantom, write_nifti, write_vti
 
 ARRAY = ("--grid", "square", "--lenses", "32x24", "--ppl", "4x4", "--pixel-pitch", "0.2", "--focal", "2",
          "--quality", "draft")
+REPO = Path(__file__).resolve().parents[2]
 FROG = Path(__import__("pyvista").__file__).parent / "examples" / "frog_tissues.vti"
 
 
@@ -145,3 +146,18 @@ def test_python_api_takes_volume_options(tmp_path):
     record = povh3d.render(path, tmp_path / "api.png", lens_array=povh3d.presets.lens_array("demo", lenses=(16, 12)),
                            quality="draft", volume=povh3d.VolumeOptions(iso=(1.5,), orientation="sagittal"))
     assert record["volume"]["draw"] == "iso" and record["volume"]["surfaces"][0]["iso"] == 1.5
+
+
+def test_a_vtk_polygon_mesh_is_a_model_and_volume_options_need_a_volume(cli, tmp_path):
+    import pyvista
+
+    mesh = tmp_path / "ball.vtk"
+    pyvista.Sphere(radius=3.0).save(mesh)
+    result = cli("render", mesh, "-o", tmp_path / "ball.png", *ARRAY)
+    assert result.code == 0, result.err
+    record = json.loads((tmp_path / "ball.json").read_text())
+    assert "model" in record and "volume" not in record and record["model"]["triangles"] > 100
+    refused = cli("render", mesh, "-o", tmp_path / "b2.png", "--iso", "1", *ARRAY)
+    assert refused.code == 2 and "not a volume" in refused.err
+    scene = cli("render", REPO / "sample_models" / "sample.pov", "-o", tmp_path / "s.png", "--labels", *ARRAY)
+    assert scene.code == 2 and "is not a volume" in scene.err
