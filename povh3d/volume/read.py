@@ -136,23 +136,23 @@ def _from_image(image: Any, name: str, label_names: dict | None = None) -> Volum
 def _vtk_quiet() -> Iterator[None]:
     """VTK's readers print their errors themselves (and go on with an empty output): silenced here,
     the empty output becomes one ``InputError``."""
-    import vtk
+    from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
 
-    shown, verbosity = vtk.vtkObject.GetGlobalWarningDisplay(), vtk.vtkLogger.GetCurrentVerbosityCutoff()
-    vtk.vtkObject.GlobalWarningDisplayOff()
-    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)
+    shown, verbosity = vtkObject.GetGlobalWarningDisplay(), vtkLogger.GetCurrentVerbosityCutoff()
+    vtkObject.GlobalWarningDisplayOff()
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
     try:
         yield
     finally:
-        vtk.vtkObject.SetGlobalWarningDisplay(shown)
-        vtk.vtkLogger.SetStderrVerbosity(verbosity)
+        vtkObject.SetGlobalWarningDisplay(shown)
+        vtkLogger.SetStderrVerbosity(verbosity)
 
 
 def read_vtk_mesh(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """A legacy ``.vtk`` polygon mesh: its triangulated surface's points and triangles."""
-    import vtk
+    from vtkmodules.vtkIOLegacy import vtkPolyDataReader
 
-    mesh = _vtk_read(vtk.vtkPolyDataReader(), path, "a VTK polygon mesh")
+    mesh = _vtk_read(vtkPolyDataReader(), path, "a VTK polygon mesh")
     mesh = mesh.extract_surface(algorithm="dataset_surface").triangulate()
     return np.asarray(mesh.points, dtype=np.float64), np.asarray(mesh.regular_faces, dtype=np.int64)
 
@@ -171,31 +171,33 @@ def _vtk_read(reader: Any, path: Path, what: str) -> Any:
 
 
 def _read_vtk(path: Path, spacing: Any) -> Volume:
-    import vtk
+    # The VTK modules themselves, not ``import vtk`` (which loads all of VTK's 150 libraries).
+    from vtkmodules.vtkIOLegacy import vtkDataSetReader
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
 
     if is_polydata_vtk(path):
         raise InputError(f"{path.name!r} is a polygon mesh, not a volume; render it as a model")
     if path.suffix.lower() == ".vti":
-        return _from_image(_vtk_read(vtk.vtkXMLImageDataReader(), path, "VTK XML image data"), path.name)
-    data = _vtk_read(vtk.vtkDataSetReader(), path, "a legacy VTK file")
+        return _from_image(_vtk_read(vtkXMLImageDataReader(), path, "VTK XML image data"), path.name)
+    data = _vtk_read(vtkDataSetReader(), path, "a legacy VTK file")
     if not data.IsA("vtkImageData"):
         raise InputError(f"{path.name!r} holds a {data.GetClassName()}, not image data (a regular voxel grid)")
     return _from_image(data, path.name)
 
 
 def _read_meta(path: Path, spacing: Any) -> Volume:
-    import vtk
+    from vtkmodules.vtkIOImage import vtkMetaImageReader
 
-    reader = vtk.vtkMetaImageReader()
+    reader = vtkMetaImageReader()
     if not reader.CanReadFile(str(path)):  # MetaIO prints its parse errors itself: ask first
         raise InputError(f"{path.name!r} is not a MetaImage file (no valid header); check the file")
     return _from_image(_vtk_read(reader, path, "a MetaImage file"), path.name)
 
 
 def _read_nifti(path: Path, spacing: Any) -> Volume:
-    import vtk
+    from vtkmodules.vtkIOImage import vtkNIFTIImageReader
 
-    reader = vtk.vtkNIFTIImageReader()
+    reader = vtkNIFTIImageReader()
     image = _vtk_read(reader, path, "a NIfTI file")
     header = reader.GetNIFTIHeader()
     matrix = reader.GetSFormMatrix() if header.GetSFormCode() > 0 else reader.GetQFormMatrix()
