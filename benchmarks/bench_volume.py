@@ -63,7 +63,7 @@ def render_case(preset: str, drawing: str, options: list[str], folder: Path) -> 
     volume = record["volume"]
     row = {"preset": preset, "drawing": drawing, "load_s": load, "wall_s": wall,
            "render_s": record["timings"]["render_seconds"], "parse_s": parse_seconds_of_scene(Path(record["scene"])),
-           "image": list(record.get("size_px", record.get("h3d_size_px", [])))}
+           "load_average": os.getloadavg()[0]}
     if "surfaces" in volume:
         row.update(extract_s=volume["seconds"]["extract"], decimate_s=volume["seconds"]["decimate"],
                    triangles_before=sum(s["triangles_extracted"] for s in volume["surfaces"]),
@@ -84,12 +84,13 @@ def save_rows(rows: list[dict[str, Any]], path: Path = OUT) -> list[dict[str, An
 
 def table(rows: list[dict[str, Any]]) -> str:
     """The markdown table of docs/volumes.md."""
-    lines = ["| preset | drawing | load s | extract s | decimate s | triangles before -> after | parse s | render s |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| preset | drawing | load s | extract s | decimate s | triangles before -> after | parse s | render s "
+             "| whole command s |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         tri = f"{r['triangles_before']:,} -> {r['triangles_after']:,}" if "triangles_before" in r else "-"
         lines.append(f"| {r['preset']} | {r['drawing']} | {r['load_s']:.2f} | {r.get('extract_s', float('nan')):.2f} | "
-                     f"{r.get('decimate_s', float('nan')):.2f} | {tri} | {r['parse_s']:.2f} | {r['render_s']:.2f} |")
+                     f"{r.get('decimate_s', float('nan')):.2f} | {tri} | {r['parse_s']:.2f} | {r['render_s']:.2f} | "
+                     f"{r['wall_s']:.1f} |")
     return "\n".join(lines)
 
 
