@@ -104,3 +104,18 @@ def test_unreadable_files_are_input_errors(tmp_path):
     with pytest.raises(InputError, match="no DICOM"):
         (tmp_path / "empty").mkdir()
         read_volume(tmp_path / "empty")
+
+
+def test_slicer_segmentation_label_table(tmp_path):
+    # 3D Slicer writes its segment names and colours as NRRD key:=value fields.
+    import nrrd
+
+    volume = asymmetric_phantom()
+    path = tmp_path / "seg.nrrd"
+    header = {"space": "left-posterior-superior", "space directions": np.diag(volume.spacing),
+              "space origin": np.asarray(volume.origin), "Segment0_LabelValue": "2", "Segment0_Name": "marker",
+              "Segment0_Color": "1 0.5 0", "Segment1_LabelValue": "1", "Segment1_Name": "body"}
+    nrrd.write(str(path), volume.values, header)
+    read = read_volume(path)
+    assert read.label_names == {2: "marker", 1: "body"}
+    assert read.label_colours == {2: (1.0, 0.5, 0.0)}
