@@ -133,7 +133,7 @@ def _from_image(image: Any, name: str, label_names: dict | None = None) -> Volum
 
 
 @contextmanager
-def _vtk_quiet() -> Iterator[None]:
+def vtk_quiet() -> Iterator[None]:
     """VTK's readers print their errors themselves (and go on with an empty output): silenced here,
     the empty output becomes one ``InputError``."""
     from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
@@ -161,7 +161,7 @@ def _vtk_read(reader: Any, path: Path, what: str) -> Any:
     """Run a VTK ``reader`` on ``path``; its output wrapped by PyVista, or an ``InputError``."""
     import pyvista
 
-    with _vtk_quiet():
+    with vtk_quiet():
         reader.SetFileName(str(path))
         reader.Update()
         output = reader.GetOutput()

@@ -56,6 +56,10 @@ class Surface:
 def _image(volume: Volume, values: np.ndarray) -> Any:
     import pyvista
 
+    if min(volume.shape) < 2:
+        raise InputError(f"{volume.name} is {' x '.join(map(str, volume.shape))} voxels: a surface needs at least two "
+                         "voxels along every axis (a single slice has no inside)")
+
     image = pyvista.ImageData(dimensions=volume.shape, spacing=volume.spacing)
     image.point_data["values"] = np.ascontiguousarray(values).ravel(order="F")
     return image
@@ -110,9 +114,12 @@ def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing
     labels = check_labels(volume, labels)
     opacity = _per_surface(opacity, len(labels))
     iterations = LABEL_SMOOTHING if smoothing is None else int(smoothing)
-    mesh = _image(volume, volume.values).contour_labels(
-        "all", select_inputs=labels, output_mesh_type="triangles", smoothing=iterations > 0,
-        smoothing_iterations=max(iterations, 1), scalars="values")
+    from .read import vtk_quiet
+
+    image = _image(volume, volume.values)
+    with vtk_quiet():
+        mesh = image.contour_labels("all", select_inputs=labels, output_mesh_type="triangles",
+                                    smoothing=iterations > 0, smoothing_iterations=max(iterations, 1), scalars="values")
     faces = np.asarray(mesh.regular_faces, dtype=np.int64) if mesh.n_cells else np.zeros((0, 3), np.int64)
     pair = np.asarray(mesh.cell_data["boundary_labels"]) if mesh.n_cells else np.zeros((0, 2))
     colours = palette(len(labels))
@@ -139,13 +146,16 @@ def iso_surfaces(volume: Volume, values: list[float], *, smoothing: int | None =
             raise ConfigError(f"iso value {v:g} is outside the data range of {volume.name}, {lo:.6g} to {hi:.6g}; "
                               "choose a value inside it")
     opacity = _per_surface(opacity, len(values))
+    from .read import vtk_quiet
+
     image = _image(volume, volume.values.astype(np.float32, copy=False))
     colours = palette(len(values))
     out = []
     for n, value in enumerate(values):
-        mesh = image.contour([float(value)], scalars="values", method="flying_edges")
-        if smoothing:
-            mesh = mesh.smooth_taubin(n_iter=int(smoothing))
+        with vtk_quiet():
+            mesh = image.contour([float(value)], scalars="values", method="flying_edges")
+            if smoothing:
+                mesh = mesh.smooth_taubin(n_iter=int(smoothing))
         faces = np.asarray(mesh.regular_faces, dtype=np.int64) if mesh.n_cells else np.zeros((0, 3), np.int64)
         # VTK winds towards lower values; ours point out of the region above the value: the same.
         points, faces = _to_world(volume, np.asarray(mesh.points, dtype=np.float64), faces)

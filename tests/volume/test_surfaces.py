@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.special import ellipeinc, ellipkinc
 
-from povh3d.errors import ConfigError
+from povh3d.errors import ConfigError, InputError
 from povh3d.volume.grid import Volume
 from povh3d.volume.surfaces import iso_surfaces, label_surfaces
 from tests.support.volumes import LABEL_BODY, LABEL_LEFT, LABEL_TOP, asymmetric_phantom, ellipsoid_field, turn
@@ -93,3 +93,5 @@ def test_bad_choices_are_one_line_errors():
         label_surfaces(field, None)
     with pytest.raises(ConfigError, match="one per surface"):
         label_surfaces(phantom, [1, 2], opacity=[0.5, 0.5, 0.5])
+    with pytest.raises(InputError, match="24 x 20 x 1 voxels: a surface needs at least two"):
+        label_surfaces(Volume(phantom.values[:, :, 8:9], phantom.spacing, name="phantom"), None)
