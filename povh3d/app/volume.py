@@ -56,9 +56,9 @@ def what_to_draw(volume: Volume, options: VolumeOptions) -> tuple[str, list[str]
         return "iso", []
     values = volume.values
     integral = np.issubdtype(values.dtype, np.integer) or bool(np.all(np.mod(values, 1) == 0))
-    if integral and len(np.unique(values)) <= MAX_AUTO_LABELS + 1 and volume.labels():
-        count = len(volume.labels())
-        return "labels", [f"no --labels, --iso or --volume: {volume.name} holds {count} integer labels, "
+    labels = volume.labels() if integral else []
+    if 0 < len(labels) <= MAX_AUTO_LABELS:
+        return "labels", [f"no --labels, --iso or --volume: {volume.name} holds {len(labels)} integer labels, "
                           "drawing every one (--labels LIST picks some)"]
     lo, hi = volume.value_range()
     raise ConfigError(f"{volume.name} holds values from {lo:.6g} to {hi:.6g}; say what to draw: --iso VALUE "
