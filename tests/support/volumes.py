@@ -148,3 +148,22 @@ def write_dicom_series(volume: Volume, folder: Path, *, uid: str | None = None, 
         ds.PixelData = (volume.values[:, :, k].T.astype(np.float64) - intercept).astype("<i2").tobytes()
         ds.save_as(str(path), enforce_file_format=True)
     return folder
+
+
+def write_nifti_qform_flipped(volume: Volume, path: Path, offset: tuple[float, float, float]) -> Path:
+    """A NIfTI-1 file with only a qform: identity quaternion, ``qfac = -1`` (the slices stored from
+    head to feet), so RAS = ``offset + (i sx, j sy, -k sz)``; ``volume.origin``/``direction`` are ignored."""
+    code, bits = _NIFTI_TYPES[volume.values.dtype]
+    header = bytearray(348)
+    struct.pack_into("<i", header, 0, 348)
+    struct.pack_into("<8h", header, 40, 3, *volume.shape, 1, 1, 1, 1)
+    struct.pack_into("<hh", header, 70, code, bits)
+    struct.pack_into("<8f", header, 76, -1.0, *volume.spacing, 1.0, 1.0, 1.0, 1.0)   # pixdim[0] = qfac
+    struct.pack_into("<f", header, 108, 352.0)
+    struct.pack_into("<ff", header, 112, 1.0, 0.0)
+    struct.pack_into("<B", header, 123, 2)
+    struct.pack_into("<hh", header, 252, 1, 0)          # qform_code 1, no sform
+    struct.pack_into("<6f", header, 256, 0.0, 0.0, 0.0, *offset)   # quatern_b, c, d; qoffset_x, y, z
+    header[344:348] = b"n+1\0"
+    path.write_bytes(bytes(header) + b"\0\0\0\0" + volume.values.tobytes(order="F"))
+    return path

@@ -8,7 +8,7 @@ import pytest
 from povh3d.errors import ConfigError, InputError
 from povh3d.volume.read import is_polydata_vtk, is_volume_source, read_volume
 from tests.support.volumes import (asymmetric_phantom, turn, write_dicom_series, write_legacy_vtk, write_meta,
-                                   write_nifti, write_nrrd, write_vti)
+                                   write_nifti, write_nifti_qform_flipped, write_nrrd, write_vti)
 
 WRITERS = {
     "phantom.vti": write_vti, "phantom.mha": write_meta, "phantom.mhd": write_meta,
@@ -56,6 +56,17 @@ def test_nifti_ras_becomes_lps(tmp_path):
     world = read.index_to_world() @ np.append(left, 1.0)
     body = read.index_to_world() @ np.append(np.argwhere(read.values == 1).mean(axis=0), 1.0)
     assert world[0] > body[0] + 5                # LPS: left is +x
+
+
+def test_nifti_qform_with_reversed_slices(tmp_path):
+    # qfac = -1: the k axis runs towards the feet.  Every voxel must land at RAS offset + (i, 1.5 j, -2 k).
+    volume = asymmetric_phantom()
+    read = read_volume(write_nifti_qform_flipped(volume, tmp_path / "q.nii", (10.0, 20.0, 30.0)))
+    for label in (1, 2, 3):
+        written = np.argwhere(volume.values == label).mean(axis=0)
+        ras = np.array([10.0, 20.0, 30.0]) + written * np.array([1.0, 1.5, -2.0])
+        found = read.index_to_world() @ np.append(np.argwhere(read.values == label).mean(axis=0), 1.0)
+        assert found[:3] == pytest.approx(ras * [-1, -1, 1])
 
 
 def test_nrrd_in_ras_space(tmp_path):
