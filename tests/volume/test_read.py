@@ -130,3 +130,10 @@ def test_slicer_segmentation_label_table(tmp_path):
     read = read_volume(path)
     assert read.label_names == {2: "marker", 1: "body"}
     assert read.label_colours == {2: (1.0, 0.5, 0.0)}
+
+
+def test_a_missing_dicom_slice_is_refused(tmp_path):
+    folder = write_dicom_series(asymmetric_phantom(dtype="int16"), tmp_path / "gap", uid="1.2.3")
+    sorted(folder.iterdir())[5].unlink()
+    with pytest.raises(InputError, match="unevenly spaced .*2 to 4 mm"):
+        read_volume(folder)
