@@ -95,3 +95,17 @@ def test_bad_choices_are_one_line_errors():
         label_surfaces(phantom, [1, 2], opacity=[0.5, 0.5, 0.5])
     with pytest.raises(InputError, match="24 x 20 x 1 voxels: a surface needs at least two"):
         label_surfaces(Volume(phantom.values[:, :, 8:9], phantom.spacing, name="phantom"), None)
+
+
+@pytest.mark.parametrize("label", [LABEL_LEFT, LABEL_TOP])
+def test_staircase_surface_wraps_the_labels_voxels_in_world_space(label):
+    # Unsmoothed, a box of voxels gives a surface half a voxel outside their centres: its corners are
+    # the box's corners through the volume's geometry (origin, spacing, a turned direction).
+    phantom = asymmetric_phantom(direction=turn(30.0))
+    (surface,) = label_surfaces(phantom, [label], smoothing=0)
+    index = np.argwhere(phantom.values == label)
+    lo, hi = index.min(axis=0) - 0.5, index.max(axis=0) + 0.5
+    corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    world = (corners @ phantom.index_to_world().T)[:, :3]
+    assert surface.vertices.min(axis=0) == pytest.approx(world.min(axis=0), abs=1e-6)
+    assert surface.vertices.max(axis=0) == pytest.approx(world.max(axis=0), abs=1e-6)
