@@ -101,8 +101,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
 
         key = content_key("volume-media", __version__, digest, options.transfer, options.df3_bits,
                           np.round(to_display, 12).tolist())
-        folder = root / "volumes" / key[:2] / key
-        folder.mkdir(parents=True, exist_ok=True)
+        folder = _cache_folder(root / "volumes" / key[:2] / key)
         stage, media = media_stage(volume, to_display, lens_array, transfer=options.transfer,
                                    bits=options.df3_bits, folder=folder)
         record["media"] = media
@@ -125,6 +124,24 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     return stage, record
 
 
+def _cache_folder(folder: Path) -> Path:
+    """``folder`` made; an unusable cache (read-only, full) is a warning and a folder of this run."""
+    from ..errors import OutputError
+    from ..image.io import check_writable
+
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        check_writable(folder / "manifest.json")
+        return folder
+    except (OSError, OutputError) as exc:
+        import tempfile
+
+        from ..system import owned_prefix
+
+        warn(f"the volume cache {str(folder.parent.parent)!r} cannot be used ({exc}); working without it")
+        return Path(tempfile.mkdtemp(prefix=owned_prefix("povh3d-")))  # swept after this run ends
+
+
 def _depth_warning(placement: Any) -> list[str]:
     if placement.size[2] > placement.depth * (1 + 1e-9):
         return [f"the volume is {placement.size[2]:.3g} mm deep at this size, beyond the depth budget of "
@@ -140,7 +157,7 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
 
     key = content_key("volume-surfaces", __version__, digest, kind, options.labels, options.iso,
                       options.opacity, options.smoothing, np.round(matrix, 12).tolist(), budget)
-    folder = root / "volumes" / key[:2] / key
+    folder = _cache_folder(root / "volumes" / key[:2] / key)
     manifest_path, include = folder / "manifest.json", folder / "surfaces.inc"
     try:  # a damaged manifest is a cache miss
         manifest = json.loads(manifest_path.read_text(encoding="utf-8")) if manifest_path.is_file() else None
@@ -161,7 +178,6 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
     from ..volume.include import surfaces_include
 
     text, rows, stats = surfaces_include(surfaces, matrix, budget, ident=IDENT, source=volume.name)
-    folder.mkdir(parents=True, exist_ok=True)
     with atomic_path(include) as tmp:
         tmp.write_text(text, encoding="utf-8")
     manifest = {"surfaces": rows, "triangles": sum(r["triangles"] for r in rows),
@@ -186,7 +202,7 @@ def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max
         points, faces = read_vtk_mesh(source)
         if not len(faces):
             raise InputError(f"{str(source)!r} holds no polygons; check the file")
-        ply.parent.mkdir(parents=True, exist_ok=True)
+        ply = _cache_folder(ply.parent) / ply.name
         with atomic_path(ply) as tmp:
             tmp.write_bytes(trimesh.Trimesh(points, faces, process=False).export(file_type="ply"))
     stage, record = prepare_stage(ply, lens_array, depth=depth, max_triangles=max_triangles, cache_dir=cache_dir,

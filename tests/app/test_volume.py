@@ -161,3 +161,12 @@ def test_a_vtk_polygon_mesh_is_a_model_and_volume_options_need_a_volume(cli, tmp
     assert refused.code == 2 and "not a volume" in refused.err
     scene = cli("render", REPO / "sample_models" / "sample.pov", "-o", tmp_path / "s.png", "--labels", *ARRAY)
     assert scene.code == 2 and "is not a volume" in scene.err
+
+
+def test_an_unusable_cache_is_a_warning(cli, tmp_path):
+    cache = tmp_path / "not-a-folder"
+    cache.write_text("a file where the cache should be")   # fails as a read-only folder would, even for root
+    path = write_vti(asymmetric_phantom(), tmp_path / "phantom.vti")
+    result = cli("render", path, "-o", tmp_path / "ro.png", "--labels", "2", *ARRAY, env={"POVH3D_CACHE": str(cache)})
+    assert result.code == 0, result.err
+    assert "volume cache" in result.err and (tmp_path / "ro.png").is_file()
