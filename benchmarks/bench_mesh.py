@@ -6,7 +6,9 @@ torus as binary PLY (smooth normals).  Each conversion is a whole
 imports included); it reports its own peak resident memory (``ru_maxrss``).
 Targets (issue 17): at least 500,000 triangles per second, peak memory under 1 GB.
 
-    .venv/bin/python benchmarks/bench_mesh.py [--triangles 1000000] [--repeats 3]
+The table is written into docs/benchmarks.md between the ``bench_mesh`` markers.
+
+    .venv/bin/python benchmarks/bench_mesh.py [--triangles 1000000] [--repeats 3] [--no-docs]
 """
 
 from __future__ import annotations
@@ -26,6 +28,9 @@ import numpy as np
 import trimesh
 
 from povh3d.povray.process import PovrayJob, run_jobs
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
+BEGIN, END = "<!-- bench_mesh: begin -->", "<!-- bench_mesh: end -->"
 
 CHILD = """
 import json, resource, sys
@@ -76,7 +81,9 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--triangles", type=int, default=1_000_000)
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--no-docs", action="store_true", help="print the table, leave docs/benchmarks.md alone")
     args = p.parse_args()
+    rows, load_before = [], os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         for stem, make, kind in (("Sphere", sphere, "stl"), ("Torus", torus, "ply")):
@@ -105,6 +112,22 @@ def main() -> int:
                   f"{tri / seconds:,.0f} triangles/s (target >= 500,000): {'ok' if tri / seconds >= 500_000 else 'MISSED'}")
             print(f"  peak memory: {peak:.0f} MB (target < 1024 MB): {'ok' if peak < 1024 else 'MISSED'}")
             print(f"  POV-Ray parse time of the include: {parse:.2f} s (whole 8x8 render run {povray_wall:.2f} s)")
+            what = ("UV sphere, binary STL, flat" if kind == "stl" else "bumpy torus, binary PLY, smooth normals")
+            rows.append((f"{tri:,}-triangle {what}, {runs[0]['vertices']:,} shared vertices",
+                         f"{seconds:.2f} s ({min(walls):.2f}-{max(walls):.2f})", f"**{tri / seconds:,.0f}**",
+                         f"{peak:.0f} MB", f"{size_mb:.1f} MB", f"{parse:.2f} s"))
+    table = "\n".join(
+        [f"Median (min-max) of {args.repeats} runs after one that fills numba's cache, {os.cpu_count()} cores; "
+         f"load average {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after (1 min).", "",
+         "| model | whole process | triangles/s | peak memory | include | POV-Ray parse |", "|---|---|---|---|---|---|"]
+        + [f"| {' | '.join(row)} |" for row in rows])
+    print(table)
+    if not args.no_docs:
+        text = DOCS.read_text(encoding="utf-8")
+        pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.DOTALL)
+        if pattern.search(text) is None:
+            raise SystemExit(f"{DOCS} has no {BEGIN} ... {END} markers")
+        DOCS.write_text(pattern.sub(lambda m: f"{BEGIN}\n{table}\n{END}", text), encoding="utf-8")
     return 0
 
 

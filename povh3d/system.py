@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from functools import cache
 
 
@@ -86,3 +87,16 @@ def available_memory() -> int | None:
     except (OSError, ValueError, IndexError):
         pass
     return None
+
+
+def default_cache_dir() -> Path:
+    """``$POVH3D_CACHE``, else ``$XDG_CACHE_HOME/povh3d``, else ``~/.cache/povh3d``."""
+    if os.environ.get("POVH3D_CACHE"):
+        return Path(os.environ["POVH3D_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME")
+    if not base:
+        try:
+            base = str(Path.home() / ".cache")
+        except RuntimeError:  # no HOME and no password entry: an unusable cache, not a crash
+            base = os.path.join(os.sep, "nonexistent-home", ".cache")
+    return Path(base) / "povh3d"

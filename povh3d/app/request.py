@@ -81,7 +81,7 @@ class VolumeOptions:
     orientation : {'coronal', 'axial', 'sagittal'}   the radiological view (``volume.orient``)
     rotate : (3,) degrees or None   then turned as POV-Ray's ``rotate``
     volume : bool                   direct volume rendering (participating media) instead of surfaces
-    transfer : str                  its transfer function: a preset name or a file
+    transfer : str                  its transfer function: a preset name, a file, or auto (chosen from the values)
     df3_bits : {8, 16}              its density file's bits per voxel
     """
 
@@ -94,7 +94,7 @@ class VolumeOptions:
     orientation: str = "coronal"
     rotate: tuple[float, float, float] | None = None
     volume: bool = False
-    transfer: str = "ct-soft"
+    transfer: str = "auto"
     df3_bits: int = 16
 
     def __post_init__(self) -> None:
@@ -208,7 +208,7 @@ class RenderRequest:
     @property
     def is_volume(self) -> bool:
         """Whether ``source`` is a volume (a volume file or a DICOM folder), put on the volume stage."""
-        from ..volume.read import is_volume_source
+        from ..volume.sources import is_volume_source
 
         return is_volume_source(self.source)
 

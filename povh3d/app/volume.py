@@ -72,7 +72,8 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
 
     ``max_triangles``: the surfaces' triangle budget (None or ``'auto'``: the display's, ``auto_budget``).
     """
-    from ..volume.read import is_polydata_vtk, read_volume
+    from ..volume.read import read_volume
+    from ..volume.sources import is_polydata_vtk
 
     options = options or VolumeOptions()
     if is_polydata_vtk(source):

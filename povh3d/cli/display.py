@@ -1,5 +1,5 @@
 """Commands on displays and images: ``presets``, ``info``, ``interleave``, ``extract``,
-``map``, ``resample``, ``quilt``, ``refocus``, ``preview``."""
+``map``, ``resample``, ``quilt``, ``refocus``, ``preview``, ``moire``."""
 
 from __future__ import annotations
 
@@ -162,6 +162,19 @@ def cmd_preview(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_moire(args: argparse.Namespace) -> int:
+    from ..app.moire import moire_sweep_file, parse_range
+
+    slants = parse_range(args.slant_range)
+    lens_array, _ = lens_array_from_args(args)
+    m = moire_sweep_file(lens_array, slants, args.output, distance=args.distance, turn=args.turn,
+                         blur=args.blur, spot=args.spot)
+    best = min(range(len(slants)), key=lambda n: m["row_contrast"][n])
+    print(f"{args.output}  {len(slants)} slants; row moire contrast {m['row_contrast'][0]:.3f} at "
+          f"{slants[0]:g} deg, least {m['row_contrast'][best]:.3f} at {slants[best]:g} deg")
+    return 0
+
+
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("interleave", help="interleave a folder of views into an H3D image")
     p.add_argument("views_dir")
@@ -230,3 +243,13 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--scale", type=positive_int, help="enlarge each lens to this many pixels")
     add_image_lens_options(p)
     p.set_defaults(func=cmd_preview)
+
+    p = sub.add_parser("moire", help="moire of a cross-lenticular sheet against its slant (plot + sidecar)")
+    p.add_argument("-o", "--output", required=True, help="plot .png (its sidecar holds the numbers)")
+    p.add_argument("--slant-range", default="0:20:0.25", metavar="START:STOP:STEP", help="degrees")
+    p.add_argument("--distance", type=float, default=500.0, help="viewer distance, mm (default 500)")
+    p.add_argument("--turn", action="store_true", help="turn the whole pair instead of the horizontal sheet")
+    p.add_argument("--blur", type=float, default=1.5, help="eye's low-pass, in lens pitches (default 1.5)")
+    p.add_argument("--spot", type=float, default=0.0, help="panel area each lens averages, mm (default 0)")
+    add_array_options(p)
+    p.set_defaults(func=cmd_moire, preset="cross-lenticular-ipad")

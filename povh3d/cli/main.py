@@ -19,7 +19,7 @@ from typing import NoReturn
 
 from .._version import __version__
 from ..errors import Povh3dError, Povh3dWarning, RenderInterrupted
-from . import calibration, display, render
+from . import calibration, display, layout, render
 from .options import warn
 
 
@@ -56,6 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_parsers(sub)
     display.add_parsers(sub)
     calibration.add_parsers(sub)
+    layout.add_parsers(sub)
     return parser
 
 

@@ -45,6 +45,9 @@ def add_array_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--panel", help="panel size WxH in pixels")
     g.add_argument("--lens-rotation", type=rotation_degrees, metavar="DEG",
                    help="turn the lens lattice by DEG within (-45, 45], counter-clockwise (slanted sheets)")
+    g.add_argument("--lattice", metavar="A1X,A1Y;A2X,A2Y",
+                   help="a lens lattice of two vectors in mm (parallelogram cells), or crossed lenticular "
+                        "sheets 'cross:PITCH,SLANT_DEG' (multi-ortho only; docs/geometry.md)")
 
 
 def lens_array_from_args(args: argparse.Namespace):
@@ -59,6 +62,7 @@ def lens_array_from_args(args: argparse.Namespace):
         "rows": args.rows,
         "panel": parse_pair(args.panel, "--panel", integral=True) if args.panel else None,
         "lens_rotation": getattr(args, "lens_rotation", None),
+        "lattice": getattr(args, "lattice", None),
     }
     if overrides["panel"] is not None and not isinstance(overrides["panel"], tuple):
         raise ConfigError(f"--panel takes WxH like 1920x1080, got {args.panel!r}")

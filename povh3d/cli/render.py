@@ -4,11 +4,15 @@ request, hand it to ``povh3d.app``, print one summary line."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
+import time
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, Povh3dWarning
 from .volume import add_volume_options, volume_options_from_args
 from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args, positive_int,
                       mapping_from_args, max_triangles, progress_bar, warn)
@@ -26,7 +30,9 @@ def request_from_args(args: argparse.Namespace) -> Any:
 
     lens_array, display = lens_array_from_args(args)
     mapping = panel = None
-    if args.mapping:  # render exactly the views the mapping reads, then map them
+    if args.method == "subpixel":
+        lens_array, display = _subpixel_sheet(args, lens_array, display)
+    elif args.mapping:  # render exactly the views the mapping reads, then map them
         mapping, panel = mapping_from_args(args, lens_array, display)
         display = {**display, "mapping": mapping.name}
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
@@ -52,6 +58,25 @@ def request_from_args(args: argparse.Namespace) -> Any:
         display_frame=frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None,
         volume=volume_options_from_args(args, _triple(args.rotate, "--rotate")))
+
+
+def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``--method subpixel`` on a display with a slanted mapping (alioscopy-42, philips-20): the
+    sheet that mapping describes, traced subpixel by subpixel straight to the panel image."""
+    if args.mapping:
+        raise ConfigError("--method subpixel writes the panel image itself; drop --mapping (a preset's "
+                          "slanted mapping gives the sheet it traces)")
+    if not display.get("mapping"):
+        return lens_array, display
+    if args.offset:
+        raise ConfigError("--method subpixel traces the sheet centred on the panel; drop --offset (the sidecar "
+                          "records the mapping offset that addresses the same sheet)")
+    from ..engine.subpixel import slanted_sheet
+
+    mapping, panel = mapping_from_args(argparse.Namespace(**{**vars(args), "mapping": display["mapping"]}),
+                                       lens_array, display)
+    sheet, offset = slanted_sheet(mapping, panel, lens_array.focal)
+    return sheet, {**display, "sheet": {"from_mapping": mapping.name, "mapping_offset": offset}}
 
 
 def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
@@ -93,6 +118,28 @@ def _method_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
+    from ..app import output_cache
+
+    key = output_cache.request_key(args)
+    output = Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png")
+    if key is not None:
+        start = time.perf_counter()
+        hit = output_cache.answer(key, output)
+        if hit is not None:
+            warn(list(hit.warnings))
+            print(f"{output}  {hit.summary}  {time.perf_counter() - start:.2f} s (output from cache)")
+            return 0
+    with _warnings_kept() as given:
+        summary = _render(args)
+    # A scene edited while it rendered: the image is of neither version's key.
+    if key is not None and summary is not None and output_cache.request_key(args) == key:
+        output_cache.keep(key, output, summary[0], summary[1] + given)
+    return 0
+
+
+def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
+    """Render; print the warnings of the sidecar and the summary line.  For a still, return
+    what follows the output name in that line and those warnings."""
     from ..app.render import render
 
     request = request_from_args(args)
@@ -108,12 +155,11 @@ def cmd_render(args: argparse.Namespace) -> int:
               f"{'reads' if result['scene_uses_clock'] else 'ignores'} the clock)  {result['seconds']:.2f} s")
         if result["video"]:
             print(result["video"])
-        return 0
-    for content in ("model", "volume"):
-        warn(result.get(content, {}).get("warnings", []))
+        return None
     placed = result.get("display_frame", {})
-    warn(placed.get("warnings", []))
-    warn(result.get("warnings", []))
+    noted = [*result.get("model", {}).get("warnings", []), *result.get("volume", {}).get("warnings", []),
+             *placed.get("warnings", []), *result.get("warnings", [])]
+    warn(noted)
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.mapping.name}" if request.mapping else ""
@@ -121,10 +167,31 @@ def cmd_render(args: argparse.Namespace) -> int:
         mapping += f"  up {result['model']['up']} ({result['model']['up_reason']})"
     if "volume" in result:
         v = result["volume"]
-        mapping += f"  {v['orientation']}, {len(v.get('surfaces', []))} surfaces, {v.get('triangles', 0)} triangles"
-    print(f"{request.output}  {w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  "
+        drawn = f"{len(v['surfaces'])} surfaces, {v['triangles']} triangles" if "surfaces" in v else "media"
+        mapping += f"  {v['orientation']}, {drawn}"
+    summary = f"{w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}"
+    print(f"{request.output}  {summary}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
-    return 0
+    return summary, noted
+
+
+@contextlib.contextmanager
+def _warnings_kept() -> Iterator[list[str]]:
+    """The lines of the warnings a render gives (still shown as they come), for the output cache
+    to give again; with the sidecar's own warnings, which the summary prints."""
+    given: list[str] = []
+    shown = warnings.showwarning
+
+    def keep(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, Povh3dWarning):
+            given.append(str(message))
+        shown(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = keep
+    try:
+        yield given
+    finally:
+        warnings.showwarning = shown
 
 
 def frame_phrase(record: dict[str, Any]) -> str:

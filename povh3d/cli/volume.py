@@ -15,7 +15,8 @@ def add_volume_options(p: argparse.ArgumentParser) -> None:
                    "labels) or e.g. 1,4,7")
     g.add_argument("--iso", metavar="VALUE[,VALUE...]", help="one surface per iso value (e.g. CT bone 300)")
     g.add_argument("--volume", action="store_true", help="draw the data as a glowing, absorbing medium")
-    g.add_argument("--transfer", default="ct-soft", metavar="NAME|FILE", help="--volume's transfer function")
+    g.add_argument("--transfer", default="auto", metavar="NAME|FILE",
+                   help="--volume's transfer function: ct-bone, ct-soft, mri, labels, a file, or auto (the default)")
     g.add_argument("--df3-bits", type=int, choices=(8, 16), default=16, help="--volume's density file depth")
     g.add_argument("--opacity", metavar="A[,A...]", help="surface opacity 0..1: one for all, or one per surface")
     g.add_argument("--smoothing", type=int, metavar="N",

@@ -24,22 +24,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, Povh3dError, warn
+from ..system import default_cache_dir  # noqa: F401 - defined there so light modules need no NumPy
 from ..image.io import atomic_path, decode_png
 
 _MAGIC = b"povh3d-cache 1 "
-
-
-def default_cache_dir() -> Path:
-    """``$POVH3D_CACHE``, else ``$XDG_CACHE_HOME/povh3d``, else ``~/.cache/povh3d``."""
-    if os.environ.get("POVH3D_CACHE"):
-        return Path(os.environ["POVH3D_CACHE"])
-    base = os.environ.get("XDG_CACHE_HOME")
-    if not base:
-        try:
-            base = str(Path.home() / ".cache")
-        except RuntimeError:  # no HOME and no password entry: an unusable cache, not a crash
-            base = os.path.join(os.sep, "nonexistent-home", ".cache")
-    return Path(base) / "povh3d"
 
 
 def content_key(*parts: Any) -> str:

@@ -28,12 +28,14 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, warn
 from ..geometry.cameras import (bank_back_off, check_clearance, default_back_off,
                                 ortho_view_frames, pinhole_frames, stack_frames, view_bank_frames)
 from ..geometry.crop import CropSettings
+from ..geometry.footprint import CENTRE, latin_hypercube
 from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray
+from ..geometry.phase_tiles import phase_tiles, tiles_mesh, uncovered
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
@@ -103,6 +105,9 @@ def _pinhole(lens_array: LensArray, back_off: float, samples: np.ndarray) -> Met
 
 def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *,
                   lenslet: str, ior: float | None, supersample: int = 1) -> MethodPlan:
+    if lens_array.grid == "lattice":
+        raise ConfigError("--method single-stage builds square, hex and lenticular lenslets, not a general "
+                          "lattice (--lattice); render it with --method multi-ortho")
     plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off, supersample)
     return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
 
@@ -125,11 +130,24 @@ def single_stage_supersamples(quality: Quality) -> int:
     return quality.aa_depth if quality.antialias is not None else 1
 
 
-def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
-    mesh = lens_mesh(subpixel.subpixel_array(lens_array), back_off)
-    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
-                      lambda images: subpixel.subpixels_to_panel(mesh.crop(stack_frames(images))),
-                      subpixel.describe(lens_array))
+def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray, *, supersample: int = 1) -> MethodPlan:
+    """A rational sheet (every real panel): one quad per phase coset, and with ``supersample``
+    k > 1 one frame per point of ``k x k`` footprint samples (aperture and subpixel area, averaged
+    in linear light).  Otherwise one strip per lenticule, point-sampled."""
+    sub = subpixel.subpixel_array(lens_array)
+    tiles = phase_tiles(sub)
+    if tiles is None:
+        if supersample > 1:
+            warn("this lens sheet's phases do not repeat within 64 subpixels and rows, so --method subpixel "
+                 "traces it point-sampled (one strip per lenticule); give a rational sheet to antialias")
+        meshes = [lens_mesh(sub, back_off)]
+    else:
+        points = latin_hypercube(supersample * supersample) if supersample > 1 else CENTRE
+        meshes = [tiles_mesh(sub, tiles, back_off, tuple(p)) for p in points]
+    outside = uncovered(sub) if tiles is not None else None
+    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
+                      lambda images: subpixel.assemble(meshes[0], tiles, images, outside),
+                      subpixel.describe(lens_array, tiles, len(meshes)))
 
 
 @dataclass(frozen=True)
@@ -175,7 +193,7 @@ METHODS: dict[str, Method] = {
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
                            supersamples=single_stage_supersamples),
-    "subpixel": Method(_subpixel),
+    "subpixel": Method(_subpixel, supersamples=single_stage_supersamples),
 }
 
 

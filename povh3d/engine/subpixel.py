@@ -19,12 +19,19 @@ own ray instead (docs/geometry.md, "Rotated lattices"):
 
 from __future__ import annotations
 
-from typing import Any
+import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import ConfigError
+from ..geometry.cameras import CameraMesh, stack_frames
 from ..geometry.lens_array import LensArray, Panel
+from ..image.colour import mean_in_linear_light
+
+if TYPE_CHECKING:  # the method (engine.methods) builds the camera; this module only reads it
+    from ..geometry.phase_tiles import PhaseTiles
+    from ..mappings import Mapping
 
 
 def subpixel_array(lens_array: LensArray) -> LensArray:
@@ -38,6 +45,59 @@ def subpixel_array(lens_array: LensArray) -> LensArray:
     return LensArray("lenticular", la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
 
 
+def slanted_sheet(mapping: Mapping, panel: Panel, focal: float) -> tuple[LensArray, float]:
+    """The lens sheet a slanted subpixel mapping describes, centred on its panel, and the
+    mapping offset ``k_off`` that puts the mapping's sheet where this one lies.
+
+    The mapping's sheet spans ``X`` subpixels along a row and moves ``slope`` subpixels
+    right per row down (``mappings.slanted``): it leans ``atan(slope s_x / (3 s_y))`` from
+    vertical (counter-clockwise, as ``--lens-rotation``), ``X s_x/3 cos a`` mm across.
+    A subpixel whose centre lies ``t`` lens pitches across the centred sheet has the
+    mapping's phase ``X t - 1/2`` (the phase is its left edge), hence ``k_off``.
+    """
+    from ..mappings.slanted import Slanted  # only the CLI asks: keeps the render's import chain short
+
+    if not isinstance(mapping, Slanted) or mapping.unit != "subpixel" or mapping.reverse:
+        raise ConfigError(f"--method subpixel traces the sheet of a slanted subpixel mapping; {mapping.name!r} "
+                          "is not one: give the sheet with --grid lenticular --ppl --lens-rotation instead")
+    sx, sy = panel.pitch_x, panel.pitch_y
+    turn = math.atan(mapping.slope * sx / (3 * sy))
+    pitch = mapping.per_lens * sx / 3 * math.cos(turn)
+    reach = panel.width * sx * math.cos(turn) + panel.height * sy * abs(math.sin(turn))
+    sheet = LensArray("lenticular", math.ceil(reach / pitch) + 1, panel.height, pitch, sy, focal, panel,
+                      math.degrees(turn))
+    x, _ = sheet.to_lattice(np.array((0.5 / 3 - panel.width / 2) * sx), np.array((panel.height / 2 - 0.5) * sy))
+    t = float(x) / pitch + sheet.lenses_x / 2          # subpixel (0, 0), across the sheet
+    return sheet, round((mapping.per_lens * t - 0.5) % mapping.per_lens, 9) % mapping.per_lens
+
+
+def subpixel_image(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray]) -> np.ndarray:
+    """The ``(H, 3W, C)`` image of every subpixel's ray out of the rendered frame."""
+    image = stack_frames(images)
+    return mesh.crop(image) if tiles is None else tiles.to_panel(image)
+
+
+def assemble(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray],
+             outside: np.ndarray | None = None) -> np.ndarray:
+    """The ``(H, W, 3)`` panel image from the rendered subpixel frames (tiles: one gather a
+    frame; several frames are footprint samples, averaged in linear light).
+
+    ``outside`` (``(H, 3W)`` bool, tiles only): subpixels outside every lenticule, made
+    black (a tile's rays run on past the sheet's edge; a strip camera finds no face there).
+    """
+    if tiles is None:
+        return subpixels_to_panel(subpixel_image(mesh, tiles, images))
+    rows, cols = tiles.panel_index()          # of every subpixel column 3 col + c
+    w = cols.size // 3
+    channel = np.arange(3)
+    panels = np.stack([image[1:, :-1][rows[:, None, None], cols.reshape(w, 3)[None], channel[None, None, :]]
+                       for image in images])
+    panel = mean_in_linear_light(panels) if len(panels) > 1 else panels[0]
+    if outside is not None:
+        panel[outside.reshape(len(rows), w, 3)] = 0
+    return panel
+
+
 def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     """``(H, 3W, C)`` subpixel image -> ``(H, W, 3)`` panel: channel ``c`` from column ``3 col + c``."""
     h, w3 = image.shape[:2]
@@ -47,7 +107,10 @@ def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.einsum("hwcc->hwc", cells))
 
 
-def describe(lens_array: LensArray) -> dict[str, Any]:
+def describe(lens_array: LensArray, tiles: PhaseTiles | None, samples: int = 1) -> dict[str, Any]:
     sub = subpixel_array(lens_array)
     return {"subpixel_panel_px": [sub.panel.width, sub.panel.height],
-            "slant_deg": lens_array.rotation, "subpixels_per_lens": 3 * lens_array.ppl_x}
+            "slant_deg": lens_array.rotation,
+            "subpixels_per_lens_along_row": 3 * lens_array.ppl_x / math.cos(math.radians(lens_array.rotation)),
+            "camera": (f"phase tiles {tiles.period[0]}x{tiles.period[1]}" if tiles else "one strip per lenticule"),
+            "footprint_samples": samples}

@@ -44,11 +44,15 @@ def ray_stretch(lens_array: LensArray) -> float:
     """Path length per mm of depth of the most oblique pixel ray, ``max |d| / d_z``.
 
     Bounded with the largest pixel offset from a lens centre: half the pitch
-    (hex: the cell's circumradius ``px / sqrt(3)``; lenticular: ``v = 0``).
+    (hex: the cell's circumradius ``px / sqrt(3)``; lenticular: ``v = 0``; lattice:
+    the parallelogram's longer half-diagonal).
     """
     f = lens_array.focal
     if lens_array.grid == "hex":
         hx, hy = lens_array.pitch_x / np.sqrt(3), 0.0
+    elif lens_array.grid == "lattice":
+        a1, a2 = np.array(lens_array.basis)
+        hx, hy = max(abs(a1 + a2) / 2, abs(a1 - a2) / 2, key=lambda h: float(h @ h))
     else:
         hx = lens_array.pitch_x / 2
         hy = 0.0 if lens_array.grid == "lenticular" else lens_array.pitch_y / 2
@@ -147,6 +151,8 @@ class CameraMesh:
     image_size: tuple[int, int]
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
     margin: tuple[int, int] = (0, 0)  # (columns, rows) of canvas around the panel, cut off after
+    # x, y map K (2 x 2, row-major) after ``scale``: origins by K, directions by K^-T (``lattice_mesh``).
+    shear: tuple[float, float, float, float] | None = None
 
     def crop(self, image: np.ndarray) -> np.ndarray:
         """The panel out of a rendered frame (extra first row and last column already cut)."""

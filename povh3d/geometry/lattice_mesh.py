@@ -12,25 +12,27 @@ from dataclasses import replace
 
 import numpy as np
 
-from .cameras import CameraMesh, _quad_mesh, camera_mesh, check_clearance
+from .cameras import TIE_SHIFT, CameraMesh, _quad_mesh, camera_mesh, check_clearance
+from .lattice import lattice_coordinates
 from .lens_array import LensArray
 from .rays import pixel_rays
 
 
 def lens_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     """One cell per lens: ``lattice_mesh`` for hex or turned lattices, else ``camera_mesh``."""
-    if lens_array.rotation or lens_array.grid == "hex":
+    if lens_array.rotation or lens_array.grid in ("hex", "lattice"):
         return lattice_mesh(lens_array, back_off)
     return camera_mesh(lens_array, back_off)
 
 
 def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
-    """``camera_mesh`` of a rotated lattice, or a hex one: one polygon per lens cell.
+    """``camera_mesh`` of a rotated lattice, a hex one or a general one: one polygon per lens cell.
 
     The cell of every lens (square: its pitch rectangle; hex: its hexagon, all six
     corners ``px / sqrt(3)`` from the centre; lenticular: a strip ``px`` wide along
-    the lenticule, past the panel at both ends) is laid out in the lattice's own
-    frame and turned by ``rotation``.  Origin and direction stay linear in the
+    the lenticule, past the panel at both ends; general lattice: the parallelogram
+    ``c +- a1/2 +- a2/2``) is laid out in the lattice's own frame and turned by
+    ``rotation``.  Origin and direction stay linear in the
     offset ``(u, v)`` and every corner offset of a lens has one length, so the face
     interpolation is exact as in ``camera_mesh``.  A pixel centre lies on a cell
     edge only by accident of a rotated lattice, and no tie shift is made for it.
@@ -73,7 +75,12 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         X, Y = la.to_lattice(*np.meshgrid(*panel.pixel_centres()))
         owner, inside = _pixel_owners(la, X, Y)
         c = la.lattice_centres().reshape(-1, 2)[np.unique(owner[inside])]
-        if la.grid == "hex":
+        if la.grid == "lattice":  # the parallelogram spanned by the two vectors
+            (a1x, a1y), (a2x, a2y) = la.basis
+            cs, ct = np.array([-0.5, 0.5, 0.5, -0.5]), np.array([-0.5, -0.5, 0.5, 0.5])
+            cs, ct = cs - _tie_shift(la, X, Y, 0), ct + _tie_shift(la, X, Y, 1)
+            cu, cv = cs * a1x + ct * a2x, cs * a1y + ct * a2y
+        elif la.grid == "hex":
             r = la.pitch_x / math.sqrt(3)
             cu = np.array([-hx, 0.0, hx, hx, 0.0, -hx])
             cv = np.array([-r / 2, -r, -r / 2, r / 2, r, r / 2])
@@ -89,13 +96,50 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     row = H / 2 - 0.5 - y / panel.pitch_y
     mx = max(0, math.ceil(max(-col.min(), col.max() - (W - 1)))) + 1
     my = max(0, math.ceil(max(-row.min(), row.max() - (H - 1)))) + 1
+    shear = None
+    if la.grid == "lattice":
+        shear, origin_x, origin_y, u, v = _unshear(la, origin_x, origin_y, u, v)
     mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), back_off, f)
-    return replace(mesh, margin=(mx, my))
+    return replace(mesh, margin=(mx, my), shear=shear)
+
+
+def _tie_shift(la: LensArray, X: np.ndarray, Y: np.ndarray, axis: int) -> float:
+    """How far (in lattice units along ``a1`` or ``a2``) to move every cell off pixel centres
+    that lie on its edges: ``TIE_SHIFT`` of a pixel, so that such a pixel is looked up inside
+    the lens ``pixel_rays`` gives it (right, below), as ``camera_mesh`` does; 0 without ties."""
+    st = lattice_coordinates(*np.array(la.basis), X, Y)[axis]
+    edge = st + (la.lenses_x if axis == 0 else la.lenses_y) / 2
+    if not np.any(np.abs(edge - np.rint(edge)) < 1e-7):
+        return 0.0
+    return TIE_SHIFT * la.panel.pitch_x / float(np.hypot(*la.basis[axis]))
+
+
+def _unshear(la: LensArray, ox: np.ndarray, oy: np.ndarray, u: np.ndarray, v: np.ndarray):
+    """A general lattice's mesh written through a shear ``K`` (``CameraMesh.shear``).
+
+    POV-Ray normalises vertex normals before it interpolates them, which is exact only
+    where a face's corner offsets ``(u, v, f)`` share one length: true of rectangles and
+    hexagons, not of a parallelogram (a 30 deg skew put rays 0.25 mm off 4 mm behind the
+    screen).  So the mesh is written with ``K^T = diag(|a1|, |a2|) B^-1`` (``B = [a1 a2]``)
+    applied to the offsets, which makes every cell a rectangle, and origins by ``K^-1``;
+    POV-Ray maps origins back by ``K`` and directions by ``K^-T``, both linear, so every
+    ray is the exact one again.
+    """
+    b = np.array(la.basis, dtype=np.float64).T  # columns a1, a2
+    kt = np.diag(np.linalg.norm(b, axis=0)) @ np.linalg.inv(b)
+    k_inv = np.linalg.inv(kt.T)
+    uo, vo = kt[0, 0] * u + kt[0, 1] * v, kt[1, 0] * u + kt[1, 1] * v
+    xo, yo = k_inv[0, 0] * ox + k_inv[0, 1] * oy, k_inv[1, 0] * ox + k_inv[1, 1] * oy
+    return tuple(float(a) for a in kt.T.ravel()), xo, yo, uo, vo
 
 
 def _pixel_owners(la: LensArray, X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Flat lens index ``i * Lx + j`` of the lens owning each pixel, and whether one does."""
     centres, _, inside = pixel_rays(la)
+    if la.grid == "lattice":
+        s, t = lattice_coordinates(*np.array(la.basis), centres[..., 0], centres[..., 1])
+        owner = np.where(inside, np.rint(la.lenses_y / 2 - 0.5 - t) * la.lenses_x + np.rint(s + la.lenses_x / 2 - 0.5), -1)
+        return owner.astype(np.int64), inside
     lattice = la.lattice_centres()
     cx, cy = la.to_lattice(centres[..., 0], centres[..., 1])
     j = np.rint((cx - lattice[0, 0, 0]) / la.pitch_x - (np.rint((lattice[0, 0, 1] - cy) / la.pitch_y) % 2) * 0.5 * (la.grid == "hex"))

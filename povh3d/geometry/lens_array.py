@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import ConfigError
 
-GRIDS = ("square", "lenticular", "hex")
+GRIDS = ("square", "lenticular", "hex", "lattice")
 
 # PPL closer than this to a whole number counts as integral: pitches come from
 # decimal data sheets (0.3825 / 0.0425 is 9 within rounding, not exactly).
@@ -103,7 +103,7 @@ class LensArray:
 
     Parameters
     ----------
-    grid : {'square', 'lenticular', 'hex'}
+    grid : {'square', 'lenticular', 'hex', 'lattice'}
     lenses_x, lenses_y : int
         Lens count ``Lx x Ly`` (lenticular: ``Ly`` is the panel height in rows).
     pitch_x, pitch_y : float, mm
@@ -116,6 +116,14 @@ class LensArray:
         The lattice turned by this angle about the origin, counter-clockwise as the
         viewer sees it (x right, y up), within (-45, 45]; a slanted lenticular sheet
         leans its lenticules this far from vertical (docs/geometry.md, "Rotated lattices").
+    basis : ((a1x, a1y), (a2x, a2y)), mm, only for ``grid='lattice'``
+        The two lattice vectors (docs/geometry.md, "General lattices"): lens ``(j, i)``
+        sits at ``(j + 0.5 - Lx/2) a1 + (Ly/2 - i - 0.5) a2`` and owns the parallelogram
+        cell spanned by them.  Taken with ``a1`` pointing right (or up) and ``a2`` on its
+        left (a positive determinant); given the other way they are negated, which is
+        the same lattice.  ``pitch_x`` and ``pitch_y`` must be the distances between the
+        cell's opposite edges (``lattice_array`` works them out); ``rotation`` stays 0
+        (turn the vectors instead).
     """
 
     grid: str
@@ -126,8 +134,10 @@ class LensArray:
     focal: float
     panel: Panel
     rotation: float = 0.0
+    basis: tuple[tuple[float, float], tuple[float, float]] | None = None
 
     def __post_init__(self) -> None:
+        self._check_basis()
         rot = self.rotation
         if isinstance(rot, bool) or not isinstance(rot, (int, float)) or not math.isfinite(rot) or not -45 < rot <= 45:
             raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {rot!r}; "
@@ -155,10 +165,27 @@ class LensArray:
         array_h = self.lenses_y * self.pitch_y
         slack = 1e-9 * max(width_mm, height_mm)
         # A rotated lattice is cut by the panel's edges, as a real slanted sheet is.
-        if self.rotation == 0.0 and (array_w > width_mm + slack or array_h > height_mm + slack):
+        if self.rotation == 0.0 and self.grid != "lattice" and (array_w > width_mm + slack or array_h > height_mm + slack):
             raise ConfigError(
                 f"the lens array ({array_w:.6g} x {array_h:.6g} mm) is larger than the panel "
                 f"({width_mm:.6g} x {height_mm:.6g} mm); use fewer lenses (--lenses) or a larger panel (--panel)")
+
+    def _check_basis(self) -> None:
+        from .lattice import cell_widths, lattice_vectors  # here: keeps lens_array's imports shallow
+
+        if self.grid != "lattice":
+            if self.basis is not None:
+                raise ConfigError(f"lattice vectors are for grid 'lattice', not {self.grid!r}; drop --lattice or --grid")
+            return
+        a1, a2 = lattice_vectors(self.basis)
+        if self.rotation:
+            raise ConfigError("a lattice given by its vectors is not turned again (--lens-rotation); "
+                              "turn its vectors instead")
+        object.__setattr__(self, "basis", (tuple(map(float, a1)), tuple(map(float, a2))))
+        px, py = cell_widths(a1, a2)
+        if not (math.isclose(self.pitch_x, px, rel_tol=1e-9) and math.isclose(self.pitch_y, py, rel_tol=1e-9)):
+            raise ConfigError(f"a lattice's pitches are its cell widths ({px:.9g} x {py:.9g} mm), got "
+                              f"{self.pitch_x:.9g} x {self.pitch_y:.9g}; build it with lattice_array()")
 
     # -- pixels per lens and views -------------------------------------------------
     @property
@@ -178,7 +205,7 @@ class LensArray:
     @cached_property
     def views(self) -> tuple[int, int] | None:
         """``(Ny, Nx)`` views of the camera bank, or None when the PPL is not whole."""
-        if self.grid == "hex" or self.rotation:
+        if self.grid in ("hex", "lattice") or self.rotation:
             return None
         nx, ny = nearest_integer(self.ppl_x), nearest_integer(self.ppl_y)
         if nx is None or ny is None:
@@ -204,6 +231,9 @@ class LensArray:
                 raise ConfigError("a hex lens array has no orthographic camera bank; render it through a "
                                   "virtual lens array with --method single-stage (views: 'povh3d extract' "
                                   "resamples them), or pick a square or lenticular --grid")
+            if self.grid == "lattice":
+                raise ConfigError("a lattice given by two vectors (--lattice) has no camera bank; render it with "
+                                  "--method multi-ortho, which traces one cell per lens")
             raise ConfigError(f"a camera bank needs whole pixels per lens (got {self.ppl_x:g} x {self.ppl_y:g}) "
                               "and an even pixel margin around the array; change --ppl, --lenses or the panel")
         return self.views
@@ -282,6 +312,10 @@ class LensArray:
         """``lens_centres`` in the lattice's own frame (before the rotation), ``(Ly, Lx, 2)`` mm."""
         j = np.arange(self.lenses_x, dtype=np.float64)
         i = np.arange(self.lenses_y, dtype=np.float64)
+        if self.grid == "lattice":
+            (a1x, a1y), (a2x, a2y) = self.basis
+            s, t = (j + 0.5 - self.lenses_x / 2)[None, :], ((self.lenses_y / 2 - i - 0.5))[:, None]
+            return np.stack([s * a1x + t * a2x, s * a1y + t * a2y], axis=-1)
         cx = np.broadcast_to((j + 0.5 - self.lenses_x / 2) * self.pitch_x, (self.lenses_y, self.lenses_x))
         if self.grid == "hex":
             # docs/geometry.md literally: odd rows shifted right by px/2 from the square
@@ -318,6 +352,7 @@ class LensArray:
                       "size_mm": list(self.panel.size_mm)},
             "ppl": [self.ppl_x, self.ppl_y],
             **({"rotation_deg": self.rotation} if self.rotation else {}),
+            **({"lattice_mm": [list(a) for a in self.basis]} if self.basis is not None else {}),
             "viewing_angle_deg": self.viewing_angle_deg,
             "resolution_3d": list(self.resolution_3d),
             "pixel_distance_3d_mm": [self.pitch_x, self.pitch_y],
@@ -332,3 +367,12 @@ class LensArray:
                 "view_angles_deg": {"horizontal": ah.tolist(), "vertical": av.tolist()},
             })
         return out
+
+
+def lattice_array(basis, lenses_x: int, lenses_y: int, focal: float, panel: Panel) -> LensArray:
+    """The ``grid='lattice'`` LensArray of two lattice vectors (pitches worked out from them)."""
+    from .lattice import cell_widths, lattice_vectors
+
+    a1, a2 = lattice_vectors(basis)
+    px, py = cell_widths(a1, a2)
+    return LensArray("lattice", lenses_x, lenses_y, px, py, focal, panel, 0.0, (tuple(a1), tuple(a2)))

@@ -19,11 +19,11 @@ if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
     from .lens_array import LensArray
 
 FIELDS = ("description", "grid", "panel", "pixel_pitch", "lens_pitch", "ppl", "lenses",
-          "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation")
+          "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation", "lattice")
 
 # Overriding any of these re-derives the panel from the lens array, unless the
 # panel itself is given.
-_ARRAY_FIELDS = ("grid", "lenses", "ppl", "rows", "lens_pitch")
+_ARRAY_FIELDS = ("grid", "lenses", "ppl", "rows", "lens_pitch", "lattice")
 
 _EPS = 1e-9
 
@@ -101,6 +101,15 @@ def merge_overrides(fields: dict[str, Any], overrides: dict[str, Any]) -> dict[s
             merged.pop(key, None)
     if "ppl" in given and "lens_pitch" not in given:
         merged.pop("lens_pitch", None)
+    # Lattice vectors replace the grid and its pitches; any other grid drops them.
+    if "lattice" in given:
+        if "ppl" in given or "lens_pitch" in given or given.get("grid", "lattice") != "lattice":
+            raise ConfigError("--lattice gives the lens cells itself; drop --ppl and --grid")
+        given["grid"] = "lattice"
+    elif given.get("grid", "lattice") != "lattice" or "ppl" in given:
+        merged.pop("lattice", None)
+        if merged.get("grid") == "lattice" and "grid" not in given:
+            merged["grid"] = "square"
     merged.update(given)
     return merged
 
@@ -129,6 +138,8 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
         panel = Panel(lenses * views, int(panel_size[1]), lens_pitch / views, sy)
         return LensArray(grid, lenses, panel.height, lens_pitch, sy, float(fields["focal"]), panel)
 
+    if grid == "lattice" or "lattice" in fields:
+        return _lattice_from_fields(fields, sx, sy, panel_size)
     if "ppl" in fields:
         nx, ny = _pair("pixels per lens (--ppl)", fields["ppl"])
         px, py = nx * sx, ny * sy
@@ -180,6 +191,75 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     return LensArray(grid, lx, ly, px, py, float(fields["focal"]), Panel(w, h, sx, sy), rotation)
 
 
+def parse_lattice(value: Any) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Lattice vectors (mm) from a ``lattice`` field or ``--lattice`` (docs/geometry.md, "General lattices").
+
+    ``'A1X,A1Y;A2X,A2Y'`` or ``[[a1x, a1y], [a2x, a2y]]``: the two vectors;
+    ``'cross:P,SLANT'`` or ``'cross:PV,PH,SLANT'``: a vertical lenticular sheet of pitch
+    ``PV`` crossed with a horizontal one of pitch ``PH`` whose lenticules are slanted
+    ``SLANT`` degrees (thesis 5.3).
+    """
+    from .lattice import cross_lenticular_basis, lattice_vectors
+
+    example = "give two vectors in mm, '0.6,0;0.1,0.6', or crossed sheets, 'cross:2.12,6.34'"
+    if isinstance(value, str):
+        text = value.strip()
+        try:
+            if text.lower().startswith("cross:"):
+                numbers = [float(t) for t in text[6:].split(",")]
+                if len(numbers) not in (2, 3) or not all(math.isfinite(n) for n in numbers):
+                    raise ValueError
+                pv, ph, slant = numbers if len(numbers) == 3 else (numbers[0], *numbers)
+                if pv <= 0 or ph <= 0:
+                    raise ConfigError(f"cross-lenticular pitches must be positive (mm), got {text!r}; {example}")
+                return cross_lenticular_basis(pv, ph, slant)
+            value = [[float(t) for t in vector.split(",")] for vector in text.split(";")]
+        except ValueError:
+            raise ConfigError(f"--lattice cannot read {value!r}; {example}") from None
+    a1, a2 = lattice_vectors(value)
+    return (float(a1[0]), float(a1[1])), (float(a2[0]), float(a2[1]))
+
+
+def _lattice_from_fields(fields: dict[str, Any], sx: float, sy: float,
+                         panel_size: tuple[float, float] | None) -> LensArray:
+    """A ``grid='lattice'`` LensArray: vectors turned by any ``lens_rotation``; lens counts that
+    cover the panel unless given (``lenses``), or the panel that holds the counted cells."""
+    import numpy as np
+
+    from .lattice import lattice_coordinates, lattice_vectors
+    from .lens_array import MAX_PANEL_PIXELS, Panel, lattice_array
+
+    if "lattice" not in fields:
+        raise ConfigError("grid 'lattice' needs its two lattice vectors; give them with --lattice")
+    if fields.get("grid", "lattice") != "lattice":
+        raise ConfigError(f"lattice vectors are a grid of their own, not {fields['grid']!r}; drop --grid or --lattice")
+    a1, a2 = (np.asarray(a) for a in parse_lattice(fields["lattice"]))
+    rotation = fields.get("lens_rotation") or 0.0
+    if rotation:  # a turned lattice is the lattice of turned vectors
+        if isinstance(rotation, bool) or not isinstance(rotation, (int, float)) or not -45 < rotation <= 45:
+            raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {rotation!r}; "
+                              "a lattice turned further is the same lattice turned less (--lens-rotation)")
+        c, s = math.cos(math.radians(rotation)), math.sin(math.radians(rotation))
+        turn = np.array([[c, -s], [s, c]])
+        a1, a2 = lattice_vectors((turn @ a1, turn @ a2))
+    if "lenses" in fields:
+        lx, ly = _pair("lens count (--lenses)", fields["lenses"], integral=True)
+    elif panel_size is not None:
+        half_w, half_h = panel_size[0] * sx / 2, panel_size[1] * sy / 2
+        s_, t_ = lattice_coordinates(a1, a2, np.array([-half_w, half_w, half_w, -half_w]),
+                                     np.array([-half_h, -half_h, half_h, half_h]))
+        lx, ly = (math.ceil(2 * np.abs(v).max() - _EPS) for v in (s_, t_))
+    else:
+        raise ConfigError("a lattice needs the panel size (--panel) or the lens count (--lenses)")
+    lx, ly = int(lx), int(ly)
+    if lx * ly > MAX_PANEL_PIXELS:
+        raise ConfigError(f"{lx}x{ly} lenses are more than povh3d can render; use fewer lenses (--lenses)")
+    if panel_size is None:  # the panel that holds every cell: corners (+-Lx/2) a1 + (+-Ly/2) a2
+        reach = lx / 2 * np.abs(a1) + ly / 2 * np.abs(a2)
+        panel_size = (math.ceil(2 * reach[0] / sx - _EPS), math.ceil(2 * reach[1] / sy - _EPS))
+    return lattice_array((a1, a2), lx, ly, float(fields["focal"]), Panel(int(panel_size[0]), int(panel_size[1]), sx, sy))
+
+
 def _covering_counts(grid: str, rotation: Any, width: float, height: float, px: float, py: float,
                      lx: int, ly: int) -> tuple[int, int]:
     """Lens counts of a turned lattice that covers a ``width x height`` mm panel (odd counts
@@ -218,6 +298,7 @@ def lens_array_from_record(record: dict[str, Any]) -> LensArray:
     try:
         panel = Panel(*record["panel"]["size_px"], *record["panel"]["pixel_pitch_mm"])
         return LensArray(record["grid"], *record["lenses"], *record["lens_pitch_mm"], record["focal_mm"], panel,
-                         record.get("rotation_deg", 0.0))
+                         record.get("rotation_deg", 0.0),
+                         tuple(map(tuple, record["lattice_mm"])) if "lattice_mm" in record else None)
     except (KeyError, TypeError) as exc:
         raise ConfigError(f"the sidecar's lens array is incomplete ({exc}); give --ppl NxxNy") from None

@@ -16,7 +16,8 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
     A pixel belongs to the lens whose cell holds its centre (square and
     lenticular: the lens's pitch rectangle, a centre on its border going to the
-    lens on the right or below; hex: the nearest centre).
+    lens on the right or below; hex: the nearest centre; lattice: the
+    parallelogram spanned by its vectors, as square).
 
     Returns
     -------
@@ -58,6 +59,11 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
         # its right (below); the tolerance keeps rounding from deciding.
         fj = X / px + Lx / 2 + 1e-9
         fi = Ly / 2 - Y / py + 1e-9
+        if lens_array.grid == "lattice":  # the parallelogram cell: lattice coordinates, as square
+            from .lattice import lattice_coordinates  # here: keeps the rays' imports shallow
+
+            s, t = lattice_coordinates(*np.array(lens_array.basis), X, Y)
+            fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
         j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
         inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
         if lens_array.grid == "lenticular" and lens_array.rotation:

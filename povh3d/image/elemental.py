@@ -27,6 +27,12 @@ def lens_index_map(lens_array: LensArray) -> np.ndarray:
     """
     centres, _, inside = pixel_rays(lens_array)
     la = lens_array
+    if la.grid == "lattice":  # indices from the lattice coordinates of the lens centre
+        from ..geometry.lattice import lattice_coordinates
+
+        s, t = lattice_coordinates(*np.array(la.basis), *np.nan_to_num(np.moveaxis(centres, -1, 0)))
+        return np.where(inside, np.rint(la.lenses_y / 2 - 0.5 - t).astype(np.int64) * la.lenses_x
+                        + np.rint(s + la.lenses_x / 2 - 0.5).astype(np.int64), -1)
     i = np.rint(la.lenses_y / 2 - 0.5 - np.nan_to_num(centres[..., 1]) / la.pitch_y).astype(np.int64)
     if la.grid == "lenticular":
         _, Y = la.panel.pixel_centres()

@@ -1,7 +1,9 @@
 """PNG images and JSON sidecars, written atomically.
 
-8-bit PNGs go through Pillow (fast); 16-bit through pypng, because Pillow opens
-16-bit RGB PNGs as 8-bit without a word (docs/geometry.md, "Files").  Every write
+8-bit PNGs are read by Pillow (fast); 16-bit ones by ``png_codec`` (zlib and
+NumPy), because Pillow opens 16-bit RGB PNGs as 8-bit without a word
+(docs/geometry.md, "Files"), and pypng, which reads them right, took seconds per
+megapixel.  ``png_codec`` writes both.  Every write
 goes to a temporary file in the destination folder and is renamed into place,
 so a failure or Ctrl-C never leaves a half-written image, and the file gets the
 mode the umask gives (``0o666 & ~umask``), like any file the user's programs
@@ -25,13 +27,12 @@ import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
-
-import numpy as np
-import png
-from PIL import Image
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError, OutputError
+
+if TYPE_CHECKING:  # NumPy, Pillow and pypng are imported where images are coded: a cached
+    import numpy as np  # output is copied as bytes without them (app/output_cache.py)
 
 
 @contextlib.contextmanager
@@ -125,24 +126,43 @@ def read_png(path: str | Path) -> np.ndarray:
 
 def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     """A PNG file or PNG bytes as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
+    import numpy as np
+    from PIL import Image
+
     try:
-        reader = png.Reader(filename=str(source)) if isinstance(source, Path) else png.Reader(bytes=source)
-        width, height, rows, info = reader.asDirect()
-        if info["bitdepth"] > 8:
-            planes = info["planes"]
-            data = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows])
-            return data.reshape(height, width, planes)
-        with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
-            im.load()
-            if im.mode not in ("RGB", "RGBA", "L", "LA"):
-                im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
-            arr = np.asarray(im)
+        if isinstance(source, Path):
+            with open(source, "rb") as fh:
+                head = fh.read(25)
+        else:
+            head = source[:25]
+        if head[24:25] == b"\x10":  # IHDR's bit depth: 16
+            arr = _decode_png16(source.read_bytes() if isinstance(source, Path) else source)
+        else:  # Pillow reads a file by parts: no copy of its bytes beside the image
+            with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
+                im.load()
+                if im.mode not in ("RGB", "RGBA", "L", "LA"):
+                    im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
+                arr = np.asarray(im)
     except MemoryError:
         raise InputError(f"{name!r} is too large to read into memory") from None
-    except Exception as exc:  # noqa: BLE001 - pypng and Pillow raise many kinds on a damaged file
+    except Exception as exc:  # noqa: BLE001 - zlib, pypng and Pillow raise many kinds on a damaged file
         raise InputError(f"cannot read {name!r} as a PNG image ({type(exc).__name__}: {exc}); "
                          "check that it is a complete PNG file") from None
     return arr[..., None] if arr.ndim == 2 else arr
+
+
+def _decode_png16(data: bytes) -> np.ndarray:
+    """16 bits per channel: ``png_codec`` (zlib and NumPy), pypng for the layouts it leaves (interlaced, palette)."""
+    import numpy as np
+    import png
+
+    from . import png_codec
+
+    arr = png_codec.decode(data)
+    if arr is None:
+        width, height, rows, info = png.Reader(bytes=data).asDirect()
+        arr = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows]).reshape(height, width, info["planes"])
+    return arr
 
 
 def write_png(path: str | Path, image: np.ndarray) -> None:
@@ -152,17 +172,16 @@ def write_png(path: str | Path, image: np.ndarray) -> None:
 
 
 def _encode_png(path: Path, image: np.ndarray) -> None:
+    import numpy as np
+
     image = np.asarray(image)
     if image.ndim == 3 and image.shape[2] == 1:
         image = image[..., 0]
-    if image.dtype == np.uint8:
-        Image.fromarray(image).save(path, format="PNG", compress_level=1)
-    elif image.dtype == np.uint16:
-        planes = 1 if image.ndim == 2 else image.shape[2]
-        writer = png.Writer(width=image.shape[1], height=image.shape[0], bitdepth=16,
-                            greyscale=planes in (1, 2), alpha=planes in (2, 4), compression=1)
+    if image.dtype in (np.uint8, np.uint16) and image.ndim in (2, 3):
+        from . import png_codec
+
         with open(path, "wb") as fh:
-            writer.write(fh, image.reshape(image.shape[0], -1))
+            png_codec.encode(fh, image)
     else:
         raise ValueError(f"write_png takes uint8 or uint16 images, got {image.dtype}")
 
@@ -173,11 +192,19 @@ def write_image_pair(path: str | Path, image: np.ndarray, record: dict[str, Any]
     Both are written to temporary names first; on any failure neither the old
     image nor the old sidecar is touched.
     """
-    path = Path(path)
+    _replace_pair(Path(path), lambda tmp: _encode_png(tmp, image), record)
+
+
+def write_png_bytes_pair(path: str | Path, data: bytes, record: dict[str, Any]) -> None:
+    """``write_image_pair`` for an image already encoded: ``data`` are the PNG file's bytes."""
+    _replace_pair(Path(path), lambda tmp: tmp.write_bytes(data), record)
+
+
+def _replace_pair(path: Path, write: Any, record: dict[str, Any]) -> None:
     side = sidecar_path(path)
     with atomic_path(side) as side_tmp:
         with atomic_path(path) as image_tmp:
-            _encode_png(image_tmp, image)
+            write(image_tmp)
             _write_json(side_tmp, {**record, "image_sha256": file_sha256(image_tmp)})
         # the image is in place; the sidecar is renamed when this block ends
 

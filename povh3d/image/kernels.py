@@ -151,6 +151,34 @@ _UNITS = {1: np.uint8, 2: np.uint16, 4: np.uint32, 8: np.uint64}
 _MIN_PARALLEL_BYTES = 1 << 20
 
 
+@njit(cache=True, boundscheck=False, nogil=True)
+def unfilter_png_rows(rows, bpp):  # pragma: no cover - compiled
+    """Undo each row's filter in place (byte 0 of a row is its type); the first bad row, or -1."""
+    height, n = rows.shape
+    for r in range(height):
+        kind = rows[r, 0]
+        if kind == 0:
+            continue
+        if kind > 4:
+            return r
+        for i in range(1, n):
+            left = np.int32(rows[r, i - bpp]) if i > bpp else np.int32(0)
+            up = np.int32(rows[r - 1, i]) if r > 0 else np.int32(0)
+            if kind == 1:
+                add = left
+            elif kind == 2:
+                add = up
+            elif kind == 3:
+                add = (left + up) >> 1
+            else:  # Paeth
+                corner = np.int32(rows[r - 1, i - bpp]) if r > 0 and i > bpp else np.int32(0)
+                p = left + up - corner
+                pa, pb, pc = abs(p - left), abs(p - up), abs(p - corner)
+                add = left if pa <= pb and pa <= pc else (up if pb <= pc else corner)
+            rows[r, i] = (np.int32(rows[r, i]) + add) & 255
+    return -1
+
+
 def threads_for(nbytes: int) -> int:
     """Threads for a gather of ``nbytes``: every core, unless the job is small or the cores are busy.
 

@@ -30,31 +30,10 @@ import numpy as np
 
 from ..errors import ConfigError, InputError, warn
 from .grid import Volume
+from .sources import SUFFIXES, is_polydata_vtk, is_volume_source, suffix as _suffix
 
-SUFFIXES = (".vti", ".vtk", ".nrrd", ".nhdr", ".mha", ".mhd", ".nii", ".nii.gz", ".npy")
+__all__ = ["SUFFIXES", "is_polydata_vtk", "is_volume_source", "read_volume", "read_vtk_mesh", "vtk_quiet"]
 _RAS_TO_LPS = np.diag([-1.0, -1.0, 1.0])
-
-
-def _suffix(path: Path) -> str:
-    name = path.name.lower()
-    return ".nii.gz" if name.endswith(".nii.gz") else path.suffix.lower()
-
-
-def is_volume_source(path: str | Path) -> bool:
-    """A volume file by its extension, or a folder (a DICOM series)."""
-    path = Path(path)
-    return path.is_dir() or _suffix(path) in SUFFIXES
-
-
-def is_polydata_vtk(path: str | Path) -> bool:
-    """A legacy ``.vtk`` file whose dataset is a polygon mesh (a model for the mesh path)."""
-    path = Path(path)
-    if path.suffix.lower() != ".vtk" or not path.is_file():
-        return False
-    with open(path, "rb") as fh:
-        head = fh.read(1024).split(b"\n")[:6]
-    return any(line.strip().upper().startswith(b"DATASET POLYDATA") for line in head)
-
 
 def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = None) -> Volume:
     """The volume in ``path``; ``spacing`` (mm, 3 values) replaces the file's; ``series`` picks a

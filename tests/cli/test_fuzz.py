@@ -61,10 +61,12 @@ GOOD = {
     "--include": ["Téléchargements", "dossier é"], "--video": ["out.mp4", "out.gif"],
 }
 GOOD_POSITIONAL = {"render": ["scene.pov", "Téléchargements/scène 1.pov", "model.obj", "broken.pov"],
-                   "convert-mesh": ["model.obj", "bad.obj"], "interleave": ["views"]}
+                   "convert-mesh": ["model.obj", "bad.obj"], "interleave": ["views"],
+                   "layout": ["scene.pov", "model.obj", "broken.pov", "Téléchargements/scène 1.pov"]}
 GOOD_OUTPUT = {"render": ["out.png", "good.png", "sub dir/é.png"], "extract": ["new views", "views"],
                "quilt": ["dossier é", "new views"], "viewpoints": ["new views"], "calibrate": ["out.json"],
-               "preview": ["out.gif"], "convert-mesh": ["out.inc", "sub dir/é.inc"]}
+               "preview": ["out.gif"], "convert-mesh": ["out.inc", "sub dir/é.inc"],
+               "layout": ["out.png", "good.png", "sub dir/é.png"]}
 CASES = {"run": 0, "failed": 0}
 
 

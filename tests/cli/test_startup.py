@@ -12,7 +12,7 @@ import pytest
 from tests.conftest import REPO, SAMPLE
 from tests.support.cli import one_error_line
 
-HEAVY = ("scipy", "numba", "matplotlib", "trimesh", "dask", "skimage")
+HEAVY = ("scipy", "numba", "matplotlib", "trimesh", "dask", "skimage", "pyvista", "vtkmodules")
 
 # Runs the command line in a fresh interpreter, then reports which heavy packages it imported.
 _WRAPPER = """
@@ -36,7 +36,8 @@ def imported_by(*args: str, prelude: str = "") -> set[str]:
 
 
 @pytest.mark.parametrize("args", [["--help"], ["render", "--help"], ["--version"], ["presets"],
-                                  ["convert-mesh", "--help"], ["calibrate", "--help"], ["map", "--help"]])
+                                  ["convert-mesh", "--help"], ["calibrate", "--help"], ["map", "--help"],
+                                  ["layout", "--help"]])
 def test_help_and_listing_import_no_heavy_package(args):
     assert imported_by(*args) & set(HEAVY) == set()
 

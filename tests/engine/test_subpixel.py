@@ -8,6 +8,8 @@
   0.002 mm of the oracle's.  The view-then-map assignment (the nearest of N
   directions) misses it by far more: the control.
 - The panel image takes channel c of subpixel c.
+- Both cameras: a sheet of no short period (one strip per lenticule) and the
+  Philips sheet, rational (one quad per phase coset, ``geometry.phase_tiles``).
 """
 
 from __future__ import annotations
@@ -20,12 +22,13 @@ import pytest
 from povh3d.engine.frames import build_script
 from povh3d.engine.methods import METHODS, display_header, run_method
 from povh3d.engine.quality import RenderSettings
-from povh3d.engine.subpixel import subpixel_array, subpixels_to_panel
-from povh3d.errors import ConfigError
-from povh3d.geometry.cameras import stack_frames
+from povh3d.engine.subpixel import subpixel_array, subpixel_image, subpixels_to_panel
+from povh3d.errors import ConfigError, Povh3dWarning
+from povh3d.geometry.footprint import latin_hypercube
 from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.phase_tiles import phase_tiles
 from povh3d.geometry.rays import pixel_rays
-from povh3d.geometry.lattice_mesh import lens_mesh
+from povh3d.image.colour import decode
 from povh3d.image.io import read_png
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs
 from povh3d.scene.scene import load_scene
@@ -36,6 +39,11 @@ from tests.support.scenes import write_checker_plane
 
 # A slanted sheet: 4.5 px (13.5 subpixels) per lenticule at 9.46 deg, like the Philips panel.
 SHEET = LensArray("lenticular", 30, 48, 0.45, 0.1, 1.2, Panel(120, 48, 0.1, 0.1), 9.46)
+# The Philips sheet exactly: 4.5 subpixels along a row, tan a = 1/6 (9 x 9 phase cosets).
+_TURN = math.atan(1 / 6)
+PHILIPS = LensArray("lenticular", 101, 48, 0.15 * math.cos(_TURN), 0.1, 1.2, Panel(120, 48, 0.1, 0.1),
+                    math.degrees(_TURN))
+SHEETS = pytest.mark.parametrize("sheet", [SHEET, PHILIPS], ids=["strips", "tiles"])
 
 
 def test_subpixel_array_is_the_sheet_over_subpixels():
@@ -59,10 +67,18 @@ def test_panel_takes_channel_c_of_subpixel_c():
         np.testing.assert_array_equal(panel[..., c], image[:, c::3, c])
 
 
-def test_every_subpixel_ray_in_numpy():
-    sub = subpixel_array(SHEET)
-    mesh = lens_mesh(sub, 10.0)
-    origin, normal, found = (mesh.crop(a[1:, :-1]) for a in simulate_lookup(mesh))
+def _camera(sheet: LensArray, back_off: float):
+    """The method's own mesh camera and its phase tiles (None: strips)."""
+    plan = METHODS["subpixel"].plan(sheet, back_off, np.zeros((1, 4)))
+    return plan.batch.context["mesh"], phase_tiles(subpixel_array(sheet))
+
+
+@SHEETS
+def test_every_subpixel_ray_in_numpy(sheet):
+    sub = subpixel_array(sheet)
+    mesh, tiles = _camera(sheet, 10.0)
+    assert (tiles is None) == (sheet is SHEET)
+    origin, normal, found = (subpixel_image(mesh, tiles, [a]) for a in simulate_lookup(mesh))
     centres, dirs, inside = pixel_rays(sub)
     assert inside.all() and np.all(found > -1e-9)
     d = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
@@ -76,6 +92,7 @@ def test_every_subpixel_ray_in_numpy():
 def _subpixel_hits(tmp_path, la: LensArray, z0: float, half: float) -> np.ndarray:
     """Render the raw subpixel image of a position-coded plane (linear, 16 bit): hit (x, y) mm."""
     plan = METHODS["subpixel"].plan(la, 10.0, np.zeros((1, 4)))
+    mesh, tiles = _camera(la, 10.0)
     scene = write_position_plane(tmp_path, z0, half)
     script = build_script(plan.batch, plan.batch.frames, method="subpixel", scene_path=str(scene),
                           add_assumed_gamma=False, header=display_header(la))
@@ -83,26 +100,32 @@ def _subpixel_hits(tmp_path, la: LensArray, z0: float, half: float) -> np.ndarra
                     options=("-A",), bit_depth=16, file_gamma="1.0", read_files=(str(scene),))
     out = []
     run_jobs([job], processes=1, binary=find_povray(), on_result=lambda r: out.append(read_png(r.images[0])))
-    mesh = plan.batch.context["mesh"]
-    img = mesh.crop(stack_frames(out)).astype(np.float64) / 65535
+    img = subpixel_image(mesh, tiles, out).astype(np.float64) / 65535
     return np.stack([img[..., 0], img[..., 1]], axis=-1) * (2 * half) - half
 
 
+@SHEETS
 @pytest.mark.parametrize("z0", [4.0, -4.0], ids=["behind", "in-front"])
-def test_every_subpixel_ray_in_povray(tmp_path, z0):
+def test_every_subpixel_ray_in_povray(tmp_path, z0, sheet):
     half = 12.0  # code +-12 mm: 16-bit steps of 3.7e-4 mm
-    hits = _subpixel_hits(tmp_path, SHEET, z0, half)
-    centres, dirs, inside = pixel_rays(subpixel_array(SHEET))
+    hits = _subpixel_hits(tmp_path, sheet, z0, half)
+    centres, dirs, inside = pixel_rays(subpixel_array(sheet))
     expected = centres + dirs[..., :2] * (z0 / dirs[..., 2])[..., None]
     err = np.abs(hits - expected).max()
     assert err < 0.002, f"worst subpixel hit {err:.4f} mm off"
+    # Control: one ray per pixel (R and B take the green subpixel's) misses by far more.
+    h, w3 = expected.shape[:2]
+    per_pixel = np.repeat(expected.reshape(h, w3 // 3, 3, 2)[:, :, 1:2], 3, axis=2).reshape(h, w3, 2)
+    assert np.abs(hits - per_pixel).max() > 20 * err
+    if sheet is PHILIPS:
+        return  # its 9 phases are the 9 view directions: only the view positions differ
     # Control: the view-then-map route gives every subpixel the nearest of 9 view directions.
     views = 9
-    u = (expected[..., 0] - centres[..., 0]) * 0 + _across(SHEET, subpixel_array(SHEET))
-    step = SHEET.pitch_x / views
+    u = _across(sheet, subpixel_array(sheet))
+    step = sheet.pitch_x / views
     snapped = (np.floor(u / step) + 0.5) * step
-    t = math.radians(SHEET.rotation)
-    shift = (snapped - u) * z0 / SHEET.focal
+    t = math.radians(sheet.rotation)
+    shift = (snapped - u) * z0 / sheet.focal
     mapped = expected + np.stack([shift * math.cos(t), shift * math.sin(t)], axis=-1)
     assert np.abs(hits - mapped).max() > 20 * err
 
@@ -120,3 +143,37 @@ def test_subpixel_render_writes_the_panel(tmp_path):
     result = run_method("subpixel", scene, SHEET, RenderSettings(quality="draft", use_cache=False))
     assert result.h3d.shape == (48, 120, 3)
     assert result.record["subpixel_panel_px"] == [360, 48]
+
+
+def test_antialiased_render_averages_footprint_samples(tmp_path):
+    """``--quality normal`` on a rational sheet: 3 x 3 footprint samples a subpixel (aperture and
+    area), one frame each, averaged in linear light.  On a plane coding x and y linearly the
+    average shows the mean of the samples' hits, each from the footprint's definition."""
+    z0, half = 4.0, 12.0
+    scene = load_scene(write_position_plane(tmp_path, z0, half))
+    result = run_method("subpixel", scene, PHILIPS, RenderSettings(quality="normal", use_cache=False, bit_depth=16))
+    assert result.record["footprint_samples"] == 9 and result.stats.frames == 9
+    coded = decode(result.h3d) * 2 * half - half                        # (H, W, 3): R codes x, G codes y
+    sub = subpixel_array(PHILIPS)
+    X, Y = np.meshgrid(*sub.panel.pixel_centres())
+    hits = np.zeros(X.shape + (2,))
+    for ax, ay, du, dv in latin_hypercube(9):
+        qx, qy = sub.to_lattice(X + du * sub.panel.pitch_x, Y + dv * sub.panel.pitch_y)
+        _, yc = sub.to_lattice(X, Y)
+        c = (np.floor(qx / sub.pitch_x + sub.lenses_x / 2 + 1e-9) + 0.5 - sub.lenses_x / 2) * sub.pitch_x
+        px, py = sub.from_lattice(c + ax * sub.pitch_x, yc + ay * sub.pitch_y)   # the aperture point
+        dx, dy = sub.from_lattice(qx - c, qy - yc)                              # the direction, over f
+        hits += np.stack([px + dx * z0 / sub.focal, py + dy * z0 / sub.focal], axis=-1) / 9
+    err = max(np.abs(coded[..., 0] - hits[:, 0::3, 0]).max(), np.abs(coded[..., 1] - hits[:, 1::3, 1]).max())
+    assert err < 0.01, f"worst subpixel {err:.4f} mm off"
+    # Control: the point-sampled rays (the footprint's centre) miss the average.
+    centres, dirs, _ = pixel_rays(sub)
+    point = centres + dirs[..., :2] * (z0 / dirs[..., 2])[..., None]
+    assert np.abs(coded[..., 0] - point[:, 0::3, 0]).max() > 5 * err
+
+
+def test_strips_cannot_antialias_and_say_so(tmp_path):
+    scene = load_scene(write_checker_plane(tmp_path, 5.0, 2.0))
+    with pytest.warns(Povh3dWarning, match="point-sampled"):
+        result = run_method("subpixel", scene, SHEET, RenderSettings(quality="normal", use_cache=False))
+    assert result.record["footprint_samples"] == 1 and result.record["camera"] == "one strip per lenticule"

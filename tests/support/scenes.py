@@ -50,6 +50,9 @@ def checker_oracle(lens_array: LensArray, z0: float, period: float,
     c, s_ = abs(np.cos(theta)), abs(np.sin(theta))
     if la.grid == "hex":
         ax = ay = la.pitch_x / np.sqrt(3)  # circumradius: bounds the hexagon at any angle
+    elif la.grid == "lattice":  # the parallelogram c +- a1/2 +- a2/2
+        (a1x, a1y), (a2x, a2y) = la.basis
+        ax, ay = (abs(a1x) + abs(a2x)) / 2, (abs(a1y) + abs(a2y)) / 2
     else:
         # Lenticular: across the lenticule, and the pixel's own height along it.
         hy = la.panel.pitch_y / 2 if la.grid == "lenticular" else la.pitch_y / 2

@@ -1,0 +1,169 @@
+"""Whole outputs remembered: a still rendered again with nothing changed is its
+stored image and sidecar, copied without importing the render machinery.
+
+The frame cache (``engine.cache``) already spares POV-Ray on a re-run, but the
+command still imports NumPy and the engine, decodes the frame and encodes the
+output PNG again (about 0.3 s at 1920x1080).  This cache keys the whole request
+to the finished files:
+
+- every option of the command line (paths resolved), except ``-q``;
+- the scene's digest (its text and every file it reads, ``scene.scene``);
+- the POV-Ray binary (path, size, modification time: its version follows) and
+  the ``POVH3D_POVRAY`` / ``POVH3D_SANDBOX`` settings;
+- povh3d itself: its version and the names, sizes and modification times of
+  its source files and templates, so an edited checkout never answers with an
+  image an older code made.
+
+An entry ``root/outputs/ab/<key>.output`` is one file: a header line
+``povh3d-output 1 <key> <sha256 of the rest> <PNG length>``, the PNG bytes and
+a JSON block (the sidecar record, the command's summary line and the warnings
+the render gave, which a hit gives again).  It is written atomically and
+checked on every read (key, length, hash); a damaged entry is removed and the
+request rendered, never answered from it.
+
+Only stills of a ``.pov`` scene use it: an animation, a mesh model or a
+volume (their conversions have their own caches), extra outputs (``--views-dir``,
+``--depth-maps``, ``--video``), a Dask scheduler, a calibration file or a
+scene that computes file names while it parses (they cannot be hashed) take
+the normal path every time, as does ``--no-cache``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import hashlib
+import json
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .._version import __version__
+from ..errors import Povh3dError
+from ..image.io import atomic_path, sidecar_path, write_png_bytes_pair
+from ..mesh.formats import is_mesh_file
+from ..povray.version_memo import binary_key
+from ..scene.scene import load_scene
+from ..system import default_cache_dir
+from ..volume.sources import is_volume_source
+
+_MAGIC = b"povh3d-output 1 "
+#: Options that change nothing in the files written.
+_IGNORED = ("func", "quiet", "no_cache")
+#: Options whose use sends a request down the normal path (see the module docstring).
+_UNCACHED = ("frames", "video", "views_dir", "depth_maps", "scheduler", "calibration")
+_PACKAGE = Path(__file__).resolve().parents[1]
+
+
+@dataclass(frozen=True)
+class Hit:
+    """A request answered from the cache: what the command prints."""
+
+    summary: str
+    warnings: tuple[str, ...]
+
+
+def request_key(args: argparse.Namespace) -> str | None:
+    """The key of a ``povh3d render`` command line; None when it cannot use this cache."""
+    fields = vars(args)
+    if fields.get("no_cache") or any(fields.get(name) for name in _UNCACHED) or is_mesh_file(args.scene) \
+            or is_volume_source(args.scene):
+        return None
+    binary = os.environ.get("POVH3D_POVRAY") or shutil.which("povray")
+    povray = binary_key(shutil.which(binary) or binary) if binary else None
+    if povray is None:
+        return None  # the render says what is missing
+    scene = load_scene(args.scene, tuple(args.include))  # a missing scene: the same one-line error
+    if scene.computed_names:
+        return None
+    options = {k: v for k, v in fields.items() if k not in _IGNORED}
+    output = args.output or Path(args.scene).stem + "-h3d.png"
+    options.update(scene=str(scene.path), include=[str(d) for d in scene.include_dirs],
+                   output=os.path.abspath(output))
+    parts = {"povh3d": [__version__, _code_stamp()], "options": options, "scene": scene.digest,
+             "povray": povray, "env": {k: os.environ.get(k) for k in ("POVH3D_POVRAY", "POVH3D_SANDBOX")}}
+    text = json.dumps(parts, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _code_stamp() -> str:
+    """Names, sizes and modification times of povh3d's source files and templates, hashed."""
+    h = hashlib.sha256()
+    folders = [_PACKAGE, _PACKAGE / "templates", _PACKAGE.parent / "templates"]
+    while folders:
+        folder = folders.pop()
+        try:
+            entries = sorted(os.scandir(folder), key=lambda e: e.name)
+        except OSError:
+            continue
+        for entry in entries:
+            if entry.is_dir() and entry.name not in ("__pycache__", "templates"):
+                folders.append(Path(entry.path))
+            elif entry.name.endswith((".py", ".pov", ".inc", ".j2", ".toml", ".txt")):
+                stat = entry.stat()
+                h.update(f"{entry.path}|{stat.st_size}|{stat.st_mtime_ns}\n".encode())
+    return h.hexdigest()
+
+
+def _entry_path(key: str, cache_dir: Path | None = None) -> Path:
+    return (cache_dir or default_cache_dir()) / "outputs" / key[:2] / f"{key}.output"
+
+
+def answer(key: str, output: Path, cache_dir: Path | None = None) -> Hit | None:
+    """Write the stored image and sidecar of ``key`` to ``output`` (as a pair, atomically); None on a miss.
+
+    A damaged entry is removed and is a miss.
+    """
+    path = _entry_path(key, cache_dir)
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    stored = _parse(key, data)
+    if stored is None:
+        with contextlib.suppress(OSError):
+            path.unlink()
+        return None
+    image, meta = stored
+    record = meta["record"]
+    record["timings"] = {**record.get("timings", {}), "output_from_cache": True}
+    write_png_bytes_pair(output, image, record)
+    return Hit(str(meta["summary"]), tuple(str(w) for w in meta["warnings"]))
+
+
+def _parse(key: str, data: bytes) -> tuple[bytes, dict[str, Any]] | None:
+    """The PNG bytes and the JSON block of an entry; None unless every check passes."""
+    line, _, body = data.partition(b"\n")
+    try:
+        magic_key, digest, length = line[len(_MAGIC):].split(b" ")
+        size = int(length)
+    except ValueError:
+        return None
+    if not line.startswith(_MAGIC) or magic_key.decode() != key or hashlib.sha256(body).hexdigest() != digest.decode():
+        return None
+    try:
+        meta = json.loads(body[size:])
+    except ValueError:
+        return None
+    if not isinstance(meta, dict) or not {"record", "summary", "warnings"} <= meta.keys():
+        return None
+    return body[:size], meta
+
+
+def keep(key: str, output: Path, summary: str, warnings: list[str], cache_dir: Path | None = None) -> None:
+    """Remember the image and sidecar just written to ``output`` (best effort: a cache that
+    cannot be written only costs the next run its speed)."""
+    try:
+        image = output.read_bytes()
+        record = json.loads(sidecar_path(output).read_text(encoding="utf-8"))
+        if record.pop("image_sha256", None) != hashlib.sha256(image).hexdigest():
+            return  # replaced meanwhile by another process: nothing trustworthy to keep
+        body = image + json.dumps({"record": record, "summary": summary, "warnings": warnings}).encode("utf-8")
+        path = _entry_path(key, cache_dir)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp:
+            tmp.write_bytes(_MAGIC + f"{key} {hashlib.sha256(body).hexdigest()} {len(image)}\n".encode() + body)
+    except (OSError, ValueError, Povh3dError):  # never fail the render that was just written
+        return

@@ -1,0 +1,96 @@
+"""``povh3d layout``: a picture of the set-up (content, screen, depth budget, lens array,
+viewing cone) to check before a long render; parsing only, the work is ``app.layout``'s."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ..errors import ConfigError
+from .options import add_array_options, lens_array_from_args, parse_pair, warn
+
+ORIENTATIONS = ("coronal", "axial", "sagittal")   # volume.orient's presets (named here: no import for --help)
+
+
+def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
+        raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
+def _iso(text: str | None) -> tuple[float, ...] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if not values or not all(abs(v) < float("inf") for v in values):
+        raise ConfigError(f"--iso takes numbers VALUE[,VALUE...], got {text!r}")
+    return values
+
+
+def cmd_layout(args: argparse.Namespace) -> int:
+    from ..app.layout import layout
+    from .render import frame_options_from_args
+
+    lens_array, display = lens_array_from_args(args)
+    size = parse_pair(args.size, "--size", integral=True)
+    if not isinstance(size, tuple):
+        raise ConfigError(f"--size takes WxH pixels like 1200x900, got {args.size!r}")
+    spacing = _triple(args.spacing, "--spacing")
+    rotate = _triple(args.rotate, "--rotate")
+    model: dict[str, Any] = {"depth": args.depth, "up": args.up, "rotate": rotate, "unit": args.unit}
+    volume: dict[str, Any] = {"orientation": args.orientation, "rotate": rotate, "depth": args.depth,
+                              "spacing": spacing, "series": args.series, "iso": _iso(args.iso)}
+    record = layout(args.source, args.output, lens_array, display=display, frame_options=frame_options_from_args(args),
+                    include_dirs=tuple(args.include), model=model, volume=volume, size=size,
+                    use_cache=not args.no_cache)
+    warn(record["content"].get("warnings", []))
+    depth = record["content_depth"]
+    reach = (f"content z {depth['near_mm']:+.3g}..{depth['far_mm']:+.3g} mm, {100 * depth['outside']:.0f} % "
+             f"outside" if depth.get("points") else "content: nothing seen")
+    budget = record["setup"]["depth_budget_mm"]
+    t = record["timings"]
+    print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {record['content']['kind']}  "
+          f"depth budget +-{budget / 2:.3g} mm  {reach}  {t['content_seconds'] + t['picture_seconds']:.2f} s")
+    return 0
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser("layout", help="draw the set-up (content, screen, depth budget, lens array, viewing "
+                       "cone) to check before rendering")
+    p.add_argument("source", help="a POV-Ray scene (.pov), a mesh model (.obj .stl .ply ...) or a volume "
+                   "(.vti .vtk .nrrd .mha .nii .npy, a DICOM folder)")
+    p.add_argument("-o", "--output", required=True, help="the picture to write (.png, with a .json of its numbers)")
+    p.add_argument("--size", default="1200x900", metavar="WxH", help="picture size in pixels (default 1200x900)")
+    p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder (scenes)")
+    p.add_argument("--no-cache", action="store_true", help="measure the scene again, ignore the cache")
+    g = p.add_argument_group("display frame (scenes; as 'povh3d render')")
+    g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
+                   help="camera: the scene's camera places the display; native: mm around z = 0; "
+                   "auto (default): camera when the scene has one")
+    g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
+    g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
+    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
+    g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
+    g.add_argument("--fit-depth", metavar="auto|MM", help="scale the frame so the scene fits the depth budget")
+    g = p.add_argument_group("models and volumes (as 'povh3d render')")
+    g.add_argument("--depth", type=float, metavar="MM", help="the content's depth on the display")
+    g.add_argument("--up", choices=("x", "y", "z", "-x", "-y", "-z"), help="a model's up axis")
+    g.add_argument("--rotate", metavar="X,Y,Z", help="then turn it by these angles (degrees, as POV-Ray's rotate)")
+    g.add_argument("--unit", choices=("mm", "cm", "m", "in"), help="a model's unit")
+    g.add_argument("--orientation", choices=ORIENTATIONS, default="coronal",
+                   help="how a volume faces the viewer (radiological views; default coronal)")
+    g.add_argument("--spacing", metavar="SX,SY,SZ", help="a volume's voxel size in mm (.npy)")
+    g.add_argument("--iso", metavar="VALUE[,VALUE...]", help="show a volume's iso-surfaces at these values "
+                   "(default: a label volume shows its non-zero voxels' boundary)")
+    g.add_argument("--series", metavar="UID", help="the DICOM series to read from a folder of several")
+    add_array_options(p)
+    p.set_defaults(func=cmd_layout)
