@@ -58,6 +58,7 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_frame.py
 	$(BIN)/python benchmarks/bench_moire.py
 	$(BIN)/python benchmarks/bench_volume_media.py
+	$(BIN)/python benchmarks/bench_volume.py
 
 clean: ## remove outputs (not the cache)
 	rm -rf out

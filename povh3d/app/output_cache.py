@@ -21,8 +21,8 @@ the render gave, which a hit gives again).  It is written atomically and
 checked on every read (key, length, hash); a damaged entry is removed and the
 request rendered, never answered from it.
 
-Only stills of a ``.pov`` scene use it: an animation, a mesh model (its
-conversion has its own cache), extra outputs (``--views-dir``,
+Only stills of a ``.pov`` scene use it: an animation, a mesh model or a
+volume (their conversions have their own caches), extra outputs (``--views-dir``,
 ``--depth-maps``, ``--video``), a Dask scheduler, a calibration file or a
 scene that computes file names while it parses (they cannot be hashed) take
 the normal path every time, as does ``--no-cache``.
@@ -47,6 +47,7 @@ from ..mesh.formats import is_mesh_file
 from ..povray.version_memo import binary_key
 from ..scene.scene import load_scene
 from ..system import default_cache_dir
+from ..volume.sources import is_volume_source
 
 _MAGIC = b"povh3d-output 1 "
 #: Options that change nothing in the files written.
@@ -67,7 +68,8 @@ class Hit:
 def request_key(args: argparse.Namespace) -> str | None:
     """The key of a ``povh3d render`` command line; None when it cannot use this cache."""
     fields = vars(args)
-    if fields.get("no_cache") or any(fields.get(name) for name in _UNCACHED) or is_mesh_file(args.scene):
+    if fields.get("no_cache") or any(fields.get(name) for name in _UNCACHED) or is_mesh_file(args.scene) \
+            or is_volume_source(args.scene):
         return None
     binary = os.environ.get("POVH3D_POVRAY") or shutil.which("povray")
     povray = binary_key(shutil.which(binary) or binary) if binary else None

@@ -96,7 +96,15 @@ def check_memory(request: RenderRequest) -> None:
 
 def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
     """The scene to render: the request's own, or a mesh model staged for the display (converted
-    once, cached by content); and the model's record for the sidecar (None for a scene)."""
+    once, cached by content) or a volume's surfaces or medium (``app.volume``); and the model's or
+    volume's record for the sidecar (None for a scene)."""
+    if request.is_volume:
+        from .volume import prepare_volume_stage
+
+        stage, volume_record = prepare_volume_stage(
+            request.source, request.render_array, request.volume, depth=request.model.depth,
+            max_triangles=request.model.max_triangles, cache_dir=request.settings.cache_dir)
+        return load_scene(stage, request.include_dirs), volume_record
     if not request.is_model:
         return load_scene(request.source, request.include_dirs), None
     m = request.model
@@ -148,7 +156,7 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if result.crop is not None:
         record["crop"] = result.crop
     if model is not None:
-        record["model"] = model
+        record["volume" if "volume" in model else "model"] = model
     if display_frame is not None:
         record["display_frame"] = display_frame
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping as MappingABC
 from dataclasses import dataclass, field
+from dataclasses import replace as _replace
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +67,54 @@ class ModelOptions:
 
 
 @dataclass(frozen=True)
+class VolumeOptions:
+    """How a volume is drawn and placed (``app.volume``).
+
+    Attributes
+    ----------
+    spacing : (3,) mm or None       voxel size (needed by ``.npy``; replaces a file's own)
+    series : str or None            the DICOM series UID, when a folder holds several
+    labels : tuple of int, 'all' or None   one surface per label (a segmentation)
+    iso : tuple of float or None    one surface per iso value (scalar data: CT in HU)
+    opacity : tuple of float or None   one for every surface, or one per surface in order
+    smoothing : int or None         smoothing iterations (None: 16 for labels, none for iso)
+    orientation : {'coronal', 'axial', 'sagittal'}   the radiological view (``volume.orient``)
+    rotate : (3,) degrees or None   then turned as POV-Ray's ``rotate``
+    volume : bool                   direct volume rendering (participating media) instead of surfaces
+    transfer : str                  its transfer function: a preset name, a file, or auto (chosen from the values)
+    df3_bits : {8, 16}              its density file's bits per voxel
+    """
+
+    spacing: tuple[float, float, float] | None = None
+    series: str | None = None
+    labels: tuple[int, ...] | str | None = None
+    iso: tuple[float, ...] | None = None
+    opacity: tuple[float, ...] | None = None
+    smoothing: int | None = None
+    orientation: str = "coronal"
+    rotate: tuple[float, float, float] | None = None
+    volume: bool = False
+    transfer: str = "auto"
+    df3_bits: int = 16
+
+    def __post_init__(self) -> None:
+        from ..volume.orient import ORIENTATIONS
+
+        if self.orientation not in ORIENTATIONS:
+            raise ConfigError(f"--orientation must be one of {', '.join(ORIENTATIONS)}, got {self.orientation!r}")
+        chosen = [name for name, on in (("--labels", self.labels is not None), ("--iso", self.iso is not None),
+                                        ("--volume", self.volume)) if on]
+        if len(chosen) > 1:
+            raise ConfigError(f"{' and '.join(chosen)} exclude each other; choose one way to draw the volume")
+        if self.iso is not None and not (self.iso and all(math.isfinite(v) for v in self.iso)):
+            raise ConfigError(f"--iso takes numbers VALUE[,VALUE...], got {self.iso!r}")
+        if self.smoothing is not None and (isinstance(self.smoothing, bool) or self.smoothing < 0):
+            raise ConfigError(f"--smoothing takes a whole number of iterations >= 0, got {self.smoothing!r}")
+        if self.df3_bits not in (8, 16):
+            raise ConfigError(f"--df3-bits must be 8 or 16, got {self.df3_bits!r}")
+
+
+@dataclass(frozen=True)
 class RenderRequest:
     """Everything one render needs.
 
@@ -92,6 +141,7 @@ class RenderRequest:
     display_frame : FrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
     depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
     depth_format : {'npy', 'png'}  float32 arrays, or 16-bit PNGs with the scale in depth_maps.json
+    volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)
     """
 
     source: Path
@@ -113,6 +163,7 @@ class RenderRequest:
     display_frame: FrameOptions = field(default_factory=FrameOptions)
     depth_maps: Path | None = None
     depth_format: str = "npy"
+    volume: VolumeOptions = field(default_factory=VolumeOptions)
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
@@ -149,11 +200,21 @@ class RenderRequest:
             if self.frames is not None:
                 raise ConfigError("--depth-maps cannot be combined with --frames; render one frame for them")
             self.render_array.require_views()
+        if not self.is_volume and _replace(self.volume, rotate=None) != VolumeOptions():
+            raise ConfigError(f"{self.source.name!r} is not a volume; the volume options (--labels, --iso, --volume, "
+                              "--orientation, --spacing, --series ...) apply to volume files and DICOM folders")
 
     @property
     def is_model(self) -> bool:
-        """Whether ``source`` is a mesh model (put on the default stage) rather than a scene."""
-        return is_mesh_file(str(self.source))
+        """Whether ``source`` is put on the default stage (a mesh model, or a volume) rather than a scene."""
+        return is_mesh_file(str(self.source)) or self.is_volume
+
+    @property
+    def is_volume(self) -> bool:
+        """Whether ``source`` is a volume (a volume file or a DICOM folder), put on the volume stage."""
+        from ..volume.sources import is_volume_source
+
+        return is_volume_source(self.source)
 
     @property
     def render_array(self) -> LensArray:

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError, Povh3dWarning
+from .volume import add_volume_options, volume_options_from_args
 from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args, positive_int,
                       mapping_from_args, max_triangles, progress_bar, warn)
 
@@ -55,7 +56,8 @@ def request_from_args(args: argparse.Namespace) -> Any:
                            _triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=frame_options_from_args(args),
-        depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format)
+        depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
+        volume=volume_options_from_args(args, _triple(args.rotate, "--rotate")))
 
 
 def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
@@ -161,13 +163,19 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
             print(result["video"])
         return None
     placed = result.get("display_frame", {})
-    noted = [*placed.get("warnings", []), *result.get("warnings", [])]  # the model's come through the channel
+    # The model's warnings came through the channel as it was staged; the volume's depth note is said here.
+    noted = [*result.get("volume", {}).get("warnings", []), *placed.get("warnings", []),
+             *result.get("warnings", [])]
     warn(noted)
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.mapping.name}" if request.mapping else ""
     if "model" in result:
         mapping += f"  up {result['model']['up']} ({result['model']['up_reason']})"
+    if "volume" in result:
+        v = result["volume"]
+        drawn = f"{len(v['surfaces'])} surfaces, {v['triangles']} triangles" if "surfaces" in v else "media"
+        mapping += f"  {v['orientation']}, {drawn}"
     summary = f"{w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}"
     print(f"{request.output}  {summary}  "
           f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
@@ -266,7 +274,8 @@ def _add_orientation(p: argparse.ArgumentParser) -> None:
 
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("render", help="render a POV-Ray scene to an H3D image")
-    p.add_argument("scene", help="POV-Ray scene (.pov; its camera places the display), or a mesh model (.obj .stl .ply ...)")
+    p.add_argument("scene", help="POV-Ray scene (.pov; its camera places the display), a mesh model (.obj .stl .ply ...), "
+                   "or a volume (.vti .nii .nrrd .mha ..., a DICOM folder)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
     p.add_argument("--quality", choices=QUALITY_NAMES, default="normal",
@@ -328,6 +337,7 @@ def add_parsers(sub: Any) -> None:
     g.add_argument("--depth-scale", nargs="?", const="fit", metavar="K",
                    help="compress depth alone along the display normal by K, keeping lateral sizes (a distortion); "
                    "bare, with --fit-depth: the K that makes the depth fit, instead of shrinking the whole scene")
+    add_volume_options(p)
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)

@@ -36,6 +36,7 @@ class Volume:
     direction : (3, 3) float        columns: world directions of the i, j, k axes (orthonormal)
     name : str                      what to call it in messages and records (the file's name)
     label_names : mapping           label value -> tissue name, when the file has a label table
+    label_colours : mapping         label value -> (r, g, b) in 0..1 (sRGB), when the table has colours
     """
 
     values: np.ndarray
@@ -44,6 +45,7 @@ class Volume:
     direction: np.ndarray = field(default_factory=lambda: np.eye(3))
     name: str = "volume"
     label_names: dict[int, str] = field(default_factory=dict)
+    label_colours: dict[int, tuple[float, float, float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.values.ndim != 3 or min(self.values.shape) < 1:

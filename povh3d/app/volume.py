@@ -1,0 +1,212 @@
+"""The stage for ``povh3d render VOLUME``: a volume's surfaces (or its medium) placed on the display.
+
+The volume's physical box is turned into the display frame by the orientation
+preset (and ``--rotate``), centred and scaled like a model (``app.stage``'s
+``fit_to_display``: fill the panel, or ``--depth``).  Surfaces (``--labels``,
+``--iso``) are extracted in LPS mm, turned, decimated to the display's
+triangle budget and written as one include in the cache, keyed by the voxel
+values and every option that shapes them; the stage scene is the mesh stage's
+(``stage.pov.j2``: background, two lights, ``translate shift scale s``).
+``--volume`` hands the volume and its world-to-display matrix to
+``app.volume_media`` instead.  A ``.vtk`` file holding a polygon mesh is a
+model: it goes to the mesh path (``app.stage``) through a PLY copy in the cache.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._version import __version__
+from ..engine.cache import content_key, default_cache_dir
+from ..errors import ConfigError, InputError, warn
+from ..geometry.lens_array import LensArray
+from ..image.io import atomic_path
+from ..volume.grid import Volume
+from ..volume.orient import display_box, volume_to_display, world_to_display
+from .request import VolumeOptions
+from .stage import fit_to_display, prepare_stage, stage_text
+
+IDENT = "Povh3d_Volume"
+#: At most this many distinct integer values make a volume a label map when nothing says what to draw.
+MAX_AUTO_LABELS = 255
+
+
+def volume_digest(volume: Volume) -> str:
+    """sha256 of the voxels and their geometry: the cache key's part that is the data."""
+    h = hashlib.sha256()
+    h.update(str((volume.values.dtype.str, volume.shape, volume.spacing, volume.origin)).encode())
+    h.update(np.asarray(volume.direction, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(volume.values).tobytes())
+    return h.hexdigest()
+
+
+def what_to_draw(volume: Volume, options: VolumeOptions) -> tuple[str, list[str]]:
+    """``'labels'``, ``'iso'`` or ``'volume'``, and a note when povh3d chose it."""
+    if options.volume:
+        return "volume", []
+    if options.labels is not None:
+        return "labels", []
+    if options.iso is not None:
+        return "iso", []
+    values = volume.values
+    integral = np.issubdtype(values.dtype, np.integer) or bool(np.all(np.mod(values, 1) == 0))
+    labels = volume.labels() if integral else []
+    if 0 < len(labels) <= MAX_AUTO_LABELS:
+        return "labels", [f"no --labels, --iso or --volume: {volume.name} holds {len(labels)} integer labels, "
+                          "drawing every one (--labels LIST picks some)"]
+    lo, hi = volume.value_range()
+    raise ConfigError(f"{volume.name} holds values from {lo:.6g} to {hi:.6g}; say what to draw: --iso VALUE "
+                      "(a surface at that value), --labels (a segmentation) or --volume (a medium)")
+
+
+def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: VolumeOptions | None = None, *,
+                         depth: float | None = None, max_triangles: int | str | None = None,
+                         cache_dir: Path | None = None) -> tuple[Path, dict[str, Any]]:
+    """Read, place, extract (cached) and write the stage scene; returns its path and the sidecar record.
+
+    ``max_triangles``: the surfaces' triangle budget (None or ``'auto'``: the display's, ``auto_budget``).
+    """
+    from ..volume.read import read_volume
+    from ..volume.sources import is_polydata_vtk
+
+    options = options or VolumeOptions()
+    if is_polydata_vtk(source):
+        if dataclasses.replace(options, rotate=None) != VolumeOptions():
+            raise ConfigError(f"{Path(source).name!r} is a polygon mesh, not a volume; the volume options (--labels, "
+                              "--iso, --volume, --orientation ...) do not apply to it")
+        return _mesh_stage(Path(source), lens_array, depth=depth, max_triangles=max_triangles,
+                           cache_dir=cache_dir, rotate=options.rotate)
+    volume = read_volume(source, spacing=options.spacing, series=options.series)
+    kind, notes = what_to_draw(volume, options)
+    for note in notes:
+        warn(note)
+    matrix = volume_to_display(options.orientation, options.rotate)
+    placement = fit_to_display(*display_box(volume.corners(), matrix), lens_array, depth=depth)
+    to_display = world_to_display(matrix, placement.shift, placement.scale)
+    digest = volume_digest(volume)
+    record: dict[str, Any] = {
+        "volume": volume.describe(), "source": str(source), "draw": kind, "orientation": options.orientation,
+        "rotate": list(options.rotate) if options.rotate else None, "world_to_display": to_display.tolist(),
+        "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
+                      "depth_budget_mm": placement.depth},
+        "warnings": _depth_warning(placement)}
+    root = cache_dir or default_cache_dir()
+    if kind == "volume":
+        from .volume_media import media_stage
+
+        key = content_key("volume-media", __version__, digest, options.transfer, options.df3_bits,
+                          np.round(to_display, 12).tolist())
+        folder = _cache_folder(root / "volumes" / key[:2] / key)
+        stage, media = media_stage(volume, to_display, lens_array, transfer=options.transfer,
+                                   bits=options.df3_bits, folder=folder)
+        record["media"] = media
+        return stage, record
+    from ..mesh.simplify import auto_budget
+
+    budget = auto_budget(lens_array) if max_triangles in (None, "auto") else max_triangles
+    include, manifest = cached_surfaces(volume, digest, kind, options, matrix, budget, root)
+    record["surfaces"] = manifest["surfaces"]
+    record["triangles"] = manifest["triangles"]
+    record["triangle_budget"] = budget
+    record["surfaces_from_cache"] = manifest["from_cache"]
+    record["seconds"] = manifest["seconds"]
+    record["silhouette_error"] = manifest["silhouette_error"]
+    text = stage_text(include.name, IDENT, placement, lens_array, model=volume.name)
+    stage = include.parent / f"stage-{hashlib.sha256(text.encode()).hexdigest()[:16]}.pov"
+    if not stage.is_file():
+        with atomic_path(stage) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+    return stage, record
+
+
+def _cache_folder(folder: Path) -> Path:
+    """``folder`` made; an unusable cache (read-only, full) is a warning and a folder of this run."""
+    from ..errors import OutputError
+    from ..image.io import check_writable
+
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        check_writable(folder / "manifest.json")
+        return folder
+    except (OSError, OutputError) as exc:
+        import tempfile
+
+        from ..system import owned_prefix
+
+        warn(f"the volume cache {str(folder.parent.parent)!r} cannot be used ({exc}); working without it")
+        return Path(tempfile.mkdtemp(prefix=owned_prefix("povh3d-")))  # swept after this run ends
+
+
+def _depth_warning(placement: Any) -> list[str]:
+    if placement.size[2] > placement.depth * (1 + 1e-9):
+        return [f"the volume is {placement.size[2]:.3g} mm deep at this size, beyond the depth budget of "
+                f"{placement.depth:.3g} mm (2 N f): its front and back look blurred; --depth "
+                f"{placement.depth:.3g} fits it"]
+    return []
+
+
+def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptions, matrix: np.ndarray,
+                    budget: int | None, root: Path) -> tuple[Path, dict[str, Any]]:
+    """The surfaces' include in the cache (``volumes/KEY/``), extracted only when it is not there."""
+    import time
+
+    key = content_key("volume-surfaces", __version__, digest, kind, options.labels, options.iso,
+                      options.opacity, options.smoothing, np.round(matrix, 12).tolist(), budget)
+    folder = _cache_folder(root / "volumes" / key[:2] / key)
+    manifest_path, include = folder / "manifest.json", folder / "surfaces.inc"
+    try:  # a damaged manifest is a cache miss
+        manifest = json.loads(manifest_path.read_text(encoding="utf-8")) if manifest_path.is_file() else None
+    except (OSError, ValueError):
+        manifest = None
+    if isinstance(manifest, dict) and "surfaces" in manifest and include.is_file():
+        return include, {**manifest, "from_cache": True}
+    start = time.perf_counter()
+    from ..volume.surfaces import iso_surfaces, label_surfaces
+
+    smoothing, opacity = options.smoothing, list(options.opacity) if options.opacity else None
+    if kind == "labels":
+        labels = None if options.labels in (None, "all") else list(options.labels)
+        surfaces = label_surfaces(volume, labels, smoothing=smoothing, opacity=opacity)
+    else:
+        surfaces = iso_surfaces(volume, list(options.iso), smoothing=smoothing, opacity=opacity)
+    extracted = time.perf_counter() - start
+    from ..volume.include import surfaces_include
+
+    text, rows, stats = surfaces_include(surfaces, matrix, budget, ident=IDENT, source=volume.name)
+    with atomic_path(include) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    manifest = {"surfaces": rows, "triangles": sum(r["triangles"] for r in rows),
+                "seconds": {"extract": round(extracted, 4), "decimate": stats["decimate_seconds"],
+                            "write": stats["write_seconds"]}, "silhouette_error": stats["silhouette_error"]}
+    with atomic_path(manifest_path) as tmp:
+        tmp.write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
+    return include, {**manifest, "from_cache": False}
+
+
+def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max_triangles: Any,
+                cache_dir: Path | None, rotate: Any) -> tuple[Path, dict[str, Any]]:
+    """A polygon-mesh ``.vtk``: triangulated into a PLY in the cache, then staged as any model."""
+    import trimesh
+
+    from ..volume.read import read_vtk_mesh
+
+    root = cache_dir or default_cache_dir()
+    key = content_key("vtk-mesh", __version__, hashlib.sha256(source.read_bytes()).hexdigest())
+    ply = root / "volumes" / key[:2] / key / f"{source.stem}.ply"
+    if not ply.is_file():
+        points, faces = read_vtk_mesh(source)
+        if not len(faces):
+            raise InputError(f"{str(source)!r} holds no polygons; check the file")
+        ply = _cache_folder(ply.parent) / ply.name
+        with atomic_path(ply) as tmp:
+            tmp.write_bytes(trimesh.Trimesh(points, faces, process=False).export(file_type="ply"))
+    stage, record = prepare_stage(ply, lens_array, depth=depth, max_triangles=max_triangles, cache_dir=cache_dir,
+                                  rotate=rotate)
+    record["model"] = str(source)
+    return stage, record

@@ -1,0 +1,47 @@
+"""The ``volumes`` options of ``povh3d render`` (one argument group) and the ``VolumeOptions`` they make."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ..errors import ConfigError
+
+
+def add_volume_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("volumes (.vti .vtk .nrrd .nhdr .mha .mhd .nii .nii.gz .npy, a DICOM folder)")
+    g.add_argument("--labels", nargs="?", const="all", metavar="LIST",
+                   help="one surface per label of a segmentation: all (the default when the data are integer "
+                   "labels) or e.g. 1,4,7")
+    g.add_argument("--iso", metavar="VALUE[,VALUE...]", help="one surface per iso value (e.g. CT bone 300)")
+    g.add_argument("--volume", action="store_true", help="draw the data as a glowing, absorbing medium")
+    g.add_argument("--transfer", default="auto", metavar="NAME|FILE",
+                   help="--volume's transfer function: ct-bone, ct-soft, mri, labels, a file, or auto (the default)")
+    g.add_argument("--df3-bits", type=int, choices=(8, 16), default=16, help="--volume's density file depth")
+    g.add_argument("--opacity", metavar="A[,A...]", help="surface opacity 0..1: one for all, or one per surface")
+    g.add_argument("--smoothing", type=int, metavar="N",
+                   help="surface smoothing iterations (default: 16 for labels, 0 for iso)")
+    g.add_argument("--orientation", choices=("coronal", "axial", "sagittal"), default="coronal",
+                   help="radiological view (default coronal: the patient faces you, their left on your right)")
+    g.add_argument("--spacing", metavar="SX,SY,SZ", help="voxel size in mm (needed by .npy)")
+    g.add_argument("--series", metavar="UID", help="the DICOM series to read from a folder holding several")
+
+
+def _numbers(text: str | None, option: str, kind: type = float) -> tuple[Any, ...] | None:
+    if text is None:
+        return None
+    try:
+        return tuple(kind(v) for v in text.split(","))
+    except ValueError:
+        raise ConfigError(f"{option} takes comma-separated {'whole ' if kind is int else ''}numbers, got "
+                          f"{text!r}") from None
+
+
+def volume_options_from_args(args: argparse.Namespace, rotate: Any) -> Any:
+    from ..app.request import VolumeOptions
+
+    labels = args.labels if args.labels in (None, "all") else _numbers(args.labels, "--labels", int)
+    return VolumeOptions(spacing=_numbers(args.spacing, "--spacing"), series=args.series, labels=labels,
+                         iso=_numbers(args.iso, "--iso"), opacity=_numbers(args.opacity, "--opacity"),
+                         smoothing=args.smoothing, orientation=args.orientation, rotate=rotate,
+                         volume=args.volume, transfer=args.transfer, df3_bits=args.df3_bits)

@@ -1,0 +1,73 @@
+"""A volume's surfaces as one POV-Ray include: turned into the display frame, decimated, ``mesh2``.
+
+Each surface becomes a ``Part`` (mesh/) in display-frame mm (``matrix @
+world``, no scale: the stage scales), then goes the way of every model:
+cleaned, decimated together to the triangle budget (``mesh.simplify``, which
+shares it in proportion to their counts), smooth-shaded, written by
+``mesh.write``.  A surface's opacity is its colour's alpha, which the writer
+turns into POV-Ray's ``transmit``.  Pure: text in memory, nothing written.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from ..mesh.clean import clean_part, vertex_normals
+from ..mesh.load import Part
+from ..mesh.write import include_text, mesh2_text
+from .surfaces import Surface
+
+
+def surface_part(surface: Surface, matrix: np.ndarray) -> Part:
+    """``surface`` in display-frame mm: ``matrix`` (3, 3) applied; a mirroring matrix (LPS is
+    right-handed, the display frame left-handed) reverses the winding so normals stay outward."""
+    m = np.asarray(matrix, dtype=np.float64)
+    faces = surface.faces[:, [0, 2, 1]] if np.linalg.det(m) < 0 else surface.faces
+    rgba = np.array([*(round(255 * c) for c in surface.colour), round(255 * surface.opacity)], dtype=np.uint8)
+    return Part(surface.name, surface.vertices @ m.T + 0.0, np.asarray(faces, dtype=np.int64), base_color=rgba)
+
+
+def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | None, *, ident: str,
+                     source: str) -> tuple[str, list[dict[str, Any]], dict[str, Any]]:
+    """The include text, one record row per surface, and the decimation's seconds and silhouette error
+    (``mesh.simplify``; None when nothing was decimated) and the writing's seconds."""
+    from ..errors import warn
+
+    parts, kept = [], []
+    for surface in surfaces:
+        part = clean_part(surface_part(surface, matrix))[0]
+        if part.triangles:
+            parts.append(part)
+            kept.append(surface)
+        else:
+            warn(f"{surface.name} of {source} has no surface; left out")
+    if not parts:
+        from ..errors import InputError
+
+        raise InputError(f"no surface to draw in {source}; check --labels or --iso")
+    before = [p.triangles for p in parts]
+    start = time.perf_counter()
+    silhouette = None
+    if budget is not None and sum(before) > budget:
+        from ..mesh.simplify import simplify_parts
+
+        parts, report = simplify_parts(parts, budget)
+        silhouette = report["silhouette_error"]
+    decimated = time.perf_counter() - start
+    start = time.perf_counter()
+    blocks = [mesh2_text(p, smooth=True, normals=vertex_normals(p.vertices, p.faces), texture_file=None, ident=ident)
+              for p in parts]
+    lo = np.min([p.vertices.min(axis=0) for p in parts], axis=0)
+    hi = np.max([p.vertices.max(axis=0) for p in parts], axis=0)
+    total = sum(p.triangles for p in parts)
+    text = include_text(blocks, ident, (lo, hi), source=source,
+                        summary=f"{len(parts)} surfaces, {total} triangles (from {sum(before)})")
+    rows = [{"name": s.name, "label": s.label, "iso": s.iso, "triangles_extracted": n, "triangles": p.triangles,
+             "colour": [round(c, 4) for c in s.colour], "opacity": s.opacity}
+            for s, p, n in zip(kept, parts, before)]
+    stats = {"decimate_seconds": round(decimated, 4), "write_seconds": round(time.perf_counter() - start, 4),
+             "silhouette_error": silhouette}
+    return text, rows, stats
