@@ -14,7 +14,7 @@ light_source { <-40, 60, -80> * S rgb <1.0, 0.95, 0.9> }
 light_source { < 60, 20, -40> * S rgb <0.25, 0.3, 0.4> shadowless }
 
 // Behind the screen: a checkered back wall and a marbled sphere.
-plane { z, 13 * S hollow  // hollow: the viewer is "inside" this half-space, and fog (povh3d's depth pass) only fills hollow objects; not a whole number of checker squares, the checker flips on whole z
+plane { z, 11.5 * S hollow  // hollow: the viewer is "inside" this half-space, and fog (povh3d's depth pass) only fills hollow objects; inside the depth budget (+-12 mm on demo); not a whole number of checker squares, the checker flips on whole z
   pigment { checker rgb <0.85, 0.85, 0.8> rgb <0.25, 0.35, 0.55> scale 3 * S }
   finish { diffuse 0.8 ambient 0.05 }
 }

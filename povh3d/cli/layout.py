@@ -8,47 +8,23 @@ from typing import Any
 
 from ..errors import ConfigError
 from .options import add_array_options, lens_array_from_args, parse_pair, warn
+from .render import parse_triple, add_frame_options, frame_options_from_args
+from .volume import parse_numbers, add_volume_source_options
 
-ORIENTATIONS = ("coronal", "axial", "sagittal")   # volume.orient's presets (named here: no import for --help)
-
-
-def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
-    if text is None:
-        return None
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
-        raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
-    return values  # type: ignore[return-value]
-
-
-def _iso(text: str | None) -> tuple[float, ...] | None:
-    if text is None:
-        return None
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if not values or not all(abs(v) < float("inf") for v in values):
-        raise ConfigError(f"--iso takes numbers VALUE[,VALUE...], got {text!r}")
-    return values
 
 
 def cmd_layout(args: argparse.Namespace) -> int:
     from ..app.layout import layout
-    from .render import frame_options_from_args
 
     lens_array, display = lens_array_from_args(args)
     size = parse_pair(args.size, "--size", integral=True)
     if not isinstance(size, tuple):
         raise ConfigError(f"--size takes WxH pixels like 1200x900, got {args.size!r}")
-    spacing = _triple(args.spacing, "--spacing")
-    rotate = _triple(args.rotate, "--rotate")
+    spacing = parse_triple(args.spacing, "--spacing")
+    rotate = parse_triple(args.rotate, "--rotate")
     model: dict[str, Any] = {"depth": args.depth, "up": args.up, "rotate": rotate, "unit": args.unit}
     volume: dict[str, Any] = {"orientation": args.orientation, "rotate": rotate, "depth": args.depth,
-                              "spacing": spacing, "series": args.series, "iso": _iso(args.iso)}
+                              "spacing": spacing, "series": args.series, "iso": parse_numbers(args.iso, "--iso")}
     record = layout(args.source, args.output, lens_array, display=display, frame_options=frame_options_from_args(args),
                     include_dirs=tuple(args.include), model=model, volume=volume, size=size,
                     use_cache=not args.no_cache)
@@ -72,25 +48,12 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--size", default="1200x900", metavar="WxH", help="picture size in pixels (default 1200x900)")
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder (scenes)")
     p.add_argument("--no-cache", action="store_true", help="measure the scene again, ignore the cache")
-    g = p.add_argument_group("display frame (scenes; as 'povh3d render')")
-    g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
-                   help="camera: the scene's camera places the display; native: mm around z = 0; "
-                   "auto (default): camera when the scene has one")
-    g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
-    g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
-    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
-    g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
-    g.add_argument("--fit-depth", metavar="auto|MM", help="scale the frame so the scene fits the depth budget")
+    add_frame_options(p)
     g = p.add_argument_group("models and volumes (as 'povh3d render')")
     g.add_argument("--depth", type=float, metavar="MM", help="the content's depth on the display")
     g.add_argument("--up", choices=("x", "y", "z", "-x", "-y", "-z"), help="a model's up axis")
     g.add_argument("--rotate", metavar="X,Y,Z", help="then turn it by these angles (degrees, as POV-Ray's rotate)")
     g.add_argument("--unit", choices=("mm", "cm", "m", "in"), help="a model's unit")
-    g.add_argument("--orientation", choices=ORIENTATIONS, default="coronal",
-                   help="how a volume faces the viewer (radiological views; default coronal)")
-    g.add_argument("--spacing", metavar="SX,SY,SZ", help="a volume's voxel size in mm (.npy)")
-    g.add_argument("--iso", metavar="VALUE[,VALUE...]", help="show a volume's iso-surfaces at these values "
-                   "(default: a label volume shows its non-zero voxels' boundary)")
-    g.add_argument("--series", metavar="UID", help="the DICOM series to read from a folder of several")
+    add_volume_source_options(g)
     add_array_options(p)
     p.set_defaults(func=cmd_layout)

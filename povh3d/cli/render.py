@@ -53,11 +53,11 @@ def request_from_args(args: argparse.Namespace) -> Any:
         mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
         views_dir=Path(args.views_dir) if args.views_dir else None,
         model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles), args.up,
-                           _triple(args.rotate, "--rotate"), args.unit),
+                           parse_triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
-        volume=volume_options_from_args(args, _triple(args.rotate, "--rotate")))
+        volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")))
 
 
 def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
@@ -79,14 +79,14 @@ def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str
     return sheet, {**display, "sheet": {"from_mapping": mapping.name, "mapping_offset": offset}}
 
 
-def _triple(text: str | None, option: str) -> tuple[float, float, float] | None:
+def parse_triple(text: str | None, option: str) -> tuple[float, float, float] | None:
     if text is None:
         return None
     try:
         values = tuple(float(v) for v in text.split(","))
     except ValueError:
         values = ()
-    if len(values) != 3:
+    if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
         raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
     return values  # type: ignore[return-value]
 
@@ -107,8 +107,8 @@ def frame_options_from_args(args: argparse.Namespace) -> Any:
             scale = float(scale)
         except ValueError:
             raise ConfigError(f"--depth-scale takes a factor (e.g. 0.5) or nothing, got {scale!r}") from None
-    return FrameOptions(args.display_frame, _triple(args.display_center, "--display-center"),
-                        _triple(args.display_normal, "--display-normal"), _triple(args.display_up, "--display-up"),
+    return FrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
+                        parse_triple(args.display_normal, "--display-normal"), parse_triple(args.display_up, "--display-up"),
                         args.display_width, fit, scale)
 
 
@@ -233,7 +233,7 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
     try:
         result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
                               fit_depth=args.fit_depth, center=args.center, max_triangles=budget, up=args.up,
-                              rotate=_triple(args.rotate, "--rotate"), progress=update)
+                              rotate=parse_triple(args.rotate, "--rotate"), progress=update)
     finally:
         close()
     line = f"{result.include}  {result.ident}  {result.summary()}, up {result.up} ({result.up_reason})  " \
@@ -322,21 +322,7 @@ def add_parsers(sub: Any) -> None:
     _add_orientation(p)
     p.add_argument("--unit", choices=("mm", "cm", "m", "in"),
                    help="a model's unit (default: the file's); the stage scales the model to the panel anyway")
-    g = p.add_argument_group("display frame (where the display sits in the scene)")
-    g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
-                   help="camera: the scene's camera places the display (look_at on the screen, its field "
-                   "across the panel); native: the scene is in mm around the screen z = 0; auto (default): "
-                   "camera when the scene has one, else native")
-    g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
-    g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
-    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
-    g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
-    g.add_argument("--fit-depth", metavar="auto|MM",
-                   help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
-                   "display's depth budget (auto: 2 N f) or MM")
-    g.add_argument("--depth-scale", nargs="?", const="fit", metavar="K",
-                   help="compress depth alone along the display normal by K, keeping lateral sizes (a distortion); "
-                   "bare, with --fit-depth: the K that makes the depth fit, instead of shrinking the whole scene")
+    add_frame_options(p)
     add_volume_options(p)
     add_mesh_options(p)
     add_array_options(p)
@@ -369,3 +355,22 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_array_options(p)
     p.set_defaults(func=cmd_bench)
+
+
+def add_frame_options(p: argparse.ArgumentParser) -> None:
+    """Where the display sits in the scene (render and layout alike)."""
+    g = p.add_argument_group("display frame (where the display sits in the scene)")
+    g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
+                   help="camera: the scene's camera places the display (look_at on the screen, its field "
+                   "across the panel); native: the scene is in mm around the screen z = 0; auto (default): "
+                   "camera when the scene has one, else native")
+    g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
+    g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
+    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
+    g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
+    g.add_argument("--fit-depth", metavar="auto|MM",
+                   help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
+                   "display's depth budget (auto: 2 N f) or MM")
+    g.add_argument("--depth-scale", nargs="?", const="fit", metavar="K",
+                   help="compress depth alone along the display normal by K, keeping lateral sizes (a distortion); "
+                   "bare, with --fit-depth: the K that makes the depth fit, instead of shrinking the whole scene")
