@@ -29,6 +29,9 @@ def request_from_args(args: argparse.Namespace) -> Any:
 
     lens_array, display = lens_array_from_args(args)
     mapping = panel = None
+    if args.calibration is not None and not args.mapping and args.method != "subpixel":
+        raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
+                          "add one of them, or drop --calibration")
     if args.method == "subpixel":
         lens_array, display = _subpixel_sheet(args, lens_array, display)
     elif args.mapping:  # render exactly the views the mapping reads, then map them

@@ -201,3 +201,11 @@ def test_bad_calibrations_are_refused(cli, tmp_path, make, args, words):
     out = tmp_path / "x.png"
     line = one_error_line(cli("render", scene, "--method", "subpixel", "--calibration", path, *args, "-o", out))
     assert words in line and not out.exists() and not out.with_suffix(".json").exists()
+
+
+def test_a_calibration_without_a_sheet_to_give_is_refused(cli, tmp_path):
+    scene = write_position_plane(tmp_path, 4.0)
+    cal = pixel_file(tmp_path / "c.json", (60, 30), 4.37, 11.3, -1.6)
+    out = tmp_path / "x.png"
+    line = one_error_line(cli("render", scene, "--calibration", cal, *PLAIN, "-o", out))
+    assert "--method subpixel" in line and not out.exists()
