@@ -91,7 +91,7 @@ def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str
     from ..app.display import read_calibration
     from ..engine.calibrated_sheet import calibrated_sheet
 
-    sheet, shift, record = calibrated_sheet(read_calibration(args.calibration), panel, lens_array.focal, nominal)
+    sheet, _, record = calibrated_sheet(read_calibration(args.calibration), panel, lens_array.focal, nominal)
     return sheet, {**display, "sheet": {**record, "calibration": str(Path(args.calibration).resolve())}}
 
 

@@ -33,7 +33,8 @@ def calibrated_sheet(calibration: dict[str, Any], panel: Panel, focal: float,
                      nominal: LensArray | None = None) -> tuple[LensArray, float, dict[str, Any]]:
     """The calibrated sheet over ``panel``, its shift across (mm, ``placed_sheet``) and a record
     of it for the sidecar.  ``nominal``: the display's own sheet, which the calibration refines."""
-    from ..mappings.slanted import from_calibration  # the CLI asks only with a calibration
+    # Only a render with a calibration asks: keeps the render's import chain short.
+    from ..mappings.slanted import from_calibration
 
     mapping = from_calibration(calibration, 1)
     _check_panel(calibration, panel)

@@ -22,14 +22,17 @@ import pytest
 from povh3d.app.calibration import calibrate_lenticular_file
 from povh3d.app.display import mapping_for_display
 from povh3d.cli.main import build_parser
+from povh3d.cli.options import lens_array_from_args
 from povh3d.cli.render import request_from_args
 from povh3d.engine.calibrated_sheet import calibrated_sheet
-from povh3d.engine.subpixel import sheet_phase
+from povh3d.engine.methods import METHODS
+from povh3d.engine.subpixel import sheet_phase, subpixel_array, subpixel_image
 from povh3d.geometry.lens_array import Panel
+from povh3d.geometry.phase_tiles import phase_tiles
 from povh3d.image.colour import decode, encode
 from povh3d.image.io import read_png, write_png
-
 from tests.engine.test_single_stage import write_position_plane
+from tests.geometry.test_rotated_lattice import simulate_lookup
 from tests.support.cli import one_error_line
 from tests.support.synth import render_lenticular_white
 
@@ -76,8 +79,6 @@ def test_render_and_map_address_one_sheet(tmp_path):
     for name, path, display_args in files(tmp_path):
         sheet, shift, display = render_sheet(scene, *display_args, "--calibration", path)
         parsed = build_parser().parse_args(["render", str(scene), *display_args])
-        from povh3d.cli.options import lens_array_from_args
-
         la, disp = lens_array_from_args(parsed)
         mapping, panel = mapping_for_display("slanted", disp, la, calibration_path=str(path), views=7)
         assert display["sheet"]["mapping_offset"] == pytest.approx(mapping.offset, abs=1e-9), name
@@ -209,3 +210,41 @@ def test_a_calibration_without_a_sheet_to_give_is_refused(cli, tmp_path):
     out = tmp_path / "x.png"
     line = one_error_line(cli("render", scene, "--calibration", cal, *PLAIN, "-o", out))
     assert "--method subpixel" in line and not out.exists()
+
+
+@pytest.mark.parametrize("rational", [True, False])
+def test_every_calibrated_ray_through_the_lookup(tmp_path, rational):
+    """POV-Ray's mesh-camera lookup, simulated in NumPy, gives every subpixel the ray of the
+    position across its lenticule that the mapping's formula gives it (docs/geometry.md: through
+    the lenticule's axis beside it, along ``normalize(R(u, 0), f)``), to 1e-9: the phase tiles of
+    a rational calibrated sheet and the strips of an irrational one, both moved across."""
+    scene = write_position_plane(tmp_path, 4.0)
+    if rational:  # Alioscopy's own pitch and slant (8 subpixels a row, tan a = 1/3), a calibrated phase
+        path = looking_glass_file(tmp_path / "r.json", (60, 30), 0.4845, 8 / math.sqrt(10),
+                                  math.degrees(math.atan(1 / 3)), 0.61)
+        display_args = ALIOSCOPY
+    else:
+        path, display_args = pixel_file(tmp_path / "i.json", (60, 30), 4.37, 11.3, -1.62), PLAIN
+    sheet, shift, _ = render_sheet(scene, *display_args, "--calibration", path)
+    parsed = build_parser().parse_args(["render", str(scene), *display_args])
+    la, disp = lens_array_from_args(parsed)
+    mapping, panel = mapping_for_display("slanted", disp, la, calibration_path=str(path), views=5)
+    sub = subpixel_array(sheet)
+    tiles = phase_tiles(sub)
+    assert (tiles is not None) == rational and shift != 0
+    mesh = METHODS["subpixel"].plan(sheet, 10.0, np.zeros((1, 4)), sheet_shift_mm=shift).batch.context["mesh"]
+    origin, normal, _ = (subpixel_image(mesh, tiles, [a]) for a in simulate_lookup(mesh))
+    # The oracle: the mapping's phase of every subpixel centre, in mm across its lenticule.
+    _, _, frac = mapping.phases((panel.width, panel.height))
+    u = ((frac * mapping.per_lens / mapping.views + 0.5) / mapping.per_lens - 0.5) * sheet.pitch_x
+    t = math.radians(sheet.rotation)
+    n = np.array([math.cos(t), math.sin(t)])
+    xs, ys = np.meshgrid(*sub.panel.pixel_centres())
+    axis = np.stack([xs, ys], -1) - u[..., None] * n
+    dirs = np.concatenate([u[..., None] * n, np.full(u.shape + (1,), sheet.focal)], -1)
+    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+    clear = np.abs(u) < 0.5 * sheet.pitch_x * (1 - 1e-6)        # not a centre on a lenticule border
+    d = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    np.testing.assert_allclose(d[clear], dirs[clear], atol=1e-9)
+    reach = -origin[..., 2] / d[..., 2]
+    np.testing.assert_allclose((origin[..., :2] + reach[..., None] * d[..., :2])[clear], axis[clear], atol=1e-9)
