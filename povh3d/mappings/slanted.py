@@ -272,6 +272,17 @@ def _check_sheet_fields(calibration: dict[str, Any], pitch: float, slope: float,
         if not math.isclose(value, derived, rel_tol=1e-6, abs_tol=1e-9):
             raise ConfigError(f"the calibration contradicts itself: {key} is {value!r} but {how} gives "
                               f"{derived!r}; calibrate again")
+    if "phase_px" in calibration:  # and the centre (an older calibrate put it half a pixel left)
+        phase = calibration["phase_px"]
+        if isinstance(phase, bool) or not isinstance(phase, (int, float)) or not math.isfinite(phase):
+            raise ConfigError(f"calibration field 'phase_px' must be a number, got {phase!r}")
+        centre = calibration["center"]
+        centre = centre.get("value") if isinstance(centre, dict) else centre
+        t = math.atan(1.0 / slope)
+        derived = (phase + math.cos(t) * (width + 1) / 2 + math.sin(t) * height / 2) * pitch / dpi - 0.5
+        if abs((derived - centre + 0.5) % 1.0 - 0.5) > 1e-6:
+            raise ConfigError(f"the calibration contradicts itself: center is {centre!r} but phase_px gives "
+                              f"{derived % 1.0!r}; calibrate again")
 
 
 def from_calibration(calibration: dict[str, Any], views: int, *, blend: bool = False) -> Slanted:

@@ -27,6 +27,7 @@ from povh3d.cli.render import request_from_args
 from povh3d.engine.calibrated_sheet import calibrated_sheet
 from povh3d.engine.methods import METHODS
 from povh3d.engine.subpixel import sheet_phase, subpixel_array, subpixel_image
+from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import Panel
 from povh3d.geometry.phase_tiles import phase_tiles
 from povh3d.image.colour import decode, encode
@@ -107,6 +108,11 @@ def test_both_files_of_one_sheet_are_one_mapping(tmp_path):
     b, sb, _ = calibrated_sheet(plain, panel, 1.0)
     assert (a.pitch_x, a.rotation, a.lenses_x) == pytest.approx((b.pitch_x, b.rotation, b.lenses_x), rel=1e-12)
     assert sa == pytest.approx(sb, abs=1e-9)
+    # A center half a pixel off its phase_px (as an older calibrate wrote it) contradicts the file.
+    t = math.radians(with_lg["slant_deg"])
+    stale = {**with_lg, "center": (with_lg["center"] - 0.5 * math.cos(t) / with_lg["pitch_px"]) % 1}
+    with pytest.raises(ConfigError, match="contradicts itself: center"):
+        calibrated_sheet(stale, panel, 1.0)
 
 
 @pytest.mark.parametrize("pitch,slant,phase", [(9.37, 9.46, 0.31), (7.71, 18.43, -1.7), (12.3, -6.34, 2.2)])
