@@ -78,4 +78,3 @@ def _check_nominal(sheet: LensArray, nominal: LensArray) -> None:
             f"(pitch {nominal.pitch_x:.5g} mm, slant {nominal.rotation:.4g} deg): more than "
             f"{100 * PITCH_TOLERANCE:g} % or {SLANT_TOLERANCE_DEG:g} deg apart; give this display's calibration, "
             "or the display it was made for (--preset, or --grid lenticular --ppl --lens-rotation)")
-
