@@ -340,11 +340,16 @@ def mapping_for_display(name: str, display: dict[str, Any], lens_array: Any, *,
     fields = {k: display[k] for k in ("slant_deg", "views") if display.get(k) is not None}
     fields.update(lens_pitch=lens_array.pitch_x, pixel_pitch=panel.pitch_x)
     if calibration_path is not None:
-        try:
-            options["calibration"] = json.loads(Path(calibration_path).read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise InputError(f"cannot read the calibration {calibration_path!r}: {exc.strerror}") from None
-        except ValueError as exc:
-            raise InputError(f"the calibration {calibration_path!r} is not JSON: {exc}") from None
+        options["calibration"] = read_calibration(calibration_path)
     opts = options_from_display(fields, lens_array.pitch_x / panel.pitch_x, **options)
     return build_mapping(name, opts), panel
+
+
+def read_calibration(path: str | Path) -> Any:
+    """A calibration file's JSON (``map --calibration``, ``render --method subpixel --calibration``)."""
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(f"cannot read the calibration {str(path)!r}: {exc.strerror}") from None
+    except ValueError as exc:
+        raise InputError(f"the calibration {str(path)!r} is not JSON: {exc}") from None

@@ -60,13 +60,17 @@ class LenticularFit:
         """The Looking Glass fields of this sheet over a panel imaged 1:1 (``mappings.slanted.looking_glass``).
 
         Their lenticule coordinate ``a = (x cos t + y sin t) / pitch - center`` (``x``
-        from the left, ``y`` up, in pixels) is ``0.5`` modulo 1 on every lenticule
-        axis (the central view looks straight out), with ``slope = 1 / tan t`` and
-        ``pitch`` in lenticules per inch across them.
+        from the left, ``y`` up, in pixels) has ``slope = 1 / tan t`` and ``pitch`` in
+        lenticules per inch across them.  Their shader reads ``a`` of subpixel ``c`` at
+        ``x = col + 1/2 + c/3``, half a pixel right of the subpixel's left edge, and the
+        slanted mapping takes that value as the phase of the left edge (van Berkel's
+        ``floor``: ``mappings.slanted``); so ``center`` is set for ``a`` to be ``0.5``
+        modulo 1 half a pixel right of every lenticule axis.  Then ``map --calibration``
+        and ``render --method subpixel --calibration`` both address the measured sheet.
         """
         w, h = self.size
         t = math.radians(self.slant_deg)
-        centre = (self.phase_px + math.cos(t) * w / 2 + math.sin(t) * h / 2) / self.pitch_px - 0.5
+        centre = (self.phase_px + math.cos(t) * (w + 1) / 2 + math.sin(t) * h / 2) / self.pitch_px - 0.5
         return {"pitch": dpi / self.pitch_px, "slope": 1.0 / math.tan(t) if t else math.inf,
                 "center": centre % 1.0, "invView": 0, "DPI": dpi, "screenW": w, "screenH": h}
 

@@ -119,7 +119,7 @@ def add_mapping_options(p: argparse.ArgumentParser, required: bool = False) -> N
     g.add_argument("--rows-per-view", type=positive_int, metavar="B", help="slanted: panel rows per view row")
     g.add_argument("--reverse-views", action="store_true", help="slanted: view N-1-v")
     g.add_argument("--blend", action="store_true", help="slanted: blend fractional views (linear light)")
-    g.add_argument("--calibration", metavar="JSON", help="slanted: Looking Glass calibration (visual.json)")
+    g.add_argument("--calibration", metavar="JSON", help="slanted: a Looking Glass visual.json or a 'povh3d calibrate --lattice lenticular' file; with render --method subpixel: the sheet it traces")
 
 
 def mapping_from_args(args: argparse.Namespace, lens_array, display):

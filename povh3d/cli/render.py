@@ -30,6 +30,9 @@ def request_from_args(args: argparse.Namespace) -> Any:
 
     lens_array, display = lens_array_from_args(args)
     mapping = panel = None
+    if args.calibration is not None and not args.mapping and args.method != "subpixel":
+        raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
+                          "add one of them, or drop --calibration")
     if args.method == "subpixel":
         lens_array, display = _subpixel_sheet(args, lens_array, display)
     elif args.mapping:  # render exactly the views the mapping reads, then map them
@@ -45,10 +48,13 @@ def request_from_args(args: argparse.Namespace) -> Any:
         frames = FrameRange(*parse_frames(args.frames), *clock)
     elif args.clock is not None:
         raise ConfigError("--clock needs --frames FIRST:LAST")
+    method_options = _method_options(args)
+    if "shift_mm" in display.get("sheet", {}):
+        method_options["sheet_shift_mm"] = display["sheet"]["shift_mm"]
     return RenderRequest(
         source=Path(args.scene), lens_array=lens_array,
         output=Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png"),
-        display=display, method=args.method, method_options=_method_options(args), settings=settings,
+        display=display, method=args.method, method_options=method_options, settings=settings,
         crop=CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None),
         mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
         views_dir=Path(args.views_dir) if args.views_dir else None,
@@ -62,21 +68,33 @@ def request_from_args(args: argparse.Namespace) -> Any:
 
 def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
     """``--method subpixel`` on a display with a slanted mapping (alioscopy-42, philips-20): the
-    sheet that mapping describes, traced subpixel by subpixel straight to the panel image."""
+    sheet that mapping describes, traced subpixel by subpixel straight to the panel image; with
+    ``--calibration``, the calibrated sheet where the calibration puts it."""
     if args.mapping:
         raise ConfigError("--method subpixel writes the panel image itself; drop --mapping (a preset's "
                           "slanted mapping gives the sheet it traces)")
-    if not display.get("mapping"):
+    if not display.get("mapping") and args.calibration is None:
         return lens_array, display
     if args.offset:
-        raise ConfigError("--method subpixel traces the sheet centred on the panel; drop --offset (the sidecar "
-                          "records the mapping offset that addresses the same sheet)")
+        raise ConfigError("--method subpixel traces the sheet centred on the panel, or where --calibration puts "
+                          "it; drop --offset (the sidecar records the mapping offset that addresses the same sheet)")
     from ..engine.subpixel import slanted_sheet
 
-    mapping, panel = mapping_from_args(argparse.Namespace(**{**vars(args), "mapping": display["mapping"]}),
-                                       lens_array, display)
-    sheet, offset = slanted_sheet(mapping, panel, lens_array.focal)
-    return sheet, {**display, "sheet": {"from_mapping": mapping.name, "mapping_offset": offset}}
+    nominal, panel, record = None, lens_array.panel, {}
+    if display.get("mapping"):
+        mapping, panel = mapping_from_args(argparse.Namespace(**{**vars(args), "mapping": display["mapping"],
+                                                                 "calibration": None}), lens_array, display)
+        nominal, offset = slanted_sheet(mapping, panel, lens_array.focal)
+        record = {"from_mapping": mapping.name, "mapping_offset": offset}
+    elif lens_array.grid == "lenticular":
+        nominal = lens_array
+    if args.calibration is None:
+        return nominal, {**display, "sheet": record}
+    from ..app.display import read_calibration
+    from ..engine.calibrated_sheet import calibrated_sheet
+
+    sheet, _, record = calibrated_sheet(read_calibration(args.calibration), panel, lens_array.focal, nominal)
+    return sheet, {**display, "sheet": {**record, "calibration": str(Path(args.calibration).resolve())}}
 
 
 def parse_triple(text: str | None, option: str) -> tuple[float, float, float] | None:

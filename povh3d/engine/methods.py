@@ -131,24 +131,27 @@ def single_stage_supersamples(quality: Quality) -> int:
     return quality.aa_depth if quality.antialias is not None else 1
 
 
-def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray, *, supersample: int = 1) -> MethodPlan:
+def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray, *, supersample: int = 1,
+              sheet_shift_mm: float = 0.0) -> MethodPlan:
     """A rational sheet (every real panel): one quad per phase coset, and with ``supersample``
     k > 1 one frame per point of ``k x k`` footprint samples (aperture and subpixel area, averaged
-    in linear light).  Otherwise one strip per lenticule, point-sampled."""
+    in linear light).  Otherwise one strip per lenticule, point-sampled.  ``sheet_shift_mm``: the
+    lenticules lie that far across from the centred sheet's (a calibrated phase, ``subpixel.placed_sheet``)."""
+    shift = float(sheet_shift_mm)
     sub = subpixel.subpixel_array(lens_array)
     tiles = phase_tiles(sub)
     if tiles is None:
         if supersample > 1:
             warn("this lens sheet's phases do not repeat within 64 subpixels and rows, so --method subpixel "
                  "traces it point-sampled (one strip per lenticule); give a rational sheet to antialias")
-        meshes = [lens_mesh(sub, back_off)]
+        meshes = [lens_mesh(sub, back_off, shift)]
     else:
         points = latin_hypercube(supersample * supersample) if supersample > 1 else CENTRE
-        meshes = [tiles_mesh(sub, tiles, back_off, tuple(p)) for p in points]
-    outside = uncovered(sub) if tiles is not None else None
+        meshes = [tiles_mesh(sub, tiles, back_off, tuple(p), shift) for p in points]
+    outside = uncovered(sub, shift) if tiles is not None else None
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
                       lambda images: subpixel.assemble(meshes[0], tiles, images, outside),
-                      subpixel.describe(lens_array, tiles, len(meshes)))
+                      subpixel.describe(lens_array, tiles, len(meshes), shift))
 
 
 @dataclass(frozen=True)
@@ -194,7 +197,7 @@ METHODS: dict[str, Method] = {
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
                            supersamples=single_stage_supersamples),
-    "subpixel": Method(_subpixel, supersamples=single_stage_supersamples),
+    "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples),
 }
 
 

@@ -55,20 +55,56 @@ def slanted_sheet(mapping: Mapping, panel: Panel, focal: float) -> tuple[LensArr
     A subpixel whose centre lies ``t`` lens pitches across the centred sheet has the
     mapping's phase ``X t - 1/2`` (the phase is its left edge), hence ``k_off``.
     """
+    _check_subpixel_mapping(mapping)
+    sheet, t = _centred(mapping, panel, focal, spare=1)
+    return sheet, round((mapping.per_lens * t - 0.5) % mapping.per_lens, 9) % mapping.per_lens
+
+
+def placed_sheet(mapping: Mapping, panel: Panel, focal: float) -> tuple[LensArray, float]:
+    """The sheet of ``mapping`` where its own offset puts it: the sheet and its ``shift``, the mm its
+    lenticules lie across from the centred sheet's (``phase_tiles``, ``lattice_mesh``).
+
+    The centred sheet has the mapping phase of ``slanted_sheet``'s ``k_off``; moving it ``s``
+    pitches across lowers every subpixel's ``t`` by ``s``, so ``s = (k_off - offset) / X`` (the
+    least such, modulo whole lenses) gives every subpixel the mapping's own phase.  Two spare
+    lenses keep the panel covered whichever way it moves.
+    """
+    _check_subpixel_mapping(mapping, reverse_ok=True)
+    sheet, t = _centred(mapping, panel, focal, spare=3)
+    x = mapping.per_lens
+    s = ((x * t - 0.5 - mapping.offset) / x + 0.5) % 1.0 - 0.5
+    return sheet, s * sheet.pitch_x
+
+
+def _check_subpixel_mapping(mapping: Mapping, reverse_ok: bool = False) -> None:
     from ..mappings.slanted import Slanted  # only the CLI asks: keeps the render's import chain short
 
-    if not isinstance(mapping, Slanted) or mapping.unit != "subpixel" or mapping.reverse:
+    if not isinstance(mapping, Slanted) or mapping.unit != "subpixel" or (mapping.reverse and not reverse_ok):
         raise ConfigError(f"--method subpixel traces the sheet of a slanted subpixel mapping; {mapping.name!r} "
                           "is not one: give the sheet with --grid lenticular --ppl --lens-rotation instead")
+
+
+def _centred(mapping: Any, panel: Panel, focal: float, spare: int) -> tuple[LensArray, float]:
+    """The centred sheet of ``mapping`` (``spare`` lenses past the panel's reach) and how many
+    pitches across it the centre of subpixel ``(0, 0)`` lies."""
     sx, sy = panel.pitch_x, panel.pitch_y
     turn = math.atan(mapping.slope * sx / (3 * sy))
     pitch = mapping.per_lens * sx / 3 * math.cos(turn)
     reach = panel.width * sx * math.cos(turn) + panel.height * sy * abs(math.sin(turn))
-    sheet = LensArray("lenticular", math.ceil(reach / pitch) + 1, panel.height, pitch, sy, focal, panel,
+    sheet = LensArray("lenticular", math.ceil(reach / pitch) + spare, panel.height, pitch, sy, focal, panel,
                       math.degrees(turn))
     x, _ = sheet.to_lattice(np.array((0.5 / 3 - panel.width / 2) * sx), np.array((panel.height / 2 - 0.5) * sy))
-    t = float(x) / pitch + sheet.lenses_x / 2          # subpixel (0, 0), across the sheet
-    return sheet, round((mapping.per_lens * t - 0.5) % mapping.per_lens, 9) % mapping.per_lens
+    return sheet, float(x) / pitch + sheet.lenses_x / 2
+
+
+def sheet_phase(sheet: LensArray, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Lenticule and position across it (0..1, left to right) of every subpixel centre ``(H, 3W)``
+    under ``sheet`` moved ``shift`` mm across (docs/geometry.md, "The ray of a pixel")."""
+    sub = subpixel_array(sheet)
+    x, _ = sub.to_lattice(*np.meshgrid(*sub.panel.pixel_centres()))
+    t = (x - shift) / sheet.pitch_x + sheet.lenses_x / 2
+    lens = np.floor(t + 1e-9)
+    return lens.astype(np.int64), t - lens
 
 
 def subpixel_image(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray]) -> np.ndarray:
@@ -107,10 +143,10 @@ def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.einsum("hwcc->hwc", cells))
 
 
-def describe(lens_array: LensArray, tiles: PhaseTiles | None, samples: int = 1) -> dict[str, Any]:
+def describe(lens_array: LensArray, tiles: PhaseTiles | None, samples: int = 1, shift: float = 0.0) -> dict[str, Any]:
     sub = subpixel_array(lens_array)
     return {"subpixel_panel_px": [sub.panel.width, sub.panel.height],
-            "slant_deg": lens_array.rotation,
+            "slant_deg": lens_array.rotation, "sheet_shift_mm": shift,
             "subpixels_per_lens_along_row": 3 * lens_array.ppl_x / math.cos(math.radians(lens_array.rotation)),
             "camera": (f"phase tiles {tiles.period[0]}x{tiles.period[1]}" if tiles else "one strip per lenticule"),
             "footprint_samples": samples}

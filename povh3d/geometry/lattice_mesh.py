@@ -18,14 +18,14 @@ from .lens_array import LensArray
 from .rays import pixel_rays
 
 
-def lens_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
-    """One cell per lens: ``lattice_mesh`` for hex or turned lattices, else ``camera_mesh``."""
-    if lens_array.rotation or lens_array.grid in ("hex", "lattice"):
-        return lattice_mesh(lens_array, back_off)
+def lens_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> CameraMesh:
+    """One cell per lens: ``lattice_mesh`` for hex, turned, general or shifted lattices, else ``camera_mesh``."""
+    if lens_array.rotation or lens_array.grid in ("hex", "lattice") or shift:
+        return lattice_mesh(lens_array, back_off, shift)
     return camera_mesh(lens_array, back_off)
 
 
-def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> CameraMesh:
     """``camera_mesh`` of a rotated lattice, a hex one or a general one: one polygon per lens cell.
 
     The cell of every lens (square: its pitch rectangle; hex: its hexagon, all six
@@ -40,6 +40,9 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     Only cells that own a pixel are written.  POV-Ray aborts on UV outside 0..1,
     and cells at the panel's edge reach past it, so the image is a canvas
     ``margin`` pixels larger on every side (``CameraMesh.crop`` cuts it back).
+
+    ``shift`` (lenticular only): the lenticules' axes lie that many mm further across
+    (the lattice's ``x``) than the centred sheet's: a calibrated sheet's phase.
     """
     check_clearance(lens_array, back_off)
     la = lens_array
@@ -47,6 +50,8 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     W, H = panel.width, panel.height
     f = la.focal
     hx, hy = la.pitch_x / 2, la.pitch_y / 2
+    if shift and la.grid != "lenticular":
+        raise ValueError("only a lenticular sheet is shifted across its lenticules")
     if la.grid == "lenticular":
         # Each strip runs along its lenticule as far as its pixels, and a pixel diagonal on.
         # Along a strip the extremes of the panel's pixels lie on the panel's border (the
@@ -55,10 +60,10 @@ def lattice_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         border = np.concatenate([np.stack(np.broadcast_arrays(xs, ys[0]), -1), np.stack(np.broadcast_arrays(xs, ys[-1]), -1),
                                  np.stack(np.broadcast_arrays(xs[0], ys), -1), np.stack(np.broadcast_arrays(xs[-1], ys), -1)])
         bx, by = la.to_lattice(border[:, 0], border[:, 1])
-        col = np.floor(bx / la.pitch_x + la.lenses_x / 2 + 1e-9).astype(np.int64)  # pixel_rays' rule
+        col = np.floor((bx - shift) / la.pitch_x + la.lenses_x / 2 + 1e-9).astype(np.int64)  # pixel_rays' rule
         ok = (col >= 0) & (col < la.lenses_x)
         col, by = col[ok], by[ok]
-        cx = la.lattice_centres()[0, :, 0]
+        cx = la.lattice_centres()[0, :, 0] + shift
         low, high = np.full(la.lenses_x, np.inf), np.full(la.lenses_x, -np.inf)
         np.minimum.at(low, col, by)
         np.maximum.at(high, col, by)

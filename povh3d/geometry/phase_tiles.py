@@ -72,15 +72,18 @@ def _period(g: float, extent: int, pitch: float) -> int | None:
     return None
 
 
-def _phase_gradient(la: LensArray) -> tuple[float, float, float]:
+def _phase_gradient(la: LensArray, shift: float = 0.0) -> tuple[float, float, float]:
     """``t0, gk, gl``: pixel ``(k, l)`` lies ``t0 + gk k + gl l`` lens pitches across the
-    sheet (lens ``floor`` of it); the steps worked out, not differenced, to keep them exact."""
+    sheet (lens ``floor`` of it); the steps worked out, not differenced, to keep them exact.
+
+    ``shift`` (mm): the lenticules' axes lie this far further across (the lattice's ``x``)
+    than the centred sheet's (a calibrated sheet's phase, ``engine.subpixel``)."""
     X, Y = la.panel.pixel_centres()
     x0, _ = la.to_lattice(np.array(X[0]), np.array(Y[0]))
     turn = math.radians(la.rotation)
     gk = math.cos(turn) * la.panel.pitch_x / la.pitch_x
     gl = -math.sin(turn) * la.panel.pitch_y / la.pitch_x   # a row down is -pitch_y
-    return float(x0) / la.pitch_x + la.lenses_x / 2, gk, gl
+    return (float(x0) - shift) / la.pitch_x + la.lenses_x / 2, gk, gl
 
 
 def phase_tiles(lens_array: LensArray) -> PhaseTiles | None:
@@ -97,10 +100,10 @@ def phase_tiles(lens_array: LensArray) -> PhaseTiles | None:
     return PhaseTiles((a, b), (math.ceil(w / a), math.ceil(h / b)), (w, h))
 
 
-def uncovered(lens_array: LensArray) -> np.ndarray | None:
+def uncovered(lens_array: LensArray, shift: float = 0.0) -> np.ndarray | None:
     """``(H, W)`` True where a pixel lies outside every lenticule (no ray: black), or None if none does."""
     la = lens_array
-    t0, gk, gl = _phase_gradient(la)
+    t0, gk, gl = _phase_gradient(la, shift)
     k, l = np.arange(la.panel.width), np.arange(la.panel.height)
     corners = t0 + np.array([0, k[-1]])[None, :] * gk + np.array([0, l[-1]])[:, None] * gl + 1e-9
     if np.floor(corners.min()) >= 0 and np.floor(corners.max()) < la.lenses_x:  # t is affine: corners bound it
@@ -110,7 +113,7 @@ def uncovered(lens_array: LensArray) -> np.ndarray | None:
 
 
 def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float,
-               sample: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)) -> CameraMesh:
+               sample: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0), shift: float = 0.0) -> CameraMesh:
     """The mesh camera of ``tiles``: one quad per coset, the quad edges half a pixel outside its pixels.
 
     A corner at fractional coset position ``(m, i)`` carries the affine extension of the
@@ -122,12 +125,14 @@ def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float,
     pixel's centre, which picks the lens and the direction, through the point ``(ax, ay)`` of that
     lens's aperture (lens pitch across, pixel pitch along).  The whole coset shares one phase, so
     its sample still shares one lens offset and one direction: one quad stays exact.
+
+    ``shift`` moves the lenticules across by that many mm (``_phase_gradient``).
     """
     check_clearance(lens_array, back_off)
     la = lens_array
     (A, B), (M, I) = tiles.period, tiles.tile
     W, H = la.panel.width, la.panel.height
-    t0, gk, gl = _phase_gradient(la)
+    t0, gk, gl = _phase_gradient(la, shift)
     nA, nB = round(A * gk), round(B * gl)
     ax, ay, du, dv = (float(v) for v in sample)
     dx, dy = la.to_lattice(du * la.panel.pitch_x, dv * la.panel.pitch_y)  # the emitting point's offset
@@ -140,7 +145,7 @@ def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float,
     X = (k + 0.5 - W / 2) * la.panel.pitch_x
     Y = (H / 2 - l - 0.5) * la.panel.pitch_y
     xl, yl = la.to_lattice(X, Y)
-    cx = (n + m * nA + i * nB + 0.5 - la.lenses_x / 2) * la.pitch_x  # the lens axis, lattice frame
+    cx = (n + m * nA + i * nB + 0.5 - la.lenses_x / 2) * la.pitch_x + shift  # the lens axis, lattice frame
     u = xl + dx - cx
     v = np.full_like(u, dy)
     ox, oy = la.from_lattice(cx + ax * la.pitch_x - u * (back_off / la.focal),

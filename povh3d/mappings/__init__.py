@@ -16,11 +16,11 @@ from typing import Any
 from ..errors import ConfigError
 from .base import Mapping
 from .sampling import Sampling, Source
-from .slanted import Slanted, looking_glass
+from .slanted import Slanted, from_calibration, looking_glass
 from .unslanted import Distributed, DistributedSmart, Triangular, smart
 
 __all__ = ["MAPPINGS", "Mapping", "MappingOptions", "Sampling", "Source", "Slanted", "build_mapping",
-           "looking_glass", "options_from_display", "parse_name", "slope_from_degrees"]
+           "from_calibration", "looking_glass", "options_from_display", "parse_name", "slope_from_degrees"]
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ def _slanted(_: int | None, o: MappingOptions) -> Mapping:
     if o.calibration is not None:
         if o.views is None:
             raise ConfigError("a Looking Glass calibration needs the view count; give it with --views")
-        return looking_glass(o.calibration, o.views, blend=o.blend)
+        return from_calibration(o.calibration, o.views, blend=o.blend)
     missing = [flag for flag, v in (("--subpixels-per-lens", o.per_lens), ("--views", o.views),
                                     ("--slant-tan or --slant-deg", o.slope)) if v is None]
     if missing:

@@ -272,3 +272,53 @@ def _check_sheet_fields(calibration: dict[str, Any], pitch: float, slope: float,
         if not math.isclose(value, derived, rel_tol=1e-6, abs_tol=1e-9):
             raise ConfigError(f"the calibration contradicts itself: {key} is {value!r} but {how} gives "
                               f"{derived!r}; calibrate again")
+    if "phase_px" in calibration:  # and the centre (an older calibrate put it half a pixel left)
+        phase = calibration["phase_px"]
+        if isinstance(phase, bool) or not isinstance(phase, (int, float)) or not math.isfinite(phase):
+            raise ConfigError(f"calibration field 'phase_px' must be a number, got {phase!r}")
+        centre = calibration["center"]
+        centre = centre.get("value") if isinstance(centre, dict) else centre
+        t = math.atan(1.0 / slope)
+        derived = (phase + math.cos(t) * (width + 1) / 2 + math.sin(t) * height / 2) * pitch / dpi - 0.5
+        if abs((derived - centre + 0.5) % 1.0 - 0.5) > 1e-6:
+            raise ConfigError(f"the calibration contradicts itself: center is {centre!r} but phase_px gives "
+                              f"{derived % 1.0!r}; calibrate again")
+
+
+def from_calibration(calibration: dict[str, Any], views: int, *, blend: bool = False) -> Slanted:
+    """The slanted mapping of a calibration file: Looking Glass fields (``looking_glass``), or a
+    ``povh3d calibrate --lattice lenticular`` file without them (its sheet in image pixels).
+
+    The pixel file's sheet (``calibration.lenticular``: ``pitch_px`` across the lenticules,
+    ``slant_deg`` counter-clockwise, ``phase_px`` from the image centre to the nearest axis) is
+    turned into the Looking Glass fields it would carry with ``--dpi`` (any DPI: it cancels), so
+    that both files of one sheet give one mapping.
+    """
+    if not isinstance(calibration, dict):
+        raise ConfigError("a calibration is a JSON object (Looking Glass visual.json or 'povh3d calibrate' output)")
+    kind = calibration.get("kind")
+    if kind == "povh3d-lens-grid":
+        raise ConfigError(f"the calibration is a {calibration.get('lattice', 'lens')} lens grid, not a lenticular "
+                          "sheet; calibrate the sheet with 'povh3d calibrate --lattice lenticular'")
+    if "pitch" in calibration or kind != "lenticular":
+        return looking_glass(calibration, views, blend=blend)
+    pitch, slant, phase = (_number(calibration, key) for key in ("pitch_px", "slant_deg", "phase_px"))
+    size = calibration.get("image_size")
+    if not (isinstance(size, list) and len(size) == 2 and all(isinstance(v, int) and v >= 1 for v in size)):
+        raise ConfigError(f"the calibration's image_size must be [W, H] pixels, got {size!r}; calibrate again")
+    if pitch <= 0 or not -45 < slant < 45 or slant == 0:
+        raise ConfigError(f"the calibration's sheet (pitch {pitch:g} px, slant {slant:g} deg) is no slanted "
+                          "lenticular sheet: the pitch must be positive and the slant within (-45, 45), not 0")
+    w, h = size
+    t = math.radians(slant)
+    centre = (phase + math.cos(t) * (w + 1) / 2 + math.sin(t) * h / 2) / pitch - 0.5  # LenticularFit.looking_glass
+    fields = {"pitch": 25.4 / pitch, "slope": 1.0 / math.tan(t), "center": centre % 1.0, "invView": 0,
+              "DPI": 25.4, "screenW": w, "screenH": h}
+    return looking_glass(fields, views, blend=blend)
+
+
+def _number(calibration: dict[str, Any], key: str) -> float:
+    value = calibration.get(key)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ConfigError(f"the lenticular calibration needs a number {key!r}, got {value!r}; calibrate again")
+    return float(value)

@@ -59,7 +59,8 @@ def test_looking_glass_fields_put_the_central_view_on_every_axis():
     pts = centre + np.array([(phase + m * pitch) * n + s * along for m in range(-5, 6) for s in (-50.0, 0.0, 70.0)])
     # The Looking Glass shader's lenticule coordinate (mappings.slanted.looking_glass doc), x from the
     # left edge, y up: a = (x + y / slope) * pitch' / W - center, pitch' = pitch W / DPI cos(atan(1/slope)).
-    x, y = pts[:, 0] + 0.5, h - pts[:, 1] - 0.5
+    # Half a pixel right of the axis (LenticularFit.looking_glass: the shader reads a subpixel's phase there).
+    x, y = pts[:, 0] + 0.5 + 0.5, h - pts[:, 1] - 0.5
     lenses = cal["pitch"] * w / cal["DPI"] * math.cos(math.atan(1 / cal["slope"]))
     a = (x + y / cal["slope"]) * lenses / w - cal["center"]
     np.testing.assert_allclose((a - np.floor(a)), 0.5, atol=0.02 / pitch)
