@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import statistics
 import subprocess
 import sys
@@ -25,10 +24,11 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _docs import table, write_table  # noqa: E402
+
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO / "sample_models" / "sample.pov"
-DOCS = REPO / "docs" / "benchmarks.md"
-BEGIN, END = "<!-- bench_command: begin -->", "<!-- bench_command: end -->"
 CASES = {
     "lenticular 1920x1080, 8 views": ["--grid", "lenticular", "--lenses", "240", "--ppl", "8", "--rows", "1080"],
     "square 960x544, 8x8 views": ["--lenses", "120x68", "--ppl", "8x8"],
@@ -113,19 +113,11 @@ def main() -> int:
             times = [seconds(command, tmp) for _ in range(args.repeats)]
             rows.append((name, summary(times), "", "", target))
             print(rows[-1])
-    load_after = os.getloadavg()
-    table = "\n".join(
-        [f"Median (min-max) of {args.repeats} interleaved runs, {os.cpu_count()} cores; load average "
-         f"{load_before[0]:.2f} before, {load_after[0]:.2f} after (1 min).", "",
-         "| command | whole process | against | ratio | target |", "|---|---|---|---|---|"]
-        + [f"| {' | '.join(row)} |" for row in rows])
-    print(table)
+    text = table(f"Median (min-max) of {args.repeats} interleaved runs",
+                 ["command", "whole process", "against", "ratio", "target"], rows, load_before)
+    print(text)
     if not args.no_docs:
-        text = DOCS.read_text(encoding="utf-8")
-        pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.DOTALL)
-        if pattern.search(text) is None:
-            raise SystemExit(f"{DOCS} has no {BEGIN} ... {END} markers")
-        DOCS.write_text(pattern.sub(lambda m: f"{BEGIN}\n{table}\n{END}", text), encoding="utf-8")
+        write_table("bench_command", text)
     return 0
 
 

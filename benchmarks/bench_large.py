@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import subprocess
 import sys
 import tempfile
@@ -22,11 +21,10 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _docs import table, write_table  # noqa: E402
 from bench_mesh import sphere  # noqa: E402 - the same 1,000,000-triangle sphere
 
 REPO = Path(__file__).resolve().parents[1]
-DOCS = REPO / "docs" / "benchmarks.md"
-BEGIN, END = "<!-- bench_large: begin -->", "<!-- bench_large: end -->"
 SCENE = """#version 3.7;
 global_settings { assumed_gamma 1 }
 light_source { <-300, 400, -600> rgb 1 }
@@ -80,19 +78,10 @@ def main() -> int:
             wall = time.perf_counter() - start
             rows.append((name, f"**{result['python_mb']:.0f} MB**", f"{result['povray_mb']:.0f} MB", f"{wall:.1f} s"))
             print(rows[-1], flush=True)
-    load_after = os.getloadavg()
-    table = "\n".join(
-        [f"One run each, {os.cpu_count()} cores; load average {load_before[0]:.2f} before, "
-         f"{load_after[0]:.2f} after (1 min).", "",
-         "| render | Python peak | POV-Ray peak | wall |", "|---|---|---|---|"]
-        + [f"| {' | '.join(row)} |" for row in rows])
-    print(table)
+    text = table("One run each", ["render", "Python peak", "POV-Ray peak", "wall"], rows, load_before)
+    print(text)
     if not args.no_docs:
-        text = DOCS.read_text(encoding="utf-8")
-        pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.DOTALL)
-        if pattern.search(text) is None:
-            raise SystemExit(f"{DOCS} has no {BEGIN} ... {END} markers")
-        DOCS.write_text(pattern.sub(lambda m: f"{BEGIN}\n{table}\n{END}", text), encoding="utf-8")
+        write_table("bench_large", text)
     return 0
 
 

@@ -24,13 +24,14 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _docs import table, write_table  # noqa: E402
+
 import numpy as np
 import trimesh
 
 from povh3d.povray.process import PovrayJob, run_jobs
 
-DOCS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
-BEGIN, END = "<!-- bench_mesh: begin -->", "<!-- bench_mesh: end -->"
 
 CHILD = """
 import json, resource, sys
@@ -116,18 +117,12 @@ def main() -> int:
             rows.append((f"{tri:,}-triangle {what}, {runs[0]['vertices']:,} shared vertices",
                          f"{seconds:.2f} s ({min(walls):.2f}-{max(walls):.2f})", f"**{tri / seconds:,.0f}**",
                          f"{peak:.0f} MB", f"{size_mb:.1f} MB", f"{parse:.2f} s"))
-    table = "\n".join(
-        [f"Median (min-max) of {args.repeats} runs after one that fills numba's cache, {os.cpu_count()} cores; "
-         f"load average {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after (1 min).", "",
-         "| model | whole process | triangles/s | peak memory | include | POV-Ray parse |", "|---|---|---|---|---|---|"]
-        + [f"| {' | '.join(row)} |" for row in rows])
-    print(table)
+    text = table(f"Median (min-max) of {args.repeats} runs after one that fills numba's cache",
+                 ["model", "whole process", "triangles/s", "peak memory", "include", "POV-Ray parse"],
+                 rows, load_before)
+    print(text)
     if not args.no_docs:
-        text = DOCS.read_text(encoding="utf-8")
-        pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.DOTALL)
-        if pattern.search(text) is None:
-            raise SystemExit(f"{DOCS} has no {BEGIN} ... {END} markers")
-        DOCS.write_text(pattern.sub(lambda m: f"{BEGIN}\n{table}\n{END}", text), encoding="utf-8")
+        write_table("bench_mesh", text)
     return 0
 
 

@@ -40,7 +40,7 @@ from povh3d.engine.subpixel import subpixel_array
 from povh3d.geometry.footprint import latin_hypercube
 from povh3d.geometry.presets import lens_array_from_record
 from povh3d.geometry.rays import pixel_rays
-from povh3d.image.colour import decode, encode
+from povh3d.image.colour import encode
 from povh3d.image.io import read_png, write_png
 from povh3d.image.metrics import psnr
 

@@ -1,0 +1,32 @@
+"""What the benchmarks share: the load line of a table and writing it into docs/benchmarks.md."""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
+
+
+def markers(name: str) -> tuple[str, str]:
+    """The comments around benchmark ``name``'s table in docs/benchmarks.md."""
+    return f"<!-- {name}: begin -->", f"<!-- {name}: end -->"
+
+
+def table(caption: str, header: list[str], rows: list[tuple[str, ...]], load_before: tuple[float, ...]) -> str:
+    """A Markdown table under ``caption``, which gets the core count and the load before and after."""
+    note = (f"{caption}, {os.cpu_count()} cores; load average {load_before[0]:.2f} before, "
+            f"{os.getloadavg()[0]:.2f} after (1 min).")
+    return "\n".join([note, "", f"| {' | '.join(header)} |", "|" + "---|" * len(header)]
+                     + [f"| {' | '.join(row)} |" for row in rows])
+
+
+def write_table(name: str, text: str) -> None:
+    """Replace benchmark ``name``'s table in docs/benchmarks.md (between its markers)."""
+    begin, end = markers(name)
+    docs = DOCS.read_text(encoding="utf-8")
+    pattern = re.compile(re.escape(begin) + ".*?" + re.escape(end), re.DOTALL)
+    if pattern.search(docs) is None:
+        raise SystemExit(f"{DOCS} has no {begin} ... {end} markers")
+    DOCS.write_text(pattern.sub(lambda m: f"{begin}\n{text}\n{end}", docs), encoding="utf-8")
