@@ -289,6 +289,26 @@ def write_layout(content: Content, lens_array: LensArray, output: str | Path, *,
     return record
 
 
+def find_content(source: Path, lens_array: LensArray, *, frame_options: Any = None, include_dirs: tuple = (),
+                 model: dict | None = None, volume: dict | None = None, use_cache: bool = True) -> Content:
+    """The scene, model or volume at ``source``, placed on the display as ``render`` places it."""
+    kind = source_kind(source)
+    if kind == "scene":
+        return scene_content(source, lens_array, frame_options, include_dirs=include_dirs, use_cache=use_cache)
+    if kind == "model":
+        return model_content(source, lens_array, **(model or {}))
+    return read_volume_content(source, lens_array, **(volume or {}))
+
+
+def content_report(source: str | Path, lens_array: LensArray) -> dict[str, Any]:
+    """``povh3d info MODEL|VOLUME``: how the default stage places it, and its depth against the budget."""
+    content = find_content(Path(source), lens_array)
+    setup = set_up(lens_array, depth_budget_mm(lens_array))
+    return {"content": str(source), "kind": content.kind, "placement": content.record.get("placement"),
+            "depth": figures(content, setup), "depth_budget_mm": setup.budget_mm,
+            "warnings": content.record.get("warnings", [])}
+
+
 def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, display: dict | None = None,
            frame_options: Any = None, include_dirs: tuple = (), model: dict | None = None,
            volume: dict | None = None, size: tuple[int, int] = (1200, 900), use_cache: bool = True) -> dict[str, Any]:
@@ -301,12 +321,7 @@ def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, dis
     source = Path(source)
     png_output(output)
     picture_size(size)
-    kind = source_kind(source)
-    if kind == "scene":
-        content = scene_content(source, lens_array, frame_options, include_dirs=include_dirs, use_cache=use_cache)
-    elif kind == "model":
-        content = model_content(source, lens_array, **(model or {}))
-    else:
-        content = read_volume_content(source, lens_array, **(volume or {}))
+    content = find_content(source, lens_array, frame_options=frame_options, include_dirs=include_dirs,
+                           model=model, volume=volume, use_cache=use_cache)
     return write_layout(content, lens_array, output, display=display, size=size,
                         content_seconds=time.perf_counter() - start)

@@ -56,22 +56,47 @@ def cmd_info(args: argparse.Namespace) -> int:
     if args.mapping:
         mapping, panel = mapping_from_args(args, lens_array, display)
         info.update(mapping.figures(panel))
-    if args.scene:  # where the display sits in this scene, and its depth against the budget
+    if args.scene and _is_scene(args.scene):  # where the display sits in this scene, its depth against the budget
         from ..app.placement import scene_report
 
         info["scene"] = scene_report(args.scene, lens_array)
+    elif args.scene:  # a model or a volume: as the default stage places it
+        from ..app.layout import content_report
+
+        info["content"] = content_report(args.scene, lens_array)
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
     for key, value in info.items():
-        if key == "scene":
+        if key in ("scene", "content"):
             continue
         if key == "view_angles_deg":
             value = {k: [round(a, 3) for a in v] for k, v in value.items()}
         print(f"{key:22s} {value}")
-    if args.scene:
+    if "scene" in info:
         _print_scene(info["scene"])
+    if "content" in info:
+        _print_content(info["content"])
     return 0
+
+
+def _is_scene(source: str) -> bool:
+    return source.lower().endswith((".pov", ".inc"))
+
+
+def _print_content(report: dict) -> None:
+    print(f"{report['kind']:22s} {report['content']}")
+    placement = report.get("placement") or {}
+    if "size_mm" in placement:
+        w, h, d = placement["size_mm"]
+        print(f"{'placed size':22s} {w:.3g} x {h:.3g} x {d:.3g} mm (set by the display's {placement['limit']})")
+    d, half = report["depth"], report["depth_budget_mm"] / 2
+    if not d.get("points"):
+        print(f"{'content depth':22s} nothing to measure")
+        return
+    verdict = "within" if d["outside"] == 0 else f"{100 * d['outside']:.0f} % BEYOND"
+    print(f"{'content depth':22s} z = {d['near_mm']:.3g} .. {d['far_mm']:.3g} mm; {verdict} the depth budget "
+          f"+-{half:.3g} mm")
 
 
 def _print_scene(report: dict) -> None:
@@ -192,8 +217,8 @@ def add_parsers(sub: Any) -> None:
     p.set_defaults(func=cmd_presets)
 
     p = sub.add_parser("info", help="derived values of a display / lens array")
-    p.add_argument("scene", nargs="?", help="also: where the display sits in this scene, and its depth "
-                   "against the display's depth budget")
+    p.add_argument("scene", nargs="?", metavar="SOURCE", help="also: where the display sits in this scene, or "
+                   "how a mesh model or a volume is placed, and its depth against the display's depth budget")
     p.add_argument("--json", action="store_true")
     add_array_options(p)
     add_mapping_options(p)
