@@ -127,3 +127,21 @@ def test_fit_depth_by_depth_scale_says_it_distorts(cli, tmp_path):
     assert frame["depth"]["fit"]["by"] == "depth_scale" and frame["depth"]["within_budget"]
     assert frame["depth_scale"] == pytest.approx(1 / frame["depth"]["fit"]["factor"])
     assert record["lens_array"]["focal_mm"] == 2.0   # the display as it is; only the rays are tilted less
+
+
+def test_info_reports_a_model_and_a_volume_as_the_stage_places_them(cli):
+    import pyvista
+
+    examples = Path(pyvista.__file__).parent / "examples"
+    width = 24 * 6 * 0.2                      # the panel (mm); the stage fills 0.9 of it
+    for source, kind in ((examples / "ant.ply", "model"), (examples / "frog_tissues.vti", "volume")):
+        data = cli("info", str(source), "--json", *ARRAY)
+        assert data.code == 0, data.err
+        report = json.loads(data.out)["content"]
+        assert report["kind"] == kind and report["depth_budget_mm"] == pytest.approx(24.0)
+        size, depth = report["placement"]["size_mm"], report["depth"]
+        assert max(size[0] / (0.9 * width), size[1] / (0.9 * 18 * 6 * 0.2)) == pytest.approx(1.0)
+        assert depth["near_mm"] == pytest.approx(-depth["far_mm"], abs=1e-6)   # centred on the screen
+        assert depth["far_mm"] - depth["near_mm"] == pytest.approx(size[2], rel=1e-6)
+        text = cli("info", str(source), *ARRAY)
+        assert f"{kind} " in text.out and "content depth" in text.out and "depth budget +-12 mm" in text.out
