@@ -22,19 +22,21 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-#: Keywords that show a feature is used, one regex per feature; tests loop over it.
-FEATURE_PATTERNS: dict[str, str] = {
-    "radiosity": r"\bradiosity\b",
-    "photons": r"\bphotons\b",
-    "media": r"\bmedia\b",
-    "area_light": r"\barea_light\b",
-    "reflection": r"\b(?:reflection|reflection_exponent)\b",
-    "refraction": r"\b(?:ior|refraction|dispersion|transmit|filter|rgbt|rgbf|rgbft)\b",
-    "fog": r"\bfog\b",
-    "sky_sphere": r"\bsky_sphere\b",
-    "rainbow": r"\brainbow\b",
-}
-_COMPILED = {name: re.compile(p) for name, p in FEATURE_PATTERNS.items()}
+#: Keywords that show a feature is used; tests loop over it.
+FEATURE_WORDS: dict[str, frozenset[str]] = {name: frozenset(words) for name, words in {
+    "radiosity": ("radiosity",),
+    "photons": ("photons",),
+    "media": ("media",),
+    "area_light": ("area_light",),
+    "reflection": ("reflection", "reflection_exponent"),
+    "refraction": ("ior", "refraction", "dispersion", "transmit", "filter", "rgbt", "rgbf", "rgbft"),
+    "fog": ("fog",),
+    "sky_sphere": ("sky_sphere",),
+    "rainbow": ("rainbow",),
+}.items()}
+# Words, not regexes over the text: a scene's text is read once into its set of words, so a
+# 100 MB mesh include costs one pass, not one per keyword (numbers hold no words).
+_WORD = re.compile(r"[A-Za-z_]\w*")
 
 #: Which features a global setting acts on; a setting is written only when one is used.
 SETTING_NEEDS: dict[str, tuple[str, ...]] = {
@@ -47,7 +49,7 @@ SETTING_NEEDS: dict[str, tuple[str, ...]] = {
 
 @dataclass(frozen=True)
 class Features:
-    """The features found in a scene's text (see ``FEATURE_PATTERNS``)."""
+    """The features found in a scene's text (see ``FEATURE_WORDS``)."""
 
     used: frozenset[str]
 
@@ -76,13 +78,22 @@ def strip_comments(text: str) -> str:
     return COMMENTS.sub("", text)
 
 
+def words_of(text: str) -> frozenset[str]:
+    """The identifiers and keywords of POV-Ray source (comments left out)."""
+    return frozenset(_WORD.findall(strip_comments(text)))
+
+
+def features_of_words(words: Iterable[frozenset[str]]) -> Features:
+    """Features used in POV-Ray sources, each given as its ``words_of``."""
+    used: set[str] = set()
+    for w in words:
+        used.update(name for name, keys in FEATURE_WORDS.items() if keys & w)
+    return Features(frozenset(used))
+
+
 def features_of_text(texts: Iterable[str]) -> Features:
     """Features used in POV-Ray source texts (comments are ignored)."""
-    used: set[str] = set()
-    for text in texts:
-        text = strip_comments(text)
-        used.update(name for name, rx in _COMPILED.items() if rx.search(text))
-    return Features(frozenset(used))
+    return features_of_words(words_of(t) for t in texts)
 
 
 def needed_settings(features: Features, requested: Mapping[str, Any]) -> dict[str, Any]:

@@ -10,7 +10,7 @@ renders:
 - the POV-Ray include files it names (``textures.inc`` ...), found in POV-Ray's
   own include folders: not part of the digest (they change with POV-Ray, whose
   version is in the key) but read for what follows;
-- the features it uses (``features.FEATURE_PATTERNS``), and so which global
+- the features it uses (``features.FEATURE_WORDS``), and so which global
   settings a quality level may add;
 - whether it reads the animation clock: a scene that never mentions ``clock``
   or the other animation identifiers looks the same at every clock value;
@@ -40,16 +40,16 @@ from functools import cache
 from pathlib import Path
 
 from ..errors import InputError
-from .features import Features, features_of_text, strip_comments
+from .features import Features, features_of_words, strip_comments, words_of
 
 _STRING = re.compile(r'"([^"\n]{1,400})"')
 # A directive or file keyword followed by anything but a string literal: a name computed at parse time.
-_COMPUTED_NAME = re.compile(r'#\s*(?:include|fopen\s+\w+|read_file)\s+[^"\s]|'
-                            r'\b(?:png|jpeg|tga|gif|iff|ppm|pgm|sys|exr|hdr|tiff|df3|ttf)\s+[A-Za-z_(]')
-_GAMMA = re.compile(r"\bassumed_gamma\b")
+_COMPUTED_DIRECTIVE = re.compile(r'#\s*(?:include|fopen\s+\w+|read_file)\s+[^"\s]')
+_FILE_TYPES = frozenset(("png", "jpeg", "tga", "gif", "iff", "ppm", "pgm", "sys", "exr", "hdr", "tiff", "df3", "ttf"))
+_COMPUTED_FILE = re.compile(r'\b(?:' + "|".join(sorted(_FILE_TYPES)) + r')\s+[A-Za-z_(]')
 # Every identifier through which a scene can see the animation.
-_CLOCK_WORDS = re.compile(r"\b(clock|clock_delta|clock_on|frame_number|initial_frame|"
-                          r"final_frame|initial_clock|final_clock)\b")
+_CLOCK_WORDS = frozenset(("clock", "clock_delta", "clock_on", "frame_number", "initial_frame", "final_frame",
+                          "initial_clock", "final_clock"))
 # Files whose text is read for names of other files (the rest are only hashed).
 _TEXT_SUFFIXES = (".pov", ".inc", ".mcr", ".ini", ".txt", ".csv")
 # Files whose text is POV-Ray source: features and clock use are read from these.
@@ -89,7 +89,7 @@ class Scene:
 
 
 # A scene with neither shows its objects in their ambient colour only (nearly black).
-_LIGHT = re.compile(r"\b(?:light_source|emission|radiosity)\b")
+_LIGHT_WORDS = frozenset(("light_source", "emission", "radiosity"))
 
 
 @cache
@@ -175,7 +175,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
 
     own: dict[Path, None] = {}        # the scene's files, in the digest
     seen: set[Path] = set()
-    sources: list[str] = []           # POV-Ray source texts, the scene's and the system's
+    sources: list[frozenset[str]] = []   # the words of POV-Ray source texts, the scene's and the system's
     pending = [(scene, True)]
     sets_gamma = computed = False
     named: dict[str, Path] = {}       # non-ASCII file names in the scene's text, and their files
@@ -190,11 +190,12 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         if suffix not in _TEXT_SUFFIXES:
             continue  # images, fonts, density files: hash them, do not parse them
         text = _read_text(current)
+        words = words_of(text) if suffix in _SOURCE_SUFFIXES else frozenset()
         if suffix in _SOURCE_SUFFIXES:
-            sources.append(text)
+            sources.append(words)
         if is_own:
-            sets_gamma = sets_gamma or bool(_GAMMA.search(text))
-            computed = computed or (suffix in _SOURCE_SUFFIXES and bool(_COMPUTED_NAME.search(text)))
+            sets_gamma = sets_gamma or "assumed_gamma" in words
+            computed = computed or (suffix in _SOURCE_SUFFIXES and _computed_name(text, words))
         for name in _STRING.findall(text):
             found = _find(name, [current.parent, *dirs] if is_own else [current.parent, *system])
             if found is not None:
@@ -211,5 +212,10 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         h.update(f.read_bytes())
         h.update(b"\0")
     return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
-                 features_of_text(sources), any(_CLOCK_WORDS.search(t) for t in sources), computed,
-                 any(_LIGHT.search(t) for t in sources), _ascii_links(named))
+                 features_of_words(sources), any(_CLOCK_WORDS & w for w in sources), computed,
+                 any(_LIGHT_WORDS & w for w in sources), _ascii_links(named))
+
+
+def _computed_name(text: str, words: frozenset[str]) -> bool:
+    """Whether ``text`` reads a file through a name computed at parse time (not a string literal)."""
+    return bool(_COMPUTED_DIRECTIVE.search(text)) or bool(words & _FILE_TYPES and _COMPUTED_FILE.search(text))

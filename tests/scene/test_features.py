@@ -8,7 +8,7 @@ import pytest
 
 from povh3d.engine.quality import QUALITY_LEVELS, Quality
 
-from povh3d.scene.features import FEATURE_PATTERNS, SETTING_NEEDS, features_of_text, needed_settings
+from povh3d.scene.features import FEATURE_WORDS, SETTING_NEEDS, features_of_text, needed_settings
 from povh3d.engine.quality import quality_settings
 from povh3d.engine.methods import display_header
 from povh3d.engine.frames import build_script, FrameBatch
@@ -41,7 +41,7 @@ USES = {
 
 
 def test_every_feature_has_a_scene_that_uses_it():
-    assert set(USES) == set(FEATURE_PATTERNS)
+    assert set(USES) == set(FEATURE_WORDS)
 
 
 def test_plain_scene_uses_nothing():
