@@ -110,13 +110,15 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     from ..mesh.simplify import auto_budget
 
     budget = auto_budget(lens_array) if max_triangles in (None, "auto") else max_triangles
-    include, manifest = cached_surfaces(volume, digest, kind, options, matrix, budget, root)
+    speck = min(lens_array.pitch_x, lens_array.pitch_y) / placement.scale   # one lens, in the surfaces' mm
+    include, manifest = cached_surfaces(volume, digest, kind, options, matrix, budget, root, speck)
     record["surfaces"] = manifest["surfaces"]
     record["triangles"] = manifest["triangles"]
     record["triangle_budget"] = budget
     record["surfaces_from_cache"] = manifest["from_cache"]
     record["seconds"] = manifest["seconds"]
     record["silhouette_error"] = manifest["silhouette_error"]
+    record["specks_left_out"] = manifest.get("specks_left_out", 0)
     text = stage_text(include.name, IDENT, placement, lens_array, model=volume.name)
     stage = include.parent / f"stage-{hashlib.sha256(text.encode()).hexdigest()[:16]}.pov"
     if not stage.is_file():
@@ -152,12 +154,12 @@ def _depth_warning(placement: Any) -> list[str]:
 
 
 def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptions, matrix: np.ndarray,
-                    budget: int | None, root: Path) -> tuple[Path, dict[str, Any]]:
+                    budget: int | None, root: Path, speck: float = 0.0) -> tuple[Path, dict[str, Any]]:
     """The surfaces' include in the cache (``volumes/KEY/``), extracted only when it is not there."""
     import time
 
     key = content_key("volume-surfaces", __version__, digest, kind, options.labels, options.iso,
-                      options.opacity, options.smoothing, np.round(matrix, 12).tolist(), budget)
+                      options.opacity, options.smoothing, np.round(matrix, 12).tolist(), budget, round(speck, 9))
     folder = _cache_folder(root / "volumes" / key[:2] / key)
     manifest_path, include = folder / "manifest.json", folder / "surfaces.inc"
     try:  # a damaged manifest is a cache miss
@@ -178,12 +180,13 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
     extracted = time.perf_counter() - start
     from ..volume.include import surfaces_include
 
-    text, rows, stats = surfaces_include(surfaces, matrix, budget, ident=IDENT, source=volume.name)
+    text, rows, stats = surfaces_include(surfaces, matrix, budget, ident=IDENT, source=volume.name, speck=speck)
     with atomic_path(include) as tmp:
         tmp.write_text(text, encoding="utf-8")
     manifest = {"surfaces": rows, "triangles": sum(r["triangles"] for r in rows),
                 "seconds": {"extract": round(extracted, 4), "decimate": stats["decimate_seconds"],
-                            "write": stats["write_seconds"]}, "silhouette_error": stats["silhouette_error"]}
+                            "write": stats["write_seconds"]}, "silhouette_error": stats["silhouette_error"],
+                "specks_left_out": stats["specks_left_out"]}
     with atomic_path(manifest_path) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
     return include, {**manifest, "from_cache": False}

@@ -10,6 +10,7 @@ turns into POV-Ray's ``transmit``.  Pure: text in memory, nothing written.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any
 
@@ -30,10 +31,45 @@ def surface_part(surface: Surface, matrix: np.ndarray) -> Part:
     return Part(surface.name, surface.vertices @ m.T + 0.0, np.asarray(faces, dtype=np.int64), base_color=rgba)
 
 
+def drop_specks(part: Part, size: float) -> tuple[Part, int]:
+    """``part`` without its connected pieces whose box diagonal is under ``size`` (the largest piece
+    always stays), and how many pieces went.
+
+    A segmentation's surfaces hold many pieces a few voxels across (the frog's label 13
+    alone has 292): smaller than one lens they are not resolved on the display, yet each
+    closed piece keeps at least four triangles through any decimation, so together
+    they can hold more triangles than the display's whole budget."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    f, n = part.faces, len(part.vertices)
+    edges = coo_matrix((np.ones(2 * len(f), dtype=bool),
+                        (np.concatenate([f[:, 0], f[:, 1]]), np.concatenate([f[:, 1], f[:, 2]]))), shape=(n, n))
+    count, piece = connected_components(edges, directed=False)
+    lo = np.full((count, 3), np.inf)
+    hi = np.full((count, 3), -np.inf)
+    np.minimum.at(lo, piece, part.vertices)
+    np.maximum.at(hi, piece, part.vertices)
+    diagonal = np.linalg.norm(hi - lo, axis=1)
+    keep = diagonal >= size
+    keep[np.argmax(diagonal)] = True
+    used = np.zeros(count, dtype=bool)
+    used[piece[f[:, 0]]] = True
+    dropped = int(np.sum(used & ~keep))
+    if not dropped:
+        return part, 0
+    faces = keep[piece[f[:, 0]]]
+    colours = None if part.face_colors is None else part.face_colors[faces]
+    return clean_part(dataclasses.replace(part, faces=f[faces], face_colors=colours))[0], dropped
+
+
 def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | None, *, ident: str,
-                     source: str) -> tuple[str, list[dict[str, Any]], dict[str, Any]]:
+                     source: str, speck: float = 0.0) -> tuple[str, list[dict[str, Any]], dict[str, Any]]:
     """The include text, one record row per surface, and the decimation's seconds and silhouette error
-    (``mesh.simplify``; None when nothing was decimated) and the writing's seconds."""
+    (``mesh.simplify``; None when nothing was decimated) and the writing's seconds.
+
+    Over ``budget``, pieces smaller than ``speck`` (one lens, in the surfaces' units) are
+    left out first (``drop_specks``), then the rest is decimated."""
     from ..errors import warn
 
     parts, kept = [], []
@@ -50,8 +86,11 @@ def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | 
         raise InputError(f"no surface to draw in {source}; check --labels or --iso")
     before = [p.triangles for p in parts]
     start = time.perf_counter()
-    silhouette = None
-    if budget is not None and sum(before) > budget:
+    silhouette, specks = None, 0
+    if budget is not None and sum(before) > budget and speck > 0:
+        parts, dropped = zip(*(drop_specks(p, speck) for p in parts))
+        parts, specks = list(parts), sum(dropped)
+    if budget is not None and sum(p.triangles for p in parts) > budget:
         from ..mesh.simplify import simplify_parts
 
         parts, report = simplify_parts(parts, budget)
@@ -69,5 +108,5 @@ def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | 
              "colour": [round(c, 4) for c in s.colour], "opacity": s.opacity}
             for s, p, n in zip(kept, parts, before)]
     stats = {"decimate_seconds": round(decimated, 4), "write_seconds": round(time.perf_counter() - start, 4),
-             "silhouette_error": silhouette}
+             "silhouette_error": silhouette, "specks_left_out": specks}
     return text, rows, stats
