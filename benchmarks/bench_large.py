@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _docs import table, write_table  # noqa: E402
+from _common import table, write_table  # noqa: E402
 from bench_mesh import sphere  # noqa: E402 - the same 1,000,000-triangle sphere
 
 REPO = Path(__file__).resolve().parents[1]

@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import statistics
 import subprocess
 import sys
@@ -25,12 +24,11 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _docs import table, write_table  # noqa: E402
+from _common import parse_seconds, table, write_table  # noqa: E402
 
 import numpy as np
 import trimesh
 
-from povh3d.povray.process import PovrayJob, run_jobs
 
 
 CHILD = """
@@ -65,17 +63,11 @@ def torus(triangles: int) -> trimesh.Trimesh:
     return trimesh.Trimesh(pts.reshape(-1, 3).astype(np.float32), faces, process=False)
 
 
-def parse_seconds(include: Path) -> float:
-    script = (f'#version 3.7;\nglobal_settings {{ assumed_gamma 1 }}\n#include "{include.name}"\n'
-              "camera { orthographic location <0, 0, -200> direction z right <120, 0, 0> up <0, 120, 0> }\n"
-              "light_source { <0, 0, -500> rgb 1 }\n"
-              f"object {{ {include.stem} }}\n")
-    job = PovrayJob(name="parse", script=script, width=8, height=8, include_dirs=(str(include.parent),),
-                    options=("-A", "+V"))
-    logs = []
-    run_jobs([job], processes=1, on_result=lambda r: logs.append(r.log))
-    m = re.search(r"Parse Time:.*?\(([\d.]+) seconds\)", logs[0])
-    return float(m.group(1)) if m else float("nan")
+def include_parse_seconds(include: Path) -> float:
+    return parse_seconds(f'#version 3.7;\nglobal_settings {{ assumed_gamma 1 }}\n#include "{include.name}"\n'
+                         "camera { orthographic location <0, 0, -200> direction z right <120, 0, 0> up <0, 120, 0> }\n"
+                         "light_source { <0, 0, -500> rgb 1 }\n"
+                         f"object {{ {include.stem} }}\n", include.parent)
 
 
 def main() -> int:
@@ -103,7 +95,7 @@ def main() -> int:
             peak = max(r["peak_mb"] for r in runs)
             tri = runs[0]["triangles"]
             t = time.perf_counter()
-            parse = parse_seconds(include)
+            parse = include_parse_seconds(include)
             povray_wall = time.perf_counter() - t
             size_mb = include.stat().st_size / 1e6
             print(f"{stem}: {tri} triangles, {runs[0]['vertices']} vertices, binary {kind.upper()} "

@@ -21,13 +21,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-import re
 
 import pyvista
 
 from povh3d.cli.main import main as povh3d
-from povh3d.povray.process import PovrayJob, run_jobs
 from povh3d.volume.read import read_volume
+
+from _common import parse_seconds
 
 REPO = Path(__file__).resolve().parents[1]
 FROG = Path(pyvista.__file__).parent / "examples" / "frog_tissues.vti"
@@ -36,14 +36,9 @@ OUT = REPO / "bench-out" / "bench_volume.json"
 
 def parse_seconds_of_scene(stage: Path) -> float:
     """POV-Ray's own parse time of a stage scene (which has no camera: one is added), an 8 x 8 render."""
-    script = (f'#include "{stage.name}"\n'
-              "camera { orthographic location <0, 0, -200> direction z right <60, 0, 0> up <0, 60, 0> }\n")
-    job = PovrayJob(name="parse", script=script, width=8, height=8, include_dirs=(str(stage.parent),),
-                    options=("-A", "+V"))
-    logs: list[str] = []
-    run_jobs([job], processes=1, on_result=lambda r: logs.append(r.log))
-    m = re.search(r"Parse Time:.*?\(([\d.]+) seconds\)", logs[0])
-    return float(m.group(1)) if m else float("nan")
+    return parse_seconds(f'#include "{stage.name}"\n'
+                         "camera { orthographic location <0, 0, -200> direction z right <60, 0, 0> up <0, 60, 0> }\n",
+                         stage.parent)
 
 
 def render_case(preset: str, drawing: str, options: list[str], folder: Path) -> dict[str, Any]:

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import statistics
 import tempfile
 import time
@@ -32,10 +31,11 @@ from povh3d.engine.methods import run_method
 from povh3d.engine.quality import RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.presets import lens_array
-from povh3d.povray.process import PovrayJob, run_jobs
 from povh3d.scene.scene import load_scene
 from povh3d.volume.grid import Volume
 from povh3d.volume.orient import display_box, volume_to_display, world_to_display
+
+from _common import parse_seconds
 
 FROG = Path(examples.__file__).parent / "frog_tissues.vti"
 
@@ -46,16 +46,11 @@ def read_frog() -> Volume:
     return Volume(values, tuple(grid.spacing), tuple(grid.origin), name=FROG.name)
 
 
-def parse_seconds(stage: Path) -> float:
+def stage_parse_seconds(stage: Path) -> float:
     """POV-Ray's own parse time for the stage (the df3 is read while parsing), from a tiny render."""
-    script = (f'#include "{stage.name}"\n'
-              "camera { orthographic location <0, 0, -100> direction z right <40, 0, 0> up <0, 40, 0> }\n")
-    job = PovrayJob(name="parse", script=script, width=4, height=4, include_dirs=(str(stage.parent),),
-                    options=("-A", "+V"))
-    logs: list[str] = []
-    run_jobs([job], processes=1, on_result=lambda r: logs.append(r.log))
-    m = re.search(r"Parse Time:.*?\(([\d.]+) seconds\)", logs[0])
-    return float(m.group(1)) if m else float("nan")
+    return parse_seconds(f'#include "{stage.name}"\n'
+                         "camera { orthographic location <0, 0, -100> direction z right <40, 0, 0> up <0, 40, 0> }\n",
+                         stage.parent, size=4)
 
 
 def run_once(volume: Volume, w2d: np.ndarray, la, bits: int, args: argparse.Namespace) -> dict[str, float]:
@@ -63,7 +58,7 @@ def run_once(volume: Volume, w2d: np.ndarray, la, bits: int, args: argparse.Name
         t = time.perf_counter()
         stage, record = media_stage(volume, w2d, la, transfer="labels", bits=bits, folder=Path(tmp), step=args.step)
         staged = time.perf_counter() - t
-        parse = parse_seconds(stage)
+        parse = stage_parse_seconds(stage)
         t = time.perf_counter()
         result = run_method("multi-ortho", load_scene(stage), la, RenderSettings(quality=args.quality, use_cache=False))
         wall = time.perf_counter() - t

@@ -1,4 +1,5 @@
-"""What the benchmarks share: the load line of a table and writing it into docs/benchmarks.md."""
+"""What the benchmarks share: POV-Ray's parse time of a script, the load line of a table and
+writing it into docs/benchmarks.md."""
 
 from __future__ import annotations
 
@@ -7,6 +8,19 @@ import re
 from pathlib import Path
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
+
+
+def parse_seconds(script: str, folder: Path, size: int = 8) -> float:
+    """POV-Ray's own parse time (from its log) of ``script``, rendered tiny with ``folder`` on the
+    include path; NaN when the log does not say."""
+    from povh3d.povray.process import PovrayJob, run_jobs
+
+    job = PovrayJob(name="parse", script=script, width=size, height=size, include_dirs=(str(folder),),
+                    options=("-A", "+V"))
+    logs: list[str] = []
+    run_jobs([job], processes=1, on_result=lambda r: logs.append(r.log))
+    m = re.search(r"Parse Time:.*?\(([\d.]+) seconds\)", logs[0])
+    return float(m.group(1)) if m else float("nan")
 
 
 def markers(name: str) -> tuple[str, str]:
