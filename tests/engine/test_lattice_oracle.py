@@ -13,8 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from povh3d.engine.frames import build_script
-from povh3d.engine.methods import METHODS, display_header, run_method
+from povh3d.engine.methods import METHODS, run_method
 from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
 from povh3d.geometry.cameras import stack_frames
@@ -22,12 +21,10 @@ from povh3d.geometry.lattice import cross_lenticular_basis
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.presets import lens_array_from_fields
 from povh3d.geometry.rays import pixel_rays
-from povh3d.image.io import read_png
-from povh3d.povray.process import PovrayJob, find_povray, run_jobs
 from povh3d.scene.scene import load_scene
 
-from tests.engine.test_single_stage import write_position_plane
-from tests.support.scenes import checker_oracle, classify, write_checker_plane
+from tests.engine.test_single_stage import decode_positions, render_linear16, write_position_plane
+from tests.support.scenes import checker_oracle, classify, match, write_checker_plane
 
 PANEL = Panel(120, 90, 0.1, 0.1)
 PERIOD = 2.5
@@ -38,10 +35,6 @@ LATTICES = {"cross-6.34": cross_lenticular_basis(0.6, 0.6, 6.34), "skewed": ((0.
 def lattice(name: str) -> LensArray:
     """The lattice with as many lenses as cover the panel (the preset rule)."""
     return lens_array_from_fields({"lattice": LATTICES[name], "panel": [120, 90], "pixel_pitch": 0.1, "focal": 1.5})
-
-
-def match(got: np.ndarray, expected: np.ndarray, clear: np.ndarray) -> float:
-    return float(np.mean(got[clear] == expected[clear]))
 
 
 @pytest.mark.parametrize("name", LATTICES)
@@ -69,15 +62,8 @@ def test_every_lattice_ray_in_povray(tmp_path, z0):
     la, half = lattice("skewed"), 12.0  # code +-12 mm: 16-bit steps of 3.7e-4 mm
     plan = METHODS["multi-ortho"].plan(la, 10.0, np.zeros((1, 4)))
     scene = write_position_plane(tmp_path, z0, half)
-    script = build_script(plan.batch, plan.batch.frames, method="multi-ortho", scene_path=str(scene),
-                          add_assumed_gamma=False, header=display_header(la))
-    job = PovrayJob(name="positions", script=script, width=plan.batch.width, height=plan.batch.height,
-                    options=("-A",), bit_depth=16, file_gamma="1.0", read_files=(str(scene),))
-    out = []
-    run_jobs([job], processes=1, binary=find_povray(), on_result=lambda r: out.append(read_png(r.images[0])))
-    mesh = plan.batch.context["mesh"]
-    img = mesh.crop(stack_frames(out)).astype(np.float64) / 65535
-    hits = np.stack([img[..., 0], img[..., 1]], axis=-1) * (2 * half) - half
+    out = render_linear16(plan.batch, "multi-ortho", scene, la)
+    hits = decode_positions(plan.batch.context["mesh"].crop(stack_frames(out)), half)
     centres, dirs, inside = pixel_rays(la)
     expected = centres + dirs[..., :2] * (z0 / dirs[..., 2])[..., None]
     err = np.abs(hits - expected)[inside].max()

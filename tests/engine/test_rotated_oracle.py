@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from povh3d.engine.methods import run_method
@@ -24,7 +23,7 @@ from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
 from povh3d.scene.scene import load_scene
 
-from tests.support.scenes import checker_oracle, classify, write_checker_plane
+from tests.support.scenes import checker_oracle, classify, match, write_checker_plane
 
 PANEL = Panel(120, 90, 0.1, 0.1)
 PERIOD = 2.5
@@ -39,10 +38,6 @@ def array(grid: str, rotation: float) -> LensArray:
         return LensArray("hex", 24 if rotation else 19, 22 if rotation else 17, 0.6, 0.6 * math.sqrt(3) / 2,
                          1.5, PANEL, rotation)
     return LensArray("square", 24 if rotation else 20, 18 if rotation else 15, 0.6, 0.6, 1.5, PANEL, rotation)
-
-
-def match(image_classes: np.ndarray, expected: np.ndarray, clear: np.ndarray) -> float:
-    return float(np.mean(image_classes[clear] == expected[clear]))
 
 
 @pytest.mark.parametrize("method", ["multi-ortho", "single-stage"])

@@ -53,17 +53,26 @@ plane {{ z, {z0!r}
     return path
 
 
-def capture_positions(plan: SingleStagePlan, scene: Path, half: float = HALF) -> np.ndarray:
-    """Render the raw capture (no turn) in linear 16-bit; decode the (x, y) each ray hit."""
-    batch = plan.batch()
-    script = build_script(batch, batch.frames, method="single-stage", scene_path=str(scene),
-                          add_assumed_gamma=False, header=display_header(plan.lens_array))
+def render_linear16(batch, method: str, scene: Path, lens_array) -> list[np.ndarray]:
+    """Every frame of ``batch`` rendered raw: linear light, 16 bit, no antialiasing."""
+    script = build_script(batch, batch.frames, method=method, scene_path=str(scene),
+                          add_assumed_gamma=False, header=display_header(lens_array))
     job = PovrayJob(name="positions", script=script, width=batch.width, height=batch.height,
                     options=("-A",), bit_depth=16, file_gamma="1.0", read_files=(str(scene),))
     out = []
     run_jobs([job], processes=1, binary=find_povray(), on_result=lambda r: out.append(read_png(r.images[0])))
-    img = out[0].astype(np.float64) / 65535
+    return out
+
+
+def decode_positions(image: np.ndarray, half: float = HALF) -> np.ndarray:
+    """The (x, y) mm each ray hit on ``write_position_plane``'s plane, from its 16-bit colour."""
+    img = image.astype(np.float64) / 65535
     return np.stack([img[..., 0], img[..., 1]], axis=-1) * (2 * half) - half
+
+
+def capture_positions(plan: SingleStagePlan, scene: Path, half: float = HALF) -> np.ndarray:
+    """Render the raw capture (no turn) in linear 16-bit; decode the (x, y) each ray hit."""
+    return decode_positions(render_linear16(plan.batch(), "single-stage", scene, plan.lens_array)[0], half)
 
 
 @pytest.mark.parametrize("shape,ior", [("conic", None), ("conic", 1.5), ("spherical", None), ("spherical", 1.5)])

@@ -19,8 +19,7 @@ import math
 import numpy as np
 import pytest
 
-from povh3d.engine.frames import build_script
-from povh3d.engine.methods import METHODS, display_header, run_method
+from povh3d.engine.methods import METHODS, run_method
 from povh3d.engine.quality import RenderSettings
 from povh3d.engine.subpixel import subpixel_array, subpixel_image, subpixels_to_panel
 from povh3d.errors import ConfigError, Povh3dWarning
@@ -29,12 +28,10 @@ from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.phase_tiles import phase_tiles
 from povh3d.geometry.rays import pixel_rays
 from povh3d.image.colour import decode
-from povh3d.image.io import read_png
-from povh3d.povray.process import PovrayJob, find_povray, run_jobs
 from povh3d.scene.scene import load_scene
 
 from tests.geometry.test_rotated_lattice import simulate_lookup
-from tests.engine.test_single_stage import write_position_plane
+from tests.engine.test_single_stage import decode_positions, render_linear16, write_position_plane
 from tests.support.scenes import write_checker_plane
 
 # A slanted sheet: 4.5 px (13.5 subpixels) per lenticule at 9.46 deg, like the Philips panel.
@@ -94,14 +91,8 @@ def _subpixel_hits(tmp_path, la: LensArray, z0: float, half: float) -> np.ndarra
     plan = METHODS["subpixel"].plan(la, 10.0, np.zeros((1, 4)))
     mesh, tiles = _camera(la, 10.0)
     scene = write_position_plane(tmp_path, z0, half)
-    script = build_script(plan.batch, plan.batch.frames, method="subpixel", scene_path=str(scene),
-                          add_assumed_gamma=False, header=display_header(la))
-    job = PovrayJob(name="positions", script=script, width=plan.batch.width, height=plan.batch.height,
-                    options=("-A",), bit_depth=16, file_gamma="1.0", read_files=(str(scene),))
-    out = []
-    run_jobs([job], processes=1, binary=find_povray(), on_result=lambda r: out.append(read_png(r.images[0])))
-    img = subpixel_image(mesh, tiles, out).astype(np.float64) / 65535
-    return np.stack([img[..., 0], img[..., 1]], axis=-1) * (2 * half) - half
+    out = render_linear16(plan.batch, "subpixel", scene, la)
+    return decode_positions(subpixel_image(mesh, tiles, out), half)
 
 
 @SHEETS

@@ -68,6 +68,11 @@ def checker_oracle(lens_array: LensArray, z0: float, period: float,
     return parity.astype(int), inside & clear(hit[..., 0], half_x) & clear(hit[..., 1], half_y)
 
 
+def match(classes: np.ndarray, expected: np.ndarray, clear: np.ndarray) -> float:
+    """The share of ``clear`` pixels whose class (``classify``) is the oracle's (``checker_oracle``)."""
+    return float(np.mean(classes[clear] == expected[clear]))
+
+
 def classify(image: np.ndarray) -> np.ndarray:
     """0 where a pixel is nearer colour A, 1 where nearer B (8-bit sRGB image)."""
     lin = (image[..., :3].astype(float) / 255.0) ** 2.2
