@@ -65,8 +65,8 @@ class Hit:
     warnings: tuple[str, ...]
 
 
-def request_key(args: argparse.Namespace) -> str | None:
-    """The key of a ``povh3d render`` command line; None when it cannot use this cache."""
+def request_key(args: argparse.Namespace, output: Path) -> str | None:
+    """The key of a ``povh3d render`` command line writing ``output``; None when it cannot use this cache."""
     fields = vars(args)
     if fields.get("no_cache") or any(fields.get(name) for name in _UNCACHED) or is_mesh_file(args.scene) \
             or is_volume_source(args.scene):
@@ -79,7 +79,6 @@ def request_key(args: argparse.Namespace) -> str | None:
     if scene.computed_names:
         return None
     options = {k: v for k, v in fields.items() if k not in _IGNORED}
-    output = args.output or Path(args.scene).stem + "-h3d.png"
     options.update(scene=str(scene.path), include=[str(d) for d in scene.include_dirs],
                    output=os.path.abspath(output))
     parts = {"povh3d": [__version__, _code_stamp()], "options": options, "scene": scene.digest,

@@ -53,7 +53,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
         method_options["sheet_shift_mm"] = display["sheet"]["shift_mm"]
     return RenderRequest(
         source=Path(args.scene), lens_array=lens_array,
-        output=Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png"),
+        output=output_path(args),
         display=display, method=args.method, method_options=method_options, settings=settings,
         crop=CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None),
         mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
@@ -141,11 +141,16 @@ def _method_options(args: argparse.Namespace) -> dict[str, Any]:
     return options
 
 
+def output_path(args: argparse.Namespace) -> Path:
+    """-o, or SCENE-h3d.png in the current folder."""
+    return Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png")
+
+
 def cmd_render(args: argparse.Namespace) -> int:
     from ..app import output_cache
 
-    key = output_cache.request_key(args)
-    output = Path(args.output) if args.output else Path(Path(args.scene).stem + "-h3d.png")
+    output = output_path(args)
+    key = output_cache.request_key(args, output)
     if key is not None:
         start = time.perf_counter()
         hit = output_cache.answer(key, output)
@@ -156,7 +161,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     with _warnings_kept() as given:
         summary = _render(args)
     # A scene edited while it rendered: the image is of neither version's key.
-    if key is not None and summary is not None and output_cache.request_key(args) == key:
+    if key is not None and summary is not None and output_cache.request_key(args, output) == key:
         output_cache.keep(key, output, summary[0], summary[1] + given)
     return 0
 
