@@ -7,9 +7,9 @@ import argparse
 from typing import Any
 
 from ..errors import ConfigError
-from .options import add_array_options, lens_array_from_args, parse_pair, warn
-from .render import parse_triple, add_frame_options, frame_options_from_args
-from .volume import parse_numbers, add_volume_source_options
+from .options import add_array_options, lens_array_from_args, parse_numbers, parse_pair, parse_triple, warn
+from .render import add_frame_options, frame_options_from_args
+from .volume import add_volume_source_options
 
 
 

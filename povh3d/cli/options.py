@@ -33,6 +33,28 @@ def parse_pair(text: str, option: str, *, integral: bool) -> tuple[float, float]
     return tuple(values) if len(values) == 2 else values[0]
 
 
+def parse_numbers(text: str | None, option: str, kind: type = float) -> tuple[Any, ...] | None:
+    if text is None:
+        return None
+    try:
+        return tuple(kind(v) for v in text.split(","))
+    except ValueError:
+        raise ConfigError(f"{option} takes comma-separated {'whole ' if kind is int else ''}numbers, got "
+                          f"{text!r}") from None
+
+
+def parse_triple(text: str | None, option: str) -> tuple[float, float, float] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
+        raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
 def add_array_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("display and lens array (override the preset field by field)")
     g.add_argument("--preset", default="demo", help="display preset (default: demo; see 'povh3d presets')")

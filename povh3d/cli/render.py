@@ -15,7 +15,7 @@ from typing import Any
 from ..errors import ConfigError, Povh3dWarning
 from .volume import add_volume_options, volume_options_from_args
 from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args, positive_int,
-                      mapping_from_args, max_triangles, progress_bar, warn)
+                      mapping_from_args, max_triangles, parse_triple, progress_bar, warn)
 
 METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage", "subpixel")
 QUALITY_NAMES = ("draft", "normal", "high", "auto")
@@ -97,18 +97,6 @@ def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str
     return sheet, {**display, "sheet": {**record, "calibration": str(Path(args.calibration).resolve())}}
 
 
-def parse_triple(text: str | None, option: str) -> tuple[float, float, float] | None:
-    if text is None:
-        return None
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
-        raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
-    return values  # type: ignore[return-value]
-
-
 def frame_options_from_args(args: argparse.Namespace) -> Any:
     """``FrameOptions`` from --display-frame and the explicit --display-* options."""
     from ..app.frame import FrameOptions
@@ -126,7 +114,8 @@ def frame_options_from_args(args: argparse.Namespace) -> Any:
         except ValueError:
             raise ConfigError(f"--depth-scale takes a factor (e.g. 0.5) or nothing, got {scale!r}") from None
     return FrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
-                        parse_triple(args.display_normal, "--display-normal"), parse_triple(args.display_up, "--display-up"),
+                        parse_triple(args.display_normal, "--display-normal"),
+                        parse_triple(args.display_up, "--display-up"),
                         args.display_width, fit, scale)
 
 

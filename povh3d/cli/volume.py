@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ..errors import ConfigError
+from .options import parse_numbers
 
 
 def add_volume_options(p: argparse.ArgumentParser) -> None:
@@ -31,16 +31,6 @@ def add_volume_source_options(g: Any) -> None:
                    help="radiological view (default coronal: the patient faces you, their left on your right)")
     g.add_argument("--spacing", metavar="SX,SY,SZ", help="voxel size in mm (needed by .npy)")
     g.add_argument("--series", metavar="UID", help="the DICOM series to read from a folder holding several")
-
-
-def parse_numbers(text: str | None, option: str, kind: type = float) -> tuple[Any, ...] | None:
-    if text is None:
-        return None
-    try:
-        return tuple(kind(v) for v in text.split(","))
-    except ValueError:
-        raise ConfigError(f"{option} takes comma-separated {'whole ' if kind is int else ''}numbers, got "
-                          f"{text!r}") from None
 
 
 def volume_options_from_args(args: argparse.Namespace, rotate: Any) -> Any:
