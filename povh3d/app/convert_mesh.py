@@ -14,6 +14,7 @@ import os
 import time
 from dataclasses import dataclass, field
 from collections.abc import Callable
+from typing import Any, NamedTuple
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ from ..errors import ConfigError, InputError, warn
 from ..image.io import atomic_path, write_png
 from ..mesh.clean import CleanReport, clean_part, vertex_normals
 from ..mesh.identifiers import check_identifier, identifier_from_path
-from ..mesh.load import Part, load_model
+from ..mesh.load import LoadedModel, Part, load_model
 from ..mesh.write import include_text, mesh2_text
 
 SHADING = ("auto", "smooth", "flat")
@@ -108,6 +109,43 @@ def _warnings(report: CleanReport, parts: list[Part], missing: list[str], notes:
     return out
 
 
+class TurnedModel(NamedTuple):
+    """A model read, cleaned and turned: what ``turned_parts`` gives."""
+
+    loaded: LoadedModel          # as read (files, missing textures, the reader's warnings)
+    parts: list[Part]            # cleaned, without empty parts, turned
+    clean: CleanReport           # what cleaning did
+    up: str                      # the up axis taken
+    up_reason: str               # and why
+
+
+def turned_parts(model: Path, *, unit: str | None = None, up: str | None = None, rotate: Any = None,
+                 step: Callable[[int, int], None] = lambda done, total: None) -> TurnedModel:
+    """The model read, cleaned and turned up (``--up``, else the format's or detected), then by ``rotate``."""
+    loaded = load_model(model, unit=unit)
+    step(1, 4)
+    parts: list[Part] = []
+    report = CleanReport()
+    for raw in loaded.parts:
+        part, r = clean_part(raw, merge=loaded.format.soup)
+        report = report + r
+        if len(part.faces):
+            parts.append(part)
+    if not parts:
+        dropped = report.nonfinite_faces + report.degenerate_faces
+        why = f" (all {dropped} were dropped as non-finite or degenerate)" if dropped else ""
+        raise InputError(f"{str(model)!r} contains no triangles{why}; check the export")
+
+    step(2, 4)
+    from ..mesh.orient import detect_up, reorient
+
+    if up is None:
+        up, up_reason = detect_up(model.suffix, *model_bounds(parts))
+    else:
+        up_reason = "--up"
+    return TurnedModel(loaded, reorient(parts, up, rotate), report, up, up_reason)
+
+
 def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: str | None = None,
                  unit: str | None = None, shading: str = "auto", fit_depth: float | None = None,
                  center: bool = False, max_triangles: int | None = None, up: str | None = None,
@@ -149,28 +187,7 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
 
     step = progress or (lambda done, total: None)
     step(0, 4)
-    loaded = load_model(model, unit=unit)
-    step(1, 4)
-    parts: list[Part] = []
-    report = CleanReport()
-    for raw in loaded.parts:
-        part, r = clean_part(raw, merge=loaded.format.soup)
-        report = report + r
-        if len(part.faces):
-            parts.append(part)
-    if not parts:
-        dropped = report.nonfinite_faces + report.degenerate_faces
-        why = f" (all {dropped} were dropped as non-finite or degenerate)" if dropped else ""
-        raise InputError(f"{str(model)!r} contains no triangles{why}; check the export")
-
-    step(2, 4)
-    from ..mesh.orient import detect_up, reorient
-
-    if up is None:
-        up, up_reason = detect_up(model.suffix, *model_bounds(parts))
-    else:
-        up_reason = "--up"
-    parts = reorient(parts, up, rotate)
+    loaded, parts, report, up, up_reason = turned_parts(model, unit=unit, up=up, rotate=rotate, step=step)
     simplification = None
     if max_triangles is not None and sum(p.triangles for p in parts) > max_triangles:
         from ..mesh.simplify import simplify_parts

@@ -138,21 +138,11 @@ def _grid_faces(z: np.ndarray, step: float, budget: float) -> np.ndarray:
 def model_content(path: Path, lens_array: LensArray, *, depth: float | None = None, up: str | None = None,
                   rotate: Any = None, unit: str | None = None) -> Content:
     """The model's triangles, turned and placed as the default stage (``app.stage``) places them."""
-    from ..mesh.clean import clean_part
-    from ..mesh.load import load_model
-    from ..mesh.orient import detect_up, reorient
-    from .convert_mesh import model_bounds
+    from .convert_mesh import model_bounds, turned_parts
 
     if not path.is_file():
         raise InputError(f"model file {str(path)!r} does not exist; check the path")
-    loaded = load_model(path, unit=unit)
-    parts = [p for p in (clean_part(raw, merge=loaded.format.soup)[0] for raw in loaded.parts) if len(p.faces)]
-    if not parts:
-        raise InputError(f"{str(path)!r} contains no triangles; check the export")
-    reason = "--up"
-    if up is None:
-        up, reason = detect_up(path.suffix, *model_bounds(parts))
-    parts = reorient(parts, up, rotate)
+    _, parts, _, up, reason = turned_parts(path, unit=unit, up=up, rotate=rotate)
     lo, hi = model_bounds(parts)
     placement = fit_to_display(lo, hi, lens_array, depth=depth)
     offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
