@@ -203,14 +203,10 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
                    depth: float | None = None, iso: tuple[float, ...] | None = None) -> Content:
     """A volume's physical box, turned by the orientation preset and ``rotate``, fitted to the display,
     with a coarse surface of what it holds (``volume_shape``)."""
-    from ..volume.orient import display_box, volume_to_display, world_to_display
+    from .volume import place_volume
 
-    matrix = volume_to_display(orientation, rotate)
-    corners = volume.corners()
-    lo, hi = display_box(corners, matrix)
-    placement = fit_to_display(lo, hi, lens_array, depth=depth)
-    m = world_to_display(matrix, placement.shift, placement.scale)
-    box = corners @ m[:3, :3].T + m[:3, 3]
+    _, placement, m = place_volume(volume, lens_array, orientation, rotate, depth)
+    box = volume.corners() @ m[:3, :3].T + m[:3, 3]
     centre = box.mean(axis=0)
     # The patient's directions (LPS: +x left, +y posterior, +z superior) at the box's faces.
     half = np.abs((box - centre) @ np.linalg.inv(m[:3, :3]).T).max(axis=0)

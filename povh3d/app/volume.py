@@ -65,6 +65,15 @@ def what_to_draw(volume: Volume, options: VolumeOptions) -> tuple[str, list[str]
                       "(a surface at that value), --labels (a segmentation) or --volume (a medium)")
 
 
+def place_volume(volume: Volume, lens_array: LensArray, orientation: str, rotate: Any = None,
+                 depth: float | None = None) -> tuple[np.ndarray, Any, np.ndarray]:
+    """The volume turned (orientation preset, then ``rotate``) and its physical box fitted to the display:
+    the turn (3, 3), the ``Placement`` and the world-to-display matrix (4, 4)."""
+    matrix = volume_to_display(orientation, rotate)
+    placement = fit_to_display(*display_box(volume.corners(), matrix), lens_array, depth=depth)
+    return matrix, placement, world_to_display(matrix, placement.shift, placement.scale)
+
+
 def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: VolumeOptions | None = None, *,
                          depth: float | None = None, max_triangles: int | str | None = None,
                          cache_dir: Path | None = None) -> tuple[Path, dict[str, Any]]:
@@ -86,9 +95,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     kind, notes = what_to_draw(volume, options)
     for note in notes:
         warn(note)
-    matrix = volume_to_display(options.orientation, options.rotate)
-    placement = fit_to_display(*display_box(volume.corners(), matrix), lens_array, depth=depth)
-    to_display = world_to_display(matrix, placement.shift, placement.scale)
+    matrix, placement, to_display = place_volume(volume, lens_array, options.orientation, options.rotate, depth)
     digest = volume_digest(volume)
     record: dict[str, Any] = {
         "volume": volume.describe(), "source": str(source), "draw": kind, "orientation": options.orientation,
