@@ -32,7 +32,6 @@ from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
 from .records import base_record, png_output, write_image
 from .stage import FILL, depth_budget_mm, fit_to_display
 
-VOLUME_SUFFIXES = (".vti", ".vtk", ".nrrd", ".nhdr", ".mha", ".mhd", ".nii", ".nii.gz", ".npy", ".dcm")
 SCENE_SUFFIXES = (".pov",)
 MIN_SIZE, MAX_SIZE = 200, 8000   # picture pixels on a side
 #: What the share outside the depth budget is a share of.
@@ -72,13 +71,14 @@ class Content:
 def source_kind(path: Path) -> str:
     """'scene', 'model' or 'volume', from the name; a ConfigError listing the kinds otherwise."""
     from ..mesh.formats import is_mesh_file
+    from ..volume.sources import SUFFIXES as VOLUME_SUFFIXES, is_volume_source
 
     name = path.name.lower()
     if name.endswith(SCENE_SUFFIXES):
         return "scene"
     if is_mesh_file(str(path)):
         return "model"
-    if path.is_dir() or name.endswith(VOLUME_SUFFIXES):
+    if is_volume_source(path):
         return "volume"
     raise ConfigError(f"cannot tell what {path.name!r} is: give a POV-Ray scene (.pov), a mesh model "
                       f"(.obj .stl .ply ...) or a volume ({' '.join(VOLUME_SUFFIXES)}, a DICOM folder)")

@@ -56,14 +56,17 @@ def cmd_info(args: argparse.Namespace) -> int:
     if args.mapping:
         mapping, panel = mapping_from_args(args, lens_array, display)
         info.update(mapping.figures(panel))
-    if args.scene and _is_scene(args.scene):  # where the display sits in this scene, its depth against the budget
-        from ..app.placement import scene_report
+    from ..mesh.formats import is_mesh_file
+    from ..volume.sources import is_volume_source
 
-        info["scene"] = scene_report(args.scene, lens_array)
-    elif args.scene:  # a model or a volume: as the default stage places it
+    if args.scene and (is_mesh_file(args.scene) or is_volume_source(args.scene)):  # as the stage places it
         from ..app.layout import content_report
 
         info["content"] = content_report(args.scene, lens_array)
+    elif args.scene:  # where the display sits in this scene, its depth against the budget
+        from ..app.placement import scene_report
+
+        info["scene"] = scene_report(args.scene, lens_array)
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -78,10 +81,6 @@ def cmd_info(args: argparse.Namespace) -> int:
     if "content" in info:
         _print_content(info["content"])
     return 0
-
-
-def _is_scene(source: str) -> bool:
-    return source.lower().endswith((".pov", ".inc"))
 
 
 def _print_content(report: dict) -> None:
