@@ -159,7 +159,7 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
     else:
         resampled = _resampled_array(input_path, result.shape[:2], ppl_out)
         if resampled is not None:
-            record["lens_array"] = resampled.describe()
+            record["lens_array"] = resampled.as_record()
     write_image(out, result, record)
     return record
 
@@ -168,13 +168,13 @@ def _resampled_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tu
     """The input's lens array with ``ppl_out`` pixels under each lens (same lenses, same
     physical panel), or None when the input has none or it does not fit ``shape``."""
     from ..geometry.lens_array import LensArray
-    from ..geometry.presets import lens_array_from_record
+    from .display_setup import Display
 
-    side = (read_sidecar(input_path) or {}).get("lens_array")
-    if not side:
+    side = read_sidecar(input_path) or {}
+    if not side.get("lens_array"):
         return None
     try:
-        a = lens_array_from_record(side)
+        a = Display.from_record(side).lens_array
         ny, nx = ppl_out
         panel = Panel(a.lenses_x * nx, a.lenses_y * ny if a.grid != "lenticular" else a.panel.height,
                       a.pitch_x / nx, a.pitch_y / ny if a.grid != "lenticular" else a.panel.pitch_y)
@@ -318,38 +318,3 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     with atomic_path(output.with_suffix(".json")) as tmp:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
     return record
-
-
-
-# -- the display a mapping is for --------------------------------------------------------------------
-def mapping_for_display(name: str, display: dict[str, Any], lens_array: Any, *,
-                        calibration_path: str | None = None, **options: Any) -> tuple[Mapping, Panel]:
-    """The mapping ``name`` for the display of a preset or CLI lens array, and its physical panel.
-
-    Presets with a mapping (alioscopy-42, philips-20) describe the view-space
-    array; their physical panel is in ``display['physical_panel']``.
-    """
-    from ..mappings import build_mapping, options_from_display
-
-    phys = display.get("physical_panel")
-    if phys:
-        (w, h), (sx, sy) = phys["size_px"], phys["pixel_pitch_mm"]
-        panel = Panel(int(w), int(h), float(sx), float(sy))
-    else:
-        panel = lens_array.panel
-    fields = {k: display[k] for k in ("slant_deg", "views") if display.get(k) is not None}
-    fields.update(lens_pitch=lens_array.pitch_x, pixel_pitch=panel.pitch_x)
-    if calibration_path is not None:
-        options["calibration"] = read_calibration(calibration_path)
-    opts = options_from_display(fields, lens_array.pitch_x / panel.pitch_x, **options)
-    return build_mapping(name, opts), panel
-
-
-def read_calibration(path: str | Path) -> Any:
-    """A calibration file's JSON (``map --calibration``, ``render --method subpixel --calibration``)."""
-    try:
-        return json.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"cannot read the calibration {str(path)!r}: {exc.strerror}") from None
-    except ValueError as exc:
-        raise InputError(f"the calibration {str(path)!r} is not JSON: {exc}") from None

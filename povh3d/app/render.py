@@ -140,17 +140,18 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if h3d.shape[:2] != expected:  # a bug, never the user's doing
         raise RuntimeError(f"{request.method} produced {h3d.shape[:2]}, expected {expected}")
 
-    timings = {"render_seconds": round(seconds, 4), **result.stats.as_dict()}
+    timings = {"render_seconds": round(seconds, 4), **result.stats.as_record()}
     record = base_record(
-        "h3d", array, method=request.method, display=dict(request.display), scene=str(scene.path),
+        "h3d", method=request.method, scene=str(scene.path),
         scene_sha256=scene.digest,
         quality={**quality_record(settings, result.quality), "bit_depth": settings.bit_depth,
                  "front_clearance_mm": result.back_off},
         output_gamma="sRGB", povray_version=result.stats.povray_version,
         sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
     )
+    record.update(request.display.as_record())  # the sidecar's lens_array and display entries
     if auto is not None:
-        record["quality"].update(level="auto", auto=auto.as_dict())
+        record["quality"].update(level="auto", auto=auto.as_record())
     if result.record is not None:
         record[request.method.replace("-", "_")] = result.record
     if result.crop is not None:
@@ -169,9 +170,10 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
              "frame (--display-*) or the model's units and orientation (--unit, --up); a scene without a "
              f"camera is modelled in mm around z = 0, viewer on -z, the display spanning {w:.4g} x {h:.4g} mm")
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
-    if request.mapping is not None:
-        h3d = request.mapping.apply(h3d, request.image_size)
-        record.update(kind="panel", mapping=request.mapping.name, size_px=list(request.image_size))
+    mapping = request.display.mapping
+    if mapping is not None:
+        h3d = mapping.apply(h3d, request.image_size)
+        record.update(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
     return Frame(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
 
 

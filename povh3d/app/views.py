@@ -13,10 +13,10 @@ import numpy as np
 
 from ..errors import ConfigError, InputError, OutputError
 from ..geometry.lens_array import LensArray
-from ..geometry.presets import lens_array_from_record
 from ..image.elemental import extract_views, view_grid
 from ..image.interleave import extract, interleave
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from .display_setup import Display
 from .records import base_record, png_output, write_image
 
 VIEW_NAME = "v_{l:03d}_{k:03d}.png"
@@ -142,7 +142,7 @@ def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | P
     record = read_sidecar(h3d_path)
     if not record or "lens_array" not in record:
         raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
-    lens_array = lens_array_from_record(record["lens_array"])
+    lens_array = Display.from_record(record).lens_array
     if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
         raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
                          f"{lens_array.panel.width}x{lens_array.panel.height} panel; re-render it")

@@ -50,7 +50,7 @@ class RenderStats:
     wall_seconds: float = 0.0
     povray_version: str = ""
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, Any]:
         return {"frames": self.frames, "frames_from_cache": self.cached, "povray_jobs": self.jobs,
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),

@@ -106,7 +106,7 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, back
         info["coverage_fraction"] = round(float(mask.mean()), 6)
     info["plan_seconds"] = round(time.perf_counter() - start, 4)
     plan = plan_crop(col_hits, row_hits, crop.margin, block)
-    info.update(plan.describe())
+    info.update(plan.as_record())
     if plan.is_full:
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
 

@@ -110,7 +110,7 @@ def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *
         raise ConfigError("--method single-stage builds square, hex and lenticular lenslets, not a general "
                           "lattice (--lattice); render it with --method multi-ortho")
     plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off, supersample)
-    return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
+    return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.as_record())
 
 
 def single_stage_supersamples(quality: Quality) -> int:
@@ -151,7 +151,7 @@ def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray, *, su
     outside = uncovered(sub, shift) if tiles is not None else None
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
                       lambda images: subpixel.assemble(meshes[0], tiles, images, outside),
-                      subpixel.describe(lens_array, tiles, len(meshes), shift))
+                      subpixel.sheet_record(lens_array, tiles, len(meshes), shift))
 
 
 @dataclass(frozen=True)

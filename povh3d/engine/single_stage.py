@@ -385,9 +385,9 @@ class SingleStagePlan:
                 out[l, k] = views[l, k, i0:i0 + la.lenses_y, j0:j0 + la.lenses_x]
         return interleave(out)
 
-    def describe(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, Any]:
         cap = self.capture_array
-        return {"lenslet": self.lenslet.describe(), "focal_plane_z_mm": -self.depth,
+        return {"lenslet": self.lenslet.as_record(), "focal_plane_z_mm": -self.depth,
                 "principal_plane_z_mm": -self.depth - self.lenslet.focal,
                 "capture_lenses": [cap.lenses_x, cap.lenses_y],
                 "capture_size_px": [cap.panel.width * self.camera_supersample,

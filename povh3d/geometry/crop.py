@@ -125,7 +125,7 @@ class CropPlan:
         """(n, 4) int: ``(view l, first lens row, stop, cropped-image row)`` of each kept run."""
         return _segments(self.keep_rows, self.lenses[1])
 
-    def describe(self) -> dict:
+    def as_record(self) -> dict:
         return {"traced_fraction": round(self.fraction, 6), "size_px": list(self.size),
                 "full_size_px": list(self.full_size)}
 

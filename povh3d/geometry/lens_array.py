@@ -340,7 +340,7 @@ class LensArray:
         """3D pixels per inch, horizontal and vertical."""
         return (25.4 / self.pitch_x, 25.4 / self.pitch_y)
 
-    def describe(self) -> dict:
+    def as_record(self) -> dict:
         """Plain values for JSON sidecars and ``povh3d info``."""
         out: dict = {
             "grid": self.grid,

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import ConfigError
 
 if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
-    from .lens_array import LensArray
+    from .lens_array import LensArray, Panel
 
 FIELDS = ("description", "grid", "panel", "pixel_pitch", "lens_pitch", "ppl", "lenses",
           "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation", "lattice")
@@ -282,23 +282,11 @@ def _length(value: float) -> None:
                           "check --pixel-pitch and --ppl")
 
 
-def describe_fields(fields: dict[str, Any]) -> dict[str, Any]:
-    """The display fields that are not geometry (mapping, slant, physical panel)."""
-    out = {k: fields[k] for k in ("description", "views", "slant_deg", "mapping") if k in fields}
-    if "panel" in fields and fields.get("mapping"):
-        sx, sy = _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
-        out["physical_panel"] = {"size_px": list(fields["panel"]), "pixel_pitch_mm": [sx, sy]}
-    return out
+def physical_panel(fields: dict[str, Any]) -> Panel | None:
+    """The physical panel of a preset whose array is its mapping's view space (a ``mapping`` field), else None."""
+    from .lens_array import Panel
 
-
-def lens_array_from_record(record: dict[str, Any]) -> LensArray:
-    """The LensArray a sidecar's ``lens_array`` entry (``LensArray.describe()``) describes."""
-    from .lens_array import LensArray, Panel
-
-    try:
-        panel = Panel(*record["panel"]["size_px"], *record["panel"]["pixel_pitch_mm"])
-        return LensArray(record["grid"], *record["lenses"], *record["lens_pitch_mm"], record["focal_mm"], panel,
-                         record.get("rotation_deg", 0.0),
-                         tuple(map(tuple, record["lattice_mm"])) if "lattice_mm" in record else None)
-    except (KeyError, TypeError) as exc:
-        raise ConfigError(f"the sidecar's lens array is incomplete ({exc}); give --ppl NxxNy") from None
+    if "panel" not in fields or not fields.get("mapping"):
+        return None
+    (w, h), (sx, sy) = fields["panel"], _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
+    return Panel(int(w), int(h), float(sx), float(sy))

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from povh3d.app.display_setup import Display
 from povh3d.app.frame import FrameOptions, resolve_frame
 from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
@@ -216,7 +217,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
 
     scene, array = load_scene(GALLERY / "tilted.pov"), small_array()
     settings = RenderSettings(quality="draft", cache_dir=tmp_path)
-    request = RenderRequest(source=scene.path, lens_array=array, output=tmp_path / "o.png", settings=settings)
+    request = RenderRequest(source=scene.path, display=Display(array), output=tmp_path / "o.png", settings=settings)
     monkeypatch.setattr(placement, "depth_pass", None)   # a separate pass would fail: none is run
     _, record = placement.place_display(request, scene)
     again = placement.place_display(request, scene)[1]

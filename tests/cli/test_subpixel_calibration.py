@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from povh3d.app.calibration import calibrate_lenticular_file
-from povh3d.app.display import mapping_for_display
+from povh3d.app.display_setup import mapping_for_display
 from povh3d.cli.main import build_parser
-from povh3d.cli.options import lens_array_from_args
+from povh3d.cli.options import display_from_args
 from povh3d.cli.render import request_from_args
 from povh3d.engine.calibrated_sheet import calibrated_sheet
 from povh3d.engine.methods import METHODS
@@ -62,7 +62,7 @@ def render_sheet(scene, *args):
     """The sheet, its shift and the display record ``povh3d render --method subpixel ARGS`` traces."""
     parsed = build_parser().parse_args(["render", str(scene), "--method", "subpixel", *map(str, args)])
     request = request_from_args(parsed)
-    return request.lens_array, request.method_options["sheet_shift_mm"], request.display
+    return request.display.lens_array, request.method_options["sheet_shift_mm"], request.display
 
 
 def files(tmp_path):
@@ -80,9 +80,8 @@ def test_render_and_map_address_one_sheet(tmp_path):
     for name, path, display_args in files(tmp_path):
         sheet, shift, display = render_sheet(scene, *display_args, "--calibration", path)
         parsed = build_parser().parse_args(["render", str(scene), *display_args])
-        la, disp = lens_array_from_args(parsed)
-        mapping, panel = mapping_for_display("slanted", disp, la, calibration_path=str(path), views=7)
-        assert display["sheet"]["mapping_offset"] == pytest.approx(mapping.offset, abs=1e-9), name
+        mapping, panel = mapping_for_display("slanted", display_from_args(parsed), calibration=path, views=7)
+        assert display.sheet["mapping_offset"] == pytest.approx(mapping.offset, abs=1e-9), name
         lens, across = sheet_phase(sheet, shift)
         m_lens, _, frac = mapping.phases((panel.width, panel.height))
         centre = (frac * mapping.per_lens / mapping.views + 0.5) / mapping.per_lens  # the mapping's, 0..1
@@ -233,8 +232,7 @@ def test_every_calibrated_ray_through_the_lookup(tmp_path, rational):
         path, display_args = pixel_file(tmp_path / "i.json", (60, 30), 4.37, 11.3, -1.62), PLAIN
     sheet, shift, _ = render_sheet(scene, *display_args, "--calibration", path)
     parsed = build_parser().parse_args(["render", str(scene), *display_args])
-    la, disp = lens_array_from_args(parsed)
-    mapping, panel = mapping_for_display("slanted", disp, la, calibration_path=str(path), views=5)
+    mapping, panel = mapping_for_display("slanted", display_from_args(parsed), calibration=path, views=5)
     sub = subpixel_array(sheet)
     tiles = phase_tiles(sub)
     assert (tiles is not None) == rational and shift != 0
