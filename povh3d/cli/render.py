@@ -95,7 +95,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     from ..app import output_cache
 
     output = output_path(args)
-    key = output_cache.request_key(args, output)
+    options = {k: v for k, v in vars(args).items() if k not in ("scene", "include", "output")}
+    key = output_cache.request_key(args.scene, output, options, args.include)
     if key is not None:
         start = time.perf_counter()
         hit = output_cache.answer(key, output)
@@ -106,7 +107,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     with _warnings_kept() as given:
         summary = _render(args)
     # A scene edited while it rendered: the image is of neither version's key.
-    if key is not None and summary is not None and output_cache.request_key(args, output) == key:
+    if key is not None and summary is not None and output_cache.request_key(args.scene, output, options, args.include) == key:
         output_cache.keep(key, output, summary[0], summary[1] + given)
     return 0
 

@@ -160,6 +160,26 @@ def test_povray_traces_the_calibrated_rays(cli, tmp_path):
     assert _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center + 0.25) > 10 * worst
 
 
+def test_the_python_api_makes_the_calibrated_render(tmp_path):
+    """``povh3d.render(..., method="subpixel", calibration=FILE)``: the same calibrated sheet as the
+    command line's, through the one display builder (same oracle and control as above)."""
+    import povh3d
+
+    z0, half, size, pixel_mm, focal = 3.0, 12.0, (60, 30), 0.1, 1.0
+    pitch_px, slant, center = 4.37, 11.3, 0.37
+    cal = looking_glass_file(tmp_path / "visual.json", size, pixel_mm, pitch_px, slant, center)
+    scene = write_position_plane(tmp_path, z0, half)
+    out = tmp_path / "api.png"
+    array = povh3d.presets.lens_array("demo", panel=list(size), pixel_pitch=pixel_mm, focal=focal)
+    record = povh3d.render(scene, out, lens_array=array, method="subpixel", calibration=cal, quality="draft",
+                           bit_depth=16, use_cache=False)
+    assert record["display"]["sheet"]["from_calibration"] and record["subpixel"]["sheet_shift_mm"] != 0
+    coded = decode(read_png(out)) * 2 * half - half
+    worst = _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center)
+    assert worst < 0.01, f"worst subpixel {worst:.4f} mm off"
+    assert _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center + 0.25) > 10 * worst
+
+
 def _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center):
     """Worst miss (mm) of the red x and green y against the rays of the Looking Glass shader.
 
