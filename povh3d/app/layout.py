@@ -92,19 +92,19 @@ def scene_content(path: Path, lens_array: LensArray, frame_options: Any = None, 
     from ..engine.methods import get_method
     from ..engine.quality import RenderSettings
     from ..scene.scene import load_scene
-    from .frame import FrameOptions
+    from .frame import DisplayFrameOptions
     from .placement import place_display
     from .request import RenderRequest
 
     scene = load_scene(path, include_dirs)
     request = RenderRequest(source=path, display=Display(lens_array), output=Path("layout.png"),
                             settings=RenderSettings(use_cache=use_cache), include_dirs=include_dirs,
-                            display_frame=frame_options or FrameOptions())
+                            display_frame=frame_options or DisplayFrameOptions())
     placed, record = place_display(request, scene)
     s = placed.settings
     units = float(record.get("units_per_mm", 1.0))
-    back_off = s.back_off or get_method(placed.method).default_back_off(lens_array)
-    depth = depth_pass(scene, lens_array, s, back_off, units)
+    front_clearance = s.front_clearance or get_method(placed.method).default_front_clearance(lens_array)
+    depth = depth_pass(scene, lens_array, s, front_clearance, units)
     points = depth_points(depth.z, depth.width_mm, depth.height_mm)
     faces = _grid_faces(depth.z, depth.width_mm / depth.z.shape[1], depth_budget_mm(lens_array))
     summary = depth.summary(depth_budget_mm(lens_array))

@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 
 from .options import add_array_options, display_from_args, parse_numbers, parse_size, parse_triple, warn
-from .render import add_frame_options, frame_options_from_args
+from .render import add_frame_options, display_frame_options_from_args
 from .volume import add_volume_source_options
 
 
@@ -23,7 +23,7 @@ def cmd_layout(args: argparse.Namespace) -> int:
     volume: dict[str, Any] = {"orientation": args.orientation, "rotate": rotate, "depth": args.depth,
                               "spacing": spacing, "series": args.series, "iso": parse_numbers(args.iso, "--iso")}
     record = layout(args.source, args.output, display.lens_array, display=display,
-                    frame_options=frame_options_from_args(args),
+                    frame_options=display_frame_options_from_args(args),
                     include_dirs=tuple(args.include), model=model, volume=volume, size=size,
                     use_cache=not args.no_cache)
     warn(record["content"].get("warnings", []))

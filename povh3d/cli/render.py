@@ -31,7 +31,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
     display = display_from_args(args, method=args.method, mapped=True)
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
                               timeout=args.timeout, use_cache=not args.no_cache,
-                              bit_depth=args.bit_depth, back_off=args.front_clearance,
+                              bit_depth=args.bit_depth, front_clearance=args.front_clearance,
                               scheduler=args.scheduler, max_error_db=args.max_error)
     frames = None
     if args.frames is not None:
@@ -48,14 +48,14 @@ def request_from_args(args: argparse.Namespace) -> Any:
         model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles), args.up,
                            parse_triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
-        display_frame=frame_options_from_args(args),
+        display_frame=display_frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
         volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")))
 
 
-def frame_options_from_args(args: argparse.Namespace) -> Any:
-    """``FrameOptions`` from --display-frame and the explicit --display-* options."""
-    from ..app.frame import FrameOptions
+def display_frame_options_from_args(args: argparse.Namespace) -> Any:
+    """``DisplayFrameOptions`` from --display-frame and the explicit --display-* options."""
+    from ..app.frame import DisplayFrameOptions
 
     fit = args.fit_depth
     if fit is not None and fit != "auto":
@@ -69,7 +69,7 @@ def frame_options_from_args(args: argparse.Namespace) -> Any:
             scale = float(scale)
         except ValueError:
             raise ConfigError(f"--depth-scale takes a factor (e.g. 0.5) or nothing, got {scale!r}") from None
-    return FrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
+    return DisplayFrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
                         parse_triple(args.display_normal, "--display-normal"),
                         parse_triple(args.display_up, "--display-up"),
                         args.display_width, fit, scale)
@@ -107,7 +107,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     with _warnings_kept() as given:
         summary = _render(args)
     # A scene edited while it rendered: the image is of neither version's key.
-    if key is not None and summary is not None and output_cache.request_key(args.scene, output, options, args.include) == key:
+    if key is not None and summary is not None and \
+            output_cache.request_key(args.scene, output, options, args.include) == key:
         output_cache.keep(key, output, summary[0], summary[1] + given)
     return 0
 
