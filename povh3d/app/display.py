@@ -17,6 +17,7 @@ import numpy as np
 from PIL import Image
 
 from ..errors import ConfigError, InputError
+from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import Panel
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
 from .records import base_record, png_output, write_image
@@ -36,11 +37,11 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
     """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
     side = (read_sidecar(h3d_path) or {}).get("lens_array") or {}
     check_against_sidecar(h3d_path, side)
-    if ppl is not None and side.get("views") and list(side["views"]) != [ppl[1], ppl[0]]:
+    if ppl is not None and side.get("views") and list(side["views"]) != to_edge(ppl):
         raise ConfigError(f"--ppl {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
                           f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
     if ppl is None and side.get("views"):
-        ppl = (int(side["views"][1]), int(side["views"][0]))
+        ppl = from_edge([int(v) for v in side["views"]])
     if ppl is None:
         raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
     focal = focal if focal is not None else side.get("focal_mm")
@@ -150,9 +151,9 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
             raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
     except ValueError as exc:
         raise ConfigError(f"{exc}; check --ppl and --ppl-out") from None
-    record = base_record("h3d", method=f"resample-{mode}", ppl_in=[ppl_in[1], ppl_in[0]],
-                     ppl_out=[ppl_out[1], ppl_out[0]], source=str(Path(input_path).resolve()),
-                     size_px=[result.shape[1], result.shape[0]], output_gamma="sRGB")
+    record = base_record("h3d", method=f"resample-{mode}", ppl_in=to_edge(ppl_in),
+                     ppl_out=to_edge(ppl_out), source=str(Path(input_path).resolve()),
+                     size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
     if mode == "lenses":
         record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
                             "focal_scale": ppl_out[1] / ppl_in[1]}
@@ -224,11 +225,11 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     views = quilt_to_views(read_png(quilt_path), grid[0], grid[1], count)
     h3d = interleave(quilt_to_bank_order(views))
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
-                     source=str(Path(quilt_path).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
+                     source=str(Path(quilt_path).resolve()), size_px=to_edge(h3d.shape[:2]),
                      output_gamma="sRGB")
     side = (read_sidecar(quilt_path) or {}).get("source_lens_array") or {}
     if side.get("views") == [int(views.shape[0]), 1] and side.get("panel", {}).get("size_px") == \
-            [h3d.shape[1], h3d.shape[0]]:
+            to_edge(h3d.shape[:2]):
         record["lens_array"] = side
     write_image(out, h3d, record)
     return record

@@ -175,11 +175,13 @@ def mapping_options(args: argparse.Namespace) -> dict[str, Any]:
 def ppl_arg(text: str | None, option: str = "--ppl", *, lenticular: bool = False) -> tuple[int, int] | None:
     """``(Ny, Nx)`` from ``NxxNy`` or ``N``.  One number means what it means in ``render``:
     N x N pixels per lens, or N x 1 on a lenticular array (which has one row of views)."""
+    from ..geometry.axes import from_edge
+
     if text is None:
         return None
     ppl = parse_pair(text, option, integral=True)
     if isinstance(ppl, tuple):
-        return (ppl[1], ppl[0])
+        return from_edge(ppl)
     return (1, ppl) if lenticular else (ppl, ppl)
 
 

@@ -16,7 +16,7 @@
 Every method traces the ray of a pixel (docs/geometry.md); point-sampled they
 agree.  A method is pure around the renderer: its ``plan`` says which frames to
 ask POV-Ray for and how to assemble the returned images into the H3D image;
-its hooks say what it supports (footprint samples, crop, back-off rounding)
+its hooks say what it supports (footprint samples, crop, front-clearance rounding)
 and what the sidecar records of it.
 """
 
@@ -159,7 +159,7 @@ def _subpixel(lens_array: LensArray, front_clearance: float, samples: np.ndarray
 class Method:
     """A rendering method and what it supports.
 
-    plan(array, back-off mm, footprint samples (K, 4), **options) -> MethodPlan
+    plan(array, front clearance mm, footprint samples (K, 4), **options) -> MethodPlan
     """
 
     plan: Callable[..., MethodPlan]

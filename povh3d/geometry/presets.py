@@ -227,18 +227,15 @@ def _lattice_from_fields(fields: dict[str, Any], sx: float, sy: float,
     import numpy as np
 
     from .lattice import lattice_coordinates, lattice_vectors
-    from .lens_array import MAX_PANEL_PIXELS, Panel, lattice_array
+    from .lens_array import MAX_PANEL_PIXELS, Panel, lattice_array, lens_rotation
 
     if "lattice" not in fields:
         raise ConfigError("grid 'lattice' needs its two lattice vectors; give them with --lattice")
     if fields.get("grid", "lattice") != "lattice":
         raise ConfigError(f"lattice vectors are a grid of their own, not {fields['grid']!r}; drop --grid or --lattice")
     a1, a2 = (np.asarray(a) for a in parse_lattice(fields["lattice"]))
-    rotation = fields.get("lens_rotation") or 0.0
+    rotation = lens_rotation(fields.get("lens_rotation") or 0.0)
     if rotation:  # a turned lattice is the lattice of turned vectors
-        if isinstance(rotation, bool) or not isinstance(rotation, (int, float)) or not -45 < rotation <= 45:
-            raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {rotation!r}; "
-                              "a lattice turned further is the same lattice turned less (--lens-rotation)")
         c, s = math.cos(math.radians(rotation)), math.sin(math.radians(rotation))
         turn = np.array([[c, -s], [s, c]])
         a1, a2 = lattice_vectors((turn @ a1, turn @ a2))
