@@ -157,7 +157,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if result.crop is not None:
         record["crop"] = result.crop
     if model is not None:
-        record["volume" if request.is_volume else "model"] = model
+        record[request.content_kind] = model
     if display_frame is not None:
         record["display_frame"] = display_frame
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it

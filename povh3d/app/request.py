@@ -213,6 +213,16 @@ class RenderRequest:
         return is_volume_source(self.source)
 
     @property
+    def content_kind(self) -> str:
+        """``'scene'``, ``'model'`` (a mesh model, or a VTK polygon mesh) or ``'volume'``: the sidecar
+        entry that describes the content."""
+        from ..volume.sources import is_polydata_vtk
+
+        if not self.is_model:
+            return "scene"
+        return "volume" if self.is_volume and not is_polydata_vtk(self.source) else "model"
+
+    @property
     def render_array(self) -> LensArray:
         """The array the method renders (``Display.render_array``)."""
         return self.display.render_array
