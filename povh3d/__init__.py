@@ -18,6 +18,7 @@ from ._version import __version__
 
 if TYPE_CHECKING:  # what type checkers and editors see
     from .app.api import render
+    from .app.display_setup import Display, build_display
     from .app.request import ModelOptions, RenderRequest, VolumeOptions
     from .app.animation import FrameRange
     from .engine.quality import Quality, RenderSettings
@@ -30,6 +31,7 @@ _PUBLIC = {
     "render": "povh3d.app.api",
     "RenderRequest": "povh3d.app.request", "ModelOptions": "povh3d.app.request",
     "VolumeOptions": "povh3d.app.request",
+    "Display": "povh3d.app.display_setup", "build_display": "povh3d.app.display_setup",
     "FrameRange": "povh3d.app.animation",
     "Quality": "povh3d.engine.quality", "RenderSettings": "povh3d.engine.quality",
     "CropSettings": "povh3d.geometry.crop",
@@ -39,7 +41,7 @@ _PUBLIC = {
 }
 _MODULES = {"presets": "povh3d.geometry.presets"}
 
-__all__ = ["__version__", "render", "RenderRequest", "ModelOptions", "VolumeOptions", "FrameRange", "Quality", "RenderSettings",
+__all__ = ["__version__", "render", "Display", "build_display", "RenderRequest", "ModelOptions", "VolumeOptions", "FrameRange", "Quality", "RenderSettings",
            "CropSettings", "LensArray", "Panel", "presets", "Povh3dError", "ConfigError", "InputError",
            "OutputError", "PovrayError"]
 

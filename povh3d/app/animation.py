@@ -12,7 +12,7 @@ computed from ``n`` itself, never by adding steps.  Frame ``n`` is written as
 Every frame is rendered by the same function as a still (``app.render``), so a
 mapping, a mesh model, a method's options and the quality apply alike.  POV-Ray's
 own frame machinery is taken: povh3d renders a batch of cameras as the frames of
-one POV-Ray run (``engine.frames.FrameBatch``), so inside a scene
+one POV-Ray run (the shots of an ``engine.batch.ShotBatch``), so inside a scene
 ``frame_number`` and ``clock_delta`` belong to that batch.  A scene animates
 with ``clock``, which povh3d sets to the same value in every run of a frame.
 
@@ -123,22 +123,22 @@ def frame_path(output: str | Path, n: int, digits: int = 4) -> Path:
 
 
 @dataclass
-class Frame:
-    """One rendered image and its sidecar record, as written for a still or a frame."""
+class RenderedImage:
+    """One rendered image and its sidecar record, as written for a still or an animation frame."""
 
     image: np.ndarray                   # (H, W, C) uint8 or uint16
     record: dict[str, Any]
     views: np.ndarray | None = None     # (Ny, Nx, Ly, Lx, C) when asked for
-    from_cache: bool = False            # every camera frame came from the cache
+    from_cache: bool = False            # every shot came from the cache
 
 
-FrameRenderer = Callable[[float | None, Progress | None], Frame]
+ImageRenderer = Callable[[float | None, Progress | None], RenderedImage]
 
 
-def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRenderer, *, uses_clock: bool,
+def render_sequence(frames: FrameRange, output: Path, render_image: ImageRenderer, *, uses_clock: bool,
                     progress: Progress | None = None, video: Path | None = None,
                     fps: float = 24.0) -> dict[str, Any]:
-    """Render frames ``frames.first..last`` as ``OUT_nnnn.png``, each by ``render_frame(clock, progress)``.
+    """Render frames ``frames.first..last`` as ``OUT_nnnn.png``, each by ``render_image(clock, progress)``.
 
     The frames are made in a hidden folder beside `output` and moved into
     place only when every one is done, so a failure leaves no partial
@@ -167,7 +167,7 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
     report: dict[str, Any] = {"frames": [], "rendered": 0, "from_cache": 0, "copied": 0,
                               "scene_uses_clock": uses_clock, "video": None}
     scale = [1]  # camera frames per animation frame, learnt from the first render
-    first: tuple[Frame, Path] | None = None
+    first: tuple[RenderedImage, Path] | None = None
     try:
         for index, n in enumerate(frames.numbers):
             staged = frame_path(staging / output.name, n, digits)
@@ -175,7 +175,7 @@ def render_sequence(frames: FrameRange, output: Path, render_frame: FrameRendere
                     "clock_range": [frames.clock_start, frames.clock_end], "scene_uses_clock": uses_clock}
             if uses_clock or first is None:
                 try:
-                    frame = render_frame(frames.clock(n) if uses_clock else None,
+                    frame = render_image(frames.clock(n) if uses_clock else None,
                                          _frame_progress(progress, index, total, scale))
                 except PovrayError as exc:  # name the animation frame, not only POV-Ray's camera batch
                     raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {exc}", command=exc.command,

@@ -14,18 +14,18 @@ from typing import Any
 from ..engine.quality import Progress, RenderSettings
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
-from ..geometry.presets import describe_fields, get_preset, lens_array_from_fields, merge_overrides
-from .display import mapping_for_display
+from .display_setup import build_display
 from .render import render as render_request
 from .request import RenderRequest
 
-_REQUEST = tuple(f.name for f in fields(RenderRequest) if f.name not in ("source", "output", "lens_array",
-                                                                          "settings", "mapping", "mapped_panel"))
+_REQUEST = tuple(f.name for f in fields(RenderRequest) if f.name not in ("source", "output", "display", "settings"))
 _SETTINGS = tuple(f.name for f in fields(RenderSettings))
 
 
 def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens_array: LensArray | None = None,
-           mapping: str | None = None, progress: Progress | None = None, **options: Any) -> dict[str, Any]:
+           mapping: str | None = None, mapping_options: dict[str, Any] | None = None,
+           calibration: str | Path | None = None, progress: Progress | None = None,
+           **options: Any) -> dict[str, Any]:
     """Render a scene or a mesh model into ``output`` (PNG + JSON sidecar); return the sidecar record.
 
     Parameters
@@ -35,6 +35,10 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
     preset : str              a display preset (``povh3d.presets.names()``)
     lens_array : LensArray    a lens array of your own, instead of the preset's
     mapping : str             a pixel mapping name (``alioscopy``, ``slanted``, ``smart:4`` ...)
+    mapping_options : dict    its options (``per_lens``, ``views``, ``slope``, ``offset``, ``rows_per_view``,
+                              ``reverse``, ``blend``), as ``povh3d map`` takes them
+    calibration : path        a calibration file: the sheet of ``mapping='slanted'``, or of
+                              ``method='subpixel'`` (a calibrated subpixel render)
     **options
         Any field of ``RenderRequest`` (``method``, ``method_options``, ``views_dir``,
         ``frames`` ...) or of ``RenderSettings`` (``quality``, ``jobs``, ``bit_depth`` ...).
@@ -43,20 +47,11 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
     unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
     if unknown:
         raise ConfigError(f"render() takes no option {', '.join(map(repr, unknown))}; it takes: "
-                          f"preset, lens_array, mapping, {', '.join(_REQUEST + _SETTINGS)}")
-    fields_ = get_preset(preset)
-    display = {"preset": preset, **describe_fields(fields_)}
-    if lens_array is None:
-        lens_array = lens_array_from_fields(merge_overrides(fields_, {}))
-    else:
-        display = {"preset": None}
-    mapped = {}
-    if mapping is not None:
-        built, panel = mapping_for_display(mapping, display, lens_array)
-        mapped = {"mapping": built, "mapped_panel": panel}
-        display = {**display, "mapping": built.name}
+                          f"preset, lens_array, mapping, mapping_options, calibration, "
+                          f"{', '.join(_REQUEST + _SETTINGS)}")
+    display = build_display(preset, lens_array=lens_array, method=options.get("method", "multi-ortho"),
+                            mapping=mapping, mapping_options=mapping_options, calibration=calibration)
     settings = RenderSettings(**{k: v for k, v in options.items() if k in _SETTINGS})
-    request = RenderRequest(source=Path(source), output=Path(output), lens_array=lens_array,
-                            settings=settings, **{"display": display, **mapped},
-                            **{k: v for k, v in options.items() if k in _REQUEST and k != "display"})
+    request = RenderRequest(source=Path(source), display=display, output=Path(output), settings=settings,
+                            **{k: v for k, v in options.items() if k in _REQUEST})
     return render_request(request, progress)

@@ -59,7 +59,7 @@ def calibrate_lenticular_file(white: str | Path, output: str | Path, *, dpi: flo
     check_writable(output)
     t = time.perf_counter()
     fit = calibrate_lenticular(image, distortion=distortion, name=repr(str(white)))
-    record = {**fit.to_dict(dpi), "seconds": round(time.perf_counter() - t, 3),
+    record = {**fit.as_record(dpi), "seconds": round(time.perf_counter() - t, 3),
               "white_image": str(Path(white).resolve())}
     with atomic_path(output) as tmp:
         tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
@@ -77,7 +77,7 @@ def undistort_file(image_path, grid_path, output) -> dict[str, Any]:
     image, grid = _load(image_path, grid_path)
     output = png_output(output)
     record = _record("undistorted", grid_path, source=str(Path(image_path).resolve()),
-                     distortion=grid.distortion.as_dict(), output_gamma="sRGB")
+                     distortion=grid.distortion.as_record(), output_gamma="sRGB")
     write_image(output, undistort_image(image, grid.distortion), record)
     return record
 

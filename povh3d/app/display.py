@@ -17,6 +17,7 @@ import numpy as np
 from PIL import Image
 
 from ..errors import ConfigError, InputError
+from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import Panel
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
 from .records import base_record, png_output, write_image
@@ -36,11 +37,11 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
     """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
     side = (read_sidecar(h3d_path) or {}).get("lens_array") or {}
     check_against_sidecar(h3d_path, side)
-    if ppl is not None and side.get("views") and list(side["views"]) != [ppl[1], ppl[0]]:
+    if ppl is not None and side.get("views") and list(side["views"]) != to_edge(ppl):
         raise ConfigError(f"--ppl {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
                           f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
     if ppl is None and side.get("views"):
-        ppl = (int(side["views"][1]), int(side["views"][0]))
+        ppl = from_edge([int(v) for v in side["views"]])
     if ppl is None:
         raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
     focal = focal if focal is not None else side.get("focal_mm")
@@ -150,16 +151,16 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
             raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
     except ValueError as exc:
         raise ConfigError(f"{exc}; check --ppl and --ppl-out") from None
-    record = base_record("h3d", method=f"resample-{mode}", ppl_in=[ppl_in[1], ppl_in[0]],
-                     ppl_out=[ppl_out[1], ppl_out[0]], source=str(Path(input_path).resolve()),
-                     size_px=[result.shape[1], result.shape[0]], output_gamma="sRGB")
+    record = base_record("h3d", method=f"resample-{mode}", ppl_in=to_edge(ppl_in),
+                     ppl_out=to_edge(ppl_out), source=str(Path(input_path).resolve()),
+                     size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
     if mode == "lenses":
         record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
                             "focal_scale": ppl_out[1] / ppl_in[1]}
     else:
         resampled = _resampled_array(input_path, result.shape[:2], ppl_out)
         if resampled is not None:
-            record["lens_array"] = resampled.describe()
+            record["lens_array"] = resampled.as_record()
     write_image(out, result, record)
     return record
 
@@ -168,13 +169,13 @@ def _resampled_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tu
     """The input's lens array with ``ppl_out`` pixels under each lens (same lenses, same
     physical panel), or None when the input has none or it does not fit ``shape``."""
     from ..geometry.lens_array import LensArray
-    from ..geometry.presets import lens_array_from_record
+    from .display_setup import Display
 
-    side = (read_sidecar(input_path) or {}).get("lens_array")
-    if not side:
+    side = read_sidecar(input_path) or {}
+    if not side.get("lens_array"):
         return None
     try:
-        a = lens_array_from_record(side)
+        a = Display.from_record(side).lens_array
         ny, nx = ppl_out
         panel = Panel(a.lenses_x * nx, a.lenses_y * ny if a.grid != "lenticular" else a.panel.height,
                       a.pitch_x / nx, a.pitch_y / ny if a.grid != "lenticular" else a.panel.pitch_y)
@@ -224,11 +225,11 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     views = quilt_to_views(read_png(quilt_path), grid[0], grid[1], count)
     h3d = interleave(quilt_to_bank_order(views))
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
-                     source=str(Path(quilt_path).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
+                     source=str(Path(quilt_path).resolve()), size_px=to_edge(h3d.shape[:2]),
                      output_gamma="sRGB")
     side = (read_sidecar(quilt_path) or {}).get("source_lens_array") or {}
     if side.get("views") == [int(views.shape[0]), 1] and side.get("panel", {}).get("size_px") == \
-            [h3d.shape[1], h3d.shape[0]]:
+            to_edge(h3d.shape[:2]):
         record["lens_array"] = side
     write_image(out, h3d, record)
     return record
@@ -318,38 +319,3 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     with atomic_path(output.with_suffix(".json")) as tmp:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
     return record
-
-
-
-# -- the display a mapping is for --------------------------------------------------------------------
-def mapping_for_display(name: str, display: dict[str, Any], lens_array: Any, *,
-                        calibration_path: str | None = None, **options: Any) -> tuple[Mapping, Panel]:
-    """The mapping ``name`` for the display of a preset or CLI lens array, and its physical panel.
-
-    Presets with a mapping (alioscopy-42, philips-20) describe the view-space
-    array; their physical panel is in ``display['physical_panel']``.
-    """
-    from ..mappings import build_mapping, options_from_display
-
-    phys = display.get("physical_panel")
-    if phys:
-        (w, h), (sx, sy) = phys["size_px"], phys["pixel_pitch_mm"]
-        panel = Panel(int(w), int(h), float(sx), float(sy))
-    else:
-        panel = lens_array.panel
-    fields = {k: display[k] for k in ("slant_deg", "views") if display.get(k) is not None}
-    fields.update(lens_pitch=lens_array.pitch_x, pixel_pitch=panel.pitch_x)
-    if calibration_path is not None:
-        options["calibration"] = read_calibration(calibration_path)
-    opts = options_from_display(fields, lens_array.pitch_x / panel.pitch_x, **options)
-    return build_mapping(name, opts), panel
-
-
-def read_calibration(path: str | Path) -> Any:
-    """A calibration file's JSON (``map --calibration``, ``render --method subpixel --calibration``)."""
-    try:
-        return json.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"cannot read the calibration {str(path)!r}: {exc.strerror}") from None
-    except ValueError as exc:
-        raise InputError(f"the calibration {str(path)!r} is not JSON: {exc}") from None

@@ -98,6 +98,9 @@ class FrameOptions:
         return self.center is not None
 
 
+DisplayFrameOptions = FrameOptions  # the name outside this module: a display frame, not an animation frame
+
+
 def resolve_frame(options: FrameOptions, scene: Scene, lens_array: LensArray, *,
                   cache_dir: Any = None, use_cache: bool = True) -> tuple[DisplayFrame, dict[str, Any]]:
     """The frame to render with and its sidecar record (``warnings`` listed there)."""
@@ -107,9 +110,9 @@ def resolve_frame(options: FrameOptions, scene: Scene, lens_array: LensArray, *,
 
 
 def resolve_frame_and_depth(options: FrameOptions, scene: Scene, lens_array: LensArray, *, cache_dir: Any = None,
-                            use_cache: bool = True, back_off: float | None = None
+                            use_cache: bool = True, front_clearance: float | None = None
                             ) -> tuple[DisplayFrame, dict[str, Any], Seen | None]:
-    """``resolve_frame``, and with ``back_off`` (mm) for a camera frame, the depth pass along its normal
+    """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise."""
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
@@ -127,8 +130,8 @@ def resolve_frame_and_depth(options: FrameOptions, scene: Scene, lens_array: Len
         note = "the scene has no camera: mm around the screen z = 0"
         return NATIVE, {**NATIVE.as_record(), "note": note, "warnings": []}, None
     try:
-        found = (_evaluate_and_measure(scene, script, lens_array, back_off, cache_dir, use_cache)
-                 if back_off is not None else None)
+        found = (_evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache)
+                 if front_clearance is not None else None)
     except PovrayError as exc:
         if isinstance(exc, PovrayTimeout):
             raise
@@ -222,12 +225,12 @@ def measured_size(scene: Scene, width: int, height: int, target: int) -> tuple[i
 _RATIO = re.compile(r"\bimage_width\s*/\s*image_height\b|\bimage_height\s*/\s*image_width\b")
 
 
-def _evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArray, back_off: float,
+def _evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArray, front_clearance: float,
                           cache_dir: Any, use_cache: bool) -> tuple[dict[str, Any], Seen, float, bool] | None:
     """The camera's vectors and a depth pass along the normal of the frame it defines, from one
     POV-Ray run: the evaluation script, the rest of the scene and ``templates/camera_depth.pov.j2``,
     which works out the frame and the clearance from the declared values, prints them and renders
-    the two fog frames (``engine.depth``).  Cached by the scene's digest, the panel and ``back_off``.
+    the two fog frames (``engine.depth``).  Cached by the scene's digest, the panel and ``front_clearance``.
     None when the camera needs a run at the panel's own size (``measured_size``)."""
     from ..engine.depth import fog_distances, pass_size
     from ..image.io import read_png
@@ -239,7 +242,7 @@ def _evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensAr
     w, h = lens_array.panel.width, lens_array.panel.height
     right, up = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0), (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
     target = pass_size(lens_array)[0]
-    key = content_key("scene-camera-depth", __version__, scene.digest, w, h, target, right, up, back_off,
+    key = content_key("scene-camera-depth", __version__, scene.digest, w, h, target, right, up, front_clearance,
                       lens_array.panel.size_mm[0])
     folder = (cache_dir or default_cache_dir()) / "cameras"
     path, array_path = folder / f"{key}.json", folder / f"{key}.npy"
@@ -251,7 +254,7 @@ def _evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensAr
     if size is None:
         return None
     text = script.script + script.rest + render_template(
-        "camera_depth.pov.j2", panel_width=lens_array.panel.size_mm[0], back_off=back_off, right=right, up=up,
+        "camera_depth.pov.j2", panel_width=lens_array.panel.size_mm[0], front_clearance=front_clearance, right=right, up=up,
         add_assumed_gamma=not scene.sets_assumed_gamma)
     job = PovrayJob(name="scene camera and depth", script=text, width=size[0], height=size[1], frames=2,
                     include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), bit_depth=16,
@@ -288,14 +291,14 @@ class Seen:
     unmeasured: float
     printed: tuple[float, ...]
 
-    def depth(self, frame: DisplayFrame, back_off: float, lens_array: LensArray) -> DepthMap | None:
-        """The depth map, if the pass was made in ``frame`` with ``back_off``; else None (measure again)."""
+    def depth(self, frame: DisplayFrame, front_clearance: float, lens_array: LensArray) -> DepthMap | None:
+        """The depth map, if the pass was made in ``frame`` with ``front_clearance``; else None (measure again)."""
         from ..engine.depth import depth_map
 
-        expected = [*frame.centre, *frame.axis_x, *frame.axis_y, *frame.axis_z, frame.units_per_mm, back_off]
+        expected = [*frame.centre, *frame.axis_x, *frame.axis_y, *frame.axis_z, frame.units_per_mm, front_clearance]
         size = max(1.0, *(abs(v) for v in frame.centre))
         if not (np.allclose(self.printed[:3], expected[:3], rtol=0, atol=1e-9 * size)
                 and np.allclose(self.printed[3:12], expected[3:12], rtol=0, atol=1e-9)
                 and np.allclose(self.printed[12:], expected[12:], rtol=1e-9, atol=0)):
             return None
-        return depth_map(self.distances, lens_array, back_off, frame.units_per_mm, self.unmeasured)
+        return depth_map(self.distances, lens_array, front_clearance, frame.units_per_mm, self.unmeasured)

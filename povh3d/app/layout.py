@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import ConfigError, InputError
 from ..geometry.lens_array import LensArray
 from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
+from .display_setup import Display
 from .records import base_record, png_output, write_image
 from .stage import FILL, depth_budget_mm, fit_to_display
 
@@ -91,19 +92,19 @@ def scene_content(path: Path, lens_array: LensArray, frame_options: Any = None, 
     from ..engine.methods import get_method
     from ..engine.quality import RenderSettings
     from ..scene.scene import load_scene
-    from .frame import FrameOptions
+    from .frame import DisplayFrameOptions
     from .placement import place_display
     from .request import RenderRequest
 
     scene = load_scene(path, include_dirs)
-    request = RenderRequest(source=path, lens_array=lens_array, output=Path("layout.png"),
+    request = RenderRequest(source=path, display=Display(lens_array), output=Path("layout.png"),
                             settings=RenderSettings(use_cache=use_cache), include_dirs=include_dirs,
-                            display_frame=frame_options or FrameOptions())
+                            display_frame=frame_options or DisplayFrameOptions())
     placed, record = place_display(request, scene)
     s = placed.settings
     units = float(record.get("units_per_mm", 1.0))
-    back_off = s.back_off or get_method(placed.method).default_back_off(lens_array)
-    depth = depth_pass(scene, lens_array, s, back_off, units)
+    front_clearance = s.front_clearance or get_method(placed.method).default_front_clearance(lens_array)
+    depth = depth_pass(scene, lens_array, s, front_clearance, units)
     points = depth_points(depth.z, depth.width_mm, depth.height_mm)
     faces = _grid_faces(depth.z, depth.width_mm / depth.z.shape[1], depth_budget_mm(lens_array))
     summary = depth.summary(depth_budget_mm(lens_array))
@@ -220,7 +221,7 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
     shape = volume_shape(volume, iso)
     if shape is not None:
         vertices, faces = shape[0] @ m[:3, :3].T + m[:3, 3], shape[1]
-    record = {"volume": volume.describe(), "orientation": orientation, "rotate": list(rotate) if rotate else None,
+    record = {"volume": volume.as_record(), "orientation": orientation, "rotate": list(rotate) if rotate else None,
               "world_to_display": m.round(12).tolist(), "shape": "iso" if iso else ("labels" if shape else None),
               "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit}}
     return Content("volume", volume.name, vertices, faces, zs, box=box, marks=marks, record=record)
@@ -255,7 +256,7 @@ def figures(content: Content, setup: SetUp) -> dict[str, Any]:
     return out
 
 
-def write_layout(content: Content, lens_array: LensArray, output: str | Path, *, display: dict | None = None,
+def write_layout(content: Content, lens_array: LensArray, output: str | Path, *, display: Display | None = None,
                  size: tuple[int, int] = (1200, 900), content_seconds: float = 0.0) -> dict[str, Any]:
     """Draw ``content`` with the display's set-up into ``output`` (PNG and sidecar); returns the record."""
     from .layout_picture import draw
@@ -265,8 +266,9 @@ def write_layout(content: Content, lens_array: LensArray, output: str | Path, *,
     size = picture_size(size)
     setup = set_up(lens_array, depth_budget_mm(lens_array))
     numbers = figures(content, setup)
-    image = draw(content, setup, lens_array, numbers, size=size, display=display or {})
-    record = base_record("layout", lens_array, display=display or {}, content={
+    described = display.as_record()["display"] if display is not None else {}
+    image = draw(content, setup, lens_array, numbers, size=size, display=described)
+    record = base_record("layout", lens_array, display=described, content={
         "kind": content.kind, "name": content.name, **content.record}, setup=setup.as_record(),
         content_depth=numbers, units_per_mm=content.units_per_mm, size_px=list(size),
         timings={"content_seconds": round(content_seconds, 3),
@@ -295,7 +297,7 @@ def content_report(source: str | Path, lens_array: LensArray) -> dict[str, Any]:
             "warnings": content.record.get("warnings", [])}
 
 
-def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, display: dict | None = None,
+def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, display: Display | None = None,
            frame_options: Any = None, include_dirs: tuple = (), model: dict | None = None,
            volume: dict | None = None, size: tuple[int, int] = (1200, 900), use_cache: bool = True) -> dict[str, Any]:
     """``povh3d layout SOURCE``: the content found, placed and drawn with the set-up (returns the record).

@@ -6,7 +6,7 @@ command still imports NumPy and the engine, decodes the frame and encodes the
 output PNG again (about 0.3 s at 1920x1080).  This cache keys the whole request
 to the finished files:
 
-- every option of the command line (paths resolved), except ``-q``;
+- every option of the request, by name (paths resolved), except ``-q``;
 - the scene's digest (its text and every file it reads, ``scene.scene``);
 - the POV-Ray binary (path, size, modification time: its version follows) and
   the ``POVH3D_POVRAY`` / ``POVH3D_SANDBOX`` settings;
@@ -30,13 +30,13 @@ the normal path every time, as does ``--no-cache``.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import hashlib
 import json
 import os
 import shutil
 from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -65,23 +65,28 @@ class Hit:
     warnings: tuple[str, ...]
 
 
-def request_key(args: argparse.Namespace, output: Path) -> str | None:
-    """The key of a ``povh3d render`` command line writing ``output``; None when it cannot use this cache."""
-    fields = vars(args)
-    if fields.get("no_cache") or any(fields.get(name) for name in _UNCACHED) or is_mesh_file(args.scene) \
-            or is_volume_source(args.scene):
+def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
+                include_dirs: Sequence[str | Path] = ()) -> str | None:
+    """The key of a render of ``scene`` into ``output``; None when it cannot use this cache.
+
+    ``options``: every other value that shapes the files written, as plain values (the
+    command line's options, by name); a name in ``_UNCACHED`` given sends the render down
+    the normal path.  Nothing heavy is imported: a hit is answered before NumPy loads.
+    """
+    if options.get("no_cache") or any(options.get(name) for name in _UNCACHED) or is_mesh_file(str(scene)) \
+            or is_volume_source(scene):
         return None
     binary = os.environ.get("POVH3D_POVRAY") or shutil.which("povray")
     povray = binary_key(shutil.which(binary) or binary) if binary else None
     if povray is None:
         return None  # the render says what is missing
-    scene = load_scene(args.scene, tuple(args.include))  # a missing scene: the same one-line error
-    if scene.computed_names:
+    loaded = load_scene(scene, tuple(include_dirs))  # a missing scene: the same one-line error
+    if loaded.computed_names:
         return None
-    options = {k: v for k, v in fields.items() if k not in _IGNORED}
-    options.update(scene=str(scene.path), include=[str(d) for d in scene.include_dirs],
-                   output=os.path.abspath(output))
-    parts = {"povh3d": [__version__, _code_stamp()], "options": options, "scene": scene.digest,
+    kept = {k: v for k, v in options.items() if k not in _IGNORED}
+    kept.update(scene=str(loaded.path), include=[str(d) for d in loaded.include_dirs],
+                output=os.path.abspath(output))
+    parts = {"povh3d": [__version__, _code_stamp()], "options": kept, "scene": loaded.digest,
              "povray": povray, "env": {k: os.environ.get(k) for k in ("POVH3D_POVRAY", "POVH3D_SANDBOX")}}
     text = json.dumps(parts, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()

@@ -39,16 +39,16 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
     options = request.display_frame
-    default = get_method(request.method).default_back_off(array)
+    default = get_method(request.method).default_front_clearance(array)
     # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
     placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
-                                                   use_cache=s.use_cache, back_off=s.back_off or default)
-    back_off = s.back_off or _clearance(placed, record, default)
+                                                   use_cache=s.use_cache, front_clearance=s.front_clearance or default)
+    front_clearance = s.front_clearance or _front_clearance(placed, default)
     scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
     if not placed.is_native or options.fit_depth is not None or scale != 1:
-        placed, depth, scale = _measure(request, scene, placed, back_off, budget, options.fit_depth,
+        placed, depth, scale = _measure(request, scene, placed, front_clearance, budget, options.fit_depth,
                                         scale, options.depth_scale == "fit",
-                                        seen.depth(placed, back_off, array) if seen else None)
+                                        seen.depth(placed, front_clearance, array) if seen else None)
         record = {**record, **placed.as_record(), "depth": depth}
         if not depth.get("empty") and not depth.get("within_budget", True):
             record["warnings"].append(
@@ -65,8 +65,9 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
                                       "check the frame")
     record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-    limited = s.back_off is None and _clearance(placed, record, default) < default
-    settings = replace(s, frame=matrix, back_off=_clearance(placed, record, default) if limited else s.back_off,
+    limited = s.front_clearance is None and _front_clearance(placed, default) < default
+    settings = replace(s, frame=matrix,
+                       front_clearance=_front_clearance(placed, default) if limited else s.front_clearance,
                        depth_scale=scale)
     if scale != 1:
         record["depth_scale"] = scale
@@ -88,18 +89,15 @@ def _check_similarity(matrix: tuple[float, ...]) -> None:
                           "no depth-only scale); build it with povh3d.geometry.frame.DisplayFrame")
 
 
-def _clearance(frame: DisplayFrame, record: dict[str, Any], default: float) -> float:
+def _front_clearance(frame: DisplayFrame, default: float) -> float:
     """The front clearance (mm): the method's default, but for a camera frame no farther out than
     0.9 of the scene camera's distance, since what lies behind the camera (walls) is no part of the view."""
-    camera = record.get("camera")
-    if frame.source != "camera" or camera is None:
+    if frame.source != "camera" or frame.camera_distance is None:
         return default
-    target = camera["look_at"] if camera["look_at"] is not None else frame.centre
-    distance = float(np.linalg.norm(np.subtract(target, camera["location"])))
-    return min(default, 0.9 * distance / frame.units_per_mm)
+    return min(default, 0.9 * frame.camera_distance / frame.units_per_mm)
 
 
-def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, back_off: float, budget: float,
+def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_clearance: float, budget: float,
              fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
              seen: DepthMap | None = None
              ) -> tuple[DisplayFrame, dict[str, Any], float]:
@@ -114,7 +112,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, back_off
         if seen is not None and f is frame:
             return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
-        return depth_pass(scene, array, replace(s, frame=matrix), back_off, f.units_per_mm).summary(budget)
+        return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm).summary(budget)
 
     def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
         # The display shows the measured z times ``factor`` (a depth scale, or 1 / a frame's scale).
@@ -161,13 +159,13 @@ def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: 
 
     scene = load_scene(path, include_dirs)
     options = options or FrameOptions()
-    default = get_method("multi-ortho").default_back_off(lens_array)
-    placed, record, seen = resolve_frame_and_depth(options, scene, lens_array, back_off=default)
+    default = get_method("multi-ortho").default_front_clearance(lens_array)
+    placed, record, seen = resolve_frame_and_depth(options, scene, lens_array, front_clearance=default)
     budget = depth_budget_mm(lens_array)
-    back_off = _clearance(placed, record, default)
+    front_clearance = _front_clearance(placed, default)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-    depth = (seen.depth(placed, back_off, lens_array) if seen else None) or depth_pass(
-        scene, lens_array, RenderSettings(frame=matrix), back_off, placed.units_per_mm)
+    depth = (seen.depth(placed, front_clearance, lens_array) if seen else None) or depth_pass(
+        scene, lens_array, RenderSettings(frame=matrix), front_clearance, placed.units_per_mm)
     return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
             "depth": depth.summary(budget), "depth_budget_mm": budget,
             "depth_budget_scene_units": budget * placed.units_per_mm}

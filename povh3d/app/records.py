@@ -22,7 +22,7 @@ def base_record(kind: str, lens_array: LensArray | None = None, **extra: Any) ->
     """``povh3d_version``, ``kind`` (``h3d``, ``panel``, ``views``, ...), the lens array, then ``extra``."""
     record: dict[str, Any] = {"povh3d_version": __version__, "kind": kind}
     if lens_array is not None:
-        record["lens_array"] = lens_array.describe()
+        record["lens_array"] = lens_array.as_record()
     record.update(extra)
     return record
 

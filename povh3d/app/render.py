@@ -3,7 +3,7 @@ sidecar out, for a still or every frame of an animation.
 
 ``render`` prepares once what every frame shares (the scene, or a mesh model
 put on the default stage; the quality, when it is ``auto``), then hands
-``render_frame`` to the still or to the animation loop.  ``render_frame`` runs
+``render_image`` to the still or to the animation loop.  ``render_image`` runs
 the method, applies the mapping and builds the sidecar record: a frame of an
 animation and a still go through exactly the same steps.
 """
@@ -29,7 +29,7 @@ from .depth_maps import check_depth_dir, write_depth_maps
 from ..engine.depth import view_depth_maps
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
-from .animation import Frame, render_sequence
+from .animation import RenderedImage, render_sequence
 from .records import base_record, png_output, write_image
 from .request import RenderRequest
 from .views import check_views_dir, write_views
@@ -49,7 +49,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     scene, model_record = load_content(request)
     request, frame_record = place_display(request, scene)
     settings, auto = _resolve_quality(request, scene, progress)
-    frame = partial(render_frame, request, scene, settings, auto=auto, model=model_record,
+    frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
                     display_frame=frame_record)
     if request.frames is None:
         still = frame(None, progress)
@@ -126,9 +126,9 @@ def _resolve_quality(request: RenderRequest, scene: Scene,
     return replace(chosen, clock=None), auto
 
 
-def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
+def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                  progress: Progress | None = None, *, auto: AutoChoice | None = None,
-                 model: dict[str, Any] | None = None, display_frame: dict[str, Any] | None = None) -> Frame:
+                 model: dict[str, Any] | None = None, display_frame: dict[str, Any] | None = None) -> RenderedImage:
     """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default)."""
     array = request.render_array
     start = time.perf_counter()
@@ -140,23 +140,24 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if h3d.shape[:2] != expected:  # a bug, never the user's doing
         raise RuntimeError(f"{request.method} produced {h3d.shape[:2]}, expected {expected}")
 
-    timings = {"render_seconds": round(seconds, 4), **result.stats.as_dict()}
+    timings = {"render_seconds": round(seconds, 4), **result.stats.as_record()}
     record = base_record(
-        "h3d", array, method=request.method, display=dict(request.display), scene=str(scene.path),
+        "h3d", method=request.method, scene=str(scene.path),
         scene_sha256=scene.digest,
         quality={**quality_record(settings, result.quality), "bit_depth": settings.bit_depth,
-                 "front_clearance_mm": result.back_off},
+                 "front_clearance_mm": result.front_clearance},
         output_gamma="sRGB", povray_version=result.stats.povray_version,
         sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
     )
+    record.update(request.display.as_record())  # the sidecar's lens_array and display entries
     if auto is not None:
-        record["quality"].update(level="auto", auto=auto.as_dict())
+        record["quality"].update(level="auto", auto=auto.as_record())
     if result.record is not None:
         record[request.method.replace("-", "_")] = result.record
     if result.crop is not None:
         record["crop"] = result.crop
     if model is not None:
-        record["volume" if "volume" in model else "model"] = model
+        record[request.content_kind] = model
     if display_frame is not None:
         record["display_frame"] = display_frame
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
@@ -169,10 +170,11 @@ def render_frame(request: RenderRequest, scene: Scene, settings: RenderSettings,
              "frame (--display-*) or the model's units and orientation (--unit, --up); a scene without a "
              f"camera is modelled in mm around z = 0, viewer on -z, the display spanning {w:.4g} x {h:.4g} mm")
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
-    if request.mapping is not None:
-        h3d = request.mapping.apply(h3d, request.image_size)
-        record.update(kind="panel", mapping=request.mapping.name, size_px=list(request.image_size))
-    return Frame(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
+    mapping = request.display.mapping
+    if mapping is not None:
+        h3d = mapping.apply(h3d, request.image_size)
+        record.update(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
+    return RenderedImage(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
 
 
 def quality_record(settings: RenderSettings, rendered: Quality) -> dict[str, Any]:

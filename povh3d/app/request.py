@@ -2,7 +2,7 @@
 API both build, and that ``app.render.render`` carries out.
 
 A request names the content (a POV-Ray scene or a mesh model), the display
-(lens array, and the pixel mapping of a slanted panel), the method and its
+(``app.display_setup.Display``: lens array, and the pixel mapping of a slanted panel), the method and its
 options, the quality, and every output (image, views, animation frames, video).
 It is frozen and checked on construction: a request that exists can be rendered.
 """
@@ -20,12 +20,12 @@ from ..engine.methods import get_method
 from ..engine.quality import RenderSettings
 from ..errors import ConfigError
 from ..geometry.crop import CropSettings
-from ..geometry.lens_array import LensArray, Panel
+from ..geometry.lens_array import LensArray
 from ..image.video import check_video_path
-from ..mappings.base import Mapping
 from ..mesh.formats import is_mesh_file
 from .animation import FrameRange
-from .frame import FrameOptions
+from .display_setup import Display
+from .frame import DisplayFrameOptions
 
 SHADINGS = ("auto", "smooth", "flat")
 
@@ -121,46 +121,40 @@ class RenderRequest:
     Attributes
     ----------
     source : Path                  a POV-Ray scene (.pov) or a mesh model (.obj .stl .ply ...)
-    lens_array : LensArray         the display's lens array
+    display : Display              the display: its lens array, preset and mapping (``build_display``)
     output : Path                  the PNG to write (frames: ``OUT_nnnn.png``)
-    display : mapping              what the display is (preset name and fields), for the sidecar
     method : str                   a name in ``engine.methods.METHODS``
     method_options : mapping       the method's own options (single-stage: lenslet, ior);
-                                   defaults filled in from the method, unknown names refused
+                                   defaults filled in from the method, unknown names refused;
+                                   subpixel's ``sheet_shift_mm`` comes from the display's sheet
     settings : RenderSettings      quality and how POV-Ray runs
     crop : CropSettings or None    trace only where objects can be (methods that crop)
-    mapping : Mapping or None      a slanted panel's pixel mapping: render exactly the
-                                   views it reads, then map them onto ``mapped_panel``
-    mapped_panel : Panel or None   the physical panel the mapping fills (with ``mapping``)
     include_dirs : tuple of Path   extra folders POV-Ray searches for includes
     views_dir : Path or None       also write the view stack here (stills only)
     model : ModelOptions           how a mesh model is staged (models only)
     frames : FrameRange or None    render an animation: one image per clock value
     video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
     fps : float                    video frames per second
-    display_frame : FrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
+    display_frame : DisplayFrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
     depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
     depth_format : {'npy', 'png'}  float32 arrays, or 16-bit PNGs with the scale in depth_maps.json
     volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)
     """
 
     source: Path
-    lens_array: LensArray
+    display: Display
     output: Path
-    display: MappingABC[str, Any] = field(default_factory=dict)
     method: str = "multi-ortho"
     method_options: MappingABC[str, Any] = field(default_factory=dict)
     settings: RenderSettings = field(default_factory=RenderSettings)
     crop: CropSettings | None = None
-    mapping: Mapping | None = None
-    mapped_panel: Panel | None = None
     include_dirs: tuple[Path, ...] = ()
     views_dir: Path | None = None
     model: ModelOptions = field(default_factory=ModelOptions)
     frames: FrameRange | None = None
     video: Path | None = None
     fps: float = 24.0
-    display_frame: FrameOptions = field(default_factory=FrameOptions)
+    display_frame: DisplayFrameOptions = field(default_factory=DisplayFrameOptions)
     depth_maps: Path | None = None
     depth_format: str = "npy"
     volume: VolumeOptions = field(default_factory=VolumeOptions)
@@ -172,15 +166,17 @@ class RenderRequest:
         set_("include_dirs", tuple(Path(d) for d in self.include_dirs))
         if self.views_dir is not None:
             set_("views_dir", Path(self.views_dir))
-        if not isinstance(self.lens_array, LensArray):
-            raise ConfigError(f"lens_array must be a povh3d.LensArray, got {type(self.lens_array).__name__}")
+        if not isinstance(self.display, Display):
+            raise ConfigError(f"display must be a Display (app.display_setup.build_display), got "
+                              f"{type(self.display).__name__}")
         if not isinstance(self.settings, RenderSettings):
             raise ConfigError(f"settings must be a RenderSettings, got {type(self.settings).__name__}")
         if self.output.suffix.lower() != ".png":
             raise ConfigError(f"the output {str(self.output)!r} must be a .png file")
-        set_("method_options", get_method(self.method).resolve_options(self.method, self.method_options))
-        if (self.mapping is None) != (self.mapped_panel is None):
-            raise ConfigError("a mapping needs the panel it fills (mapped_panel), and mapped_panel a mapping")
+        options = dict(self.method_options)
+        if self.display.sheet_shift_mm is not None and self.method == "subpixel":
+            options.setdefault("sheet_shift_mm", self.display.sheet_shift_mm)
+        set_("method_options", get_method(self.method).resolve_options(self.method, options))
         if self.frames is None:
             for name in ("video",):
                 if getattr(self, name) is not None:
@@ -217,14 +213,21 @@ class RenderRequest:
         return is_volume_source(self.source)
 
     @property
+    def content_kind(self) -> str:
+        """``'scene'``, ``'model'`` (a mesh model, or a VTK polygon mesh) or ``'volume'``: the sidecar
+        entry that describes the content."""
+        from ..volume.sources import is_polydata_vtk
+
+        if not self.is_model:
+            return "scene"
+        return "volume" if self.is_volume and not is_polydata_vtk(self.source) else "model"
+
+    @property
     def render_array(self) -> LensArray:
-        """The array the method renders: the display's, or the view-space array a mapping reads."""
-        if self.mapping is None:
-            return self.lens_array
-        return self.mapping.render_array(self.mapped_panel, self.lens_array.focal)
+        """The array the method renders (``Display.render_array``)."""
+        return self.display.render_array
 
     @property
     def image_size(self) -> tuple[int, int]:
-        """``(W, H)`` of the image written: the mapped panel, or the H3D image."""
-        panel = self.mapped_panel or self.lens_array.panel
-        return panel.width, panel.height
+        """``(W, H)`` of the image written (``Display.image_size``)."""
+        return self.display.image_size

@@ -12,11 +12,12 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError, InputError, OutputError
+from ..geometry.axes import to_edge
 from ..geometry.lens_array import LensArray
-from ..geometry.presets import lens_array_from_record
 from ..image.elemental import extract_views, view_grid
 from ..image.interleave import extract, interleave
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from .display_setup import Display
 from .records import base_record, png_output, write_image
 
 VIEW_NAME = "v_{l:03d}_{k:03d}.png"
@@ -96,7 +97,7 @@ def read_views(views_dir: str | Path) -> np.ndarray:
     if len(shapes) != 1:
         raise InputError(f"the views in {str(folder)!r} differ in size or channels: {sorted(shapes)}")
     size = manifest.get("view_size_px")
-    if size is not None and images and list(size) != [images[0].shape[1], images[0].shape[0]]:
+    if size is not None and images and list(size) != to_edge(images[0].shape[:2]):
         raise InputError(f"the views in {str(folder)!r} are {images[0].shape[1]}x{images[0].shape[0]} but views.json "
                          f"describes {size[0]}x{size[1]}; render again into an empty folder")
     dtypes = {img.dtype for img in images}
@@ -111,8 +112,8 @@ def interleave_dir(views_dir: str | Path, output: str | Path) -> dict[str, Any]:
     output = png_output(output)
     h3d = interleave(views)
     source = read_sidecar(Path(views_dir) / "views.json") or {}
-    record = base_record("h3d", None, method="interleave", views=[views.shape[1], views.shape[0]],
-                      views_dir=str(Path(views_dir).resolve()), size_px=[h3d.shape[1], h3d.shape[0]],
+    record = base_record("h3d", None, method="interleave", views=to_edge(views.shape[:2]),
+                      views_dir=str(Path(views_dir).resolve()), size_px=to_edge(h3d.shape[:2]),
                       output_gamma="sRGB")
     if source.get("lens_array"):
         record["lens_array"] = source["lens_array"]
@@ -135,14 +136,14 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: s
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
     write_views(views_dir, views, None, {"h3d": str(Path(h3d_path).resolve())})
-    return {"views": [ppl[1], ppl[0]], "view_size_px": [views.shape[3], views.shape[2]]}
+    return {"views": to_edge(ppl), "view_size_px": to_edge(views.shape[2:4])}
 
 
 def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | Path) -> dict[str, Any]:
     record = read_sidecar(h3d_path)
     if not record or "lens_array" not in record:
         raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
-    lens_array = lens_array_from_record(record["lens_array"])
+    lens_array = Display.from_record(record).lens_array
     if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
         raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
                          f"{lens_array.panel.width}x{lens_array.panel.height} panel; re-render it")

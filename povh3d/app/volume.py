@@ -98,7 +98,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     matrix, placement, to_display = place_volume(volume, lens_array, options.orientation, options.rotate, depth)
     digest = volume_digest(volume)
     record: dict[str, Any] = {
-        "volume": volume.describe(), "source": str(source), "draw": kind, "orientation": options.orientation,
+        "volume": volume.as_record(), "source": str(source), "draw": kind, "orientation": options.orientation,
         "rotate": list(options.rotate) if options.rotate else None, "world_to_display": to_display.tolist(),
         "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
                       "depth_budget_mm": placement.depth},

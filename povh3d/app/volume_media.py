@@ -196,7 +196,7 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
                       intervals=intervals, samples=samples, background=background)
     stage = folder / f"volume-media-{hashlib.sha256(text.encode()).hexdigest()[:16]}.pov"
     _write_once(stage, text.encode())
-    record = {"kind": "media", "volume": volume.describe(), "transfer": transfer.record(),
+    record = {"kind": "media", "volume": volume.as_record(), "transfer": transfer.as_record(),
               "df3": {"path": str(df3_path), "bits": bits, "shape": list(padded_shape(volume.shape)),
                       "bytes": len(data), "interpolate": classified["interpolate"],
                       "window": classified["window"]},

@@ -85,7 +85,7 @@ class Brown:
         ratio = np.divide(ru, rd, out=np.ones_like(rd), where=rd > 0)
         return self.centre + d * ratio
 
-    def as_dict(self) -> dict:
+    def as_record(self) -> dict:
         return {"model": "brown-radial", "k1": self.k1, "k2": self.k2,
                 "centre_px": list(self.centre), "scale_px": self.scale}
 

@@ -218,7 +218,7 @@ class Grid:
                              "taken by the same camera at the same size")
 
     # -- JSON ------------------------------------------------------------------
-    def to_dict(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, Any]:
         inside = self.inside
         rc = np.argwhere(inside)
         record: dict[str, Any] = {
@@ -227,7 +227,7 @@ class Grid:
             "residual_px": float(self.residual_px), "confidence": float(self.confidence),
             "image_size": list(self.image_size), "table": list(self.table),
             "basis_px": self.basis.tolist(), "origin_px": self.origin.tolist(),
-            "distortion": self.distortion.as_dict(),
+            "distortion": self.distortion.as_record(),
             "lens_count": int(inside.sum()),
             "centers_px": np.round(self.centres[inside], 6).tolist(),
             "lens_rc": rc.tolist(),
@@ -262,7 +262,7 @@ class Grid:
 
 def write_grid(path: str | Path, grid: Grid) -> None:
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(grid.to_dict()) + "\n", encoding="utf-8")
+        tmp.write_text(json.dumps(grid.as_record()) + "\n", encoding="utf-8")
 
 
 def read_grid(path: str | Path) -> Grid:

@@ -74,7 +74,7 @@ class LenticularFit:
         return {"pitch": dpi / self.pitch_px, "slope": 1.0 / math.tan(t) if t else math.inf,
                 "center": centre % 1.0, "invView": 0, "DPI": dpi, "screenW": w, "screenH": h}
 
-    def to_dict(self, dpi: float | None = None) -> dict[str, Any]:
+    def as_record(self, dpi: float | None = None) -> dict[str, Any]:
         out: dict[str, Any] = {"kind": "lenticular", "pitch_px": self.pitch_px, "slant_deg": self.slant_deg,
                                "phase_px": self.phase_px, "k1": self.k1, "image_size": list(self.size),
                                "residual_rad": self.residual_rad, "tiles": self.tiles}

@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
-from .options import (add_array_options, add_image_lens_options, add_mapping_options, lens_array_from_args,
-                      mapping_from_args, parse_pair, positive_int, ppl_arg)
+from .options import (add_array_options, add_image_lens_options, add_mapping_options, display_from_args,
+                      lens_array_from_args, parse_size, positive_int, ppl_arg)
 
 
 def cmd_interleave(args: argparse.Namespace) -> int:
@@ -51,11 +51,11 @@ def cmd_presets(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    lens_array, display = lens_array_from_args(args)
-    info = {**display, **lens_array.describe()}
-    if args.mapping:
-        mapping, panel = mapping_from_args(args, lens_array, display)
-        info.update(mapping.figures(panel))
+    display = display_from_args(args, mapped=bool(args.mapping))
+    lens_array = display.lens_array
+    info = {**display.as_record()["display"], **lens_array.as_record()}
+    if display.mapping is not None:
+        info.update(display.mapping.figures(display.mapped_panel))
     from ..mesh.formats import is_mesh_file
     from ..volume.sources import is_volume_source
 
@@ -115,11 +115,8 @@ def _print_scene(report: dict) -> None:
 def cmd_map(args: argparse.Namespace) -> int:
     from ..app.display import map_file
 
-    lens_array, display = lens_array_from_args(args)
-    mapping, _ = mapping_from_args(args, lens_array, display)
-    panel = parse_pair(args.panel_size, "--panel-size", integral=True) if args.panel_size else None
-    if panel is not None and not isinstance(panel, tuple):
-        raise ConfigError(f"--panel-size takes WxH like 1920x1080, got {args.panel_size!r}")
+    mapping = display_from_args(args, mapped=True).mapping
+    panel = parse_size(args.panel_size, "--panel-size") if args.panel_size else None
     record = map_file(args.input, mapping, args.output, panel)
     print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {mapping.name}")
     return 0
@@ -141,9 +138,7 @@ def cmd_resample(args: argparse.Namespace) -> int:
 def cmd_quilt(args: argparse.Namespace) -> int:
     from ..app.display import export_quilt, import_quilt, lens_info
 
-    grid = parse_pair(args.quilt, "--quilt", integral=True) if args.quilt else None
-    if grid is not None and not isinstance(grid, tuple):
-        raise ConfigError(f"--quilt takes COLSxROWS like 8x6, got {args.quilt!r}")
+    grid = parse_size(args.quilt, "--quilt", "COLSxROWS like 8x6") if args.quilt else None
     if args.import_quilt:
         record = import_quilt(args.input, args.output, grid, args.views)
         print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  from {record['views'][0]} views")
@@ -190,7 +185,7 @@ def cmd_moire(args: argparse.Namespace) -> int:
     from ..app.moire import moire_sweep_file, parse_range
 
     slants = parse_range(args.slant_range)
-    lens_array, _ = lens_array_from_args(args)
+    lens_array = lens_array_from_args(args)
     m = moire_sweep_file(lens_array, slants, args.output, distance=args.distance, turn=args.turn,
                          blur=args.blur, spot=args.spot)
     best = min(range(len(slants)), key=lambda n: m["row_contrast"][n])

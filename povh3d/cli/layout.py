@@ -6,9 +6,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ..errors import ConfigError
-from .options import add_array_options, lens_array_from_args, parse_numbers, parse_pair, parse_triple, warn
-from .render import add_frame_options, frame_options_from_args
+from .options import add_array_options, display_from_args, parse_numbers, parse_size, parse_triple, warn
+from .render import add_frame_options, display_frame_options_from_args
 from .volume import add_volume_source_options
 
 
@@ -16,16 +15,15 @@ from .volume import add_volume_source_options
 def cmd_layout(args: argparse.Namespace) -> int:
     from ..app.layout import layout
 
-    lens_array, display = lens_array_from_args(args)
-    size = parse_pair(args.size, "--size", integral=True)
-    if not isinstance(size, tuple):
-        raise ConfigError(f"--size takes WxH pixels like 1200x900, got {args.size!r}")
+    display = display_from_args(args)
+    size = parse_size(args.size, "--size", "WxH pixels like 1200x900")
     spacing = parse_triple(args.spacing, "--spacing")
     rotate = parse_triple(args.rotate, "--rotate")
     model: dict[str, Any] = {"depth": args.depth, "up": args.up, "rotate": rotate, "unit": args.unit}
     volume: dict[str, Any] = {"orientation": args.orientation, "rotate": rotate, "depth": args.depth,
                               "spacing": spacing, "series": args.series, "iso": parse_numbers(args.iso, "--iso")}
-    record = layout(args.source, args.output, lens_array, display=display, frame_options=frame_options_from_args(args),
+    record = layout(args.source, args.output, display.lens_array, display=display,
+                    frame_options=display_frame_options_from_args(args),
                     include_dirs=tuple(args.include), model=model, volume=volume, size=size,
                     use_cache=not args.no_cache)
     warn(record["content"].get("warnings", []))

@@ -33,6 +33,14 @@ def parse_pair(text: str, option: str, *, integral: bool) -> tuple[float, float]
     return tuple(values) if len(values) == 2 else values[0]
 
 
+def parse_size(text: str, option: str, form: str = "WxH like 1920x1080") -> tuple[int, int]:
+    """``'1920x1080'`` -> (1920, 1080): two whole numbers, both given (a panel, a picture, a quilt grid)."""
+    size = parse_pair(text, option, integral=True)
+    if not isinstance(size, tuple):
+        raise ConfigError(f"{option} takes {form}, got {text!r}")
+    return size  # type: ignore[return-value]
+
+
 def parse_numbers(text: str | None, option: str, kind: type = float) -> tuple[Any, ...] | None:
     if text is None:
         return None
@@ -72,24 +80,34 @@ def add_array_options(p: argparse.ArgumentParser) -> None:
                         "sheets 'cross:PITCH,SLANT_DEG' (multi-ortho only; docs/geometry.md)")
 
 
-def lens_array_from_args(args: argparse.Namespace):
-    from ..geometry.presets import describe_fields, get_preset, lens_array_from_fields, merge_overrides
-
-    overrides: dict[str, Any] = {
+def array_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The preset fields the display options replace (``geometry.presets.FIELDS``), parsed."""
+    return {
         "grid": args.grid,
         "lenses": parse_pair(args.lenses, "--lenses", integral=True) if args.lenses else None,
         "ppl": parse_pair(args.ppl, "--ppl", integral=False) if args.ppl else None,
         "pixel_pitch": args.pixel_pitch,
         "focal": args.focal,
         "rows": args.rows,
-        "panel": parse_pair(args.panel, "--panel", integral=True) if args.panel else None,
+        "panel": parse_size(args.panel, "--panel") if args.panel else None,
         "lens_rotation": getattr(args, "lens_rotation", None),
         "lattice": getattr(args, "lattice", None),
     }
-    if overrides["panel"] is not None and not isinstance(overrides["panel"], tuple):
-        raise ConfigError(f"--panel takes WxH like 1920x1080, got {args.panel!r}")
-    fields = merge_overrides(get_preset(args.preset), overrides)
-    return lens_array_from_fields(fields), {"preset": args.preset, **describe_fields(fields)}
+
+
+def display_from_args(args: argparse.Namespace, *, method: str = "multi-ortho", mapped: bool = False) -> Any:
+    """The ``Display`` of the display options (``app.display_setup.build_display``); ``mapped``:
+    with the pixel mapping options (``--mapping``, ``--calibration`` ...) too."""
+    from ..app.display_setup import build_display
+
+    mapping = {"mapping": args.mapping, "mapping_options": mapping_options(args),
+               "calibration": args.calibration} if mapped else {}
+    return build_display(args.preset, array_overrides(args), method=method, **mapping)
+
+
+def lens_array_from_args(args: argparse.Namespace) -> Any:
+    """The display options' lens array (commands that need only the array)."""
+    return display_from_args(args).lens_array
 
 
 def progress_bar(enabled: bool, unit: str = "frames"):
@@ -144,26 +162,26 @@ def add_mapping_options(p: argparse.ArgumentParser, required: bool = False) -> N
     g.add_argument("--calibration", metavar="JSON", help="slanted: a Looking Glass visual.json or a 'povh3d calibrate --lattice lenticular' file; with render --method subpixel: the sheet it traces")
 
 
-def mapping_from_args(args: argparse.Namespace, lens_array, display):
-    from ..app.display import mapping_for_display
+def mapping_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The pixel mapping options (``mappings.options_from_display``) given on the command line."""
     from ..mappings import slope_from_degrees
 
     slope = 3 * args.slant_tan if args.slant_tan is not None else (
         slope_from_degrees(args.slant_deg) if args.slant_deg is not None else None)
-    return mapping_for_display(args.mapping, display, lens_array, calibration_path=args.calibration,
-                               per_lens=args.subpixels_per_lens, views=args.views, slope=slope,
-                               offset=args.offset or None, rows_per_view=args.rows_per_view,
-                               reverse=args.reverse_views or None, blend=args.blend or None)
+    return {"per_lens": args.subpixels_per_lens, "views": args.views, "slope": slope, "offset": args.offset or None,
+            "rows_per_view": args.rows_per_view, "reverse": args.reverse_views or None, "blend": args.blend or None}
 
 
 def ppl_arg(text: str | None, option: str = "--ppl", *, lenticular: bool = False) -> tuple[int, int] | None:
     """``(Ny, Nx)`` from ``NxxNy`` or ``N``.  One number means what it means in ``render``:
     N x N pixels per lens, or N x 1 on a lenticular array (which has one row of views)."""
+    from ..geometry.axes import from_edge
+
     if text is None:
         return None
     ppl = parse_pair(text, option, integral=True)
     if isinstance(ppl, tuple):
-        return (ppl[1], ppl[0])
+        return from_edge(ppl)
     return (1, ppl) if lenticular else (ppl, ppl)
 
 

@@ -14,8 +14,8 @@ from typing import Any
 
 from ..errors import ConfigError, Povh3dWarning
 from .volume import add_volume_options, volume_options_from_args
-from .options import (add_array_options, add_mapping_options, add_mesh_options, lens_array_from_args, positive_int,
-                      mapping_from_args, max_triangles, parse_triple, progress_bar, warn)
+from .options import (add_array_options, add_mapping_options, add_mesh_options, display_from_args,
+                      lens_array_from_args, max_triangles, parse_triple, positive_int, progress_bar, warn)
 
 METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage", "subpixel")
 QUALITY_NAMES = ("draft", "normal", "high", "auto")
@@ -28,19 +28,10 @@ def request_from_args(args: argparse.Namespace) -> Any:
     from ..engine.quality import RenderSettings
     from ..geometry.crop import CropSettings, parse_bbox
 
-    lens_array, display = lens_array_from_args(args)
-    mapping = panel = None
-    if args.calibration is not None and not args.mapping and args.method != "subpixel":
-        raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
-                          "add one of them, or drop --calibration")
-    if args.method == "subpixel":
-        lens_array, display = _subpixel_sheet(args, lens_array, display)
-    elif args.mapping:  # render exactly the views the mapping reads, then map them
-        mapping, panel = mapping_from_args(args, lens_array, display)
-        display = {**display, "mapping": mapping.name}
+    display = display_from_args(args, method=args.method, mapped=True)
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
                               timeout=args.timeout, use_cache=not args.no_cache,
-                              bit_depth=args.bit_depth, back_off=args.front_clearance,
+                              bit_depth=args.bit_depth, front_clearance=args.front_clearance,
                               scheduler=args.scheduler, max_error_db=args.max_error)
     frames = None
     if args.frames is not None:
@@ -48,58 +39,23 @@ def request_from_args(args: argparse.Namespace) -> Any:
         frames = FrameRange(*parse_frames(args.frames), *clock)
     elif args.clock is not None:
         raise ConfigError("--clock needs --frames FIRST:LAST")
-    method_options = _method_options(args)
-    if "shift_mm" in display.get("sheet", {}):
-        method_options["sheet_shift_mm"] = display["sheet"]["shift_mm"]
     return RenderRequest(
-        source=Path(args.scene), lens_array=lens_array,
-        output=output_path(args),
-        display=display, method=args.method, method_options=method_options, settings=settings,
+        source=Path(args.scene), display=display, output=output_path(args),
+        method=args.method, method_options=_method_options(args), settings=settings,
         crop=CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None),
-        mapping=mapping, mapped_panel=panel, include_dirs=tuple(Path(d) for d in args.include),
+        include_dirs=tuple(Path(d) for d in args.include),
         views_dir=Path(args.views_dir) if args.views_dir else None,
         model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles), args.up,
                            parse_triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
-        display_frame=frame_options_from_args(args),
+        display_frame=display_frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
         volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")))
 
 
-def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-    """``--method subpixel`` on a display with a slanted mapping (alioscopy-42, philips-20): the
-    sheet that mapping describes, traced subpixel by subpixel straight to the panel image; with
-    ``--calibration``, the calibrated sheet where the calibration puts it."""
-    if args.mapping:
-        raise ConfigError("--method subpixel writes the panel image itself; drop --mapping (a preset's "
-                          "slanted mapping gives the sheet it traces)")
-    if not display.get("mapping") and args.calibration is None:
-        return lens_array, display
-    if args.offset:
-        raise ConfigError("--method subpixel traces the sheet centred on the panel, or where --calibration puts "
-                          "it; drop --offset (the sidecar records the mapping offset that addresses the same sheet)")
-    from ..engine.subpixel import slanted_sheet
-
-    nominal, panel, record = None, lens_array.panel, {}
-    if display.get("mapping"):
-        mapping, panel = mapping_from_args(argparse.Namespace(**{**vars(args), "mapping": display["mapping"],
-                                                                 "calibration": None}), lens_array, display)
-        nominal, offset = slanted_sheet(mapping, panel, lens_array.focal)
-        record = {"from_mapping": mapping.name, "mapping_offset": offset}
-    elif lens_array.grid == "lenticular":
-        nominal = lens_array
-    if args.calibration is None:
-        return nominal, {**display, "sheet": record}
-    from ..app.display import read_calibration
-    from ..engine.calibrated_sheet import calibrated_sheet
-
-    sheet, _, record = calibrated_sheet(read_calibration(args.calibration), panel, lens_array.focal, nominal)
-    return sheet, {**display, "sheet": {**record, "calibration": str(Path(args.calibration).resolve())}}
-
-
-def frame_options_from_args(args: argparse.Namespace) -> Any:
-    """``FrameOptions`` from --display-frame and the explicit --display-* options."""
-    from ..app.frame import FrameOptions
+def display_frame_options_from_args(args: argparse.Namespace) -> Any:
+    """``DisplayFrameOptions`` from --display-frame and the explicit --display-* options."""
+    from ..app.frame import DisplayFrameOptions
 
     fit = args.fit_depth
     if fit is not None and fit != "auto":
@@ -113,7 +69,7 @@ def frame_options_from_args(args: argparse.Namespace) -> Any:
             scale = float(scale)
         except ValueError:
             raise ConfigError(f"--depth-scale takes a factor (e.g. 0.5) or nothing, got {scale!r}") from None
-    return FrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
+    return DisplayFrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
                         parse_triple(args.display_normal, "--display-normal"),
                         parse_triple(args.display_up, "--display-up"),
                         args.display_width, fit, scale)
@@ -139,7 +95,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     from ..app import output_cache
 
     output = output_path(args)
-    key = output_cache.request_key(args, output)
+    options = {k: v for k, v in vars(args).items() if k not in ("scene", "include", "output")}
+    key = output_cache.request_key(args.scene, output, options, args.include)
     if key is not None:
         start = time.perf_counter()
         hit = output_cache.answer(key, output)
@@ -150,7 +107,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     with _warnings_kept() as given:
         summary = _render(args)
     # A scene edited while it rendered: the image is of neither version's key.
-    if key is not None and summary is not None and output_cache.request_key(args, output) == key:
+    if key is not None and summary is not None and \
+            output_cache.request_key(args.scene, output, options, args.include) == key:
         output_cache.keep(key, output, summary[0], summary[1] + given)
     return 0
 
@@ -181,7 +139,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     warn(noted)
     t = result["timings"]
     w, h = request.image_size
-    mapping = f"  {request.mapping.name}" if request.mapping else ""
+    mapping = f"  {request.display.mapping.name}" if request.display.mapping else ""
     if "model" in result:
         mapping += f"  up {result['model']['up']} ({result['model']['up_reason']})"
     if "volume" in result:
@@ -240,7 +198,7 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
     if budget == "auto":
         from ..mesh.simplify import auto_budget
 
-        budget = auto_budget(lens_array_from_args(args)[0])
+        budget = auto_budget(lens_array_from_args(args))
     update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "steps")
     try:
         result = convert_mesh(args.model, args.output, name=args.name, unit=args.unit, shading=args.shading,
@@ -262,7 +220,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from ..app.bench import default_trials, format_table, run_bench, write_report
     from ..scene.scene import load_scene
 
-    lens_array, _ = lens_array_from_args(args)
+    lens_array = lens_array_from_args(args)
     scene = load_scene(args.scene, tuple(args.include))
     trials = default_trials(lens_array, args.methods.split(","))
     update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "trials")

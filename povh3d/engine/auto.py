@@ -44,7 +44,7 @@ class AutoChoice:
     seconds: float
     reference_samples: int = 256
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, Any]:
         return {"max_error_db": self.min_psnr_db, "chosen": self.quality.label,
                 "probe_lenses": list(self.probe_lenses), "probe_seconds": round(self.seconds, 3),
                 "probe_reference_samples": self.reference_samples,

@@ -1,5 +1,11 @@
-"""What a method asks POV-Ray for (``FrameBatch``) and what a render did (``RenderStats``):
-plain values shared by the methods, the crop and the frame runner."""
+"""What a method asks POV-Ray for (``ShotBatch``) and what a render did (``RenderStats``):
+plain values shared by the methods, the crop and the runner (``engine.frames``).
+
+Words: a *shot* is one image a method asks POV-Ray for (a view, a camera mesh's image);
+a POV-Ray run renders several shots as the frames of its own animation (a *POV-Ray frame*,
+``povray.job``).  An *animation frame* is one H3D image of ``--frames`` (``app.animation``),
+and the *display frame* is where the display sits in the scene (``geometry.frame``).
+"""
 
 from __future__ import annotations
 
@@ -10,31 +16,31 @@ from ..system import cpu_count
 
 
 @dataclass(frozen=True)
-class FrameBatch:
-    """What a method asks POV-Ray for: ``len(frames)`` images of ``width x height``.
+class ShotBatch:
+    """What a method asks POV-Ray for: ``len(shots)`` images of ``width x height``.
 
-    ``frames_per_job`` bounds how many frames one POV-Ray run renders as an
-    animation: a run costs about 0.7 s to start, a further frame about 0.2 s.
+    ``shots_per_job`` bounds how many shots one POV-Ray run renders as the frames
+    of an animation: a run costs about 0.7 s to start, a further frame about 0.2 s.
     """
 
     template: str
     context: dict[str, Any]
-    frames: list[dict[str, Any]]
+    shots: list[dict[str, Any]]
     width: int
     height: int
-    frames_per_job: int = 1
+    shots_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
     options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
 
 
-def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...] = ()) -> FrameBatch:
-    """One frame per camera mesh (``cameras.CameraMesh``, all of one image size), spread over the cores."""
+def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...] = ()) -> ShotBatch:
+    """One shot per camera mesh (``cameras.CameraMesh``, all of one image size), spread over the cores."""
     width, height = meshes[0].image_size
     if len(meshes) == 1:
-        return FrameBatch(template, {"mesh": meshes[0]}, [{}], width, height, processes=1, options=options)
+        return ShotBatch(template, {"mesh": meshes[0]}, [{}], width, height, processes=1, options=options)
     processes = min(cpu_count(), len(meshes))
-    return FrameBatch(template, {}, [{"mesh": m} for m in meshes], width, height,
-                      frames_per_job=-(-len(meshes) // processes), processes=processes, options=options)
+    return ShotBatch(template, {}, [{"mesh": m} for m in meshes], width, height,
+                      shots_per_job=-(-len(meshes) // processes), processes=processes, options=options)
 
 
 @dataclass
@@ -50,7 +56,7 @@ class RenderStats:
     wall_seconds: float = 0.0
     povray_version: str = ""
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, Any]:
         return {"frames": self.frames, "frames_from_cache": self.cached, "povray_jobs": self.jobs,
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),

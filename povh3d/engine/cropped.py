@@ -35,11 +35,11 @@ from ..errors import InputError
 from ..geometry.footprint import CENTRE
 from ..geometry.lens_array import LensArray
 from ..scene.scene import Scene
-from .batch import FrameBatch, RenderStats, mesh_camera_batch
+from .batch import ShotBatch, RenderStats, mesh_camera_batch
 from .quality import Progress, RenderSettings
 
 # trace(batch, label, progress) -> (images, stats): one batch rendered (``engine.frames.render_frames``).
-Trace = Callable[[FrameBatch, str, Progress | None], tuple[list[np.ndarray], RenderStats]]
+Trace = Callable[[ShotBatch, str, Progress | None], tuple[list[np.ndarray], RenderStats]]
 
 COVERAGE_OPTIONS = ("-A", "+Q0", "+UA")
 
@@ -53,16 +53,16 @@ class CroppedTiles:
     info: dict[str, Any]
 
 
-def coverage_mask(trace: Trace, lens_array: LensArray, back_off: float,
+def coverage_mask(trace: Trace, lens_array: LensArray, front_clearance: float,
                   samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
     """(Ny*Ly, Nx*Lx) bool: the tiled image's pixels one of whose ``samples`` meets an object."""
-    batch = mesh_camera_batch("coverage.pov.j2", view_bank_frames(lens_array, back_off, samples), COVERAGE_OPTIONS)
+    batch = mesh_camera_batch("coverage.pov.j2", view_bank_frames(lens_array, front_clearance, samples), COVERAGE_OPTIONS)
     images, stats = trace(batch, "multi-ortho coverage", None)
     alpha = stack_frames(images)[..., -1]
     return (alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0), stats
 
 
-def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, back_off: float,
+def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, front_clearance: float,
                          settings: RenderSettings, crop: CropSettings,
                          progress: Progress | None = None, samples: np.ndarray = CENTRE) -> CroppedTiles:
     """Render the one-pass view bank cropped to what the objects can reach.
@@ -100,17 +100,17 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, back
         col_hits, row_hits = bbox_hits(lens_array, crop.bbox, angular=bool(np.any(samples[:, 2:])))
         info["source"] = "bbox"
     else:
-        mask, _ = coverage_mask(trace, lens_array, back_off, samples)
+        mask, _ = coverage_mask(trace, lens_array, front_clearance, samples)
         col_hits, row_hits = mask_hits(mask, lens_array.views)
         info["source"] = "coverage pre-pass"
         info["coverage_fraction"] = round(float(mask.mean()), 6)
     info["plan_seconds"] = round(time.perf_counter() - start, 4)
     plan = plan_crop(col_hits, row_hits, crop.margin, block)
-    info.update(plan.describe())
+    info.update(plan.as_record())
     if plan.is_full:
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
 
-    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples, plan))
+    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, front_clearance, samples, plan))
     images, stats = trace(batch, "multi-ortho", progress)
     tiled = stack_frames(images)
     banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])

@@ -1,6 +1,6 @@
 """The scene's depth along the display normal, measured by POV-Ray: a low-resolution depth pass.
 
-An orthographic camera looks along the display normal from ``back_off`` mm in
+An orthographic camera looks along the display normal from ``front_clearance`` mm in
 front of the screen, over the lens array's field.  It renders the scene twice
 with a constant ``fog`` (``fog_type 1``) of colour 0 and of colour 1: POV-Ray
 blends a pixel of surface colour ``c`` as ``c t + fog (1 - t)`` with
@@ -24,7 +24,7 @@ from ..geometry.lens_array import LensArray
 from ..geometry.rays import depth_scaled_rays
 from ..image.colour import decode
 from ..scene.scene import Scene
-from .batch import FrameBatch
+from .batch import ShotBatch
 from .frames import render_frames
 from .quality import RenderSettings
 
@@ -66,18 +66,18 @@ class DepthMap:
                 "field_within_budget": bool(-half <= field_near and field_far <= half)}
 
 
-def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, back_off: float,
-               fog: float, width: int, height: int) -> FrameBatch:
+def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
+               fog: float, width: int, height: int) -> ShotBatch:
     """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames."""
     right = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0)
     up = (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
     frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
-    return FrameBatch("depth.pov.j2", {"fog_distance": fog, "back_off": back_off, "right": right, "up": up},
-                      frames, width, height, frames_per_job=max(2, min(400, len(frames))), processes=1,
+    return ShotBatch("depth.pov.j2", {"fog_distance": fog, "front_clearance": front_clearance, "right": right, "up": up},
+                      frames, width, height, shots_per_job=max(2, min(400, len(frames))), processes=1,
                       options=("-A",))
 
 
-def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: FrameBatch,
+def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch,
                  fog: float) -> tuple[np.ndarray, np.ndarray]:
     """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, clipped, unmeasured)
     and the fraction of unmeasured pixels per direction."""
@@ -114,24 +114,24 @@ def pass_size(lens_array: LensArray) -> tuple[int, int]:
     return w, max(1, round(w * height_mm / width_mm))
 
 
-def depth_map(distances: np.ndarray, lens_array: LensArray, back_off: float, units_per_mm: float,
+def depth_map(distances: np.ndarray, lens_array: LensArray, front_clearance: float, units_per_mm: float,
               unmeasured: float = 0.0) -> DepthMap:
-    """The depth map of ray lengths (scene units) of a pass along the normal from ``back_off`` mm."""
+    """The depth map of ray lengths (scene units) of a pass along the normal from ``front_clearance`` mm."""
     width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
-    return DepthMap(distances / units_per_mm - back_off, width_mm, height_mm, unmeasured)
+    return DepthMap(distances / units_per_mm - front_clearance, width_mm, height_mm, unmeasured)
 
 
-def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
+def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
                units_per_mm: float) -> DepthMap:
     """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
     w, h = pass_size(lens_array)
-    fog = back_off * units_per_mm   # scene units: t = 1/e at the screen
+    fog = front_clearance * units_per_mm   # scene units: t = 1/e at the screen
     d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
-                                                                          back_off, fog, w, h), fog)
-    return depth_map(d[0], lens_array, back_off, units_per_mm, float(unmeasured[0]))
+                                                                          front_clearance, fog, w, h), fog)
+    return depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
 
 
-def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, back_off: float,
+def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
                     units_per_mm: float) -> np.ndarray:
     """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
     (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
@@ -151,12 +151,12 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     slopes = np.array([((j + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f)
                        for l in range(ny) for j in range(nx)])
     directions = [(a, b, 1.0) for a, b in slopes.tolist()]
-    fog = back_off * units_per_mm
-    batch = _fog_batch(directions, lens_array, back_off, fog, lens_array.lenses_x, lens_array.lenses_y)
+    fog = front_clearance * units_per_mm
+    batch = _fog_batch(directions, lens_array, front_clearance, fog, lens_array.lenses_x, lens_array.lenses_y)
     d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
-    # The ray starts back_off * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
+    # The ray starts front_clearance * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
     lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
-    z = d / units_per_mm / lengths - back_off
+    z = d / units_per_mm / lengths - front_clearance
     shown = np.sqrt(((slopes / k) ** 2).sum(axis=1) + 1.0)   # the display's own ray, slope (u, v) / f
     out = k * z * shown[:, None, None]
     return out.reshape(ny, nx, *out.shape[1:]).astype(np.float32)

@@ -1,6 +1,6 @@
 """Turn a list of camera frames into images: cache lookups, POV-Ray jobs, reads.
 
-A rendering method describes what it needs as a ``FrameBatch``: one template,
+A rendering method describes what it needs as a ``ShotBatch``: one template,
 values common to every frame, and the per-frame values (a view's direction, a
 lens's centre).  Each frame has its own content key, so an unchanged view comes
 from the cache however the missing ones are batched into POV-Ray runs.
@@ -29,7 +29,7 @@ from ..povray.version_memo import remembered_version
 from ..errors import PovrayError, PovrayTimeout, warn
 from ..scene.scene import Scene
 from ..system import cpu_count
-from .batch import FrameBatch, RenderStats
+from .batch import ShotBatch, RenderStats
 from .quality import Progress, RenderSettings
 from ..povray.templates import render_template, templates_dir
 
@@ -71,14 +71,14 @@ def _template_digest(name: str) -> str:
     return h.hexdigest()
 
 
-def build_script(batch: FrameBatch, frames: list[dict[str, Any]], *, method: str, scene_path: str,
+def build_script(batch: ShotBatch, frames: list[dict[str, Any]], *, method: str, scene_path: str,
                  add_assumed_gamma: bool, header: dict[str, Any]) -> str:
     """The POV-Ray script that renders ``frames`` of ``batch`` as animation frames 1..n."""
     return render_template(batch.template, version=__version__, method=method, scene_path=scene_path,
                            add_assumed_gamma=add_assumed_gamma, frames=frames, **header, **batch.context)
 
 
-def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
+def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                   method: str, header: dict[str, Any], progress: Progress | None = None,
                   ) -> tuple[list[np.ndarray], RenderStats]:
     """Render every frame of ``batch`` (or take it from the cache), in order.
@@ -86,7 +86,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
     Parameters
     ----------
     scene : Scene
-    batch : FrameBatch
+    batch : ShotBatch
     settings : RenderSettings
     method : str                 the method's name, written into the script header
     header : dict                display constants for the scene header template
@@ -103,7 +103,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
         runner: Any = DaskRunner(settings.scheduler)
     else:
         runner = LocalRunner(find_povray())
-    stats = RenderStats(frames=len(batch.frames), povray_version=runner.version)
+    stats = RenderStats(frames=len(batch.shots), povray_version=runner.version)
     cache = ImageCache(settings.cache_dir or default_cache_dir()) if settings.use_cache else None
     if cache is not None and scene.computed_names and not confines():
         # Unconfined, POV-Ray may read files whose names povh3d cannot know: no key covers them.
@@ -116,7 +116,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
                              _template_digest(batch.template), _canonical(batch.context),
                              _canonical(header), batch.width, batch.height, settings.options,
                              settings.bit_depth, scene.sets_assumed_gamma, batch.options)
-    keys = [content_key(common_key, _canonical(frame)) for frame in batch.frames]
+    keys = [content_key(common_key, _canonical(frame)) for frame in batch.shots]
     images: list[np.ndarray | None] = [None] * len(keys)
     missing: list[int] = []
     for index, key in enumerate(keys):
@@ -134,7 +134,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
 
     # Frames reach the cache one by one as POV-Ray writes them (``take``), so the method's
     # batching into runs costs nothing when a run is stopped (Ctrl-C, timeout, crash).
-    per_job = batch.frames_per_job
+    per_job = batch.shots_per_job
     chunks = [missing[i:i + per_job] for i in range(0, len(missing), per_job)]
     cores = cpu_count()
     processes = max(1, min(len(chunks) or 1, settings.jobs or batch.processes or cores))
@@ -143,7 +143,7 @@ def render_frames(scene: Scene, batch: FrameBatch, settings: RenderSettings, *,
 
     jobs = []
     for chunk in chunks:
-        script = build_script(batch, [batch.frames[i] for i in chunk], method=method,
+        script = build_script(batch, [batch.shots[i] for i in chunk], method=method,
                               scene_path=str(scene.path), add_assumed_gamma=not scene.sets_assumed_gamma,
                               header=header)
         name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")

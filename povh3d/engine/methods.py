@@ -16,7 +16,7 @@
 Every method traces the ray of a pixel (docs/geometry.md); point-sampled they
 agree.  A method is pure around the renderer: its ``plan`` says which frames to
 ask POV-Ray for and how to assemble the returned images into the H3D image;
-its hooks say what it supports (footprint samples, crop, back-off rounding)
+its hooks say what it supports (footprint samples, crop, front-clearance rounding)
 and what the sidecar records of it.
 """
 
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError, warn
-from ..geometry.cameras import (bank_back_off, check_clearance, default_back_off,
+from ..geometry.cameras import (bank_front_clearance, check_front_clearance, default_front_clearance,
                                 ortho_view_frames, pinhole_frames, stack_frames, view_bank_frames)
 from ..geometry.crop import CropSettings
 from ..geometry.footprint import CENTRE, latin_hypercube
@@ -42,7 +42,7 @@ from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
 from ..system import cpu_count
 from .cropped import render_cropped_tiles
-from .batch import FrameBatch, RenderStats, mesh_camera_batch
+from .batch import ShotBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
 from . import subpixel
@@ -53,18 +53,18 @@ from .single_stage import SingleStagePlan, default_depth, lenslet_for
 class MethodPlan:
     """What one render of a method asks POV-Ray for, and how it becomes the H3D image."""
 
-    batch: FrameBatch
+    batch: ShotBatch
     assemble: Callable[[list[np.ndarray]], np.ndarray]
     record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
 
 
-def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
     if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
-        mesh = lens_mesh(lens_array, back_off)
+        mesh = lens_mesh(lens_array, front_clearance)
         return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
                           lambda images: mesh.crop(stack_frames(images)))
     # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
-    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples)),
+    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, front_clearance, samples)),
                       lambda images: banks_to_h3d(lens_array, stack_frames(images)))
 
 
@@ -76,41 +76,42 @@ def banks_to_h3d(lens_array: LensArray, image: np.ndarray) -> np.ndarray:
     return interleave(untile_views(bank, (ny, nx)))
 
 
-def _multi_ortho_views(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+def _multi_ortho_views(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
     ny, nx = lens_array.require_views()
-    check_clearance(lens_array, back_off)
+    check_front_clearance(lens_array, front_clearance)
     common, frames = ortho_view_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     # Process start-up (~0.7 s) is mostly idle, so more processes than cores
     # overlap it; a few frames per run amortise it further.
     processes = 4 * cpu_count()
     per_job = max(1, -(-len(frames) // processes))
-    batch = FrameBatch("multi_ortho_views.pov.j2", {**common, "back_off": back_off}, frames,
-                       width, height, frames_per_job=per_job, processes=processes)
+    batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": front_clearance}, frames,
+                       width, height, shots_per_job=per_job, processes=processes)
     return MethodPlan(batch, lambda images: interleave(np.stack(images).reshape(ny, nx, *images[0].shape)))
 
 
-def _pinhole(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+def _pinhole(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
     lens_array.require_views()
     common, frames = pinhole_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
     processes = 2 * cpu_count()
     # Many small frames per run: each extra frame costs a re-parse, not a start-up.
     per_job = max(1, min(500, -(-len(frames) // processes)))
-    batch = FrameBatch("pinhole.pov.j2", common, frames, width, height,
-                       frames_per_job=per_job, processes=processes)
+    batch = ShotBatch("pinhole.pov.j2", common, frames, width, height,
+                       shots_per_job=per_job, processes=processes)
     lenses = (lens_array.lenses_y, lens_array.lenses_x)
     return MethodPlan(batch, lambda images: tile_elemental_images(
         np.stack(images).reshape(*lenses, *images[0].shape)))
 
 
-def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *,
+def _single_stage(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *,
                   lenslet: str, ior: float | None, supersample: int = 1) -> MethodPlan:
     if lens_array.grid == "lattice":
         raise ConfigError("--method single-stage builds square, hex and lenticular lenslets, not a general "
                           "lattice (--lattice); render it with --method multi-ortho")
-    plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off, supersample)
-    return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
+    plan = SingleStagePlan.for_front_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), front_clearance,
+                                               supersample)
+    return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.as_record())
 
 
 def single_stage_supersamples(quality: Quality) -> int:
@@ -131,7 +132,7 @@ def single_stage_supersamples(quality: Quality) -> int:
     return quality.aa_depth if quality.antialias is not None else 1
 
 
-def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray, *, supersample: int = 1,
+def _subpixel(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, supersample: int = 1,
               sheet_shift_mm: float = 0.0) -> MethodPlan:
     """A rational sheet (every real panel): one quad per phase coset, and with ``supersample``
     k > 1 one frame per point of ``k x k`` footprint samples (aperture and subpixel area, averaged
@@ -144,29 +145,29 @@ def _subpixel(lens_array: LensArray, back_off: float, samples: np.ndarray, *, su
         if supersample > 1:
             warn("this lens sheet's phases do not repeat within 64 subpixels and rows, so --method subpixel "
                  "traces it point-sampled (one strip per lenticule); give a rational sheet to antialias")
-        meshes = [lens_mesh(sub, back_off, shift)]
+        meshes = [lens_mesh(sub, front_clearance, shift)]
     else:
         points = latin_hypercube(supersample * supersample) if supersample > 1 else CENTRE
-        meshes = [tiles_mesh(sub, tiles, back_off, tuple(p), shift) for p in points]
+        meshes = [tiles_mesh(sub, tiles, front_clearance, tuple(p), shift) for p in points]
     outside = uncovered(sub, shift) if tiles is not None else None
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
                       lambda images: subpixel.assemble(meshes[0], tiles, images, outside),
-                      subpixel.describe(lens_array, tiles, len(meshes), shift))
+                      subpixel.sheet_record(lens_array, tiles, len(meshes), shift))
 
 
 @dataclass(frozen=True)
 class Method:
     """A rendering method and what it supports.
 
-    plan(array, back-off mm, footprint samples (K, 4), **options) -> MethodPlan
+    plan(array, front clearance mm, footprint samples (K, 4), **options) -> MethodPlan
     """
 
     plan: Callable[..., MethodPlan]
     # The method's own options and their defaults (CLI --lenslet, --ior).
     options: Mapping[str, Any] = field(default_factory=dict)
-    default_back_off: Callable[[LensArray], float] = default_back_off
+    default_front_clearance: Callable[[LensArray], float] = default_front_clearance
     # Where the rays really start for a requested clearance (the sidecar's figure).
-    round_back_off: Callable[[LensArray, float], float] = lambda lens_array, back_off: back_off
+    round_front_clearance: Callable[[LensArray, float], float] = lambda lens_array, front_clearance: front_clearance
     # Whether the method can trace footprint samples (sub-views) for this array;
     # where it cannot, a quality that asks for them falls back to antialiasing.
     takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
@@ -192,7 +193,7 @@ def _whole_views(lens_array: LensArray) -> bool:
 
 METHODS: dict[str, Method] = {
     "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True,
-                          round_back_off=lambda la, b: bank_back_off(la, b) if la.views else b),
+                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
@@ -217,7 +218,7 @@ def display_header(lens_array: LensArray) -> dict[str, Any]:
 class MethodResult:
     h3d: np.ndarray          # (H, W, C) uint8 or uint16
     stats: RenderStats
-    back_off: float
+    front_clearance: float
     quality: Quality         # as rendered (after any fallback to antialiasing)
     crop: dict[str, Any] | None = None    # what the crop did, for the sidecar
     record: dict[str, Any] | None = None  # the method's own set-up, for the sidecar
@@ -238,7 +239,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     asked = settings.spec
     header = display_header(lens_array)   # the display's own constants, whatever --depth-scale does
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
-    back_off = method.round_back_off(lens_array, settings.back_off or method.default_back_off(lens_array))
+    front_clearance = method.round_front_clearance(
+        lens_array, settings.front_clearance or method.default_front_clearance(lens_array))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if quality != settings.spec:
         settings = replace(settings, quality=quality)
@@ -254,17 +256,17 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     settings_needed = quality_settings(scene.features, quality)
     if settings_needed:
         header["global_settings"] = settings_needed
-    def trace(batch: FrameBatch, label: str, progress: Progress | None) -> tuple[list[np.ndarray], RenderStats]:
+    def trace(batch: ShotBatch, label: str, progress: Progress | None) -> tuple[list[np.ndarray], RenderStats]:
         return render_frames(scene, batch, settings, method=label, header=header, progress=progress)
 
     h3d, crop_info, record = None, None, None
     if method.crops and crop is not None:
-        tiles = render_cropped_tiles(trace, scene, lens_array, back_off, settings, crop, progress, samples)
+        tiles = render_cropped_tiles(trace, scene, lens_array, front_clearance, settings, crop, progress, samples)
         crop_info = tiles.info
         if tiles.tiled is not None:
             h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats
     if h3d is None:
-        plan = method.plan(lens_array, back_off, samples, **plan_options)
+        plan = method.plan(lens_array, front_clearance, samples, **plan_options)
         images, stats = trace(plan.batch, name, progress)
         h3d, record = plan.assemble(images), plan.record
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
@@ -273,4 +275,4 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
         canvas[lens_array.bank_region] = h3d
         h3d = canvas
-    return MethodResult(h3d, stats, back_off, quality, crop_info, record)
+    return MethodResult(h3d, stats, front_clearance, quality, crop_info, record)

@@ -128,7 +128,7 @@ class RenderSettings:
     use_cache : bool            read and write the image cache
     cache_dir : Path or None    None: ``default_cache_dir()``
     bit_depth : {8, 16}
-    back_off : float or None    mm in front of the screen where rays start (None: default)
+    front_clearance : float or None    mm in front of the screen where rays start (None: default)
     clock : float or None       POV-Ray's ``clock`` for every run (None: POV-Ray's default, 0);
                                 set only for scenes that read it (see animation.py)
     scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
@@ -146,7 +146,7 @@ class RenderSettings:
     use_cache: bool = True
     cache_dir: Path | None = None
     bit_depth: int = 8
-    back_off: float | None = None
+    front_clearance: float | None = None
     clock: float | None = None
     scheduler: str | None = None
     max_error_db: float | None = None
@@ -173,8 +173,8 @@ class RenderSettings:
             raise ConfigError(f"--timeout must be a positive number of seconds, got {self.timeout}")
         if self.bit_depth not in (8, 16):
             raise ConfigError(f"bit depth must be 8 or 16, got {self.bit_depth}")
-        if self.back_off is not None and not (np.isfinite(self.back_off) and self.back_off > 0):
-            raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.back_off}")
+        if self.front_clearance is not None and not (np.isfinite(self.front_clearance) and self.front_clearance > 0):
+            raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.front_clearance}")
 
         if self.clock is not None and not np.isfinite(self.clock):
             raise ConfigError(f"the clock must be a finite number, got {self.clock}")

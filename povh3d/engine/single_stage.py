@@ -68,7 +68,7 @@ from ..geometry.rays import pixel_rays
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet
-from .batch import FrameBatch
+from .batch import ShotBatch
 
 APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
 
@@ -215,13 +215,13 @@ class SingleStagePlan:
                 raise ConfigError(f"single-stage depth {self.depth!r} mm is not a multiple of {unit!r} mm")
 
     @classmethod
-    def for_clearance(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float,
-                      supersample: int = 1) -> SingleStagePlan:
-        """The plan whose depth is the smallest exact ``D >= clearance`` (0 for no clearance)."""
+    def for_front_clearance(cls, lens_array: LensArray, lenslet: Lenslet, front_clearance: float,
+                            supersample: int = 1) -> SingleStagePlan:
+        """The plan whose depth is the smallest exact ``D >= front_clearance`` (0 for none)."""
         unit = recentre_unit(lens_array, supersample)
-        if clearance <= 0:
+        if front_clearance <= 0:
             return cls(lens_array, lenslet, 0.0, supersample)
-        return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9), supersample)
+        return cls(lens_array, lenslet, unit * math.ceil(front_clearance / unit - 1e-9), supersample)
 
     # -- view shifts ------------------------------------------------------------
     @cached_property
@@ -340,10 +340,10 @@ class SingleStagePlan:
         """Capture pixels per panel pixel and axis: ``k`` with whole PPL, else 1 (denser bank)."""
         return self.supersample if self.bank is None else 1
 
-    def batch(self) -> FrameBatch:
+    def batch(self) -> ShotBatch:
         panel, k = self.capture_array.panel, self.camera_supersample
         # The camera keeps its mm extent: k x k sub-pixels tile each pixel, centred in it.
-        return FrameBatch("single_stage.pov.j2", self.template_context(), [{}],
+        return ShotBatch("single_stage.pov.j2", self.template_context(), [{}],
                           panel.width * k, panel.height * k, processes=1)
 
     # -- from the capture to the H3D image ------------------------------------------
@@ -385,9 +385,9 @@ class SingleStagePlan:
                 out[l, k] = views[l, k, i0:i0 + la.lenses_y, j0:j0 + la.lenses_x]
         return interleave(out)
 
-    def describe(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, Any]:
         cap = self.capture_array
-        return {"lenslet": self.lenslet.describe(), "focal_plane_z_mm": -self.depth,
+        return {"lenslet": self.lenslet.as_record(), "focal_plane_z_mm": -self.depth,
                 "principal_plane_z_mm": -self.depth - self.lenslet.focal,
                 "capture_lenses": [cap.lenses_x, cap.lenses_y],
                 "capture_size_px": [cap.panel.width * self.camera_supersample,

@@ -143,7 +143,7 @@ def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.einsum("hwcc->hwc", cells))
 
 
-def describe(lens_array: LensArray, tiles: PhaseTiles | None, samples: int = 1, shift: float = 0.0) -> dict[str, Any]:
+def sheet_record(lens_array: LensArray, tiles: PhaseTiles | None, samples: int = 1, shift: float = 0.0) -> dict[str, Any]:
     sub = subpixel_array(lens_array)
     return {"subpixel_panel_px": [sub.panel.width, sub.panel.height],
             "slant_deg": lens_array.rotation, "sheet_shift_mm": shift,

@@ -2,7 +2,7 @@
 
 Pure: a LensArray in, NumPy arrays and numbers out.  Every camera here traces
 the ray of a pixel of docs/geometry.md: through the lens centre ``c`` with
-direction ``(u, v, f)``, starting ``back_off`` mm in front of the display plane
+direction ``(u, v, f)``, starting ``front_clearance`` mm in front of the display plane
 so that objects floating in front of the screen are seen.
 """
 
@@ -25,10 +25,10 @@ POVRAY_MIN_DEPTH = 1e-4
 POVRAY_MAX_DEPTH = 1e7
 #: The least front clearance, mm: a hundred times POV-Ray's nearest depth, so a
 #: tiny panel (scene scaled to micrometres) still sees its screen.
-MIN_CLEARANCE = 100 * POVRAY_MIN_DEPTH
+MIN_FRONT_CLEARANCE = 100 * POVRAY_MIN_DEPTH
 
 
-def default_back_off(lens_array: LensArray) -> float:
+def default_front_clearance(lens_array: LensArray) -> float:
     """How far in front of the screen rays start, mm: four panel widths, at least 0.01 mm.
 
     Far enough for any object a display can show in front of its screen, near
@@ -37,7 +37,7 @@ def default_back_off(lens_array: LensArray) -> float:
     beyond POV-Ray's nearest intersection depth on panels under 2.5 um wide.
     """
     width, height = lens_array.panel.size_mm
-    return max(4.0 * max(width, height), MIN_CLEARANCE)
+    return max(4.0 * max(width, height), MIN_FRONT_CLEARANCE)
 
 
 def ray_stretch(lens_array: LensArray) -> float:
@@ -59,31 +59,31 @@ def ray_stretch(lens_array: LensArray) -> float:
     return float(np.sqrt(hx * hx + hy * hy + f * f) / f)
 
 
-def check_clearance(lens_array: LensArray, back_off: float) -> None:
+def check_front_clearance(lens_array: LensArray, front_clearance: float) -> None:
     """Refuse a front clearance POV-Ray cannot trace (ConfigError naming the range that works).
 
-    Rays start ``back_off`` mm in front of the screen; the most oblique travels
-    ``back_off * ray_stretch`` to reach it.  That must stay above POV-Ray's
+    Rays start ``front_clearance`` mm in front of the screen; the most oblique travels
+    ``front_clearance * ray_stretch`` to reach it.  That must stay above POV-Ray's
     nearest intersection depth and under half its furthest, leaving at least
     as much again for the scene behind the screen.
     """
-    if not back_off >= MIN_CLEARANCE:
+    if not front_clearance >= MIN_FRONT_CLEARANCE:
         raise ConfigError(
-            f"the front clearance {back_off:g} mm is under {MIN_CLEARANCE:g} mm: POV-Ray ignores surfaces "
-            f"nearer than {POVRAY_MIN_DEPTH:g} mm to where a ray starts; use --front-clearance {MIN_CLEARANCE:g} or more")
+            f"the front clearance {front_clearance:g} mm is under {MIN_FRONT_CLEARANCE:g} mm: POV-Ray ignores surfaces "
+            f"nearer than {POVRAY_MIN_DEPTH:g} mm to where a ray starts; use --front-clearance {MIN_FRONT_CLEARANCE:g} or more")
     stretch = ray_stretch(lens_array)
-    if back_off * stretch > POVRAY_MAX_DEPTH / 2:
+    if front_clearance * stretch > POVRAY_MAX_DEPTH / 2:
         most = POVRAY_MAX_DEPTH / 2 / stretch
-        if most < MIN_CLEARANCE:  # no clearance works: the display itself is out of POV-Ray's reach
+        if most < MIN_FRONT_CLEARANCE:  # no clearance works: the display itself is out of POV-Ray's reach
             w, h = lens_array.panel.size_mm
             raise ConfigError(
                 f"a {w:.4g} x {h:.4g} mm display with rays this oblique is beyond POV-Ray's {POVRAY_MAX_DEPTH:g} mm "
                 "ray length whatever the front clearance; check --pixel-pitch and --focal (mm), or model the "
                 "scene and the display in larger units (smaller numbers)")
         raise ConfigError(
-            f"rays starting {back_off:.6g} mm in front of the screen travel {back_off * stretch:.4g} mm to reach it, "
+            f"rays starting {front_clearance:.6g} mm in front of the screen travel {front_clearance * stretch:.4g} mm to reach it, "
             f"over half of POV-Ray's {POVRAY_MAX_DEPTH:g} mm ray length, so the scene behind it would vanish; "
-            f"use --front-clearance between {MIN_CLEARANCE:g} and {most:.6g} mm (or model the scene in smaller units)")
+            f"use --front-clearance between {MIN_FRONT_CLEARANCE:g} and {most:.6g} mm (or model the scene in smaller units)")
 
 
 # -- multi-orthographic camera bank, one orthographic camera per view ---------------
@@ -97,7 +97,7 @@ def ortho_view_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
         ``right``, ``up`` (mm vectors spanning the lens array) and image size.
     frames : list of dict
         ``{"view": (l, k), "direction": (u/f, v/f, 1)}``; the template backs the
-        camera off along ``direction`` (z component 1, so by exactly ``back_off``).
+        camera off along ``direction`` (z component 1, so by exactly ``front_clearance``).
     """
     u, v = lens_array.view_offsets()
     f = lens_array.focal
@@ -136,7 +136,7 @@ class CameraMesh:
 
     Attributes
     ----------
-    vertices : (n, 3) float            ray origins at z = -back_off, in mm / ``scale``
+    vertices : (n, 3) float            ray origins at z = -front_clearance, in mm / ``scale``
     normals : (n, 3) float              ray directions ``(u, v, f)`` times ``scale``
     uvs : (n, 2) float                  lookup coordinates
     faces : (m, 3) int
@@ -175,7 +175,7 @@ def _borders_on_pixel_centres(lenses: int, ppl: float, pixels: int) -> bool:
     return bool(np.any(np.abs(borders - np.rint(borders)) < 1e-6))
 
 
-def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+def camera_mesh(lens_array: LensArray, front_clearance: float) -> CameraMesh:
     """One quad per lens (one strip per lens column for lenticular arrays).
 
     Within a lens, origin and direction are linear in the pixel offset ``(u, v)``,
@@ -191,7 +191,7 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     axis: if POV-Ray normalises the normals, a ray's crossing of ``z = 0`` moves
     by about 0.006 pixel (6.5 PPL, f = 1.5 mm, s = 0.1 mm).
     """
-    check_clearance(lens_array, back_off)
+    check_front_clearance(lens_array, front_clearance)
     if lens_array.rotation or lens_array.grid == "hex":
         raise ConfigError("a turned or hex lattice has one cell per lens; use lattice_mesh.lens_mesh")
     panel = lens_array.panel
@@ -214,7 +214,7 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         y = np.broadcast_to(corner_y, x.shape)
         u = np.broadcast_to(corner_u, x.shape)
         v = np.zeros_like(x)
-        origin_x = cx[:, None] - u * (back_off / f)
+        origin_x = cx[:, None] - u * (front_clearance / f)
         origin_y = y
     else:
         c = centres.reshape(-1, 2)
@@ -224,17 +224,17 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
         y = c[:, 1:2] + corner_v[None, :]
         u = np.broadcast_to(corner_u, x.shape)
         v = np.broadcast_to(corner_v, x.shape)
-        origin_x = c[:, 0:1] - u * (back_off / f)
-        origin_y = c[:, 1:2] - v * (back_off / f)
+        origin_x = c[:, 0:1] - u * (front_clearance / f)
+        origin_y = c[:, 1:2] - v * (front_clearance / f)
 
     # Panel position -> fractional image column/row.
     col = x / sx + W / 2 - 0.5
     row = H / 2 - 0.5 - y / sy
-    return _quad_mesh(origin_x, origin_y, u, v, col, row, (W, H), back_off, f)
+    return _quad_mesh(origin_x, origin_y, u, v, col, row, (W, H), front_clearance, f)
 
 
 def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.ndarray,
-               col: np.ndarray, row: np.ndarray, size: tuple[int, int], back_off: float,
+               col: np.ndarray, row: np.ndarray, size: tuple[int, int], front_clearance: float,
                focal: float, scale: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> CameraMesh:
     """A CameraMesh from ``(quads, 4)`` corner values, corners counter-clockwise.
 
@@ -248,7 +248,7 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
         return [np.broadcast_to(np.asarray(a, dtype=np.float64), shape) for a in values]
 
     uv = np.stack(full(col / (W + 1), 1.0 - (row + 1.0) / (H + 1)), axis=-1)
-    vertices = np.stack(full(origin_x, origin_y, -back_off), axis=-1).reshape(-1, 3)
+    vertices = np.stack(full(origin_x, origin_y, -front_clearance), axis=-1).reshape(-1, 3)
     normals = np.stack(full(u, v, focal), axis=-1).reshape(-1, 3)
     # A convex polygon per lens (quads; hexagons) as a fan of triangles from corner 0.
     n = shape[1]
@@ -280,7 +280,7 @@ def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) ->
     return [samples[i:i + size] for i in range(0, len(samples), size)]
 
 
-def view_bank_frames(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None,
+def view_bank_frames(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None = None,
                      plan=None) -> list[CameraMesh]:
     """The meshes of the frames that trace a view bank per footprint sample (``bank_groups``).
 
@@ -290,13 +290,13 @@ def view_bank_frames(lens_array: LensArray, back_off: float, samples: np.ndarray
     view[l, k][i, j]``, one bank per footprint sample of the group, stacked top to
     bottom.  Within a view the ray origin is linear in the lens index and the
     direction constant, so one quad per view is exact; every corner is exact in
-    single precision (``bank_back_off``), so a cropped pixel gets the very ray the
+    single precision (``bank_front_clearance``), so a cropped pixel gets the very ray the
     uncropped mesh gives it.
     """
     cols, rows, size = _bank_tiles(lens_array, plan)
     samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
     groups = bank_groups(samples, 2 * len(cols) * len(rows), size[0] * size[1])
-    return [_bank_mesh(lens_array, back_off, group, cols, rows, size) for group in groups]
+    return [_bank_mesh(lens_array, front_clearance, group, cols, rows, size) for group in groups]
 
 
 def _bank_tiles(lens_array: LensArray, plan) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
@@ -311,19 +311,19 @@ def _bank_tiles(lens_array: LensArray, plan) -> tuple[np.ndarray, np.ndarray, tu
     return cols, rows, (lx * nx, ly * ny)
 
 
-def bank_back_off(lens_array: LensArray, back_off: float) -> float:
-    """The front clearance a view bank uses: ``back_off`` rounded up to a multiple of ``f * lcm(Nx, Ny)``.
+def bank_front_clearance(lens_array: LensArray, front_clearance: float) -> float:
+    """The front clearance a view bank uses: ``front_clearance`` rounded up to a multiple of ``f * lcm(Nx, Ny)``.
 
-    Then every view's origin shift ``u * back_off / f``, in lens pitches, is a
+    Then every view's origin shift ``u * front_clearance / f``, in lens pitches, is a
     multiple of 1/2 (times the samples' 1/GRID grid), so the bank's corners,
     written in lens pitches, are exact in POV-Ray's single precision.
     """
     ny, nx = lens_array.require_views()
     unit = lens_array.focal * math.lcm(nx, ny)
-    return math.ceil(back_off / unit * (1 - 1e-12)) * unit
+    return math.ceil(front_clearance / unit * (1 - 1e-12)) * unit
 
 
-def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None, cols: np.ndarray,
+def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None, cols: np.ndarray,
                rows: np.ndarray, size: tuple[int, int]) -> CameraMesh:
     """Quads over column segments x row segments of the tiled views, one bank per sample.
 
@@ -333,8 +333,8 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     offset, is a multiple of 1/GRID and stored exactly (see ``CameraMesh``).
     """
     ny, nx = lens_array.require_views()
-    back_off = bank_back_off(lens_array, back_off)
-    check_clearance(lens_array, back_off)
+    front_clearance = bank_front_clearance(lens_array, front_clearance)
+    check_front_clearance(lens_array, front_clearance)
     px, py, f = lens_array.pitch_x, lens_array.pitch_y, lens_array.focal
     s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
     samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
@@ -354,9 +354,9 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     top, bottom = cy[i0] + 0.5, cy[i1 - 1] - 0.5
     x = np.concatenate([left, right, right, left], axis=1) + ax
     y = np.concatenate([bottom, bottom, top, top], axis=1) + ay
-    # The origin shift u * back_off / f in lens pitches: u = (k - (Nx-1)/2 + du) s and
-    # px = Nx s, so (k - (Nx-1)/2 + du) * back_off / (f Nx), a whole multiple of the offset.
-    units = round(back_off / (f * math.lcm(nx, ny)))
+    # The origin shift u * front_clearance / f in lens pitches: u = (k - (Nx-1)/2 + du) s and
+    # px = Nx s, so (k - (Nx-1)/2 + du) * front_clearance / (f Nx), a whole multiple of the offset.
+    units = round(front_clearance / (f * math.lcm(nx, ny)))
     mx, my = units * math.lcm(nx, ny) // nx, units * math.lcm(nx, ny) // ny
     turn_x = k - (nx - 1) / 2 + du
     turn_y = (ny - 1) / 2 - l + dv
@@ -365,7 +365,7 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     i = np.concatenate([i1, i1, i0, i0], axis=1) - 0.5
     return _quad_mesh(origin_x, origin_y, turn_x * s_x * px, turn_y * s_y * py,
                       col0 + (j - j0), b * height + row0 + (i - i0),
-                      (width, height * len(samples)), back_off, f, (px, py, 1.0))
+                      (width, height * len(samples)), front_clearance, f, (px, py, 1.0))
 
 
 def stack_frames(images: list[np.ndarray]) -> np.ndarray:

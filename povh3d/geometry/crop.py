@@ -12,7 +12,7 @@ Why the pixels are identical, not just close:
 
 - A kept pixel gets the same ray: both meshes are written in lens pitches,
   where every corner is exact in POV-Ray's single-precision vertices
-  (``cameras.bank_back_off``), so the cropped quads lie exactly on the
+  (``cameras.bank_front_clearance``), so the cropped quads lie exactly on the
   uncropped ones and the rays agree to double rounding (in mm, corners were
   rounded differently: 1-23 of 2-8 million pixels changed).
 - A ray that meets no object shows the constant background (no fog, media,
@@ -125,7 +125,7 @@ class CropPlan:
         """(n, 4) int: ``(view l, first lens row, stop, cropped-image row)`` of each kept run."""
         return _segments(self.keep_rows, self.lenses[1])
 
-    def describe(self) -> dict:
+    def as_record(self) -> dict:
         return {"traced_fraction": round(self.fraction, 6), "size_px": list(self.size),
                 "full_size_px": list(self.full_size)}
 

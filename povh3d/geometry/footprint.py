@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 CENTRE = np.zeros((1, 4))
-#: Samples sit on a grid of 1/GRID: a view bank's corners (``cameras.bank_back_off``)
+#: Samples sit on a grid of 1/GRID: a view bank's corners (``cameras.bank_front_clearance``)
 #: then stay exact in POV-Ray's single precision, and a cropped bank traces the very
 #: rays of the uncropped one.
 GRID = 2048

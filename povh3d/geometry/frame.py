@@ -20,7 +20,7 @@ Pure: no files, no processes.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -49,6 +49,8 @@ class DisplayFrame:
     units_per_mm : float                 scene units per display millimetre (> 0)
     source : str                         where it came from: 'native', 'camera', 'explicit'
     note : str                           how it was worked out, for the sidecar
+    camera_distance : float or None      a camera frame's scene camera, how far from the centre
+                                         (scene units); what lies behind it is no part of the view
     """
 
     centre: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -58,6 +60,7 @@ class DisplayFrame:
     units_per_mm: float = 1.0
     source: str = "native"
     note: str = ""
+    camera_distance: float | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         axes = np.array([_vec(a, f"the frame's {n}") for a, n in
@@ -107,7 +110,7 @@ class DisplayFrame:
     def scaled(self, factor: float) -> DisplayFrame:
         """The same placement with ``factor`` times the units per mm (``--fit-depth``)."""
         return DisplayFrame(self.centre, self.axis_x, self.axis_y, self.axis_z, self.units_per_mm * factor,
-                            self.source, self.note)
+                            self.source, self.note, self.camera_distance)
 
     def as_record(self) -> dict[str, Any]:
         return {"source": self.source, "centre": list(self.centre), "axis_x": list(self.axis_x),
@@ -180,4 +183,5 @@ def camera_frame(location: Any, direction: Any, right: Any, up: Any, look_at: An
     if np.dot(y, u) < 0:
         y = -y  # a mirrored camera: the image's up stays up
     width = distance * np.linalg.norm(r) / np.linalg.norm(d)
-    return DisplayFrame(tuple(centre), tuple(x), tuple(y), tuple(z), width / panel_width_mm, "camera", note)
+    return DisplayFrame(tuple(centre), tuple(x), tuple(y), tuple(z), width / panel_width_mm, "camera", note,
+                        float(np.linalg.norm(centre - loc)))

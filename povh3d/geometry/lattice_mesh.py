@@ -12,20 +12,20 @@ from dataclasses import replace
 
 import numpy as np
 
-from .cameras import TIE_SHIFT, CameraMesh, _quad_mesh, camera_mesh, check_clearance
+from .cameras import TIE_SHIFT, CameraMesh, _quad_mesh, camera_mesh, check_front_clearance
 from .lattice import lattice_coordinates
 from .lens_array import LensArray
 from .rays import pixel_rays
 
 
-def lens_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> CameraMesh:
+def lens_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0.0) -> CameraMesh:
     """One cell per lens: ``lattice_mesh`` for hex, turned, general or shifted lattices, else ``camera_mesh``."""
     if lens_array.rotation or lens_array.grid in ("hex", "lattice") or shift:
-        return lattice_mesh(lens_array, back_off, shift)
-    return camera_mesh(lens_array, back_off)
+        return lattice_mesh(lens_array, front_clearance, shift)
+    return camera_mesh(lens_array, front_clearance)
 
 
-def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> CameraMesh:
+def lattice_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0.0) -> CameraMesh:
     """``camera_mesh`` of a rotated lattice, a hex one or a general one: one polygon per lens cell.
 
     The cell of every lens (square: its pitch rectangle; hex: its hexagon, all six
@@ -44,7 +44,7 @@ def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> 
     ``shift`` (lenticular only): the lenticules' axes lie that many mm further across
     (the lattice's ``x``) than the centred sheet's: a calibrated sheet's phase.
     """
-    check_clearance(lens_array, back_off)
+    check_front_clearance(lens_array, front_clearance)
     la = lens_array
     panel = la.panel
     W, H = panel.width, panel.height
@@ -75,7 +75,7 @@ def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> 
         lx = cx[:, None] + cu[None, :]
         ly = np.stack([ends[:, 0] - reach] * 2 + [ends[:, 1] + reach] * 2, axis=1)  # along the lenticule
         ou, ov = np.broadcast_to(cu, lx.shape), np.zeros(lx.shape)  # v across the lenticule is 0
-        olx, oly = cx[:, None] - ou * (back_off / f), ly
+        olx, oly = cx[:, None] - ou * (front_clearance / f), ly
     else:
         X, Y = la.to_lattice(*np.meshgrid(*panel.pixel_centres()))
         owner, inside = _pixel_owners(la, X, Y)
@@ -93,7 +93,7 @@ def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> 
             cu, cv = np.array([-hx, hx, hx, -hx]), np.array([-hy, -hy, hy, hy])
         lx, ly = c[:, 0:1] + cu[None, :], c[:, 1:2] + cv[None, :]
         ou, ov = np.broadcast_to(cu, lx.shape), np.broadcast_to(cv, lx.shape)
-        olx, oly = c[:, 0:1] - ou * (back_off / f), c[:, 1:2] - ov * (back_off / f)
+        olx, oly = c[:, 0:1] - ou * (front_clearance / f), c[:, 1:2] - ov * (front_clearance / f)
     x, y = la.from_lattice(lx, ly)
     u, v = la.from_lattice(ou, ov)
     origin_x, origin_y = la.from_lattice(olx, oly)
@@ -104,7 +104,7 @@ def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> 
     shear = None
     if la.grid == "lattice":
         shear, origin_x, origin_y, u, v = _unshear(la, origin_x, origin_y, u, v)
-    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), back_off, f)
+    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), front_clearance, f)
     return replace(mesh, margin=(mx, my), shear=shear)
 
 

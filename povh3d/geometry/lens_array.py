@@ -13,6 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .axes import to_edge
 from ..errors import ConfigError
 
 GRIDS = ("square", "lenticular", "hex", "lattice")
@@ -48,6 +49,16 @@ def _count(name: str, value: int, fix: str) -> int:
     if value > MAX_PANEL_PIXELS:
         raise ConfigError(f"{name} {value} is too large; {fix}")
     return int(value)
+
+
+def lens_rotation(value: object) -> float:
+    """A lens rotation in degrees within (-45, 45] as a float; a ConfigError otherwise (a
+    lattice turned further is the same lattice turned less)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+            or not -45 < value <= 45:
+        raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {value!r}; "
+                          "a lattice turned further is the same lattice turned less (--lens-rotation)")
+    return float(value)
 
 
 def nearest_integer(value: float) -> int | None:
@@ -138,11 +149,7 @@ class LensArray:
 
     def __post_init__(self) -> None:
         self._check_basis()
-        rot = self.rotation
-        if isinstance(rot, bool) or not isinstance(rot, (int, float)) or not math.isfinite(rot) or not -45 < rot <= 45:
-            raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {rot!r}; "
-                              "a lattice turned further is the same lattice turned less (--lens-rotation)")
-        object.__setattr__(self, "rotation", float(rot))
+        object.__setattr__(self, "rotation", lens_rotation(self.rotation))
         if self.grid not in GRIDS:
             raise ConfigError(f"grid must be one of {', '.join(GRIDS)}, got {self.grid!r}; pick one with --grid")
         object.__setattr__(self, "lenses_x", _count("lens count", self.lenses_x, "give it as --lenses 60x40 (lenticular: --lenses 60)"))
@@ -340,7 +347,7 @@ class LensArray:
         """3D pixels per inch, horizontal and vertical."""
         return (25.4 / self.pitch_x, 25.4 / self.pitch_y)
 
-    def describe(self) -> dict:
+    def as_record(self) -> dict:
         """Plain values for JSON sidecars and ``povh3d info``."""
         out: dict = {
             "grid": self.grid,
@@ -361,9 +368,9 @@ class LensArray:
         if self.views is not None:
             ah, av = self.view_angles_deg()
             out.update({
-                "views": [self.views[1], self.views[0]],
-                "view_size_px": [self.lenses_x, self.lenses_y],
-                "h3d_size_px": [self.h3d_size[1], self.h3d_size[0]],
+                "views": to_edge(self.views),
+                "view_size_px": to_edge(self.view_size),
+                "h3d_size_px": to_edge(self.h3d_size),
                 "view_angles_deg": {"horizontal": ah.tolist(), "vertical": av.tolist()},
             })
         return out

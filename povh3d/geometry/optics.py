@@ -191,7 +191,7 @@ class Lenslet:
         b = 0.0 if self.aperture == "lenticular" else 1.0
         return ((1.0, b, 1.0 + self.conic), (0.0, 0.0, 0.0), (0.0, 0.0, 2.0 * self.radius), 0.0)
 
-    def describe(self) -> dict:
+    def as_record(self) -> dict:
         return {"shape": self.shape, "aperture": self.aperture, "ior": self.ior,
                 "radius_mm": self.radius, "conic_constant": self.conic, "focal_mm": self.focal,
                 "aperture_radius_mm": self.aperture_radius, "thickness_mm": self.thickness,

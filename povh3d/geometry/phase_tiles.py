@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cameras import CameraMesh, _quad_mesh, check_clearance
+from .cameras import CameraMesh, _quad_mesh, check_front_clearance
 from .lens_array import LensArray
 
 #: Most cosets per axis tried: the thesis's panels need 9 (Philips) and 8 (Alioscopy).
@@ -112,7 +112,7 @@ def uncovered(lens_array: LensArray, shift: float = 0.0) -> np.ndarray | None:
     return (j < 0) | (j >= la.lenses_x)
 
 
-def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float,
+def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, front_clearance: float,
                sample: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0), shift: float = 0.0) -> CameraMesh:
     """The mesh camera of ``tiles``: one quad per coset, the quad edges half a pixel outside its pixels.
 
@@ -128,7 +128,7 @@ def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float,
 
     ``shift`` moves the lenticules across by that many mm (``_phase_gradient``).
     """
-    check_clearance(lens_array, back_off)
+    check_front_clearance(lens_array, front_clearance)
     la = lens_array
     (A, B), (M, I) = tiles.period, tiles.tile
     W, H = la.panel.width, la.panel.height
@@ -148,8 +148,8 @@ def tiles_mesh(lens_array: LensArray, tiles: PhaseTiles, back_off: float,
     cx = (n + m * nA + i * nB + 0.5 - la.lenses_x / 2) * la.pitch_x + shift  # the lens axis, lattice frame
     u = xl + dx - cx
     v = np.full_like(u, dy)
-    ox, oy = la.from_lattice(cx + ax * la.pitch_x - u * (back_off / la.focal),
-                             yl + ay * la.pitch_y - v * (back_off / la.focal))
+    ox, oy = la.from_lattice(cx + ax * la.pitch_x - u * (front_clearance / la.focal),
+                             yl + ay * la.pitch_y - v * (front_clearance / la.focal))
     ux, uy = la.from_lattice(u, v)
     col, row = a * M + m, b * I + i
-    return _quad_mesh(ox, oy, ux, uy, col, row, tiles.image_size, back_off, la.focal)
+    return _quad_mesh(ox, oy, ux, uy, col, row, tiles.image_size, front_clearance, la.focal)

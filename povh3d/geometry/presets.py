@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import ConfigError
 
 if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
-    from .lens_array import LensArray
+    from .lens_array import LensArray, Panel
 
 FIELDS = ("description", "grid", "panel", "pixel_pitch", "lens_pitch", "ppl", "lenses",
           "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation", "lattice")
@@ -227,18 +227,15 @@ def _lattice_from_fields(fields: dict[str, Any], sx: float, sy: float,
     import numpy as np
 
     from .lattice import lattice_coordinates, lattice_vectors
-    from .lens_array import MAX_PANEL_PIXELS, Panel, lattice_array
+    from .lens_array import MAX_PANEL_PIXELS, Panel, lattice_array, lens_rotation
 
     if "lattice" not in fields:
         raise ConfigError("grid 'lattice' needs its two lattice vectors; give them with --lattice")
     if fields.get("grid", "lattice") != "lattice":
         raise ConfigError(f"lattice vectors are a grid of their own, not {fields['grid']!r}; drop --grid or --lattice")
     a1, a2 = (np.asarray(a) for a in parse_lattice(fields["lattice"]))
-    rotation = fields.get("lens_rotation") or 0.0
+    rotation = lens_rotation(fields.get("lens_rotation") or 0.0)
     if rotation:  # a turned lattice is the lattice of turned vectors
-        if isinstance(rotation, bool) or not isinstance(rotation, (int, float)) or not -45 < rotation <= 45:
-            raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {rotation!r}; "
-                              "a lattice turned further is the same lattice turned less (--lens-rotation)")
         c, s = math.cos(math.radians(rotation)), math.sin(math.radians(rotation))
         turn = np.array([[c, -s], [s, c]])
         a1, a2 = lattice_vectors((turn @ a1, turn @ a2))
@@ -282,23 +279,11 @@ def _length(value: float) -> None:
                           "check --pixel-pitch and --ppl")
 
 
-def describe_fields(fields: dict[str, Any]) -> dict[str, Any]:
-    """The display fields that are not geometry (mapping, slant, physical panel)."""
-    out = {k: fields[k] for k in ("description", "views", "slant_deg", "mapping") if k in fields}
-    if "panel" in fields and fields.get("mapping"):
-        sx, sy = _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
-        out["physical_panel"] = {"size_px": list(fields["panel"]), "pixel_pitch_mm": [sx, sy]}
-    return out
+def physical_panel(fields: dict[str, Any]) -> Panel | None:
+    """The physical panel of a preset whose array is its mapping's view space (a ``mapping`` field), else None."""
+    from .lens_array import Panel
 
-
-def lens_array_from_record(record: dict[str, Any]) -> LensArray:
-    """The LensArray a sidecar's ``lens_array`` entry (``LensArray.describe()``) describes."""
-    from .lens_array import LensArray, Panel
-
-    try:
-        panel = Panel(*record["panel"]["size_px"], *record["panel"]["pixel_pitch_mm"])
-        return LensArray(record["grid"], *record["lenses"], *record["lens_pitch_mm"], record["focal_mm"], panel,
-                         record.get("rotation_deg", 0.0),
-                         tuple(map(tuple, record["lattice_mm"])) if "lattice_mm" in record else None)
-    except (KeyError, TypeError) as exc:
-        raise ConfigError(f"the sidecar's lens array is incomplete ({exc}); give --ppl NxxNy") from None
+    if "panel" not in fields or not fields.get("mapping"):
+        return None
+    (w, h), (sx, sy) = fields["panel"], _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
+    return Panel(int(w), int(h), float(sx), float(sy))

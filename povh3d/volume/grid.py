@@ -84,7 +84,7 @@ class Volume:
         """The label values present (0, the background, left out)."""
         return [int(v) for v in np.unique(self.values) if v != 0]
 
-    def describe(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, Any]:
         lo, hi = self.value_range()
         return {"name": self.name, "shape": list(self.shape), "spacing_mm": [float(s) for s in self.spacing],
                 "origin_mm": [float(o) for o in self.origin],

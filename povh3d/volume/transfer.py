@@ -86,7 +86,7 @@ class Transfer:
         lo, hi = self.window(volume_values)
         return lo + v * (hi - lo)
 
-    def record(self) -> dict:
+    def as_record(self) -> dict:
         return {"name": self.name, "kind": self.kind, "points": [
             [float(v), *map(float, c), float(s)] for v, c, s in zip(self.values, self.colour, self.extinction)]}
 

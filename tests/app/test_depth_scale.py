@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from povh3d.app.display_setup import Display
 from povh3d.app.frame import FrameOptions
 from povh3d.app.placement import place_display
 from povh3d.app.request import RenderRequest
@@ -143,7 +144,7 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     scene = tmp_path / "s.pov"
     scene.write_text(SCENE.format(far=30))
     array = small()
-    request = RenderRequest(source=scene, lens_array=array, output=tmp_path / "o.png",
+    request = RenderRequest(source=scene, display=Display(array), output=tmp_path / "o.png",
                             settings=RenderSettings(quality="draft"),
                             display_frame=FrameOptions(fit_depth="auto", depth_scale="fit"))
     placed, record = place_display(request, load_scene(scene))
@@ -156,7 +157,7 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     assert record["depth"]["far_mm"] == pytest.approx(before["far_mm"] * k)
     assert placed.settings.frame is None   # the frame is not scaled: lateral sizes kept
     # Without --depth-scale the frame shrinks instead.
-    request = RenderRequest(source=scene, lens_array=array, output=tmp_path / "o.png",
+    request = RenderRequest(source=scene, display=Display(array), output=tmp_path / "o.png",
                             settings=RenderSettings(quality="draft"), display_frame=FrameOptions(fit_depth="auto"))
     placed, record = place_display(request, load_scene(scene))
     assert placed.settings.depth_scale == 1 and record["units_per_mm"] == pytest.approx(1 / k)

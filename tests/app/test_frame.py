@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from povh3d.app.display_setup import Display
 from povh3d.app.frame import FrameOptions, resolve_frame
 from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
@@ -98,7 +99,7 @@ def test_views_equal_oblique_orthographic_renders(tmp_path, name):
     record = render(GALLERY / name, array, tmp_path / "h3d.png", settings=RenderSettings(quality="draft"))
     frame = _frame(record["display_frame"])
     assert record["display_frame"]["source"] == "camera"
-    back_off = record["quality"]["front_clearance_mm"]
+    front_clearance = record["quality"]["front_clearance_mm"]
     views = extract(read_png(tmp_path / "h3d.png"), array.require_views())
     ny, nx = array.require_views()
     s, f = array.panel.pitch_x, array.focal
@@ -107,7 +108,7 @@ def test_views_equal_oblique_orthographic_renders(tmp_path, name):
         u, v = (k + 0.5 - nx / 2) * s, (ny / 2 - l - 0.5) * s
         d = np.array([u / f, v / f, 1.0])
         # The ray of docs/geometry.md in display mm, carried into scene units by the frame in NumPy.
-        location = frame.to_scene(-back_off * d)
+        location = frame.to_scene(-front_clearance * d)
         direction = frame.directions_to_scene(d)
         right = frame.directions_to_scene([array.lenses_x * array.pitch_x, 0, 0])
         up = frame.directions_to_scene([0, array.lenses_y * array.pitch_y, 0])
@@ -216,7 +217,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
 
     scene, array = load_scene(GALLERY / "tilted.pov"), small_array()
     settings = RenderSettings(quality="draft", cache_dir=tmp_path)
-    request = RenderRequest(source=scene.path, lens_array=array, output=tmp_path / "o.png", settings=settings)
+    request = RenderRequest(source=scene.path, display=Display(array), output=tmp_path / "o.png", settings=settings)
     monkeypatch.setattr(placement, "depth_pass", None)   # a separate pass would fail: none is run
     _, record = placement.place_display(request, scene)
     again = placement.place_display(request, scene)[1]
@@ -229,8 +230,10 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     for key in ("near_mm", "far_mm", "field_near_mm", "field_far_mm"):
         assert record["depth"][key] == pytest.approx(own[key], abs=0.02), key
     # The pass belongs to its frame and clearance: another one is measured again.
-    _, _, seen = resolve_frame_and_depth(FrameOptions(), scene, array, cache_dir=tmp_path, back_off=4 * 28.8)
-    clearance = placement._clearance(frame, record, 4 * 28.8)   # within 0.9 of the camera's distance
+    placed, _, seen = resolve_frame_and_depth(FrameOptions(), scene, array, cache_dir=tmp_path,
+                                              front_clearance=4 * 28.8)
+    assert np.allclose(placed.matrix(), frame.matrix())
+    clearance = placement._front_clearance(placed, 4 * 28.8)   # within 0.9 of the camera's distance
     assert clearance < 4 * 28.8
     assert seen.depth(frame, clearance, array) is not None
     assert seen.depth(frame.scaled(1.001), clearance, array) is None

@@ -13,6 +13,7 @@ import pytest
 import povh3d
 from povh3d.app import render as render_module
 from povh3d.cli.main import main
+from povh3d.app.display_setup import Display
 from povh3d.errors import ConfigError
 from povh3d.image.io import read_png
 
@@ -113,7 +114,7 @@ def test_the_python_api_gives_the_cli_image(tmp_path, scene):
 @pytest.mark.parametrize("call, name", [
     (lambda p: povh3d.render(p, p.with_suffix(".png"), qualty="draft"), "qualty"),
     (lambda p: povh3d.presets.lens_array("demo", foccal=2.0), "foccal"),
-    (lambda p: povh3d.RenderRequest(p, povh3d.presets.lens_array("demo"), p.with_suffix(".png"),
+    (lambda p: povh3d.RenderRequest(p, Display(povh3d.presets.lens_array("demo")), p.with_suffix(".png"),
                                     method_options={"lenslet": "conic"}), "lenslet"),
 ])
 def test_unknown_names_are_refused_by_name(tmp_path, scene, call, name):

@@ -81,7 +81,7 @@ def test_grid_file_round_trip(tmp_path):
     write_grid(tmp_path / "grid.json", grid)
     again = read_grid(tmp_path / "grid.json")
     np.testing.assert_allclose(again.centres, grid.centres, atol=1e-9)
-    record = grid.to_dict()
+    record = grid.as_record()
     for key in ("lattice", "pitch_px", "rotation_deg", "centers_px", "residual_px", "confidence"):
         assert key in record
     assert np.asarray(record["centers_px"]).shape == (int(grid.inside.sum()), 2)

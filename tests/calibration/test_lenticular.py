@@ -51,7 +51,7 @@ def test_looking_glass_fields_put_the_central_view_on_every_axis():
     pitch, slant, phase = 9.37, 9.46, 0.8
     w, h = 480, 320
     fit = calibrate_lenticular(render_lenticular_white((w, h), pitch, slant, phase, noise=0.01))
-    cal = fit.to_dict(dpi=254.0)
+    cal = fit.as_record(dpi=254.0)
     # Points on true axes, in image pixels: n . (q - c) = phase + m pitch, n = (cos t, -sin t).
     t = math.radians(slant)
     n, along = np.array([math.cos(t), -math.sin(t)]), np.array([math.sin(t), math.cos(t)])

@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from povh3d.app.calibration import calibrate_lenticular_file
-from povh3d.app.display import mapping_for_display
+from povh3d.app.display_setup import mapping_for_display
 from povh3d.cli.main import build_parser
-from povh3d.cli.options import lens_array_from_args
+from povh3d.cli.options import display_from_args
 from povh3d.cli.render import request_from_args
 from povh3d.engine.calibrated_sheet import calibrated_sheet
 from povh3d.engine.methods import METHODS
@@ -62,7 +62,7 @@ def render_sheet(scene, *args):
     """The sheet, its shift and the display record ``povh3d render --method subpixel ARGS`` traces."""
     parsed = build_parser().parse_args(["render", str(scene), "--method", "subpixel", *map(str, args)])
     request = request_from_args(parsed)
-    return request.lens_array, request.method_options["sheet_shift_mm"], request.display
+    return request.display.lens_array, request.method_options["sheet_shift_mm"], request.display
 
 
 def files(tmp_path):
@@ -80,9 +80,8 @@ def test_render_and_map_address_one_sheet(tmp_path):
     for name, path, display_args in files(tmp_path):
         sheet, shift, display = render_sheet(scene, *display_args, "--calibration", path)
         parsed = build_parser().parse_args(["render", str(scene), *display_args])
-        la, disp = lens_array_from_args(parsed)
-        mapping, panel = mapping_for_display("slanted", disp, la, calibration_path=str(path), views=7)
-        assert display["sheet"]["mapping_offset"] == pytest.approx(mapping.offset, abs=1e-9), name
+        mapping, panel = mapping_for_display("slanted", display_from_args(parsed), calibration=path, views=7)
+        assert display.sheet["mapping_offset"] == pytest.approx(mapping.offset, abs=1e-9), name
         lens, across = sheet_phase(sheet, shift)
         m_lens, _, frac = mapping.phases((panel.width, panel.height))
         centre = (frac * mapping.per_lens / mapping.views + 0.5) / mapping.per_lens  # the mapping's, 0..1
@@ -161,6 +160,26 @@ def test_povray_traces_the_calibrated_rays(cli, tmp_path):
     assert _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center + 0.25) > 10 * worst
 
 
+def test_the_python_api_makes_the_calibrated_render(tmp_path):
+    """``povh3d.render(..., method="subpixel", calibration=FILE)``: the same calibrated sheet as the
+    command line's, through the one display builder (same oracle and control as above)."""
+    import povh3d
+
+    z0, half, size, pixel_mm, focal = 3.0, 12.0, (60, 30), 0.1, 1.0
+    pitch_px, slant, center = 4.37, 11.3, 0.37
+    cal = looking_glass_file(tmp_path / "visual.json", size, pixel_mm, pitch_px, slant, center)
+    scene = write_position_plane(tmp_path, z0, half)
+    out = tmp_path / "api.png"
+    array = povh3d.presets.lens_array("demo", panel=list(size), pixel_pitch=pixel_mm, focal=focal)
+    record = povh3d.render(scene, out, lens_array=array, method="subpixel", calibration=cal, quality="draft",
+                           bit_depth=16, use_cache=False)
+    assert record["display"]["sheet"]["from_calibration"] and record["subpixel"]["sheet_shift_mm"] != 0
+    coded = decode(read_png(out)) * 2 * half - half
+    worst = _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center)
+    assert worst < 0.01, f"worst subpixel {worst:.4f} mm off"
+    assert _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center + 0.25) > 10 * worst
+
+
 def _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center):
     """Worst miss (mm) of the red x and green y against the rays of the Looking Glass shader.
 
@@ -233,8 +252,7 @@ def test_every_calibrated_ray_through_the_lookup(tmp_path, rational):
         path, display_args = pixel_file(tmp_path / "i.json", (60, 30), 4.37, 11.3, -1.62), PLAIN
     sheet, shift, _ = render_sheet(scene, *display_args, "--calibration", path)
     parsed = build_parser().parse_args(["render", str(scene), *display_args])
-    la, disp = lens_array_from_args(parsed)
-    mapping, panel = mapping_for_display("slanted", disp, la, calibration_path=str(path), views=5)
+    mapping, panel = mapping_for_display("slanted", display_from_args(parsed), calibration=path, views=5)
     sub = subpixel_array(sheet)
     tiles = phase_tiles(sub)
     assert (tiles is not None) == rational and shift != 0

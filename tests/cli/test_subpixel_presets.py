@@ -17,11 +17,10 @@ import json
 import numpy as np
 import pytest
 
-from povh3d.app.display import mapping_for_display
+from povh3d.app.display_setup import build_display, mapping_for_display
 from povh3d.engine.methods import METHODS
 from povh3d.engine.subpixel import slanted_sheet, subpixel_array
 from povh3d.geometry.phase_tiles import phase_tiles
-from povh3d.geometry.presets import describe_fields, get_preset, lens_array_from_fields, merge_overrides
 from povh3d.geometry.rays import pixel_rays
 from povh3d.image.colour import decode
 from povh3d.image.io import read_png
@@ -34,18 +33,16 @@ PANEL = (60, 30)
 
 
 def _sheet(preset: str):
-    fields = merge_overrides(get_preset(preset), {"panel": PANEL})
-    la = lens_array_from_fields(fields)
-    display = {"preset": preset, **describe_fields(fields)}
-    mapping, panel = mapping_for_display(fields["mapping"], display, la)
-    return mapping, panel, la, display
+    display = build_display(preset, {"panel": PANEL})
+    mapping, panel = mapping_for_display(display.mapping_name, display)
+    return mapping, panel, display.lens_array, display
 
 
 @PRESETS
 def test_the_sheet_is_the_mappings(preset):
     mapping, panel, la, display = _sheet(preset)
     sheet, offset = slanted_sheet(mapping, panel, la.focal)
-    shifted, _ = mapping_for_display(mapping.name, display, la, offset=offset or None)
+    shifted, _ = mapping_for_display(mapping.name, display, offset=offset or None)
     _, _, frac = shifted.phases((panel.width, panel.height))
     sub = subpixel_array(sheet)
     x, _ = sub.to_lattice(*np.meshgrid(*sub.panel.pixel_centres()))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from povh3d.engine.frames import FrameBatch, render_frames
+from povh3d.engine.frames import ShotBatch, render_frames
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import Quality, RenderSettings
 from povh3d.errors import InputError
@@ -141,7 +141,7 @@ def test_identical_frames_in_one_batch_are_traced_once(quarter_scene):
     common, frames = ortho_view_frames(la)
     w, h = common.pop("width"), common.pop("height")
     twice = [frames[0], frames[1], dict(frames[0])]
-    batch = FrameBatch("multi_ortho_views.pov.j2", {**common, "back_off": 20.0}, twice, w, h)
+    batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": 20.0}, twice, w, h)
     seen = []
     images, stats = render_frames(quarter_scene, batch, RenderSettings(quality="draft", use_cache=False),
                                   method="multi-ortho-views", header={"panel_size": (1, 1), "lens_pitch": 0.2,

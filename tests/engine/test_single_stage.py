@@ -55,7 +55,7 @@ plane {{ z, {z0!r}
 
 def render_linear16(batch, method: str, scene: Path, lens_array) -> list[np.ndarray]:
     """Every frame of ``batch`` rendered raw: linear light, 16 bit, no antialiasing."""
-    script = build_script(batch, batch.frames, method=method, scene_path=str(scene),
+    script = build_script(batch, batch.shots, method=method, scene_path=str(scene),
                           add_assumed_gamma=False, header=display_header(lens_array))
     job = PovrayJob(name="positions", script=script, width=batch.width, height=batch.height,
                     options=("-A",), bit_depth=16, file_gamma="1.0", read_files=(str(scene),))
@@ -206,7 +206,7 @@ def test_resampled_arrays_place_depth_like_the_oracle(tmp_path, la, z0):
     # must show the colour the ray of docs/geometry.md meets (geometry.pixel_rays).
     scene = load_scene(write_checker_plane(tmp_path, z0, 2.5))
     got = run_method("single-stage", scene, la, DRAFT).h3d
-    plan = SingleStagePlan.for_clearance(la, lenslet_for(la), default_depth(la))
+    plan = SingleStagePlan.for_front_clearance(la, lenslet_for(la), default_depth(la))
     assert plan.depth > abs(z0) > 3.5 * la.focal
     parity, clear = checker_oracle(la, z0, 2.5)
     assert clear.sum() > 800  # hex: the clear footprint bounds the whole hexagon (px / sqrt 3)
@@ -232,13 +232,13 @@ def test_recentre_depth_is_exact_for_every_grid():
     assert recentre_unit(SQUARE) == pytest.approx(1.5 * 12)            # even 6 PPL: 2 * 6 * f
     la = square_array(lx=10, ly=10, nx=5, ny=3, s=0.1, f=1.0)
     assert recentre_unit(la) == pytest.approx(15.0)                    # lcm(5, 3) * f
-    plan = SingleStagePlan.for_clearance(SQUARE, lenslet_for(SQUARE), 10.0)
+    plan = SingleStagePlan.for_front_clearance(SQUARE, lenslet_for(SQUARE), 10.0)
     assert plan.depth == pytest.approx(18.0)
     sx, sy = plan.shifts
     assert sx.tolist() == [-5, -3, -1, 1, 3, 5] and sy.tolist() == [5, 3, 1, -1, -3, -5]
     hexa = lens_array_from_fields(get_preset("hex-5.6"))
     assert recentre_unit(hexa) == pytest.approx(20 * hexa.focal)      # its 10 x 10 capture grid
-    assert SingleStagePlan.for_clearance(hexa, lenslet_for(hexa), 25.0).depth == pytest.approx(40.0)
+    assert SingleStagePlan.for_front_clearance(hexa, lenslet_for(hexa), 25.0).depth == pytest.approx(40.0)
     with pytest.raises(ConfigError, match="not a multiple"):
         SingleStagePlan(hexa, lenslet_for(hexa), 25.0)
 

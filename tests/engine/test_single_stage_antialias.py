@@ -49,7 +49,7 @@ def test_povray_antialiasing_on_the_capture_fails(tmp_path):
     # The former scheme, rendered directly: point capture, POV-Ray +A0.1 +AM2 +R3.
     z0 = 7.3
     scene = load_scene(write_checker_plane(tmp_path, z0, PERIOD))
-    plan = SingleStagePlan.for_clearance(REPORT, lenslet_for(REPORT), default_depth(REPORT))
+    plan = SingleStagePlan.for_front_clearance(REPORT, lenslet_for(REPORT), default_depth(REPORT))
     settings = RenderSettings(quality=QUALITY_LEVELS["normal"], use_cache=False)
     images, _ = render_frames(scene, plan.batch(), settings, method="single-stage",
                               header=display_header(REPORT))
@@ -67,8 +67,8 @@ def test_lens_aligned_bank_antialiases_inside_the_lens(tmp_path, la):
     result = run_method("single-stage", scene, la, RenderSettings(quality="normal", use_cache=False))
     assert clear_match(result.h3d, la, z0) >= 0.995
     # k = 3 denser samples than the point-sampled bank.
-    draft = SingleStagePlan.for_clearance(la, lenslet_for(la), 1.0)
-    dense = SingleStagePlan.for_clearance(la, lenslet_for(la), 1.0, 3)
+    draft = SingleStagePlan.for_front_clearance(la, lenslet_for(la), 1.0)
+    dense = SingleStagePlan.for_front_clearance(la, lenslet_for(la), 1.0, 3)
     assert dense.bank.samples[0] >= 3 * draft.bank.samples[0] - 1
 
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from tests.support.render import render
-from povh3d.geometry.cameras import MIN_CLEARANCE
+from povh3d.geometry.cameras import MIN_FRONT_CLEARANCE
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.geometry.footprint import CENTRE, angular_grid
 from povh3d.geometry.lens_array import LensArray, Panel
@@ -219,7 +219,7 @@ def test_scripts_hold_only_finite_numbers(method, index):
     # multi-ortho also with footprint samples (3x3 angular sub-views per pixel).
     samples = angular_grid(3) if method == "multi-ortho" and la.views else CENTRE
     batch = METHODS[method].plan(la, 4 * max(la.panel.size_mm), samples, **METHODS[method].options).batch
-    script = build_script(batch, batch.frames, method=method, scene_path="/s.pov", add_assumed_gamma=True,
+    script = build_script(batch, batch.shots, method=method, scene_path="/s.pov", add_assumed_gamma=True,
                           header=display_header(la))
     assert not re.search(r"\b(nan|inf|infinity)\b", script, re.I)
     numbers = [float(t) for t in _NUMBER.findall(script)]
@@ -258,9 +258,9 @@ def test_clearance_beyond_povray_reach_is_refused_before_rendering(tmp_path):
     with pytest.raises(ConfigError, match=r"POV-Ray's 1e\+07 mm ray length.*--front-clearance between 0\.01 and"):
         render(write_checker_plane(tmp_path, 6e6, 2.5e6), la, out, settings=DRAFT)
     assert not out.exists() and not out.with_suffix(".json").exists()
-    with pytest.raises(ConfigError, match=f"under {MIN_CLEARANCE:g} mm"):
+    with pytest.raises(ConfigError, match=f"under {MIN_FRONT_CLEARANCE:g} mm"):
         run_method("multi-ortho-views", load_scene(write_checker_plane(tmp_path, 1.0, 1.0)),
-                   scaled_array("square", 1.0), RenderSettings(quality="draft", back_off=1e-3))
+                   scaled_array("square", 1.0), RenderSettings(quality="draft", front_clearance=1e-3))
 
 
 # -- index of refraction close to 1 (single-stage lenslets) -------------------------

@@ -64,9 +64,9 @@ def test_panel_takes_channel_c_of_subpixel_c():
         np.testing.assert_array_equal(panel[..., c], image[:, c::3, c])
 
 
-def _camera(sheet: LensArray, back_off: float):
+def _camera(sheet: LensArray, front_clearance: float):
     """The method's own mesh camera and its phase tiles (None: strips)."""
-    plan = METHODS["subpixel"].plan(sheet, back_off, np.zeros((1, 4)))
+    plan = METHODS["subpixel"].plan(sheet, front_clearance, np.zeros((1, 4)))
     return plan.batch.context["mesh"], phase_tiles(subpixel_array(sheet))
 
 

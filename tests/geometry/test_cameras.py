@@ -60,8 +60,8 @@ def _assert_hits_lens_centres(la, hit, centres):
 @pytest.mark.parametrize("la", [square_array(lx=6, ly=4, nx=4, ny=3), lenticular_array(lx=5, rows=7, nx=6),
                                 square_array(lx=3, ly=2, nx=1, ny=1)], ids=["square", "lenticular", "1ppl"])
 def test_mesh_camera_traces_the_ray_of_every_pixel(la):
-    back_off = 50.0
-    mesh = camera_mesh(la, back_off)
+    front_clearance = 50.0
+    mesh = camera_mesh(la, front_clearance)
     origin, normal, margin, inside_face = (a[1:, :-1] for a in _simulate_mesh_camera(mesh))  # cut off
     assert np.all(inside_face > -1e-12), "a lookup fell outside every face"
     centres, dirs, inside = pixel_rays(la)

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from povh3d.errors import ConfigError
-from povh3d.geometry.cameras import default_back_off
+from povh3d.geometry.cameras import default_front_clearance
 from povh3d.geometry.crop import (CropSettings, bbox_hits, cut_mask, fill_colour, layout_independent,
     parse_bbox, paste, plan_crop)
 from povh3d.geometry.footprint import latin_hypercube
@@ -159,7 +159,7 @@ def test_paste_is_the_inverse_of_cropping():
 def test_cropped_mesh_rays_match_the_uncropped_mesh(samples):
     """Every kept pixel of the cropped mesh interpolates the same ray as the uncropped mesh, in every bank."""
     la = square_array(lx=12, ly=9, nx=3, ny=2)
-    back = default_back_off(la)
+    back = default_front_clearance(la)
     plan = plan_crop(*bbox_hits(la, ((-0.3, -0.3, -0.5), (0.2, 0.4, 0.5)), angular=samples is not None))
     full, crop = view_bank_mesh(la, back, samples), cropped_view_bank_mesh(la, back, plan, samples)
     banks = 1 if samples is None else len(samples)
@@ -199,7 +199,7 @@ def test_layout_independence_of_switches():
 
 def test_lenticular_bank_has_one_view_row():
     la = lenticular_array(lx=10, rows=24, nx=6)
-    mesh = view_bank_mesh(la, default_back_off(la))
+    mesh = view_bank_mesh(la, default_front_clearance(la))
     assert la.views == (1, 6)
     assert mesh.image_size == (10 * 6 + 1, 24 + 1)   # one view row: panel rows, not rows x views
     assert np.all(mesh.normals[:, 1] == 0)            # no vertical view direction

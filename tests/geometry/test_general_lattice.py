@@ -124,7 +124,7 @@ def test_lattice_field_forms_and_preset():
     la = preset_array("cross-lenticular-ipad")
     assert la.grid == "lattice" and la.pitch_x == pytest.approx(2.12) and la.pitch_y == pytest.approx(2.12)
     assert pixel_rays(la)[2].all(), "the preset's lenses cover the whole panel"
-    assert la.views is None and la.describe()["lattice_mm"][0][0] == pytest.approx(2.12)
+    assert la.views is None and la.as_record()["lattice_mm"][0][0] == pytest.approx(2.12)
     turned = preset_array("cross-lenticular-ipad", lens_rotation=18.43)
     assert turned.basis[1][0] < 0 and pixel_rays(turned)[2].all()
 

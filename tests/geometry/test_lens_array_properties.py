@@ -16,8 +16,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from povh3d.geometry.cameras import (TIE_SHIFT, MIN_CLEARANCE, POVRAY_MAX_DEPTH, camera_mesh,
-    check_clearance, bank_back_off, default_back_off, ortho_view_frames, pinhole_frames, ray_stretch)
+from povh3d.geometry.cameras import (TIE_SHIFT, MIN_FRONT_CLEARANCE, POVRAY_MAX_DEPTH, camera_mesh,
+    check_front_clearance, bank_front_clearance, default_front_clearance, ortho_view_frames, pinhole_frames, ray_stretch)
 from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
@@ -187,14 +187,14 @@ def _corner_hits(mesh):
 @given(la=lens_arrays(grids=("square", "lenticular"), integral=True))
 def test_view_bank_mesh_corner_rays_cross_the_lens_grid(la):
     assume(la.views is not None)
-    back_off = default_back_off(la)
-    mesh = view_bank_mesh(la, back_off)
+    front_clearance = default_front_clearance(la)
+    mesh = view_bank_mesh(la, front_clearance)
     for a in (mesh.vertices, mesh.normals, mesh.uvs):
         assert np.isfinite(a).all()
     # Rays start at the clearance rounded up to a multiple of f lcm(Nx, Ny), never nearer.
-    start = bank_back_off(la, back_off)
+    start = bank_front_clearance(la, front_clearance)
     unit = la.focal * math.lcm(*la.views)
-    assert back_off <= start < back_off + unit * (1 + 1e-9)
+    assert front_clearance <= start < front_clearance + unit * (1 + 1e-9)
     assert np.all(mesh_in_mm(mesh).vertices[:, 2] == -start)
     # ... so every corner, in lens pitches, is stored exactly in POV-Ray's single precision.
     assert np.array_equal(mesh.vertices[:, :2].astype(np.float32).astype(float), mesh.vertices[:, :2])
@@ -213,8 +213,8 @@ def test_view_bank_mesh_corner_rays_cross_the_lens_grid(la):
 @SETTINGS
 @given(la=lens_arrays(grids=("square", "lenticular"), max_pixels=2000))
 def test_per_lens_camera_mesh_corner_rays_meet_at_their_lens_centre(la):
-    back_off = default_back_off(la)
-    mesh = camera_mesh(la, back_off)
+    front_clearance = default_front_clearance(la)
+    mesh = camera_mesh(la, front_clearance)
     assert np.isfinite(mesh.vertices).all() and np.isfinite(mesh.normals).all() and np.isfinite(mesh.uvs).all()
     hit, _ = _corner_hits(mesh)
     if la.grid == "lenticular":
@@ -255,7 +255,7 @@ def test_ortho_and_pinhole_frames_are_finite_and_exact(la):
 def _float32_crossing_error(la):
     """Largest distance, mm, between where POV-Ray's stored (float32) corner rays cross
     z = 0 and where docs/geometry.md puts them (float64)."""
-    mesh = view_bank_mesh(la, default_back_off(la))
+    mesh = view_bank_mesh(la, default_front_clearance(la))
     exact, _ = _corner_hits(mesh)
     stored = type(mesh)(mesh.vertices.astype(np.float32).astype(float),
                         mesh.normals.astype(np.float32).astype(float), mesh.uvs, mesh.faces, mesh.image_size,
@@ -282,15 +282,15 @@ def test_4000_lenses_keep_the_sample_grid_in_single_precision(ppl, angle):
 @SETTINGS
 @given(la=lens_arrays(max_pixels=2000))
 def test_default_clearance_is_traceable_and_refusals_name_the_range(la):
-    back_off = default_back_off(la)
-    assert back_off >= MIN_CLEARANCE
-    if back_off * ray_stretch(la) <= POVRAY_MAX_DEPTH / 2:
-        check_clearance(la, back_off)
+    front_clearance = default_front_clearance(la)
+    assert front_clearance >= MIN_FRONT_CLEARANCE
+    if front_clearance * ray_stretch(la) <= POVRAY_MAX_DEPTH / 2:
+        check_front_clearance(la, front_clearance)
     with pytest.raises(ConfigError, match=r"--front-clearance 0\.01 or more"):
-        check_clearance(la, MIN_CLEARANCE / 2)
+        check_front_clearance(la, MIN_FRONT_CLEARANCE / 2)
     too_far = POVRAY_MAX_DEPTH / ray_stretch(la)
     with pytest.raises(ConfigError, match=r"between 0\.01 and"):
-        check_clearance(la, too_far)
+        check_front_clearance(la, too_far)
 
 
 def test_ray_stretch_is_the_most_oblique_pixel():

@@ -109,8 +109,8 @@ def simulate_lookup(mesh):
 @pytest.mark.parametrize("grid,rotation", [(g, r) for g in ("square", "hex", "lenticular") for r in (6.34, 9.46)])
 def test_mesh_camera_traces_the_ray_of_every_rotated_pixel(grid, rotation):
     la = rotated(grid, rotation)
-    back_off = 20.0
-    mesh = lens_mesh(la, back_off)
+    front_clearance = 20.0
+    mesh = lens_mesh(la, front_clearance)
     assert mesh.uvs.min() > 0 and mesh.uvs.max() < 1, "POV-Ray aborts on UV outside 0..1"
     origin, normal, found = simulate_lookup(mesh)
     crop = lambda a: mesh.crop(a[1:, :-1])  # noqa: E731  (as the method assembles it)

@@ -27,7 +27,7 @@ def test_script_matches_golden(name):
     la = (LensArray("lenticular", 3, 2, 0.5, 0.25, 1.5, Panel(4, 2, 0.25, 0.25), 9.46) if name == "subpixel"
           else square_array(lx=2, ly=2, nx=2, ny=2, s=0.25, f=1.5))
     batch = METHODS[name].plan(la, 10.0, CENTRE, **METHODS[name].options).batch
-    script = build_script(batch, batch.frames, method=name, scene_path="/scenes/tiny.pov",
+    script = build_script(batch, batch.shots, method=name, scene_path="/scenes/tiny.pov",
                           add_assumed_gamma=True, header=display_header(la))
     script = script.replace(script.splitlines()[0], "// header line")  # carries the version
     path = GOLDEN / f"{name}.pov"
@@ -39,7 +39,7 @@ def test_script_matches_golden(name):
 def test_numbers_in_scripts_round_trip():
     la = square_array(lx=3, ly=1, nx=3, ny=1, s=0.1, f=1.7)
     batch = METHODS["multi-ortho-views"].plan(la, 10.0, CENTRE).batch
-    script = build_script(batch, batch.frames, method="x", scene_path="/s.pov", add_assumed_gamma=False,
+    script = build_script(batch, batch.shots, method="x", scene_path="/s.pov", add_assumed_gamma=False,
                           header=display_header(la))
     # u/f for the right view, written with repr: reads back as the same double
     assert repr(0.1 / 1.7) in script
@@ -51,5 +51,5 @@ def test_scene_with_quote_in_path_is_refused():
     la = square_array(lx=1, ly=1, nx=1, ny=1)
     batch = METHODS["multi-ortho"].plan(la, 10.0, CENTRE).batch
     with pytest.raises(ConfigError, match="rename"):
-        build_script(batch, batch.frames, method="x", scene_path='/a"b.pov', add_assumed_gamma=True,
+        build_script(batch, batch.shots, method="x", scene_path='/a"b.pov', add_assumed_gamma=True,
                      header=display_header(la))

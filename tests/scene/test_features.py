@@ -11,7 +11,7 @@ from povh3d.engine.quality import QUALITY_LEVELS, Quality
 from povh3d.scene.features import FEATURE_WORDS, SETTING_NEEDS, features_of_text, needed_settings
 from povh3d.engine.quality import quality_settings
 from povh3d.engine.methods import display_header
-from povh3d.engine.frames import build_script, FrameBatch
+from povh3d.engine.frames import build_script, ShotBatch
 from povh3d.scene.scene import load_scene
 
 from tests.support.arrays import square_array
@@ -97,7 +97,7 @@ def _header(tmp_path, text: str, quality: str) -> str:
     extra = quality_settings(scene.features, QUALITIES[quality])
     if extra:
         header["global_settings"] = extra
-    script = build_script(FrameBatch("pinhole.pov.j2", {"direction": (0, 0, 1), "right": (1, 0, 0),
+    script = build_script(ShotBatch("pinhole.pov.j2", {"direction": (0, 0, 1), "right": (1, 0, 0),
                                                         "up": (0, 1, 0)}, [{"centre": (0, 0, 0)}], 4, 4),
                           [{"centre": (0.0, 0.0, 0.0)}], method="pinhole", scene_path=str(scene.path),
                           add_assumed_gamma=not scene.sets_assumed_gamma, header=header)

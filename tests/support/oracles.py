@@ -145,24 +145,24 @@ def trace_collimated(lenslet: Lenslet, h: np.ndarray) -> tuple[np.ndarray, np.nd
 
 # -- geometry/cameras: one view-bank mesh, and a mesh in mm -----------------------------------------
 
-def view_bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None) -> CameraMesh:
+def view_bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None = None) -> CameraMesh:
     """The orthographic camera bank as one mesh camera: one quad per view.
 
     The image is the views tiled side by side, view ``(l, k)`` at rows
     ``l*Ly .. (l+1)*Ly - 1`` and columns ``k*Lx .. (k+1)*Lx - 1``, so that
     ``tiled[l*Ly + i, k*Lx + j] = view[l, k][i, j]``.  Same lookup rules as
     ``cameras.camera_mesh`` (extra first row and last column).  Rays start
-    ``cameras.bank_back_off`` in front of the screen (``back_off``, rounded up).
+    ``cameras.bank_front_clearance`` in front of the screen (``front_clearance``, rounded up).
 
     ``samples`` (K, 4), optional: footprint samples (``geometry.footprint``); each
     gets a whole bank, the banks stacked top to bottom (bank ``b`` at rows
     ``b*Ny*Ly ..``).  Default: the pixel's own ray.  All banks in one mesh,
     whatever ``cameras.bank_groups`` would split them into.
     """
-    return _bank_mesh(lens_array, back_off, samples, *_bank_tiles(lens_array, None))
+    return _bank_mesh(lens_array, front_clearance, samples, *_bank_tiles(lens_array, None))
 
 
-def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan,
+def cropped_view_bank_mesh(lens_array: LensArray, front_clearance: float, plan,
                            samples: np.ndarray | None = None) -> CameraMesh:
     """``view_bank_mesh`` over the columns and rows a ``crop.CropPlan`` keeps.
 
@@ -170,7 +170,7 @@ def cropped_view_bank_mesh(lens_array: LensArray, back_off: float, plan,
     uncropped tiled image with the other columns and rows removed, one such
     bank per footprint sample.
     """
-    return _bank_mesh(lens_array, back_off, samples, *_bank_tiles(lens_array, plan))
+    return _bank_mesh(lens_array, front_clearance, samples, *_bank_tiles(lens_array, plan))
 
 
 def mesh_in_mm(mesh: CameraMesh) -> CameraMesh:

@@ -6,18 +6,19 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from povh3d.app.display_setup import Display
 from povh3d.app.render import render as render_request
 from povh3d.app.request import RenderRequest
 from povh3d.engine.quality import RenderSettings
 
 
 def render(source: str | Path, lens_array: Any, output: str | Path, *, progress: Any = None,
-           settings: RenderSettings | None = None, include_dirs: tuple = (), display: dict | None = None,
+           settings: RenderSettings | None = None, include_dirs: tuple = (),
            method: str = "multi-ortho", views_dir: str | Path | None = None, crop: Any = None,
            **method_options: Any) -> dict[str, Any]:
     """Render ``source`` through ``lens_array`` into ``output``; the sidecar record."""
-    request = RenderRequest(source=Path(source), lens_array=lens_array, output=Path(output),
-                            display=display or {}, method=method, method_options=method_options,
+    request = RenderRequest(source=Path(source), display=Display(lens_array), output=Path(output),
+                            method=method, method_options=method_options,
                             settings=settings or RenderSettings(), crop=crop, include_dirs=tuple(include_dirs),
                             views_dir=Path(views_dir) if views_dir is not None else None)
     return render_request(request, progress)
@@ -25,11 +26,11 @@ def render(source: str | Path, lens_array: Any, output: str | Path, *, progress:
 
 def render_animation(source: str | Path, lens_array: Any, output: str | Path, frames: Any, *,
                      progress: Any = None, settings: RenderSettings | None = None, include_dirs: tuple = (),
-                     display: dict | None = None, method: str = "multi-ortho", video: str | Path | None = None,
+                     method: str = "multi-ortho", video: str | Path | None = None,
                      fps: float = 24.0) -> dict[str, Any]:
     """Render the ``frames`` of an animated ``source``; the animation's report."""
-    request = RenderRequest(source=Path(source), lens_array=lens_array, output=Path(output),
-                            display=display or {}, method=method, settings=settings or RenderSettings(),
+    request = RenderRequest(source=Path(source), display=Display(lens_array), output=Path(output),
+                            method=method, settings=settings or RenderSettings(),
                             include_dirs=tuple(include_dirs), frames=frames,
                             video=Path(video) if video is not None else None, fps=fps)
     return render_request(request, progress)

@@ -1,0 +1,217 @@
+"""The display a render is for, as one value: ``Display``, built by ``build_display`` (the one
+builder the command line and ``povh3d.render`` both call), written to a sidecar by
+``Display.as_record`` and read back by ``Display.from_record``.
+
+Why in ``app/``: a display joins a preset (``geometry.presets``), a pixel mapping
+(``mappings``), the sheet that ``--method subpixel`` traces (``engine.subpixel``,
+``engine.calibrated_sheet``) and a calibration file the user named.  ``app/`` is the lowest
+layer allowed to know all four and to read a user's file; the engine receives from a
+``Display`` only what it renders: its ``render_array`` and the sheet's shift (a method option).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping as MappingABC
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from ..errors import ConfigError, InputError
+from ..geometry.lens_array import LensArray, Panel
+from ..mappings.base import Mapping
+
+
+@dataclass(frozen=True)
+class Display:
+    """A display: its lens array, what its preset says of it, and how its panel is addressed.
+
+    Attributes
+    ----------
+    lens_array : LensArray         the display's lens array; with ``--method subpixel`` on a
+                                   slanted display, the sheet it traces over the physical panel
+    preset : str or None           the preset it came from (None: a lens array of the caller's own)
+    description : str or None      the preset's description of the device
+    views, slant_deg               a slanted preset's view count and lens slant (deg), or None
+    mapping_name : str or None     the panel's pixel mapping (the preset's, or the one applied)
+    physical_panel : Panel or None a slanted preset's panel, when ``lens_array`` is its view space
+    mapping : Mapping or None      applied: render exactly the views it reads, then map them onto
+                                   ``mapped_panel``
+    sheet : mapping or None        where the traced sheet came from (``--method subpixel``): the
+                                   preset's mapping and offset, or a calibration and its ``shift_mm``
+    """
+
+    lens_array: LensArray
+    preset: str | None = None
+    description: str | None = None
+    views: int | None = None
+    slant_deg: float | None = None
+    mapping_name: str | None = None
+    physical_panel: Panel | None = None
+    mapping: Mapping | None = None
+    sheet: MappingABC[str, Any] | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.lens_array, LensArray):
+            raise ConfigError(f"lens_array must be a povh3d.LensArray, got {type(self.lens_array).__name__}")
+        if self.mapping is not None and self.mapping_name != self.mapping.name:
+            object.__setattr__(self, "mapping_name", self.mapping.name)
+
+    @property
+    def mapped_panel(self) -> Panel | None:
+        """The physical panel the mapping fills (None without a mapping)."""
+        if self.mapping is None:
+            return None
+        return self.physical_panel or self.lens_array.panel
+
+    @property
+    def render_array(self) -> LensArray:
+        """The array the method renders: the display's, or the view-space array a mapping reads."""
+        if self.mapping is None:
+            return self.lens_array
+        return self.mapping.render_array(self.mapped_panel, self.lens_array.focal)
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """``(W, H)`` of the image written: the mapped panel, or the H3D image."""
+        panel = self.mapped_panel or self.lens_array.panel
+        return panel.width, panel.height
+
+    @property
+    def sheet_shift_mm(self) -> float | None:
+        """How far across a calibration puts the traced sheet (``subpixel.placed_sheet``), or None."""
+        return None if not self.sheet or "shift_mm" not in self.sheet else float(self.sheet["shift_mm"])
+
+    def as_record(self) -> dict[str, Any]:
+        """The sidecar's ``lens_array`` (the array rendered) and ``display`` entries."""
+        display: dict[str, Any] = {"preset": self.preset}
+        for key, value in (("description", self.description), ("views", self.views),
+                           ("slant_deg", self.slant_deg), ("mapping", self.mapping_name)):
+            if value is not None:
+                display[key] = value
+        if self.physical_panel is not None:
+            p = self.physical_panel
+            display["physical_panel"] = {"size_px": [p.width, p.height], "pixel_pitch_mm": [p.pitch_x, p.pitch_y]}
+        if self.sheet is not None:
+            display["sheet"] = dict(self.sheet)
+        return {"lens_array": self.render_array.as_record(), "display": display}
+
+    @classmethod
+    def from_record(cls, record: MappingABC[str, Any]) -> Display:
+        """The display a sidecar describes (``as_record``; a sidecar without a ``display`` entry is a
+        lens array alone).  Its ``lens_array`` is the array the image was rendered through."""
+        side = record.get("lens_array") or {}
+        try:
+            lens_array = LensArray(side["grid"], *side["lenses"], *side["lens_pitch_mm"], side["focal_mm"],
+                                   _panel(side["panel"]), side.get("rotation_deg", 0.0),
+                                   tuple(map(tuple, side["lattice_mm"])) if "lattice_mm" in side else None)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ConfigError(f"the sidecar's lens array is incomplete ({exc}); give --ppl NxxNy") from None
+        d = record.get("display") or {}
+        return cls(lens_array, d.get("preset"), d.get("description"), d.get("views"), d.get("slant_deg"),
+                   d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
+                   sheet=d.get("sheet"))
+
+
+def _panel(record: MappingABC[str, Any]) -> Panel:
+    (w, h), (sx, sy) = record["size_px"], record["pixel_pitch_mm"]
+    return Panel(int(w), int(h), float(sx), float(sy))
+
+
+def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] | None = None, *,
+                  lens_array: LensArray | None = None, method: str = "multi-ortho", mapping: str | None = None,
+                  mapping_options: MappingABC[str, Any] | None = None,
+                  calibration: str | Path | None = None) -> Display:
+    """The display a render is for: the command line's and ``povh3d.render``'s one builder.
+
+    Parameters
+    ----------
+    preset : str               a display preset (``povh3d.presets.names()``)
+    overrides : mapping        preset fields replaced (``geometry.presets.FIELDS``: ``ppl``, ``focal`` ...)
+    lens_array : LensArray     a lens array of the caller's own, instead of the preset's
+    method : str               the render method (``subpixel`` traces a slanted preset's sheet itself)
+    mapping : str              a pixel mapping to apply (``alioscopy``, ``slanted``, ``smart:4`` ...)
+    mapping_options : mapping  its options (``per_lens``, ``views``, ``slope``, ``offset``,
+                               ``rows_per_view``, ``reverse``, ``blend``)
+    calibration : path         a calibration file: the sheet of ``mapping='slanted'`` or of ``method='subpixel'``
+    """
+    from ..geometry.presets import get_preset, lens_array_from_fields, merge_overrides, physical_panel
+
+    if lens_array is None:
+        fields = merge_overrides(get_preset(preset or "demo"), dict(overrides or {}))
+        display = Display(lens_array_from_fields(fields), preset or "demo", fields.get("description"),
+                          fields.get("views"), fields.get("slant_deg"), fields.get("mapping"),
+                          physical_panel(fields))
+    else:
+        if overrides:
+            raise ConfigError("a lens array of your own takes no preset overrides; build it with them instead")
+        display = Display(lens_array)
+    options = {k: v for k, v in (mapping_options or {}).items() if v is not None}
+    if calibration is not None and not mapping and method != "subpixel":
+        raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
+                          "add one of them, or drop --calibration")
+    if method == "subpixel":
+        return _subpixel_sheet(display, mapping, options, calibration)
+    if mapping:
+        built, _ = mapping_for_display(mapping, display, calibration=calibration, **options)
+        return replace(display, mapping=built)
+    return display
+
+
+def _subpixel_sheet(display: Display, mapping: str | None, options: dict[str, Any],
+                    calibration: str | Path | None) -> Display:
+    """``--method subpixel`` on a display with a slanted mapping (alioscopy-42, philips-20): the
+    sheet that mapping describes, traced subpixel by subpixel straight to the panel image; with
+    a calibration, the calibrated sheet where the calibration puts it."""
+    if mapping:
+        raise ConfigError("--method subpixel writes the panel image itself; drop --mapping (a preset's "
+                          "slanted mapping gives the sheet it traces)")
+    if not display.mapping_name and calibration is None:
+        return display
+    if options.get("offset"):
+        raise ConfigError("--method subpixel traces the sheet centred on the panel, or where --calibration puts "
+                          "it; drop --offset (the sidecar records the mapping offset that addresses the same sheet)")
+    from ..engine.subpixel import slanted_sheet
+
+    la = display.lens_array
+    nominal, panel, record = None, la.panel, {}
+    if display.mapping_name:
+        built, panel = mapping_for_display(display.mapping_name, display, **options)
+        nominal, offset = slanted_sheet(built, panel, la.focal)
+        record = {"from_mapping": built.name, "mapping_offset": offset}
+    elif la.grid == "lenticular":
+        nominal = la
+    if calibration is None:
+        return replace(display, lens_array=nominal, sheet=record)
+    from ..engine.calibrated_sheet import calibrated_sheet
+
+    sheet, _, record = calibrated_sheet(read_calibration(calibration), panel, la.focal, nominal)
+    return replace(display, lens_array=sheet, sheet={**record, "calibration": str(Path(calibration).resolve())})
+
+
+def mapping_for_display(name: str, display: Display, *, calibration: str | Path | None = None,
+                        **options: Any) -> tuple[Mapping, Panel]:
+    """The mapping ``name`` for ``display``, and the physical panel it fills.
+
+    Presets with a mapping (alioscopy-42, philips-20) describe the view-space array;
+    their physical panel is ``display.physical_panel``.
+    """
+    from ..mappings import build_mapping, options_from_display
+
+    panel = display.physical_panel or display.lens_array.panel
+    fields = {k: v for k, v in (("slant_deg", display.slant_deg), ("views", display.views)) if v is not None}
+    fields.update(lens_pitch=display.lens_array.pitch_x, pixel_pitch=panel.pitch_x)
+    if calibration is not None:
+        options["calibration"] = read_calibration(calibration)
+    opts = options_from_display(fields, display.lens_array.pitch_x / panel.pitch_x, **options)
+    return build_mapping(name, opts), panel
+
+
+def read_calibration(path: str | Path) -> Any:
+    """A calibration file's JSON (``map --calibration``, ``render --method subpixel --calibration``)."""
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(f"cannot read the calibration {str(path)!r}: {exc.strerror}") from None
+    except ValueError as exc:
+        raise InputError(f"the calibration {str(path)!r} is not JSON: {exc}") from None
