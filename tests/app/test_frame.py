@@ -243,7 +243,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     ("#declare IW = image_width;\ncamera { location -5*z right x*IW/100 look_at 0 }", None, None),  # own run
 ])
 def test_the_camera_is_evaluated_at_a_size_it_cannot_tell_apart(tmp_path, camera, size, odd):
-    from povh3d.app.frame import measured_size
+    from povh3d.engine.scene_camera import measured_size
 
     scene = load_scene(_scene(tmp_path, camera))
     assert measured_size(scene, 320, 240, 80) == size
