@@ -8,8 +8,6 @@ import shutil
 from pathlib import Path
 from functools import cache
 
-from .errors import PovrayNotFound
-
 
 @cache
 def cpu_count() -> int:
@@ -124,6 +122,8 @@ def find_povray() -> str:
     PovrayNotFound
         With a one-line hint on installing it.
     """
+    from .errors import PovrayNotFound  # here: system.py stays a leaf of the import graph
+
     configured = os.environ.get(ENV_VAR)
     if configured:
         found = shutil.which(configured)

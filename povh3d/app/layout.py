@@ -7,7 +7,7 @@ The content is put where a render would put it, in the display's frame (mm):
   then the depth pass (``engine.depth``) seen from the viewer: a coarse surface
   through the points it hits, the scene's bounding geometry as the display sees it;
 - a mesh model: its triangles, turned (``--up``, ``--rotate``) and placed by
-  ``app.stage.fit_to_display`` exactly as the default stage places them;
+  ``geometry.fit.fit_to_display`` exactly as the default stage places them;
 - a volume: its physical box turned by the orientation preset and ``--rotate``
   (``volume.orient``) and fitted to the display the same way, with the patient's
   directions marked on it.
@@ -30,7 +30,7 @@ from ..errors import ConfigError, InputError
 from ..geometry.lens_array import LensArray
 from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
 from .records import base_record, png_output, write_image
-from .stage import FILL, depth_budget_mm, fit_to_display
+from ..geometry.fit import FILL, depth_budget_mm, fit_to_display
 
 SCENE_SUFFIXES = (".pov",)
 MIN_SIZE, MAX_SIZE = 200, 8000   # picture pixels on a side

@@ -21,7 +21,7 @@ from ..errors import ConfigError
 from ..geometry.frame import NATIVE, DisplayFrame
 from ..scene.scene import Scene
 from .frame import resolve_frame_and_depth
-from .stage import depth_budget_mm
+from ..geometry.fit import depth_budget_mm
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from .request import RenderRequest

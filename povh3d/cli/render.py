@@ -25,7 +25,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
     """The ``RenderRequest`` the options of ``povh3d render`` describe."""
     from ..app.animation import FrameRange, parse_clock, parse_frames
     from ..app.request import ModelOptions, RenderRequest
-    from ..engine.quality import RenderSettings
+    from ..app.request import RenderSettings
     from ..geometry.crop import CropSettings, parse_bbox
 
     lens_array, display = lens_array_from_args(args)
@@ -78,23 +78,22 @@ def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str
     if args.offset:
         raise ConfigError("--method subpixel traces the sheet centred on the panel, or where --calibration puts "
                           "it; drop --offset (the sidecar records the mapping offset that addresses the same sheet)")
-    from ..engine.subpixel import slanted_sheet
+    from ..app.sheets import mapping_sheet
 
     nominal, panel, record = None, lens_array.panel, {}
     if display.get("mapping"):
         mapping, panel = mapping_from_args(argparse.Namespace(**{**vars(args), "mapping": display["mapping"],
                                                                  "calibration": None}), lens_array, display)
-        nominal, offset = slanted_sheet(mapping, panel, lens_array.focal)
+        nominal, offset = mapping_sheet(mapping, panel, lens_array.focal)
         record = {"from_mapping": mapping.name, "mapping_offset": offset}
     elif lens_array.grid == "lenticular":
         nominal = lens_array
     if args.calibration is None:
         return nominal, {**display, "sheet": record}
-    from ..app.display import read_calibration
-    from ..engine.calibrated_sheet import calibrated_sheet
+    from ..app.sheets import calibrated_sheet_from_file
 
-    sheet, _, record = calibrated_sheet(read_calibration(args.calibration), panel, lens_array.focal, nominal)
-    return sheet, {**display, "sheet": {**record, "calibration": str(Path(args.calibration).resolve())}}
+    sheet, record = calibrated_sheet_from_file(args.calibration, panel, lens_array.focal, nominal)
+    return sheet, {**display, "sheet": record}
 
 
 def frame_options_from_args(args: argparse.Namespace) -> Any:

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from .. import cache
-from ..cache import content_key  # noqa: F401 - the frames' keys are the one cache's keys
 from ..errors import Povh3dError, warn
 from ..image.io import decode_png
 

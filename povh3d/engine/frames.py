@@ -25,7 +25,7 @@ from ..image.io import read_png
 from ..povray.job import SCENE_FILE
 from ..povray.log import past_scene_end
 from ..povray.process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
-from ..povray.sandbox import confines, scene_inputs
+from ..povray.sandbox import confines, describe, scene_inputs
 from ..povray.version_memo import remembered_version
 from ..errors import PovrayError, PovrayTimeout, warn
 from ..scene.scene import Scene
@@ -33,6 +33,12 @@ from ..system import cpu_count
 from .batch import FrameBatch, RenderStats
 from .quality import Progress, RenderSettings
 from ..povray.templates import render_template, templates_dir
+
+
+def sandbox_in_use() -> str:
+    """How this process's POV-Ray runs are confined (the sidecar's ``sandbox``): app/ asks the engine,
+    which alone talks to ``povray/``."""
+    return describe()
 
 
 class LocalRunner:
