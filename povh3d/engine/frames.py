@@ -24,12 +24,12 @@ from .cache import ImageCache
 from ..image.io import read_png
 from ..povray.job import SCENE_FILE
 from ..povray.log import past_scene_end
-from ..povray.process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
+from ..povray.process import JobResult, PovrayJob, povray_version, run_jobs
 from ..povray.sandbox import confines, describe, scene_inputs
 from ..povray.version_memo import remembered_version
 from ..errors import PovrayError, PovrayTimeout, warn
 from ..scene.scene import Scene
-from ..system import cpu_count
+from ..system import cpu_count, find_povray
 from .batch import FrameBatch, RenderStats
 from .quality import Progress, RenderSettings
 from ..povray.templates import render_template, templates_dir

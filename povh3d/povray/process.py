@@ -42,7 +42,7 @@ from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, Pov
     RenderInterrupted)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
-from ..system import ENV_VAR, INSTALL_HINT, find_povray, owned_prefix, sweep_orphans  # noqa: F401 - named here too
+from ..system import INSTALL_HINT, find_povray, owned_prefix, sweep_orphans
 from .log import denied_note, describe_exit, parse_error, tail
 from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
 
