@@ -139,3 +139,18 @@ def test_the_header_check_refuses_what_it_must():  # negative controls of the en
 def test_content_key_is_canonical():
     assert cache.content_key({"a": 1, "b": 2.5}) == cache.content_key({"b": 2.5, "a": 1})
     assert cache.content_key(0.1 + 0.2) != cache.content_key(0.3)
+
+
+def test_a_damaged_media_file_is_written_again(tmp_path):
+    """The df3 of a volume medium is named by its content and reused: a same-size damaged one is
+    found by its hash and written again, never handed to POV-Ray."""
+    from povh3d.app.volume_media import media_stage
+    from tests.support.volumes import asymmetric_phantom
+
+    volume = asymmetric_phantom()
+    media_stage(volume, np.eye(4), _array(), transfer="labels", folder=tmp_path)
+    (df3,) = tmp_path.glob("*.df3")
+    good = df3.read_bytes()
+    df3.write_bytes(good[:-20] + bytes(b ^ 0xFF for b in good[-20:]))
+    media_stage(volume, np.eye(4), _array(), transfer="labels", folder=tmp_path)
+    assert df3.read_bytes() == good

@@ -23,16 +23,20 @@ import numpy as np
 from ..engine.stages import media_stage_text
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
-from ..image.io import atomic_path
+from ..image.io import atomic_path, file_sha256
 from ..volume.df3 import df3_bytes, padded_shape
 from ..volume.grid import Volume
 from ..volume.media import present_labels, classify, sampling_for, sub_intervals, uniform_scale
 from ..volume.transfer import AUTO, Transfer, auto_transfer, load_transfer
 
-def _write_once(path: Path, data: bytes) -> None:
-    if not path.is_file() or path.stat().st_size != len(data):
-        with atomic_path(path) as tmp:
-            tmp.write_bytes(data)
+
+def _write_once(path: Path, data: bytes, sha256: str) -> None:
+    """Write ``data`` at ``path`` unless the file there holds it already (its hash is checked: a damaged
+    file of the same size is written again, never handed to POV-Ray)."""
+    if path.is_file() and path.stat().st_size == len(data) and file_sha256(path) == sha256:
+        return
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
 
 
 def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensArray, *,
@@ -63,15 +67,16 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
     classified = classify(volume, transfer, bits)
     data = df3_bytes(classified.pop("samples"), bits)
     encoded = time.perf_counter()
-    digest = hashlib.sha256(data).hexdigest()[:16]
+    digest = hashlib.sha256(data).hexdigest()
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    df3_path = folder / f"volume-{digest}.df3"
-    _write_once(df3_path, data)
+    df3_path = folder / f"volume-{digest[:16]}.df3"
+    _write_once(df3_path, data, digest)
     text = media_stage_text(volume, world_to_display, classified, transfer, df3_name=df3_path.name,
-                      intervals=intervals, samples=samples, background=background)
-    stage = folder / f"volume-media-{hashlib.sha256(text.encode()).hexdigest()[:16]}.pov"
-    _write_once(stage, text.encode())
+                            intervals=intervals, samples=samples, background=background).encode()
+    text_digest = hashlib.sha256(text).hexdigest()
+    stage = folder / f"volume-media-{text_digest[:16]}.pov"
+    _write_once(stage, text, text_digest)
     record = {"kind": "media", "volume": volume.describe(), "transfer": transfer.record(),
               "df3": {"path": str(df3_path), "bits": bits, "shape": list(padded_shape(volume.shape)),
                       "bytes": len(data), "interpolate": classified["interpolate"],
