@@ -55,7 +55,7 @@ def _output(root: Path) -> bool:
 
 
 def _camera(root: Path) -> bool:
-    from povh3d.app.frame import FrameOptions, resolve_frame
+    from povh3d.app.display_frame import FrameOptions, resolve_frame
     from povh3d.scene.scene import load_scene
 
     _, record = resolve_frame(FrameOptions(mode="camera"), load_scene(GALLERY / "inches.pov"), _array(),
@@ -64,7 +64,7 @@ def _camera(root: Path) -> bool:
 
 
 def _camera_depth(root: Path) -> bool:
-    from povh3d.app.frame import FrameOptions, resolve_frame_and_depth
+    from povh3d.app.display_frame import FrameOptions, resolve_frame_and_depth
     from povh3d.scene.scene import load_scene
 
     _, record, seen = resolve_frame_and_depth(FrameOptions(), load_scene(GALLERY / "tilted.pov"), _array(),

@@ -91,7 +91,7 @@ def scene_content(path: Path, lens_array: LensArray, frame_options: Any = None, 
     from ..engine.methods import get_method
     from ..engine.quality import RenderSettings
     from ..scene.scene import load_scene
-    from .frame import FrameOptions
+    from .display_frame import FrameOptions
     from .placement import place_display
     from .request import RenderRequest
 

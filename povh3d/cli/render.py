@@ -98,7 +98,7 @@ def _subpixel_sheet(args: argparse.Namespace, lens_array: Any, display: dict[str
 
 def frame_options_from_args(args: argparse.Namespace) -> Any:
     """``FrameOptions`` from --display-frame and the explicit --display-* options."""
-    from ..app.frame import FrameOptions
+    from ..app.display_frame import FrameOptions
 
     fit = args.fit_depth
     if fit is not None and fit != "auto":

@@ -8,7 +8,7 @@ declared values and renders the fog depth pass through it in the same run.
 Both are cached in the one cache (``povh3d.cache``: ``cameras/ab/<key>.camera``),
 keyed by the scene's digest and the panel, so a re-run starts no POV-Ray.  The
 display frame these numbers define is worked out in ``geometry/frame.py``; which
-frame a render uses is decided in ``app/frame.py``.
+frame a render uses is decided in ``app/display_frame.py``.
 """
 
 from __future__ import annotations

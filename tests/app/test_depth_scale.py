@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from povh3d.app.frame import FrameOptions
+from povh3d.app.display_frame import FrameOptions
 from povh3d.app.placement import place_display
 from povh3d.app.request import RenderRequest
 from povh3d.engine.quality import RenderSettings

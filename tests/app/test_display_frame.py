@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from povh3d.app.frame import FrameOptions, resolve_frame
+from povh3d.app.display_frame import FrameOptions, resolve_frame
 from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
 from povh3d.geometry.frame import DisplayFrame, explicit_frame
@@ -210,7 +210,7 @@ def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
 def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     """The depth pass made in the camera's run equals a depth pass of its own in the same frame."""
     import povh3d.app.placement as placement
-    from povh3d.app.frame import resolve_frame_and_depth
+    from povh3d.app.display_frame import resolve_frame_and_depth
     from povh3d.app.request import RenderRequest
     from povh3d.engine.depth import depth_pass
 
