@@ -154,3 +154,15 @@ def test_a_damaged_media_file_is_written_again(tmp_path):
     df3.write_bytes(good[:-20] + bytes(b ^ 0xFF for b in good[-20:]))
     media_stage(volume, np.eye(4), _array(), transfer="labels", folder=tmp_path)
     assert df3.read_bytes() == good
+
+
+def test_a_damaged_camera_entry_is_a_warning_not_an_internal_error(tmp_path, cli):
+    """From the command line: a damaged camera entry was ``internal error``, exit 70."""
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    args = ("--preset", "demo", "--lenses", "6x4", "--ppl", "4", "--quality", "draft", "-q")
+    assert cli("render", GALLERY / "tilted.pov", "-o", tmp_path / "a.png", *args, env=env).code == 0
+    (entry,) = (tmp_path / "cache" / "cameras").rglob("*.camera")
+    _damage(entry, "truncated")
+    result = cli("render", GALLERY / "tilted.pov", "-o", tmp_path / "b.png", *args, env=env)
+    assert result.code == 0, result.err
+    assert "damaged" in result.err and "internal error" not in result.err
