@@ -17,7 +17,7 @@ and the atomic writers of ``image/io.py`` (which load NumPy only when decoding).
   ``store`` writes it atomically (a temporary file renamed into place).
 - **Damage policy:** ``load`` checks the header, the key and the hash, then hands
   the body to the reader's parser.  A truncated, altered or foreign entry (or a body
-  its parser refuses with a ``ValueError``, ``KeyError``, ``TypeError`` or
+  its parser refuses: a ``ValueError``, ``KeyError``, ``TypeError``, ``EOFError`` or
   ``InputError``) is reported once (a ``Povh3dWarning``), removed and a miss; never
   an error of the command.
 - **Folder:** ``cache_root`` is the one fallback (``cache_dir`` if given, else
@@ -87,7 +87,7 @@ def load(path: Path, key: str, parse: Callable[[bytes], T], *, again: str = "mak
         return None
     try:
         return parse(entry_body(key, data))
-    except (InputError, ValueError, KeyError, TypeError, IndexError) as exc:
+    except (InputError, ValueError, KeyError, TypeError, IndexError, EOFError) as exc:
         warn(f"the cache entry {str(path)!r} was damaged ({exc}); removed it, {again}")
         path.unlink(missing_ok=True)
         return None

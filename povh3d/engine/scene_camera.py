@@ -36,14 +36,27 @@ if TYPE_CHECKING:  # only for annotations: keeps the import chain short
 _AGAIN = "evaluating the scene's camera again"
 
 
-def _load(path: Any, key: str, use_cache: bool) -> tuple[dict[str, Any], bytes] | None:
-    """The JSON and the bytes of the camera entry ``key``; None on a miss (a damaged entry: warned, removed)."""
+def _load(path: Any, key: str, use_cache: bool, parse: Any) -> Any:
+    """``parse(json, bytes)`` of the camera entry ``key``; None on a miss (a damaged entry, or one ``parse``
+    refuses: warned, removed)."""
     if not use_cache:
         return None
     try:
-        return cache.load(path, key, cache.split_json, again=_AGAIN)
+        return cache.load(path, key, lambda body: parse(*cache.split_json(body)), again=_AGAIN)
     except OSError:
         return None
+
+
+def _camera(meta: dict[str, Any], data: bytes) -> dict[str, Any]:
+    if not {"type", "location"} <= meta.keys():
+        raise ValueError("no camera")
+    return meta
+
+
+def _camera_and_pass(meta: dict[str, Any], data: bytes) -> tuple[dict[str, Any], Seen]:
+    distances = np.load(io.BytesIO(data), allow_pickle=False)
+    return _camera(meta["camera"], b""), Seen(distances, float(meta["unmeasured"]),
+                                               tuple(float(v) for v in meta["printed"]))
 
 
 def _keep(path: Any, key: str, meta: dict[str, Any], data: bytes = b"") -> None:
@@ -70,9 +83,9 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
     w, h = lens_array.panel.width, lens_array.panel.height
     key = content_key("scene-camera", __version__, scene.digest, w, h)
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
-    stored = _load(path, key, use_cache)
+    stored = _load(path, key, use_cache, _camera)
     if stored is not None:
-        return stored[0], time.perf_counter() - start, True
+        return stored, time.perf_counter() - start, True
     job = PovrayJob(name="scene camera", script=script, width=w, height=h, start_row=0, end_row=1,
                     options=("-A",), threads=1, timeout=120, **scene_inputs(scene))
     logs: list[str] = []
@@ -131,12 +144,9 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     key = content_key("scene-camera-depth", __version__, scene.digest, w, h, target, right, up, back_off,
                       lens_array.panel.size_mm[0])
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
-    stored = _load(path, key, use_cache)
+    stored = _load(path, key, use_cache, _camera_and_pass)
     if stored is not None:
-        saved, data = stored
-        seen = Seen(np.load(io.BytesIO(data), allow_pickle=False), float(saved["unmeasured"]),
-                    tuple(float(v) for v in saved["printed"]))
-        return saved["camera"], seen, time.perf_counter() - start, True
+        return *stored, time.perf_counter() - start, True
     size = measured_size(scene, w, h, target)
     if size is None:
         return None
