@@ -30,7 +30,7 @@ from ..errors import ConfigError, InputError
 from ..geometry.lens_array import LensArray
 from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
 from .records import base_record, png_output, write_image
-from ..geometry.fit import FILL, depth_budget_mm, fit_to_display
+from ..geometry.fit import FILL, depth_budget_mm, fit_to_display, placement_record
 
 SCENE_SUFFIXES = (".pov",)
 MIN_SIZE, MAX_SIZE = 200, 8000   # picture pixels on a side
@@ -149,8 +149,7 @@ def model_content(path: Path, lens_array: LensArray, *, depth: float | None = No
     vertices = (np.concatenate([p.vertices for p in parts]) + placement.shift) * placement.scale
     faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets)])
     record = {"up": up, "up_reason": reason, "triangles": len(faces),
-              "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
-                            "fill": FILL}}
+              "placement": placement_record(placement, fill=FILL)}
     return Content("model", path.name, vertices, faces, _surface_z(vertices, faces), record=record)
 
 
@@ -222,7 +221,7 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
         vertices, faces = shape[0] @ m[:3, :3].T + m[:3, 3], shape[1]
     record = {"volume": volume.describe(), "orientation": orientation, "rotate": list(rotate) if rotate else None,
               "world_to_display": m.round(12).tolist(), "shape": "iso" if iso else ("labels" if shape else None),
-              "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit}}
+              "placement": placement_record(placement)}
     return Content("volume", volume.name, vertices, faces, zs, box=box, marks=marks, record=record)
 
 

@@ -20,7 +20,7 @@ from .._version import __version__
 from ..cache import content_key
 from ..engine.stages import model_stage_text
 from ..errors import warn
-from ..geometry.fit import depth_warning, fit_to_display
+from ..geometry.fit import depth_warning, fit_to_display, placement_record
 from ..geometry.lens_array import LensArray
 from ..image.io import atomic_path
 
@@ -130,6 +130,5 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
               "conversion_from_cache": manifest["from_cache"], "warnings": warnings,
               "up": manifest.get("up"), "up_reason": manifest.get("up_reason"),
               "simplification": manifest["simplification"],
-              "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
-                            "depth_budget_mm": placement.depth}}
+              "placement": placement_record(placement, depth_budget_mm=placement.depth)}
     return stage, record

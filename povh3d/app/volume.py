@@ -26,7 +26,7 @@ from .._version import __version__
 from ..cache import content_key
 from ..engine.stages import model_stage_text
 from ..errors import ConfigError, InputError, warn
-from ..geometry.fit import depth_warning, fit_to_display
+from ..geometry.fit import depth_warning, fit_to_display, placement_record
 from ..geometry.lens_array import LensArray
 from ..image.io import atomic_path
 from ..volume.grid import Volume
@@ -102,8 +102,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     record: dict[str, Any] = {
         "volume": volume.describe(), "source": str(source), "draw": kind, "orientation": options.orientation,
         "rotate": list(options.rotate) if options.rotate else None, "world_to_display": to_display.tolist(),
-        "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
-                      "depth_budget_mm": placement.depth},
+        "placement": placement_record(placement, depth_budget_mm=placement.depth),
         "warnings": depth_warning(placement, "volume")}
     root = cache.cache_root(cache_dir)
     if kind == "volume":

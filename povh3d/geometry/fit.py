@@ -22,6 +22,7 @@ square arrays the smaller of the two.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -90,3 +91,8 @@ def depth_warning(placement: Placement, what: str) -> list[str]:
                 f"{placement.depth:.3g} mm (2 N f): its front and back look blurred; --depth "
                 f"{placement.depth:.3g} fits it"]
     return []
+
+
+def placement_record(placement: Placement, **extra: Any) -> dict[str, Any]:
+    """The sidecar's ``placement``: scale, placed size (mm) and the limit that set the scale, and ``extra``."""
+    return {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit, **extra}
