@@ -52,10 +52,10 @@ def plain_2d_command(case_args: list[str], folder: Path) -> list[str]:
               for k, v in overrides.items()}
     la = lens_array_from_fields(merge_overrides(get_preset("demo"), fields))
     w_mm, h_mm = la.panel.size_mm
-    back_off = 4 * max(w_mm, h_mm)  # povh3d's default front clearance
+    front_clearance = 4 * max(w_mm, h_mm)  # povh3d's default front clearance
     (folder / SCENE_FILE).write_text(
         f'#version 3.7;\nglobal_settings {{ assumed_gamma 1.0 }}\n#include "{SAMPLE}"\n'
-        f"camera {{ orthographic location <0, 0, {-back_off!r}> direction z "
+        f"camera {{ orthographic location <0, 0, {-front_clearance!r}> direction z "
         f"right <{w_mm!r}, 0, 0> up <0, {h_mm!r}, 0> }}\n")
     job = PovrayJob(name="2D", script="", width=la.panel.width, height=la.panel.height,
                     include_dirs=(str(SAMPLE.parent),), options=QUALITY_OPTIONS["draft"], threads=cpu_count())

@@ -36,11 +36,11 @@ CASES = {
 }
 
 
-def plain_2d_seconds(scene, la: LensArray, back_off: float) -> float:
+def plain_2d_seconds(scene, la: LensArray, front_clearance: float) -> float:
     """One orthographic camera square to the screen at the panel resolution."""
     w_mm, h_mm = la.panel.size_mm
     script = (f'#version 3.7;\n#include "{scene.path}"\n'
-              f"camera {{ orthographic location <0, 0, {-back_off!r}> direction z "
+              f"camera {{ orthographic location <0, 0, {-front_clearance!r}> direction z "
               f"right <{w_mm!r}, 0, 0> up <0, {h_mm!r}, 0> }}\n")
     if not scene.sets_assumed_gamma:
         script = "global_settings { assumed_gamma 1.0 }\n" + script
@@ -114,8 +114,8 @@ def main() -> int:
     print(f"{'case':32s} {'2D floor':>9s} {'method':>18s} {'time':>8s} {'ratio':>7s}")
     for case, overrides in CASES.items():
         la = lens_array_from_fields(merge_overrides(get_preset("demo"), overrides))
-        back_off = 4 * max(la.panel.size_mm)
-        floor = timed(lambda: plain_2d_seconds(scene, la, back_off), args.repeats)
+        front_clearance = 4 * max(la.panel.size_mm)
+        floor = timed(lambda: plain_2d_seconds(scene, la, front_clearance), args.repeats)
         row = {"floor_seconds": floor}
         for method in ("multi-ortho", "multi-ortho-views"):
             t = timed(lambda: run_method(method, scene, la, draft), args.repeats)

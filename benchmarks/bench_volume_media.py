@@ -25,7 +25,7 @@ import numpy as np
 import pyvista as pv
 from pyvista import examples
 
-from povh3d.app.stage import fit_to_display
+from povh3d.geometry.fit import fit_to_display
 from povh3d.app.volume_media import media_stage
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import RenderSettings

@@ -1,8 +1,10 @@
-"""What this machine offers the renderer: the cores this process may use."""
+"""What this machine offers the renderer: the cores this process may use, its memory, the cache
+folder and the POV-Ray binary (looked up here alone)."""
 
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 from functools import cache
 
@@ -100,3 +102,46 @@ def default_cache_dir() -> Path:
         except RuntimeError:  # no HOME and no password entry: an unusable cache, not a crash
             base = os.path.join(os.sep, "nonexistent-home", ".cache")
     return Path(base) / "povh3d"
+
+
+# -- the POV-Ray binary: looked up here alone (the renderer runs it, the output cache keys on it) --------
+#: Environment variable naming the POV-Ray executable to use.
+ENV_VAR = "POVH3D_POVRAY"
+INSTALL_HINT = ("install it with 'sudo apt-get install -y povray' (Debian/Ubuntu) "
+                f"or set {ENV_VAR}=/path/to/povray")
+
+
+def find_povray() -> str:
+    """Path of the POV-Ray executable.
+
+    ``$POVH3D_POVRAY`` if set (a path or a command name), else ``povray`` on
+    ``PATH``.
+
+    Raises
+    ------
+    PovrayNotFound
+        With a one-line hint on installing it.
+    """
+    from .errors import PovrayNotFound  # here: system.py stays a leaf of the import graph
+
+    configured = os.environ.get(ENV_VAR)
+    if configured:
+        found = shutil.which(configured)
+        if found is None:
+            raise PovrayNotFound(f"{ENV_VAR}={configured} is not an executable "
+                                 f"program; {INSTALL_HINT}.")
+        return found
+    found = shutil.which("povray")
+    if found is None:
+        raise PovrayNotFound(f"POV-Ray was not found on PATH; {INSTALL_HINT}.")
+    return found
+
+
+def binary_key(binary: str) -> str | None:
+    """``"path|size|mtime_ns"`` of the file ``binary`` resolves to (its version follows); None if unreadable."""
+    try:
+        path = os.path.realpath(binary)
+        stat = os.stat(path)
+    except OSError:
+        return None
+    return f"{path}|{stat.st_size}|{stat.st_mtime_ns}"

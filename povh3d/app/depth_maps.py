@@ -7,14 +7,15 @@ screen (where the ray crosses ``z = 0``) to the first surface: negative in
 front of the screen, NaN where nothing is hit.  ``p_LLL_KKK.npy`` holds the
 matching disparity in view pixels (lenses) per view step, ``z s / (f p)`` with
 ``z`` the hit's depth ``d / |(u/f, v/f, 1)|``: a point at depth ``z`` moves by
-that many lenses from one view to the next.  ``depth_maps.json`` says all this
-and records the frame.  Every file is written atomically.
+that many lenses from one view to the next (``geometry.rays.disparity``).
+``depth_maps.json`` says all this and records the frame.  Every file is written
+atomically.
 
 With ``--depth-format png`` the maps are 16-bit greyscale PNGs instead
 (``d_LLL_KKK.png``, ``p_LLL_KKK.png``): code 0 is "nothing hit" (NaN), codes
 1..65535 are ``offset + (code - 1) * scale``, one scale and offset for all the
 views of a kind, recorded in ``depth_maps.json``; the rounding is at most half
-a ``scale``.
+a ``scale`` (``image.depth_codes``).
 """
 
 from __future__ import annotations
@@ -28,6 +29,8 @@ import numpy as np
 
 from ..errors import OutputError
 from ..geometry.lens_array import LensArray
+from ..geometry.rays import disparity
+from ..image.depth_codes import quantise
 from ..image.io import atomic_path
 
 
@@ -41,38 +44,7 @@ def check_depth_dir(folder: Path) -> None:
         raise OutputError(f"cannot create --depth-maps folder {str(folder)!r}: {exc.strerror}") from None
 
 
-def disparity(depth: np.ndarray, lens_array: LensArray) -> np.ndarray:
-    """(Ny, Nx, Ly, Lx) ray distances (mm) -> disparity in lenses per view step (horizontal)."""
-    ny, nx = depth.shape[:2]
-    s, f, p = lens_array.panel.pitch_x, lens_array.focal, lens_array.pitch_x
-    a = (np.arange(nx) + 0.5 - nx / 2) * s / f
-    b = (ny / 2 - np.arange(ny) - 0.5) * lens_array.panel.pitch_y / f
-    length = np.sqrt(a[None, :] ** 2 + b[:, None] ** 2 + 1.0)
-    z = depth / length[:, :, None, None]
-    return (z * s / (f * p)).astype(np.float32)
-
-
 DEPTH_FORMATS = ("npy", "png")
-NO_HIT = 0          # the PNG code of a ray that hits nothing
-TOP = 65535
-
-
-def quantise(values: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """Float values (NaN: none) -> uint16 codes (0: none, 1..65535 evenly over the finite range),
-    the scale and the offset: ``value = offset + (code - 1) * scale``, to within ``scale / 2``."""
-    finite = values[np.isfinite(values)]
-    offset = float(finite.min()) if finite.size else 0.0
-    span = float(finite.max()) - offset if finite.size else 0.0
-    scale = span / (TOP - 1) if span > 0 else 1.0
-    codes = np.full(values.shape, NO_HIT, np.uint16)
-    ok = np.isfinite(values)
-    codes[ok] = (np.rint((values[ok] - offset) / scale) + 1).clip(1, TOP).astype(np.uint16)
-    return codes, scale, offset
-
-
-def dequantise(codes: np.ndarray, scale: float, offset: float) -> np.ndarray:
-    """uint16 codes -> float64 values, NaN where the code is 0 (the inverse of ``quantise``)."""
-    return np.where(codes == NO_HIT, np.nan, offset + (codes.astype(np.float64) - 1) * scale)
 
 
 def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, record: dict[str, Any],

@@ -7,7 +7,7 @@ The content is put where a render would put it, in the display's frame (mm):
   then the depth pass (``engine.depth``) seen from the viewer: a coarse surface
   through the points it hits, the scene's bounding geometry as the display sees it;
 - a mesh model: its triangles, turned (``--up``, ``--rotate``) and placed by
-  ``app.stage.fit_to_display`` exactly as the default stage places them;
+  ``geometry.fit.fit_to_display`` exactly as the default stage places them;
 - a volume: its physical box turned by the orientation preset and ``--rotate``
   (``volume.orient``) and fitted to the display the same way, with the patient's
   directions marked on it.
@@ -31,7 +31,7 @@ from ..geometry.lens_array import LensArray
 from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
 from .display_setup import Display
 from .records import base_record, png_output, write_image
-from .stage import FILL, depth_budget_mm, fit_to_display
+from ..geometry.fit import FILL, depth_budget_mm, fit_to_display, placement_record
 
 SCENE_SUFFIXES = (".pov",)
 MIN_SIZE, MAX_SIZE = 200, 8000   # picture pixels on a side
@@ -92,7 +92,7 @@ def scene_content(path: Path, lens_array: LensArray, frame_options: Any = None, 
     from ..engine.methods import get_method
     from ..engine.quality import RenderSettings
     from ..scene.scene import load_scene
-    from .frame import DisplayFrameOptions
+    from .display_frame import DisplayFrameOptions
     from .placement import place_display
     from .request import RenderRequest
 
@@ -150,8 +150,7 @@ def model_content(path: Path, lens_array: LensArray, *, depth: float | None = No
     vertices = (np.concatenate([p.vertices for p in parts]) + placement.shift) * placement.scale
     faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets)])
     record = {"up": up, "up_reason": reason, "triangles": len(faces),
-              "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
-                            "fill": FILL}}
+              "placement": placement_record(placement, fill=FILL)}
     return Content("model", path.name, vertices, faces, _surface_z(vertices, faces), record=record)
 
 
@@ -223,7 +222,7 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
         vertices, faces = shape[0] @ m[:3, :3].T + m[:3, 3], shape[1]
     record = {"volume": volume.as_record(), "orientation": orientation, "rotate": list(rotate) if rotate else None,
               "world_to_display": m.round(12).tolist(), "shape": "iso" if iso else ("labels" if shape else None),
-              "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit}}
+              "placement": placement_record(placement)}
     return Content("volume", volume.name, vertices, faces, zs, box=box, marks=marks, record=record)
 
 

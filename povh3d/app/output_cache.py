@@ -14,12 +14,11 @@ to the finished files:
   its source files and templates, so an edited checkout never answers with an
   image an older code made.
 
-An entry ``root/outputs/ab/<key>.output`` is one file: a header line
-``povh3d-output 1 <key> <sha256 of the rest> <PNG length>``, the PNG bytes and
-a JSON block (the sidecar record, the command's summary line and the warnings
-the render gave, which a hit gives again).  It is written atomically and
-checked on every read (key, length, hash); a damaged entry is removed and the
-request rendered, never answered from it.
+An entry ``root/outputs/ab/<key>.output`` is one entry of the one cache
+(``povh3d.cache``: its header, its hash, its damage policy) whose body is a JSON
+line (the sidecar record, the command's summary line and the warnings the render
+gave, which a hit gives again) and the PNG bytes.  A damaged entry is reported,
+removed and the request rendered, never answered from it.
 
 Only stills of a ``.pov`` scene use it: an animation, a mesh model or a
 volume (their conversions have their own caches), extra outputs (``--views-dir``,
@@ -30,26 +29,23 @@ the normal path every time, as does ``--no-cache``.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
-import shutil
 from dataclasses import dataclass
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from .. import cache
 from .._version import __version__
 from ..errors import Povh3dError
-from ..image.io import atomic_path, sidecar_path, write_png_bytes_pair
+from ..image.io import sidecar_path, write_png_bytes_pair
 from ..mesh.formats import is_mesh_file
-from ..povray.version_memo import binary_key
 from ..scene.scene import load_scene
-from ..system import default_cache_dir
+from ..system import binary_key, find_povray
 from ..volume.sources import is_volume_source
 
-_MAGIC = b"povh3d-output 1 "
 #: Options that change nothing in the files written.
 _IGNORED = ("func", "quiet", "no_cache")
 #: Options whose use sends a request down the normal path (see the module docstring).
@@ -76,10 +72,12 @@ def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
     if options.get("no_cache") or any(options.get(name) for name in _UNCACHED) or is_mesh_file(str(scene)) \
             or is_volume_source(scene):
         return None
-    binary = os.environ.get("POVH3D_POVRAY") or shutil.which("povray")
-    povray = binary_key(shutil.which(binary) or binary) if binary else None
-    if povray is None:
+    try:
+        povray = binary_key(find_povray())
+    except Povh3dError:
         return None  # the render says what is missing
+    if povray is None:
+        return None
     loaded = load_scene(scene, tuple(include_dirs))  # a missing scene: the same one-line error
     if loaded.computed_names:
         return None
@@ -88,8 +86,7 @@ def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
                 output=os.path.abspath(output))
     parts = {"povh3d": [__version__, _code_stamp()], "options": kept, "scene": loaded.digest,
              "povray": povray, "env": {k: os.environ.get(k) for k in ("POVH3D_POVRAY", "POVH3D_SANDBOX")}}
-    text = json.dumps(parts, sort_keys=True, separators=(",", ":"), default=str)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return cache.content_key(parts)
 
 
 def _code_stamp() -> str:
@@ -112,48 +109,33 @@ def _code_stamp() -> str:
 
 
 def _entry_path(key: str, cache_dir: Path | None = None) -> Path:
-    return (cache_dir or default_cache_dir()) / "outputs" / key[:2] / f"{key}.output"
+    return cache.entry_path(cache.cache_root(cache_dir), "outputs", key, ".output")
 
 
 def answer(key: str, output: Path, cache_dir: Path | None = None) -> Hit | None:
     """Write the stored image and sidecar of ``key`` to ``output`` (as a pair, atomically); None on a miss.
 
-    A damaged entry is removed and is a miss.
+    A damaged entry is reported, removed and a miss.
     """
-    path = _entry_path(key, cache_dir)
     try:
-        data = path.read_bytes()
+        stored = cache.load(_entry_path(key, cache_dir), key, _parse, again="rendering again")
     except OSError:
         return None
-    stored = _parse(key, data)
     if stored is None:
-        with contextlib.suppress(OSError):
-            path.unlink()
         return None
-    image, meta = stored
+    meta, image = stored
     record = meta["record"]
     record["timings"] = {**record.get("timings", {}), "output_from_cache": True}
     write_png_bytes_pair(output, image, record)
     return Hit(str(meta["summary"]), tuple(str(w) for w in meta["warnings"]))
 
 
-def _parse(key: str, data: bytes) -> tuple[bytes, dict[str, Any]] | None:
-    """The PNG bytes and the JSON block of an entry; None unless every check passes."""
-    line, _, body = data.partition(b"\n")
-    try:
-        magic_key, digest, length = line[len(_MAGIC):].split(b" ")
-        size = int(length)
-    except ValueError:
-        return None
-    if not line.startswith(_MAGIC) or magic_key.decode() != key or hashlib.sha256(body).hexdigest() != digest.decode():
-        return None
-    try:
-        meta = json.loads(body[size:])
-    except ValueError:
-        return None
-    if not isinstance(meta, dict) or not {"record", "summary", "warnings"} <= meta.keys():
-        return None
-    return body[:size], meta
+def _parse(body: bytes) -> tuple[dict[str, Any], bytes]:
+    """The JSON block and the PNG bytes of an entry's body; ``ValueError`` unless it is whole."""
+    meta, image = cache.split_json(body)
+    if not {"record", "summary", "warnings"} <= meta.keys() or not isinstance(meta["record"], dict):
+        raise ValueError("not an output entry")
+    return meta, image
 
 
 def keep(key: str, output: Path, summary: str, warnings: list[str], cache_dir: Path | None = None) -> None:
@@ -164,10 +146,7 @@ def keep(key: str, output: Path, summary: str, warnings: list[str], cache_dir: P
         record = json.loads(sidecar_path(output).read_text(encoding="utf-8"))
         if record.pop("image_sha256", None) != hashlib.sha256(image).hexdigest():
             return  # replaced meanwhile by another process: nothing trustworthy to keep
-        body = image + json.dumps({"record": record, "summary": summary, "warnings": warnings}).encode("utf-8")
-        path = _entry_path(key, cache_dir)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp:
-            tmp.write_bytes(_MAGIC + f"{key} {hashlib.sha256(body).hexdigest()} {len(image)}\n".encode() + body)
+        body = cache.json_and_bytes({"record": record, "summary": summary, "warnings": warnings}, image)
+        cache.store(_entry_path(key, cache_dir), key, body)
     except (OSError, ValueError, Povh3dError):  # never fail the render that was just written
         return

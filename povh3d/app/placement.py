@@ -1,6 +1,6 @@
 """Place the display in the scene for a request: the frame, the front clearance, the depth.
 
-``place_display`` resolves the frame (``app.frame``), keeps the rays' start in
+``place_display`` resolves the frame (``app.display_frame``), keeps the rays' start in
 front of the scene's camera, measures the scene's depth in the frame
 (``engine.depth``: only for a frame other than native, or with ``--fit-depth``),
 scales the frame when ``--fit-depth`` asks, and returns the request with the
@@ -20,8 +20,8 @@ from ..engine.quality import DEPTH_SCALE_RANGE
 from ..errors import ConfigError
 from ..geometry.frame import NATIVE, DisplayFrame
 from ..scene.scene import Scene
-from .frame import resolve_frame_and_depth
-from .stage import depth_budget_mm
+from .display_frame import resolve_frame_and_depth
+from ..geometry.fit import depth_budget_mm
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from .request import RenderRequest
@@ -155,10 +155,10 @@ def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: 
     """``povh3d info SCENE``: the frame the scene would render with and its depth against the budget."""
     from ..engine.quality import RenderSettings
     from ..scene.scene import load_scene
-    from .frame import FrameOptions
+    from .display_frame import DisplayFrameOptions
 
     scene = load_scene(path, include_dirs)
-    options = options or FrameOptions()
+    options = options or DisplayFrameOptions()
     default = get_method("multi-ortho").default_front_clearance(lens_array)
     placed, record, seen = resolve_frame_and_depth(options, scene, lens_array, front_clearance=default)
     budget = depth_budget_mm(lens_array)

@@ -27,7 +27,7 @@ from .stage import prepare_stage
 from .placement import place_display
 from .depth_maps import check_depth_dir, write_depth_maps
 from ..engine.depth import view_depth_maps
-from ..povray.sandbox import describe as describe_sandbox
+from ..engine.frames import sandbox_in_use as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import RenderedImage, render_sequence
 from .records import base_record, png_output, write_image

@@ -25,7 +25,7 @@ from ..image.video import check_video_path
 from ..mesh.formats import is_mesh_file
 from .animation import FrameRange
 from .display_setup import Display
-from .frame import DisplayFrameOptions
+from .display_frame import DisplayFrameOptions
 
 SHADINGS = ("auto", "smooth", "flat")
 
@@ -135,7 +135,7 @@ class RenderRequest:
     frames : FrameRange or None    render an animation: one image per clock value
     video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
     fps : float                    video frames per second
-    display_frame : DisplayFrameOptions   where the display sits in the scene (scenes only; ``app.frame``)
+    display_frame : DisplayFrameOptions   where the display sits in the scene (scenes only; ``app.display_frame``)
     depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
     depth_format : {'npy', 'png'}  float32 arrays, or 16-bit PNGs with the scale in depth_maps.json
     volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)

@@ -1,7 +1,7 @@
 """The stage for ``povh3d render VOLUME``: a volume's surfaces (or its medium) placed on the display.
 
 The volume's physical box is turned into the display frame by the orientation
-preset (and ``--rotate``), centred and scaled like a model (``app.stage``'s
+preset (and ``--rotate``), centred and scaled like a model (``geometry.fit``'s
 ``fit_to_display``: fill the panel, or ``--depth``).  Surfaces (``--labels``,
 ``--iso``) are extracted in LPS mm, turned, decimated to the display's
 triangle budget and written as one include in the cache, keyed by the voxel
@@ -16,21 +16,23 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .. import cache
 from .._version import __version__
-from ..engine.cache import content_key, default_cache_dir
+from ..cache import content_key
+from ..engine.stages import model_stage_text
 from ..errors import ConfigError, InputError, warn
+from ..geometry.fit import depth_warning, fit_to_display, placement_record
 from ..geometry.lens_array import LensArray
 from ..image.io import atomic_path
 from ..volume.grid import Volume
 from ..volume.orient import display_box, volume_to_display, world_to_display
 from .request import VolumeOptions
-from .stage import fit_to_display, prepare_stage, stage_text
+from .stage import load_manifest, prepare_stage, store_manifest, write_stage
 
 IDENT = "Povh3d_Volume"
 #: At most this many distinct integer values make a volume a label map when nothing says what to draw.
@@ -100,16 +102,15 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     record: dict[str, Any] = {
         "volume": volume.as_record(), "source": str(source), "draw": kind, "orientation": options.orientation,
         "rotate": list(options.rotate) if options.rotate else None, "world_to_display": to_display.tolist(),
-        "placement": {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit,
-                      "depth_budget_mm": placement.depth},
-        "warnings": _depth_warning(placement)}
-    root = cache_dir or default_cache_dir()
+        "placement": placement_record(placement, depth_budget_mm=placement.depth),
+        "warnings": depth_warning(placement, "volume")}
+    root = cache.cache_root(cache_dir)
     if kind == "volume":
         from .volume_media import media_stage
 
         key = content_key("volume-media", __version__, digest, options.transfer, options.df3_bits,
                           np.round(to_display, 12).tolist())
-        folder = _cache_folder(root / "volumes" / key[:2] / key)
+        folder = cache.cache_folder(cache.entry_path(root, "volumes", key, ""), "volume")
         stage, media = media_stage(volume, to_display, lens_array, transfer=options.transfer,
                                    bits=options.df3_bits, folder=folder)
         record["media"] = media
@@ -126,38 +127,9 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     record["seconds"] = manifest["seconds"]
     record["silhouette_error"] = manifest["silhouette_error"]
     record["specks_left_out"] = manifest.get("specks_left_out", 0)
-    text = stage_text(include.name, IDENT, placement, lens_array, model=volume.name)
-    stage = include.parent / f"stage-{hashlib.sha256(text.encode()).hexdigest()[:16]}.pov"
-    if not stage.is_file():
-        with atomic_path(stage) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+    stage = write_stage(include.parent, model_stage_text(include.name, IDENT, placement, lens_array,
+                                                         model=volume.name))
     return stage, record
-
-
-def _cache_folder(folder: Path) -> Path:
-    """``folder`` made; an unusable cache (read-only, full) is a warning and a folder of this run."""
-    from ..errors import OutputError
-    from ..image.io import check_writable
-
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        check_writable(folder / "manifest.json")
-        return folder
-    except (OSError, OutputError) as exc:
-        import tempfile
-
-        from ..system import owned_prefix
-
-        warn(f"the volume cache {str(folder.parent.parent)!r} cannot be used ({exc}); working without it")
-        return Path(tempfile.mkdtemp(prefix=owned_prefix("povh3d-")))  # swept after this run ends
-
-
-def _depth_warning(placement: Any) -> list[str]:
-    if placement.size[2] > placement.depth * (1 + 1e-9):
-        return [f"the volume is {placement.size[2]:.3g} mm deep at this size, beyond the depth budget of "
-                f"{placement.depth:.3g} mm (2 N f): its front and back look blurred; --depth "
-                f"{placement.depth:.3g} fits it"]
-    return []
 
 
 def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptions, matrix: np.ndarray,
@@ -167,14 +139,13 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
 
     key = content_key("volume-surfaces", __version__, digest, kind, options.labels, options.iso,
                       options.opacity, options.smoothing, np.round(matrix, 12).tolist(), budget, round(speck, 9))
-    folder = _cache_folder(root / "volumes" / key[:2] / key)
-    manifest_path, include = folder / "manifest.json", folder / "surfaces.inc"
-    try:  # a damaged manifest is a cache miss
-        manifest = json.loads(manifest_path.read_text(encoding="utf-8")) if manifest_path.is_file() else None
-    except (OSError, ValueError):
-        manifest = None
-    if isinstance(manifest, dict) and "surfaces" in manifest and include.is_file():
+    folder = cache.entry_path(root, "volumes", key, "")
+    include = folder / "surfaces.inc"
+    manifest = load_manifest(folder, key, ("surfaces",))
+    if manifest is not None and include.is_file():
         return include, {**manifest, "from_cache": True}
+    folder = cache.cache_folder(folder, "volume")
+    include = folder / "surfaces.inc"
     start = time.perf_counter()
     from ..volume.surfaces import iso_surfaces, label_surfaces
 
@@ -194,8 +165,7 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
                 "seconds": {"extract": round(extracted, 4), "decimate": stats["decimate_seconds"],
                             "write": stats["write_seconds"]}, "silhouette_error": stats["silhouette_error"],
                 "specks_left_out": stats["specks_left_out"]}
-    with atomic_path(manifest_path) as tmp:
-        tmp.write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
+    store_manifest(folder, key, manifest)
     return include, {**manifest, "from_cache": False}
 
 
@@ -206,14 +176,14 @@ def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max
 
     from ..volume.read import read_vtk_mesh
 
-    root = cache_dir or default_cache_dir()
+    root = cache.cache_root(cache_dir)
     key = content_key("vtk-mesh", __version__, hashlib.sha256(source.read_bytes()).hexdigest())
-    ply = root / "volumes" / key[:2] / key / f"{source.stem}.ply"
+    ply = cache.entry_path(root, "volumes", key, "") / f"{source.stem}.ply"
     if not ply.is_file():
         points, faces = read_vtk_mesh(source)
         if not len(faces):
             raise InputError(f"{str(source)!r} holds no polygons; check the file")
-        ply = _cache_folder(ply.parent) / ply.name
+        ply = cache.cache_folder(ply.parent, "volume") / ply.name
         with atomic_path(ply) as tmp:
             tmp.write_bytes(trimesh.Trimesh(points, faces, process=False).export(file_type="ply"))
     stage, record = prepare_stage(ply, lens_array, depth=depth, max_triangles=max_triangles, cache_dir=cache_dir,

@@ -25,7 +25,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
     """The ``RenderRequest`` the options of ``povh3d render`` describe."""
     from ..app.animation import FrameRange, parse_clock, parse_frames
     from ..app.request import ModelOptions, RenderRequest
-    from ..engine.quality import RenderSettings
+    from ..app.request import RenderSettings
     from ..geometry.crop import CropSettings, parse_bbox
 
     display = display_from_args(args, method=args.method, mapped=True)
@@ -55,7 +55,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
 
 def display_frame_options_from_args(args: argparse.Namespace) -> Any:
     """``DisplayFrameOptions`` from --display-frame and the explicit --display-* options."""
-    from ..app.frame import DisplayFrameOptions
+    from ..app.display_frame import DisplayFrameOptions
 
     fit = args.fit_depth
     if fit is not None and fit != "auto":

@@ -19,19 +19,26 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from .cache import ImageCache, content_key, default_cache_dir
+from ..cache import cache_root, content_key
+from .cache import ImageCache
 from ..image.io import read_png
 from ..povray.job import SCENE_FILE
 from ..povray.log import past_scene_end
-from ..povray.process import JobResult, PovrayJob, find_povray, povray_version, run_jobs
-from ..povray.sandbox import confines, scene_inputs
+from ..povray.process import JobResult, PovrayJob, povray_version, run_jobs
+from ..povray.sandbox import confines, describe, scene_inputs
 from ..povray.version_memo import remembered_version
 from ..errors import PovrayError, PovrayTimeout, warn
 from ..scene.scene import Scene
-from ..system import cpu_count
+from ..system import cpu_count, find_povray
 from .batch import ShotBatch, RenderStats
 from .quality import Progress, RenderSettings
 from ..povray.templates import render_template, templates_dir
+
+
+def sandbox_in_use() -> str:
+    """How this process's POV-Ray runs are confined (the sidecar's ``sandbox``): app/ asks the engine,
+    which alone talks to ``povray/``."""
+    return describe()
 
 
 class LocalRunner:
@@ -40,7 +47,7 @@ class LocalRunner:
     def __init__(self, binary: str) -> None:
         self.binary = binary
         # Remembered across runs: a `povray --version` costs about 0.2 s a render.
-        self.version = remembered_version(binary, default_cache_dir(), povray_version)
+        self.version = remembered_version(binary, cache_root(), povray_version)
 
     def run(self, jobs: list[PovrayJob], *, processes: int, on_result: Callable[[JobResult], None],
             on_running: Callable[[dict[int, float]], None] | None = None,
@@ -104,7 +111,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     else:
         runner = LocalRunner(find_povray())
     stats = RenderStats(frames=len(batch.shots), povray_version=runner.version)
-    cache = ImageCache(settings.cache_dir or default_cache_dir()) if settings.use_cache else None
+    cache = ImageCache(cache_root(settings.cache_dir)) if settings.use_cache else None
     if cache is not None and scene.computed_names and not confines():
         # Unconfined, POV-Ray may read files whose names povh3d cannot know: no key covers them.
         warn(f"{scene.path.name} reads a file whose name is computed while POV-Ray parses, and POV-Ray "

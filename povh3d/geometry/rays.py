@@ -102,3 +102,18 @@ def depth_scaled_rays(lens_array: LensArray, depth_scale: float) -> LensArray:
     if depth_scale == 1:
         return lens_array
     return replace(lens_array, focal=lens_array.focal / depth_scale)
+
+
+def disparity(depth: np.ndarray, lens_array: LensArray) -> np.ndarray:
+    """(Ny, Nx, Ly, Lx) ray distances (mm) -> disparity in lenses per view step (horizontal).
+
+    ``z s / (f p)`` with ``z`` the hit's depth ``d / |(u/f, v/f, 1)|``: a point at depth ``z``
+    moves by that many lenses from one view to the next.
+    """
+    ny, nx = depth.shape[:2]
+    s, f, p = lens_array.panel.pitch_x, lens_array.focal, lens_array.pitch_x
+    a = (np.arange(nx) + 0.5 - nx / 2) * s / f
+    b = (ny / 2 - np.arange(ny) - 0.5) * lens_array.panel.pitch_y / f
+    length = np.sqrt(a[None, :] ** 2 + b[:, None] ** 2 + 1.0)
+    z = depth / length[:, :, None, None]
+    return (z * s / (f * p)).astype(np.float32)

@@ -8,7 +8,7 @@ placed by a scene's camera is brought into this frame first (the frame's
 - the screen: the panel's rectangle, ``W x H`` mm;
 - the lens array's extent: its lenses' cells (turned with a rotated lattice);
 - the depth-budget slab: the screen's rectangle from ``z = -N f`` to ``z = +N f``
-  (``2 N f`` deep, ``app.stage.depth_budget_mm``);
+  (``2 N f`` deep, ``geometry.fit.depth_budget_mm``);
 - the viewing cone of one lens: the directions its pixels send light to the
   viewer.  A pixel at offset ``(u, v)`` from its lens centre lights the ray
   ``-(u, v, f)`` towards the viewer (the ray of a pixel, reversed), and the

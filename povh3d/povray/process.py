@@ -42,42 +42,13 @@ from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, Pov
     RenderInterrupted)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
-from ..system import owned_prefix, sweep_orphans
+from ..system import INSTALL_HINT, find_povray, owned_prefix, sweep_orphans
 from .log import denied_note, describe_exit, parse_error, tail
 from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
-
-#: Environment variable naming the POV-Ray executable to use.
-ENV_VAR = "POVH3D_POVRAY"
-INSTALL_HINT = ("install it with 'sudo apt-get install -y povray' (Debian/Ubuntu) "
-                f"or set {ENV_VAR}=/path/to/povray")
 
 _DENIED = re.compile(r"Cannot (open|find)")
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
-
-
-def find_povray() -> str:
-    """Path of the POV-Ray executable.
-
-    ``$POVH3D_POVRAY`` if set (a path or a command name), else ``povray`` on
-    ``PATH``.
-
-    Raises
-    ------
-    PovrayNotFound
-        With a one-line hint on installing it.
-    """
-    configured = os.environ.get(ENV_VAR)
-    if configured:
-        found = shutil.which(configured)
-        if found is None:
-            raise PovrayNotFound(f"{ENV_VAR}={configured} is not an executable "
-                                 f"program; {INSTALL_HINT}.")
-        return found
-    found = shutil.which("povray")
-    if found is None:
-        raise PovrayNotFound(f"POV-Ray was not found on PATH; {INSTALL_HINT}.")
-    return found
 
 
 def povray_version(binary: str | None = None) -> str:

@@ -16,19 +16,11 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+from ..system import binary_key
+
 FILE_NAME = "povray-version.json"
 #: Entries kept: one per binary seen, a handful at most on any machine.
 _MAX_ENTRIES = 16
-
-
-def binary_key(binary: str) -> str | None:
-    """``"path|size|mtime_ns"`` of the file `binary` resolves to; None if it cannot be read."""
-    try:
-        path = os.path.realpath(binary)
-        stat = os.stat(path)
-    except OSError:
-        return None
-    return f"{path}|{stat.st_size}|{stat.st_mtime_ns}"
 
 
 def remembered_version(binary: str, folder: str | Path, ask: Callable[[str], str]) -> str:

@@ -62,7 +62,7 @@ def display_box(corners: np.ndarray, matrix: np.ndarray) -> tuple[np.ndarray, np
 
 
 def world_to_display(matrix: np.ndarray, shift: Any, scale: float) -> np.ndarray:
-    """(4, 4): display mm = ``scale * (matrix @ world + shift)`` (``shift``, ``scale``: app.stage.Placement)."""
+    """(4, 4): display mm = ``scale * (matrix @ world + shift)`` (``shift``, ``scale``: geometry.fit.Placement)."""
     m = np.eye(4)
     m[:3, :3] = scale * np.asarray(matrix, dtype=np.float64)
     m[:3, 3] = scale * np.asarray(shift, dtype=np.float64)

@@ -1,4 +1,4 @@
-"""The depth maps' 16-bit PNG codes (``app/depth_maps.py``)."""
+"""The depth maps' 16-bit PNG codes (``image/depth_codes.py``)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 
 def test_depth_map_codes_round_trip():
     """quantise/dequantise: NaN <-> 0, every finite value back within half a step (hypothesis-style sweep)."""
-    from povh3d.app.depth_maps import dequantise, quantise
+    from povh3d.image.depth_codes import dequantise, quantise
 
     rng = np.random.default_rng(7)
     for spread in (1e-3, 1.0, 500.0):

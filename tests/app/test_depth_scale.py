@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from povh3d.app.display_setup import Display
-from povh3d.app.frame import FrameOptions
+from povh3d.app.display_frame import DisplayFrameOptions
 from povh3d.app.placement import place_display
 from povh3d.app.request import RenderRequest
 from povh3d.engine.quality import RenderSettings
@@ -146,7 +146,7 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     array = small()
     request = RenderRequest(source=scene, display=Display(array), output=tmp_path / "o.png",
                             settings=RenderSettings(quality="draft"),
-                            display_frame=FrameOptions(fit_depth="auto", depth_scale="fit"))
+                            display_frame=DisplayFrameOptions(fit_depth="auto", depth_scale="fit"))
     placed, record = place_display(request, load_scene(scene))
     k = placed.settings.depth_scale
     before = record["depth"]["before_fit"]
@@ -158,16 +158,16 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     assert placed.settings.frame is None   # the frame is not scaled: lateral sizes kept
     # Without --depth-scale the frame shrinks instead.
     request = RenderRequest(source=scene, display=Display(array), output=tmp_path / "o.png",
-                            settings=RenderSettings(quality="draft"), display_frame=FrameOptions(fit_depth="auto"))
+                            settings=RenderSettings(quality="draft"), display_frame=DisplayFrameOptions(fit_depth="auto"))
     placed, record = place_display(request, load_scene(scene))
     assert placed.settings.depth_scale == 1 and record["units_per_mm"] == pytest.approx(1 / k)
 
 
 def test_depth_scale_options_are_checked():
     with pytest.raises(ConfigError, match="needs --fit-depth"):
-        FrameOptions(depth_scale="fit")
+        DisplayFrameOptions(depth_scale="fit")
     with pytest.raises(ConfigError, match="both set the depth"):
-        FrameOptions(fit_depth="auto", depth_scale=0.5)
+        DisplayFrameOptions(fit_depth="auto", depth_scale=0.5)
     with pytest.raises(ConfigError, match="depth-scale"):
         RenderSettings(depth_scale=0.0)
 

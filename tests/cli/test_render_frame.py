@@ -95,7 +95,7 @@ def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path
 def test_depth_maps_as_16_bit_png_decode_to_the_npy_maps(cli, tmp_path):
     import numpy as np
 
-    from povh3d.app.depth_maps import dequantise
+    from povh3d.image.depth_codes import dequantise
     from povh3d.image.io import read_png
 
     for fmt in ("npy", "png"):

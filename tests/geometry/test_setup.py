@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from povh3d.app.stage import depth_budget_mm
+from povh3d.geometry.fit import depth_budget_mm
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.presets import lens_array, names
 from povh3d.geometry.setup import (

@@ -25,8 +25,9 @@ from PIL import Image
 
 from povh3d.errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
     RenderInterrupted)
-from povh3d.povray.process import (ENV_VAR, JobResult, PovrayJob, build_command, find_povray,
-    povray_conf, povray_version, run_jobs)
+from povh3d.povray.process import (JobResult, PovrayJob, build_command, povray_conf, povray_version,
+    run_jobs)
+from povh3d.system import ENV_VAR, find_povray
 
 HAVE_POVRAY = bool(os.environ.get(ENV_VAR) or shutil.which("povray"))
 needs_povray = pytest.mark.skipif(not HAVE_POVRAY, reason="POV-Ray is not installed")

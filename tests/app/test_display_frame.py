@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from povh3d.app.display_setup import Display
-from povh3d.app.frame import FrameOptions, resolve_frame
+from povh3d.app.display_frame import DisplayFrameOptions, resolve_frame
 from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
 from povh3d.geometry.frame import DisplayFrame, explicit_frame
@@ -54,7 +54,7 @@ def _frame(record: dict) -> DisplayFrame:
 def test_frame_follows_the_declared_camera():
     """Centre at look_at, normal along look_at - location, y along the rolled sky, width = field."""
     array = small_array()
-    frame, record = resolve_frame(FrameOptions(), load_scene(GALLERY / "tilted.pov"), array)
+    frame, record = resolve_frame(DisplayFrameOptions(), load_scene(GALLERY / "tilted.pov"), array)
     target = np.array([0.35, 0.42, -0.10])
     el, az = np.radians(28), np.radians(-37)
     # vrotate(<0,0,-d>, <el, az, 0>) in POV-Ray's left-handed frame: about x, then y.
@@ -78,7 +78,7 @@ def test_frame_follows_the_declared_camera():
 def test_camera_vectors_reproduce_povray_render(tmp_path):
     """POV-Ray through the scene's own camera == through a camera written from povh3d's vectors."""
     scene = GALLERY / "tilted.pov"
-    _, record = resolve_frame(FrameOptions(), load_scene(scene), small_array())
+    _, record = resolve_frame(DisplayFrameOptions(), load_scene(scene), small_array())
     cam = record["camera"]
     own = _povray(f'#include "{scene.name}"\n', 144, 108, GALLERY)
     ours = _povray(f'#include "{scene.name}"\ncamera {{ location {pov_vector(cam["location"])} '
@@ -167,7 +167,7 @@ def _scene(tmp_path: Path, camera: str) -> Path:
 ])
 def test_camera_that_cannot_be_used_is_one_line_naming_the_options(tmp_path, camera, words):
     with pytest.raises(CameraError) as info:
-        resolve_frame(FrameOptions(), load_scene(_scene(tmp_path, camera)), small_array())
+        resolve_frame(DisplayFrameOptions(), load_scene(_scene(tmp_path, camera)), small_array())
     message = str(info.value)
     assert words in message and "--display-center" in message and "\n" not in message
 
@@ -175,9 +175,9 @@ def test_camera_that_cannot_be_used_is_one_line_naming_the_options(tmp_path, cam
 def test_explicit_and_native_frames(tmp_path):
     scene = load_scene(_scene(tmp_path, "camera { location <0,0,-5> look_at 0 }"))
     array = small_array()
-    frame, _ = resolve_frame(FrameOptions("native"), scene, array)
+    frame, _ = resolve_frame(DisplayFrameOptions("native"), scene, array)
     assert frame.is_native
-    frame, record = resolve_frame(FrameOptions(center=(1, 2, 3), normal=(0, 0, 2), width=28.8), scene, array)
+    frame, record = resolve_frame(DisplayFrameOptions(center=(1, 2, 3), normal=(0, 0, 2), width=28.8), scene, array)
     assert record["source"] == "explicit" and frame.units_per_mm == pytest.approx(1.0)
     np.testing.assert_allclose(frame.to_scene([0, 0, 0]), [1, 2, 3])
     with pytest.raises(ConfigError, match="parallel"):
@@ -185,13 +185,13 @@ def test_explicit_and_native_frames(tmp_path):
     with pytest.raises(ConfigError, match="positive"):
         explicit_frame((0, 0, 0), (0, 0, 1), 0, 28.8)
     with pytest.raises(ConfigError, match="needs all"):
-        FrameOptions(center=(0, 0, 0))
+        DisplayFrameOptions(center=(0, 0, 0))
 
 
 def test_camera_evaluation_is_cached_by_scene_digest():
     scene, array = load_scene(GALLERY / "inches.pov"), small_array()
-    _, first = resolve_frame(FrameOptions(), scene, array)
-    _, again = resolve_frame(FrameOptions(), scene, array)
+    _, first = resolve_frame(DisplayFrameOptions(), scene, array)
+    _, again = resolve_frame(DisplayFrameOptions(), scene, array)
     assert not first["evaluation_from_cache"] and again["evaluation_from_cache"]
     assert again["evaluation_seconds"] < 0.05
     assert any("2 cameras" in w for w in first["warnings"])
@@ -211,7 +211,7 @@ def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
 def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     """The depth pass made in the camera's run equals a depth pass of its own in the same frame."""
     import povh3d.app.placement as placement
-    from povh3d.app.frame import resolve_frame_and_depth
+    from povh3d.app.display_frame import resolve_frame_and_depth
     from povh3d.app.request import RenderRequest
     from povh3d.engine.depth import depth_pass
 
@@ -230,7 +230,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     for key in ("near_mm", "far_mm", "field_near_mm", "field_far_mm"):
         assert record["depth"][key] == pytest.approx(own[key], abs=0.02), key
     # The pass belongs to its frame and clearance: another one is measured again.
-    placed, _, seen = resolve_frame_and_depth(FrameOptions(), scene, array, cache_dir=tmp_path,
+    placed, _, seen = resolve_frame_and_depth(DisplayFrameOptions(), scene, array, cache_dir=tmp_path,
                                               front_clearance=4 * 28.8)
     assert np.allclose(placed.matrix(), frame.matrix())
     clearance = placement._front_clearance(placed, 4 * 28.8)   # within 0.9 of the camera's distance
@@ -246,7 +246,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     ("#declare IW = image_width;\ncamera { location -5*z right x*IW/100 look_at 0 }", None, None),  # own run
 ])
 def test_the_camera_is_evaluated_at_a_size_it_cannot_tell_apart(tmp_path, camera, size, odd):
-    from povh3d.app.frame import measured_size
+    from povh3d.engine.scene_camera import measured_size
 
     scene = load_scene(_scene(tmp_path, camera))
     assert measured_size(scene, 320, 240, 80) == size
