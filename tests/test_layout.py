@@ -18,7 +18,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "povh3d"
 
-# Which top-level parts may import which (besides errors, _version and system,
+# Which top-level parts may import which (besides errors, _version, system and extras,
 # which everything may use).  cli -> app -> engine -> povray, beside the libraries.
 LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration", "volume"}
 ALLOWED = {
@@ -34,7 +34,7 @@ ALLOWED = {
     "scene": set(),
     "geometry": set(),
 }
-BASE = {"errors", "_version", "system"}
+BASE = {"errors", "_version", "system", "extras"}
 
 
 def _modules() -> dict[str, Path]:

@@ -35,7 +35,9 @@ def to_rgb8(image: np.ndarray) -> np.ndarray:
 
 
 def _write_mp4(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
-    import imageio_ffmpeg
+    from ..extras import require
+
+    imageio_ffmpeg = require("imageio_ffmpeg", "video", "an MP4 video")
 
     height, width = frames[0].shape[:2]
     writer = imageio_ffmpeg.write_frames(

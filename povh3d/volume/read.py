@@ -206,7 +206,9 @@ _NRRD_SPACES = {"left-posterior-superior": np.eye(3), "lps": np.eye(3),
 
 
 def _read_nrrd(path: Path, spacing: Any) -> Volume:
-    import nrrd
+    from ..extras import require
+
+    nrrd = require("nrrd", "volume", "a NRRD volume")
 
     values, header = nrrd.read(str(path))  # Fortran order: values[i, j, k], i fastest in the file
     values = _scalar(np.asarray(values), path.name)
