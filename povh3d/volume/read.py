@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError, warn
+from ..errors import ConfigError, InputError, MissingExtra, warn
 from .grid import Volume
 from .sources import SUFFIXES, is_polydata_vtk, is_volume_source, suffix as _suffix
 
@@ -59,7 +59,7 @@ def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = N
                              f"{', '.join(SUFFIXES)} or a DICOM folder")
         try:
             volume = reader(path, spacing)
-        except (InputError, ConfigError):
+        except (InputError, ConfigError, MissingExtra):
             raise
         except Exception as exc:  # the readers' own errors, in any of their types
             raise InputError(f"cannot read the volume {str(path)!r} ({type(exc).__name__}: "
