@@ -60,6 +60,10 @@ def without(monkeypatch):
                 monkeypatch.delitem(sys.modules, module)
         for top in tops:
             monkeypatch.setitem(sys.modules, top, None)
+        # a package keeps its imported submodules as attributes: 'from ..app import calibration' reads them
+        for package, name in (("povh3d", "calibration"), ("povh3d.app", "calibration")):
+            if package in sys.modules:
+                monkeypatch.delattr(sys.modules[package], name, raising=False)
     return hide
 
 

@@ -3,4 +3,4 @@ optimisers and filters, an optional group (``pip install 'povh3d[calibration]'``
 
 from ..extras import require
 
-require("scipy", "calibration", "the capture commands (calibrate, undistort, borders, ...)")
+require("scipy", "calibration", "capture processing (calibrate, undistort, borders, ...)")
