@@ -186,3 +186,10 @@ def test_convert_mesh(tmp_path, cli):
     _ok(cli("convert-mesh", SAMPLES / "letter_l.stl", "-o", tmp_path / "cli.inc"))
     povh3d.convert_mesh(SAMPLES / "letter_l.stl", tmp_path / "api.inc")
     assert (tmp_path / "api.inc").read_text() == (tmp_path / "cli.inc").read_text()
+
+
+def test_layout(tmp_path, cli):
+    _ok(cli("layout", SAMPLES / "letter_l.stl", "--size", "320x240", "-o", tmp_path / "cli.png"))
+    record = povh3d.layout(SAMPLES / "letter_l.stl", tmp_path / "api.png", size=(320, 240))
+    assert record["setup"] == json.loads((tmp_path / "cli.json").read_text())["setup"]
+    assert np.array_equal(read_png(tmp_path / "api.png"), read_png(tmp_path / "cli.png"))

@@ -8,6 +8,7 @@ It downloads the core dependencies from PyPI (about a minute); pip's cache makes
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -70,9 +71,13 @@ def test_wheel_installs_lean_and_renders_the_sample(installed):
          cwd=work, env=env)
     image = np.asarray(Image.open(work / "out.png"))
     record = json.loads((work / "out.json").read_text())
-    assert image.shape[:2] == tuple(record["image_size_px"][::-1]) if "image_size_px" in record else image.ndim == 3
+    assert record["kind"] == "h3d" and record["display"]["preset"] == "demo"
+    assert list(image.shape[1::-1]) == record["lens_array"]["panel"]["size_px"]  # (W, H) in the sidecar
+    assert record["image_sha256"] == hashlib.sha256((work / "out.png").read_bytes()).hexdigest()
     assert image.std() > 5  # a scene, not a blank frame
-    assert record["display"]["preset"] == "demo"
+    metadata = _run([str(python), "-c", "from importlib.metadata import metadata; m = metadata('povh3d'); "
+                     "print(m['License'], m.get_all('License-File'))"], cwd=work, env=env).stdout
+    assert "MIT" in metadata and "LICENSE" in metadata
 
 
 @pytest.mark.slow
