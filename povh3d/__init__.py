@@ -50,7 +50,7 @@ _MODULES = {"presets": "povh3d.geometry.presets"}
 
 __all__ = ["__version__", "render", "RenderRequest", "ModelOptions", "VolumeOptions", "FrameRange", "Quality", "RenderSettings",
            "CropSettings", "LensArray", "Panel", "presets", "Povh3dError", "ConfigError", "InputError",
-           "OutputError", "PovrayError", *_COMMANDS]
+           "OutputError", "PovrayError", *(c for c in _COMMANDS if c != "map")]  # no builtin hidden by a *-import
 
 
 def __getattr__(name: str) -> Any:
@@ -62,4 +62,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(__all__)
+    return sorted({*__all__, *_COMMANDS})

@@ -123,3 +123,9 @@ def _big_part():
 
     rng = np.random.default_rng(0)
     return Part(name="p", vertices=rng.random((30, 3)), faces=rng.integers(0, 30, (40, 3)))
+
+
+def test_a_star_import_hides_no_builtin():
+    namespace: dict = {}
+    exec("from povh3d import *", namespace)
+    assert "map" not in namespace and "extract" in namespace
