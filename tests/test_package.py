@@ -93,6 +93,7 @@ def test_a_failure_inside_a_present_package_is_not_renamed(tmp_path, monkeypatch
     ("scipy", ["calibrate", "{tmp}/white.png", "-o", "{tmp}/grid.json"], "calibration"),
     ("distributed", ["render", str(SAMPLE), "--scheduler", "tcp://127.0.0.1:1", "-o", "{tmp}/o.png"], "cluster"),
     ("nrrd", ["layout", "{tmp}/v.nrrd", "-o", "{tmp}/l.png"], "volume"),
+    ("lxml", ["convert-mesh", "{tmp}/m.3mf", "-o", "{tmp}/m.inc"], "mesh"),
     ("imageio_ffmpeg", None, "video"),
     ("fast_simplification", None, "mesh"),
     ("skimage", None, "analysis"),
@@ -101,6 +102,7 @@ def test_a_command_of_a_missing_group_says_which_extra_in_one_line(tmp_path, cli
     from povh3d.image.io import write_png
 
     write_png(tmp_path / "white.png", np.full((32, 32, 3), 255, np.uint8))
+    (tmp_path / "m.3mf").write_bytes(b"PK not read: the group is checked first")
     (tmp_path / "v.nrrd").write_bytes(b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n" + bytes(8))
     without(hidden)
     if args is None:  # the library functions behind the commands
