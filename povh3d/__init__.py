@@ -50,7 +50,10 @@ _MODULES = {"presets": "povh3d.geometry.presets"}
 
 __all__ = ["__version__", "render", "RenderRequest", "ModelOptions", "VolumeOptions", "FrameRange", "Quality", "RenderSettings",
            "CropSettings", "LensArray", "Panel", "presets", "Povh3dError", "ConfigError", "InputError",
-           "OutputError", "PovrayError", *(c for c in _COMMANDS if c != "map")]  # no builtin hidden by a *-import
+           "OutputError", "PovrayError",
+           # _COMMANDS but map: a star import must not hide the builtin
+           "read_h3d", "interleave", "extract", "resample", "quilt", "unquilt", "refocus", "preview", "info", "moire",
+           "calibrate", "undistort", "borders", "equalise", "viewpoints", "stitch", "convert_mesh", "layout"]
 
 
 def __getattr__(name: str) -> Any:

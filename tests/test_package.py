@@ -131,3 +131,17 @@ def test_a_star_import_hides_no_builtin():
     namespace: dict = {}
     exec("from povh3d import *", namespace)
     assert "map" not in namespace and "extract" in namespace
+
+
+def test_import_povh3d_loads_no_command_until_one_is_used():
+    probe = ("import sys, povh3d; dir(povh3d); before = 'numpy' in sys.modules or 'povh3d.api' in sys.modules; "
+             "povh3d.extract; print(before, 'povh3d.api' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", probe], cwd=REPO, capture_output=True, text=True, timeout=60,
+                          check=False)
+    assert done.stdout.split() == ["False", "True"], done  # the second: the probe sees a load
+
+
+def test_all_is_every_command_but_map():
+    import povh3d
+
+    assert set(povh3d._COMMANDS) - set(povh3d.__all__) == {"map"}
