@@ -19,9 +19,11 @@ import numpy as np
 from .errors import ConfigError
 
 if TYPE_CHECKING:
+    from .app.convert_mesh import ConversionResult
     from .calibration.gridfile import Grid
     from .calibration.lenticular import LenticularFit
     from .geometry.lens_array import LensArray
+    from .geometry.moire import SlantSweep
     from .mappings import Mapping
 
 Ppl = tuple[int, int]
@@ -265,8 +267,8 @@ def info(preset: str = "demo", *, lens_array: LensArray | None = None) -> dict[s
     return {**display, **array.describe()}
 
 
-def moire(lens_array: LensArray, slants_deg: np.ndarray, *, distance: float = 500.0, turn: bool = False,
-          blur: float = 1.5, spot: float = 0.0) -> Any:
+def moire(lens_array: LensArray, slants_deg: np.ndarray | list[float], *, distance: float = 500.0, turn: bool = False,
+          blur: float = 1.5, spot: float = 0.0) -> SlantSweep:
     """``povh3d moire``: the moire of two crossed lenticular sheets of the array's pitch over its panel.
 
     Parameters
@@ -376,7 +378,7 @@ def stitch(a: np.ndarray, b: np.ndarray, grid: Grid | str | Path) -> np.ndarray:
 
 
 # -- file level --------------------------------------------------------------------------------------
-def convert_mesh(model: str | Path, output: str | Path | None = None, **options: Any) -> Any:
+def convert_mesh(model: str | Path, output: str | Path | None = None, **options: Any) -> ConversionResult:
     """``povh3d convert-mesh``: a mesh model to a POV-Ray ``mesh2`` include; see ``app.convert_mesh``."""
     from .app.convert_mesh import convert_mesh as _convert
 
