@@ -4,6 +4,8 @@
     povh3d.render("scene.pov", "out.png", preset="demo", quality="draft")
     array = povh3d.presets.lens_array("demo", ppl=6)
     povh3d.render("scene.pov", "out6.png", lens_array=array)
+    h3d, lens_array = povh3d.read_h3d("out.png")
+    views = povh3d.extract(h3d, lens_array)                  # every command, on arrays (docs/api.md)
 
 The names below are loaded when first used, so ``import povh3d`` (and the
 ``povh3d`` command's start-up) costs nothing until a render is asked for.
@@ -17,6 +19,8 @@ from typing import TYPE_CHECKING, Any
 from ._version import __version__
 
 if TYPE_CHECKING:  # what type checkers and editors see
+    from .api import (borders, calibrate, convert_mesh, equalise, extract, info, interleave, layout, map, moire,
+                      preview, read_h3d, refocus, resample, quilt, stitch, undistort, unquilt, viewpoints)
     from .app.api import render
     from .app.display_setup import Display, build_display
     from .app.request import ModelOptions, RenderRequest, VolumeOptions
@@ -27,7 +31,12 @@ if TYPE_CHECKING:  # what type checkers and editors see
     from .geometry.crop import CropSettings
     from .geometry.lens_array import LensArray, Panel
 
+# the commands as functions on arrays (povh3d/api.py, docs/api.md)
+_COMMANDS = ("read_h3d", "interleave", "extract", "map", "resample", "quilt", "unquilt", "refocus", "preview",
+             "info", "moire", "calibrate", "undistort", "borders", "equalise", "viewpoints", "stitch",
+             "convert_mesh", "layout")
 _PUBLIC = {
+    **dict.fromkeys(_COMMANDS, "povh3d.api"),
     "render": "povh3d.app.api",
     "RenderRequest": "povh3d.app.request", "ModelOptions": "povh3d.app.request",
     "VolumeOptions": "povh3d.app.request",
@@ -43,7 +52,10 @@ _MODULES = {"presets": "povh3d.geometry.presets"}
 
 __all__ = ["__version__", "render", "Display", "build_display", "RenderRequest", "ModelOptions", "VolumeOptions", "FrameRange", "Quality", "RenderSettings",
            "CropSettings", "LensArray", "Panel", "presets", "Povh3dError", "ConfigError", "InputError",
-           "OutputError", "PovrayError"]
+           "OutputError", "PovrayError",
+           # _COMMANDS but map: a star import must not hide the builtin
+           "read_h3d", "interleave", "extract", "resample", "quilt", "unquilt", "refocus", "preview", "info", "moire",
+           "calibrate", "undistort", "borders", "equalise", "viewpoints", "stitch", "convert_mesh", "layout"]
 
 
 def __getattr__(name: str) -> Any:
@@ -55,4 +67,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(__all__)
+    return sorted({*__all__, *_COMMANDS})

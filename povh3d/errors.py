@@ -55,6 +55,13 @@ class PovrayTimeout(PovrayError):
     """A POV-Ray run exceeded its time limit."""
 
 
+class MissingExtra(Povh3dError, ImportError):
+    """A command needs a package of an optional group (``pip install 'povh3d[GROUP]'``) that is not
+    installed.  Also an ``ImportError``, so ``except ImportError`` in a caller's code still holds."""
+
+    exit_code = 7
+
+
 class RenderInterrupted(Povh3dError):
     """The user interrupted a render (Ctrl-C); every child was stopped."""
 

@@ -18,7 +18,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "povh3d"
 
-# Which top-level parts may import which (besides errors, _version, system and cache,
+# Which top-level parts may import which (besides errors, _version, system, cache and extras,
 # which everything may use).  cli -> app -> engine -> povray, beside the libraries.
 LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration", "volume"}
 ALLOWED = {
@@ -35,7 +35,7 @@ ALLOWED = {
     "geometry": set(),
     "cache": {"image"},   # the one cache writes its entries with image/io.py's atomic writer
 }
-BASE = {"errors", "_version", "system", "cache"}
+BASE = {"errors", "_version", "system", "cache", "extras"}
 
 
 def _modules() -> dict[str, Path]:

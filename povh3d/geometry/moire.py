@@ -143,7 +143,9 @@ class MoireMeasure:
 
 def measure(brightness: np.ndarray, lens_array: LensArray, blur: float = 1.5) -> MoireMeasure:
     """Contrast and period of the moire in ``brightness`` (``(Ly, Lx)``, one value per lens)."""
-    from scipy.ndimage import gaussian_filter
+    from ..extras import require
+
+    gaussian_filter = require("scipy.ndimage", "analysis", "the moire measure").gaussian_filter
 
     lattice_basis(lens_array)  # a sheet whose moire is modelled, else the one-line error
     b = np.asarray(brightness, dtype=np.float64)

@@ -21,7 +21,10 @@ def psnr(image: np.ndarray, reference: np.ndarray) -> float:
 def ssim(image: np.ndarray, reference: np.ndarray) -> float:
     """Structural similarity (scikit-image, 7x7 window) of two integer images, over channels."""
     a, b = _unit(image), _unit(reference)
-    from skimage.metrics import structural_similarity  # scipy: only when SSIM is asked for
+    from ..extras import require
+
+    # scikit-image (and SciPy): only when SSIM is asked for
+    structural_similarity = require("skimage.metrics", "analysis", "SSIM").structural_similarity
 
     return float(structural_similarity(a, b, data_range=1.0, channel_axis=-1 if a.ndim == 3 else None))
 

@@ -35,7 +35,9 @@ def to_rgb8(image: np.ndarray) -> np.ndarray:
 
 
 def _write_mp4(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
-    import imageio_ffmpeg
+    from ..extras import require
+
+    imageio_ffmpeg = require("imageio_ffmpeg", "video", "an MP4 video")
 
     height, width = frames[0].shape[:2]
     writer = imageio_ffmpeg.write_frames(
@@ -73,6 +75,10 @@ def check_video_path(path: str | Path) -> Path:
     if path.suffix.lower() not in VIDEO_WRITERS:
         raise ConfigError(f"--video {str(path)!r}: the file name must end in "
                           f"{' or '.join(VIDEO_WRITERS)}")
+    if path.suffix.lower() == ".mp4":  # before any frame is rendered, not after the last
+        from ..extras import require
+
+        require("imageio_ffmpeg", "video", "an MP4 video")
     return path
 
 

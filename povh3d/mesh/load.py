@@ -299,6 +299,11 @@ def load_model(path: str | Path, *, unit: str | None = None) -> LoadedModel:
     if fmt.file_type == "ply" and (fast := _binary_ply(path, data, fmt, unit)) is not None:
         return fast
 
+    if fmt.file_type == "3mf":  # trimesh reads 3MF with lxml and networkx: the mesh group
+        from ..extras import require
+
+        for module in ("lxml", "networkx"):
+            require(module, "mesh", "a 3MF model")
     import trimesh
 
     resolver = _recording_resolver(path)

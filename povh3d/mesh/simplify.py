@@ -41,7 +41,9 @@ def _carry(values: np.ndarray | None, mapping: np.ndarray, count: int) -> np.nda
 
 def simplify_part(part: Part, target: int) -> Part:
     """``part`` decimated to about ``target`` triangles (unchanged when it has fewer)."""
-    import fast_simplification
+    from ..extras import require
+
+    fast_simplification = require("fast_simplification", "mesh", "decimating a mesh (a triangle budget)")
 
     if part.triangles <= target:
         return part

@@ -63,6 +63,9 @@ def connect(address: str) -> Any:
         client = _CLIENTS.get(address)
         if client is not None and client.status == "running":
             return client
+        from ..extras import require
+
+        require("distributed", "cluster", "--scheduler (a Dask cluster)")
         from distributed import Client
 
         try:

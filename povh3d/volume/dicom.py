@@ -23,7 +23,9 @@ from .grid import Volume
 
 
 def _headers(folder: Path) -> list[tuple[Path, object]]:
-    import pydicom
+    from ..extras import require
+
+    pydicom = require("pydicom", "volume", "a DICOM folder")
     from pydicom.errors import InvalidDicomError
 
     found = []

@@ -39,7 +39,9 @@ def drop_specks(part: Part, size: float) -> tuple[Part, int]:
     alone has 292): smaller than one lens they are not resolved on the display, yet each
     closed piece keeps at least four triangles through any decimation, so together
     they can hold more triangles than the display's whole budget."""
-    from scipy.sparse import coo_matrix
+    from ..extras import require
+
+    coo_matrix = require("scipy.sparse", "volume", "a volume's surfaces").coo_matrix
     from scipy.sparse.csgraph import connected_components
 
     f, n = part.faces, len(part.vertices)

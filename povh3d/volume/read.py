@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError, warn
+from ..errors import ConfigError, InputError, MissingExtra, warn
 from .grid import Volume
 from .sources import SUFFIXES, is_polydata_vtk, is_volume_source, suffix as _suffix
 
@@ -59,7 +59,7 @@ def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = N
                              f"{', '.join(SUFFIXES)} or a DICOM folder")
         try:
             volume = reader(path, spacing)
-        except (InputError, ConfigError):
+        except (InputError, ConfigError, MissingExtra):
             raise
         except Exception as exc:  # the readers' own errors, in any of their types
             raise InputError(f"cannot read the volume {str(path)!r} ({type(exc).__name__}: "
@@ -206,7 +206,9 @@ _NRRD_SPACES = {"left-posterior-superior": np.eye(3), "lps": np.eye(3),
 
 
 def _read_nrrd(path: Path, spacing: Any) -> Volume:
-    import nrrd
+    from ..extras import require
+
+    nrrd = require("nrrd", "volume", "a NRRD volume")
 
     values, header = nrrd.read(str(path))  # Fortran order: values[i, j, k], i fastest in the file
     values = _scalar(np.asarray(values), path.name)
