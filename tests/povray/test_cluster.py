@@ -410,3 +410,32 @@ def test_no_scheduler_fails_in_one_line_within_seconds(tmp_path: Path, cli, addr
     assert "scheduler" in result.err
     assert took < 5, took
     assert sorted(p.name for p in tmp_path.iterdir()) == ["behind.pov"]
+
+
+def test_a_killed_client_stops_povray_on_the_worker(tmp_path: Path) -> None:
+    with spawned_cluster(tmp_path, 1) as cluster:
+        cluster.wait_for_workers(1)
+        client_code = ("import sys\nfrom povh3d.povray.cluster import DaskRunner\n"
+                       "from tests.povray.test_cluster import busy_jobs\n"
+                       "DaskRunner(sys.argv[1]).run(busy_jobs(1, loops=60_000_000))\n")
+        client = subprocess.Popen([sys.executable, "-c", client_code, cluster.address],
+                                  cwd=Path(__file__).resolve().parents[2], stdout=cluster.log,
+                                  stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            deadline = time.monotonic() + 60
+            while not povray_in(cluster.tmp) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            assert povray_in(cluster.tmp), "POV-Ray never started on the worker"
+        finally:
+            os.kill(client.pid, signal.SIGKILL)
+            client.wait()
+        killed = time.monotonic()
+        while povray_in(cluster.tmp) and time.monotonic() - killed < 30:
+            time.sleep(0.05)
+        stopped = time.monotonic() - killed
+        print(f"POV-Ray stopped {stopped:.1f} s after the client died")
+        assert stopped < 5
+        deadline = time.monotonic() + 5
+        while list(cluster.tmp.glob("povh3d-job-*")) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert list(cluster.tmp.glob("povh3d-job-*")) == []
