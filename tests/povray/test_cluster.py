@@ -346,8 +346,23 @@ def test_a_worker_killed_mid_render(tmp_path: Path, workers: int) -> None:
             if not killed:
                 killed.append(kill_a_busy_worker(cluster))
 
-        remote = rendered(runner.run, jobs, then=kill_once)
+        out: list = []
+
+        def render_there() -> None:
+            try:
+                out.append(rendered(runner.run, jobs, then=kill_once))
+            except BaseException as error:
+                out.append(error)
+
+        # In a thread, so that a render that hangs fails the test (its cluster is then killed).
+        thread = threading.Thread(target=render_there, daemon=True)
+        thread.start()
+        thread.join(240)
         took = time.monotonic() - started
+        assert out, f"the render did not finish within {took:.0f} s"
+        if isinstance(out[0], BaseException):
+            raise out[0]
+        remote = out[0]
         assert killed and not Path(f"/proc/{killed[0]}").exists()
         assert sorted(remote) == sorted(local)
         for name in local:
