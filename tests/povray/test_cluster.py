@@ -454,3 +454,35 @@ def test_a_killed_client_stops_povray_on_the_worker(tmp_path: Path) -> None:
         while list(cluster.tmp.glob("povh3d-job-*")) and time.monotonic() < deadline:
             time.sleep(0.1)
         assert list(cluster.tmp.glob("povh3d-job-*")) == []
+
+
+@pytest.mark.parametrize("resubmits", [dask_backend.RESUBMITS, 0], ids=["resubmitted", "control-none"])
+def test_jobs_the_scheduler_forgot_are_submitted_again(tmp_path: Path, address: str, resubmits: int,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    # The input files' task cancelled behind the runner's back (as when the scheduler forgets
+    # data that died with its workers) takes every job not yet done with it.
+    from distributed import Future
+
+    monkeypatch.setattr(dask_backend, "RESUBMITS", resubmits)
+    jobs = busy_jobs(4, loops=300_000)
+    local = rendered(lambda j, **k: run_jobs(j, processes=1, **k), jobs)
+    runner = DaskRunner(address)
+    forgot: list[str] = []
+
+    def forget_files(result: JobResult) -> None:
+        if not forgot:
+            keys = runner.client.run_on_scheduler(
+                lambda dask_scheduler: [str(k) for k in dask_scheduler.tasks if str(k).startswith("_hold")])
+            forgot.extend(keys)
+            runner.client.cancel([Future(key, runner.client) for key in keys], force=True)
+
+    if resubmits == 0:
+        with pytest.raises(PovrayError, match="lost 1 times"):
+            rendered(runner.run, jobs, then=forget_files)
+        return
+    remote = rendered(runner.run, jobs, then=forget_files)
+    assert forgot
+    assert sorted(remote) == sorted(local)
+    for name in local:
+        assert np.array_equal(remote[name], local[name]), name
+    assert wait_no_povray() == []
