@@ -1,7 +1,9 @@
 """Tests of povh3d.dask_backend on a local Dask cluster of worker processes.
 
 The oracle is the local process pool: the same render through the cluster
-must give the same pixels, and the same errors.
+must give the same pixels, and the same errors.  The fault tests at the end start
+their own scheduler and workers (``dask scheduler``/``dask worker``, 127.0.0.1 only),
+kill one of them by its pid, and kill them all when they end.
 """
 
 from __future__ import annotations
