@@ -16,15 +16,29 @@ worker's, and only POV-Ray's own include files are there for sure.
 Errors come back as they would locally: a `PovrayError` raised on a worker
 reaches the caller with POV-Ray's message; Ctrl-C, or any failure, cancels
 every future, and a worker stops the POV-Ray process of a cancelled task.
+
+When things go wrong: the input files travel as a task of their own (not
+``scatter``ed data, which dies with the last worker that holds it), so the
+scheduler can run it again on a worker that comes back; a job a dead worker
+took with it is run again (the scheduler does that, and a job it gave up on is
+submitted again, up to `RESUBMITS` times).  A worker stops its POV-Ray as soon
+as it loses its scheduler (it is closing) or the task is cancelled (the client
+went).  Each task's folder (``povh3d-job-PID-*`` in the worker's temporary
+folder) is removed when it ends, and those of a killed worker by the next task
+on that machine.  An address is checked, and its port tried with a short
+timeout, before Dask is asked: no answer is one line within `CONNECT_SECONDS`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import os
+import re
 import shutil
+import socket
 import tempfile
 import threading
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -33,13 +47,20 @@ from ..errors import ConfigError, InputError, PovrayError, PovrayNotFound, Povh3
 from .format import pov_string
 from .job import JobResult, PovrayJob
 from .process import find_povray, povray_version, run_jobs
+from ..system import owned_prefix, sweep_orphans
 
-__all__ = ["DaskRunner", "connect", "job_files"]
+__all__ = ["DaskRunner", "check_address", "connect", "job_files"]
 
 _CLIENTS: dict[str, Any] = {}
 _CHECKED: dict[str, tuple[frozenset[str], str]] = {}  # address -> (workers, POV-Ray version)
 _LOCK = threading.Lock()
 _MIRROR = "files"  # the worker's copy of path /a/b is ROOT/files/a/b
+TASK_PREFIX = "povh3d-job-"  # a task's folder on a worker: povh3d-job-<worker pid>-<random>
+#: Seconds to wait for a scheduler to answer (name lookup, TCP connect, Dask's handshake).
+CONNECT_SECONDS = 4.0
+#: Times a job lost with a dead worker is submitted again before the render fails.
+RESUBMITS = 3
+_ADDRESS = re.compile(r"(?:(tcp|tls)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,16 +70,53 @@ class _Files:
     data: dict[str, bytes]
 
 
+def check_address(address: str) -> tuple[str, str, int]:
+    """``(address with its scheme, host, port)`` of a scheduler address such as ``tcp://HOST:8786``.
+
+    Raises
+    ------
+    ConfigError
+        Not of that form (``bogus``, no port, a port above 65535).
+    """
+    match = _ADDRESS.fullmatch(address or "")
+    if match is None or not 0 < int(match[3]) < 65536:
+        raise ConfigError(f"--scheduler takes an address like tcp://HOST:8786, got {address!r}")
+    scheme = match[1] or "tcp"
+    return f"{scheme}://{match[2]}:{match[3]}", match[2].strip("[]"), int(match[3])
+
+
+def _answers(host: str, port: int, seconds: float) -> str | None:
+    """None when something accepts TCP connections at ``host:port`` within `seconds`, else why not.
+
+    The name lookup runs in a thread of its own: ``getaddrinfo`` has no timeout.
+    """
+    outcome: list[str | None] = []
+
+    def probe() -> None:
+        try:
+            with socket.create_connection((host, port), timeout=seconds):
+                outcome.append(None)
+        except socket.gaierror as error:
+            outcome.append(f"unknown host {host!r}: {error.strerror}")
+        except OSError as error:
+            outcome.append(error.strerror or type(error).__name__)
+
+    thread = threading.Thread(target=probe, daemon=True, name="povh3d-scheduler-probe")
+    thread.start()
+    thread.join(seconds)
+    return outcome[0] if outcome else f"no answer within {seconds:g} s"
+
+
 def connect(address: str) -> Any:
     """A `distributed.Client` for `address`, made once per process.
 
     Raises
     ------
     ConfigError
-        The address is malformed, nothing answers there, or no worker joins.
+        The address is malformed, nothing answers there within `CONNECT_SECONDS`,
+        or no worker joins.
     """
-    if not address or any(c.isspace() for c in address):
-        raise ConfigError(f"--scheduler takes an address like tcp://HOST:8786, got {address!r}")
+    address, host, port = check_address(address)
     with _LOCK:
         client = _CLIENTS.get(address)
         if client is not None and client.status == "running":
@@ -66,13 +124,20 @@ def connect(address: str) -> Any:
         from ..extras import require
 
         require("distributed", "cluster", "--scheduler (a Dask cluster)")
+        import dask
         from distributed import Client
 
+        hint = "start one with 'dask scheduler' and check the address"
+        why = _answers(host, port, CONNECT_SECONDS)
+        if why is not None:
+            raise ConfigError(f"cannot reach the Dask scheduler at {address} ({why}); {hint}")
         try:
-            client = Client(address, set_as_default=False)
+            with dask.config.set({"distributed.comm.timeouts.connect": f"{CONNECT_SECONDS}s"}):
+                client = Client(address, set_as_default=False, timeout=CONNECT_SECONDS)
         except (OSError, TimeoutError, ValueError) as error:
-            raise ConfigError(f"cannot reach the Dask scheduler at {address} ({error}); start one "
-                              f"with 'dask scheduler' and check the address") from None
+            raise ConfigError(f"cannot reach the Dask scheduler at {address} "
+                              f"({type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}); "
+                              f"{hint}") from None
         try:
             client.wait_for_workers(1, timeout=30)
         except (TimeoutError, OSError):
@@ -112,9 +177,15 @@ def _read_all(paths: Iterable[str]) -> _Files:
     return _Files(data)
 
 
+def _hold(files: _Files) -> _Files:
+    """A task whose result is `files`: unlike scattered data, the scheduler can run it again."""
+    return files
+
+
 def _on_worker(job: PovrayJob, files: _Files) -> tuple[list[bytes], float, str]:
     """Render `job` on this worker from its shipped files; the images as PNG bytes."""
-    root = tempfile.mkdtemp(prefix="povh3d-job-")
+    sweep_orphans(tempfile.gettempdir(), TASK_PREFIX)  # the folders of a worker killed on this machine
+    root = tempfile.mkdtemp(prefix=owned_prefix(TASK_PREFIX))
     try:
         def here(path: str) -> str:
             return os.path.join(root, _MIRROR, os.path.abspath(path).lstrip(os.sep))
@@ -157,19 +228,25 @@ def _worker_address() -> str:
 
 
 def _cancelled_here() -> Callable[[], bool] | None:
-    """On a worker: whether the client cancelled the task running in this thread."""
+    """On a worker: whether the task running in this thread is no longer wanted: the client
+    cancelled it or went away, or the worker lost its scheduler (then it closes, and nobody
+    would take the images)."""
     try:
         from distributed import get_worker
+        from distributed.core import Status
 
         worker = get_worker()
         key = worker.get_current_task()
         tasks = worker.state.tasks
     except (ImportError, ValueError, AttributeError):
         return None
+    working = (Status.running, Status.paused, Status.closing_gracefully)
 
     def cancelled() -> bool:
         state = tasks.get(key)
-        return state is None or state.state in ("cancelled", "released", "forgotten")
+        stream = getattr(worker, "batched_stream", None)
+        return (state is None or state.state in ("cancelled", "released", "forgotten")
+                or worker.status not in working or (stream is not None and bool(stream.closed())))
 
     return cancelled
 
@@ -182,7 +259,7 @@ class DaskRunner:
     """
 
     def __init__(self, address: str) -> None:
-        self.address = address
+        self.address = check_address(address)[0]
         self.client = connect(address)
         workers = frozenset(self.client.scheduler_info().get("workers", {}))
         known = _CHECKED.get(address)
@@ -202,34 +279,60 @@ class DaskRunner:
         self.workers = len(answers)
         _CHECKED[address] = (frozenset(answers), self.version)
 
+    def _submit_files(self, files: _Files) -> Any:
+        with warnings.catch_warnings():  # the files are the graph's bulk by design
+            warnings.filterwarnings("ignore", message="Sending large graph")
+            return self.client.submit(_hold, files, pure=False)
+
     def run(self, jobs: Sequence[PovrayJob], *, processes: int = 1,
             on_result: Callable[[JobResult], None] | None = None,
             on_progress: Callable[[int, int], None] | None = None) -> list[float]:
         """Render `jobs` on the cluster; like ``povray.run_jobs`` (``processes`` is the cluster's)."""
         from distributed import as_completed
         from distributed.scheduler import KilledWorker
+        from distributed.utils import CancelledError
 
         jobs = list(jobs)
         if not jobs:
             return []
-        [files] = self.client.scatter([_read_all(p for job in jobs for p in job_files(job))],
-                                      broadcast=True, hash=False)
-        futures = [self.client.submit(_on_worker, job, files, pure=False, retries=0)
-                   for job in jobs]
+        shipped = _read_all(p for job in jobs for p in job_files(job))
+        files = self._submit_files(shipped)
+        futures = [self.client.submit(_on_worker, job, files, pure=False, retries=0) for job in jobs]
         index = {future.key: i for i, future in enumerate(futures)}
+        lost = [0] * len(jobs)
         seconds = [0.0] * len(jobs)
         done = 0
         folder = Path(tempfile.mkdtemp(prefix="povh3d-dask-"))
         try:
-            for future in as_completed(futures, loop=self.client.loop):
+            waiting = as_completed(futures, loop=self.client.loop)
+            for future in waiting:
                 i = index[future.key]
                 try:
                     images, seconds[i], log = future.result()
                 except Povh3dError:
                     raise
                 except KilledWorker:
-                    raise PovrayError(f"{jobs[i].name}: the Dask worker running it died "
-                                      "(out of memory? killed?); see the worker's log") from None
+                    raise PovrayError(f"{jobs[i].name}: the Dask workers running it died "
+                                      "(out of memory? killed?); see the workers' logs") from None
+                except CancelledError:
+                    if self.client.status != "running":  # the scheduler went: its workers stop
+                        _CLIENTS.pop(self.address, None)
+                        raise PovrayError(f"{jobs[i].name}: lost the Dask scheduler at {self.address} "
+                                          "(its workers stop their POV-Ray); start it again and "
+                                          "render again") from None
+                    # Its worker died and the scheduler forgot it (or its input files): again.
+                    lost[i] += 1
+                    if lost[i] > RESUBMITS:
+                        raise PovrayError(f"{jobs[i].name}: lost {lost[i]} times with the Dask "
+                                          "workers running it; see the workers' logs") from None
+                    if files.status in ("cancelled", "lost", "error"):
+                        futures.append(files)  # cancelled with the others at the end
+                        files = self._submit_files(shipped)
+                    again = self.client.submit(_on_worker, jobs[i], files, pure=False, retries=0)
+                    index[again.key] = i
+                    futures.append(again)
+                    waiting.add(again)
+                    continue
                 except Exception as error:  # anything else a worker raised
                     raise PovrayError(f"{jobs[i].name}: failed on a Dask worker: "
                                       f"{type(error).__name__}: {error}") from None

@@ -15,7 +15,8 @@ outside its folder.
 So povh3d restricts the child itself.  Before ``exec`` the child calls
 ``landlock_restrict_self`` with a ruleset built by the parent from a
 `Policy`: read (and run) what POV-Ray needs to start (``/usr``, ``/lib*``,
-``/etc/povray``, the loader cache) and the scene's own files; read and
+``/etc/povray``, the loader cache, the program itself but never the folder
+around it) and the scene's own files; read and
 write the job's folder; nothing else.  Landlock also forbids TCP ``bind`` and
 ``connect`` on kernels that support it (ABI 4).  The rules survive ``exec``
 and bind the child and everything it starts.  Work done in the child
@@ -32,7 +33,9 @@ import contextlib
 import ctypes
 import os
 import platform
+import re
 import signal
+import subprocess
 import sys
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -142,20 +145,73 @@ def describe() -> str:
     return f"landlock ABI {abi}" if abi else "none (the kernel has no Landlock)"
 
 
+# Read-only system software: the loader, libc, a wrapper's shell, POV-Ray's Debian tree.
+_SYSTEM_DIRS = ("/usr", "/lib", "/lib64", "/lib32", "/bin")
+_SYSTEM_FILES = ("/etc/povray", "/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d",
+                 "/dev/null", "/dev/urandom",
+                 "/sys/devices/system/cpu")  # glibc's CPU count for POV-Ray's threads
+_LIBRARY_PATH = re.compile(r"^\s*(?:Library_Path\s*=|[+]L)\s*(.+?)\s*(?:;.*)?$", re.IGNORECASE)
+
+
 def system_read_paths(binary: str) -> tuple[str, ...]:
     """What POV-Ray reads to start and to find its own include files and fonts.
 
-    The program's tree (``/usr``: binary, libraries, ``share/povray-3.7``),
-    the ``/lib*`` links, ``/etc/povray`` (``povray.ini``: ``Library_Path``)
-    and the loader's cache; not the rest of ``/etc`` (``/etc/passwd``...).
+    The system's software (``/usr``, the ``/lib*`` links, ``/bin``), the loader's
+    cache, ``/etc/povray``; the program itself (`binary` and the file it links to)
+    and, when it lies elsewhere, the shared libraries it loads (``ldd``) and its
+    prefix's ``share/povray-3.7``; the ``Library_Path`` folders of its
+    ``povray.ini``.  Never the folder around the program: for ``~/bin/povray``
+    that would be the whole home, for ``/opt/povray`` all of ``/``.  A wrapper
+    script must ``exec`` a POV-Ray under ``/usr``; point ``POVH3D_POVRAY`` at the
+    program itself otherwise.
     """
-    binary = os.path.realpath(binary)
-    prefix = os.path.dirname(os.path.dirname(binary))  # /usr/bin/povray -> /usr
-    candidates = [prefix, "/usr", "/lib", "/lib64", "/lib32", "/bin", "/etc/povray",
-                  "/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d",
-                  os.path.join(prefix, "etc", "povray"), "/dev/null", "/dev/urandom",
-                  "/sys/devices/system/cpu"]  # glibc's CPU count for POV-Ray's threads
-    return tuple(dict.fromkeys(p for p in candidates if os.path.exists(p)))
+    real = os.path.realpath(binary)
+    prefix = os.path.dirname(os.path.dirname(real))  # /usr/bin/povray -> /usr
+    candidates = [*_SYSTEM_DIRS, *_SYSTEM_FILES, os.path.abspath(binary), real,
+                  os.path.join(prefix, "share", "povray-3.7"), os.path.join(prefix, "etc", "povray")]
+    if not _under(real, _SYSTEM_DIRS):  # a system program's libraries are in the system's folders
+        candidates += [lib for lib in _shared_libraries(real) if not _under(lib, _SYSTEM_DIRS)]
+    for ini in ("/etc/povray/3.7/povray.ini", os.path.join(prefix, "etc", "povray", "3.7", "povray.ini")):
+        candidates += _library_paths(ini)
+    return tuple(dict.fromkeys(p for p in candidates if os.path.exists(p) and not _too_wide(p)))
+
+
+def _under(path: str, folders: Iterable[str]) -> bool:
+    return any(os.path.commonpath([path, folder]) == folder for folder in folders)
+
+
+def _too_wide(path: str) -> bool:
+    """A folder that holds ``/`` 's children or a home: never readable as a whole."""
+    real = os.path.realpath(path)
+    if not os.path.isdir(real) or _under(real, _SYSTEM_DIRS):
+        return False
+    homes = {os.path.realpath(os.path.expanduser("~")), "/home", "/root", "/tmp", "/var", "/etc",
+             "/opt", "/srv", "/mnt", "/media", "/run"}
+    return real == "/" or any(_under(home, [real]) for home in homes if home)
+
+
+@cache
+def _shared_libraries(binary: str) -> tuple[str, ...]:
+    """The files of the shared libraries `binary` loads, as ``ldd`` resolves them; () for a script."""
+    try:
+        with open(binary, "rb") as fh:
+            if fh.read(4) != b"\x7fELF":
+                return ()
+        done = subprocess.run(["ldd", binary], capture_output=True, text=True, timeout=20, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return ()
+    found = re.findall(r"(?:=>\s*|^\s*)(/\S+)\s+\(0x", done.stdout, re.MULTILINE)
+    return tuple(dict.fromkeys(p for path in found for p in (path, os.path.realpath(path))))
+
+
+def _library_paths(ini: str) -> list[str]:
+    """The ``Library_Path`` folders a ``povray.ini`` names (POV-Ray's include files and fonts)."""
+    try:
+        lines = Path(ini).read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError:
+        return []
+    folders = [match[1].strip("\"'") for line in lines if (match := _LIBRARY_PATH.match(line))]
+    return [folder for folder in folders if os.path.isabs(folder)]
 
 
 def files_within(files: Iterable[str | os.PathLike[str]],

@@ -153,6 +153,96 @@ def test_render_of_a_scene_naming_etc_passwd(tmp_path: Path) -> None:
     assert out.exists()  # its own include is allowed
 
 
+# Where POVH3D_POVRAY may point, and the files that lie around it: a wrapper script in a
+# user's bin folder, a wrapper in an /opt-like prefix (for /opt/povray/povray the old rule,
+# dirname(dirname(binary)), allowed all of /), a copy of the program in a prefix of its own.
+def _wrapper(path: Path) -> None:
+    path.write_text('#!/bin/sh\nexec /usr/bin/povray "$@"\n')
+    path.chmod(0o755)
+
+
+def _copy(path: Path) -> None:
+    path.write_bytes(Path("/usr/bin/povray").read_bytes())
+    path.chmod(0o755)
+
+
+PLACES = {"home-wrapper": ("home/bin/povray", _wrapper, ("home/secret.txt", "home/bin/secret.txt")),
+          "opt-wrapper": ("opt/povray/povray", _wrapper, ("opt/secret.txt", "opt/povray/secret.txt")),
+          "prefix-copy": ("prefix/bin/povray", _copy, ("prefix/secret.txt", "prefix/bin/secret.txt"))}
+
+
+def _computed_read(path: Path) -> str:
+    """A scene that reads `path` through a name it computes (no literal names the file)."""
+    text = str(path)
+    cut = len(text) // 2
+    return (HEAD + f'#fopen F concat("{text[:cut]}", "{text[cut:]}") read\n#read (F, Word)\n#fclose F\n'
+            '#if (strcmp(Word, "sesame") != 0) #error "read something else" #end\n' + PLANE.format("Green")
+            ).replace("Green", "rgb <0, 1, 0>")
+
+
+@pytest.mark.parametrize("secret", [0, 1], ids=["in-prefix", "beside-binary"])
+@pytest.mark.parametrize("place", sorted(PLACES))
+@pytest.mark.parametrize("confined", [True, False], ids=["sandbox", "control-off"])
+def test_the_binary_location_does_not_widen_the_sandbox(tmp_path: Path, workdir: Path, place: str,
+                                                        secret: int, confined: bool,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    where, make, secrets = PLACES[place]
+    binary = tmp_path / where
+    binary.parent.mkdir(parents=True)
+    make(binary)
+    target = tmp_path / secrets[secret]
+    target.write_text('"sesame"\n')
+    monkeypatch.setenv("POVH3D_POVRAY", str(binary))
+    if not confined:
+        monkeypatch.setenv(sandbox.ENV_VAR, "off")
+    if confined:
+        with pytest.raises(PovrayError, match=r"Cannot open user file .*secret\.txt \(read\)"):
+            run(_computed_read(target), workdir)
+        assert not any(p.startswith(str(tmp_path)) and os.path.isdir(p)
+                       for p in sandbox.system_read_paths(str(binary)))
+    else:  # the wrapper or copy runs, and the scene does read the file when nothing stops it
+        image, = run(_computed_read(target), workdir)
+        assert tuple(image[0, 0]) == (0, 255, 0)
+
+
+@pytest.mark.parametrize("place", sorted(PLACES))
+def test_a_moved_binary_still_reads_the_scene_and_its_own_includes(tmp_path: Path, workdir: Path,
+                                                                   place: str,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    where, make, _ = PLACES[place]
+    binary = tmp_path / where
+    binary.parent.mkdir(parents=True)
+    make(binary)
+    monkeypatch.setenv("POVH3D_POVRAY", str(binary))
+    scene = tmp_path / "scene"
+    scene.mkdir()
+    (scene / "word.txt").write_text('"sesame"\n')
+    script = _computed_read(scene / "word.txt").replace(HEAD, HEAD + '#include "colors.inc"\n'
+                                                        'text { ttf "timrom.ttf" "A" 1, 0 scale 0.01 '
+                                                        'translate 5*z }\n')
+    image, = run(script, workdir, include_dirs=(str(scene),))
+    assert tuple(image[0, 0]) == (0, 255, 0)
+
+
+def test_system_paths_never_hold_a_home_or_the_root(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    (tmp_path / "home" / "bin").mkdir(parents=True)
+    _wrapper(tmp_path / "home" / "bin" / "povray")
+    paths = sandbox.system_read_paths(str(tmp_path / "home" / "bin" / "povray"))
+    assert str(tmp_path / "home" / "bin" / "povray") in paths  # the program itself, a file
+    assert not any(p in ("/", str(tmp_path), str(tmp_path / "home"), str(tmp_path / "home" / "bin"))
+                   for p in paths)
+    # A povray.ini whose Library_Path is / or the home is not followed.
+    ini = tmp_path / "home" / "etc" / "povray" / "3.7" / "povray.ini"
+    ini.parent.mkdir(parents=True)
+    ini.write_text(f'Library_Path="/"\nLibrary_Path={tmp_path / "home"}\n+L/opt\n'
+                   f'Library_Path="{tmp_path / "home" / "etc"}" ; fine\n')
+    paths = sandbox.system_read_paths(str(tmp_path / "home" / "bin" / "povray"))
+    assert "/" not in paths and str(tmp_path / "home") not in paths and "/opt" not in paths
+    assert str(tmp_path / "home" / "etc") in paths  # negative control: the parser reads entries
+    assert "/usr/share/povray-3.7/include" in sandbox.system_read_paths("/usr/bin/povray")
+
+
 def test_files_within() -> None:
     files = ["/etc/passwd", "/a/b/c.inc", "/a/bc/d.inc", "/x/y.png"]
     assert sandbox.files_within(files, ["/a/b", "/x"]) == ("/a/b/c.inc", "/x/y.png")
