@@ -313,3 +313,20 @@ def device_of(cal: Calibration) -> Device | None:
 def with_overrides(cal: Calibration, **changes: Any) -> Calibration:
     """A copy with fields changed, validated again."""
     return replace(cal, **changes)
+
+
+def check_view_cone(cal: Calibration, cone_deg: float, *, tolerance_deg: float = 0.5) -> None:
+    """Refuse rendering for a cone other than the calibration's ``viewCone``."""
+    if not math.isclose(cal.view_cone, cone_deg, abs_tol=tolerance_deg):
+        raise ConfigError(f"the calibration's viewCone is {cal.view_cone:g} deg but the views span {cone_deg:.4g} deg; "
+                          "give the device's preset (its focal length spans the cone) or this display's calibration")
+
+
+def check_panel(cal: Calibration, size_px: tuple[int, int], pixel_pitch_mm: float | None = None) -> None:
+    """Refuse a calibration of another panel: ``size_px = (W, H)``, pixel pitch in mm."""
+    if (cal.screen_w, cal.screen_h) != tuple(size_px):
+        raise ConfigError(f"the calibration is of a {cal.screen_w}x{cal.screen_h} pixel screen but the panel is "
+                          f"{size_px[0]}x{size_px[1]}; give this panel's calibration, or its size with --panel")
+    if pixel_pitch_mm is not None and not math.isclose(cal.pixel_pitch_mm, pixel_pitch_mm, rel_tol=0.02):
+        raise ConfigError(f"the calibration's DPI {cal.dpi:g} means {cal.pixel_pitch_mm:.4g} mm pixels but the panel's "
+                          f"are {pixel_pitch_mm:.4g} mm; give this panel's calibration, or --pixel-pitch")

@@ -117,3 +117,19 @@ def test_portrait_figures():
     assert d.calibration.size_mm == pytest.approx((1536 * 25.4 / 324, 2048 * 25.4 / 324))
     # 52 lenticules per inch across the sheet, slanted atan(1/7): 0.4934 mm along a row
     assert d.calibration.lens_pitch_mm == pytest.approx(25.4 / 52 / math.cos(math.atan(1 / 7)))
+
+
+def test_cone_and_panel_checks():
+    from povh3d.devices.looking_glass import check_panel, check_view_cone
+    from povh3d.geometry.presets import lens_array
+
+    cal = quiet(PORTRAIT)
+    a = lens_array("looking-glass-portrait")
+    check_view_cone(cal, a.viewing_angle_deg)              # the preset's focal spans the vendor's cone
+    with pytest.raises(ConfigError, match="viewCone"):
+        check_view_cone(cal, 13.8)
+    check_panel(cal, (1536, 2048), 25.4 / 324)
+    with pytest.raises(ConfigError, match="262x56"):
+        check_panel(cal, (262, 56))
+    with pytest.raises(ConfigError, match="DPI"):
+        check_panel(cal, (1536, 2048), 0.1)
