@@ -133,3 +133,12 @@ def test_cone_and_panel_checks():
         check_panel(cal, (262, 56))
     with pytest.raises(ConfigError, match="DPI"):
         check_panel(cal, (1536, 2048), 0.1)
+
+
+def test_portrait_quilt_is_named_the_vendors_way():
+    from povh3d.image.quilt import quilt_name, view_aspect
+
+    d = device("looking-glass-portrait")
+    assert quilt_name("sample", *d.grid, d.aspect) == "sample_qs8x6a0.75.png"
+    # the physical panel gives the same aspect (the views cover the whole screen)
+    assert quilt_name("sample", *d.grid, view_aspect(*d.calibration.size_mm)) == "sample_qs8x6a0.75.png"
