@@ -139,3 +139,21 @@ def quilt_to_native(quilt: np.ndarray, grid: tuple[int, int], cal: Calibration, 
     if np.issubdtype(quilt.dtype, np.integer):
         return np.clip(np.rint(acc), 0, np.iinfo(quilt.dtype).max).astype(quilt.dtype)
     return acc.astype(quilt.dtype)
+
+
+def slanted_mapping(cal: Calibration, views: int, *, blend: bool = False):  # -> Slanted
+    """The view-space slanted mapping (``map``, ``render --method subpixel``) of a calibration.
+
+    It shares the shader's view index (tested), but addresses lenses, not tiles, and has no
+    flips or subpixel cells: those fields are reported, not silently dropped.
+    """
+    from ..errors import warn
+    from .slanted import looking_glass
+
+    unused = [name for name, on in (("flipImageX", cal.flip_x), ("flipImageY", cal.flip_y),
+                                    ("subpixelCells", bool(cal.subpixel_cells))) if on]
+    if unused:
+        warn(f"the view-space mapping ignores the calibration's {', '.join(unused)}; make the panel image "
+             "from a quilt (mappings.looking_glass.quilt_to_native), which follows them")
+    from ..devices.looking_glass import visual_fields
+    return looking_glass(visual_fields(cal), views, blend=blend)

@@ -57,11 +57,11 @@ def naive_subpixel(quilt, cols, rows, cal: Calibration, row, col, c, *, slope_si
     return quilt[hq - 1 - texel_y, texel_x, c]
 
 
-def agreement(native, quilt, grid, cal, **kw):
+def agreement(native, quilt, grid, cal, samples=SAMPLES, **kw):
     rng = np.random.default_rng(23)
-    rows = rng.integers(0, cal.screen_h, SAMPLES)
-    cols = rng.integers(0, cal.screen_w, SAMPLES)
-    chans = rng.integers(0, 3, SAMPLES)
+    rows = rng.integers(0, cal.screen_h, samples)
+    cols = rng.integers(0, cal.screen_w, samples)
+    chans = rng.integers(0, 3, samples)
     expect = np.array([naive_subpixel(quilt, *grid, cal, r, c, ch, **kw) for r, c, ch in zip(rows, cols, chans)])
     return float(np.mean(native[rows, cols, chans] == expect))
 
@@ -102,7 +102,7 @@ def test_flips_inversion_and_gen3_cells_match_the_naive_shader(change):
     native = quilt_to_native(quilt, (8, 9), cal)
     plain = quilt_to_native(quilt, (8, 9), replace(DEVICES["looking-glass-portrait"].calibration,
                                                      screen_w=300, screen_h=200))
-    assert agreement(native, quilt, (8, 9), cal) >= 0.999
+    assert agreement(native, quilt, (8, 9), cal, samples=40_000) >= 0.999
     assert np.mean(native != plain) > 0.5        # the field changes the picture
 
 
@@ -115,3 +115,28 @@ def test_bilinear_equals_nearest_on_a_flat_tile():
     assert np.array_equal(near, bil)
     # tile t holds 5 t: the native value is 5 x the view the shader picks
     assert set(np.unique(near) // 5) <= set(range(48))
+
+
+def test_view_index_agrees_with_the_view_space_slanted_mapping():
+    """Cross-check with an independent implementation: mappings.slanted's van Berkel form of the
+    same calibration, fed a view-space image whose every view is its own index."""
+    from povh3d.mappings.looking_glass import slanted_mapping, view_fractions
+
+    cal = DEVICES["looking-glass-portrait"].calibration
+    n = 48
+    m = slanted_mapping(cal, n)
+    rows, cols = m.source((cal.screen_w, cal.screen_h)).shape[:2]
+    image = np.broadcast_to((np.arange(cols) % n).astype(np.uint8)[None, :, None], (rows, cols, 3))
+    mapped = m.apply(np.ascontiguousarray(image), (cal.screen_w, cal.screen_h))
+    shader = np.minimum((view_fractions(cal) * n).astype(np.int64), n - 1)
+    assert np.mean(mapped == shader) >= 0.999
+    flipped = np.minimum((view_fractions(replace(cal, slope=-cal.slope)) * n).astype(np.int64), n - 1)
+    assert np.mean(mapped == flipped) < 0.999             # negative control
+
+
+def test_view_space_mapping_reports_what_it_ignores():
+    from povh3d.errors import Povh3dWarning
+    from povh3d.mappings.looking_glass import slanted_mapping
+
+    with pytest.warns(Povh3dWarning, match="flipImageX"):
+        slanted_mapping(replace(DEVICES["looking-glass-portrait"].calibration, flip_x=True), 48)
