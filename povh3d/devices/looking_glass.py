@@ -36,8 +36,8 @@ _TEXT = {"serial": "serial", "configVersion": "config_version"}
 #: Read, but not used by the quilt -> panel mapping: a non-zero value is worth a warning.
 _UNUSED = ("flipSubp", "fringe", "verticalAngle")
 #: Fields of a ``povh3d calibrate --lattice lenticular`` file, read by mappings.slanted.
-_POVH3D = {"kind", "pitch_px", "slant_deg", "phase_px", "image_size", "lattice", "residual_px",
-           "tool", "version", "source", "lenticular", "calibration", "fit"}
+_POVH3D = {"kind", "pitch_px", "slant_deg", "phase_px", "k1", "image_size", "residual_rad", "tiles",
+           "seconds", "white_image"}
 _CELL_KEYS = ("ROffsetX", "ROffsetY", "GOffsetX", "GOffsetY", "BOffsetX", "BOffsetY")
 
 

@@ -60,7 +60,9 @@ def test_unused_fields_warn_in_one_line():
 
 
 def test_povh3d_calibrate_fields_do_not_warn():
-    quiet(dict(PORTRAIT, kind="lenticular", pitch_px=6.1, slant_deg=8.0, phase_px=0.1, image_size=[1536, 2048]))
+    # the keys 'povh3d calibrate --lattice lenticular --dpi' writes (calibration.lenticular.to_dict, app.calibration)
+    quiet(dict(PORTRAIT, kind="lenticular", pitch_px=6.1, slant_deg=8.0, phase_px=0.1, k1=0.0,
+               image_size=[1536, 2048], residual_rad=0.01, tiles=4, seconds=1.0, white_image="w.png"))
 
 
 @pytest.mark.parametrize("bad", [{"pitch": {"value": "x"}}, {"slope": 0}, {"screenW": 0}, {"viewCone": 200},
