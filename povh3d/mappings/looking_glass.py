@@ -22,11 +22,15 @@ This is the shader's nearest-view mode (``filterMode 0``), the one every unit sh
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..devices.looking_glass import Calibration
 from ..errors import ConfigError
+
+if TYPE_CHECKING:
+    from .slanted import Slanted
 
 # The shader clamps the view fraction into this range before picking a tile.
 _LOW, _HIGH = 0.00001, 0.999999
@@ -141,7 +145,7 @@ def quilt_to_native(quilt: np.ndarray, grid: tuple[int, int], cal: Calibration, 
     return acc.astype(quilt.dtype)
 
 
-def slanted_mapping(cal: Calibration, views: int, *, blend: bool = False):  # -> Slanted
+def slanted_mapping(cal: Calibration, views: int, *, blend: bool = False) -> Slanted:
     """The view-space slanted mapping (``map``, ``render --method subpixel``) of a calibration.
 
     It shares the shader's view index (tested), but addresses lenses, not tiles, and has no
