@@ -20,17 +20,19 @@ PACKAGE = Path(__file__).resolve().parents[1] / "povh3d"
 
 # Which top-level parts may import which (besides errors, _version, system, cache and extras,
 # which everything may use).  cli -> app -> engine -> povray, beside the libraries.
-LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration", "volume"}
+LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration", "volume", "devices", "dataset"}
 ALLOWED = {
-    "cli": {"app", "geometry", "mappings", "mesh", "scene", "image", "volume"},
+    "cli": {"app", "geometry", "mappings", "mesh", "scene", "image", "volume", "devices", "dataset"},
     "app": {"engine", *LIBRARIES},
     "engine": {"povray", *LIBRARIES},
     "povray": {"image", "scene"},
-    "mappings": {"geometry", "image"},
+    "mappings": {"geometry", "image", "devices"},
     "mesh": {"geometry", "image", "povray"},
     "calibration": {"image", "geometry"},
     "volume": {"geometry", "image", "mesh"},
     "image": {"geometry"},
+    "devices": set(),
+    "dataset": {"image"},
     "scene": set(),
     "geometry": set(),
     "cache": {"image"},   # the one cache writes its entries with image/io.py's atomic writer

@@ -96,6 +96,20 @@ class _Child:
         return path.read_text(encoding="utf-8", errors="replace") if path.exists() else ""
 
 
+@functools.cache
+def shared_libraries(binary: str) -> tuple[str, ...]:
+    """The files of the shared libraries `binary` loads, as ``ldd`` resolves them; () for a script."""
+    try:
+        with open(binary, "rb") as fh:
+            if fh.read(4) != b"\x7fELF":
+                return ()
+        done = subprocess.run(["ldd", binary], capture_output=True, text=True, timeout=20, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return ()
+    found = re.findall(r"(?:=>\s*|^\s*)(/\S+)\s+\(0x", done.stdout, re.MULTILINE)
+    return tuple(dict.fromkeys(p for path in found for p in (path, os.path.realpath(path))))
+
+
 def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
              on_result: Callable[[JobResult], None] | None = None,
              on_progress: Callable[[int, int], None] | None = None,
@@ -191,7 +205,7 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
         run = ascii_paths(job, folder)  # what POV-Ray is given; results stay the caller's `job`'s
         command = build_command(run, binary)
         env = _prepare(folder, run)
-        with open(folder / LOG_FILE, "wb") as log, sandbox.confinement(binary, _inputs(run), folder) as fd, \
+        with open(folder / LOG_FILE, "wb") as log, sandbox.confinement(binary, _inputs(run), folder, shared_libraries) as fd, \
                 _deferred_interrupt():
             process = _spawn(command, folder, env, log, fd)
             watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job.frames),

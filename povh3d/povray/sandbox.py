@@ -35,9 +35,8 @@ import os
 import platform
 import re
 import signal
-import subprocess
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -153,7 +152,8 @@ _SYSTEM_FILES = ("/etc/povray", "/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.
 _LIBRARY_PATH = re.compile(r"^\s*(?:Library_Path\s*=|[+]L)\s*(.+?)\s*(?:;.*)?$", re.IGNORECASE)
 
 
-def system_read_paths(binary: str) -> tuple[str, ...]:
+def system_read_paths(binary: str,
+                      libraries: Callable[[str], tuple[str, ...]] | None = None) -> tuple[str, ...]:
     """What POV-Ray reads to start and to find its own include files and fonts.
 
     The system's software (``/usr``, the ``/lib*`` links, ``/bin``), the loader's
@@ -163,14 +163,15 @@ def system_read_paths(binary: str) -> tuple[str, ...]:
     ``povray.ini``.  Never the folder around the program: for ``~/bin/povray``
     that would be the whole home, for ``/opt/povray`` all of ``/``.  A wrapper
     script must ``exec`` a POV-Ray under ``/usr``; point ``POVH3D_POVRAY`` at the
-    program itself otherwise.
+    program itself otherwise.  ``libraries`` lists the files a program loads
+    (``process.shared_libraries``: only the process module starts programs).
     """
     real = os.path.realpath(binary)
     prefix = os.path.dirname(os.path.dirname(real))  # /usr/bin/povray -> /usr
     candidates = [*_SYSTEM_DIRS, *_SYSTEM_FILES, os.path.abspath(binary), real,
                   os.path.join(prefix, "share", "povray-3.7"), os.path.join(prefix, "etc", "povray")]
-    if not _under(real, _SYSTEM_DIRS):  # a system program's libraries are in the system's folders
-        candidates += [lib for lib in _shared_libraries(real) if not _under(lib, _SYSTEM_DIRS)]
+    if libraries is not None and not _under(real, _SYSTEM_DIRS):  # a system program's are in the system's folders
+        candidates += [lib for lib in libraries(real) if not _under(lib, _SYSTEM_DIRS)]
     for ini in ("/etc/povray/3.7/povray.ini", os.path.join(prefix, "etc", "povray", "3.7", "povray.ini")):
         candidates += _library_paths(ini)
     return tuple(dict.fromkeys(p for p in candidates if os.path.exists(p) and not _too_wide(p)))
@@ -188,20 +189,6 @@ def _too_wide(path: str) -> bool:
     homes = {os.path.realpath(os.path.expanduser("~")), "/home", "/root", "/tmp", "/var", "/etc",
              "/opt", "/srv", "/mnt", "/media", "/run"}
     return real == "/" or any(_under(home, [real]) for home in homes if home)
-
-
-@cache
-def _shared_libraries(binary: str) -> tuple[str, ...]:
-    """The files of the shared libraries `binary` loads, as ``ldd`` resolves them; () for a script."""
-    try:
-        with open(binary, "rb") as fh:
-            if fh.read(4) != b"\x7fELF":
-                return ()
-        done = subprocess.run(["ldd", binary], capture_output=True, text=True, timeout=20, check=False)
-    except (OSError, subprocess.TimeoutExpired):
-        return ()
-    found = re.findall(r"(?:=>\s*|^\s*)(/\S+)\s+\(0x", done.stdout, re.MULTILINE)
-    return tuple(dict.fromkeys(p for path in found for p in (path, os.path.realpath(path))))
 
 
 def _library_paths(ini: str) -> list[str]:
@@ -323,10 +310,11 @@ def restrict_self(fd: int) -> None:
 
 
 @contextlib.contextmanager
-def confinement(binary: str, inputs: Iterable[str], folder: Path) -> Iterator[int | None]:
+def confinement(binary: str, inputs: Iterable[str], folder: Path,
+                libraries: Callable[[str], tuple[str, ...]] | None = None) -> Iterator[int | None]:
     """The Landlock ruleset fd for a POV-Ray child while it starts (None: unconfined):
-    it may read POV-Ray's own files and ``inputs``, and write only in ``folder``."""
-    ruleset = build_ruleset(Policy(system_read_paths(binary) + tuple(inputs), (str(folder),)))
+    it may read POV-Ray's own files (``system_read_paths``) and ``inputs``, and write only in ``folder``."""
+    ruleset = build_ruleset(Policy(system_read_paths(binary, libraries) + tuple(inputs), (str(folder),)))
     try:
         yield None if ruleset is None else ruleset.fd
     finally:

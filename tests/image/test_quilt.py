@@ -4,8 +4,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from povh3d.errors import ConfigError
-from povh3d.image.quilt import (bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
-                                quilt_to_views, views_to_quilt)
+from povh3d.image.quilt import (auto_grid, bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
+                                quilt_to_views, view_aspect, views_to_quilt)
 
 
 def test_view_zero_is_bottom_left_and_order_runs_right_then_up():
@@ -45,3 +45,66 @@ def test_bad_grids():
         views_to_quilt(np.zeros((7, 2, 2, 3), np.uint8), 3, 2)
     with pytest.raises(ConfigError, match="equal views"):
         quilt_to_views(np.zeros((5, 9, 3), np.uint8), 3, 2)
+
+
+# -- the aspect in the name is the view's physical shape --------------------------------------------
+def _extent(a):
+    return a.lenses_x * a.pitch_x, a.lenses_y * a.pitch_y
+
+
+def test_aspect_is_physical_not_the_tiles_pixel_shape():
+    from povh3d.geometry.presets import lens_array, lens_array_from_fields
+
+    # 32 x 30 mm lenticular panel: 40 lenses of 8 views, 300 rows -> views of 40 x 300 pixels
+    a = lens_array_from_fields({"grid": "lenticular", "lenses": 40, "ppl": 8, "rows": 300,
+                                "pixel_pitch": 0.1, "focal": 1.0})
+    assert _extent(a) == pytest.approx((32.0, 30.0))
+    assert view_aspect(*_extent(a)) == pytest.approx(32 / 30)
+    assert 40 / 300 != pytest.approx(view_aspect(*_extent(a)))     # the old, pixel-shape answer
+    assert quilt_name("s", 8, 1, view_aspect(*_extent(a))) == "s_qs8x1a1.0667.png"
+    b = lens_array("alioscopy-42")                                   # 930 x 523 mm
+    assert quilt_name("s", 8, 1, view_aspect(*_extent(b))).endswith("a1.7778.png")
+
+
+def test_auto_grid_takes_the_device_layout_then_the_squarest_quilt():
+    assert auto_grid(48, (560, 420), (8, 6)) == (8, 6)                # Looking Glass Portrait
+    assert auto_grid(48, (560, 420), (5, 9)) != (5, 9)                # another device's layout does not fit
+    c, r = auto_grid(48, (560, 420))
+    assert c * r == 48 and (c, r) == (8, 6)                           # 3360 x 3360
+    assert auto_grid(8, (300, 40)) == (8, 1)                          # tall narrow tiles: one row
+    assert auto_grid(7, (10, 10)) == (7, 1)
+    with pytest.raises(ConfigError):
+        auto_grid(0, (1, 1))
+
+
+def _viewer(l, k, ny, nx):
+    # the viewer of bank view (l, k) stands along -(u_k, v_l, f): its x, y (conventions)
+    u = (k + 0.5 - nx / 2)
+    v = (ny / 2 - l - 0.5)
+    return -u, -v
+
+
+@pytest.mark.parametrize("ny,nx", [(3, 4), (4, 4), (5, 2)])
+def test_all_rows_run_left_to_right_then_upward_by_viewer_position(ny, nx):
+    bank = np.zeros((ny, nx, 1, 1, 2))
+    for l in range(ny):
+        for k in range(nx):
+            bank[l, k, 0, 0] = _viewer(l, k, ny, nx)
+    tiles = bank_to_quilt_order(bank, "all")[:, 0, 0]
+    order = np.array([(t // nx, t % nx) for t in range(ny * nx)])     # (quilt row from the bottom, column)
+    assert np.all(np.diff(tiles.reshape(ny, nx, 2)[..., 0], axis=1) > 0)   # viewer moves right along a row
+    assert np.all(np.diff(tiles.reshape(ny, nx, 2)[..., 1], axis=0) > 0)   # and up row by row
+    assert len(order) == len(tiles)
+    assert np.array_equal(quilt_to_bank_order(bank_to_quilt_order(bank, "all"), ny), bank)
+    # negative control: the bank's own order (no reversal) runs the viewer leftward
+    naive = bank.reshape(-1, 1, 1, 2)[:, 0, 0].reshape(ny, nx, 2)
+    assert not np.all(np.diff(naive[..., 0], axis=1) > 0)
+
+
+def test_centre_row_and_refusals():
+    bank = np.arange(5)[:, None, None, None, None] * np.ones((5, 3, 1, 1, 1))
+    assert np.all(bank_to_quilt_order(bank, "centre") == 2)
+    with pytest.raises(ConfigError, match="--rows"):
+        bank_to_quilt_order(bank)
+    with pytest.raises(ConfigError, match="centre or all"):
+        bank_to_quilt_order(bank, "middle")

@@ -17,7 +17,7 @@ import pytest
 from povh3d.povray import sandbox
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.image.io import read_png
-from povh3d.povray.process import JobResult, PovrayJob, run_jobs
+from povh3d.povray.process import JobResult, PovrayJob, run_jobs, shared_libraries
 from povh3d.engine.quality import RenderSettings
 from tests.support.arrays import square_array
 
@@ -199,7 +199,7 @@ def test_the_binary_location_does_not_widen_the_sandbox(tmp_path: Path, workdir:
         with pytest.raises(PovrayError, match=r"Cannot open user file .*secret\.txt \(read\)"):
             run(_computed_read(target), workdir)
         assert not any(p.startswith(str(tmp_path)) and os.path.isdir(p)
-                       for p in sandbox.system_read_paths(str(binary)))
+                       for p in sandbox.system_read_paths(str(binary), shared_libraries))
     else:  # the wrapper or copy runs, and the scene does read the file when nothing stops it
         image, = run(_computed_read(target), workdir)
         assert tuple(image[0, 0]) == (0, 255, 0)

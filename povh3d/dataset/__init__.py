@@ -1,0 +1,1 @@
+"""Exports of rendered light fields in the layouts research tools load."""

@@ -1,0 +1,1 @@
+"""Commercial light-field displays: their calibration files and device tables."""
