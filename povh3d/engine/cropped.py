@@ -64,11 +64,13 @@ def coverage_mask(trace: Trace, lens_array: LensArray, back_off: float,
 
 def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, back_off: float,
                          settings: RenderSettings, crop: CropSettings,
-                         progress: Progress | None = None, samples: np.ndarray = CENTRE) -> CroppedTiles:
+                         progress: Progress | None = None, samples: np.ndarray = CENTRE,
+                         gutter: int = 0) -> CroppedTiles:
     """Render the one-pass view bank cropped to what the objects can reach.
 
     ``samples`` are the footprint samples of ``view_bank_frames``; each gets a
     bank, cropped alike, so the reach is that of the pixel's whole footprint.
+    ``gutter``: pixels between the kept tiles (``cameras.view_bank_frames``).
 
     Raises
     ------
@@ -110,9 +112,10 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, back
     if plan.is_full:
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
 
-    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples, plan))
+    meshes = view_bank_frames(lens_array, back_off, samples, plan, gutter)
+    batch = mesh_camera_batch("multi_ortho.pov.j2", meshes)
     images, stats = trace(batch, "multi-ortho", progress)
-    tiled = stack_frames(images)
+    tiled = stack_frames(images, meshes)
     banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])
     fills = [fill_colour(bank, plan) for bank in banks]
     fill = fills[0] if all(f is not None and np.array_equal(f, fills[0]) for f in fills) else None

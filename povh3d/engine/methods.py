@@ -49,6 +49,11 @@ from . import subpixel
 from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
 
+#: Pixels between the tiles of a one-pass view bank when antialiasing samples pixel
+#: borders: one, each tile reaching half of it (``cameras._bank_mesh``).
+GUTTER = 1
+
+
 @dataclass(frozen=True)
 class MethodPlan:
     """What one render of a method asks POV-Ray for, and how it becomes the H3D image."""
@@ -58,14 +63,16 @@ class MethodPlan:
     record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
 
 
-def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray) -> MethodPlan:
+def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray, *, gutter: int = 0) -> MethodPlan:
     if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
         mesh = lens_mesh(lens_array, back_off)
         return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
                           lambda images: mesh.crop(stack_frames(images)))
-    # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
-    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, back_off, samples)),
-                      lambda images: banks_to_h3d(lens_array, stack_frames(images)))
+    # Whole PPL: one quad per view (views tiled, gutters between them where antialiasing
+    # samples pixel borders), one bank per footprint sample, a few banks a frame.
+    meshes = view_bank_frames(lens_array, back_off, samples, gutter=gutter)
+    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
+                      lambda images: banks_to_h3d(lens_array, stack_frames(images, meshes)))
 
 
 def banks_to_h3d(lens_array: LensArray, image: np.ndarray) -> np.ndarray:
@@ -175,6 +182,10 @@ class Method:
     # Methods that antialias inside each pixel themselves: sub-samples per axis for a
     # quality, passed to ``plan`` as ``supersample`` while POV-Ray traces point-sampled.
     supersamples: Callable[[Quality], int] | None = None
+    # Methods that tile several views (or lens ranges) into one POV-Ray image: passed
+    # ``gutter`` pixels to leave between them where POV-Ray's antialiasing samples
+    # pixel borders (``Quality.samples_pixel_borders``).
+    gutters: bool = False
 
     def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
         """``given`` (None values count as not given) over the defaults; unknown names refused."""
@@ -191,7 +202,7 @@ def _whole_views(lens_array: LensArray) -> bool:
 
 
 METHODS: dict[str, Method] = {
-    "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True,
+    "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
                           round_back_off=lambda la, b: bank_back_off(la, b) if la.views else b),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
@@ -248,6 +259,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         plan_options["supersample"] = method.supersamples(asked)
         quality = Quality(max_trace_level=quality.max_trace_level)
         settings = replace(settings, quality=quality)
+    if method.gutters:
+        plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
     samples = quality.samples()
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
@@ -259,7 +272,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
 
     h3d, crop_info, record = None, None, None
     if method.crops and crop is not None:
-        tiles = render_cropped_tiles(trace, scene, lens_array, back_off, settings, crop, progress, samples)
+        tiles = render_cropped_tiles(trace, scene, lens_array, back_off, settings, crop, progress, samples,
+                                     plan_options.get("gutter", 0))
         crop_info = tiles.info
         if tiles.tiled is not None:
             h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats

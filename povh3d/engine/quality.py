@@ -65,6 +65,13 @@ class Quality:
         return (f"+A{self.antialias:g}", f"+AM{self.aa_method}", f"+R{self.aa_depth}",
                 "+J" if self.jitter else "-J")
 
+    @property
+    def samples_pixel_borders(self) -> bool:
+        """Whether POV-Ray may trace rays on a pixel's border, shared with its neighbour:
+        adaptive antialiasing (``+AM2``) traces every pixel's corners; jitter moves
+        samples up to the border.  ``+AM1`` without jitter stays inside the pixel."""
+        return self.antialias is not None and (self.aa_method == 2 or self.jitter)
+
     def point_sampled(self) -> Quality:
         """This quality for a method that traces one ray per sub-view (no footprint
         samples): sub-views and footprint samples become adaptive antialiasing."""

@@ -9,7 +9,7 @@ so that objects floating in front of the screen are seen.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -153,6 +153,9 @@ class CameraMesh:
     margin: tuple[int, int] = (0, 0)  # (columns, rows) of canvas around the panel, cut off after
     # x, y map K (2 x 2, row-major) after ``scale``: origins by K, directions by K^-T (``lattice_mesh``).
     shear: tuple[float, float, float, float] | None = None
+    # View banks with gutters (``view_bank_frames``): the image columns and rows that hold
+    # pixels, counted after the extra first row and last column are cut; None: all of them.
+    kept: tuple[np.ndarray, np.ndarray] | None = None
 
     def crop(self, image: np.ndarray) -> np.ndarray:
         """The panel out of a rendered frame (extra first row and last column already cut)."""
@@ -161,6 +164,13 @@ class CameraMesh:
             return image
         w, h = self.image_size
         return image[my:h - 1 - my, mx:w - 1 - mx]
+
+    def without_gutters(self, image: np.ndarray) -> np.ndarray:
+        """A rendered frame (extra first row and last column already cut) without its gutters."""
+        if self.kept is None:
+            return image
+        cols, rows = self.kept
+        return image[np.ix_(rows, cols)]
 
 
 # How far lens quads are moved off pixel centres that lie on lens borders, in
@@ -281,7 +291,7 @@ def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) ->
 
 
 def view_bank_frames(lens_array: LensArray, back_off: float, samples: np.ndarray | None = None,
-                     plan=None) -> list[CameraMesh]:
+                     plan=None, gutter: int = 0) -> list[CameraMesh]:
     """The meshes of the frames that trace a view bank per footprint sample (``bank_groups``).
 
     Each mesh is the orthographic camera bank as one mesh camera, one quad per view
@@ -292,11 +302,14 @@ def view_bank_frames(lens_array: LensArray, back_off: float, samples: np.ndarray
     direction constant, so one quad per view is exact; every corner is exact in
     single precision (``bank_back_off``), so a cropped pixel gets the very ray the
     uncropped mesh gives it.
+
+    ``gutter`` > 0 (a render whose antialiasing samples pixel borders): that many
+    pixels between any two quads (``_bank_mesh``), cut off by ``stack_frames``.
     """
     cols, rows, size = _bank_tiles(lens_array, plan)
     samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
     groups = bank_groups(samples, 2 * len(cols) * len(rows), size[0] * size[1])
-    return [_bank_mesh(lens_array, back_off, group, cols, rows, size) for group in groups]
+    return [_bank_mesh(lens_array, back_off, group, cols, rows, size, gutter) for group in groups]
 
 
 def _bank_tiles(lens_array: LensArray, plan) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
@@ -324,13 +337,22 @@ def bank_back_off(lens_array: LensArray, back_off: float) -> float:
 
 
 def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | None, cols: np.ndarray,
-               rows: np.ndarray, size: tuple[int, int]) -> CameraMesh:
+               rows: np.ndarray, size: tuple[int, int], gutter: int = 0) -> CameraMesh:
     """Quads over column segments x row segments of the tiled views, one bank per sample.
 
     ``cols``/``rows`` are ``(n, 4)``: ``(view, first lens, stop lens, image column/row)``.
     Vertices are in lens pitches (x, y) and mm (z), the mesh scaled by ``(px, py, 1)``:
     a corner ``j`` lenses from the array's centre, shifted by the view's origin
     offset, is a multiple of 1/GRID and stored exactly (see ``CameraMesh``).
+
+    ``gutter``: pixels between neighbouring quads (and banks), each quad reaching
+    half of it past its outer lenses.  POV-Ray's adaptive antialiasing (``+AM2``)
+    traces every pixel's corners, and POV-Ray gives a ray on the edge two quads
+    share to the first quad of the mesh: without gutters the first row and column
+    of a view took their outer corners from the view above and to the left (a
+    quarter of their samples at ``+R3``).  Within a quad the ray is linear in the
+    image position, so the corners of its outer pixels, half a pixel out, are the
+    rays through the lens border of that same view: inside the pixel's footprint.
     """
     ny, nx = lens_array.require_views()
     back_off = bank_back_off(lens_array, back_off)
@@ -339,6 +361,13 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
     samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
     width, height = size
+    if gutter:
+        # Segment n moves n gutters on (segments are in image order), banks one more each.
+        cols, rows = cols.copy(), rows.copy()
+        kept_cols = _with_gutters(cols, width, gutter)
+        kept_rows = _with_gutters(rows, height, gutter)
+        width, height = width + (len(cols) - 1) * gutter, height + (len(rows) - 1) * gutter + gutter
+        kept_rows = (np.arange(len(samples))[:, None] * height + kept_rows[None, :]).reshape(-1)
     b = np.repeat(np.arange(len(samples)), len(cols) * len(rows))[:, None]
     r = np.tile(np.repeat(rows, len(cols), axis=0), (len(samples), 1))   # every row segment ...
     c = np.tile(cols, (len(rows) * len(samples), 1))                      # ... times every column segment, per bank
@@ -350,8 +379,9 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     centres = lens_array.lens_centres()
     cx = np.round(centres[0, :, 0] / px * GRID) / GRID
     cy = np.round(centres[:, 0, 1] / py * GRID) / GRID
-    left, right = cx[j0] - 0.5, cx[j1 - 1] + 0.5
-    top, bottom = cy[i0] + 0.5, cy[i1 - 1] - 0.5
+    reach = gutter / 2   # lens pitches (one image pixel is one lens) past the outer lens borders
+    left, right = cx[j0] - 0.5 - reach, cx[j1 - 1] + 0.5 + reach
+    top, bottom = cy[i0] + 0.5 + reach, cy[i1 - 1] - 0.5 - reach
     x = np.concatenate([left, right, right, left], axis=1) + ax
     y = np.concatenate([bottom, bottom, top, top], axis=1) + ay
     # The origin shift u * back_off / f in lens pitches: u = (k - (Nx-1)/2 + du) s and
@@ -361,17 +391,32 @@ def _bank_mesh(lens_array: LensArray, back_off: float, samples: np.ndarray | Non
     turn_x = k - (nx - 1) / 2 + du
     turn_y = (ny - 1) / 2 - l + dv
     origin_x, origin_y = x - turn_x * mx, y - turn_y * my
-    j = np.concatenate([j0, j1, j1, j0], axis=1) - 0.5                  # lens index of each corner
-    i = np.concatenate([i1, i1, i0, i0], axis=1) - 0.5
-    return _quad_mesh(origin_x, origin_y, turn_x * s_x * px, turn_y * s_y * py,
+    j = np.concatenate([j0 - reach, j1 + reach, j1 + reach, j0 - reach], axis=1) - 0.5  # lens index of each corner
+    i = np.concatenate([i1 + reach, i1 + reach, i0 - reach, i0 - reach], axis=1) - 0.5
+    mesh = _quad_mesh(origin_x, origin_y, turn_x * s_x * px, turn_y * s_y * py,
                       col0 + (j - j0), b * height + row0 + (i - i0),
-                      (width, height * len(samples)), back_off, f, (px, py, 1.0))
+                      (width, height * len(samples) - (gutter if gutter else 0)), back_off, f, (px, py, 1.0))
+    return replace(mesh, kept=(kept_cols, kept_rows)) if gutter else mesh
 
 
-def stack_frames(images: list[np.ndarray]) -> np.ndarray:
+def _with_gutters(segments: np.ndarray, size: int, gutter: int) -> np.ndarray:
+    """Move ``segments`` (``(n, 4)``, image position last, in image order) ``gutter``
+    pixels apart, in place; the image positions that hold pixels."""
+    order = np.argsort(segments[:, 3], kind="stable")
+    shift = np.empty(len(segments), dtype=np.int64)
+    shift[order] = np.arange(len(segments)) * gutter
+    kept = np.arange(size) + np.repeat(shift[order], np.diff(np.append(segments[order, 3], size)))
+    segments[:, 3] += shift
+    return kept
+
+
+def stack_frames(images: list[np.ndarray], meshes: list[CameraMesh] | None = None) -> np.ndarray:
     """Rendered mesh-camera frames stacked top to bottom, each without the extra first
-    row and last column of ``CameraMesh``."""
-    return images[0][1:, :-1] if len(images) == 1 else np.concatenate([im[1:, :-1] for im in images])
+    row and last column of ``CameraMesh`` (and without the gutters of its mesh, if given)."""
+    cut = [im[1:, :-1] for im in images]
+    if meshes is not None:
+        cut = [mesh.without_gutters(im) for mesh, im in zip(meshes, cut)]
+    return cut[0] if len(cut) == 1 else np.concatenate(cut)
 
 
 # -- per-lens pinhole cameras ---------------------------------------------------------
