@@ -65,9 +65,14 @@ class MethodPlan:
 
 def _multi_ortho(lens_array: LensArray, back_off: float, samples: np.ndarray, *, gutter: int = 0) -> MethodPlan:
     if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
-        mesh = lens_mesh(lens_array, back_off)
-        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
-                          lambda images: mesh.crop(stack_frames(images)))
+        if len(samples) == 1 and not np.any(samples):
+            mesh = lens_mesh(lens_array, back_off)
+            return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
+                              lambda images: mesh.crop(stack_frames(images)))
+        # One frame per footprint sample, every sample through the pixel's own lens.
+        meshes = [lens_mesh(lens_array, back_off, sample=p) for p in samples]
+        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes), lambda images: mean_in_linear_light(
+            np.stack([mesh.crop(stack_frames([im])) for mesh, im in zip(meshes, images)])))
     # Whole PPL: one quad per view (views tiled, gutters between them where antialiasing
     # samples pixel borders), one bank per footprint sample, a few banks a frame.
     meshes = view_bank_frames(lens_array, back_off, samples, gutter=gutter)
@@ -186,6 +191,9 @@ class Method:
     # ``gutter`` pixels to leave between them where POV-Ray's antialiasing samples
     # pixel borders (``Quality.samples_pixel_borders``).
     gutters: bool = False
+    # Whether POV-Ray's own antialiasing stays inside each pixel's footprint on this array;
+    # where not, a quality that asks for it traces footprint samples (``Quality.footprint_sampled``).
+    confines_antialias: Callable[[LensArray], bool] | None = None
 
     def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
         """``given`` (None values count as not given) over the defaults; unknown names refused."""
@@ -202,7 +210,10 @@ def _whole_views(lens_array: LensArray) -> bool:
 
 
 METHODS: dict[str, Method] = {
+    # A lens mesh (hex, fractional PPL, turned lattices) lays neighbouring lenses side by side in
+    # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
     "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
+                          confines_antialias=_whole_views,
                           round_back_off=lambda la, b: bank_back_off(la, b) if la.views else b),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
@@ -251,6 +262,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
     back_off = method.round_back_off(lens_array, settings.back_off or method.default_back_off(lens_array))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
+    if method.confines_antialias is not None and not method.confines_antialias(lens_array):
+        quality = quality.footprint_sampled()
     if quality != settings.spec:
         settings = replace(settings, quality=quality)
     plan_options = dict(options)

@@ -80,6 +80,14 @@ class Quality:
         aa = {} if self.antialias is not None else {"antialias": 0.05, "aa_method": 2, "aa_depth": 3}
         return replace(self, subviews=1, footprint=0, **aa)
 
+    def footprint_sampled(self) -> Quality:
+        """This quality where POV-Ray's antialiasing would cross footprints (a lens mesh:
+        corner samples on a lens border belong to the next lens): ``+R`` squared footprint
+        samples (9 at ``normal``) instead, each traced through the pixel's own lens."""
+        if self.antialias is None:
+            return self
+        return replace(self, antialias=None, aa_method=1, footprint=max(self.footprint, self.aa_depth ** 2))
+
     def samples(self) -> np.ndarray:
         """The footprint samples each pixel gets, ``(K, 4)`` (see ``povh3d.footprint``)."""
         if self.footprint:

@@ -156,6 +156,10 @@ class CameraMesh:
     # View banks with gutters (``view_bank_frames``): the image columns and rows that hold
     # pixels, counted after the extra first row and last column are cut; None: all of them.
     kept: tuple[np.ndarray, np.ndarray] | None = None
+    # A footprint sample's angle on a lens mesh (``sampled_corners``): every ray direction
+    # (dx, dy, dz) becomes (dx + a dz, dy + b dz, dz), written as the mesh ``matrix``
+    # <1, 0, -a, 0, 1, -b, 0, 0, 1, 0, 0, 0> (directions go by its inverse transpose).
+    direction_shear: tuple[float, float] | None = None
 
     def crop(self, image: np.ndarray) -> np.ndarray:
         """The panel out of a rendered frame (extra first row and last column already cut)."""
@@ -185,7 +189,7 @@ def _borders_on_pixel_centres(lenses: int, ppl: float, pixels: int) -> bool:
     return bool(np.any(np.abs(borders - np.rint(borders)) < 1e-6))
 
 
-def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
+def camera_mesh(lens_array: LensArray, back_off: float, sample=None) -> CameraMesh:
     """One quad per lens (one strip per lens column for lenticular arrays).
 
     Within a lens, origin and direction are linear in the pixel offset ``(u, v)``,
@@ -200,6 +204,8 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     corner lengths then differ, relatively, by at most ``TIE_SHIFT * s / f`` per
     axis: if POV-Ray normalises the normals, a ray's crossing of ``z = 0`` moves
     by about 0.006 pixel (6.5 PPL, f = 1.5 mm, s = 0.1 mm).
+
+    ``sample`` ``(ax, ay, du, dv)``: every ray moved to that footprint sample (``sampled_corners``).
     """
     check_clearance(lens_array, back_off)
     if lens_array.rotation or lens_array.grid == "hex":
@@ -240,12 +246,43 @@ def camera_mesh(lens_array: LensArray, back_off: float) -> CameraMesh:
     # Panel position -> fractional image column/row.
     col = x / sx + W / 2 - 0.5
     row = H / 2 - 0.5 - y / sy
-    return _quad_mesh(origin_x, origin_y, u, v, col, row, (W, H), back_off, f)
+    if sample is None:
+        return _quad_mesh(origin_x, origin_y, u, v, col, row, (W, H), back_off, f)
+    origin_x, origin_y, z, shear = sampled_corners(lens_array, sample, origin_x, origin_y, back_off)
+    return replace(_quad_mesh(origin_x, origin_y, u, v, col, row, (W, H), back_off, f, z=z),
+                   direction_shear=shear)
+
+
+def sampled_corners(lens_array: LensArray, sample, origin_x: np.ndarray, origin_y: np.ndarray,
+                    back_off: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[float, float]]:
+    """A lens mesh's corners moved to footprint sample ``(ax, ay, du, dv)`` (``geometry.footprint``).
+
+    The lookup (which cell a pixel centre falls in) stays, so every sample of a pixel
+    goes through the pixel's own lens: ``ax, ay`` lens pitches across its aperture, its
+    direction ``du, dv`` pixel pitches across its angular width.  The aperture moves the
+    origins; the angle is a shear of every direction by ``(du s, dv s) / f`` per unit of
+    depth, done by the mesh's ``direction_shear`` transform, because POV-Ray normalises
+    vertex normals before interpolating them, exact only while a face's corner offsets
+    keep one length.  The stored vertices are the origins taken back through that
+    transform: their z is ``-back_off + a x + b y``.
+
+    Returns origin x, y (mm), the stored z, and the shear ``(a, b)``.
+    """
+    ax, ay, du, dv = (float(t) for t in np.asarray(sample, dtype=np.float64).reshape(4))
+    la = lens_array
+    a, b = du * la.panel.pitch_x / la.focal, dv * la.panel.pitch_y / la.focal
+    # The aperture sample across the lens cell, in the lattice's own axes.
+    step_x, step_y = la.from_lattice(ax * la.pitch_x, ay * la.pitch_y)
+    # The ray through c + aperture with the sheared direction starts back_off before z = 0.
+    ox = origin_x + step_x - a * back_off
+    oy = origin_y + step_y - b * back_off
+    return ox, oy, -back_off + a * ox + b * oy, (a, b)
 
 
 def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.ndarray,
                col: np.ndarray, row: np.ndarray, size: tuple[int, int], back_off: float,
-               focal: float, scale: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> CameraMesh:
+               focal: float, scale: tuple[float, float, float] = (1.0, 1.0, 1.0),
+               z: np.ndarray | float | None = None) -> CameraMesh:
     """A CameraMesh from ``(quads, 4)`` corner values, corners counter-clockwise.
 
     ``col``/``row`` are fractional pixel positions of the corners in a
@@ -258,7 +295,7 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
         return [np.broadcast_to(np.asarray(a, dtype=np.float64), shape) for a in values]
 
     uv = np.stack(full(col / (W + 1), 1.0 - (row + 1.0) / (H + 1)), axis=-1)
-    vertices = np.stack(full(origin_x, origin_y, -back_off), axis=-1).reshape(-1, 3)
+    vertices = np.stack(full(origin_x, origin_y, -back_off if z is None else z), axis=-1).reshape(-1, 3)
     normals = np.stack(full(u, v, focal), axis=-1).reshape(-1, 3)
     # A convex polygon per lens (quads; hexagons) as a fan of triangles from corner 0.
     n = shape[1]

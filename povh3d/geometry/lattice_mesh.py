@@ -12,20 +12,21 @@ from dataclasses import replace
 
 import numpy as np
 
-from .cameras import TIE_SHIFT, CameraMesh, _quad_mesh, camera_mesh, check_clearance
+from .cameras import TIE_SHIFT, CameraMesh, _quad_mesh, camera_mesh, check_clearance, sampled_corners
 from .lattice import lattice_coordinates
 from .lens_array import LensArray
 from .rays import pixel_rays
 
 
-def lens_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> CameraMesh:
-    """One cell per lens: ``lattice_mesh`` for hex, turned, general or shifted lattices, else ``camera_mesh``."""
+def lens_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0, sample=None) -> CameraMesh:
+    """One cell per lens: ``lattice_mesh`` for hex, turned, general or shifted lattices, else ``camera_mesh``.
+    ``sample`` ``(ax, ay, du, dv)``: every ray moved to that footprint sample (``cameras.sampled_corners``)."""
     if lens_array.rotation or lens_array.grid in ("hex", "lattice") or shift:
-        return lattice_mesh(lens_array, back_off, shift)
-    return camera_mesh(lens_array, back_off)
+        return lattice_mesh(lens_array, back_off, shift, sample)
+    return camera_mesh(lens_array, back_off, sample)
 
 
-def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> CameraMesh:
+def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0, sample=None) -> CameraMesh:
     """``camera_mesh`` of a rotated lattice, a hex one or a general one: one polygon per lens cell.
 
     The cell of every lens (square: its pitch rectangle; hex: its hexagon, all six
@@ -101,11 +102,13 @@ def lattice_mesh(lens_array: LensArray, back_off: float, shift: float = 0.0) -> 
     row = H / 2 - 0.5 - y / panel.pitch_y
     mx = max(0, math.ceil(max(-col.min(), col.max() - (W - 1)))) + 1
     my = max(0, math.ceil(max(-row.min(), row.max() - (H - 1)))) + 1
-    shear = None
+    shear, z, direction_shear = None, None, None
+    if sample is not None:
+        origin_x, origin_y, z, direction_shear = sampled_corners(la, sample, origin_x, origin_y, back_off)
     if la.grid == "lattice":
         shear, origin_x, origin_y, u, v = _unshear(la, origin_x, origin_y, u, v)
-    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), back_off, f)
-    return replace(mesh, margin=(mx, my), shear=shear)
+    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), back_off, f, z=z)
+    return replace(mesh, margin=(mx, my), shear=shear, direction_shear=direction_shear)
 
 
 def _tie_shift(la: LensArray, X: np.ndarray, Y: np.ndarray, axis: int) -> float:
