@@ -1,20 +1,23 @@
 """Antialiasing stays inside each pixel's own footprint: every method, grid and quality.
 
 The set-up of issue 21 (item 4): an emissive L on a black background, a thin slab
-2 mm behind the screen lit where ``x < X_EDGE`` or ``y < Y_EDGE`` (the left and the
-lower third).  docs/geometry.md's footprint of a pixel is its lens aperture times
-its angular width; where that whole box meets the plane ``z = 2`` away from the L
-("dark" pixels), no sample of any quality may see the slab: the pixel reads 0.
-The oracle is the ray of a pixel (``pixel_rays``) with the footprint's extent at
-the plane; it is validated on renders known to be right (point-sampled ``draft``,
-which lights every "lit" pixel fully and no dark one) and kept with its negative
-control, the one-pass view bank as it was (views tiled edge to edge at
-``normal``: the first row and column of a view took the corners of its neighbour).
+6 mm behind the screen lit where ``x > X_EDGE`` or ``y < Y_EDGE`` (the right and the
+lower third), so that a view's first row and column, which POV-Ray's mesh camera
+gave the shared corners of the tile before, are dark and that tile's last ones lit.
+docs/geometry.md's footprint of a pixel is its lens aperture times its angular
+width; where that whole box meets the plane ``z = Z_SLAB`` off the L ("dark"
+pixels), no sample of any quality may see the slab: the pixel reads 0.  The
+oracle is the ray of a pixel (``pixel_rays``) with the footprint's extent at the
+plane; it is validated on renders known to be right (point-sampled ``draft``,
+which lights every "lit" pixel fully and no dark one; ``multi-ortho-views`` and
+``pinhole``, one image per view or lens) and kept with its negative control, the
+one-pass view bank as it was (views tiled edge to edge at ``normal``).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -31,7 +34,7 @@ from povh3d.scene.scene import load_scene
 from tests.support.arrays import lenticular_array, square_array
 
 Z_SLAB = 6.0
-X_EDGE, Y_EDGE = -0.8, -0.6   # mm: the lit L is x < X_EDGE or y < Y_EDGE
+X_EDGE, Y_EDGE = 0.8, -0.6   # mm: the lit L is x > X_EDGE or y < Y_EDGE
 
 SQUARE = square_array(lx=12, ly=9, nx=4, ny=4, s=0.1, f=1.5)
 LENTICULAR = lenticular_array(lx=12, rows=36, nx=4, s=0.1, f=1.5)
@@ -61,7 +64,7 @@ def write_lit_l(folder) -> object:
 global_settings {{ assumed_gamma 1.0 }}
 background {{ rgb 0 }}
 union {{
-  box {{ <-1000, -1000, {z0!r}>, <{X_EDGE!r}, 1000, {z1!r}> }}
+  box {{ <{X_EDGE!r}, -1000, {z0!r}>, <1000, 1000, {z1!r}> }}
   box {{ <-1000, -1000, {z0!r}>, <1000, {Y_EDGE!r}, {z1!r}> }}
   pigment {{ rgb 1 }} finish {{ emission 1 diffuse 0 ambient 0 }}
 }}
@@ -87,8 +90,8 @@ def footprint_classes(la: LensArray) -> tuple[np.ndarray, np.ndarray]:
     half_x = hx + Z_SLAB * la.panel.pitch_x / 2 / la.focal + 1e-6
     half_y = hy + Z_SLAB * la.panel.pitch_y / 2 / la.focal + 1e-6
     x, y = hit[..., 0], hit[..., 1]
-    dark = inside & (x - half_x > X_EDGE) & (y - half_y > Y_EDGE)
-    lit = inside & ((x + half_x < X_EDGE) | (y + half_y < Y_EDGE))
+    dark = inside & (x + half_x < X_EDGE) & (y - half_y > Y_EDGE)
+    lit = inside & ((x - half_x > X_EDGE) | (y + half_y < Y_EDGE))
     return dark, lit
 
 
@@ -131,3 +134,35 @@ def test_views_tiled_edge_to_edge_bleed(tmp_path):
     images, _ = render_frames(scene, plan.batch, settings, method="multi-ortho", header=display_header(la))
     dark, _ = classes_of("multi-ortho", la)
     assert bleed(plan.assemble(images), dark) > 50
+
+
+@pytest.mark.parametrize("la", [HEX, FRACTIONAL, LensArray("square", 7, 5, 0.6, 0.6, 1.5, Panel(48, 36, 0.1, 0.1), 9.46)],
+                         ids=["hex", "square-6.5", "square-turned"])
+def test_lens_mesh_samples_are_footprint_rays(la):
+    # POV-Ray's lookup simulated in NumPy (normals normalised before they are interpolated),
+    # then the mesh's direction shear: every pixel's sample ray crosses z = 0 at its own lens
+    # centre plus the aperture sample, with its own direction plus the angular sample.
+    from tests.geometry.test_rotated_lattice import simulate_lookup
+    from povh3d.geometry.lattice_mesh import lens_mesh
+
+    ax, ay, du, dv = 0.3, -0.2, 0.4, -0.35
+    back_off = 20.0
+    mesh = lens_mesh(la, back_off, sample=(ax, ay, du, dv))
+    a, b = mesh.direction_shear
+    origin, normal, _ = (mesh.crop(x[1:, :-1]) for x in simulate_lookup(mesh))
+    origin[..., 2] -= a * origin[..., 0] + b * origin[..., 1]        # points by the matrix
+    normal = normal + np.stack([a * normal[..., 2], b * normal[..., 2], 0 * normal[..., 2]], axis=-1)  # directions
+    slope = normal[..., :2] / normal[..., 2:]
+    crossing = origin[..., :2] - slope * origin[..., 2:]
+    centres, dirs, inside = pixel_rays(la)
+    step = np.array(la.from_lattice(ax * la.pitch_x, ay * la.pitch_y))
+    s = np.array([la.panel.pitch_x, la.panel.pitch_y])
+    np.testing.assert_allclose(crossing[inside], (centres + step)[inside], atol=1e-9)
+    np.testing.assert_allclose(slope[inside], (dirs[..., :2] / dirs[..., 2:] + np.array([du, dv]) * s / la.focal)[inside],
+                               atol=1e-9)
+    # The negative control: the same offsets put into the normals bend the rays (POV-Ray's normalisation).
+    plain = lens_mesh(la, back_off)
+    bent = replace(plain, normals=plain.normals + np.array([du * s[0], dv * s[1], 0.0]))
+    _, n2, _ = (plain.crop(x[1:, :-1]) for x in simulate_lookup(bent))
+    error = np.abs(n2[..., :2] / n2[..., 2:] - (dirs[..., :2] / dirs[..., 2:] + np.array([du, dv]) * s / la.focal))
+    assert error[inside].max() > 1e-4
