@@ -25,7 +25,7 @@ import pytest
 from povh3d.engine.frames import render_frames
 from povh3d.engine.methods import display_header, run_method, _multi_ortho
 from povh3d.engine.quality import QUALITY_LEVELS, RenderSettings
-from povh3d.engine.subpixel import subpixel_array
+from povh3d.engine.subpixel import sheet_phase, subpixel_array
 from povh3d.geometry.cameras import default_back_off
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
@@ -102,6 +102,14 @@ def classes_of(method: str, la: LensArray) -> tuple[np.ndarray, np.ndarray]:
         dark, lit = footprint_classes(la)
         return dark[..., None], lit[..., None]
     dark, lit = footprint_classes(subpixel_array(la))
+    # --method subpixel models the light of a subpixel's whole area, which passes through
+    # whichever lenticule lies over each point of it (``phase_tiles.tiles_mesh``): a subpixel
+    # across a lenticule border lights through both.  Those are left out here.
+    _, phase = sheet_phase(la)
+    turn = np.radians(la.rotation)
+    sx, sy = la.panel.pitch_x / 3, la.panel.pitch_y
+    half = (sx * abs(np.cos(turn)) + sy * abs(np.sin(turn))) / 2 / la.pitch_x   # of the lenticule, across
+    dark &= (phase > half) & (phase < 1 - half)
     h, w = la.panel.height, la.panel.width
     return dark.reshape(h, w, 3), lit.reshape(h, w, 3)
 
