@@ -3,6 +3,11 @@ bundled fine-texture scene, against a reference that integrates each pixel's
 footprint; then --quality auto against --quality high on a larger panel.
 
 Writes bench-out/quality/bench.{csv,md,png} and bench-out/quality.json.
+
+``--default-cost``: the default quality's cost instead: whole ``povh3d render`` commands of the
+bundled sample at ``draft`` and ``normal`` on ``demo`` and ``alioscopy-42``, interleaved, median
+and spread, with each level's PSNR against the converged footprint reference on a probe of the
+central lenses (``engine.auto``); ``--tree`` times another checkout's code (before/after).
 """
 
 from __future__ import annotations
@@ -29,13 +34,67 @@ def omni(lenses: tuple[int, int], ppl: int = 8, s: float = 0.1, f: float = 1.5) 
     return LensArray("square", *lenses, ppl * s, ppl * s, f, Panel(lenses[0] * ppl, lenses[1] * ppl, s, s))
 
 
+def default_cost(tree: Path, repeats: int, out: Path) -> list[tuple[str, ...]]:
+    """Rows ``(preset, draft s, normal s, ratio, draft dB, normal dB)``: whole commands, interleaved."""
+    import os
+    import statistics
+    import subprocess
+    import tempfile
+
+    from povh3d.engine.auto import probe_array, reference_quality, to_8bit
+    from povh3d.engine.methods import run_method
+    from povh3d.image.metrics import psnr
+
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    scene = load_scene(SAMPLE)
+    rows = []
+    for preset in ("demo", "alioscopy-42"):
+        times: dict[str, list[float]] = {"draft": [], "normal": []}
+        with tempfile.TemporaryDirectory() as folder:
+            for _ in range(repeats):
+                for level in times:   # interleaved: a change of load hits both
+                    command = [sys.executable, "-m", "povh3d.cli", "render", str(SAMPLE), "--preset", preset,
+                               "--quality", level, "--no-cache", "-q", "-o", f"{folder}/{level}.png"]
+                    start = time.perf_counter()
+                    subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                    times[level].append(time.perf_counter() - start)
+            # The error: on the array the method rendered (a slanted preset's view space, from the
+            # sidecar), its central lenses.
+            a = json.loads(Path(f"{folder}/draft.json").read_text())["lens_array"]
+            p = a["panel"]
+            la = LensArray(a["grid"], *a["lenses"], *a["lens_pitch_mm"], a["focal_mm"],
+                           Panel(*p["size_px"], *p["pixel_pitch_mm"]))
+        probe = probe_array(la, (48, 40))
+        base = RenderSettings(quality="draft", use_cache=False)
+        reference = to_8bit(run_method("multi-ortho", scene, probe,
+                                       replace(base, quality=reference_quality(256), bit_depth=16)).h3d)
+        error = {level: psnr(run_method("multi-ortho", scene, probe, replace(base, quality=level)).h3d, reference)
+                 for level in times}
+        med = {level: statistics.median(t) for level, t in times.items()}
+        rows.append((preset, *(f"{med[level]:.2f} s ({min(t):.2f}-{max(t):.2f})" for level, t in times.items()),
+                     f"{med['normal'] / med['draft']:.2f}x", f"{error['draft']:.2f}", f"{error['normal']:.2f}"))
+        print(" | ".join(rows[-1]), flush=True)
+    return rows
+
+
+SAMPLE = REPO / "sample_models" / "sample.pov"
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", default=str(REPO / "bench-out"))
     parser.add_argument("--methods", default="multi-ortho,pinhole,single-stage:conic,single-stage:spherical")
     parser.add_argument("--auto-only", action="store_true", help="only --quality auto against high")
+    parser.add_argument("--default-cost", action="store_true", help="only normal against draft, whole commands")
+    parser.add_argument("--tree", default=str(REPO), help="with --default-cost: the checkout whose code is timed")
+    parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     out = Path(args.out)
+    if args.default_cost:
+        os_load = __import__("os").getloadavg()
+        default_cost(Path(args.tree), args.repeats, out)
+        print(f"load average {os_load[0]:.2f} before, {__import__('os').getloadavg()[0]:.2f} after (1 min)")
+        return 0
     scene = load_scene(SCENE)
     results: dict = {"auto": []}
 

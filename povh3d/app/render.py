@@ -13,11 +13,10 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine.auto import AutoChoice, resolve_auto
 from ..engine.methods import run_method
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..errors import ConfigError, warn
@@ -33,6 +32,9 @@ from .animation import RenderedImage, render_sequence
 from .records import base_record, png_output, write_image
 from .request import RenderRequest
 from .views import check_views_dir, write_views
+
+if TYPE_CHECKING:
+    from ..engine.auto import AutoChoice
 
 
 def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
@@ -117,6 +119,8 @@ def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
 def _resolve_quality(request: RenderRequest, scene: Scene,
                      progress: Progress | None = None) -> tuple[RenderSettings, AutoChoice | None]:
     """``--quality auto`` chosen once for the whole request (on the first frame's clock)."""
+    from ..engine.auto import resolve_auto  # here: it keeps the module-level import chain within 8 levels
+
     first_clock = None
     if request.frames is not None and scene.uses_clock:
         first_clock = request.frames.clock(request.frames.first)

@@ -34,7 +34,7 @@ class ShotBatch:
 
 
 def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...] = ()) -> ShotBatch:
-    """One shot per camera mesh (``cameras.CameraMesh``, all of one image size), spread over the cores."""
+    """One shot per camera mesh (``camera_mesh.CameraMesh``, all of one image size), spread over the cores."""
     width, height = meshes[0].image_size
     if len(meshes) == 1:
         return ShotBatch(template, {"mesh": meshes[0]}, [{}], width, height, processes=1, options=options)

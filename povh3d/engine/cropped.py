@@ -12,7 +12,7 @@ settings), so every image is cached and every POV-Ray process goes through
    glass) but intersects everything, so alpha is exactly "this ray met an object
    that is not ``no_image``";
 2. the cropped render: one quad per kept tile (per footprint sample, banks
-   stacked as in ``cameras.view_bank_frames``);
+   stacked as in ``view_bank.view_bank_frames``);
 3. the paste into a canvas of the background colour, read at the cuts.
 
 Returns None where cropping does not apply, with the reason, so the caller
@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry.cameras import stack_frames, view_bank_frames
+from ..geometry.view_bank import stack_frames, view_bank_frames
 from ..geometry.crop import (CropSettings, bbox_hits, fill_colour, layout_independent,
     mask_hits, paste, plan_crop)
 from ..errors import InputError
@@ -64,11 +64,13 @@ def coverage_mask(trace: Trace, lens_array: LensArray, front_clearance: float,
 
 def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, front_clearance: float,
                          settings: RenderSettings, crop: CropSettings,
-                         progress: Progress | None = None, samples: np.ndarray = CENTRE) -> CroppedTiles:
+                         progress: Progress | None = None, samples: np.ndarray = CENTRE,
+                         gutter: int = 0) -> CroppedTiles:
     """Render the one-pass view bank cropped to what the objects can reach.
 
     ``samples`` are the footprint samples of ``view_bank_frames``; each gets a
     bank, cropped alike, so the reach is that of the pixel's whole footprint.
+    ``gutter``: pixels between the kept tiles (``view_bank.view_bank_frames``).
 
     Raises
     ------
@@ -110,9 +112,10 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
     if plan.is_full:
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
 
-    batch = mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, front_clearance, samples, plan))
+    meshes = view_bank_frames(lens_array, front_clearance, samples, plan, gutter)
+    batch = mesh_camera_batch("multi_ortho.pov.j2", meshes)
     images, stats = trace(batch, "multi-ortho", progress)
-    tiled = stack_frames(images)
+    tiled = stack_frames(images, meshes)
     banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])
     fills = [fill_colour(bank, plan) for bank in banks]
     fill = fills[0] if all(f is not None and np.array_equal(f, fills[0]) for f in fills) else None

@@ -29,8 +29,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError, warn
-from ..geometry.cameras import (bank_front_clearance, check_front_clearance, default_front_clearance,
-                                ortho_view_frames, pinhole_frames, stack_frames, view_bank_frames)
+from ..geometry.cameras import ortho_view_frames, pinhole_frames
+from ..geometry.camera_mesh import check_front_clearance, default_front_clearance
+from ..geometry.view_bank import bank_front_clearance, stack_frames, view_bank_frames
 from ..geometry.crop import CropSettings
 from ..geometry.footprint import CENTRE, latin_hypercube
 from ..geometry.lattice_mesh import lens_mesh
@@ -49,6 +50,11 @@ from . import subpixel
 from .single_stage import SingleStagePlan, default_depth, lenslet_for
 
 
+#: Pixels between the tiles of a one-pass view bank when antialiasing samples pixel
+#: borders: one, each tile reaching half of it (``view_bank._bank_mesh``).
+GUTTER = 1
+
+
 @dataclass(frozen=True)
 class MethodPlan:
     """What one render of a method asks POV-Ray for, and how it becomes the H3D image."""
@@ -58,14 +64,21 @@ class MethodPlan:
     record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
 
 
-def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
+def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, gutter: int = 0) -> MethodPlan:
     if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
-        mesh = lens_mesh(lens_array, front_clearance)
-        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
-                          lambda images: mesh.crop(stack_frames(images)))
-    # Whole PPL: one quad per view (views tiled), one bank per footprint sample, a few banks a frame.
-    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", view_bank_frames(lens_array, front_clearance, samples)),
-                      lambda images: banks_to_h3d(lens_array, stack_frames(images)))
+        if len(samples) == 1 and not np.any(samples):
+            mesh = lens_mesh(lens_array, front_clearance)
+            return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
+                              lambda images: mesh.crop(stack_frames(images)))
+        # One frame per footprint sample, every sample through the pixel's own lens.
+        meshes = [lens_mesh(lens_array, front_clearance, sample=p) for p in samples]
+        return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes), lambda images: mean_in_linear_light(
+            np.stack([mesh.crop(stack_frames([im])) for mesh, im in zip(meshes, images)])))
+    # Whole PPL: one quad per view (views tiled, gutters between them where antialiasing
+    # samples pixel borders), one bank per footprint sample, a few banks a frame.
+    meshes = view_bank_frames(lens_array, front_clearance, samples, gutter=gutter)
+    return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
+                      lambda images: banks_to_h3d(lens_array, stack_frames(images, meshes)))
 
 
 def banks_to_h3d(lens_array: LensArray, image: np.ndarray) -> np.ndarray:
@@ -176,6 +189,13 @@ class Method:
     # Methods that antialias inside each pixel themselves: sub-samples per axis for a
     # quality, passed to ``plan`` as ``supersample`` while POV-Ray traces point-sampled.
     supersamples: Callable[[Quality], int] | None = None
+    # Methods that tile several views (or lens ranges) into one POV-Ray image: passed
+    # ``gutter`` pixels to leave between them where POV-Ray's antialiasing samples
+    # pixel borders (``Quality.samples_pixel_borders``).
+    gutters: bool = False
+    # Whether POV-Ray's own antialiasing stays inside each pixel's footprint on this array;
+    # where not, a quality that asks for it traces footprint samples (``Quality.footprint_sampled``).
+    confines_antialias: Callable[[LensArray], bool] | None = None
 
     def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
         """``given`` (None values count as not given) over the defaults; unknown names refused."""
@@ -192,7 +212,10 @@ def _whole_views(lens_array: LensArray) -> bool:
 
 
 METHODS: dict[str, Method] = {
-    "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True,
+    # A lens mesh (hex, fractional PPL, turned lattices) lays neighbouring lenses side by side in
+    # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
+    "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
+                          confines_antialias=_whole_views,
                           round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
@@ -242,6 +265,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     front_clearance = method.round_front_clearance(
         lens_array, settings.front_clearance or method.default_front_clearance(lens_array))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
+    if method.confines_antialias is not None and not method.confines_antialias(lens_array):
+        quality = quality.footprint_sampled()
     if quality != settings.spec:
         settings = replace(settings, quality=quality)
     plan_options = dict(options)
@@ -250,6 +275,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         plan_options["supersample"] = method.supersamples(asked)
         quality = Quality(max_trace_level=quality.max_trace_level)
         settings = replace(settings, quality=quality)
+    if method.gutters:
+        plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
     samples = quality.samples()
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
@@ -261,7 +288,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
 
     h3d, crop_info, record = None, None, None
     if method.crops and crop is not None:
-        tiles = render_cropped_tiles(trace, scene, lens_array, front_clearance, settings, crop, progress, samples)
+        tiles = render_cropped_tiles(trace, scene, lens_array, front_clearance, settings, crop, progress, samples,
+                                     plan_options.get("gutter", 0))
         crop_info = tiles.info
         if tiles.tiled is not None:
             h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats

@@ -65,6 +65,13 @@ class Quality:
         return (f"+A{self.antialias:g}", f"+AM{self.aa_method}", f"+R{self.aa_depth}",
                 "+J" if self.jitter else "-J")
 
+    @property
+    def samples_pixel_borders(self) -> bool:
+        """Whether POV-Ray may trace rays on a pixel's border, shared with its neighbour:
+        adaptive antialiasing (``+AM2``) traces every pixel's corners; jitter moves
+        samples up to the border.  ``+AM1`` without jitter stays inside the pixel."""
+        return self.antialias is not None and (self.aa_method == 2 or self.jitter)
+
     def point_sampled(self) -> Quality:
         """This quality for a method that traces one ray per sub-view (no footprint
         samples): sub-views and footprint samples become adaptive antialiasing."""
@@ -72,6 +79,14 @@ class Quality:
             return self
         aa = {} if self.antialias is not None else {"antialias": 0.05, "aa_method": 2, "aa_depth": 3}
         return replace(self, subviews=1, footprint=0, **aa)
+
+    def footprint_sampled(self) -> Quality:
+        """This quality where POV-Ray's antialiasing would cross footprints (a lens mesh:
+        corner samples on a lens border belong to the next lens): ``+R`` squared footprint
+        samples (9 at ``normal``) instead, each traced through the pixel's own lens."""
+        if self.antialias is None:
+            return self
+        return replace(self, antialias=None, aa_method=1, footprint=max(self.footprint, self.aa_depth ** 2))
 
     def samples(self) -> np.ndarray:
         """The footprint samples each pixel gets, ``(K, 4)`` (see ``povh3d.footprint``)."""

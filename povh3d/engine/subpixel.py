@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import ConfigError
-from ..geometry.cameras import CameraMesh, stack_frames
+from ..geometry.camera_mesh import CameraMesh
+from ..geometry.view_bank import stack_frames
 from ..geometry.lens_array import LensArray, Panel
 from ..image.colour import mean_in_linear_light
 

@@ -12,20 +12,22 @@ from dataclasses import replace
 
 import numpy as np
 
-from .cameras import TIE_SHIFT, CameraMesh, _quad_mesh, camera_mesh, check_front_clearance
+from .cameras import TIE_SHIFT, camera_mesh, sampled_corners
+from .camera_mesh import CameraMesh, _quad_mesh, check_front_clearance
 from .lattice import lattice_coordinates
 from .lens_array import LensArray
 from .rays import pixel_rays
 
 
-def lens_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0.0) -> CameraMesh:
-    """One cell per lens: ``lattice_mesh`` for hex, turned, general or shifted lattices, else ``camera_mesh``."""
+def lens_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0.0, sample=None) -> CameraMesh:
+    """One cell per lens: ``lattice_mesh`` for hex, turned, general or shifted lattices, else ``camera_mesh``.
+    ``sample`` ``(ax, ay, du, dv)``: every ray moved to that footprint sample (``cameras.sampled_corners``)."""
     if lens_array.rotation or lens_array.grid in ("hex", "lattice") or shift:
-        return lattice_mesh(lens_array, front_clearance, shift)
-    return camera_mesh(lens_array, front_clearance)
+        return lattice_mesh(lens_array, front_clearance, shift, sample)
+    return camera_mesh(lens_array, front_clearance, sample)
 
 
-def lattice_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0.0) -> CameraMesh:
+def lattice_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0.0, sample=None) -> CameraMesh:
     """``camera_mesh`` of a rotated lattice, a hex one or a general one: one polygon per lens cell.
 
     The cell of every lens (square: its pitch rectangle; hex: its hexagon, all six
@@ -101,11 +103,13 @@ def lattice_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0
     row = H / 2 - 0.5 - y / panel.pitch_y
     mx = max(0, math.ceil(max(-col.min(), col.max() - (W - 1)))) + 1
     my = max(0, math.ceil(max(-row.min(), row.max() - (H - 1)))) + 1
-    shear = None
+    shear, z, direction_shear = None, None, None
+    if sample is not None:
+        origin_x, origin_y, z, direction_shear = sampled_corners(la, sample, origin_x, origin_y, front_clearance)
     if la.grid == "lattice":
         shear, origin_x, origin_y, u, v = _unshear(la, origin_x, origin_y, u, v)
-    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), front_clearance, f)
-    return replace(mesh, margin=(mx, my), shear=shear)
+    mesh = _quad_mesh(origin_x, origin_y, u, v, col + mx, row + my, (W + 2 * mx, H + 2 * my), front_clearance, f, z=z)
+    return replace(mesh, margin=(mx, my), shear=shear, direction_shear=direction_shear)
 
 
 def _tie_shift(la: LensArray, X: np.ndarray, Y: np.ndarray, axis: int) -> float:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cameras import CameraMesh, _quad_mesh, check_front_clearance
+from .camera_mesh import CameraMesh, _quad_mesh, check_front_clearance
 from .lens_array import LensArray
 
 #: Most cosets per axis tried: the thesis's panels need 9 (Philips) and 8 (Alioscopy).

@@ -86,13 +86,13 @@ def test_cropped_render_is_identical_with_footprint_samples(quarter_scene, mode)
 
 
 def test_footprint_banks_split_over_frames_give_the_same_image(quarter_scene, monkeypatch):
-    # Banks of footprint samples go to POV-Ray a few per frame (cameras.bank_groups, the
+    # Banks of footprint samples go to POV-Ray a few per frame (view_bank.bank_groups, the
     # template's #switch on frame_number); stacked back in order they are the one-frame render.
-    import povh3d.geometry.cameras as cameras
+    import povh3d.geometry.view_bank as view_bank
     la = ARRAYS["square"]
     st_ = RenderSettings(quality=Quality(footprint=6, seed=3), use_cache=False)
     one = run_method("multi-ortho", quarter_scene, la, st_)
-    monkeypatch.setattr(cameras, "FRAME_SECONDS", 1e-12)     # frames cost nothing: one bank a frame
+    monkeypatch.setattr(view_bank, "FRAME_SECONDS", 1e-12)     # frames cost nothing: one bank a frame
     three = run_method("multi-ortho", quarter_scene, la, st_)
     assert three.stats.frames == 6 and one.stats.frames == 1
     assert np.array_equal(one.h3d, three.h3d)

@@ -16,7 +16,7 @@ import pytest
 from povh3d.engine.methods import METHODS, run_method
 from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
-from povh3d.geometry.cameras import stack_frames
+from povh3d.geometry.view_bank import stack_frames
 from povh3d.geometry.lattice import cross_lenticular_basis
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.presets import lens_array_from_fields

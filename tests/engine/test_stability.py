@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from tests.support.render import render
-from povh3d.geometry.cameras import MIN_FRONT_CLEARANCE
+from povh3d.geometry.camera_mesh import MIN_FRONT_CLEARANCE
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.geometry.footprint import CENTRE, angular_grid
 from povh3d.geometry.lens_array import LensArray, Panel

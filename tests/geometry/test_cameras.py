@@ -160,7 +160,7 @@ def test_view_bank_mesh_stacks_one_bank_per_footprint_sample(la):
 def test_bank_groups_split_samples_into_equal_frames_by_cost(count, faces, rays, size):
     # POV-Ray scans every face of a mesh camera per ray and a further frame costs a fixed
     # time: the groups take the cheapest size, equal for all frames (a divisor of the count).
-    from povh3d.geometry.cameras import FRAME_SECONDS, SCAN_SECONDS, bank_groups
+    from povh3d.geometry.view_bank import FRAME_SECONDS, SCAN_SECONDS, bank_groups
     from povh3d.geometry.footprint import latin_hypercube
 
     samples = latin_hypercube(count, seed=2)

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from povh3d.errors import ConfigError
-from povh3d.geometry.cameras import default_front_clearance
+from povh3d.geometry.camera_mesh import default_front_clearance
 from povh3d.geometry.crop import (CropSettings, bbox_hits, cut_mask, fill_colour, layout_independent,
     parse_bbox, paste, plan_crop)
 from povh3d.geometry.footprint import latin_hypercube
@@ -167,7 +167,7 @@ def test_cropped_mesh_rays_match_the_uncropped_mesh(samples):
     assert crop.image_size == (plan.size[0] + 1, banks * plan.size[1] + 1)
 
     def rays(mesh, cols, rows):
-        # Barycentric interpolation at each pixel centre's UV, the lookup rule of cameras.CameraMesh.
+        # Barycentric interpolation at each pixel centre's UV, the lookup rule of camera_mesh.CameraMesh.
         w, h = mesh.image_size
         uv = np.stack([(cols + 0.0) / w, 1.0 - (rows + 1.0) / h], -1)
         out = np.full((len(uv), 6), np.nan)

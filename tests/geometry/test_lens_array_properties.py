@@ -16,8 +16,9 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from povh3d.geometry.cameras import (TIE_SHIFT, MIN_FRONT_CLEARANCE, POVRAY_MAX_DEPTH, camera_mesh,
-    check_front_clearance, bank_front_clearance, default_front_clearance, ortho_view_frames, pinhole_frames, ray_stretch)
+from povh3d.geometry.cameras import TIE_SHIFT, camera_mesh, ortho_view_frames, pinhole_frames
+from povh3d.geometry.view_bank import bank_front_clearance
+from povh3d.geometry.camera_mesh import MIN_FRONT_CLEARANCE, POVRAY_MAX_DEPTH, check_front_clearance, default_front_clearance, ray_stretch
 from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays

@@ -11,7 +11,8 @@ import numpy as np
 from povh3d.calibration.distortion import Brown
 from povh3d.calibration.gridfile import LATTICES, Grid
 from povh3d.errors import ConfigError
-from povh3d.geometry.cameras import CameraMesh, _bank_mesh, _bank_tiles
+from povh3d.geometry.camera_mesh import CameraMesh
+from povh3d.geometry.view_bank import _bank_mesh, _bank_tiles
 from povh3d.geometry.lens_array import LensArray
 from povh3d.geometry.rays import pixel_rays
 from povh3d.geometry.optics import Lenslet, sag
@@ -157,7 +158,7 @@ def view_bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.nd
     ``samples`` (K, 4), optional: footprint samples (``geometry.footprint``); each
     gets a whole bank, the banks stacked top to bottom (bank ``b`` at rows
     ``b*Ny*Ly ..``).  Default: the pixel's own ray.  All banks in one mesh,
-    whatever ``cameras.bank_groups`` would split them into.
+    whatever ``view_bank.bank_groups`` would split them into.
     """
     return _bank_mesh(lens_array, front_clearance, samples, *_bank_tiles(lens_array, None))
 
