@@ -68,6 +68,7 @@ from ..geometry.rays import pixel_rays
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet
+from ..geometry.chief_rays import ChiefRays, chief_rays
 from .batch import FrameBatch
 
 APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
@@ -340,7 +341,65 @@ class SingleStagePlan:
         """Capture pixels per panel pixel and axis: ``k`` with whole PPL, else 1 (denser bank)."""
         return self.supersample if self.bank is None else 1
 
+    # -- per-pixel capture rays (hex, fractional PPL: module doc, 6) -------------------
+    @property
+    def traces_chief_rays(self) -> bool:
+        """Whether every pixel gets its own capture ray (hex and fractional PPL, unturned)."""
+        return self.bank is not None and self.lens_array.rotation == 0.0
+
+    @cached_property
+    def chief(self) -> ChiefRays:
+        """The capture ray of every sub-pixel, ``(H k, W k)`` (``chief_rays``)."""
+        la, k = self.lens_array, self.supersample
+        c, _, inside = pixel_rays(la)
+        X, Y = np.meshgrid(*la.panel.pixel_centres())
+        d = (np.arange(k) + 0.5) / k - 0.5  # sub-pixel centres, in pixels, inside the pixel's own lens
+        h, w = inside.shape
+        cs = np.repeat(np.repeat(np.nan_to_num(c), k, 0), k, 1)
+        u = np.repeat(np.repeat(X, k, 0), k, 1) + np.tile(d, w)[None, :] * la.panel.pitch_x - cs[..., 0]
+        v = np.repeat(np.repeat(Y, k, 0), k, 1) - np.tile(d, h)[:, None] * la.panel.pitch_y - cs[..., 1]
+        if la.grid == "lenticular":
+            v = np.zeros_like(v)
+            cs[..., 1] = np.repeat(np.repeat(Y, k, 0), k, 1) - np.tile(d, h)[:, None] * la.panel.pitch_y
+        dirs = np.stack([u, v, np.full(u.shape, la.focal)], axis=-1)
+        dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+        rays = chief_rays(self.capture_array, self.lenslet, -self.depth - self.lenslet.focal, cs, dirs,
+                          air_gap=1e-3 * self.lenslet.focal)
+        keep = np.repeat(np.repeat(inside, k, 0), k, 1)
+        return ChiefRays(rays.origins, rays.directions, rays.served & keep)
+
+    def chief_mesh(self) -> dict[str, np.ndarray]:
+        """One triangle per sub-pixel, centroid at its ray's origin, normal along it.
+
+        ``mesh_camera`` distribution 0 shoots image pixel ``(col, row)`` from the
+        centroid of face ``col + (row - 1) W`` along the face's normal (measured:
+        row 0 repeats row 1, so the image has one extra row on top, cut off).
+        Pixels outside every lens look back (-z) at the background; they are
+        blacked out afterwards.
+        """
+        la, k = self.lens_array, self.supersample
+        rays = self.chief
+        _, _, inside = pixel_rays(la)
+        keep = np.repeat(np.repeat(inside, k, 0), k, 1).reshape(-1)
+        o = rays.origins.reshape(-1, 3).copy()
+        nrm = rays.directions.reshape(-1, 3).copy()
+        o[~keep] = (0.0, 0.0, -1.0)
+        nrm[~keep] = (0.0, 0.0, -1.0)
+        e1 = np.cross(nrm, (0.0, 1.0, 0.0))
+        e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)
+        e2 = np.cross(nrm, e1)
+        size = la.pitch_x  # large faces: their float32 normals stay exact to ~1e-7
+        r3 = math.sqrt(3) / 2
+        verts = np.stack([o + size * e1, o - size * (0.5 * e1 + r3 * e2), o - size * (0.5 * e1 - r3 * e2)], axis=1)
+        faces = np.arange(3 * len(o), dtype=np.int64).reshape(-1, 3)
+        return {"vertices": verts.reshape(-1, 3), "faces": faces}
+
     def batch(self) -> FrameBatch:
+        if self.traces_chief_rays:
+            la, k = self.lens_array, self.supersample
+            context = {**self.template_context(), "chief_mesh": self.chief_mesh()}
+            return FrameBatch("single_stage.pov.j2", context, [{}], la.panel.width * k, la.panel.height * k + 1,
+                              processes=1)
         panel, k = self.capture_array.panel, self.camera_supersample
         # The camera keeps its mm extent: k x k sub-pixels tile each pixel, centred in it.
         return FrameBatch("single_stage.pov.j2", self.template_context(), [{}],
@@ -360,6 +419,14 @@ class SingleStagePlan:
         ``(Ly*Ny, Lx*Nx, C)`` (whole PPL; the caller pads the margin).
         """
         la = self.lens_array
+        if self.traces_chief_rays:
+            k = self.supersample
+            h, w, c = la.panel.height, la.panel.width, capture.shape[2]
+            sub = capture[1:]  # row 0 repeats row 1 (chief_mesh)
+            blocks = sub.reshape(h, k, w, k, c).transpose(1, 3, 0, 2, 4).reshape(k * k, h, w, c)
+            out = mean_in_linear_light(blocks) if k > 1 else blocks[0].copy()
+            out[~pixel_rays(la)[2]] = 0
+            return out
         if self.bank is not None:
             cap = self.capture_array.panel
             return sample_turned_bank(capture, la, (cap.pitch_x, cap.pitch_y), self.bank.phase,
