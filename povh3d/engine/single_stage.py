@@ -333,7 +333,7 @@ class SingleStagePlan:
             "z_vertex": z_vertex, "z_flat": z_vertex - lenslet.thickness, "z_focus": -self.depth,
             "z_camera": z_vertex - lenslet.thickness - lenslet.focal, "camera_xy": self.camera_offset,
             "right": (width_mm, 0.0, 0.0), "up": (0.0, height_mm, 0.0),
-            "rotation": cap.rotation,
+            "rotation": cap.rotation, "array_offset": self.array_offset,
         }
 
     @property
@@ -364,9 +364,23 @@ class SingleStagePlan:
         dirs = np.stack([u, v, np.full(u.shape, la.focal)], axis=-1)
         dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
         rays = chief_rays(self.capture_array, self.lenslet, -self.depth - self.lenslet.focal, cs, dirs,
-                          air_gap=1e-3 * self.lenslet.focal)
+                          air_gap=1e-3 * self.lenslet.focal, offset=self.array_offset)
         keep = np.repeat(np.repeat(inside, k, 0), k, 1)
         return ChiefRays(rays.origins, rays.directions, rays.served & keep)
+
+    @property
+    def array_offset(self) -> tuple[float, float]:
+        """Lateral shift of the virtual lenslets (mm): 0, or off the display's lattice for per-pixel rays.
+
+        Per-pixel capture rays do not need the lenslets on the display's centres; off
+        them by an irrational fraction of a pitch, no family of pixel rays (a column of
+        hex pixels with ``u = 0``, say) runs along a lenslet's edge, where POV-Ray's
+        answer depends on rounding.
+        """
+        if not self.traces_chief_rays:
+            return 0.0, 0.0
+        la = self.lens_array
+        return (math.sqrt(2) - 1) * 0.5 * la.pitch_x, (0.0 if la.grid == "lenticular" else (math.sqrt(5) - 2) * la.pitch_y)
 
     def chief_mesh(self) -> dict[str, np.ndarray]:
         """One triangle per sub-pixel, centroid at its ray's origin, normal along it.

@@ -84,7 +84,7 @@ def in_cell(grid: str, pitch_x: float, pitch_y: float, du: np.ndarray, dv: np.nd
 
 
 def chief_rays(capture: LensArray, lenslet: Lenslet, z_vertex: float, centres: np.ndarray,
-               directions: np.ndarray, air_gap: float) -> ChiefRays:
+               directions: np.ndarray, air_gap: float, offset: tuple[float, float] = (0.0, 0.0)) -> ChiefRays:
     """The capture ray that leaves ``capture``'s lenslets along each given line.
 
     Parameters
@@ -95,13 +95,15 @@ def chief_rays(capture: LensArray, lenslet: Lenslet, z_vertex: float, centres: n
     centres : (..., 2) float, mm   where each line crosses the display plane ``z = 0``
     directions : (..., 3) float    unit directions, ``z`` component > 0
     air_gap : float, mm            how far before the flat face each capture ray starts
+    offset : (ox, oy), mm          the virtual array's lenslets sit this far from ``capture``'s centres
     """
     n, R, K = lenslet.ior, lenslet.radius, lenslet.conic
     thick = lenslet.thickness
     b = 0.0 if capture.grid == "lenticular" else 1.0
     d = directions
     p = centres + d[..., :2] * (z_vertex / d[..., 2:3])  # L at the vertex plane
-    cx, cy = nearest_lens(capture, p[..., 0], p[..., 1])
+    cx, cy = nearest_lens(capture, p[..., 0] - offset[0], p[..., 1] - offset[1])
+    cx, cy = cx + offset[0], cy + offset[1]
     # Local frame of that lenslet: vertex at the origin, glass at z < 0.
     q = np.stack([centres[..., 0] - cx, centres[..., 1] - cy, np.full(cx.shape, -z_vertex)], axis=-1)
     A = d[..., 0] ** 2 + b * d[..., 1] ** 2 + (1 + K) * d[..., 2] ** 2
@@ -133,8 +135,9 @@ def chief_rays(capture: LensArray, lenslet: Lenslet, z_vertex: float, centres: n
     back = air_gap / np.where(a[..., 2] > 0, a[..., 2], 1.0)
     origins = Bf - back[..., None] * a
     origins = origins + np.stack([cx, cy, np.full(cx.shape, z_vertex)], axis=-1)
-    # Not served: the line itself from before the array (what a missing lens would show).
-    z0 = z_vertex - thick - air_gap
+    # Not served (the line grazes a lenslet's edge): the line itself, started just past
+    # the array's vertices, as if that lenslet were missing.
+    z0 = z_vertex + air_gap
     plain = np.concatenate([centres + d[..., :2] * (z0 / d[..., 2:3]), np.full(cx.shape + (1,), z0)], axis=-1)
     ok = served & np.all(np.isfinite(origins), axis=-1) & np.all(np.isfinite(a), axis=-1)
     return ChiefRays(np.where(ok[..., None], origins, plain), np.where(ok[..., None], a, d), ok)
