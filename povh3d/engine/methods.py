@@ -109,7 +109,7 @@ def _single_stage(lens_array: LensArray, back_off: float, samples: np.ndarray, *
     if lens_array.grid == "lattice":
         raise ConfigError("--method single-stage builds square, hex and lenticular lenslets, not a general "
                           "lattice (--lattice); render it with --method multi-ortho")
-    plan = SingleStagePlan.for_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), back_off, supersample)
+    plan = SingleStagePlan.checked(lens_array, lenslet_for(lens_array, lenslet, ior, back_off), back_off, supersample)
     return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.describe())
 
 

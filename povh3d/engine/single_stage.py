@@ -53,7 +53,7 @@ The geometry (thesis 3.3, worked out against docs/geometry.md):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
@@ -74,10 +74,62 @@ from .batch import FrameBatch
 APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
 
 
-def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None = None) -> Lenslet:
-    """The lenslet of ``lens_array``: its pitch, its focal length, ``shape`` and ``ior``."""
-    return Lenslet(shape, APERTURE_OF_GRID[lens_array.grid], lens_array.pitch_x,
-                   lens_array.pitch_y, lens_array.focal, ior)
+#: Indices of real lens materials for visible light: water 1.33 up to diamond 2.42 (the
+#: densest optical glasses reach about 2.0).  Outside this range no lenslet can be made.
+PHYSICAL_IOR = (1.3, 2.5)
+#: Share of pixels whose ray may miss every lenslet (at a lens's rim, grazing a corner):
+#: they are traced from past the array along their own ray, still exact, not refracted.
+UNSERVED_SHARE = 0.005
+#: Indices tried, lowest first, when ``--ior`` is not given (1.5: acrylic, crown glass).
+DEFAULT_IORS = tuple(round(1.5 + 0.1 * k, 1) for k in range(11))
+
+
+def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None = None,
+                clearance: float = 0.0) -> Lenslet:
+    """The lenslet of ``lens_array``: its pitch, its focal length, ``shape`` and ``ior``.
+
+    ``ior`` None: per-pixel capture rays (module doc, 6) are exact with any lens, so the
+    lowest physical index through which every pixel's ray passes at the depth that
+    ``clearance`` asks for (``DEFAULT_IORS``); a
+    turned array's parallel capture keeps the optically thin ``optics.default_ior``.
+    """
+    def make(n: float | None) -> Lenslet:
+        return Lenslet(shape, APERTURE_OF_GRID[lens_array.grid], lens_array.pitch_x,
+                       lens_array.pitch_y, lens_array.focal, n)
+
+    lo, hi = PHYSICAL_IOR
+    if ior is not None and ior > 1 and not lo <= ior <= hi:
+        raise ConfigError(f"--ior {ior:g} is no lens material: real lenses have indices from {lo:g} (water 1.33) "
+                          f"to {hi:g} (diamond 2.42); raise --ior above {lo:g} or lower it to {hi:g} at most "
+                          f"(1.5 is glass)")
+    if ior is not None or lens_array.rotation != 0.0:
+        return make(ior)
+    last = None
+    for n in DEFAULT_IORS:
+        try:
+            lenslet = make(n)
+        except ConfigError:  # a sphere too strongly curved to span the aperture at this index
+            continue
+        last = lenslet
+        if SingleStagePlan.for_clearance(lens_array, lenslet, clearance).unserved == 0:
+            return lenslet
+    return last if last is not None else make(DEFAULT_IORS[-1])
+
+
+def border_margin(lens_array: LensArray) -> np.ndarray:
+    """(H, W) mm: how far each pixel centre lies inside its lens's cell (-inf outside every lens)."""
+    c, _, inside = pixel_rays(lens_array)
+    X, Y = lens_array.to_lattice(*np.meshgrid(*lens_array.panel.pixel_centres()))
+    cx, cy = lens_array.to_lattice(c[..., 0], c[..., 1])
+    ax, ay = np.abs(X - cx), np.abs(Y - cy)
+    px, py = lens_array.pitch_x, lens_array.pitch_y
+    if lens_array.grid == "hex":
+        margin = np.minimum(px / 2 - ax, px / 2 - ax / 2 - math.sqrt(3) / 2 * ay)
+    elif lens_array.grid == "lenticular":
+        margin = px / 2 - ax
+    else:
+        margin = np.minimum(px / 2 - ax, py / 2 - ay)
+    return np.where(inside, margin, -np.inf)
 
 
 def recentre_unit(lens_array: LensArray, density: int = 1) -> float:
@@ -202,6 +254,7 @@ class SingleStagePlan:
     lenslet: Lenslet
     depth: float = 0.0
     supersample: int = 1
+    collimated: bool = False
 
     def __post_init__(self) -> None:
         k = self.supersample
@@ -223,6 +276,14 @@ class SingleStagePlan:
         if clearance <= 0:
             return cls(lens_array, lenslet, 0.0, supersample)
         return cls(lens_array, lenslet, unit * math.ceil(clearance / unit - 1e-9), supersample)
+
+    @classmethod
+    def checked(cls, lens_array: LensArray, lenslet: Lenslet, clearance: float,
+                supersample: int = 1) -> SingleStagePlan:
+        """``for_clearance``, refused in one line where a pixel's ray cannot pass a lenslet."""
+        plan = cls.for_clearance(lens_array, lenslet, clearance, supersample)
+        plan.check_optics()
+        return plan
 
     # -- view shifts ------------------------------------------------------------
     @cached_property
@@ -252,16 +313,27 @@ class SingleStagePlan:
     def extension(self) -> tuple[int, int]:
         """Extra capture lenses on each side, ``(Ex, Ey)``."""
         bank, la = self.bank, self.lens_array
+        if self.traces_chief_rays:
+            # A pixel ray crosses the vertex plane at c - u (D + f) / f, |u| at most the
+            # cell's half-width; the lenslet it meets lies within one more lens.
+            gain = 1 + (self.depth + self.lenslet.focal) / la.focal
+            ex = math.ceil(la.pitch_x / 2 * gain / la.pitch_x) + 1
+            if la.grid == "lenticular":
+                return ex, 0
+            half_y = la.pitch_x / math.sqrt(3) if la.grid == "hex" else la.pitch_y / 2
+            ey = math.ceil(half_y * gain / la.pitch_y) + 1
+            return ex, ey + ey % 2 if la.grid == "hex" else ey
+        extra = 0
         if bank is not None:
             (n, m), (a, b) = bank.samples, bank.phase
             t = self.depth / la.focal
-            ex = math.ceil(np.abs(bank.offsets[:, 0] + a).max() / n * t - 1e-9) + (1 if la.grid == "hex" else 0)
+            ex = math.ceil(np.abs(bank.offsets[:, 0] + a).max() / n * t - 1e-9) + (1 if la.grid == "hex" else 0) + extra
             if la.grid == "lenticular":
                 return ex, 0
-            ey = math.ceil(np.abs(bank.offsets[:, 1] + b).max() / m * t - 1e-9)
+            ey = math.ceil(np.abs(bank.offsets[:, 1] + b).max() / m * t - 1e-9) + extra
             return ex, ey + ey % 2 if la.grid == "hex" else ey  # hex: keep the row parity
         sx, sy = self.shifts
-        return int(np.abs(sx).max()), int(np.abs(sy).max())
+        return int(np.abs(sx).max()) + extra, (int(np.abs(sy).max()) + extra if la.grid != "lenticular" else 0)
 
     @cached_property
     def capture_array(self) -> LensArray:
@@ -344,8 +416,9 @@ class SingleStagePlan:
     # -- per-pixel capture rays (hex, fractional PPL: module doc, 6) -------------------
     @property
     def traces_chief_rays(self) -> bool:
-        """Whether every pixel gets its own capture ray (hex and fractional PPL, unturned)."""
-        return self.bank is not None and self.lens_array.rotation == 0.0
+        """Whether every pixel gets its own capture ray (module doc, 6): every unturned array
+        unless ``collimated`` asks for the thesis's parallel capture camera (points 1-5)."""
+        return not self.collimated and self.lens_array.rotation == 0.0
 
     @cached_property
     def chief(self) -> ChiefRays:
@@ -381,6 +454,39 @@ class SingleStagePlan:
             return 0.0, 0.0
         la = self.lens_array
         return (math.sqrt(2) - 1) * 0.5 * la.pitch_x, (0.0 if la.grid == "lenticular" else (math.sqrt(5) - 2) * la.pitch_y)
+
+    @cached_property
+    def unserved(self) -> int:
+        """Pixels clear of their lens border (0.1 pixel) whose ray cannot pass through a lenslet."""
+        if not self.traces_chief_rays:
+            return 0
+        la, k = self.lens_array, self.supersample
+        clear = np.repeat(np.repeat(border_margin(la) > 0.1 * la.panel.pitch_x, k, 0), k, 1)
+        return int(np.sum(clear & ~self.chief.served))
+
+    def check_optics(self) -> None:
+        """Refuse, in one line, a lenslet through which more than ``UNSERVED_SHARE`` of the
+        pixel rays cannot pass.  (The few left start past the array along their own ray.)"""
+        bad = self.unserved
+        if bad <= UNSERVED_SHARE * pixel_rays(self.lens_array)[2].sum():
+            return
+        lens, la = self.lenslet, self.lens_array
+        lo, hi = PHYSICAL_IOR
+        need = la.focal
+        for _ in range(40):  # the shortest focal length that serves every pixel at the highest index
+            need *= 1.25
+            try:
+                trial = replace(la, focal=need)
+                plan = SingleStagePlan.for_clearance(trial, lenslet_for(trial, lens.shape, hi), self.depth)
+            except ConfigError:
+                continue
+            if plan.unserved == 0:
+                break
+        raise ConfigError(
+            f"single-stage cannot pass {bad} pixel rays through a {lens.shape} lenslet of focal length "
+            f"{la.focal:g} mm, pitch {la.pitch_x:g} mm and index {lens.ior:g} (total internal reflection or a "
+            f"lenslet's side): real indices are {lo:g}..{hi:g}; lengthen --focal to {need:.3g} mm or more, "
+            f"or use --method multi-ortho")
 
     def chief_mesh(self) -> dict[str, np.ndarray]:
         """One triangle per sub-pixel, centroid at its ray's origin, normal along it.
@@ -474,5 +580,8 @@ class SingleStagePlan:
                 "capture_size_px": [cap.panel.width * self.camera_supersample,
                                     cap.panel.height * self.camera_supersample],
                 "supersamples_per_pixel": [self.supersample, self.supersample],
+                "capture": "collimated" if not self.traces_chief_rays else "per-pixel rays traced back through the lenslets",
+                **({"lenslet_offset_mm": list(self.array_offset),
+                    "pixels_past_the_lenslets": self.unserved} if self.traces_chief_rays else {}),
                 **({"capture_samples_per_lens": list(self.bank.samples),
                     "capture_sample_phase": list(self.bank.phase)} if self.bank is not None else {})}

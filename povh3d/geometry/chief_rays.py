@@ -84,7 +84,8 @@ def in_cell(grid: str, pitch_x: float, pitch_y: float, du: np.ndarray, dv: np.nd
 
 
 def chief_rays(capture: LensArray, lenslet: Lenslet, z_vertex: float, centres: np.ndarray,
-               directions: np.ndarray, air_gap: float, offset: tuple[float, float] = (0.0, 0.0)) -> ChiefRays:
+               directions: np.ndarray, air_gap: float, offset: tuple[float, float] = (0.0, 0.0),
+               through_walls: bool = False) -> ChiefRays:
     """The capture ray that leaves ``capture``'s lenslets along each given line.
 
     Parameters
@@ -101,10 +102,56 @@ def chief_rays(capture: LensArray, lenslet: Lenslet, z_vertex: float, centres: n
     thick = lenslet.thickness
     b = 0.0 if capture.grid == "lenticular" else 1.0
     d = directions
-    p = centres + d[..., :2] * (z_vertex / d[..., 2:3])  # L at the vertex plane
-    cx, cy = nearest_lens(capture, p[..., 0] - offset[0], p[..., 1] - offset[1])
-    cx, cy = cx + offset[0], cy + offset[1]
-    # Local frame of that lenslet: vertex at the origin, glass at z < 0.
+    # The lenslet L leaves through: under L somewhere between the vertex plane and the
+    # flat face (L slants, and dips into a neighbour near an edge).  Try the lenslets
+    # under L at four depths, keeping the first whose curved face L meets inside its cell.
+    E = np.full(d.shape, np.nan)
+    t = np.full(d.shape[:-1], -np.inf)
+    cx, cy = np.zeros(t.shape), np.zeros(t.shape)
+    found = np.zeros(t.shape, bool)
+    for depth in (0.0, thick / 3, 2 * thick / 3, thick):
+        z = z_vertex - depth
+        p = centres + d[..., :2] * (z / d[..., 2:3])
+        lx, ly = nearest_lens(capture, p[..., 0] - offset[0], p[..., 1] - offset[1])
+        lx, ly = lx + offset[0], ly + offset[1]
+        e, tt = _curved_face_hit(centres, d, lx, ly, z_vertex, R, K, b, thick)
+        hit = ~found & np.isfinite(tt) & in_cell(capture.grid, capture.pitch_x, capture.pitch_y, e[..., 0], e[..., 1])
+        E, t = np.where(hit[..., None], e, E), np.where(hit, tt, t)
+        cx, cy = np.where(hit, lx, cx), np.where(hit, ly, cy)
+        found |= hit
+    with np.errstate(invalid="ignore", divide="ignore"):
+        N = np.stack([E[..., 0], b * E[..., 1], (1 + K) * E[..., 2] + R], axis=-1)
+        N /= np.linalg.norm(N, axis=-1, keepdims=True)
+    # Snell backwards at E: the tangential part shrinks by n inside the glass.
+    dn = np.sum(d * N, axis=-1, keepdims=True)
+    gt = (d - dn * N) / n
+    g = gt + np.sqrt(np.clip(1 - np.sum(gt * gt, axis=-1, keepdims=True), 0, None)) * N
+    s = (-thick - E[..., 2]) / g[..., 2]
+    Bf = E + s[..., None] * g  # on the flat face
+    a_xy = n * g[..., :2]
+    sin2 = np.sum(a_xy * a_xy, axis=-1)
+    a = np.concatenate([a_xy, np.sqrt(np.clip(1 - sin2, 0, None))[..., None]], axis=-1)
+    served = (np.isfinite(t) & (sin2 < 1)
+              & in_cell(capture.grid, capture.pitch_x, capture.pitch_y, E[..., 0], E[..., 1])
+              & (through_walls | in_cell(capture.grid, capture.pitch_x, capture.pitch_y, Bf[..., 0], Bf[..., 1])))
+    back = air_gap / np.where(a[..., 2] > 0, a[..., 2], 1.0)
+    origins = Bf - back[..., None] * a
+    origins = origins + np.stack([cx, cy, np.full(cx.shape, z_vertex)], axis=-1)
+    # Not served (the line grazes a lenslet's edge): the line itself, started just past
+    # the array's vertices, as if that lenslet were missing.
+    z0 = z_vertex + air_gap
+    plain = np.concatenate([centres + d[..., :2] * (z0 / d[..., 2:3]), np.full(cx.shape + (1,), z0)], axis=-1)
+    ok = served & np.all(np.isfinite(origins), axis=-1) & np.all(np.isfinite(a), axis=-1)
+    return ChiefRays(np.where(ok[..., None], origins, plain), np.where(ok[..., None], a, d), ok)
+
+
+def _curved_face_hit(centres: np.ndarray, d: np.ndarray, cx: np.ndarray, cy: np.ndarray, z_vertex: float,
+                     R: float, K: float, b: float, thick: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the line through ``(centres, 0)`` along ``d`` meets the curved face of lenslet ``(cx, cy)``.
+
+    Returns ``E`` (..., 3) in that lenslet's frame (vertex at the origin) and the line
+    parameter ``t``; NaN / -inf where the line misses the face within the lens's thickness.
+    """
     q = np.stack([centres[..., 0] - cx, centres[..., 1] - cy, np.full(cx.shape, -z_vertex)], axis=-1)
     A = d[..., 0] ** 2 + b * d[..., 1] ** 2 + (1 + K) * d[..., 2] ** 2
     B = 2 * (q[..., 0] * d[..., 0] + b * q[..., 1] * d[..., 1] + (1 + K) * q[..., 2] * d[..., 2]) + 2 * R * d[..., 2]
@@ -117,27 +164,4 @@ def chief_rays(capture: LensArray, lenslet: Lenslet, z_vertex: float, centres: n
         zr = q[..., 2:3] + roots * d[..., 2:3]
         good = (zr <= 1e-9 * R + 1e-12) & (zr >= -thick)
         t = np.where(good, roots, -np.inf).max(axis=-1)
-    E = q + t[..., None] * d
-    N = np.stack([E[..., 0], b * E[..., 1], (1 + K) * E[..., 2] + R], axis=-1)
-    N /= np.linalg.norm(N, axis=-1, keepdims=True)
-    # Snell backwards at E: the tangential part shrinks by n inside the glass.
-    dn = np.sum(d * N, axis=-1, keepdims=True)
-    gt = (d - dn * N) / n
-    g = gt + np.sqrt(np.clip(1 - np.sum(gt * gt, axis=-1, keepdims=True), 0, None)) * N
-    s = (-thick - E[..., 2]) / g[..., 2]
-    Bf = E + s[..., None] * g  # on the flat face
-    a_xy = n * g[..., :2]
-    sin2 = np.sum(a_xy * a_xy, axis=-1)
-    a = np.concatenate([a_xy, np.sqrt(np.clip(1 - sin2, 0, None))[..., None]], axis=-1)
-    served = (np.isfinite(t) & (sin2 < 1)
-              & in_cell(capture.grid, capture.pitch_x, capture.pitch_y, E[..., 0], E[..., 1])
-              & in_cell(capture.grid, capture.pitch_x, capture.pitch_y, Bf[..., 0], Bf[..., 1]))
-    back = air_gap / np.where(a[..., 2] > 0, a[..., 2], 1.0)
-    origins = Bf - back[..., None] * a
-    origins = origins + np.stack([cx, cy, np.full(cx.shape, z_vertex)], axis=-1)
-    # Not served (the line grazes a lenslet's edge): the line itself, started just past
-    # the array's vertices, as if that lenslet were missing.
-    z0 = z_vertex + air_gap
-    plain = np.concatenate([centres + d[..., :2] * (z0 / d[..., 2:3]), np.full(cx.shape + (1,), z0)], axis=-1)
-    ok = served & np.all(np.isfinite(origins), axis=-1) & np.all(np.isfinite(a), axis=-1)
-    return ChiefRays(np.where(ok[..., None], origins, plain), np.where(ok[..., None], a, d), ok)
+        return q + t[..., None] * d, t

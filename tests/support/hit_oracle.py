@@ -74,7 +74,9 @@ def render_hits(method: str, lens_array: LensArray, folder: Path, z0: float, hal
                 **options) -> np.ndarray:
     """(H, W, 2) mm: where each pixel of ``method``'s point-sampled image hit the plane."""
     scene = load_scene(write_position_plane(folder, z0, half))
-    settings = RenderSettings(quality="draft", use_cache=False, bit_depth=16)
+    # Rays start (single-stage: the virtual array sits) clear of a plane in front of the screen.
+    back_off = max(0.0, -z0) + 2.0 if z0 < 0 else None
+    settings = RenderSettings(quality="draft", use_cache=False, bit_depth=16, back_off=back_off)
     h3d = run_method(method, scene, lens_array, settings, **options).h3d
     lin = decode(h3d)
     return np.stack([lin[..., 0], lin[..., 1]], axis=-1) * (2 * half) - half
