@@ -104,6 +104,7 @@ def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None =
                           f"(1.5 is glass)")
     if ior is not None or lens_array.rotation != 0.0:
         return make(ior)
+    probe = _probe_array(lens_array)
     last = None
     for n in DEFAULT_IORS:
         try:
@@ -111,9 +112,31 @@ def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None =
         except ConfigError:  # a sphere too strongly curved to span the aperture at this index
             continue
         last = lenslet
-        if SingleStagePlan.for_clearance(lens_array, lenslet, clearance).unserved == 0:
+        if SingleStagePlan.for_clearance(probe, lenslet, clearance).unserved == 0:
             return lenslet
     return last if last is not None else make(DEFAULT_IORS[-1])
+
+
+def _probe_array(lens_array: LensArray, lenses: int = 24) -> LensArray:
+    """A piece of ``lens_array`` at most ``lenses`` a side, on the same pixels, for trying indices.
+
+    Whether a pixel ray passes a lenslet depends on its offset and slope, which a
+    piece of the array already shows in all their variety; the whole array is checked
+    once the index is chosen (``SingleStagePlan.check_optics``).
+    """
+    la = lens_array
+    lx, ly = min(la.lenses_x, lenses), min(la.lenses_y, lenses)
+    if la.grid == "lenticular":
+        ly = min(la.lenses_y, 4 * lenses)
+    if (lx, ly) == (la.lenses_x, la.lenses_y):
+        return la
+    s_x, s_y = la.panel.pitch_x, la.panel.pitch_y
+    extra = la.pitch_x / 2 if la.grid == "hex" and ly > 1 else 0.0
+    width = math.ceil((lx * la.pitch_x + extra) / s_x - 1e-9)
+    height = ly if la.grid == "lenticular" else math.ceil(ly * la.pitch_y / s_y - 1e-9)
+    width += (la.panel.width - width) % 2  # the same pixel phase about the centre
+    height += (la.panel.height - height) % 2
+    return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, Panel(width, height, s_x, s_y))
 
 
 def border_margin(lens_array: LensArray) -> np.ndarray:
