@@ -484,7 +484,9 @@ class SingleStagePlan:
         if not self.traces_chief_rays:
             return 0
         la, k = self.lens_array, self.supersample
-        clear = np.repeat(np.repeat(border_margin(la) > 0.1 * la.panel.pitch_x, k, 0), k, 1)
+        # Sub-pixel rays reach up to (1 - 1/k) / sqrt(2) of a pixel from its centre.
+        reach = 0.1 + (1 - 1 / k) / math.sqrt(2)
+        clear = np.repeat(np.repeat(border_margin(la) > reach * la.panel.pitch_x, k, 0), k, 1)
         return int(np.sum(clear & ~self.chief.served))
 
     def check_optics(self) -> None:
