@@ -48,6 +48,20 @@ The geometry (thesis 3.3, worked out against docs/geometry.md):
    The same construction is why a hex array cannot simply move forward: a lens
    array in one plane offers only rays through its own focal points, and
    ``c - u D/f`` is a focal point only on such a grid.
+6. **Per-pixel capture rays (every unturned array; points 1-5 remain for turned
+   arrays and ``collimated``).**  Parallel capture rays reach only the rays
+   through the focal points, bent by the lenslet's distortion
+   (``tan = w / (f + sag)``), and 2-5 interpolate between them: hex pixels
+   landed up to 1.8 mm off on a plane 30 mm away.  Instead each pixel gets its
+   own capture ray, worked out backwards through the lenslet its ray leaves
+   (``geometry.chief_rays``): POV-Ray refracts it at the flat and the curved
+   face and it leaves along the pixel's ray exactly, for any grid, depth ``D``,
+   shape and index.  The camera is a ``mesh_camera`` with one face per
+   (sub-)pixel; the 180-degree turn and the view shifts are in the rays, so
+   ``assemble`` only averages sub-pixels.  The lenslets sit off the display's
+   lattice by an irrational fraction of a pitch (``array_offset``).  The index
+   is a real one (``PHYSICAL_IOR``); where no real index lets the pixel rays
+   through, the render is refused (``check_optics``).
 """
 
 from __future__ import annotations
