@@ -616,11 +616,15 @@ class SingleStagePlan:
         return {"lenslet": self.lenslet.describe(), "focal_plane_z_mm": -self.depth,
                 "principal_plane_z_mm": -self.depth - self.lenslet.focal,
                 "capture_lenses": [cap.lenses_x, cap.lenses_y],
-                "capture_size_px": [cap.panel.width * self.camera_supersample,
-                                    cap.panel.height * self.camera_supersample],
+                "capture_size_px": ([self.lens_array.panel.width * self.supersample,
+                                     self.lens_array.panel.height * self.supersample]
+                                    if self.traces_chief_rays else
+                                    [cap.panel.width * self.camera_supersample,
+                                     cap.panel.height * self.camera_supersample]),
                 "supersamples_per_pixel": [self.supersample, self.supersample],
                 "capture": "collimated" if not self.traces_chief_rays else "per-pixel rays traced back through the lenslets",
                 **({"lenslet_offset_mm": list(self.array_offset),
                     "pixels_past_the_lenslets": self.unserved} if self.traces_chief_rays else {}),
                 **({"capture_samples_per_lens": list(self.bank.samples),
-                    "capture_sample_phase": list(self.bank.phase)} if self.bank is not None else {})}
+                    "capture_sample_phase": list(self.bank.phase)}
+                   if self.bank is not None and not self.traces_chief_rays else {})}
