@@ -122,8 +122,7 @@ def _single_stage(lens_array: LensArray, front_clearance: float, samples: np.nda
     if lens_array.grid == "lattice":
         raise ConfigError("--method single-stage builds square, hex and lenticular lenslets, not a general "
                           "lattice (--lattice); render it with --method multi-ortho")
-    plan = SingleStagePlan.for_front_clearance(lens_array, lenslet_for(lens_array, lenslet, ior), front_clearance,
-                                               supersample)
+    plan = SingleStagePlan.checked(lens_array, lenslet_for(lens_array, lenslet, ior, front_clearance), front_clearance, supersample)
     return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.as_record())
 
 

@@ -48,12 +48,26 @@ The geometry (thesis 3.3, worked out against docs/geometry.md):
    The same construction is why a hex array cannot simply move forward: a lens
    array in one plane offers only rays through its own focal points, and
    ``c - u D/f`` is a focal point only on such a grid.
+6. **Per-pixel capture rays (every unturned array; points 1-5 remain for turned
+   arrays and ``collimated``).**  Parallel capture rays reach only the rays
+   through the focal points, bent by the lenslet's distortion
+   (``tan = w / (f + sag)``), and 2-5 interpolate between them: hex pixels
+   landed up to 1.8 mm off on a plane 30 mm away.  Instead each pixel gets its
+   own capture ray, worked out backwards through the lenslet its ray leaves
+   (``geometry.chief_rays``): POV-Ray refracts it at the flat and the curved
+   face and it leaves along the pixel's ray exactly, for any grid, depth ``D``,
+   shape and index.  The camera is a ``mesh_camera`` with one face per
+   (sub-)pixel; the 180-degree turn and the view shifts are in the rays, so
+   ``assemble`` only averages sub-pixels.  The lenslets sit off the display's
+   lattice by an irrational fraction of a pitch (``array_offset``).  The index
+   is a real one (``PHYSICAL_IOR``); where no real index lets the pixel rays
+   through, the render is refused (``check_optics``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
@@ -68,15 +82,91 @@ from ..geometry.rays import pixel_rays
 from ..image.colour import mean_in_linear_light
 from ..image.interleave import interleave
 from ..geometry.optics import Lenslet
+from ..geometry.chief_rays import ChiefRays, chief_rays
 from .batch import ShotBatch
 
 APERTURE_OF_GRID = {"square": "square", "lenticular": "lenticular", "hex": "hex"}
 
 
-def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None = None) -> Lenslet:
-    """The lenslet of ``lens_array``: its pitch, its focal length, ``shape`` and ``ior``."""
-    return Lenslet(shape, APERTURE_OF_GRID[lens_array.grid], lens_array.pitch_x,
-                   lens_array.pitch_y, lens_array.focal, ior)
+#: Indices of real lens materials for visible light: water 1.33 up to diamond 2.42 (the
+#: densest optical glasses reach about 2.0).  Outside this range no lenslet can be made.
+PHYSICAL_IOR = (1.3, 2.5)
+#: Share of pixels whose ray may miss every lenslet (at a lens's rim, grazing a corner):
+#: they are traced from past the array along their own ray, still exact, not refracted.
+UNSERVED_SHARE = 0.005
+#: Indices tried, lowest first, when ``--ior`` is not given (1.5: acrylic, crown glass).
+DEFAULT_IORS = tuple(round(1.5 + 0.1 * k, 1) for k in range(11))
+
+
+def lenslet_for(lens_array: LensArray, shape: str = "conic", ior: float | None = None,
+                front_clearance: float = 0.0) -> Lenslet:
+    """The lenslet of ``lens_array``: its pitch, its focal length, ``shape`` and ``ior``.
+
+    ``ior`` None: per-pixel capture rays (module doc, 6) are exact with any lens, so the
+    lowest physical index through which every pixel's ray passes at the depth that
+    ``front_clearance`` asks for (``DEFAULT_IORS``); a
+    turned array's parallel capture keeps the optically thin ``optics.default_ior``.
+    """
+    def make(n: float | None) -> Lenslet:
+        return Lenslet(shape, APERTURE_OF_GRID[lens_array.grid], lens_array.pitch_x,
+                       lens_array.pitch_y, lens_array.focal, n)
+
+    lo, hi = PHYSICAL_IOR
+    if ior is not None and ior > 1 and not lo <= ior <= hi:
+        raise ConfigError(f"--ior {ior:g} is no lens material: real lenses have indices from {lo:g} (water 1.33) "
+                          f"to {hi:g} (diamond 2.42); raise --ior above {lo:g} or lower it to {hi:g} at most "
+                          f"(1.5 is glass)")
+    if ior is not None or lens_array.rotation != 0.0:
+        return make(ior)
+    probe = _probe_array(lens_array)
+    last = None
+    for n in DEFAULT_IORS:
+        try:
+            lenslet = make(n)
+        except ConfigError:  # a sphere too strongly curved to span the aperture at this index
+            continue
+        last = lenslet
+        if SingleStagePlan.for_front_clearance(probe, lenslet, front_clearance).unserved == 0:
+            return lenslet
+    return last if last is not None else make(DEFAULT_IORS[-1])
+
+
+def _probe_array(lens_array: LensArray, lenses: int = 24) -> LensArray:
+    """A piece of ``lens_array`` at most ``lenses`` a side, on the same pixels, for trying indices.
+
+    Whether a pixel ray passes a lenslet depends on its offset and slope, which a
+    piece of the array already shows in all their variety; the whole array is checked
+    once the index is chosen (``SingleStagePlan.check_optics``).
+    """
+    la = lens_array
+    lx, ly = min(la.lenses_x, lenses), min(la.lenses_y, lenses)
+    if la.grid == "lenticular":
+        ly = min(la.lenses_y, 4 * lenses)
+    if (lx, ly) == (la.lenses_x, la.lenses_y):
+        return la
+    s_x, s_y = la.panel.pitch_x, la.panel.pitch_y
+    extra = la.pitch_x / 2 if la.grid == "hex" and ly > 1 else 0.0
+    width = math.ceil((lx * la.pitch_x + extra) / s_x - 1e-9)
+    height = ly if la.grid == "lenticular" else math.ceil(ly * la.pitch_y / s_y - 1e-9)
+    width += (la.panel.width - width) % 2  # the same pixel phase about the centre
+    height += (la.panel.height - height) % 2
+    return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, Panel(width, height, s_x, s_y))
+
+
+def border_margin(lens_array: LensArray) -> np.ndarray:
+    """(H, W) mm: how far each pixel centre lies inside its lens's cell (-inf outside every lens)."""
+    c, _, inside = pixel_rays(lens_array)
+    X, Y = lens_array.to_lattice(*np.meshgrid(*lens_array.panel.pixel_centres()))
+    cx, cy = lens_array.to_lattice(c[..., 0], c[..., 1])
+    ax, ay = np.abs(X - cx), np.abs(Y - cy)
+    px, py = lens_array.pitch_x, lens_array.pitch_y
+    if lens_array.grid == "hex":
+        margin = np.minimum(px / 2 - ax, px / 2 - ax / 2 - math.sqrt(3) / 2 * ay)
+    elif lens_array.grid == "lenticular":
+        margin = px / 2 - ax
+    else:
+        margin = np.minimum(px / 2 - ax, py / 2 - ay)
+    return np.where(inside, margin, -np.inf)
 
 
 def recentre_unit(lens_array: LensArray, density: int = 1) -> float:
@@ -201,6 +291,7 @@ class SingleStagePlan:
     lenslet: Lenslet
     depth: float = 0.0
     supersample: int = 1
+    collimated: bool = False
 
     def __post_init__(self) -> None:
         k = self.supersample
@@ -222,6 +313,14 @@ class SingleStagePlan:
         if front_clearance <= 0:
             return cls(lens_array, lenslet, 0.0, supersample)
         return cls(lens_array, lenslet, unit * math.ceil(front_clearance / unit - 1e-9), supersample)
+
+    @classmethod
+    def checked(cls, lens_array: LensArray, lenslet: Lenslet, front_clearance: float,
+                supersample: int = 1) -> SingleStagePlan:
+        """``for_front_clearance``, refused in one line where a pixel's ray cannot pass a lenslet."""
+        plan = cls.for_front_clearance(lens_array, lenslet, front_clearance, supersample)
+        plan.check_optics()
+        return plan
 
     # -- view shifts ------------------------------------------------------------
     @cached_property
@@ -251,16 +350,27 @@ class SingleStagePlan:
     def extension(self) -> tuple[int, int]:
         """Extra capture lenses on each side, ``(Ex, Ey)``."""
         bank, la = self.bank, self.lens_array
+        if self.traces_chief_rays:
+            # A pixel ray crosses the vertex plane at c - u (D + f) / f, |u| at most the
+            # cell's half-width; the lenslet it meets lies within one more lens.
+            gain = 1 + (self.depth + self.lenslet.focal) / la.focal
+            ex = math.ceil(la.pitch_x / 2 * gain / la.pitch_x) + 1
+            if la.grid == "lenticular":
+                return ex, 0
+            half_y = la.pitch_x / math.sqrt(3) if la.grid == "hex" else la.pitch_y / 2
+            ey = math.ceil(half_y * gain / la.pitch_y) + 1
+            return ex, ey + ey % 2 if la.grid == "hex" else ey
+        extra = 0
         if bank is not None:
             (n, m), (a, b) = bank.samples, bank.phase
             t = self.depth / la.focal
-            ex = math.ceil(np.abs(bank.offsets[:, 0] + a).max() / n * t - 1e-9) + (1 if la.grid == "hex" else 0)
+            ex = math.ceil(np.abs(bank.offsets[:, 0] + a).max() / n * t - 1e-9) + (1 if la.grid == "hex" else 0) + extra
             if la.grid == "lenticular":
                 return ex, 0
-            ey = math.ceil(np.abs(bank.offsets[:, 1] + b).max() / m * t - 1e-9)
+            ey = math.ceil(np.abs(bank.offsets[:, 1] + b).max() / m * t - 1e-9) + extra
             return ex, ey + ey % 2 if la.grid == "hex" else ey  # hex: keep the row parity
         sx, sy = self.shifts
-        return int(np.abs(sx).max()), int(np.abs(sy).max())
+        return int(np.abs(sx).max()) + extra, (int(np.abs(sy).max()) + extra if la.grid != "lenticular" else 0)
 
     @cached_property
     def capture_array(self) -> LensArray:
@@ -332,7 +442,7 @@ class SingleStagePlan:
             "z_vertex": z_vertex, "z_flat": z_vertex - lenslet.thickness, "z_focus": -self.depth,
             "z_camera": z_vertex - lenslet.thickness - lenslet.focal, "camera_xy": self.camera_offset,
             "right": (width_mm, 0.0, 0.0), "up": (0.0, height_mm, 0.0),
-            "rotation": cap.rotation,
+            "rotation": cap.rotation, "array_offset": self.array_offset,
         }
 
     @property
@@ -340,7 +450,115 @@ class SingleStagePlan:
         """Capture pixels per panel pixel and axis: ``k`` with whole PPL, else 1 (denser bank)."""
         return self.supersample if self.bank is None else 1
 
+    # -- per-pixel capture rays (hex, fractional PPL: module doc, 6) -------------------
+    @property
+    def traces_chief_rays(self) -> bool:
+        """Whether every pixel gets its own capture ray (module doc, 6): every unturned array
+        unless ``collimated`` asks for the thesis's parallel capture camera (points 1-5)."""
+        return not self.collimated and self.lens_array.rotation == 0.0
+
+    @cached_property
+    def chief(self) -> ChiefRays:
+        """The capture ray of every sub-pixel, ``(H k, W k)`` (``chief_rays``)."""
+        la, k = self.lens_array, self.supersample
+        c, _, inside = pixel_rays(la)
+        X, Y = np.meshgrid(*la.panel.pixel_centres())
+        d = (np.arange(k) + 0.5) / k - 0.5  # sub-pixel centres, in pixels, inside the pixel's own lens
+        h, w = inside.shape
+        cs = np.repeat(np.repeat(np.nan_to_num(c), k, 0), k, 1)
+        u = np.repeat(np.repeat(X, k, 0), k, 1) + np.tile(d, w)[None, :] * la.panel.pitch_x - cs[..., 0]
+        v = np.repeat(np.repeat(Y, k, 0), k, 1) - np.tile(d, h)[:, None] * la.panel.pitch_y - cs[..., 1]
+        if la.grid == "lenticular":
+            v = np.zeros_like(v)
+            cs[..., 1] = np.repeat(np.repeat(Y, k, 0), k, 1) - np.tile(d, h)[:, None] * la.panel.pitch_y
+        dirs = np.stack([u, v, np.full(u.shape, la.focal)], axis=-1)
+        dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+        rays = chief_rays(self.capture_array, self.lenslet, -self.depth - self.lenslet.focal, cs, dirs,
+                          air_gap=1e-3 * self.lenslet.focal, offset=self.array_offset)
+        keep = np.repeat(np.repeat(inside, k, 0), k, 1)
+        return ChiefRays(rays.origins, rays.directions, rays.served & keep)
+
+    @property
+    def array_offset(self) -> tuple[float, float]:
+        """Lateral shift of the virtual lenslets (mm): 0, or off the display's lattice for per-pixel rays.
+
+        Per-pixel capture rays do not need the lenslets on the display's centres; off
+        them by an irrational fraction of a pitch, no family of pixel rays (a column of
+        hex pixels with ``u = 0``, say) runs along a lenslet's edge, where POV-Ray's
+        answer depends on rounding.
+        """
+        if not self.traces_chief_rays:
+            return 0.0, 0.0
+        la = self.lens_array
+        return (math.sqrt(2) - 1) * 0.5 * la.pitch_x, (0.0 if la.grid == "lenticular" else (math.sqrt(5) - 2) * la.pitch_y)
+
+    @cached_property
+    def unserved(self) -> int:
+        """Pixels clear of their lens border (0.1 pixel) whose ray cannot pass through a lenslet."""
+        if not self.traces_chief_rays:
+            return 0
+        la, k = self.lens_array, self.supersample
+        # Sub-pixel rays reach up to (1 - 1/k) / sqrt(2) of a pixel from its centre.
+        reach = 0.1 + (1 - 1 / k) / math.sqrt(2)
+        clear = np.repeat(np.repeat(border_margin(la) > reach * la.panel.pitch_x, k, 0), k, 1)
+        return int(np.sum(clear & ~self.chief.served))
+
+    def check_optics(self) -> None:
+        """Refuse, in one line, a lenslet through which more than ``UNSERVED_SHARE`` of the
+        pixel rays cannot pass.  (The few left start past the array along their own ray.)"""
+        bad = self.unserved
+        if bad <= UNSERVED_SHARE * pixel_rays(self.lens_array)[2].sum():
+            return
+        lens, la = self.lenslet, self.lens_array
+        lo, hi = PHYSICAL_IOR
+        need = la.focal
+        for _ in range(40):  # the shortest focal length that serves every pixel at the highest index
+            need *= 1.25
+            try:
+                trial = replace(la, focal=need)
+                plan = SingleStagePlan.for_front_clearance(trial, lenslet_for(trial, lens.shape, hi), self.depth)
+            except ConfigError:
+                continue
+            if plan.unserved == 0:
+                break
+        raise ConfigError(
+            f"single-stage cannot pass {bad} pixel rays through a {lens.shape} lenslet of focal length "
+            f"{la.focal:g} mm, pitch {la.pitch_x:g} mm and index {lens.ior:g} (total internal reflection or a "
+            f"lenslet's side): real indices are {lo:g}..{hi:g}; lengthen --focal to {need:.3g} mm or more, "
+            f"or use --method multi-ortho")
+
+    def chief_mesh(self) -> dict[str, np.ndarray]:
+        """One triangle per sub-pixel, centroid at its ray's origin, normal along it.
+
+        ``mesh_camera`` distribution 0 shoots image pixel ``(col, row)`` from the
+        centroid of face ``col + (row - 1) W`` along the face's normal (measured:
+        row 0 repeats row 1, so the image has one extra row on top, cut off).
+        Pixels outside every lens look back (-z) at the background; they are
+        blacked out afterwards.
+        """
+        la, k = self.lens_array, self.supersample
+        rays = self.chief
+        _, _, inside = pixel_rays(la)
+        keep = np.repeat(np.repeat(inside, k, 0), k, 1).reshape(-1)
+        o = rays.origins.reshape(-1, 3).copy()
+        nrm = rays.directions.reshape(-1, 3).copy()
+        o[~keep] = (0.0, 0.0, -1.0)
+        nrm[~keep] = (0.0, 0.0, -1.0)
+        e1 = np.cross(nrm, (0.0, 1.0, 0.0))
+        e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)
+        e2 = np.cross(nrm, e1)
+        size = la.pitch_x  # large faces: their float32 normals stay exact to ~1e-7
+        r3 = math.sqrt(3) / 2
+        verts = np.stack([o + size * e1, o - size * (0.5 * e1 + r3 * e2), o - size * (0.5 * e1 - r3 * e2)], axis=1)
+        faces = np.arange(3 * len(o), dtype=np.int64).reshape(-1, 3)
+        return {"vertices": verts.reshape(-1, 3), "faces": faces}
+
     def batch(self) -> ShotBatch:
+        if self.traces_chief_rays:
+            la, k = self.lens_array, self.supersample
+            context = {**self.template_context(), "chief_mesh": self.chief_mesh()}
+            return ShotBatch("single_stage.pov.j2", context, [{}], la.panel.width * k, la.panel.height * k + 1,
+                              processes=1)
         panel, k = self.capture_array.panel, self.camera_supersample
         # The camera keeps its mm extent: k x k sub-pixels tile each pixel, centred in it.
         return ShotBatch("single_stage.pov.j2", self.template_context(), [{}],
@@ -360,6 +578,14 @@ class SingleStagePlan:
         ``(Ly*Ny, Lx*Nx, C)`` (whole PPL; the caller pads the margin).
         """
         la = self.lens_array
+        if self.traces_chief_rays:
+            k = self.supersample
+            h, w, c = la.panel.height, la.panel.width, capture.shape[2]
+            sub = capture[1:]  # row 0 repeats row 1 (chief_mesh)
+            blocks = sub.reshape(h, k, w, k, c).transpose(1, 3, 0, 2, 4).reshape(k * k, h, w, c)
+            out = mean_in_linear_light(blocks) if k > 1 else blocks[0].copy()
+            out[~pixel_rays(la)[2]] = 0
+            return out
         if self.bank is not None:
             cap = self.capture_array.panel
             return sample_turned_bank(capture, la, (cap.pitch_x, cap.pitch_y), self.bank.phase,
@@ -390,8 +616,15 @@ class SingleStagePlan:
         return {"lenslet": self.lenslet.as_record(), "focal_plane_z_mm": -self.depth,
                 "principal_plane_z_mm": -self.depth - self.lenslet.focal,
                 "capture_lenses": [cap.lenses_x, cap.lenses_y],
-                "capture_size_px": [cap.panel.width * self.camera_supersample,
-                                    cap.panel.height * self.camera_supersample],
+                "capture_size_px": ([self.lens_array.panel.width * self.supersample,
+                                     self.lens_array.panel.height * self.supersample]
+                                    if self.traces_chief_rays else
+                                    [cap.panel.width * self.camera_supersample,
+                                     cap.panel.height * self.camera_supersample]),
                 "supersamples_per_pixel": [self.supersample, self.supersample],
+                "capture": "collimated" if not self.traces_chief_rays else "per-pixel rays traced back through the lenslets",
+                **({"lenslet_offset_mm": list(self.array_offset),
+                    "pixels_past_the_lenslets": self.unserved} if self.traces_chief_rays else {}),
                 **({"capture_samples_per_lens": list(self.bank.samples),
-                    "capture_sample_phase": list(self.bank.phase)} if self.bank is not None else {})}
+                    "capture_sample_phase": list(self.bank.phase)}
+                   if self.bank is not None and not self.traces_chief_rays else {})}

@@ -33,6 +33,7 @@ from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_f
 
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.cli import one_error_line
+from tests.support.hit_oracle import border_margin_px
 from tests.support.scenes import checker_oracle, classify, write_checker_plane, write_textured_scene
 
 DRAFT = RenderSettings(quality="draft", use_cache=False)
@@ -79,7 +80,7 @@ def capture_positions(plan: SingleStagePlan, scene: Path, half: float = HALF) ->
 def test_rendered_lenslet_focal_length(tmp_path, shape, ior):
     f = 1.5
     la = LensArray("square", 1, 1, 0.8, 0.8, f, Panel(80, 80, 0.01, 0.01))
-    plan = SingleStagePlan(la, lenslet_for(la, shape, ior))
+    plan = SingleStagePlan(la, lenslet_for(la, shape, ior), collimated=True)  # the lens itself, parallel rays
     X, _ = la.panel.pixel_centres()
     row = 40  # the row through the axis (y = -0.005 mm)
     hits = {z: capture_positions(plan, write_position_plane(tmp_path, z, 1.0), 1.0)[row, :, 0]
@@ -121,18 +122,21 @@ def capture_lens_centres(plan: SingleStagePlan) -> tuple[np.ndarray, np.ndarray]
 
 
 def test_hex_56_lens_centres_over_the_whole_panel(tmp_path):
-    # The capture grid of hex-5.6 (lens-aligned, 10 x 10 samples per lens): at
-    # depth 0 the rays of every capture lens cross the display plane at its centre.
+    # hex-5.6 over its whole panel (over 14000 lenses, a capture ray per pixel): at
+    # depth 0 every pixel's ray leaves its lenslet through its own lens centre on z = 0.
     la = lens_array_from_fields(get_preset("hex-5.6"))
     assert la.lenses_x * la.lenses_y > 14000
     plan = SingleStagePlan(la, lenslet_for(la, "conic"))
-    hit = capture_positions(plan, write_position_plane(tmp_path, 0.0))
-    centres, in_hex = capture_lens_centres(plan)
-    assert in_hex.sum() > 0.7 * in_hex.size
-    err = np.abs(hit - centres) / la.panel.pitch_x
-    assert err[in_hex].max() < 0.05, f"worst lens-centre error {err[in_hex].max():.3f} px"
+    assert plan.traces_chief_rays
+    hit = capture_positions(plan, write_position_plane(tmp_path, 0.0))[1:]  # row 0 repeats row 1
+    centres, _, inside = pixel_rays(la)
+    clear = border_margin_px(la) > 0.1
+    assert clear.sum() > 0.9 * inside.sum()
+    err = np.linalg.norm(hit - np.nan_to_num(centres), axis=-1) / la.panel.pitch_x
+    assert err[clear].max() < 0.05, f"worst lens-centre error {err[clear].max():.3f} px"
     # Negative control: a centre grid off by a tenth of a pixel is caught.
-    assert (np.abs(hit[..., 0] - centres[..., 0] - 0.1 * la.panel.pitch_x) / la.panel.pitch_x)[in_hex].max() > 0.05
+    off = np.abs(hit[..., 0] - centres[..., 0] - 0.1 * la.panel.pitch_x) / la.panel.pitch_x
+    assert off[clear].max() > 0.05
 
 
 SQUARE = square_array(lx=24, ly=16, nx=6, ny=6, s=0.1, f=1.5)
@@ -183,8 +187,9 @@ def test_textured_scene_and_real_glass(tmp_path):
     thin = run_method("single-stage", scene, la, DRAFT).h3d
     glass = run_method("single-stage", scene, la, DRAFT, ior=1.5).h3d
     assert psnr(thin, ref) >= 30
-    # Real acrylic: its thickness distorts the ray angles (tan = w / (f + sag)).
-    assert psnr(glass, ref) < psnr(thin, ref)
+    # Real acrylic bends the rays more (tan = w / (f + sag) for parallel capture rays), but
+    # each pixel's capture ray is traced back through the lenslet it enters: as exact.
+    assert psnr(glass, ref) >= 30
 
 
 def test_lenticular_matches_multi_ortho(tmp_path):

@@ -218,7 +218,13 @@ def test_scripts_hold_only_finite_numbers(method, index):
     la = EXTREMES[index]
     # multi-ortho also with footprint samples (3x3 angular sub-views per pixel).
     samples = angular_grid(3) if method == "multi-ortho" and la.views else CENTRE
-    batch = METHODS[method].plan(la, 4 * max(la.panel.size_mm), samples, **METHODS[method].options).batch
+    try:
+        batch = METHODS[method].plan(la, 4 * max(la.panel.size_mm), samples, **METHODS[method].options).batch
+    except ConfigError as err:
+        # Single-stage refuses lenslets no real index can make (45-80 degree views):
+        # in one line, naming the focal length that works.
+        assert method == "single-stage" and "lengthen --focal to" in str(err), str(err)
+        return
     script = build_script(batch, batch.shots, method=method, scene_path="/s.pov", add_assumed_gamma=True,
                           header=display_header(la))
     assert not re.search(r"\b(nan|inf|infinity)\b", script, re.I)

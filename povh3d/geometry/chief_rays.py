@@ -1,0 +1,167 @@
+"""The capture ray of every panel pixel through the single-stage lenslet array: pure NumPy.
+
+A collimated capture camera reaches only the rays through the lenslets' focal points,
+which on a hex or fractional-PPL array leaves most pixel rays between samples.  Here
+each pixel gets its own capture ray instead, worked out backwards from the ray it must
+show (docs/geometry.md, "The ray of a pixel"): the line ``L`` through its lens centre
+``c`` (display plane) with direction ``d = normalize(u, v, f)``.
+
+1. ``L`` meets the vertex plane of the virtual array at ``p``; the lenslet whose cell
+   (the same Voronoi / pitch cell as the CSG aperture) holds ``p`` is the one it leaves.
+2. ``L`` meets that lenslet's curved face (``x^2 + y^2 + (1 + K) z^2 + 2 R z = 0``) at
+   ``E``; there Snell's law run backwards gives the ray inside the glass.
+3. That ray meets the flat face at ``B``; Snell again gives the ray in air before it.
+
+POV-Ray, tracing the capture ray from just before ``B``, refracts it at ``B`` and at
+``E`` and so sends it out along ``L`` exactly (to float precision), whatever the
+lenslet's shape, index or distortion.  A pixel whose backward ray would leave its
+lenslet through a side wall, or meet total internal reflection, cannot be traced
+through the array: ``served`` is False there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .lens_array import LensArray
+from .optics import Lenslet
+
+
+@dataclass(frozen=True)
+class ChiefRays:
+    """Capture rays, one per pixel ray asked for.
+
+    Attributes
+    ----------
+    origins : (..., 3) float, mm      just before the lenslet's flat face
+    directions : (..., 3) float       unit direction in air, toward +z
+    served : (...) bool               the backward trace stayed in one lenslet (no side wall, no TIR)
+    """
+
+    origins: np.ndarray
+    directions: np.ndarray
+    served: np.ndarray
+
+
+def nearest_lens(array: LensArray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centre ``(cx, cy)`` of the lens of ``array`` whose cell holds each point (unrotated array)."""
+    centres = array.lattice_centres()
+    Lx, Ly = array.lenses_x, array.lenses_y
+    px, py = array.pitch_x, array.pitch_y
+    if array.grid == "hex":
+        i0 = np.rint(Ly / 2 - 0.5 - y / py).astype(np.int64)
+        best = np.full(x.shape, np.inf)
+        cx, cy = np.zeros(x.shape), np.zeros(x.shape)
+        for di in (-1, 0, 1):
+            i = np.clip(i0 + di, 0, Ly - 1)
+            j = np.clip(np.rint(x / px + Lx / 2 - 0.5 - (i % 2) / 2).astype(np.int64), 0, Lx - 1)
+            c = centres[i, j]
+            dd = (x - c[..., 0]) ** 2 + (y - c[..., 1]) ** 2
+            better = dd < best
+            best = np.where(better, dd, best)
+            cx, cy = np.where(better, c[..., 0], cx), np.where(better, c[..., 1], cy)
+        return cx, cy
+    j = np.clip(np.floor(x / px + Lx / 2).astype(np.int64), 0, Lx - 1)
+    if array.grid == "lenticular":
+        return centres[0, j, 0], y.copy()
+    i = np.clip(np.floor(Ly / 2 - y / py).astype(np.int64), 0, Ly - 1)
+    c = centres[i, j]
+    return c[..., 0], c[..., 1]
+
+
+def in_cell(grid: str, pitch_x: float, pitch_y: float, du: np.ndarray, dv: np.ndarray) -> np.ndarray:
+    """Whether offsets ``(du, dv)`` from a lens centre lie inside its cell (edges included)."""
+    ax, ay = np.abs(du), np.abs(dv)
+    slack = 1 + 1e-9
+    if grid == "hex":
+        return (ax <= pitch_x / 2 * slack) & (ax / 2 + math.sqrt(3) / 2 * ay <= pitch_x / 2 * slack)
+    if grid == "lenticular":
+        return ax <= pitch_x / 2 * slack
+    return (ax <= pitch_x / 2 * slack) & (ay <= pitch_y / 2 * slack)
+
+
+def chief_rays(capture: LensArray, lenslet: Lenslet, z_vertex: float, centres: np.ndarray,
+               directions: np.ndarray, air_gap: float, offset: tuple[float, float] = (0.0, 0.0),
+               through_walls: bool = False) -> ChiefRays:
+    """The capture ray that leaves ``capture``'s lenslets along each given line.
+
+    Parameters
+    ----------
+    capture : LensArray            the virtual array (unrotated); its lenslets' curved vertices at ``z_vertex``
+    lenslet : Lenslet
+    z_vertex : float, mm
+    centres : (..., 2) float, mm   where each line crosses the display plane ``z = 0``
+    directions : (..., 3) float    unit directions, ``z`` component > 0
+    air_gap : float, mm            how far before the flat face each capture ray starts
+    offset : (ox, oy), mm          the virtual array's lenslets sit this far from ``capture``'s centres
+    """
+    n, R, K = lenslet.ior, lenslet.radius, lenslet.conic
+    thick = lenslet.thickness
+    b = 0.0 if capture.grid == "lenticular" else 1.0
+    d = directions
+    # The lenslet L leaves through: under L somewhere between the vertex plane and the
+    # flat face (L slants, and dips into a neighbour near an edge).  Try the lenslets
+    # under L at four depths, keeping the first whose curved face L meets inside its cell.
+    E = np.full(d.shape, np.nan)
+    t = np.full(d.shape[:-1], -np.inf)
+    cx, cy = np.zeros(t.shape), np.zeros(t.shape)
+    found = np.zeros(t.shape, bool)
+    for depth in (0.0, thick / 3, 2 * thick / 3, thick):
+        z = z_vertex - depth
+        p = centres + d[..., :2] * (z / d[..., 2:3])
+        lx, ly = nearest_lens(capture, p[..., 0] - offset[0], p[..., 1] - offset[1])
+        lx, ly = lx + offset[0], ly + offset[1]
+        e, tt = _curved_face_hit(centres, d, lx, ly, z_vertex, R, K, b, thick)
+        hit = ~found & np.isfinite(tt) & in_cell(capture.grid, capture.pitch_x, capture.pitch_y, e[..., 0], e[..., 1])
+        E, t = np.where(hit[..., None], e, E), np.where(hit, tt, t)
+        cx, cy = np.where(hit, lx, cx), np.where(hit, ly, cy)
+        found |= hit
+    with np.errstate(invalid="ignore", divide="ignore"):
+        N = np.stack([E[..., 0], b * E[..., 1], (1 + K) * E[..., 2] + R], axis=-1)
+        N /= np.linalg.norm(N, axis=-1, keepdims=True)
+    # Snell backwards at E: the tangential part shrinks by n inside the glass.
+    dn = np.sum(d * N, axis=-1, keepdims=True)
+    gt = (d - dn * N) / n
+    g = gt + np.sqrt(np.clip(1 - np.sum(gt * gt, axis=-1, keepdims=True), 0, None)) * N
+    s = (-thick - E[..., 2]) / g[..., 2]
+    Bf = E + s[..., None] * g  # on the flat face
+    a_xy = n * g[..., :2]
+    sin2 = np.sum(a_xy * a_xy, axis=-1)
+    a = np.concatenate([a_xy, np.sqrt(np.clip(1 - sin2, 0, None))[..., None]], axis=-1)
+    served = (np.isfinite(t) & (sin2 < 1)
+              & in_cell(capture.grid, capture.pitch_x, capture.pitch_y, E[..., 0], E[..., 1])
+              & (through_walls | in_cell(capture.grid, capture.pitch_x, capture.pitch_y, Bf[..., 0], Bf[..., 1])))
+    back = air_gap / np.where(a[..., 2] > 0, a[..., 2], 1.0)
+    origins = Bf - back[..., None] * a
+    origins = origins + np.stack([cx, cy, np.full(cx.shape, z_vertex)], axis=-1)
+    # Not served (the line grazes a lenslet's edge): the line itself, started just past
+    # the array's vertices, as if that lenslet were missing.
+    z0 = z_vertex + air_gap
+    plain = np.concatenate([centres + d[..., :2] * (z0 / d[..., 2:3]), np.full(cx.shape + (1,), z0)], axis=-1)
+    ok = served & np.all(np.isfinite(origins), axis=-1) & np.all(np.isfinite(a), axis=-1)
+    return ChiefRays(np.where(ok[..., None], origins, plain), np.where(ok[..., None], a, d), ok)
+
+
+def _curved_face_hit(centres: np.ndarray, d: np.ndarray, cx: np.ndarray, cy: np.ndarray, z_vertex: float,
+                     R: float, K: float, b: float, thick: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the line through ``(centres, 0)`` along ``d`` meets the curved face of lenslet ``(cx, cy)``.
+
+    Returns ``E`` (..., 3) in that lenslet's frame (vertex at the origin) and the line
+    parameter ``t``; NaN / -inf where the line misses the face within the lens's thickness.
+    """
+    q = np.stack([centres[..., 0] - cx, centres[..., 1] - cy, np.full(cx.shape, -z_vertex)], axis=-1)
+    A = d[..., 0] ** 2 + b * d[..., 1] ** 2 + (1 + K) * d[..., 2] ** 2
+    B = 2 * (q[..., 0] * d[..., 0] + b * q[..., 1] * d[..., 1] + (1 + K) * q[..., 2] * d[..., 2]) + 2 * R * d[..., 2]
+    C = q[..., 0] ** 2 + b * q[..., 1] ** 2 + (1 + K) * q[..., 2] ** 2 + 2 * R * q[..., 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        root = np.sqrt(B * B - 4 * A * C)
+        # Stable roots; the one on the vertex's sheet lies within the lens's thickness.
+        qq = -0.5 * (B + np.copysign(root, B))
+        roots = np.stack([qq / A, C / qq], axis=-1)
+        zr = q[..., 2:3] + roots * d[..., 2:3]
+        good = (zr <= 1e-9 * R + 1e-12) & (zr >= -thick)
+        t = np.where(good, roots, -np.inf).max(axis=-1)
+        return q + t[..., None] * d, t
