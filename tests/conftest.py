@@ -1,17 +1,62 @@
 """Shared fixtures (an isolated image cache per test, a POV-Ray work folder, the in-process
-command line) and the paths the tests share."""
+command line), the paths the tests share, and the fast subset: ``pytest --fast`` leaves out
+the tests marked ``povray`` and fails any other test that starts POV-Ray
+(tests/support/processes.py)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
 
+from tests.support import processes
 from tests.support.cli import Result, run_in_process
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLES = REPO / "sample_models"
 SAMPLE = SAMPLES / "sample.pov"
+
+
+def pytest_addoption(parser):
+    parser.addoption("--fast", action="store_true",
+                     help=f"leave out the tests marked {processes.MARK!r} and fail any other test that "
+                          "starts POV-Ray or the povh3d command as a process (make test-fast)")
+
+
+def pytest_configure(config):
+    if config.getoption("--fast"):
+        guard = processes.forbid_povray()
+        config.stash[_REFUSED] = guard.__enter__()
+        config.add_cleanup(lambda: guard.__exit__(None, None, None))
+
+
+_REFUSED = pytest.StashKey[list]()
+
+
+def pytest_collection_modifyitems(config, items):
+    if not config.getoption("--fast"):
+        return
+    kept = [item for item in items if item.get_closest_marker(processes.MARK) is None]
+    if len(kept) < len(items):
+        config.hook.pytest_deselected(items=[i for i in items if i.get_closest_marker(processes.MARK)])
+        items[:] = kept
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    # A test of the fast subset that tried to start POV-Ray fails, even when the code under
+    # test caught the error the guard raised.
+    outcome = yield
+    refused = item.config.stash.get(_REFUSED, None)
+    if not refused:
+        return
+    report = outcome.get_result()
+    if os.environ.get("POVH3D_TEST_RECORD"):
+        processes.record(os.environ["POVH3D_TEST_RECORD"], item.nodeid)
+    report.outcome = "failed"
+    report.longrepr = f"{refused[0]!r} {processes.HINT}"
+    refused.clear()
 
 
 @pytest.fixture(autouse=True)

@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from povh3d.engine.methods import METHODS, run_method
-from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
 from povh3d.geometry.cameras import stack_frames
 from povh3d.geometry.lattice import cross_lenticular_basis
@@ -25,10 +24,10 @@ from povh3d.scene.scene import load_scene
 
 from tests.engine.test_single_stage import decode_positions, render_linear16, write_position_plane
 from tests.support.scenes import checker_oracle, classify, match, write_checker_plane
+from tests.support.render import DRAFT
 
 PANEL = Panel(120, 90, 0.1, 0.1)
 PERIOD = 2.5
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 LATTICES = {"cross-6.34": cross_lenticular_basis(0.6, 0.6, 6.34), "skewed": ((0.6, 0.05), (0.3, 0.6))}
 
 

@@ -18,16 +18,15 @@ import math
 import pytest
 
 from povh3d.engine.methods import run_method
-from povh3d.engine.quality import RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
 from povh3d.scene.scene import load_scene
 
 from tests.support.scenes import checker_oracle, classify, match, write_checker_plane
+from tests.support.render import DRAFT
 
 PANEL = Panel(120, 90, 0.1, 0.1)
 PERIOD = 2.5
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 
 
 def array(grid: str, rotation: float) -> LensArray:

@@ -26,7 +26,6 @@ from povh3d.engine.methods import display_header, run_method
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs
 from povh3d.image.metrics import psnr
 from povh3d.geometry.presets import get_preset, lens_array_from_fields
-from povh3d.engine.quality import RenderSettings
 from povh3d.engine.frames import build_script
 from povh3d.scene.scene import load_scene
 from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
@@ -34,8 +33,8 @@ from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_f
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.cli import one_error_line
 from tests.support.scenes import checker_oracle, classify, write_checker_plane, write_textured_scene
+from tests.support.render import DRAFT
 
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 HALF = 70.0  # position code covers -HALF..HALF mm
 
 

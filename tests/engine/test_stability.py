@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.support.render import render
+from tests.support.render import DRAFT, render
 from povh3d.geometry.cameras import MIN_FRONT_CLEARANCE
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.geometry.footprint import CENTRE, angular_grid
@@ -31,7 +31,6 @@ from povh3d.scene.scene import load_scene
 
 from tests.support.scenes import classify, write_checker_plane
 
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 
 
 def point_oracle(la: LensArray, z0: float, period: float, margin: float,
