@@ -83,6 +83,7 @@ def test_clock_detection(tmp_path: Path) -> None:
 
 # -- rendering -------------------------------------------------------------------
 
+@pytest.mark.povray
 def test_clock_scene_renders_each_frame_with_its_clock(tmp_path: Path) -> None:
     scene = write_scene(tmp_path, "fade.pov", "rgb clock")
     out = tmp_path / "out" / "fade.png"
@@ -102,6 +103,7 @@ def test_clock_scene_renders_each_frame_with_its_clock(tmp_path: Path) -> None:
     assert wider["from_cache"] == 5 and wider["rendered"] == 4  # clocks 0, .25, .. 1 known
 
 
+@pytest.mark.povray
 def test_static_scene_is_rendered_once(tmp_path: Path) -> None:
     scene = write_scene(tmp_path, "still.pov", "rgb 0.5")
     out = tmp_path / "still.png"
@@ -117,6 +119,7 @@ def test_static_scene_is_rendered_once(tmp_path: Path) -> None:
     assert (report["rendered"], report["copied"]) == (4, 0)
 
 
+@pytest.mark.povray
 def test_failure_leaves_no_partial_sequence(tmp_path: Path) -> None:
     # Frame 2 (clock 0.5) fails: frames 0 and 1 were fine but none is written.
     scene = tmp_path / "breaks.pov"
@@ -128,6 +131,7 @@ def test_failure_leaves_no_partial_sequence(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["breaks.pov"]
 
 
+@pytest.mark.povray
 def test_cli_frames_and_video(tmp_path: Path, cli) -> None:
     scene = write_scene(tmp_path, "fade.pov", "rgb clock")
     out, video = tmp_path / "f.png", tmp_path / "f.mp4"

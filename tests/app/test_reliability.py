@@ -79,6 +79,7 @@ def test_modes_follow_the_umask(tmp_path, umask):
         assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~umask
 
 
+@pytest.mark.povray
 def test_full_disk_keeps_the_previous_output(tmp_path):
     """RLIMIT_FSIZE stands in for a full disk: the write fails, good.png and good.json stay."""
     views = tmp_path / "views"
@@ -144,6 +145,7 @@ def _povray_children_of(pid: int) -> list[int]:
     return found
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("signum, background", [(signal.SIGTERM, False), (signal.SIGHUP, False),
                                                 (signal.SIGINT, False), (signal.SIGTERM, True)])
 def test_sigterm_and_sighup_stop_like_ctrl_c(tmp_path, signum, background):
@@ -159,6 +161,7 @@ def test_sigterm_and_sighup_stop_like_ctrl_c(tmp_path, signum, background):
     assert read_sidecar(out)["note"] == "old" and np.array_equal(read_png(out), _noise(seed=3))
 
 
+@pytest.mark.povray
 def test_kill_9_leaves_the_output_and_the_next_run_sweeps_its_folders(tmp_path):
     out = tmp_path / "good.png"
     write_image(out, _noise(seed=4), base_record("h3d", note="old"))
@@ -195,6 +198,7 @@ def _entries(cache: Path) -> list[Path]:
     return sorted(cache.rglob("*.entry"))
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("damage", ["truncate", "empty", "same-size", "foreign"])
 def test_damaged_cache_entry_is_reported_removed_and_rendered_again(tmp_path, cli, damage):
     cache = tmp_path / "cache"
@@ -222,6 +226,7 @@ def test_damaged_cache_entry_is_reported_removed_and_rendered_again(tmp_path, cl
     assert "warning" not in result.err and json.loads((tmp_path / "c.json").read_text())["timings"]["frames_from_cache"] == 1
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("where", ["POVH3D_CACHE", "HOME"])
 def test_unusable_cache_is_one_warning_and_the_render_goes_on(tmp_path, cli, where):
     blocker = tmp_path / "a-file"
@@ -250,6 +255,7 @@ def uninterrupted(tmp_path_factory) -> np.ndarray:
     return read_png(folder / "a.png")
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
 def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, monkeypatch, uninterrupted, signum):
     """Frames reach the cache one by one as POV-Ray writes them: stop a render in the middle
@@ -283,6 +289,7 @@ def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, mon
     assert not list(tmp_path.glob("povh3d-*")), "job folders removed (a killed run's swept by the re-run)"
 
 
+@pytest.mark.povray
 def test_computed_include_with_the_sandbox_off_is_not_cached(tmp_path, cli):
     (tmp_path / "part.inc").write_text("sphere { <0, 0, 3>, 5 pigment { rgb 1 } finish { emission 1 } }\n")
     scene = tmp_path / "s.pov"
@@ -300,6 +307,7 @@ def test_computed_include_with_the_sandbox_off_is_not_cached(tmp_path, cli):
 
 
 # -- stale data and hostile paths ----------------------------------------------------------------------
+@pytest.mark.povray
 def test_a_views_folder_holds_one_render(tmp_path, cli):
     views = tmp_path / "views"
     assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--views-dir", views).code == 0
@@ -334,6 +342,7 @@ def _write_scene(folder: Path, scene: str, include: str, settings: str = "") -> 
     return folder / scene
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("settings", ["", "charset utf8 "])
 def test_scene_and_includes_with_non_ascii_names_render(tmp_path, cli, settings):
     """A scene under a non-ASCII folder that includes a non-ASCII file (POV-Ray 3.7 reads the name as
@@ -349,6 +358,7 @@ def test_scene_and_includes_with_non_ascii_names_render(tmp_path, cli, settings)
     assert np.array_equal(image, read_png(tmp_path / "plain.png")) and len(np.unique(image.reshape(-1, 3), axis=0)) > 1
 
 
+@pytest.mark.povray
 def test_an_absolute_non_ascii_include_is_one_line_naming_the_limit(tmp_path, cli):
     folder = tmp_path / "modèles"
     folder.mkdir()
@@ -374,6 +384,7 @@ def test_quilt_round_trip_keeps_the_lens_array(tmp_path, cli):
     assert result.code == 0, result.err
 
 
+@pytest.mark.povray
 def test_unusable_cache_with_a_mesh_model(tmp_path, cli):
     from tests.conftest import SAMPLES
 

@@ -56,6 +56,7 @@ def captures(tmp_path_factory):
     return out
 
 
+@pytest.mark.povray
 def test_stitched_renders_equal_the_wide_render(captures, tmp_path, cli):
     result = cli("stitch", captures["a"], captures["b"], "--grid", captures["grid"], "-o", tmp_path / "ab.png")
     assert result.code == 0
@@ -64,6 +65,7 @@ def test_stitched_renders_equal_the_wide_render(captures, tmp_path, cli):
     assert record["shift_lenses"] == {"rows": 0, "cols": 8} and record["mode"] == "pixels"
 
 
+@pytest.mark.povray
 def test_half_lens_shift_is_refused(captures, tmp_path, cli):
     result = cli("stitch", captures["a"], captures["c"], "--grid", captures["grid"], "-o", tmp_path / "ac.png")
     assert result.code == 3

@@ -62,6 +62,7 @@ def test_terminal_shows_pixel_share_frames_and_time_left(shown):
     assert result.strip().startswith(str(out)) and "960x544" in result
 
 
+@pytest.mark.povray
 def test_quiet_and_pipes_show_nothing(tmp_path):
     code, text = run_in_pty(cli_command("render", SAMPLE, *SLOW[:4], "--quality", "draft", "-q",
                                         "-o", tmp_path / "q.png"))

@@ -140,6 +140,7 @@ def test_calibrate_then_render_recovers_the_sheet(tmp_path, pitch, slant, phase)
     assert np.abs((across - across_true + 0.5) % 1 - 0.5).max() * pitch < 0.02
 
 
+@pytest.mark.povray
 def test_povray_traces_the_calibrated_rays(cli, tmp_path):
     """Every red subpixel shows the x, every green one the y, where its ray from the Looking Glass
     shader's lenticule coordinate meets an emissive plane (a sheet neither centred nor rational)."""

@@ -13,6 +13,8 @@ from povh3d.geometry.crop import CropSettings
 from povh3d.scene.scene import load_scene
 from tests.support.arrays import lenticular_array, square_array
 
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
+
 SCENE = """#version 3.7;
 global_settings { assumed_gamma 1.0 }
 background { rgb <0.1, 0.2, 0.3> }

@@ -18,6 +18,8 @@ from tests.support.arrays import square_array
 from tests.support.scenes import write_textured_scene
 from tests.support.render import DRAFT
 
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
+
 LA = square_array(lx=16, ly=12, nx=6, ny=6, s=0.1, f=1.5)
 
 

@@ -36,6 +36,7 @@ def lattice(name: str) -> LensArray:
     return lens_array_from_fields({"lattice": LATTICES[name], "panel": [120, 90], "pixel_pitch": 0.1, "focal": 1.5})
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("name", LATTICES)
 @pytest.mark.parametrize("z0", [6.0, -6.0], ids=["behind", "in-front"])
 def test_lattice_checker_matches_oracle(tmp_path, name, z0):
@@ -56,6 +57,7 @@ def test_lattice_checker_matches_oracle(tmp_path, name, z0):
         assert match(got, upright, clear & uclear) < 0.97
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("z0", [4.0, -4.0], ids=["behind", "in-front"])
 def test_every_lattice_ray_in_povray(tmp_path, z0):
     la, half = lattice("skewed"), 12.0  # code +-12 mm: 16-bit steps of 3.7e-4 mm
@@ -77,6 +79,7 @@ def test_single_stage_refuses_a_lattice_in_one_line(tmp_path):
         run_method("pinhole", scene, lattice("skewed"), DRAFT)
 
 
+@pytest.mark.povray
 def test_cli_renders_a_lattice_and_records_it(tmp_path, cli):
     import json
 

@@ -39,6 +39,7 @@ def array(grid: str, rotation: float) -> LensArray:
     return LensArray("square", 24 if rotation else 20, 18 if rotation else 15, 0.6, 0.6, 1.5, PANEL, rotation)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method", ["multi-ortho", "single-stage"])
 @pytest.mark.parametrize("grid", ["square", "hex", "lenticular"])
 @pytest.mark.parametrize("rotation", [6.34, 9.46])
@@ -63,6 +64,7 @@ def test_rotated_checker_matches_oracle(tmp_path, method, grid, rotation, z0):
     assert match(got, upright, clear & uclear) < 0.97
 
 
+@pytest.mark.povray
 def test_unrotated_hex_through_the_mesh_camera(tmp_path):
     # Hex needs no view bank any more: one hexagon per lens in the mesh camera.
     la = array("hex", 0.0)
@@ -81,6 +83,7 @@ def test_cli_refuses_a_rotation_outside_the_range(tmp_path, cli, rotation):
     assert "(-45, 45]" in line and not out.exists()
 
 
+@pytest.mark.povray
 def test_cli_renders_a_turned_preset_and_records_it(tmp_path, cli):
     out = tmp_path / "out.png"
     scene = write_checker_plane(tmp_path, 6.0, PERIOD)

@@ -84,6 +84,7 @@ def scene_with_files(folder: Path) -> Path:
     return scene
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method", ["multi-ortho", "multi-ortho-views"])
 def test_same_pixels_as_the_local_pool(tmp_path: Path, address: str, method: str) -> None:
     scene = scene_with_files(tmp_path)
