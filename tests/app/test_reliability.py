@@ -24,6 +24,7 @@ from povh3d.image.io import read_png, read_sidecar
 from povh3d.system import sweep_orphans
 from tests.conftest import SAMPLE
 from tests.support.cli import cli_command, one_error_line
+from tests.support.waiting import wait_until
 
 TINY = ["--preset", "demo", "--lenses", "6x4", "--ppl", "4", "--quality", "draft", "-q"]
 
@@ -128,7 +129,7 @@ def _start_slow_render(tmp_path: Path, out: Path, ignore_sigint: bool = False) -
     while not list(tmp.glob(f"povh3d-{proc.pid}-*/frame*")) and not list(tmp.glob(f"povh3d-{proc.pid}-*/*.log")):
         assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
         time.sleep(0.05)
-    time.sleep(0.3)
+    wait_until(lambda: _povray_children_of(proc.pid) or proc.poll() is not None, 60, "POV-Ray running")
     return proc, tmp
 
 
@@ -168,7 +169,6 @@ def test_kill_9_leaves_the_output_and_the_next_run_sweeps_its_folders(tmp_path):
     proc, tmp = _start_slow_render(tmp_path, out)
     proc.kill()
     proc.communicate(timeout=30)
-    time.sleep(0.5)
     assert list(tmp.glob(f"povh3d-{proc.pid}-*")), "kill -9: nobody could remove the job folder"
     assert not _povray_children_of(proc.pid)
     deadline = time.monotonic() + 10  # POV-Ray got SIGKILL with its parent (PR_SET_PDEATHSIG)
