@@ -163,11 +163,10 @@ def _scene(tmp_path: Path, camera: str) -> Path:
     return path
 
 
-@pytest.mark.povray
 @pytest.mark.parametrize("camera, words", [
     ("#if (Use_A) camera { location <0,0,-5> look_at 0 } #end", "inside an #if"),
-    ("camera { location <0,0,-5> look_at <0,0,-5> }", "location equals its look_at"),
-    ("camera { orthographic location <0,0,-5> look_at 0 }", "orthographic"),
+    pytest.param("camera { location <0,0,-5> look_at <0,0,-5> }", "location equals its look_at", marks=pytest.mark.povray),
+    pytest.param("camera { orthographic location <0,0,-5> look_at 0 }", "orthographic", marks=pytest.mark.povray),
     ("#if (Use_A) #declare C = camera { location <0,0,-5> } #end\ncamera { C }", "identifier 'C' is declared inside"),
 ])
 def test_camera_that_cannot_be_used_is_one_line_naming_the_options(tmp_path, camera, words):
