@@ -1,6 +1,6 @@
 """Shared fixtures (an isolated image cache per test, a POV-Ray work folder, the in-process
 command line), the paths the tests share, and the fast subset: ``pytest --fast`` leaves out
-the tests marked ``povray`` and fails any other test that starts POV-Ray
+the tests marked ``povray`` or ``slow`` and fails any other test that starts POV-Ray
 (tests/support/processes.py)."""
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ SAMPLE = SAMPLES / "sample.pov"
 
 def pytest_addoption(parser):
     parser.addoption("--fast", action="store_true",
-                     help=f"leave out the tests marked {processes.MARK!r} and fail any other test that "
-                          "starts POV-Ray or the povh3d command as a process (make test-fast)")
+                     help=f"leave out the tests marked {processes.MARK!r} or 'slow' and fail any other test "
+                          "that starts POV-Ray or the povh3d command as a process (make test-fast)")
 
 
 def pytest_configure(config):
@@ -37,10 +37,11 @@ _REFUSED = pytest.StashKey[list]()
 def pytest_collection_modifyitems(config, items):
     if not config.getoption("--fast"):
         return
-    kept = [item for item in items if item.get_closest_marker(processes.MARK) is None]
-    if len(kept) < len(items):
-        config.hook.pytest_deselected(items=[i for i in items if i.get_closest_marker(processes.MARK)])
-        items[:] = kept
+    left_out = [item for item in items if any(item.get_closest_marker(m) for m in (processes.MARK, "slow"))]
+    if left_out:
+        config.hook.pytest_deselected(items=left_out)
+        dropped = set(left_out)
+        items[:] = [item for item in items if item not in dropped]
 
 
 @pytest.hookimpl(hookwrapper=True)

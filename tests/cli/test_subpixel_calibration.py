@@ -114,6 +114,7 @@ def test_both_files_of_one_sheet_are_one_mapping(tmp_path):
         calibrated_sheet(stale, panel, 1.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pitch,slant,phase", [(9.37, 9.46, 0.31), (7.71, 18.43, -1.7), (12.3, -6.34, 2.2)])
 def test_calibrate_then_render_recovers_the_sheet(tmp_path, pitch, slant, phase):
     size, pixel_mm = (800, 600), 0.2   # the calibration tests' size: smaller ones fit the phase less well
