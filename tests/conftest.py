@@ -6,6 +6,8 @@ the tests marked ``povray`` or ``slow`` and fails any other test that starts POV
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -26,12 +28,13 @@ def pytest_addoption(parser):
 
 def pytest_configure(config):
     if config.getoption("--fast"):
-        guard = processes.forbid_povray()
-        config.stash[_REFUSED] = guard.__enter__()
-        config.add_cleanup(lambda: guard.__exit__(None, None, None))
+        log = Path(tempfile.mkdtemp(prefix="povh3d-fast-")) / "refused"
+        guard = processes.forbid_povray(log)
+        config.stash[_REFUSED] = (guard.__enter__(), log)
+        config.add_cleanup(lambda: (guard.__exit__(None, None, None), shutil.rmtree(log.parent, True)))
 
 
-_REFUSED = pytest.StashKey[list]()
+_REFUSED = pytest.StashKey[tuple]()
 
 
 def pytest_collection_modifyitems(config, items):
@@ -49,15 +52,18 @@ def pytest_runtest_makereport(item, call):
     # A test of the fast subset that tried to start POV-Ray fails, even when the code under
     # test caught the error the guard raised.
     outcome = yield
-    refused = item.config.stash.get(_REFUSED, None)
-    if not refused:
+    if _REFUSED not in item.config.stash:
+        return
+    refused, log = item.config.stash[_REFUSED]
+    lines = refused + processes.refused_in_children(log)
+    refused.clear()
+    if not lines:
         return
     report = outcome.get_result()
     if os.environ.get("POVH3D_TEST_RECORD"):
         processes.record(os.environ["POVH3D_TEST_RECORD"], item.nodeid)
     report.outcome = "failed"
-    report.longrepr = f"{refused[0]!r} {processes.HINT}"
-    refused.clear()
+    report.longrepr = f"{lines[0][:120]!r} {processes.HINT}"
 
 
 @pytest.fixture(autouse=True)

@@ -3,12 +3,13 @@ and a povh3d child process, and let other programs run."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
 import pytest
 
-from tests.support.processes import forbid_povray, is_povray_start
+from tests.support.processes import forbid_povray, is_povray_start, refused_in_children
 
 
 def test_povray_and_the_povh3d_command_are_seen():
@@ -33,3 +34,24 @@ def test_the_guard_refuses_povray_and_records_it():
         assert subprocess.run(["true"], check=False).returncode == 0  # other programs still run
     assert refused == ["povray --version"]
     assert subprocess.Popen._execute_child is start  # left as it was found
+
+
+def test_a_forked_child_that_execs_povray_is_ended_and_reported(tmp_path):
+    log = tmp_path / "refused"
+    with forbid_povray(log):
+        pid = os.fork()
+        if pid == 0:  # as pty.fork's child does
+            try:
+                os.execv("/bin/true", ["true"])  # not POV-Ray: runs
+            finally:
+                os._exit(1)
+        assert os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]) == 0
+        pid = os.fork()
+        if pid == 0:
+            try:
+                os.execvp("povray", ["povray", "--version"])
+            finally:
+                os._exit(1)
+        assert os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]) == 70
+    assert refused_in_children(log) == ["povray --version"]
+    assert refused_in_children(log) == []  # read once

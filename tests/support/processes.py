@@ -46,13 +46,20 @@ def is_povray_start(args: str | bytes | Sequence, executable: str | bytes | None
     return python and any("povh3d" in w for w in words[1:])
 
 
+_EXECS = ("execv", "execve", "execvp", "execvpe")
+
+
 @contextmanager
-def forbid_povray() -> Iterator[list[str]]:
+def forbid_povray(log: Path | None = None) -> Iterator[list[str]]:
     """Within: a child that :func:`is_povray_start` raises RuntimeError instead of starting; the
     list yielded collects the command lines refused (the caller fails the test when it is not empty,
-    as code under test may swallow the error)."""
+    as code under test may swallow the error).
+
+    A forked child (``pty.fork``, ``os.fork``) that execs POV-Ray or povh3d is ended instead with
+    exit status 70, and its command line appended to the file ``log``, which the parent reads."""
     refused: list[str] = []
     real = subprocess.Popen._execute_child  # the one place Popen, run and check_output start a child
+    real_execs = {name: getattr(os, name) for name in _EXECS}
 
     def guarded(self, args, executable, *rest, **kwargs):  # type: ignore[no-untyped-def]
         if is_povray_start(args, executable):
@@ -61,11 +68,35 @@ def forbid_povray() -> Iterator[list[str]]:
             raise RuntimeError(f"{line[:120]!r} {HINT}")
         return real(self, args, executable, *rest, **kwargs)
 
+    def exec_guard(name: str):  # type: ignore[no-untyped-def]
+        def guarded_exec(path, args, *rest):  # type: ignore[no-untyped-def]
+            if is_povray_start(args, path):
+                if log is not None:
+                    with open(log, "a", encoding="utf-8") as out:
+                        out.write(" ".join(_program(args, path)) + "\n")
+                os._exit(70)  # in a forked copy of pytest: never go on running the tests here
+            return real_execs[name](path, args, *rest)
+        return guarded_exec
+
     subprocess.Popen._execute_child = guarded  # type: ignore[method-assign]
+    for name in _EXECS:
+        setattr(os, name, exec_guard(name))
     try:
         yield refused
     finally:
         subprocess.Popen._execute_child = real  # type: ignore[method-assign]
+        for name, function in real_execs.items():
+            setattr(os, name, function)
+
+
+def refused_in_children(log: Path) -> list[str]:
+    """The command lines forked children were refused (see :func:`forbid_povray`), read once."""
+    try:
+        lines = log.read_text(encoding="utf-8").splitlines()
+    except FileNotFoundError:
+        return []
+    log.unlink()
+    return lines
 
 
 def record(path: str | Path, nodeid: str) -> None:
