@@ -42,12 +42,13 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 	$(BIN)/povh3d render sample_models/sample.pov --preset $(PRESET) --quality $(QUALITY) \
 	  -o out/sample-h3d.png --views-dir out/views
 
-# WORKERS pytest processes (pytest-xdist), one a core; pytest's exit status is make's (5: no test ran).
+# WORKERS pytest processes (pytest-xdist), one a core, each taking whole files (a module's fixtures
+# render once); pytest's exit status is make's (5: no test ran).
 test: povray opengl venv ## run the whole test suite, POV-Ray renders included (WORKERS=2 processes)
-	$(BIN)/python -m pytest -q -n $(WORKERS)
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile
 
 test-fast: venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
-	$(BIN)/python -m pytest -q -n $(WORKERS) --fast
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile --fast
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py
