@@ -2,8 +2,9 @@
 
 A test marked ``povray`` starts POV-Ray or the povh3d command as a child process;
 ``pytest --fast`` (``make test-fast``) leaves those out and, for the rest, makes every
-such start fail at once and fails the test in its teardown, so that a test that starts
-POV-Ray without the mark is seen in the fast subset rather than slowing it down."""
+such start fail at once and fails the test that tried (tests/conftest.py), so that a test
+that starts POV-Ray without the mark is seen in the fast subset rather than slowing it down.
+Other programs (a fake ``POVH3D_POVRAY`` script under another name, say) still run."""
 
 from __future__ import annotations
 
