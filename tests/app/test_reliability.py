@@ -115,6 +115,13 @@ def _result(done):
 
 
 # -- signals -------------------------------------------------------------------------------------------
+def _sigint_in_child(disposition):
+    """A preexec_fn giving the child's SIGINT ``disposition``: SIG_DFL as for a shell's foreground job
+    (whatever this test process inherited: an ignored SIGINT passes on through exec), SIG_IGN as for
+    a background job."""
+    return lambda: signal.signal(signal.SIGINT, disposition)
+
+
 def _start_slow_render(tmp_path: Path, out: Path, ignore_sigint: bool = False) -> tuple[subprocess.Popen, Path]:
     """`render` at --quality high in a child, once POV-Ray runs; `ignore_sigint`: started as a shell
     starts a background job (`cmd &`), with SIGINT ignored."""
@@ -124,7 +131,7 @@ def _start_slow_render(tmp_path: Path, out: Path, ignore_sigint: bool = False) -
     proc = subprocess.Popen(cli_command("render", SAMPLE, "-o", out, "--preset", "demo", "--quality", "high",
                                         "-q", "--jobs", "1"),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            preexec_fn=(lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignore_sigint else None)
+                            preexec_fn=_sigint_in_child(signal.SIG_IGN if ignore_sigint else signal.SIG_DFL))
     deadline = time.monotonic() + 60
     while not list(tmp.glob(f"povh3d-{proc.pid}-*/frame*")) and not list(tmp.glob(f"povh3d-{proc.pid}-*/*.log")):
         assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
@@ -266,7 +273,8 @@ def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, mon
     cache, out = tmp_path / "cache", tmp_path / "a.png"
     env = {**os.environ, "POVH3D_CACHE": str(cache), "TMPDIR": str(tmp_path)}
     proc = subprocess.Popen(cli_command("render", SAMPLE, "-o", out, *PACED), env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_sigint_in_child(signal.SIG_DFL))
     deadline = time.monotonic() + 120
     while len(_entries(cache)) < 3:  # 3 of the first run's 6 frames
         assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
