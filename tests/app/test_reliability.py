@@ -116,10 +116,13 @@ def _result(done):
 
 # -- signals -------------------------------------------------------------------------------------------
 def _sigint_in_child(disposition):
-    """A preexec_fn giving the child's SIGINT ``disposition``: SIG_DFL as for a shell's foreground job
-    (whatever this test process inherited: an ignored SIGINT passes on through exec), SIG_IGN as for
-    a background job."""
-    return lambda: signal.signal(signal.SIGINT, disposition)
+    """A preexec_fn giving the child's SIGINT ``disposition``, unblocked: SIG_DFL as for a shell's
+    foreground job, SIG_IGN as for a background job, whatever this test process holds (an ignored
+    or blocked SIGINT passes on through exec: after other tests, the SIGINT cases ran to the end)."""
+    def setup() -> None:
+        signal.signal(signal.SIGINT, disposition)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    return setup
 
 
 def _start_slow_render(tmp_path: Path, out: Path, ignore_sigint: bool = False) -> tuple[subprocess.Popen, Path]:
