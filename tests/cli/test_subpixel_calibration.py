@@ -162,6 +162,7 @@ def test_povray_traces_the_calibrated_rays(cli, tmp_path):
     assert _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center + 0.25) > 10 * worst
 
 
+@pytest.mark.povray
 def test_the_python_api_makes_the_calibrated_render(tmp_path):
     """``povh3d.render(..., method="subpixel", calibration=FILE)``: the same calibrated sheet as the
     command line's, through the one display builder (same oracle and control as above)."""

@@ -187,6 +187,7 @@ def _computed_read(path: Path) -> str:
             ).replace("Green", "rgb <0, 1, 0>")
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("secret", [0, 1], ids=["in-prefix", "beside-binary"])
 @pytest.mark.parametrize("place", sorted(PLACES))
 @pytest.mark.parametrize("confined", [True, False], ids=["sandbox", "control-off"])
@@ -212,6 +213,7 @@ def test_the_binary_location_does_not_widen_the_sandbox(tmp_path: Path, workdir:
         assert tuple(image[0, 0]) == (0, 255, 0)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("place", sorted(PLACES))
 def test_a_moved_binary_still_reads_the_scene_and_its_own_includes(tmp_path: Path, workdir: Path,
                                                                    place: str,
