@@ -1,4 +1,5 @@
-# povh3d: `make render` renders the bundled sample, `make test` runs the tests.
+# povh3d: `make render` renders the bundled sample, `make test` runs the tests,
+# `make test-fast` the ones that start no POV-Ray (the edit loop).
 # Both set up what they need: POV-Ray (apt) and a .venv with povh3d installed.
 SHELL := bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -12,11 +13,12 @@ BIN := $(VENV)/bin
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 PRESET ?= demo
 QUALITY ?= normal
+WORKERS ?= 2
 
-.PHONY: help render test bench povray opengl venv clean
+.PHONY: help render test test-fast bench povray opengl venv clean
 
 help: ## list the targets
-	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-8s %s\n", $$1, $$2}'
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
 
 povray: ## install POV-Ray 3.7 with apt when it is missing
 	@command -v povray >/dev/null || { echo "installing POV-Ray (apt-get install povray)"; \
@@ -40,8 +42,13 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 	$(BIN)/povh3d render sample_models/sample.pov --preset $(PRESET) --quality $(QUALITY) \
 	  -o out/sample-h3d.png --views-dir out/views
 
-test: povray opengl venv ## run the test suite (POV-Ray tests included)
-	$(BIN)/python -m pytest -q
+# WORKERS pytest processes (pytest-xdist), one a core, each taking whole files (a module's fixtures
+# render once); pytest's exit status is make's (5: no test ran).
+test: povray opengl venv ## run the whole test suite, POV-Ray renders included (WORKERS=2 processes)
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile
+
+test-fast: venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile --fast
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py

@@ -1,17 +1,69 @@
 """Shared fixtures (an isolated image cache per test, a POV-Ray work folder, the in-process
-command line) and the paths the tests share."""
+command line), the paths the tests share, and the fast subset: ``pytest --fast`` leaves out
+the tests marked ``povray`` or ``slow`` and fails any other test that starts POV-Ray
+(tests/support/processes.py)."""
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
 
+from tests.support import processes
 from tests.support.cli import Result, run_in_process
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLES = REPO / "sample_models"
 SAMPLE = SAMPLES / "sample.pov"
+
+
+def pytest_addoption(parser):
+    parser.addoption("--fast", action="store_true",
+                     help=f"leave out the tests marked {processes.MARK!r} or 'slow' and fail any other test "
+                          "that starts POV-Ray or the povh3d command as a process (make test-fast)")
+
+
+def pytest_configure(config):
+    if config.getoption("--fast"):
+        log = Path(tempfile.mkdtemp(prefix="povh3d-fast-")) / "refused"
+        guard = processes.forbid_povray(log)
+        config.stash[_REFUSED] = (guard.__enter__(), log)
+        config.add_cleanup(lambda: (guard.__exit__(None, None, None), shutil.rmtree(log.parent, True)))
+
+
+_REFUSED = pytest.StashKey[tuple]()
+
+
+def pytest_collection_modifyitems(config, items):
+    if not config.getoption("--fast"):
+        return
+    left_out = [item for item in items if any(item.get_closest_marker(m) for m in (processes.MARK, "slow"))]
+    if left_out:
+        config.hook.pytest_deselected(items=left_out)
+        dropped = set(left_out)
+        items[:] = [item for item in items if item not in dropped]
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    # A test of the fast subset that tried to start POV-Ray fails, even when the code under
+    # test caught the error the guard raised.
+    outcome = yield
+    if _REFUSED not in item.config.stash:
+        return
+    refused, log = item.config.stash[_REFUSED]
+    lines = refused + processes.refused_in_children(log)
+    refused.clear()
+    if not lines:
+        return
+    report = outcome.get_result()
+    if os.environ.get("POVH3D_TEST_RECORD"):
+        processes.record(os.environ["POVH3D_TEST_RECORD"], item.nodeid)
+    report.outcome = "failed"
+    report.longrepr = f"{lines[0][:120]!r} {processes.HINT}"
 
 
 @pytest.fixture(autouse=True)

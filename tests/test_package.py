@@ -24,6 +24,7 @@ def _names(requirements: list[str]) -> set[str]:
     return {re.split(r"[<>=\[ ;]", r, maxsplit=1)[0].lower() for r in requirements}
 
 
+@pytest.mark.povray
 def test_python_dash_m_povh3d_is_the_command():
     done = subprocess.run([sys.executable, "-m", "povh3d", "--version"], cwd=REPO, capture_output=True, text=True,
                           timeout=60, check=False)
@@ -133,6 +134,7 @@ def test_a_star_import_hides_no_builtin():
     assert "map" not in namespace and "extract" in namespace
 
 
+@pytest.mark.povray
 def test_import_povh3d_loads_no_command_until_one_is_used():
     probe = ("import sys, povh3d; dir(povh3d); before = 'numpy' in sys.modules or 'povh3d.api' in sys.modules; "
              "povh3d.extract; print(before, 'povh3d.api' in sys.modules)")

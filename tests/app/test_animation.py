@@ -10,14 +10,12 @@ import pytest
 from hypothesis import given, strategies as st
 
 from povh3d.app.animation import FrameRange, frame_path, parse_clock, parse_frames
-from tests.support.render import render_animation
+from tests.support.render import DRAFT, DRAFT_CACHED, render_animation
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.image.io import read_png
-from povh3d.engine.quality import RenderSettings
 from povh3d.scene.scene import load_scene
 from tests.support.arrays import square_array
 
-DRAFT = RenderSettings(quality="draft")
 LENS = square_array(3, 2, 2, 2)
 
 
@@ -85,11 +83,12 @@ def test_clock_detection(tmp_path: Path) -> None:
 
 # -- rendering -------------------------------------------------------------------
 
+@pytest.mark.povray
 def test_clock_scene_renders_each_frame_with_its_clock(tmp_path: Path) -> None:
     scene = write_scene(tmp_path, "fade.pov", "rgb clock")
     out = tmp_path / "out" / "fade.png"
     out.parent.mkdir()
-    report = render_animation(scene, LENS, out, FrameRange(0, 4), settings=DRAFT)
+    report = render_animation(scene, LENS, out, FrameRange(0, 4), settings=DRAFT_CACHED)
     assert report["rendered"] == 5 and report["copied"] == 0 and report["scene_uses_clock"]
     for n in range(5):
         image = read_png(frame_path(out, n))
@@ -98,16 +97,17 @@ def test_clock_scene_renders_each_frame_with_its_clock(tmp_path: Path) -> None:
         record = json.loads(frame_path(out, n).with_suffix(".json").read_text())
         assert record["animation"]["clock"] == n / 4 and record["animation"]["frame"] == n
     # A second run, and a range that shares clock values, come from the cache.
-    again = render_animation(scene, LENS, out, FrameRange(0, 4), settings=DRAFT)
+    again = render_animation(scene, LENS, out, FrameRange(0, 4), settings=DRAFT_CACHED)
     assert again["rendered"] == 0 and again["from_cache"] == 5
-    wider = render_animation(scene, LENS, out, FrameRange(0, 8, 0, 2), settings=DRAFT)
+    wider = render_animation(scene, LENS, out, FrameRange(0, 8, 0, 2), settings=DRAFT_CACHED)
     assert wider["from_cache"] == 5 and wider["rendered"] == 4  # clocks 0, .25, .. 1 known
 
 
+@pytest.mark.povray
 def test_static_scene_is_rendered_once(tmp_path: Path) -> None:
     scene = write_scene(tmp_path, "still.pov", "rgb 0.5")
     out = tmp_path / "still.png"
-    settings = RenderSettings(quality="draft", use_cache=False)
+    settings = DRAFT
     report = render_animation(scene, LENS, out, FrameRange(3, 6), settings=settings)
     assert (report["rendered"], report["copied"]) == (1, 3) and not report["scene_uses_clock"]
     first = read_png(frame_path(out, 3))
@@ -119,6 +119,7 @@ def test_static_scene_is_rendered_once(tmp_path: Path) -> None:
     assert (report["rendered"], report["copied"]) == (4, 0)
 
 
+@pytest.mark.povray
 def test_failure_leaves_no_partial_sequence(tmp_path: Path) -> None:
     # Frame 2 (clock 0.5) fails: frames 0 and 1 were fine but none is written.
     scene = tmp_path / "breaks.pov"
@@ -126,10 +127,11 @@ def test_failure_leaves_no_partial_sequence(tmp_path: Path) -> None:
                      "plane { z, 3 pigment { rgb clock } finish { emission 1 } }\n")
     out = tmp_path / "b.png"
     with pytest.raises(PovrayError, match="broken at half time"):
-        render_animation(scene, LENS, out, FrameRange(0, 4), settings=DRAFT, video=tmp_path / "b.mp4")
+        render_animation(scene, LENS, out, FrameRange(0, 4), settings=DRAFT_CACHED, video=tmp_path / "b.mp4")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["breaks.pov"]
 
 
+@pytest.mark.povray
 def test_cli_frames_and_video(tmp_path: Path, cli) -> None:
     scene = write_scene(tmp_path, "fade.pov", "rgb clock")
     out, video = tmp_path / "f.png", tmp_path / "f.mp4"

@@ -12,6 +12,8 @@ from povh3d.scene.scene import load_scene
 from tests.support.arrays import square_array
 from tests.support.scenes import write_textured_scene
 
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
+
 
 @pytest.fixture(scope="module")
 def textured(tmp_path_factory):

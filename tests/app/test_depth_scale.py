@@ -64,6 +64,7 @@ def test_depth_scaled_rays_are_the_slopes_times_k():
     assert depth_scaled_rays(a, 1) is a
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method, array", [
     ("multi-ortho", small()),
     ("multi-ortho", LensArray("square", 18, 13, 1.3, 1.3, 2.0, Panel(120, 90, 0.2, 0.2))),   # fractional PPL
@@ -88,6 +89,7 @@ def test_compressed_render_equals_the_physically_compressed_scene(tmp_path, meth
     assert ours["lens_array"]["focal_mm"] == array.focal   # the display is recorded as it is
 
 
+@pytest.mark.povray
 def test_single_stage_lenslets_of_focal_f_over_k(tmp_path):
     """Single-stage is a physical simulation (aberrations): compared by an error figure, not identity."""
     from povh3d.image.metrics import psnr
@@ -105,6 +107,7 @@ def test_single_stage_lenslets_of_focal_f_over_k(tmp_path):
     assert psnr(c, b) < 15      # negative control: uncompressed (8 dB)
 
 
+@pytest.mark.povray
 def test_pinhole_behind_the_screen(tmp_path):
     """Pinhole cameras see only z > 0: a scene wholly behind the screen, compressed both ways."""
     k = 0.5
@@ -120,6 +123,7 @@ def test_pinhole_behind_the_screen(tmp_path):
     assert (np.abs(a - b).max(-1) > 2).mean() < 0.002
 
 
+@pytest.mark.povray
 def test_parallax_of_a_plane_is_k_times(tmp_path):
     """Stripes of period P on the plane z = Z: view k sees them shifted by K Z u_k / f (analytic)."""
     far, period, k = 6.0, 1.7, 0.4
@@ -140,6 +144,7 @@ def test_parallax_of_a_plane_is_k_times(tmp_path):
             assert (seen == white)[clear].all(), (scale, view)
 
 
+@pytest.mark.povray
 def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     scene = tmp_path / "s.pov"
     scene.write_text(SCENE.format(far=30))
@@ -172,6 +177,7 @@ def test_depth_scale_options_are_checked():
         RenderSettings(depth_scale=0.0)
 
 
+@pytest.mark.povray
 def test_depth_maps_show_the_compressed_depth(tmp_path):
     """Per view: distance along the display's ray (slope u/f) to the plane z = K Z."""
     from povh3d.engine.depth import view_depth_maps

@@ -51,6 +51,7 @@ def _frame(record: dict) -> DisplayFrame:
                         tuple(record["normal"]), record["units_per_mm"], record["source"])
 
 
+@pytest.mark.povray
 def test_frame_follows_the_declared_camera():
     """Centre at look_at, normal along look_at - location, y along the rolled sky, width = field."""
     array = small_array()
@@ -75,6 +76,7 @@ def test_frame_follows_the_declared_camera():
     assert np.dot(frame.axis_y, flat_up) < np.cos(np.radians(11))
 
 
+@pytest.mark.povray
 def test_camera_vectors_reproduce_povray_render(tmp_path):
     """POV-Ray through the scene's own camera == through a camera written from povh3d's vectors."""
     scene = GALLERY / "tilted.pov"
@@ -92,6 +94,7 @@ def test_camera_vectors_reproduce_povray_render(tmp_path):
     assert psnr(wrong, own) < 25  # negative control
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("name", ["tilted.pov", "inches.pov"])
 def test_views_equal_oblique_orthographic_renders(tmp_path, name):
     """Every view (a sample of them) equals POV-Ray's oblique orthographic render placed by the frame."""
@@ -123,6 +126,7 @@ def test_views_equal_oblique_orthographic_renders(tmp_path, name):
     assert flipped == 0
 
 
+@pytest.mark.povray
 def test_moved_scene_and_frame_give_the_same_pixels(tmp_path):
     """A scene moved by T, rendered through the frame T, equals the scene in place (every method)."""
     base = tmp_path / "base.pov"
@@ -161,8 +165,8 @@ def _scene(tmp_path: Path, camera: str) -> Path:
 
 @pytest.mark.parametrize("camera, words", [
     ("#if (Use_A) camera { location <0,0,-5> look_at 0 } #end", "inside an #if"),
-    ("camera { location <0,0,-5> look_at <0,0,-5> }", "location equals its look_at"),
-    ("camera { orthographic location <0,0,-5> look_at 0 }", "orthographic"),
+    pytest.param("camera { location <0,0,-5> look_at <0,0,-5> }", "location equals its look_at", marks=pytest.mark.povray),
+    pytest.param("camera { orthographic location <0,0,-5> look_at 0 }", "orthographic", marks=pytest.mark.povray),
     ("#if (Use_A) #declare C = camera { location <0,0,-5> } #end\ncamera { C }", "identifier 'C' is declared inside"),
 ])
 def test_camera_that_cannot_be_used_is_one_line_naming_the_options(tmp_path, camera, words):
@@ -188,6 +192,7 @@ def test_explicit_and_native_frames(tmp_path):
         DisplayFrameOptions(center=(0, 0, 0))
 
 
+@pytest.mark.povray
 def test_camera_evaluation_is_cached_by_scene_digest():
     scene, array = load_scene(GALLERY / "inches.pov"), small_array()
     _, first = resolve_frame(DisplayFrameOptions(), scene, array)
@@ -208,6 +213,7 @@ def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.povray
 def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     """The depth pass made in the camera's run equals a depth pass of its own in the same frame."""
     import povh3d.app.placement as placement

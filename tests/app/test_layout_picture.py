@@ -77,6 +77,7 @@ def check_picture_of(record: dict, path: Path) -> dict:
     return written
 
 
+@pytest.mark.povray
 def test_a_scene_with_a_camera_is_measured_in_the_cameras_frame(tmp_path):
     from povh3d.app.placement import scene_report
     from povh3d.geometry.frame import DisplayFrame
@@ -140,6 +141,7 @@ def test_bad_input_is_one_line_and_leaves_the_output(tmp_path, cli):
     assert "must be a .png" in one_error_line(cli("layout", str(ANT), "-o", tmp_path / "o.jpg"))
 
 
+@pytest.mark.povray
 def test_the_command_is_quiet_headless(tmp_path):
     # a separate process with no display: VTK's X-server complaint must not reach the user
     out = tmp_path / "ant.png"
@@ -206,6 +208,7 @@ def test_the_share_outside_is_a_share_of_the_surface(tmp_path):
     assert depth["front_outside"] == pytest.approx(depth["behind_outside"], abs=0.015)
 
 
+@pytest.mark.povray
 def test_no_opengl_is_one_line_not_a_crash(tmp_path):
     # glvnd finds no EGL driver: VTK falls back to OSMesa, which segfaults the process when it is
     # missing too; povh3d must refuse with one line instead (or draw, where OSMesa is installed)

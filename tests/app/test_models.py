@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 import json
 
 import numpy as np
@@ -9,6 +10,8 @@ import numpy as np
 from povh3d.image.interleave import extract
 from povh3d.image.io import read_png
 from tests.support.gallery_meshes import planet_stl, tower_ply
+
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
 
 ARRAY = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch", "0.2", "--focal", "2")
 

@@ -4,6 +4,7 @@ never answered from."""
 
 from __future__ import annotations
 
+import pytest
 import json
 import os
 import subprocess
@@ -14,6 +15,8 @@ import numpy as np
 
 from povh3d.image.io import file_sha256, read_png
 from tests.support.cli import REPO, one_error_line
+
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
 
 TINY = ["--lenses", "6x4", "--ppl", "4x4", "--quality", "draft", "-q"]
 

@@ -24,6 +24,7 @@ from povh3d.image.io import read_png, read_sidecar
 from povh3d.system import sweep_orphans
 from tests.conftest import SAMPLE
 from tests.support.cli import cli_command, one_error_line
+from tests.support.waiting import wait_until
 
 TINY = ["--preset", "demo", "--lenses", "6x4", "--ppl", "4", "--quality", "draft", "-q"]
 
@@ -79,6 +80,7 @@ def test_modes_follow_the_umask(tmp_path, umask):
         assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~umask
 
 
+@pytest.mark.povray
 def test_full_disk_keeps_the_previous_output(tmp_path):
     """RLIMIT_FSIZE stands in for a full disk: the write fails, good.png and good.json stay."""
     views = tmp_path / "views"
@@ -113,6 +115,16 @@ def _result(done):
 
 
 # -- signals -------------------------------------------------------------------------------------------
+def _sigint_in_child(disposition):
+    """A preexec_fn giving the child's SIGINT ``disposition``, unblocked: SIG_DFL as for a shell's
+    foreground job, SIG_IGN as for a background job, whatever this test process holds (an ignored
+    or blocked SIGINT passes on through exec: after other tests, the SIGINT cases ran to the end)."""
+    def setup() -> None:
+        signal.signal(signal.SIGINT, disposition)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    return setup
+
+
 def _start_slow_render(tmp_path: Path, out: Path, ignore_sigint: bool = False) -> tuple[subprocess.Popen, Path]:
     """`render` at --quality high in a child, once POV-Ray runs; `ignore_sigint`: started as a shell
     starts a background job (`cmd &`), with SIGINT ignored."""
@@ -122,12 +134,12 @@ def _start_slow_render(tmp_path: Path, out: Path, ignore_sigint: bool = False) -
     proc = subprocess.Popen(cli_command("render", SAMPLE, "-o", out, "--preset", "demo", "--quality", "high",
                                         "-q", "--jobs", "1"),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            preexec_fn=(lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignore_sigint else None)
+                            preexec_fn=_sigint_in_child(signal.SIG_IGN if ignore_sigint else signal.SIG_DFL))
     deadline = time.monotonic() + 60
     while not list(tmp.glob(f"povh3d-{proc.pid}-*/frame*")) and not list(tmp.glob(f"povh3d-{proc.pid}-*/*.log")):
         assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
         time.sleep(0.05)
-    time.sleep(0.3)
+    wait_until(lambda: _povray_children_of(proc.pid) or proc.poll() is not None, 60, "POV-Ray running")
     return proc, tmp
 
 
@@ -144,6 +156,7 @@ def _povray_children_of(pid: int) -> list[int]:
     return found
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("signum, background", [(signal.SIGTERM, False), (signal.SIGHUP, False),
                                                 (signal.SIGINT, False), (signal.SIGTERM, True)])
 def test_sigterm_and_sighup_stop_like_ctrl_c(tmp_path, signum, background):
@@ -159,13 +172,13 @@ def test_sigterm_and_sighup_stop_like_ctrl_c(tmp_path, signum, background):
     assert read_sidecar(out)["note"] == "old" and np.array_equal(read_png(out), _noise(seed=3))
 
 
+@pytest.mark.povray
 def test_kill_9_leaves_the_output_and_the_next_run_sweeps_its_folders(tmp_path):
     out = tmp_path / "good.png"
     write_image(out, _noise(seed=4), base_record("h3d", note="old"))
     proc, tmp = _start_slow_render(tmp_path, out)
     proc.kill()
     proc.communicate(timeout=30)
-    time.sleep(0.5)
     assert list(tmp.glob(f"povh3d-{proc.pid}-*")), "kill -9: nobody could remove the job folder"
     assert not _povray_children_of(proc.pid)
     deadline = time.monotonic() + 10  # POV-Ray got SIGKILL with its parent (PR_SET_PDEATHSIG)
@@ -195,6 +208,7 @@ def _entries(cache: Path) -> list[Path]:
     return sorted(cache.rglob("*.entry"))
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("damage", ["truncate", "empty", "same-size", "foreign"])
 def test_damaged_cache_entry_is_reported_removed_and_rendered_again(tmp_path, cli, damage):
     cache = tmp_path / "cache"
@@ -222,6 +236,7 @@ def test_damaged_cache_entry_is_reported_removed_and_rendered_again(tmp_path, cl
     assert "warning" not in result.err and json.loads((tmp_path / "c.json").read_text())["timings"]["frames_from_cache"] == 1
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("where", ["POVH3D_CACHE", "HOME"])
 def test_unusable_cache_is_one_warning_and_the_render_goes_on(tmp_path, cli, where):
     blocker = tmp_path / "a-file"
@@ -250,6 +265,7 @@ def uninterrupted(tmp_path_factory) -> np.ndarray:
     return read_png(folder / "a.png")
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
 def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, monkeypatch, uninterrupted, signum):
     """Frames reach the cache one by one as POV-Ray writes them: stop a render in the middle
@@ -260,7 +276,8 @@ def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, mon
     cache, out = tmp_path / "cache", tmp_path / "a.png"
     env = {**os.environ, "POVH3D_CACHE": str(cache), "TMPDIR": str(tmp_path)}
     proc = subprocess.Popen(cli_command("render", SAMPLE, "-o", out, *PACED), env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_sigint_in_child(signal.SIG_DFL))
     deadline = time.monotonic() + 120
     while len(_entries(cache)) < 3:  # 3 of the first run's 6 frames
         assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
@@ -283,6 +300,7 @@ def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, mon
     assert not list(tmp_path.glob("povh3d-*")), "job folders removed (a killed run's swept by the re-run)"
 
 
+@pytest.mark.povray
 def test_computed_include_with_the_sandbox_off_is_not_cached(tmp_path, cli):
     (tmp_path / "part.inc").write_text("sphere { <0, 0, 3>, 5 pigment { rgb 1 } finish { emission 1 } }\n")
     scene = tmp_path / "s.pov"
@@ -300,6 +318,7 @@ def test_computed_include_with_the_sandbox_off_is_not_cached(tmp_path, cli):
 
 
 # -- stale data and hostile paths ----------------------------------------------------------------------
+@pytest.mark.povray
 def test_a_views_folder_holds_one_render(tmp_path, cli):
     views = tmp_path / "views"
     assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--views-dir", views).code == 0
@@ -334,6 +353,7 @@ def _write_scene(folder: Path, scene: str, include: str, settings: str = "") -> 
     return folder / scene
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("settings", ["", "charset utf8 "])
 def test_scene_and_includes_with_non_ascii_names_render(tmp_path, cli, settings):
     """A scene under a non-ASCII folder that includes a non-ASCII file (POV-Ray 3.7 reads the name as
@@ -349,6 +369,7 @@ def test_scene_and_includes_with_non_ascii_names_render(tmp_path, cli, settings)
     assert np.array_equal(image, read_png(tmp_path / "plain.png")) and len(np.unique(image.reshape(-1, 3), axis=0)) > 1
 
 
+@pytest.mark.povray
 def test_an_absolute_non_ascii_include_is_one_line_naming_the_limit(tmp_path, cli):
     folder = tmp_path / "modèles"
     folder.mkdir()
@@ -374,6 +395,7 @@ def test_quilt_round_trip_keeps_the_lens_array(tmp_path, cli):
     assert result.code == 0, result.err
 
 
+@pytest.mark.povray
 def test_unusable_cache_with_a_mesh_model(tmp_path, cli):
     from tests.conftest import SAMPLES
 

@@ -55,6 +55,7 @@ def still_and_frame(tmp_path: Path, source: Path, *options: str) -> tuple[Path, 
     return still, tmp_path / "anim_0001.png"
 
 
+@pytest.mark.povray
 def test_a_frame_with_a_mapping_is_the_mapped_panel(tmp_path, scene):
     mapping = ["--mapping", "slanted", "--subpixels-per-lens", "4.5", "--views", "9", "--slant-tan", "0.1667"]
     still, frame = still_and_frame(tmp_path, scene, "--preset", "demo", *mapping)
@@ -66,6 +67,7 @@ def test_a_frame_with_a_mapping_is_the_mapped_panel(tmp_path, scene):
     assert not np.array_equal(read_png(tmp_path / "plain.png"), read_png(frame))
 
 
+@pytest.mark.povray
 def test_a_frame_of_a_mesh_model_is_the_staged_model(tmp_path):
     still, frame = still_and_frame(tmp_path, BLOB, *SMALL)
     image = read_png(frame)
@@ -74,18 +76,21 @@ def test_a_frame_of_a_mesh_model_is_the_staged_model(tmp_path):
     assert sidecar(frame)["model"]["model"].endswith("blob.ply")
 
 
+@pytest.mark.povray
 def test_a_frame_keeps_the_single_stage_options(tmp_path, scene):
     still, frame = still_and_frame(tmp_path, scene, *SMALL, "--method", "single-stage", "--lenslet", "spherical")
     assert sidecar(frame)["single_stage"]["lenslet"]["shape"] == "spherical"
     assert np.array_equal(read_png(frame), read_png(still))
 
 
+@pytest.mark.povray
 def test_single_stage_defaults_to_the_conic_lenslet(tmp_path, scene):
     out = tmp_path / "ss.png"
     assert run(["render", scene, "-o", out, "--quality", "draft", *SMALL, "--method", "single-stage"]) == 0
     assert sidecar(out)["single_stage"]["lenslet"]["shape"] == "conic"
 
 
+@pytest.mark.povray
 def test_auto_quality_is_chosen_once_for_an_animation(tmp_path, monkeypatch):
     moving = tmp_path / "moving.pov"
     moving.write_text(SCENE.replace("<0.3, -0.2, 1.0>", "<0.3 + clock, -0.2, 1.0>"))
@@ -101,6 +106,7 @@ def test_auto_quality_is_chosen_once_for_an_animation(tmp_path, monkeypatch):
     assert [r["animation"]["clock"] for r in records] == [0.0, 0.5, 1.0]
 
 
+@pytest.mark.povray
 def test_the_python_api_gives_the_cli_image(tmp_path, scene):
     assert run(["render", scene, "-o", tmp_path / "cli.png", "--quality", "draft", "--preset", "demo"]) == 0
     record = povh3d.render(scene, tmp_path / "api.png", preset="demo", quality="draft")
@@ -122,14 +128,18 @@ def test_unknown_names_are_refused_by_name(tmp_path, scene, call, name):
         call(scene)
 
 
+@pytest.mark.povray
 def test_import_povh3d_loads_nothing_heavy():
     import subprocess
     code = "import povh3d, sys; print(sorted(m for m in ('numpy', 'jinja2', 'PIL', 'trimesh') if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
-    assert set(povh3d.__all__) == {"__version__", *povh3d._PUBLIC, *povh3d._MODULES}
+    # Every public name is in __all__ but map: a star import must not hide the builtin map.
+    assert set(povh3d.__all__) == {"__version__", *povh3d._PUBLIC, *povh3d._MODULES} - {"map"}
+    assert "map" in dir(povh3d) and callable(povh3d.map)
 
 
+@pytest.mark.povray
 def test_a_failed_render_leaves_the_previous_output(tmp_path, scene):
     out = tmp_path / "good.png"
     assert run(["render", scene, "-o", out, "--quality", "draft", *SMALL]) == 0

@@ -13,6 +13,8 @@ from povh3d.image.io import read_png
 from povh3d.volume.orient import display_box, volume_to_display
 from tests.support.volumes import asymmetric_phantom, write_nifti, write_vti
 
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
+
 ARRAY = ("--grid", "square", "--lenses", "32x24", "--ppl", "4x4", "--pixel-pitch", "0.2", "--focal", "2",
          "--quality", "draft")
 REPO = Path(__file__).resolve().parents[2]

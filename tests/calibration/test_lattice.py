@@ -47,6 +47,7 @@ def check(grid: Grid, spec: WhiteSpec) -> None:
     assert grid.residual_px < 0.1 and grid.confidence > 0.8
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("barrel", [0.0, -0.03], ids=["straight", "barrel"])
 @pytest.mark.parametrize("profile", ["rounded", "flat"])
 @pytest.mark.parametrize("rotation", ROTATIONS)
@@ -70,6 +71,7 @@ def test_metric_catches_a_small_offset():
         check(moved, spec)
 
 
+@pytest.mark.slow
 def test_large_pitch_and_sixteen_bit_camera_file():
     spec = WhiteSpec((640, 480), pitch_px=23.7, rotation_deg=-2.0, profile="flat", vignetting=0.4, noise=0.02)
     check(calibrate(to_uint(render_white(spec), 16)), spec)

@@ -33,6 +33,7 @@ CASES = [  # pitch px, slant deg, phase px, k1, vignetting, noise
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pitch,slant,phase,k1,vignetting,noise", CASES)
 def test_pitch_slant_and_phase_are_found(pitch, slant, phase, k1, vignetting, noise):
     img = render_lenticular_white((800, 600), pitch, slant, phase, k1=k1, vignetting=vignetting, noise=noise)

@@ -26,6 +26,7 @@ def test_brown_undistort_inverts_distort(k1, k2, x, y):
     np.testing.assert_allclose(model.distort(model.undistort(p)), p, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_undistort_makes_lattice_rows_straight():
     spec = WhiteSpec((320, 240), pitch_px=6.37, rotation_deg=0.3, k1=-0.05, vignetting=0.2, noise=0.005)
     white = render_white(spec)
@@ -44,6 +45,7 @@ def wave(centre, uv):
         + 0.05 * np.sin(centre[..., 0] / 17.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rotation, k1", [(0.0, 0.0), (9.46, 0.0), (6.34, -0.03)])
 def test_viewpoints_sample_the_known_scene(rotation, k1):
     spec = WhiteSpec((300, 220), pitch_px=10.6, rotation_deg=rotation, k1=k1, profile="flat", level=1.0)
@@ -63,6 +65,7 @@ def test_viewpoints_sample_the_known_scene(rotation, k1):
     assert np.percentile(np.abs(views[:, ::-1] - expect)[:, :, ok], 90) > 0.1
 
 
+@pytest.mark.slow
 def test_equaliser_default_size_follows_distortion():
     plain = calibrate(render_white(WhiteSpec((300, 220), pitch_px=10.6)))
     assert default_size(plain) == pytest.approx((10.6, 10.6), abs=0.01)

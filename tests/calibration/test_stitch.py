@@ -13,7 +13,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.support.render import render
+from tests.support.render import DRAFT, render
 from povh3d.calibration.gridfile import write_grid
 from povh3d.calibration.lattice import calibrate
 from povh3d.calibration.stitch import find_shift, stitch
@@ -21,7 +21,6 @@ from tests.support.oracles import grid_for_lens_array
 from tests.support.synth import WhiteSpec, render_white, to_uint
 from povh3d.errors import InputError
 from povh3d.image.io import read_png, write_png
-from povh3d.engine.quality import RenderSettings
 
 from tests.support.arrays import square_array
 
@@ -44,7 +43,7 @@ plane {{ z, 3
 @pytest.fixture(scope="module")
 def captures(tmp_path_factory):
     folder = tmp_path_factory.mktemp("stitch")
-    settings = RenderSettings(quality="draft", use_cache=False)
+    settings = DRAFT
     out = {}
     # Wide camera: 24 lenses. A = its lenses 0..15, B = 8..23, C = B moved half a lens more.
     for name, lenses, shift in [("wide", 24, 0.0), ("a", 16, 4.0), ("b", 16, -4.0), ("c", 16, -4.5)]:
@@ -56,6 +55,7 @@ def captures(tmp_path_factory):
     return out
 
 
+@pytest.mark.povray
 def test_stitched_renders_equal_the_wide_render(captures, tmp_path, cli):
     result = cli("stitch", captures["a"], captures["b"], "--grid", captures["grid"], "-o", tmp_path / "ab.png")
     assert result.code == 0
@@ -64,6 +64,7 @@ def test_stitched_renders_equal_the_wide_render(captures, tmp_path, cli):
     assert record["shift_lenses"] == {"rows": 0, "cols": 8} and record["mode"] == "pixels"
 
 
+@pytest.mark.povray
 def test_half_lens_shift_is_refused(captures, tmp_path, cli):
     result = cli("stitch", captures["a"], captures["c"], "--grid", captures["grid"], "-o", tmp_path / "ac.png")
     assert result.code == 3

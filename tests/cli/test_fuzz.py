@@ -179,11 +179,8 @@ def pristine(tmp_path_factory):
     return root
 
 
-@settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(args=command_lines())
-def test_hostile_command_lines_end_in_one_line(args, pristine, tmp_path, monkeypatch):
-    work = tmp_path / "w"
+def _one_case(args: list[str], pristine: Path, work: Path) -> None:
+    """One command line run in a fresh copy of ``pristine``: one error line or the asked-for output."""
     if work.exists():
         shutil.rmtree(work)
     shutil.copytree(pristine, work)
@@ -191,7 +188,7 @@ def test_hostile_command_lines_end_in_one_line(args, pristine, tmp_path, monkeyp
     if os.environ.get("POVH3D_FUZZ_LOG"):
         with open(os.environ["POVH3D_FUZZ_LOG"], "a", encoding="utf-8") as log:
             log.write(f"run\t{args}\n")
-    with monkeypatch.context() as patch:
+    with pytest.MonkeyPatch.context() as patch:
         patch.chdir(work)
         result = run_in_process(*args)  # an exception escaping main fails the test here
     after = _snapshot(work)
@@ -212,10 +209,41 @@ def test_hostile_command_lines_end_in_one_line(args, pristine, tmp_path, monkeyp
             (args, _changed(before, after))
 
 
-def test_fuzz_ran_every_case():
-    # pytest runs this module's tests in order: the count of the hypothesis test above.
-    assert CASES["run"] >= EXAMPLES * 0.9, CASES
-    print(f"fuzz: {CASES['run']} command lines, {CASES['failed']} refused, 0 tracebacks")
+@pytest.fixture(scope="module")
+def fuzz(pristine, tmp_path_factory):
+    """The hypothesis run, once per module whichever of its two tests comes first: the count of
+    command lines it ran and the error it ended in (None when every case passed)."""
+    work = tmp_path_factory.mktemp("fuzz-work") / "w"
+
+    @settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(args=command_lines())
+    def run_cases(args):
+        _one_case(args, pristine, work)
+
+    CASES.update(run=0, failed=0)
+    with pytest.MonkeyPatch.context() as patch:  # set up before any test's own cache folder
+        patch.setenv("POVH3D_CACHE", str(tmp_path_factory.mktemp("fuzz-cache")))
+        try:
+            run_cases()
+        except Exception as error:  # noqa: BLE001 - reported by the test that owns it
+            return dict(CASES), error
+    return dict(CASES), None
+
+
+@pytest.mark.povray
+def test_hostile_command_lines_end_in_one_line(fuzz):
+    cases, error = fuzz
+    if error is not None:
+        raise error
+
+
+@pytest.mark.povray
+def test_fuzz_ran_every_case(fuzz):
+    # The count of the hypothesis run of the fixture, whichever test asked for it first.
+    cases, _ = fuzz
+    assert cases["run"] >= EXAMPLES * 0.9, cases
+    print(f"fuzz: {cases['run']} command lines, {cases['failed']} refused, 0 tracebacks")
 
 
 def test_negative_control_a_removed_file_is_seen(tmp_path):

@@ -14,6 +14,7 @@ from tests.support.cli import one_error_line, run_subprocess
 SMALL = ["--lenses", "12x8", "--ppl", "4x4", "--quality", "draft", "-q"]
 
 
+@pytest.mark.povray
 def test_version_presets_info(cli):
     assert run_subprocess("--version").out.startswith("povh3d ")  # the module entry point, in its own process
     assert cli("--version").out.startswith("povh3d ")
@@ -28,6 +29,7 @@ def test_version_presets_info(cli):
     assert info["panel"]["size_px"] == [1920, 1080] and info["views"] == [8, 1]
 
 
+@pytest.mark.povray
 def test_render_writes_h3d_sidecar_and_views_then_hits_cache(tmp_path, cli):
     out = tmp_path / "h3d.png"
     views = tmp_path / "views"
@@ -55,6 +57,7 @@ def test_render_writes_h3d_sidecar_and_views_then_hits_cache(tmp_path, cli):
     assert json.loads(out.with_suffix(".json").read_text())["timings"]["frames_from_cache"] == 0
 
 
+@pytest.mark.povray
 def test_scene_may_include_files_beside_it(tmp_path, cli):
     (tmp_path / "part.inc").write_text("sphere { <0, 0, 3>, 1 pigment { rgb <1, 0, 0> } finish { emission 1 } }\n")
     scene = tmp_path / "s.pov"
@@ -79,13 +82,14 @@ def test_scene_may_include_files_beside_it(tmp_path, cli):
     (["render", SAMPLE, "--method", "nope"], "invalid choice"),
     (["info", "--focal", "-1"], "focal length"),
     (["render", SAMPLE, "--quality", "auto", "-q"], "--quality auto needs --max-error"),
-    (["render", SAMPLE, "--lenses", "12x8", "--ppl", "4x4", "--quality", "auto", "--max-error", "99", "-q",
-      "-o", "/tmp/povh3d-never.png"], "lower --max-error"),
+    pytest.param(["render", SAMPLE, "--lenses", "12x8", "--ppl", "4x4", "--quality", "auto", "--max-error", "99",
+                  "-q", "-o", "/tmp/povh3d-never.png"], "lower --max-error", marks=pytest.mark.povray),
 ])
 def test_bad_input_is_one_line(args, fragment, cli):
     assert fragment in one_error_line(cli(*args))
 
 
+@pytest.mark.povray
 def test_parse_error_shows_file_and_line(tmp_path, cli):
     scene = tmp_path / "broken.pov"
     scene.write_text("sphere { <0,0,3>, 1 pigment { rgb 1 } }\nbox { <0,0,0> <1,1,1> nonsense_keyword }\n")
@@ -95,6 +99,7 @@ def test_parse_error_shows_file_and_line(tmp_path, cli):
     assert not out.exists() and list(tmp_path.iterdir()) == [scene]
 
 
+@pytest.mark.povray
 def test_missing_include_named(tmp_path, cli):
     scene = tmp_path / "s.pov"
     scene.write_text('#include "nowhere.inc"\n')
@@ -114,6 +119,7 @@ def test_main_returns_zero_in_process(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["views"] == [8, 8]
 
 
+@pytest.mark.povray
 def test_quality_auto_records_its_choice(tmp_path, cli):
     out = tmp_path / "auto.png"
     result = cli("render", SAMPLE, "-o", out, "--lenses", "12x8", "--ppl", "4x4", "--quality", "auto",

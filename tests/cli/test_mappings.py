@@ -47,6 +47,7 @@ def test_info_reports_mapping_figures(cli):
     assert info["resolution_3d"] == [720, 360] and info["mapping_lens_pitch_mm"] == pytest.approx(1.292)
 
 
+@pytest.mark.povray
 def test_render_with_mapping_renders_only_the_views_it_needs(tmp_path, cli):
     out, views = tmp_path / "panel.png", tmp_path / "views"
     result = cli("render", SAMPLE, "-o", out, "--views-dir", views, "--grid", "lenticular", "--lenses", "10",

@@ -99,6 +99,7 @@ def test_image_changed_after_its_sidecar(tmp_path, cli):
     assert "describes another image" in line or "but its sidecar describes" in line
 
 
+@pytest.mark.povray
 def test_missing_include_is_not_blamed_on_the_sandbox(tmp_path, cli):
     scene = tmp_path / "s.pov"
     scene.write_text('#version 3.7;\nlight_source { <0, 0, -50> rgb 1 }\n#include "nothere.inc"\n')
@@ -107,6 +108,7 @@ def test_missing_include_is_not_blamed_on_the_sandbox(tmp_path, cli):
     assert "lets a scene read only" not in line
 
 
+@pytest.mark.povray
 def test_animation_error_names_the_animation_frame(tmp_path, cli):
     scene = tmp_path / "a.pov"
     scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#if (clock > 0.6) #error "late" #end\n'
@@ -116,6 +118,7 @@ def test_animation_error_names_the_animation_frame(tmp_path, cli):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "no staging folder left"
 
 
+@pytest.mark.povray
 def test_an_unclosed_brace_at_the_end_of_the_scene_names_the_scene(tmp_path, cli):
     """POV-Ray notices it only in povh3d's own script (its ``scene.pov``), which the user never sees."""
     scene = tmp_path / "mine.pov"
@@ -124,6 +127,7 @@ def test_an_unclosed_brace_at_the_end_of_the_scene_names_the_scene(tmp_path, cli
     assert "past the end of mine.pov" in line and "No matching } in 'sphere'" in line and "scene.pov" not in line
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("text, expected", [
     ("sphere { <0, 0, 3>, 0.5 pigment { rgb 1 } }\n", "has no light_source"),
     ("light_source { <0, 0, -50> rgb 1 }\nsphere { <5000, 0, 3>, 1 pigment { rgb 1 } }\n", "as if no ray hit anything"),
@@ -137,6 +141,7 @@ def test_empty_render_and_no_light_warn(tmp_path, cli, text, expected):
     assert len(lines) == 1 and lines[0].startswith("povh3d: warning: ") and expected in lines[0]
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("quiet", [[], ["-q"]], ids=["", "-q"])
 def test_mesh_warnings_are_one_line_each_and_kept_in_the_record(tmp_path, cli, quiet):
     """A model whose texture is missing: one warning line from convert-mesh, one from render
@@ -165,11 +170,13 @@ def test_mesh_warnings_are_one_line_each_and_kept_in_the_record(tmp_path, cli, q
         assert model_record["conversion_from_cache"] == (run == "from the cache")
 
 
+@pytest.mark.povray
 def test_a_lit_scene_has_no_warning(tmp_path, cli):  # negative control of the two above
     result = cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY)
     assert result.code == 0 and "warning" not in result.err
 
 
+@pytest.mark.povray
 def test_a_panel_larger_than_memory_is_refused_before_rendering(tmp_path, cli, monkeypatch):
     import povh3d.app.render as render_module
 

@@ -46,6 +46,7 @@ def shown(tmp_path_factory):
     return out, run_in_pty(cli_command("render", SAMPLE, *SLOW, "-o", out))
 
 
+@pytest.mark.povray
 def test_terminal_shows_pixel_share_frames_and_time_left(shown):
     out, (code, text) = shown
     assert code == 0, text
@@ -62,6 +63,7 @@ def test_terminal_shows_pixel_share_frames_and_time_left(shown):
     assert result.strip().startswith(str(out)) and "960x544" in result
 
 
+@pytest.mark.povray
 def test_quiet_and_pipes_show_nothing(tmp_path):
     code, text = run_in_pty(cli_command("render", SAMPLE, *SLOW[:4], "--quality", "draft", "-q",
                                         "-o", tmp_path / "q.png"))
@@ -91,6 +93,7 @@ def test_status_line_redraws_in_place_and_erases_itself():
     assert quiet.getvalue() == ""
 
 
+@pytest.mark.povray
 def test_convert_mesh_shows_its_steps_on_a_terminal(tmp_path):
     model = REPO / "sample_models" / "letter_l.stl"
     code, text = run_in_pty(cli_command("convert-mesh", model, "-o", tmp_path / "l.inc"))

@@ -12,6 +12,7 @@ GALLERY = Path(__file__).resolve().parents[1] / "support" / "gallery"
 ARRAY = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch", "0.2", "--focal", "2")
 
 
+@pytest.mark.povray
 def test_summary_names_the_camera_frame_and_fit_depth_fits(cli, tmp_path):
     out = tmp_path / "t.png"
     plain = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", *ARRAY)
@@ -29,6 +30,7 @@ def test_summary_names_the_camera_frame_and_fit_depth_fits(cli, tmp_path):
         or depth["fit"]["factor"] == 1.0
 
 
+@pytest.mark.povray
 def test_native_scene_summary(cli, tmp_path):
     scene = tmp_path / "s.pov"
     scene.write_text("#version 3.7;\nsphere { <0, 0, 0>, 3 pigment { rgb 1 } }\nlight_source { <0, 9, -9> rgb 1 }\n")
@@ -55,6 +57,7 @@ def test_bad_frame_options_are_one_line(cli, tmp_path, args, words):
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.povray
 def test_info_reports_the_scene_depth_against_the_budget(cli):
     result = cli("info", str(GALLERY / "tilted.pov"), *ARRAY)
     assert result.code == 0, result.err
@@ -64,6 +67,7 @@ def test_info_reports_the_scene_depth_against_the_budget(cli):
     assert report["depth_budget_mm"] == pytest.approx(24.0) and report["depth"]["empty"] is False
 
 
+@pytest.mark.povray
 def test_depth_maps_are_written_per_view_with_their_disparity(cli, tmp_path):
     import numpy as np
 
@@ -82,6 +86,7 @@ def test_depth_maps_are_written_per_view_with_their_disparity(cli, tmp_path):
     assert len(list(folder.glob("*.npy"))) == 2 * 36
 
 
+@pytest.mark.povray
 def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path):
     scene = tmp_path / "inside.pov"   # the viewpoint inside a solid: no fog, nothing measured
     scene.write_text("#version 3.7;\nlight_source { <0, 9, -9> rgb 1 }\nplane { z, 10 pigment { rgb 1 } }\n"
@@ -92,6 +97,7 @@ def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path
     assert result.err.strip().count("\n") == 0 and not out.exists() and not out.with_suffix(".json").exists()
 
 
+@pytest.mark.povray
 def test_depth_maps_as_16_bit_png_decode_to_the_npy_maps(cli, tmp_path):
     import numpy as np
 
@@ -116,6 +122,7 @@ def test_depth_maps_as_16_bit_png_decode_to_the_npy_maps(cli, tmp_path):
             assert np.nanmax(np.abs(decoded - exact)) <= scale / 2 * (1 + 1e-6) + 1e-6 * abs(offset)
 
 
+@pytest.mark.povray
 def test_fit_depth_by_depth_scale_says_it_distorts(cli, tmp_path):
     out = tmp_path / "k.png"
     result = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", "--fit-depth", "auto",

@@ -35,6 +35,7 @@ def imported_by(*args: str, prelude: str = "") -> set[str]:
     return set(json.loads(line[1]))
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("args", [["--help"], ["render", "--help"], ["--version"], ["presets"],
                                   ["convert-mesh", "--help"], ["calibrate", "--help"], ["map", "--help"],
                                   ["layout", "--help"]])
@@ -42,16 +43,19 @@ def test_help_and_listing_import_no_heavy_package(args):
     assert imported_by(*args) & set(HEAVY) == set()
 
 
+@pytest.mark.povray
 def test_help_and_presets_do_not_even_import_numpy():
     assert "numpy" not in imported_by("--help")
     assert "numpy" not in imported_by("presets")
 
 
+@pytest.mark.povray
 def test_the_probe_sees_a_heavy_import():
     # negative control: the same probe reports scipy when something does import it
     assert "scipy" in imported_by("--help", prelude="import scipy.ndimage")
 
 
+@pytest.mark.povray
 def test_render_imports_no_plotting_or_cluster_package(tmp_path):
     # a whole draft render: NumPy, PIL and Jinja, but no SciPy, Matplotlib, trimesh or Dask
     used = imported_by("render", str(SAMPLE), "--lenses", "12x8", "--ppl", "4x4", "--quality", "draft",

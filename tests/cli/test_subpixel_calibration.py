@@ -114,6 +114,7 @@ def test_both_files_of_one_sheet_are_one_mapping(tmp_path):
         calibrated_sheet(stale, panel, 1.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pitch,slant,phase", [(9.37, 9.46, 0.31), (7.71, 18.43, -1.7), (12.3, -6.34, 2.2)])
 def test_calibrate_then_render_recovers_the_sheet(tmp_path, pitch, slant, phase):
     size, pixel_mm = (800, 600), 0.2   # the calibration tests' size: smaller ones fit the phase less well
@@ -140,6 +141,7 @@ def test_calibrate_then_render_recovers_the_sheet(tmp_path, pitch, slant, phase)
     assert np.abs((across - across_true + 0.5) % 1 - 0.5).max() * pitch < 0.02
 
 
+@pytest.mark.povray
 def test_povray_traces_the_calibrated_rays(cli, tmp_path):
     """Every red subpixel shows the x, every green one the y, where its ray from the Looking Glass
     shader's lenticule coordinate meets an emissive plane (a sheet neither centred nor rational)."""
@@ -160,6 +162,7 @@ def test_povray_traces_the_calibrated_rays(cli, tmp_path):
     assert _worst(coded, size, pixel_mm, focal, z0, pitch_px, slant, center + 0.25) > 10 * worst
 
 
+@pytest.mark.povray
 def test_the_python_api_makes_the_calibrated_render(tmp_path):
     """``povh3d.render(..., method="subpixel", calibration=FILE)``: the same calibrated sheet as the
     command line's, through the one display builder (same oracle and control as above)."""

@@ -71,6 +71,7 @@ def test_every_subpixel_ray_through_the_lookup(preset):
     np.testing.assert_allclose(origin[..., :2] + t[..., None] * d[..., :2], centres, atol=1e-9)
 
 
+@pytest.mark.povray
 @PRESETS
 def test_render_writes_the_panel_from_every_subpixels_ray(cli, tmp_path, preset):
     z0, half = 4.0, 20.0

@@ -64,6 +64,7 @@ def test_an_existing_output_is_left_as_it_was(cli, tmp_path):
     assert out.read_bytes() == b"the user's image"
 
 
+@pytest.mark.povray
 def test_series_picks_one_of_several(cli, tmp_path):
     folder = tmp_path / "dcm"
     write_dicom_series(asymmetric_phantom(dtype="int16"), folder, uid="1.2.9", description="a")

@@ -36,6 +36,7 @@ def footprint_oracle(la, samples):
     return total / len(samples)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("la", [square_array(lx=8, ly=6, nx=4, ny=4), lenticular_array(lx=8, rows=12, nx=4)],
                          ids=["square", "lenticular"])
 def test_footprint_samples_integrate_each_pixels_footprint(tmp_path, la):
@@ -57,6 +58,7 @@ def textured(tmp_path_factory):
     return load_scene(write_textured_scene(tmp_path_factory.mktemp("bench")))
 
 
+@pytest.mark.povray
 def test_auto_quality_takes_the_first_rung_that_meets_the_target(textured):
     la = square_array(lx=10, ly=8, nx=4, ny=4)
     reports: list[tuple[int, int]] = []

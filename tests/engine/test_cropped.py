@@ -12,6 +12,9 @@ from povh3d.errors import InputError
 from povh3d.geometry.crop import CropSettings
 from povh3d.scene.scene import load_scene
 from tests.support.arrays import lenticular_array, square_array
+from tests.support.render import DRAFT
+
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
 
 SCENE = """#version 3.7;
 global_settings { assumed_gamma 1.0 }
@@ -61,7 +64,7 @@ ARRAYS = {"square": square_array(lx=40, ly=30, nx=4, ny=3, s=0.1, f=1.5),
 @pytest.mark.parametrize("mode", ["auto", "measure"])
 def test_cropped_render_is_identical_point_sampled(quarter_scene, grid, mode):
     la = ARRAYS[grid]
-    st_ = RenderSettings(quality="draft", use_cache=False)
+    st_ = DRAFT
     full = run_method("multi-ortho", quarter_scene, la, st_)
     crop = run_method("multi-ortho", quarter_scene, la, st_, crop=CropSettings(mode, SCENE_BOX))
     assert crop.crop["applied"], crop.crop

@@ -12,14 +12,15 @@ import pytest
 from povh3d.geometry.lens_array import LensArray
 from povh3d.engine.methods import run_method
 from povh3d.image.metrics import psnr
-from povh3d.engine.quality import RenderSettings
 from povh3d.scene.scene import load_scene
 
 from tests.support.arrays import square_array
 from tests.support.scenes import write_textured_scene
+from tests.support.render import DRAFT
+
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
 
 LA = square_array(lx=16, ly=12, nx=6, ny=6, s=0.1, f=1.5)
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 
 
 @pytest.fixture(scope="module")

@@ -11,6 +11,8 @@ from povh3d.geometry.frame import DisplayFrame
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.scene.scene import load_scene
 
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
+
 SCENE = """#version 3.7;
 global_settings {{ assumed_gamma 1.0 }}
 #ifndef (T) #declare T = transform {{ scale 1 }} #end

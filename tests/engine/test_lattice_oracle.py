@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from povh3d.engine.methods import METHODS, run_method
-from povh3d.engine.quality import RenderSettings
 from povh3d.errors import ConfigError
 from povh3d.geometry.view_bank import stack_frames
 from povh3d.geometry.lattice import cross_lenticular_basis
@@ -25,10 +24,10 @@ from povh3d.scene.scene import load_scene
 
 from tests.engine.test_single_stage import decode_positions, render_linear16, write_position_plane
 from tests.support.scenes import checker_oracle, classify, match, write_checker_plane
+from tests.support.render import DRAFT
 
 PANEL = Panel(120, 90, 0.1, 0.1)
 PERIOD = 2.5
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 LATTICES = {"cross-6.34": cross_lenticular_basis(0.6, 0.6, 6.34), "skewed": ((0.6, 0.05), (0.3, 0.6))}
 
 
@@ -37,6 +36,7 @@ def lattice(name: str) -> LensArray:
     return lens_array_from_fields({"lattice": LATTICES[name], "panel": [120, 90], "pixel_pitch": 0.1, "focal": 1.5})
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("name", LATTICES)
 @pytest.mark.parametrize("z0", [6.0, -6.0], ids=["behind", "in-front"])
 def test_lattice_checker_matches_oracle(tmp_path, name, z0):
@@ -57,6 +57,7 @@ def test_lattice_checker_matches_oracle(tmp_path, name, z0):
         assert match(got, upright, clear & uclear) < 0.97
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("z0", [4.0, -4.0], ids=["behind", "in-front"])
 def test_every_lattice_ray_in_povray(tmp_path, z0):
     la, half = lattice("skewed"), 12.0  # code +-12 mm: 16-bit steps of 3.7e-4 mm
@@ -78,6 +79,7 @@ def test_single_stage_refuses_a_lattice_in_one_line(tmp_path):
         run_method("pinhole", scene, lattice("skewed"), DRAFT)
 
 
+@pytest.mark.povray
 def test_cli_renders_a_lattice_and_records_it(tmp_path, cli):
     import json
 

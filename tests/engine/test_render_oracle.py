@@ -18,6 +18,8 @@ from povh3d.scene.scene import load_scene
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.scenes import checker_oracle, classify, write_checker_plane
 
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
+
 ARRAYS = {
     "lenticular": lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=1.5),
     "square": square_array(lx=24, ly=16, nx=6, ny=6, s=0.1, f=1.5),

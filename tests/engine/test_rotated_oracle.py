@@ -18,16 +18,15 @@ import math
 import pytest
 
 from povh3d.engine.methods import run_method
-from povh3d.engine.quality import RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
 from povh3d.scene.scene import load_scene
 
 from tests.support.scenes import checker_oracle, classify, match, write_checker_plane
+from tests.support.render import DRAFT
 
 PANEL = Panel(120, 90, 0.1, 0.1)
 PERIOD = 2.5
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 
 
 def array(grid: str, rotation: float) -> LensArray:
@@ -40,6 +39,7 @@ def array(grid: str, rotation: float) -> LensArray:
     return LensArray("square", 24 if rotation else 20, 18 if rotation else 15, 0.6, 0.6, 1.5, PANEL, rotation)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method", ["multi-ortho", "single-stage"])
 @pytest.mark.parametrize("grid", ["square", "hex", "lenticular"])
 @pytest.mark.parametrize("rotation", [6.34, 9.46])
@@ -64,6 +64,7 @@ def test_rotated_checker_matches_oracle(tmp_path, method, grid, rotation, z0):
     assert match(got, upright, clear & uclear) < 0.97
 
 
+@pytest.mark.povray
 def test_unrotated_hex_through_the_mesh_camera(tmp_path):
     # Hex needs no view bank any more: one hexagon per lens in the mesh camera.
     la = array("hex", 0.0)
@@ -82,6 +83,7 @@ def test_cli_refuses_a_rotation_outside_the_range(tmp_path, cli, rotation):
     assert "(-45, 45]" in line and not out.exists()
 
 
+@pytest.mark.povray
 def test_cli_renders_a_turned_preset_and_records_it(tmp_path, cli):
     out = tmp_path / "out.png"
     scene = write_checker_plane(tmp_path, 6.0, PERIOD)

@@ -26,7 +26,6 @@ from povh3d.engine.methods import display_header, run_method
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs
 from povh3d.image.metrics import psnr
 from povh3d.geometry.presets import get_preset, lens_array_from_fields
-from povh3d.engine.quality import RenderSettings
 from povh3d.engine.frames import build_script
 from povh3d.scene.scene import load_scene
 from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
@@ -35,8 +34,8 @@ from tests.support.arrays import lenticular_array, square_array
 from tests.support.cli import one_error_line
 from tests.support.hit_oracle import border_margin_px
 from tests.support.scenes import checker_oracle, classify, write_checker_plane, write_textured_scene
+from tests.support.render import DRAFT
 
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 HALF = 70.0  # position code covers -HALF..HALF mm
 
 
@@ -76,6 +75,7 @@ def capture_positions(plan: SingleStagePlan, scene: Path, half: float = HALF) ->
     return decode_positions(render_linear16(plan.batch(), "single-stage", scene, plan.lens_array)[0], half)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("shape,ior", [("conic", None), ("conic", 1.5), ("spherical", None), ("spherical", 1.5)])
 def test_rendered_lenslet_focal_length(tmp_path, shape, ior):
     f = 1.5
@@ -121,6 +121,7 @@ def capture_lens_centres(plan: SingleStagePlan) -> tuple[np.ndarray, np.ndarray]
     return best_c, margin > 0.5 * plan.lens_array.panel.pitch_x
 
 
+@pytest.mark.povray
 def test_hex_56_lens_centres_over_the_whole_panel(tmp_path):
     # hex-5.6 over its whole panel (over 14000 lenses, a capture ray per pixel): at
     # depth 0 every pixel's ray leaves its lenslet through its own lens centre on z = 0.
@@ -157,12 +158,14 @@ def checker_renders(tmp_path_factory):
     return out
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("where", list(Z_ORACLE))
 def test_conic_matches_multi_ortho_on_the_oracle_scene(checker_renders, where):
     r = checker_renders[where]
     assert psnr(r["conic"], r["multi-ortho"]) >= 28
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("where", list(Z_ORACLE))
 def test_spherical_aberration_costs_accuracy(checker_renders, where, capsys):
     # Reported, not a target: a sphere's rim rays miss the focal point, and the
@@ -174,12 +177,14 @@ def test_spherical_aberration_costs_accuracy(checker_renders, where, capsys):
     assert sph <= con
 
 
+@pytest.mark.povray
 def test_without_the_turn_it_fails(checker_renders):
     r = checker_renders["behind"]
     h = r["conic"].reshape(16, 6, 24, 6, -1)[:, ::-1, :, ::-1].reshape(r["conic"].shape)
     assert psnr(h, r["multi-ortho"]) < 20
 
 
+@pytest.mark.povray
 def test_textured_scene_and_real_glass(tmp_path):
     scene = load_scene(write_textured_scene(tmp_path))
     la = square_array(lx=16, ly=12, nx=6, ny=6, s=0.1, f=1.5)
@@ -192,6 +197,7 @@ def test_textured_scene_and_real_glass(tmp_path):
     assert psnr(glass, ref) >= 30
 
 
+@pytest.mark.povray
 def test_lenticular_matches_multi_ortho(tmp_path):
     la = lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=1.5)
     scene = load_scene(write_checker_plane(tmp_path, 5.93, 2.5))
@@ -203,6 +209,7 @@ FRACTIONAL = LensArray("square", 12, 8, 0.65, 0.65, 1.5, Panel(78, 52, 0.1, 0.1)
 HEX_SMALL_ARRAY = LensArray("hex", 12, 8, 0.95, 0.95 * math.sqrt(3) / 2, 1.2, Panel(120, 80, 0.1, 0.1))
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("la", [FRACTIONAL, HEX_SMALL_ARRAY], ids=["square-6.5ppl", "hex-9.5ppl"])
 @pytest.mark.parametrize("z0", [-5.93, 5.93], ids=["in-front", "behind"])
 def test_resampled_arrays_place_depth_like_the_oracle(tmp_path, la, z0):
@@ -222,6 +229,7 @@ def test_resampled_arrays_place_depth_like_the_oracle(tmp_path, la, z0):
     assert (wrong[clear] != parity[clear]).mean() > 0.2
 
 
+@pytest.mark.povray
 def test_fractional_ppl_square_renders_close_to_multi_ortho(tmp_path, capsys):
     # 6.5 pixels per lens: sampled 7 x 7 per lens, interpolated in direction.
     scene = load_scene(write_textured_scene(tmp_path))
@@ -248,6 +256,7 @@ def test_recentre_depth_is_exact_for_every_grid():
         SingleStagePlan(hexa, lenslet_for(hexa), 25.0)
 
 
+@pytest.mark.povray
 def test_hex_56_renders_through_the_method(tmp_path):
     la = lens_array_from_fields(get_preset("hex-5.6"))
     scene = load_scene(write_checker_plane(tmp_path, 8.0, 7.0))
@@ -269,6 +278,7 @@ HEX_SMALL = ["--grid", "hex", "--lenses", "12x8", "--ppl", "9.5", "--pixel-pitch
              "--quality", "draft", "-q", "--method", "single-stage"]
 
 
+@pytest.mark.povray
 def test_cli_hex_render_and_resampled_extract(tmp_path, cli):
     scene = write_textured_scene(tmp_path)
     out = tmp_path / "hex.png"

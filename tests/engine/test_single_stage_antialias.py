@@ -35,6 +35,7 @@ def clear_match(h3d: np.ndarray, la: LensArray, z0: float) -> float:
     return float(np.mean(classify(h3d)[clear] == expected[clear]))
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("quality", list(QUALITY_LEVELS))
 @pytest.mark.parametrize("z0", [7.3, -7.3], ids=["behind", "in-front"])
 def test_every_quality_keeps_clear_pixels(tmp_path, quality, z0):
@@ -46,6 +47,7 @@ def test_every_quality_keeps_clear_pixels(tmp_path, quality, z0):
     assert (k > 1) == (quality != "draft")
 
 
+@pytest.mark.povray
 def test_povray_antialiasing_on_the_capture_fails(tmp_path):
     # The former scheme, rendered directly: point capture, POV-Ray +A0.1 +AM2 +R3.
     z0 = 7.3
@@ -61,6 +63,7 @@ def test_povray_antialiasing_on_the_capture_fails(tmp_path):
     assert match < 0.99, f"the control should mix lenslets at lens borders, got {match:.4f}"
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("la", [
     LensArray("hex", 20, 16, 0.56, 0.56 * 3 ** 0.5 / 2, 1.2, Panel(120, 80, 0.1, 0.1)),
     LensArray("square", 20, 14, 0.65, 0.65, 1.2, Panel(130, 91, 0.1, 0.1)),

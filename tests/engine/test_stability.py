@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.support.render import render
+from tests.support.render import DRAFT, render
 from povh3d.geometry.camera_mesh import MIN_FRONT_CLEARANCE
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.geometry.footprint import CENTRE, angular_grid
@@ -31,7 +31,6 @@ from povh3d.scene.scene import load_scene
 
 from tests.support.scenes import classify, write_checker_plane
 
-DRAFT = RenderSettings(quality="draft", use_cache=False)
 
 
 def point_oracle(la: LensArray, z0: float, period: float, margin: float,
@@ -100,6 +99,7 @@ def render_scaled(tmp_path: Path, method: str, grid: str, scale: float) -> np.nd
 SCALE_TOLERANCE = 0.002
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method, grid", [("multi-ortho", "square"), ("multi-ortho", "lenticular"),
                                           ("multi-ortho-views", "square")])
 def test_same_scene_at_a_thousandth_one_and_a_thousand_gives_the_same_image(tmp_path, method, grid):
@@ -110,6 +110,7 @@ def test_same_scene_at_a_thousandth_one_and_a_thousand_gives_the_same_image(tmp_
         assert differ.mean() <= SCALE_TOLERANCE, f"scale {scale:g}: {differ.mean():.4f} of pixels differ"
 
 
+@pytest.mark.povray
 def test_scale_comparison_fails_where_povray_loses_shadows(tmp_path):
     """Negative control, and POV-Ray's own limit: at 1e-4 the scene's features are
     ~1e-4 mm apart, inside POV-Ray's shadow tolerance, so shadows vanish.  That is
@@ -119,6 +120,7 @@ def test_scale_comparison_fails_where_povray_loses_shadows(tmp_path):
     assert differ.mean() > 10 * SCALE_TOLERANCE
 
 
+@pytest.mark.povray
 def test_micrometre_panel_sees_its_screen(tmp_path):
     """A 14 um wide panel (the demo scaled by 1e-6): the default clearance of four
     panel widths fell under POV-Ray's nearest intersection depth (1e-4 mm) and the
@@ -155,6 +157,7 @@ CASES = {
 }
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("case", list(CASES))
 @pytest.mark.parametrize("side", [1, -1], ids=["behind", "in-front"])
 def test_extreme_arrays_trace_the_ray_of_every_pixel(tmp_path, case, side):
@@ -167,6 +170,7 @@ def test_extreme_arrays_trace_the_ray_of_every_pixel(tmp_path, case, side):
     assert_matches(h3d, expected, clear)
 
 
+@pytest.mark.povray
 def test_80_degree_views_agree_between_both_bank_methods(tmp_path):
     la = array_for("square", (16, 12), 6, 0.6, 80.0)
     scene = load_scene(write_checker_plane(tmp_path, 0.3, 0.37 * 0.6))
@@ -185,6 +189,7 @@ LONG_ROW = array_for("lenticular", (4000, 1), 4, 0.4, 80.0, rows=2)
 LONG_MARGIN = 5e-3 * LONG_ROW.pitch_x
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method", ["multi-ortho", "multi-ortho-views"])
 def test_4000_lenses_in_a_row_do_not_drift(tmp_path, method):
     """A checker of period 2.71 pitches 1.2 mm behind the screen: every lens sees a
@@ -236,6 +241,7 @@ ROUND_TRIP = [1e-300, 2.5e-9, 1 / 3 * 1e-5, -0.1, 2 / 3, 1.0000000000000002, 123
               -5.76e7, 9007199254740993.0, 1.5e20, 1e300]
 
 
+@pytest.mark.povray
 def test_povray_reads_our_numbers_back_exactly(tmp_path):
     """Each number as ``pov_number`` writes it (shortest repr, exponents like 1e-05)
     must parse to the same double as its 17-digit scientific form.  POV-Ray's ``!=``

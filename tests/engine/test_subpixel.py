@@ -95,6 +95,7 @@ def _subpixel_hits(tmp_path, la: LensArray, z0: float, half: float) -> np.ndarra
     return decode_positions(subpixel_image(mesh, tiles, out), half)
 
 
+@pytest.mark.povray
 @SHEETS
 @pytest.mark.parametrize("z0", [4.0, -4.0], ids=["behind", "in-front"])
 def test_every_subpixel_ray_in_povray(tmp_path, z0, sheet):
@@ -129,6 +130,7 @@ def _across(sheet: LensArray, sub: LensArray) -> np.ndarray:
     return (X - centres[..., 0]) * math.cos(t) + (Y - centres[..., 1]) * math.sin(t)
 
 
+@pytest.mark.povray
 def test_subpixel_render_writes_the_panel(tmp_path):
     scene = load_scene(write_checker_plane(tmp_path, 5.0, 2.0))
     result = run_method("subpixel", scene, SHEET, RenderSettings(quality="draft", use_cache=False))
@@ -136,6 +138,7 @@ def test_subpixel_render_writes_the_panel(tmp_path):
     assert result.record["subpixel_panel_px"] == [360, 48]
 
 
+@pytest.mark.povray
 def test_antialiased_render_averages_footprint_samples(tmp_path):
     """``--quality normal`` on a rational sheet: 3 x 3 footprint samples a subpixel (aperture and
     area), one frame each, averaged in linear light.  On a plane coding x and y linearly the
@@ -163,6 +166,7 @@ def test_antialiased_render_averages_footprint_samples(tmp_path):
     assert np.abs(coded[..., 0] - point[:, 0::3, 0]).max() > 5 * err
 
 
+@pytest.mark.povray
 def test_strips_cannot_antialias_and_say_so(tmp_path):
     scene = load_scene(write_checker_plane(tmp_path, 5.0, 2.0))
     with pytest.warns(Povh3dWarning, match="point-sampled"):

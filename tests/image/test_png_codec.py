@@ -96,6 +96,7 @@ def test_every_filter_type_is_undone(planes):
     assert np.array_equal(_pypng_read(data), image)  # the oracle encoder itself is right
 
 
+@pytest.mark.povray
 def test_povray_16_bit_output(tmp_path):
     """libpng's adaptive filters, as in every 16-bit frame povh3d reads."""
     scene = tmp_path / "s.pov"

@@ -1,5 +1,6 @@
 """Refocusing a rendered scene: the plane's depth is the sharpest of the sweep."""
 
+import pytest
 import numpy as np
 
 from tests.support.render import render
@@ -15,6 +16,7 @@ DEPTH = 6.0
 SWEEP = [-6.0, -3.0, 0.0, 3.0, DEPTH, 9.0, 12.0]
 
 
+@pytest.mark.povray
 def test_refocus_is_sharpest_at_the_textured_plane(tmp_path):
     la = square_array(lx=24, ly=16, nx=6, ny=6, s=0.1, f=1.5)
     scene = write_checker_plane(tmp_path, DEPTH, 1.2)

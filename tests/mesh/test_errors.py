@@ -150,6 +150,7 @@ def test_bad_options(tmp_path):
     assert only(tmp_path) == {"flat.obj"}
 
 
+@pytest.mark.povray
 def test_converted_include_parses_in_a_scene_without_assumed_gamma(tmp_path):
     """POV-Ray refuses ``srgb`` before ``assumed_gamma`` is set; a converted include must
     parse in any scene, here one with no global_settings at all (POV-Ray run directly)."""

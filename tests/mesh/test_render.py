@@ -11,6 +11,8 @@ from povh3d.mesh.raster import Window, iou, silhouette
 from tests.conftest import SAMPLES
 from tests.support.mesh_oracles import pov_silhouette
 
+pytestmark = pytest.mark.povray  # every test here starts POV-Ray
+
 
 @pytest.mark.parametrize("model", ["letter_l.stl", "blob.ply", "still_life.glb", "letter_f.obj"])
 def test_pov_silhouette_matches_numpy_raster(tmp_path, model):

@@ -74,6 +74,7 @@ def _scaled(x: float) -> int:
     return 23 - math.frexp(x)[1] + 1 if x else 0
 
 
+@pytest.mark.povray
 def test_povray_itself_reads_the_same_floats(workdir):
     # One triangle per value, the value its lowest x: min_extent is POV-Ray's float bounding box,
     # so it shows the float POV-Ray stored.  Printed times a power of two, as an exact integer.

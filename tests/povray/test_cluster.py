@@ -84,6 +84,7 @@ def scene_with_files(folder: Path) -> Path:
     return scene
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method", ["multi-ortho", "multi-ortho-views"])
 def test_same_pixels_as_the_local_pool(tmp_path: Path, address: str, method: str) -> None:
     scene = scene_with_files(tmp_path)
@@ -335,6 +336,7 @@ def kill_a_busy_worker(cluster: SpawnedCluster, seconds: float = 30) -> int:
     raise AssertionError("no worker ran POV-Ray")
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("workers", [2, 1], ids=["2-workers-one-killed", "1-worker-restarted-by-its-nanny"])
 def test_a_worker_killed_mid_render(tmp_path: Path, workers: int) -> None:
     jobs = busy_jobs(6)
@@ -429,6 +431,7 @@ def test_no_scheduler_fails_in_one_line_within_seconds(tmp_path: Path, cli, addr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["behind.pov"]
 
 
+@pytest.mark.povray
 def test_a_killed_client_stops_povray_on_the_worker(tmp_path: Path) -> None:
     with spawned_cluster(tmp_path, 1) as cluster:
         cluster.wait_for_workers(1)
@@ -458,6 +461,7 @@ def test_a_killed_client_stops_povray_on_the_worker(tmp_path: Path) -> None:
         assert list(cluster.tmp.glob("povh3d-job-*")) == []
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("resubmits", [dask_backend.RESUBMITS, 0], ids=["resubmitted", "control-none"])
 def test_jobs_the_scheduler_forgot_are_submitted_again(tmp_path: Path, address: str, resubmits: int,
                                                        monkeypatch: pytest.MonkeyPatch) -> None:

@@ -197,11 +197,13 @@ def test_missing_workdir(tmp_path: Path) -> None:
 
 # -- rendering ----------------------------------------------------------------
 
+@pytest.mark.povray
 @needs_povray
 def test_povray_version() -> None:
     assert povray_version().startswith("3.")
 
 
+@pytest.mark.povray
 @needs_povray
 def test_image_larger_than_povrays_default_buffer_stays_in_memory(workdir: Path) -> None:
     # Past +MI (default 128 MB, ~5 floats a pixel) POV-Ray 3.7 backs the image
@@ -214,6 +216,7 @@ def test_image_larger_than_povrays_default_buffer_stays_in_memory(workdir: Path)
     assert image.size == (2600, 2600) and image.getpixel((2599, 2599)) == (0, 255, 0)
 
 
+@pytest.mark.povray
 def test_single_frame_and_animation(workdir: Path) -> None:
     images: dict[str, list] = {}
     progress: list[tuple[int, int]] = []
@@ -246,6 +249,7 @@ def test_single_frame_and_animation(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 def test_sixteen_bit(workdir: Path) -> None:
     values = []
@@ -263,6 +267,7 @@ def test_sixteen_bit(workdir: Path) -> None:
     assert rgb == pytest.approx([32768, 16384, 65535], abs=2)
 
 
+@pytest.mark.povray
 @needs_povray
 @pytest.mark.parametrize(("start", "end"), [(2, 5), (0, 1), (7, 8)])
 def test_partial_rows(workdir: Path, start: int, end: int) -> None:
@@ -275,6 +280,7 @@ def test_partial_rows(workdir: Path, start: int, end: int) -> None:
     assert rendered == list(range(start, end))
 
 
+@pytest.mark.povray
 @needs_povray
 def test_include_and_image_map_outside_tmp(outside: Path) -> None:
     scene = outside / "scene folder"  # a space too, to test quoting
@@ -299,6 +305,7 @@ plane { z, 0 pigment { Left } finish { ambient 1 diffuse 0 } clipped_by { plane 
 
 # -- failures -----------------------------------------------------------------
 
+@pytest.mark.povray
 @needs_povray
 def test_parse_error_names_the_line(workdir: Path) -> None:
     with pytest.raises(PovrayError) as caught:
@@ -313,6 +320,7 @@ def test_parse_error_names_the_line(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 def test_missing_include_names_the_file(workdir: Path) -> None:
     with pytest.raises(PovrayError, match=r"view 1: .*nothere\.inc"):
@@ -321,6 +329,7 @@ def test_missing_include_names_the_file(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 def test_timeout(workdir: Path) -> None:
     began = time.monotonic()
@@ -331,6 +340,7 @@ def test_timeout(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 def test_failure_stops_the_other_jobs(workdir: Path) -> None:
     started: list[str] = []
@@ -345,6 +355,7 @@ def test_failure_stops_the_other_jobs(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 def test_interrupt_from_callback(workdir: Path) -> None:
     jobs = [PovrayJob("fast", FAST, 2, 2), PovrayJob("slow 1", SLOW, 2, 2),
@@ -358,6 +369,7 @@ def test_interrupt_from_callback(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 def test_interrupt_by_signal(workdir: Path) -> None:
     # Ctrl-C in a terminal sends SIGINT to Python only: children have their
@@ -377,6 +389,7 @@ def test_interrupt_by_signal(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 def test_callback_error_cleans_up(workdir: Path) -> None:
     def on_result(result: JobResult) -> None:
@@ -390,6 +403,7 @@ def test_callback_error_cleans_up(workdir: Path) -> None:
 
 # -- parallelism --------------------------------------------------------------
 
+@pytest.mark.povray
 @needs_povray
 def test_processes_limit_concurrency(workdir: Path) -> None:
     counts: list[int] = []
@@ -417,6 +431,7 @@ def _render_forever(workdir: str) -> None:
     run_jobs([PovrayJob("slow", SLOW, 2, 2)], processes=1, workdir=workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux-only prctl")
 def test_children_die_with_python(workdir: Path) -> None:
@@ -450,6 +465,7 @@ def _paced(frames: int, last: str = "") -> str:
             + f"#if (frame_number = {frames})\n{last}\n#end\n")
 
 
+@pytest.mark.povray
 @needs_povray
 def test_each_frame_is_handed_over_while_the_job_runs(workdir: Path) -> None:
     handed: list[tuple[int, int, bool]] = []
@@ -469,6 +485,7 @@ def test_each_frame_is_handed_over_while_the_job_runs(workdir: Path) -> None:
     assert_clean(workdir)
 
 
+@pytest.mark.povray
 @needs_povray
 @pytest.mark.parametrize("fault, error", [("#while (1) #end", PovrayTimeout), ("Foo", PovrayError)])
 def test_frames_before_a_timeout_or_a_failure_are_kept(workdir: Path, fault: str, error: type) -> None:

@@ -59,6 +59,7 @@ def test_this_kernel_has_landlock() -> None:
     assert sandbox.describe().startswith("landlock ABI")
 
 
+@pytest.mark.povray
 def test_reading_etc_passwd_fails_with_a_clear_error(workdir: Path) -> None:
     script = HEAD + '#fopen F "/etc/passwd" read\n' + PLANE.format("rgb 1")
     with pytest.raises(PovrayError) as caught:
@@ -69,12 +70,14 @@ def test_reading_etc_passwd_fails_with_a_clear_error(workdir: Path) -> None:
     assert list(workdir.iterdir()) == []
 
 
+@pytest.mark.povray
 def test_including_a_file_outside_the_job_fails(workdir: Path, outside: Path) -> None:
     script = HEAD + f'#include "{outside}/secret.inc"\n' + PLANE.format("Secret")
     with pytest.raises(PovrayError, match="Cannot open include file .*secret.inc"):
         run(script, workdir)
 
 
+@pytest.mark.povray
 def test_negative_control_unconfined_povray_reads_outside(workdir: Path, outside: Path,
                                                           unconfined: None) -> None:
     # The job's povray.conf says "restricted"; POV-Ray 3.7.0.10 reads it anyway.
@@ -83,6 +86,7 @@ def test_negative_control_unconfined_povray_reads_outside(workdir: Path, outside
     assert tuple(image[0, 0]) == (0, 255, 0)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("confined", [True, False], ids=["sandbox", "control-off"])
 def test_writing_outside_the_job_folder(workdir: Path, outside: Path, confined: bool,
                                         monkeypatch: pytest.MonkeyPatch) -> None:
@@ -99,6 +103,7 @@ def test_writing_outside_the_job_folder(workdir: Path, outside: Path, confined: 
         assert target.read_text() == "x"
 
 
+@pytest.mark.povray
 def test_allowed_job_folder_writes_system_includes_and_fonts(workdir: Path) -> None:
     # Writing in its own folder, POV-Ray's include files and fonts: all allowed.
     script = HEAD + """#include "colors.inc"
@@ -115,6 +120,7 @@ text { ttf "timrom.ttf" "A" 1, 0 pigment { Red } scale 0.01 translate 5*z }
     assert tuple(image[0, 0]) == (0, 0, 255)
 
 
+@pytest.mark.povray
 def test_read_files_allow_listed_and_not(workdir: Path, tmp_path: Path) -> None:
     scene = tmp_path / "scene"
     scene.mkdir()
@@ -133,6 +139,7 @@ def test_read_files_allow_listed_and_not(workdir: Path, tmp_path: Path) -> None:
     assert tuple(image[0, 0]) == (0, 0, 255)
 
 
+@pytest.mark.povray
 def test_render_of_a_scene_naming_etc_passwd(tmp_path: Path) -> None:
     # scene.py lists /etc/passwd among the scene's files (it exists and is
     # named); the sandbox still allows only the scene's own folders.
@@ -180,6 +187,7 @@ def _computed_read(path: Path) -> str:
             ).replace("Green", "rgb <0, 1, 0>")
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("secret", [0, 1], ids=["in-prefix", "beside-binary"])
 @pytest.mark.parametrize("place", sorted(PLACES))
 @pytest.mark.parametrize("confined", [True, False], ids=["sandbox", "control-off"])
@@ -205,6 +213,7 @@ def test_the_binary_location_does_not_widen_the_sandbox(tmp_path: Path, workdir:
         assert tuple(image[0, 0]) == (0, 255, 0)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("place", sorted(PLACES))
 def test_a_moved_binary_still_reads_the_scene_and_its_own_includes(tmp_path: Path, workdir: Path,
                                                                    place: str,
@@ -265,6 +274,7 @@ def test_system_paths_leave_out_etc() -> None:
     assert all(os.path.isabs(p) for p in paths)
 
 
+@pytest.mark.povray
 def test_sidecar_records_the_sandbox(tmp_path: Path) -> None:
     from tests.support.render import render
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 import json
 import os
 
@@ -23,6 +24,7 @@ def _runs(tmp_path) -> int:
     return len(path.read_text().splitlines()) if path.exists() else 0
 
 
+@pytest.mark.povray
 def test_asked_once_then_remembered_until_the_binary_changes(tmp_path, monkeypatch):
     cache = tmp_path / "cache"
     monkeypatch.setenv("POVH3D_CACHE", str(cache))

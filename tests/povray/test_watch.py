@@ -8,6 +8,13 @@ import time
 
 from povh3d.povray.job import collect_images
 from povh3d.povray.watch import LogProgress, sleep_until_exit
+from tests.support.waiting import wait_until
+
+
+def _is_zombie(pid: int) -> bool:
+    """The child has exited and nobody has reaped it yet (its state in /proc is Z)."""
+    with open(f"/proc/{pid}/stat") as stat:
+        return stat.read().rsplit(")", 1)[1].split()[0] == "Z"
 
 
 def _child(seconds: float) -> int:
@@ -43,8 +50,8 @@ def test_the_limit_ends_the_wait_while_children_run():
 
 def test_an_exited_unreaped_child_returns_at_once():
     pid = _child(0.0)
-    time.sleep(0.3)  # a zombie now
     try:
+        wait_until(lambda: _is_zombie(pid), 10.0, "a zombie")
         start = time.monotonic()
         sleep_until_exit([pid], None)
         assert time.monotonic() - start < 1.0

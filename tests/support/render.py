@@ -11,6 +11,11 @@ from povh3d.app.render import render as render_request
 from povh3d.app.request import RenderRequest
 from povh3d.engine.quality import RenderSettings
 
+# Draft quality for the oracles, rendered afresh: the test checks what POV-Ray makes, never a cache hit.
+DRAFT = RenderSettings(quality="draft", use_cache=False)
+# Draft quality through the cache, for the tests of what the cache gives back.
+DRAFT_CACHED = RenderSettings(quality="draft")
+
 
 def render(source: str | Path, lens_array: Any, output: str | Path, *, progress: Any = None,
            settings: RenderSettings | None = None, include_dirs: tuple = (),

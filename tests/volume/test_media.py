@@ -87,6 +87,7 @@ def blob_renders(tmp_path_factory):
                          for step, bits in ((1.0, 16), (0.25, 16), (1.0, 8))}
 
 
+@pytest.mark.povray
 def test_media_matches_the_ray_march(blob_renders):
     volume, w2d, images = blob_renders
     coarse, fine = compare(images[1.0, 16], volume, w2d, TRANSFER), compare(images[0.25, 16], volume, w2d, TRANSFER)
@@ -96,6 +97,7 @@ def test_media_matches_the_ray_march(blob_renders):
     assert compare(images[1.0, 8], volume, w2d, TRANSFER) >= 35.0, "8-bit df3"
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("wrong", ["half-voxel", "mirrored"])
 def test_a_misplaced_volume_fails_the_same_check(blob_renders, wrong):
     volume, w2d, images = blob_renders
@@ -104,6 +106,7 @@ def test_a_misplaced_volume_fails_the_same_check(blob_renders, wrong):
     assert compare(images[0.25, 16], moved, w2d, TRANSFER) < 45.0
 
 
+@pytest.mark.povray
 def test_label_volume_nearest_voxel(tmp_path):
     volume = tissues()
     w2d = placement(volume, "axial", (10, -25, 5))
