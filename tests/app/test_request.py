@@ -95,8 +95,10 @@ def test_auto_quality_is_chosen_once_for_an_animation(tmp_path, monkeypatch):
     moving = tmp_path / "moving.pov"
     moving.write_text(SCENE.replace("<0.3, -0.2, 1.0>", "<0.3 + clock, -0.2, 1.0>"))
     calls = []
-    real = render_module.resolve_auto
-    monkeypatch.setattr(render_module, "resolve_auto", lambda *a, **k: calls.append(1) or real(*a, **k))
+    import povh3d.engine.auto as auto_module  # app.render imports it where the quality is resolved
+
+    real = auto_module.resolve_auto
+    monkeypatch.setattr(auto_module, "resolve_auto", lambda *a, **k: calls.append(1) or real(*a, **k))
     out = tmp_path / "auto.png"
     assert run(["render", moving, "-o", out, *SMALL, "--quality", "auto", "--max-error", "20",
                 "--frames", "0:2"]) == 0
