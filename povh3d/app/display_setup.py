@@ -153,7 +153,9 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
     if method == "subpixel":
         return _subpixel_sheet(display, mapping, options, calibration)
     if mapping:
-        built, _ = mapping_for_display(mapping, display, calibration=calibration, **options)
+        built, panel = mapping_for_display(mapping, display, calibration=calibration, **options)
+        if calibration is not None and is_visual(read_calibration(calibration)):
+            return replace(display, mapping=built, physical_panel=panel)  # the file's screen is the panel
         return replace(display, mapping=built)
     return display
 
@@ -199,12 +201,49 @@ def mapping_for_display(name: str, display: Display, *, calibration: str | Path 
     from ..mappings import build_mapping, options_from_display
 
     panel = display.physical_panel or display.lens_array.panel
+    if calibration is not None and is_visual(data := read_calibration(calibration)):
+        if name != "slanted":
+            raise ConfigError(f"a Looking Glass calibration gives a slanted sheet, not mapping {name!r}; "
+                              "use --mapping slanted")
+        return _visual_mapping(data, display, **options)
     fields = {k: v for k, v in (("slant_deg", display.slant_deg), ("views", display.views)) if v is not None}
     fields.update(lens_pitch=display.lens_array.pitch_x, pixel_pitch=panel.pitch_x)
     if calibration is not None:
         options["calibration"] = read_calibration(calibration)
     opts = options_from_display(fields, display.lens_array.pitch_x / panel.pitch_x, **options)
     return build_mapping(name, opts), panel
+
+
+def is_visual(data: Any) -> bool:
+    """Whether a calibration file's JSON holds the Looking Glass fields (``pitch``): a unit's
+    ``visual.json`` or ``povh3d calibrate --dpi`` output.  Without them it is a pixel file."""
+    return isinstance(data, dict) and "pitch" in data
+
+
+def _visual_mapping(data: dict[str, Any], display: Display, *, views: int | None = None, blend: bool = False,
+                    **others: Any) -> tuple[Mapping, Panel]:
+    """The slanted mapping of a Looking Glass calibration and the panel it describes: the file's
+    ``screenW x screenH`` pixels of ``25.4 / DPI`` mm.  A preset's own panel, or a Looking Glass
+    device's calibration, that the file contradicts is refused."""
+    from ..devices.looking_glass import DEVICES, check_panel, parse_visual
+    from ..mappings import from_calibration
+    from ..mappings.looking_glass_shader import slanted_mapping
+
+    from_calibration(data, 1)  # its fields present, and its pixel fields (calibrate --dpi) consistent with them
+    cal = parse_visual(data)
+    if display.preset in DEVICES:
+        DEVICES[display.preset].check(cal)
+    if display.physical_panel is not None:
+        p = display.physical_panel
+        check_panel(cal, (p.width, p.height), p.pitch_x)
+    views = views or display.views
+    if not views:
+        raise ConfigError("a Looking Glass calibration needs the view count; give it with --views")
+    unused = sorted(k for k, v in others.items() if v not in (None, False))
+    if unused:
+        raise ConfigError(f"the calibration gives the sheet; drop --{', --'.join(k.replace('_', '-') for k in unused)}")
+    pitch = cal.pixel_pitch_mm
+    return slanted_mapping(cal, int(views), blend=bool(blend)), Panel(cal.screen_w, cal.screen_h, pitch, pitch)
 
 
 def read_calibration(path: str | Path) -> Any:
