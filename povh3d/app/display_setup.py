@@ -39,6 +39,8 @@ class Display:
                                    ``mapped_panel``
     sheet : mapping or None        where the traced sheet came from (``--method subpixel``): the
                                    preset's mapping and offset, or a calibration and its ``shift_mm``
+    quilt : mapping or None        a Looking Glass preset's quilt (``app.device_quilt``): ``device``
+                                   and the unit's ``calibration`` file (None: the factory one)
     """
 
     lens_array: LensArray
@@ -50,6 +52,7 @@ class Display:
     physical_panel: Panel | None = None
     mapping: Mapping | None = None
     sheet: MappingABC[str, Any] | None = None
+    quilt: MappingABC[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.lens_array, LensArray):
@@ -94,6 +97,8 @@ class Display:
             display["physical_panel"] = {"size_px": [p.width, p.height], "pixel_pitch_mm": [p.pitch_x, p.pitch_y]}
         if self.sheet is not None:
             display["sheet"] = dict(self.sheet)
+        if self.quilt is not None:
+            display["quilt"] = dict(self.quilt)
         return {"lens_array": self.render_array.as_record(), "display": display}
 
     @classmethod
@@ -110,7 +115,7 @@ class Display:
         d = record.get("display") or {}
         return cls(lens_array, d.get("preset"), d.get("description"), d.get("views"), d.get("slant_deg"),
                    d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
-                   sheet=d.get("sheet"))
+                   sheet=d.get("sheet"), quilt=d.get("quilt"))
 
 
 def _panel(record: MappingABC[str, Any]) -> Panel:
@@ -147,6 +152,12 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
             raise ConfigError("a lens array of your own takes no preset overrides; build it with them instead")
         display = Display(lens_array)
     options = {k: v for k, v in (mapping_options or {}).items() if v is not None}
+    given = {k: v for k, v in (overrides or {}).items() if v is not None}
+    if lens_array is None and not given and not mapping and method != "subpixel" and not options:
+        from ..devices.looking_glass import DEVICES
+
+        if preset in DEVICES:  # the device's views at its tile size, for its quilt
+            return _device_display(display, DEVICES[preset], calibration)
     if calibration is not None and not mapping and method != "subpixel":
         raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
                           "add one of them, or drop --calibration")
@@ -158,6 +169,16 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
             return replace(display, mapping=built, physical_panel=panel)  # the file's screen is the panel
         return replace(display, mapping=built)
     return display
+
+
+def _device_display(display: Display, device: Any, calibration: str | Path | None) -> Display:
+    """A Looking Glass preset rendered for its quilt (``app.device_quilt``): the camera bank of
+    one lens per tile pixel over the panel, spanning the unit's view cone."""
+    from .device_quilt import device_calibration, quilt_array
+
+    cal = device_calibration(device, calibration)
+    spec = {"device": device.name, "calibration": None if calibration is None else str(Path(calibration).resolve())}
+    return replace(display, lens_array=quilt_array(device, cal), views=device.views, mapping_name=None, quilt=spec)
 
 
 def _subpixel_sheet(display: Display, mapping: str | None, options: dict[str, Any],

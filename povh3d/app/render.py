@@ -25,6 +25,7 @@ from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
 from .depth_maps import check_depth_dir, write_depth_maps
+from .device_quilt import check_device_render, write_device_outputs
 from ..engine.depth import view_depth_maps
 from ..engine.frames import sandbox_in_use as describe_sandbox
 from ..scene.scene import Scene, load_scene
@@ -48,6 +49,8 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         check_views_dir(request.views_dir)
     if request.depth_maps is not None:
         check_depth_dir(request.depth_maps)
+    if request.display.quilt is not None:  # a Looking Glass preset: its quilt beside the output
+        check_device_render(request.display.quilt, output, request.frames is not None)
     scene, model_record = load_content(request)
     request, frame_record = place_display(request, scene)
     settings, auto = _resolve_quality(request, scene, progress)
@@ -65,6 +68,9 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
             write_depth_maps(request.depth_maps, depth, request.render_array, still.record, request.depth_format)
             still.record["depth_maps"] = {"folder": str(request.depth_maps),
                                           "nan_fraction": float(np.isnan(depth).mean())}
+        if request.display.quilt is not None:
+            still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
+                                                         request.display.quilt, still.record)
         write_image(output, still.image, still.record)
         return still.record
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
