@@ -189,6 +189,15 @@ def cmd_preview(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_dataset(args: argparse.Namespace) -> int:
+    from ..app.dataset import dataset_from_render
+
+    written = dataset_from_render(args.h3d, args.output, all_views=args.all_views)
+    cams = sum(1 for p in written if p.name.startswith("input_Cam"))
+    print(f"{args.output}  HCI layout: {cams} cameras, {len(written)} files")
+    return 0
+
+
 def cmd_moire(args: argparse.Namespace) -> int:
     from ..app.moire import moire_sweep_file, parse_range
 
@@ -274,6 +283,12 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--scale", type=positive_int, help="enlarge each lens to this many pixels")
     add_image_lens_options(p)
     p.set_defaults(func=cmd_preview)
+
+    p = sub.add_parser("dataset", help="an H3D render (with its sidecar) as an HCI 4D light-field dataset")
+    p.add_argument("h3d")
+    p.add_argument("-o", "--output", required=True, help="folder for input_CamNNN.png, parameters.cfg, *.pfm")
+    p.add_argument("--all-views", action="store_true", help="disparity and depth for every camera")
+    p.set_defaults(func=cmd_dataset)
 
     p = sub.add_parser("moire", help="moire of a cross-lenticular sheet against its slant (plot + sidecar)")
     p.add_argument("-o", "--output", required=True, help="plot .png (its sidecar holds the numbers)")
