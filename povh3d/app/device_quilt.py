@@ -23,7 +23,6 @@ import numpy as np
 from ..devices.looking_glass import Calibration, Device, read_visual
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray, Panel
-from ..image.interleave import extract
 from ..image.io import check_writable
 from ..image.quilt import bank_to_quilt_order, quilt_name, views_to_quilt
 from .records import base_record, write_image
@@ -64,7 +63,12 @@ def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Pat
 def device_quilt(h3d: np.ndarray, array: LensArray, device: Device) -> np.ndarray:
     """The device's quilt ``(Hq, Wq, C)`` of a render of ``quilt_array``: tiles from the bottom
     left, padding (black) right and top up to the device's quilt size."""
-    views = bank_to_quilt_order(extract(h3d[array.bank_region], array.require_views()))
+    ny, n = array.require_views()
+    region = h3d[array.bank_region]
+    # one row of views: bank view k, pixel (i, j) is region[i, j n + k] (interleave.extract's
+    # layout, by a reshape: no compiled gather to load for one image)
+    bank = region.reshape(region.shape[0], array.lenses_x, n, region.shape[2]).transpose(2, 0, 1, 3)[None]
+    views = bank_to_quilt_order(bank)
     tiled = views_to_quilt(views, *device.grid)
     wq, hq = device.quilt_size
     if tiled.shape[0] > hq or tiled.shape[1] > wq:   # a bug: the tiles are the quilt divided by the grid
