@@ -56,6 +56,9 @@ def test_portrait_render_writes_the_quilt_and_the_native_image(tmp_path, cli):
     share = agreement(native, quilt, (8, 6), PORTRAIT.calibration, samples=20_000)
     assert share >= 0.999
     assert agreement(native, quilt, (8, 6), PORTRAIT.calibration, samples=20_000, slope_sign=-1.0) < 0.999
+    again = cli("quilt", out, "--quilt", "auto", "-o", tmp_path / "again")   # the device's grid and aspect
+    assert again.code == 0, again.err
+    assert np.array_equal(read_png(tmp_path / "again" / quilt_path.name), quilt)
     record = read_sidecar(out)
     assert record["quilt"]["file"] == quilt_path.name and record["quilt"]["view_cone_deg"] == 40.0
     assert record["display"]["quilt"]["device"] == "looking-glass-portrait"
