@@ -29,8 +29,10 @@ def bank_geometry(lens_array: LensArray) -> BankGeometry:
     return BankGeometry(lens_array.panel.pitch_x, lens_array.pitch_x, lens_array.focal, views)
 
 
-def check_dataset_dir(folder: Path, lens_array: LensArray) -> None:
-    """Before any work: the bank fits HCI's layout and ``folder`` holds no dataset already."""
+def check_dataset_dir(folder: Path, lens_array: LensArray, *, mapped: bool = False) -> None:
+    """Before any work: an unmapped bank that fits HCI's layout, and ``folder`` holding no dataset."""
+    if mapped:
+        raise ConfigError("--dataset exports the camera bank's views; drop --mapping (map the image afterwards)")
     bank_geometry(lens_array)
     if folder.exists() and not folder.is_dir():
         raise OutputError(f"--dataset {str(folder)!r} is a file; give a folder")

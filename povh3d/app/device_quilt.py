@@ -76,8 +76,7 @@ def device_quilt(h3d: np.ndarray, array: LensArray, device: Device) -> np.ndarra
     return np.pad(tiled, ((hq - tiled.shape[0], 0), (0, wq - tiled.shape[1]), (0, 0)))
 
 
-def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: dict[str, Any],
-                         record: dict[str, Any]) -> dict[str, Any]:
+def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: dict[str, Any]) -> dict[str, Any]:
     """Write the quilt (and with a calibration the native panel image) of a device render beside
     ``output``; return the sidecar's ``quilt`` entry."""
     from ..devices.looking_glass import device

@@ -53,9 +53,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.display.quilt is not None:  # a Looking Glass preset: its quilt beside the output
         check_device_render(request.display.quilt, output, request.frames is not None)
     if request.dataset is not None:
-        if request.display.mapping is not None:
-            raise ConfigError("--dataset exports the camera bank's views; drop --mapping (map the image afterwards)")
-        check_dataset_dir(request.dataset, request.render_array)
+        check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
     request, frame_record = place_display(request, scene)
     settings, auto = _resolve_quality(request, scene, progress)
@@ -81,7 +79,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
                                           "nan_fraction": float(np.isnan(depth).mean())}
         if request.display.quilt is not None:
             still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
-                                                         request.display.quilt, still.record)
+                                                         request.display.quilt)
         write_image(output, still.image, still.record)
         return still.record
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
