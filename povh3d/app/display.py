@@ -42,6 +42,10 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
                           f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
     if ppl is None and side.get("views"):
         ppl = from_edge([int(v) for v in side["views"]])
+    if ppl is None and side:  # a sidecar whose array has no whole-pixel views (hex, fractional PPL): say why
+        from .display_setup import Display
+
+        Display.from_record({"lens_array": side}).lens_array.require_views()
     if ppl is None:
         raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
     focal = focal if focal is not None else side.get("focal_mm")
