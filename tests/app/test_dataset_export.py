@@ -30,6 +30,7 @@ plane {{ -z, {-z0!r} pigment {{ checker rgb 0.2 rgb 0.6 }} finish {{ ambient 0 d
     return path
 
 
+@pytest.mark.povray  # main registers the marker (make test-fast leaves it out)
 @pytest.mark.parametrize("z0", [-3.0, 3.0])
 def test_plane_disparity_is_geometry_with_hcis_sign(tmp_path, cli, z0):
     out, folder = tmp_path / "h3d.png", tmp_path / "hci"

@@ -35,6 +35,7 @@ def test_quilt_array_spans_the_cone_at_the_tile_size(name):
     assert math.degrees(2 * math.atan(la.pitch_x / (2 * la.focal))) == pytest.approx(d.calibration.view_cone)
 
 
+@pytest.mark.povray  # main registers the marker (make test-fast leaves it out)
 def test_portrait_render_writes_the_quilt_and_the_native_image(tmp_path, cli):
     cal = tmp_path / "visual.json"
     cal.write_text(visual_json(PORTRAIT.calibration))
