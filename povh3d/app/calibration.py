@@ -59,11 +59,25 @@ def calibrate_lenticular_file(white: str | Path, output: str | Path, *, dpi: flo
     check_writable(output)
     t = time.perf_counter()
     fit = calibrate_lenticular(image, distortion=distortion, name=repr(str(white)))
-    record = {**fit.as_record(dpi), "seconds": round(time.perf_counter() - t, 3),
+    record = {**fit.as_record(), **_looking_glass_fields(fit, dpi), "seconds": round(time.perf_counter() - t, 3),
               "white_image": str(Path(white).resolve())}
     with atomic_path(output) as tmp:
         tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     return record
+
+
+def _looking_glass_fields(fit: Any, dpi: float | None) -> dict[str, Any]:
+    """The sheet's Looking Glass fields written the vendor's way, every number ``{"value": x}``
+    (``devices.looking_glass.visual_fields``); none without ``dpi`` or for an unslanted sheet.
+    A white image measures no view cone, so none is written (a reader would take a default)."""
+    if dpi is None or fit.slant_deg == 0:
+        return {}
+    from ..devices.looking_glass import parse_visual, visual_fields
+
+    fields = visual_fields(parse_visual(fit.looking_glass(dpi)))
+    for unmeasured in ("viewCone", "serial", "verticalAngle", "flipSubp", "fringe"):
+        fields.pop(unmeasured, None)
+    return fields
 
 
 def _load(image_path: str | Path, grid_path: str | Path) -> tuple[np.ndarray, Grid]:

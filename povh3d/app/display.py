@@ -24,8 +24,8 @@ from .records import base_record, png_output, write_image
 from ..image.interleave import extract, interleave
 from ..mappings import Mapping
 from ..mappings.sampling import Source
-from ..image.quilt import (bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
-                           quilt_to_views, views_to_quilt)
+from ..image.quilt import (auto_grid, bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
+                           quilt_to_views, view_aspect, views_to_quilt)
 from ..image.refocus import contact_sheet, gradient_energy, refocus_linear
 from ..image.colour import from_linear, to_linear
 from ..image.resample import resample_micro_images, trade_views_for_lenses
@@ -42,6 +42,10 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
                           f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
     if ppl is None and side.get("views"):
         ppl = from_edge([int(v) for v in side["views"]])
+    if ppl is None and side:  # a sidecar whose array has no whole-pixel views (hex, fractional PPL): say why
+        from .display_setup import Display
+
+        Display.from_record({"lens_array": side}).lens_array.require_views()
     if ppl is None:
         raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
     focal = focal if focal is not None else side.get("focal_mm")
@@ -73,6 +77,20 @@ def is_lenticular(path: str | Path) -> bool:
     except InputError:
         return False
     return side.get("grid") == "lenticular"
+
+
+def read_whole_lenses(path: str | Path) -> np.ndarray:
+    """An H3D PNG cut to the lenses its sidecar's lens array holds: a lenticular array of
+    341 lenses of 6 px is centred on a 2048 px panel (``ipad-retina``), so 1 px either side
+    is no lens's; ``extract`` reads the same region.  Without a sidecar, the whole image."""
+    image = read_png(path)
+    side = (read_sidecar(path) or {}).get("lens_array")
+    if not side:
+        return image
+    from .views import sidecar_array
+
+    lens_array = sidecar_array(image, path)
+    return image[lens_array.bank_region] if lens_array.views is not None else image
 
 
 def _need(value: Any, what: str, flag: str) -> Any:
@@ -140,7 +158,7 @@ def _params(mapping: Mapping) -> dict[str, Any]:
 # -- resample ----------------------------------------------------------------------------------------
 def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int, int],
                   ppl_out: tuple[int, int], mode: str = "micro") -> dict[str, Any]:
-    image = read_png(input_path)
+    image = read_whole_lenses(input_path)
     out = png_output(output)
     try:
         if mode == "micro":
@@ -186,31 +204,75 @@ def _resampled_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tu
 
 
 # -- quilts ------------------------------------------------------------------------------------------
-def export_quilt(h3d_path: str | Path, ppl: int, grid: tuple[int, int], output_dir: str | Path,
-                 aspect: float | None = None) -> Path:
-    """Write the views of a lenticular H3D image as ``stem_qs{c}x{r}a{aspect}.png`` in ``output_dir``."""
+def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, int] | str | None,
+                 *, ppl: tuple[int, int] | None = None, aspect: float | None = None,
+                 rows: str | None = None) -> Path:
+    """Write the views of an H3D image as ``stem_qs{c}x{r}a{aspect}.png`` in ``output_dir``.
+
+    The views come from the sidecar's lens array (its camera bank, or each lens resampled on
+    a hex array, as ``extract``), else from ``ppl``.  ``grid``: ``(cols, rows)`` or ``"auto"``
+    (``image.quilt.auto_grid``: a Looking Glass preset's own layout when the views fill it).
+    ``rows``: which rows of a square or hex bank (``centre`` or ``all``).  The aspect in the
+    name is the view's physical shape (``quilt_aspect``), unless ``aspect`` is given.
+    """
+    from .views import sidecar_array, sidecar_bank
+
     image = read_png(h3d_path)
-    try:
-        bank = extract(image, (1, ppl))
-    except ValueError as exc:
-        raise ConfigError(str(exc)) from None
-    views = bank_to_quilt_order(bank)
-    if views.shape[0] != grid[0] * grid[1]:
-        raise ConfigError(f"{views.shape[0]} views do not fill a {grid[0]}x{grid[1]} quilt exactly; "
-                          f"give --quilt with cols x rows = {views.shape[0]}")
-    h, w = views.shape[1:3]
-    aspect = aspect or w / h
+    record = read_sidecar(h3d_path) or {}
+    display = None
+    if record.get("lens_array"):
+        from .display_setup import Display
+
+        display = Display.from_record(record)
+        if ppl is not None and display.lens_array.views not in (None, tuple(ppl)):
+            raise ConfigError(f"--ppl contradicts the sidecar of {str(h3d_path)!r}; leave --ppl out")
+        bank = sidecar_bank(image, sidecar_array(image, h3d_path))
+    else:
+        if ppl is None:
+            raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
+        try:
+            bank = extract(image, ppl)
+        except ValueError as exc:
+            raise ConfigError(str(exc)) from None
+    views = bank_to_quilt_order(bank, rows)
+    n, h, w = views.shape[:3]
+    device = _device(display)
+    if grid is None or grid == "auto":
+        grid = auto_grid(n, (h, w), device.grid if device else None)
+    if n != grid[0] * grid[1]:
+        raise ConfigError(f"{n} views do not fill a {grid[0]}x{grid[1]} quilt exactly; "
+                          f"give --quilt with cols x rows = {n}, or --quilt auto")
+    aspect = aspect or quilt_aspect(display, image.shape[:2])
     folder = Path(output_dir)
-    folder.mkdir(parents=True, exist_ok=True)
     out = folder / quilt_name(Path(h3d_path).stem, grid[0], grid[1], aspect)
+    folder.mkdir(parents=True, exist_ok=True)
     check_writable(out)
-    record = base_record("quilt", grid=list(grid), aspect=aspect, views=int(views.shape[0]),
-                         source=str(Path(h3d_path).resolve()))
-    side = (read_sidecar(h3d_path) or {}).get("lens_array")
-    if side:  # so that importing the quilt gives back the H3D image with its lens array
-        record["source_lens_array"] = side
-    write_image(out, views_to_quilt(views, *grid), record)
+    out_record = base_record("quilt", grid=list(grid), aspect=aspect, views=int(n), rows=rows or "centre",
+                             source=str(Path(h3d_path).resolve()))
+    if record.get("lens_array"):  # so that importing the quilt gives back the H3D image with its lens array
+        out_record["source_lens_array"] = record["lens_array"]
+    write_image(out, views_to_quilt(views, *grid), out_record)
     return out
+
+
+def _device(display: Any) -> Any:
+    """The Looking Glass device a display's preset names, or None."""
+    from ..devices.looking_glass import DEVICES
+
+    return DEVICES.get(display.preset) if display is not None and display.preset else None
+
+
+def quilt_aspect(display: Any, shape: tuple[int, int]) -> float:
+    """The view's physical aspect: a Looking Glass preset's own (its panel's), else the physical
+    panel's extent (a slanted preset's panel, not its view-space image), else, without a
+    sidecar, the image's with square pixels."""
+    device = _device(display)
+    if device is not None:
+        return device.aspect
+    if display is None:
+        return view_aspect(shape[1], shape[0])
+    p = display.physical_panel or display.lens_array.panel
+    return view_aspect(p.width * p.pitch_x, p.height * p.pitch_y)
 
 
 def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, int] | None = None,
@@ -257,7 +319,7 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
 
     A sweep writes ``output`` as the contact sheet and ``stem_NNN.png`` per plane beside it.
     """
-    image = read_png(h3d_path)
+    image = read_whole_lenses(h3d_path)
     views, offsets, pitch, focal = _views_geometry(image, info)
     out = png_output(output)
     lin = to_linear(views, np.float32)
@@ -290,7 +352,7 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     output = Path(output)
     if output.suffix.lower() != ".gif":
         raise ConfigError(f"the preview {str(output)!r} must be a .gif file")
-    image = read_png(h3d_path)
+    image = read_whole_lenses(h3d_path)
     ny, nx = info["ppl"]
     focal = _need(info["focal"], "focal length", "--focal")
     sx = _need(info["pixel_pitch"], "pixel pitch", "--pixel-pitch")

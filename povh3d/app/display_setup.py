@@ -39,6 +39,8 @@ class Display:
                                    ``mapped_panel``
     sheet : mapping or None        where the traced sheet came from (``--method subpixel``): the
                                    preset's mapping and offset, or a calibration and its ``shift_mm``
+    quilt : mapping or None        a Looking Glass preset's quilt (``app.device_quilt``): ``device``
+                                   and the unit's ``calibration`` file (None: the factory one)
     """
 
     lens_array: LensArray
@@ -50,6 +52,7 @@ class Display:
     physical_panel: Panel | None = None
     mapping: Mapping | None = None
     sheet: MappingABC[str, Any] | None = None
+    quilt: MappingABC[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.lens_array, LensArray):
@@ -94,6 +97,8 @@ class Display:
             display["physical_panel"] = {"size_px": [p.width, p.height], "pixel_pitch_mm": [p.pitch_x, p.pitch_y]}
         if self.sheet is not None:
             display["sheet"] = dict(self.sheet)
+        if self.quilt is not None:
+            display["quilt"] = dict(self.quilt)
         return {"lens_array": self.render_array.as_record(), "display": display}
 
     @classmethod
@@ -110,7 +115,7 @@ class Display:
         d = record.get("display") or {}
         return cls(lens_array, d.get("preset"), d.get("description"), d.get("views"), d.get("slant_deg"),
                    d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
-                   sheet=d.get("sheet"))
+                   sheet=d.get("sheet"), quilt=d.get("quilt"))
 
 
 def _panel(record: MappingABC[str, Any]) -> Panel:
@@ -147,15 +152,33 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
             raise ConfigError("a lens array of your own takes no preset overrides; build it with them instead")
         display = Display(lens_array)
     options = {k: v for k, v in (mapping_options or {}).items() if v is not None}
+    given = {k: v for k, v in (overrides or {}).items() if v is not None}
+    if lens_array is None and not given and not mapping and method != "subpixel" and not options:
+        from ..devices.looking_glass import DEVICES
+
+        if preset in DEVICES:  # the device's views at its tile size, for its quilt
+            return _device_display(display, DEVICES[preset], calibration)
     if calibration is not None and not mapping and method != "subpixel":
         raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
                           "add one of them, or drop --calibration")
     if method == "subpixel":
         return _subpixel_sheet(display, mapping, options, calibration)
     if mapping:
-        built, _ = mapping_for_display(mapping, display, calibration=calibration, **options)
+        built, panel = mapping_for_display(mapping, display, calibration=calibration, **options)
+        if calibration is not None and is_visual(read_calibration(calibration)):
+            return replace(display, mapping=built, physical_panel=panel)  # the file's screen is the panel
         return replace(display, mapping=built)
     return display
+
+
+def _device_display(display: Display, device: Any, calibration: str | Path | None) -> Display:
+    """A Looking Glass preset rendered for its quilt (``app.device_quilt``): the camera bank of
+    one lens per tile pixel over the panel, spanning the unit's view cone."""
+    from .device_quilt import device_calibration, quilt_array
+
+    cal = device_calibration(device, calibration)
+    spec = {"device": device.name, "calibration": None if calibration is None else str(Path(calibration).resolve())}
+    return replace(display, lens_array=quilt_array(device, cal), views=device.views, mapping_name=None, quilt=spec)
 
 
 def _subpixel_sheet(display: Display, mapping: str | None, options: dict[str, Any],
@@ -199,12 +222,49 @@ def mapping_for_display(name: str, display: Display, *, calibration: str | Path 
     from ..mappings import build_mapping, options_from_display
 
     panel = display.physical_panel or display.lens_array.panel
+    if calibration is not None and is_visual(data := read_calibration(calibration)):
+        if name != "slanted":
+            raise ConfigError(f"a Looking Glass calibration gives a slanted sheet, not mapping {name!r}; "
+                              "use --mapping slanted")
+        return _visual_mapping(data, display, **options)
     fields = {k: v for k, v in (("slant_deg", display.slant_deg), ("views", display.views)) if v is not None}
     fields.update(lens_pitch=display.lens_array.pitch_x, pixel_pitch=panel.pitch_x)
     if calibration is not None:
         options["calibration"] = read_calibration(calibration)
     opts = options_from_display(fields, display.lens_array.pitch_x / panel.pitch_x, **options)
     return build_mapping(name, opts), panel
+
+
+def is_visual(data: Any) -> bool:
+    """Whether a calibration file's JSON holds the Looking Glass fields (``pitch``): a unit's
+    ``visual.json`` or ``povh3d calibrate --dpi`` output.  Without them it is a pixel file."""
+    return isinstance(data, dict) and "pitch" in data
+
+
+def _visual_mapping(data: dict[str, Any], display: Display, *, views: int | None = None, blend: bool = False,
+                    **others: Any) -> tuple[Mapping, Panel]:
+    """The slanted mapping of a Looking Glass calibration and the panel it describes: the file's
+    ``screenW x screenH`` pixels of ``25.4 / DPI`` mm.  A preset's own panel, or a Looking Glass
+    device's calibration, that the file contradicts is refused."""
+    from ..devices.looking_glass import DEVICES, check_panel, parse_visual
+    from ..mappings import from_calibration
+    from ..mappings.looking_glass_shader import slanted_mapping
+
+    from_calibration(data, 1)  # its fields present, and its pixel fields (calibrate --dpi) consistent with them
+    cal = parse_visual(data)
+    if display.preset in DEVICES:
+        DEVICES[display.preset].check(cal)
+    if display.physical_panel is not None:
+        p = display.physical_panel
+        check_panel(cal, (p.width, p.height), p.pitch_x)
+    views = views or display.views
+    if not views:
+        raise ConfigError("a Looking Glass calibration needs the view count; give it with --views")
+    unused = sorted(k for k, v in others.items() if v not in (None, False))
+    if unused:
+        raise ConfigError(f"the calibration gives the sheet; drop --{', --'.join(k.replace('_', '-') for k in unused)}")
+    pitch = cal.pixel_pitch_mm
+    return slanted_mapping(cal, int(views), blend=bool(blend)), Panel(cal.screen_w, cal.screen_h, pitch, pitch)
 
 
 def read_calibration(path: str | Path) -> Any:

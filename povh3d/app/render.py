@@ -25,6 +25,8 @@ from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
 from .depth_maps import check_depth_dir, write_depth_maps
+from .dataset import check_dataset_dir, write_dataset
+from .device_quilt import check_device_render, write_device_outputs
 from ..engine.depth import view_depth_maps
 from ..engine.frames import sandbox_in_use as describe_sandbox
 from ..scene.scene import Scene, load_scene
@@ -48,6 +50,10 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         check_views_dir(request.views_dir)
     if request.depth_maps is not None:
         check_depth_dir(request.depth_maps)
+    if request.display.quilt is not None:  # a Looking Glass preset: its quilt beside the output
+        check_device_render(request.display.quilt, output, request.frames is not None)
+    if request.dataset is not None:
+        check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
     request, frame_record = place_display(request, scene)
     settings, auto = _resolve_quality(request, scene, progress)
@@ -58,13 +64,22 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         _warn_unlit(scene)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
-        if request.depth_maps is not None:
+        depth = None
+        if request.depth_maps is not None or request.dataset is not None:
             units = frame_record.get("units_per_mm", 1.0)
             depth = view_depth_maps(scene, request.render_array, settings,
                                     still.record["quality"]["front_clearance_mm"], units)
+        if request.dataset is not None:
+            write_dataset(request.dataset, still.image, request.render_array, depth,
+                          all_views=request.dataset_all_views, scene=scene.path.stem)
+            still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
+        if request.depth_maps is not None:
             write_depth_maps(request.depth_maps, depth, request.render_array, still.record, request.depth_format)
             still.record["depth_maps"] = {"folder": str(request.depth_maps),
                                           "nan_fraction": float(np.isnan(depth).mean())}
+        if request.display.quilt is not None:
+            still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
+                                                         request.display.quilt)
         write_image(output, still.image, still.record)
         return still.record
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,

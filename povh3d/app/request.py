@@ -139,6 +139,8 @@ class RenderRequest:
     depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
     depth_format : {'npy', 'png'}  float32 arrays, or 16-bit PNGs with the scale in depth_maps.json
     volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)
+    dataset : Path or None         also write the HCI 4D light-field layout here (stills; ``app.dataset``)
+    dataset_all_views : bool       with ``dataset``: disparity and depth for every view, not only the centre
     """
 
     source: Path
@@ -158,6 +160,8 @@ class RenderRequest:
     depth_maps: Path | None = None
     depth_format: str = "npy"
     volume: VolumeOptions = field(default_factory=VolumeOptions)
+    dataset: Path | None = None
+    dataset_all_views: bool = False
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
@@ -196,6 +200,12 @@ class RenderRequest:
             if self.frames is not None:
                 raise ConfigError("--depth-maps cannot be combined with --frames; render one frame for them")
             self.render_array.require_views()
+        if self.dataset is not None:
+            set_("dataset", Path(self.dataset))
+            if self.frames is not None:
+                raise ConfigError("--dataset cannot be combined with --frames; render one frame for it")
+        elif self.dataset_all_views:
+            raise ConfigError("--dataset-all-views needs --dataset DIR")
         if not self.is_volume and _replace(self.volume, rotate=None) != VolumeOptions():
             raise ConfigError(f"{self.source.name!r} is not a volume; the volume options (--labels, --iso, --volume, "
                               "--orientation, --spacing, --series ...) apply to volume files and DICOM folders")

@@ -139,7 +139,8 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: s
     return {"views": to_edge(ppl), "view_size_px": to_edge(views.shape[2:4])}
 
 
-def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | Path) -> dict[str, Any]:
+def sidecar_array(h3d: np.ndarray, h3d_path: str | Path) -> LensArray:
+    """The lens array of an H3D image's sidecar, checked against the image's size."""
     record = read_sidecar(h3d_path)
     if not record or "lens_array" not in record:
         raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
@@ -147,9 +148,22 @@ def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | P
     if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
         raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
                          f"{lens_array.panel.width}x{lens_array.panel.height} panel; re-render it")
-    ny, nx = lens_array.views or view_grid(lens_array)
-    views = extract_views(h3d, lens_array, (ny, nx)) if lens_array.views is None else \
-        extract(h3d[lens_array.bank_region], (ny, nx))
+    return lens_array
+
+
+def sidecar_bank(h3d: np.ndarray, lens_array: LensArray) -> np.ndarray:
+    """``(Ny, Nx, Ly, Lx, C)`` views of an image of ``lens_array``: the camera bank's region
+    (an array narrower than its panel, e.g. 341 lenses of 6 px on 2048 px), or each lens
+    resampled at the view offsets on a hex or fractional-PPL array."""
+    if lens_array.views is None:
+        return extract_views(h3d, lens_array, view_grid(lens_array))
+    return extract(h3d[lens_array.bank_region], lens_array.views)
+
+
+def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | Path) -> dict[str, Any]:
+    lens_array = sidecar_array(h3d, h3d_path)
+    views = sidecar_bank(h3d, lens_array)
+    ny, nx = views.shape[:2]
     source = {"h3d": str(Path(h3d_path).resolve()), "resampled": lens_array.views is None,
               "lens_centres_mm": lens_array.lens_centres().reshape(-1, 2).tolist()}
     write_views(views_dir, views, lens_array, source)

@@ -115,8 +115,17 @@ def _print_scene(report: dict) -> None:
 def cmd_map(args: argparse.Namespace) -> int:
     from ..app.display import map_file
 
-    mapping = display_from_args(args, mapped=True).mapping
+    from ..app.display_setup import is_visual, read_calibration
+
+    display = display_from_args(args, mapped=True)
+    mapping = display.mapping
     panel = parse_size(args.panel_size, "--panel-size") if args.panel_size else None
+    if args.calibration and is_visual(read_calibration(args.calibration)):  # the file's screen is the panel
+        calibrated = display.image_size
+        if panel is not None and tuple(panel) != calibrated:
+            raise ConfigError(f"--panel-size {panel[0]}x{panel[1]} is not the calibration's {calibrated[0]}x"
+                              f"{calibrated[1]} screen; drop --panel-size")
+        panel = calibrated
     record = map_file(args.input, mapping, args.output, panel)
     print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {mapping.name}")
     return 0
@@ -136,19 +145,18 @@ def cmd_resample(args: argparse.Namespace) -> int:
 
 
 def cmd_quilt(args: argparse.Namespace) -> int:
-    from ..app.display import export_quilt, import_quilt, lens_info
+    from ..app.display import export_quilt, import_quilt
 
-    grid = parse_size(args.quilt, "--quilt", "COLSxROWS like 8x6") if args.quilt else None
+    auto = args.quilt == "auto"
+    grid = parse_size(args.quilt, "--quilt", "COLSxROWS like 8x6, or auto") if args.quilt and not auto else None
     if args.import_quilt:
         record = import_quilt(args.input, args.output, grid, args.views)
         print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  from {record['views'][0]} views")
         return 0
-    if grid is None:
-        raise ConfigError("give the quilt grid with --quilt COLSxROWS, e.g. --quilt 8x6")
-    ppl = lens_info(args.input, ppl_arg(args.ppl, lenticular=True), None, None)["ppl"]  # quilts: one row
-    if ppl[0] != 1:
-        raise ConfigError("a quilt holds one row of views: use a lenticular (horizontal-only) H3D image")
-    out = export_quilt(args.input, ppl[1], grid, args.output, args.aspect)
+    if grid is None and not auto:
+        raise ConfigError("give the quilt grid with --quilt COLSxROWS, e.g. --quilt 8x6, or --quilt auto")
+    ppl = ppl_arg(args.ppl, lenticular=True)
+    out = export_quilt(args.input, args.output, grid or "auto", ppl=ppl, aspect=args.aspect, rows=args.rows)
     print(out)
     return 0
 
@@ -178,6 +186,15 @@ def cmd_preview(args: argparse.Namespace) -> int:
                      args.pixel_pitch)
     preview_file(args.input, args.output, info, frames=args.frames, scale=args.scale)
     print(f"{args.output}  {args.frames} frames, contact sheet {Path(args.output).with_suffix('.png')}")
+    return 0
+
+
+def cmd_dataset(args: argparse.Namespace) -> int:
+    from ..app.dataset import dataset_from_render
+
+    written = dataset_from_render(args.h3d, args.output, all_views=args.all_views)
+    cams = sum(1 for p in written if p.name.startswith("input_Cam"))
+    print(f"{args.output}  HCI layout: {cams} cameras, {len(written)} files")
     return 0
 
 
@@ -237,11 +254,15 @@ def add_parsers(sub: Any) -> None:
     p = sub.add_parser("quilt", help="export the views of an H3D image as a quilt, or import one")
     p.add_argument("input")
     p.add_argument("-o", "--output", required=True, help="export: folder; import: H3D PNG")
-    p.add_argument("--quilt", metavar="COLSxROWS", help="grid, e.g. 8x6 (import: default from the name)")
+    p.add_argument("--quilt", metavar="COLSxROWS", help="grid, e.g. 8x6, or auto (a Looking Glass preset's "
+                   "own layout, else the most square); import: default from the name")
+    p.add_argument("--rows", choices=("centre", "all"), help="export from a square or hex image: the middle "
+                   "row of views, or every row")
     p.add_argument("--import", dest="import_quilt", action="store_true", help="quilt -> H3D image")
     p.add_argument("--ppl", help="pixels per lens (default: from the sidecar)")
     p.add_argument("--views", type=positive_int, help="import: how many tiles hold views (default: all)")
-    p.add_argument("--aspect", type=float, help="export: view aspect for the name (default: tile w/h)")
+    p.add_argument("--aspect", type=float, help="export: view aspect for the name "
+                   "(default: the view's physical width / height, from the sidecar)")
     p.set_defaults(func=cmd_quilt)
 
     p = sub.add_parser("refocus", help="refocus an H3D image at a depth (shift-and-sum over views)")
@@ -262,6 +283,12 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--scale", type=positive_int, help="enlarge each lens to this many pixels")
     add_image_lens_options(p)
     p.set_defaults(func=cmd_preview)
+
+    p = sub.add_parser("dataset", help="an H3D render (with its sidecar) as an HCI 4D light-field dataset")
+    p.add_argument("h3d")
+    p.add_argument("-o", "--output", required=True, help="folder for input_CamNNN.png, parameters.cfg, *.pfm")
+    p.add_argument("--all-views", action="store_true", help="disparity and depth for every camera")
+    p.set_defaults(func=cmd_dataset)
 
     p = sub.add_parser("moire", help="moire of a cross-lenticular sheet against its slant (plot + sidecar)")
     p.add_argument("-o", "--output", required=True, help="plot .png (its sidecar holds the numbers)")

@@ -50,7 +50,8 @@ def request_from_args(args: argparse.Namespace) -> Any:
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
         display_frame=display_frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
-        volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")))
+        volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")),
+        dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views)
 
 
 def display_frame_options_from_args(args: argparse.Namespace) -> Any:
@@ -259,6 +260,10 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--views-dir", help="also write the view stack here (v_LLL_KKK.png)")
     p.add_argument("--depth-maps", metavar="DIR", help="also write per view the distance along each ray to the "
                    "first surface (d_LLL_KKK.npy, mm) and its disparity (p_LLL_KKK.npy, lenses per view step)")
+    p.add_argument("--dataset", metavar="DIR", help="also write the HCI 4D light-field layout here (input_CamNNN.png, "
+                   "parameters.cfg, gt_disp_lowres.pfm, gt_depth_lowres.pfm; odd view counts)")
+    p.add_argument("--dataset-all-views", action="store_true", help="with --dataset: disparity and depth for "
+                   "every camera, not only the centre one")
     p.add_argument("--depth-format", choices=("npy", "png"), default="npy",
                    help="depth maps as float32 .npy (default) or 16-bit PNG (scale and offset in depth_maps.json)")
     p.add_argument("--no-cache", action="store_true", help="render everything again, ignore the cache")

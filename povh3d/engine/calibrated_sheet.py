@@ -15,8 +15,10 @@ the calibration may refine it, not replace it: it wins within ``PITCH_TOLERANCE`
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+from ..devices.looking_glass import check_view_cone
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray, Panel
 from .subpixel import placed_sheet
@@ -39,6 +41,12 @@ def calibrated_sheet(calibration: dict[str, Any], panel: Panel, focal: float,
     mapping = from_calibration(calibration, 1)
     _check_panel(calibration, panel)
     sheet, shift = placed_sheet(mapping, panel, focal)
+    cone = _view_cone(calibration, panel)
+    if cone is not None:
+        if nominal is None:  # the file's cone decides the views: the focal length that spans it
+            focal = row_pitch(sheet) / (2 * math.tan(math.radians(cone.view_cone) / 2))
+            sheet, shift = placed_sheet(mapping, panel, focal)
+        check_view_cone(cone, view_cone_deg(sheet))
     record: dict[str, Any] = {"from_calibration": True, "mapping_offset": round(mapping.offset, 12),
                               "subpixels_per_lens": mapping.per_lens, "slope": mapping.slope,
                               "pitch_mm": sheet.pitch_x, "slant_deg": sheet.rotation, "shift_mm": shift}
@@ -46,6 +54,29 @@ def calibrated_sheet(calibration: dict[str, Any], panel: Panel, focal: float,
         _check_nominal(sheet, nominal)
         record["nominal"] = {"pitch_mm": nominal.pitch_x, "slant_deg": nominal.rotation}
     return sheet, shift, record
+
+
+def row_pitch(sheet: LensArray) -> float:
+    """The lenticule pitch along a panel row, mm (``pitch_x`` is across the lenticules)."""
+    return sheet.pitch_x / math.cos(math.radians(sheet.rotation))
+
+
+def view_cone_deg(sheet: LensArray) -> float:
+    """The cone a lenticular sheet's views span, degrees: ``2 atan(row pitch / 2 f)``, the
+    definition the Looking Glass presets' focal lengths are made from (docs/displays.md)."""
+    return math.degrees(2 * math.atan(row_pitch(sheet) / (2 * sheet.focal)))
+
+
+def _view_cone(calibration: dict[str, Any], panel: Panel) -> Any:
+    """The parsed Looking Glass calibration when the file states a ``viewCone``, else None.
+    Parsing it also checks it whole (``devices.looking_glass.parse_visual``) and against the panel."""
+    if "pitch" not in calibration:
+        return None
+    from ..devices.looking_glass import check_panel, parse_visual
+
+    cal = parse_visual(calibration)
+    check_panel(cal, (panel.width, panel.height), panel.pitch_x)
+    return cal if "viewCone" in calibration else None
 
 
 def _field(calibration: dict[str, Any], key: str) -> Any:

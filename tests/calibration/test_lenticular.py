@@ -19,7 +19,7 @@ import pytest
 from povh3d.calibration.lenticular import calibrate_lenticular
 from povh3d.errors import ConfigError, InputError
 from povh3d.image.colour import encode
-from povh3d.image.io import write_png
+from povh3d.image.io import read_png, write_png
 from povh3d.mappings.slanted import looking_glass
 
 from tests.support.cli import one_error_line
@@ -92,21 +92,22 @@ def test_cli_calibrates_and_map_accepts_it(tmp_path, cli):
     record = json.loads(cal.read_text())
     assert record["kind"] == "lenticular" and abs(record["slant_deg"] - 9.46) < 0.01
     h3d = tmp_path / "h3d.png"
-    write_png(h3d, np.zeros((160, 9 * 26, 3), np.uint8))
+    write_png(h3d, np.zeros((160, 9 * 25, 3), np.uint8))  # what the file's 240 x 160 screen reads
     out = tmp_path / "mapped.png"
     assert cli("map", h3d, "--mapping", "slanted", "--views", "9", "--calibration", cal,
-               "--grid", "lenticular", "--lenses", "26", "--ppl", "9", "--rows", "160", "-o", out).code == 0
+               "--grid", "lenticular", "--lenses", "25", "--ppl", "9", "--rows", "160", "-o", out).code == 0
+    assert read_png(out).shape[:2] == (160, 240)  # the calibration's screen, not a size inferred from the image
     # Contradictory fields: one line, non-zero, nothing written.
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({**record, "pitch_px": record["pitch_px"] * 1.5}))
     out2 = tmp_path / "mapped2.png"
     line = one_error_line(cli("map", h3d, "--mapping", "slanted", "--views", "9", "--calibration", bad,
-                              "--grid", "lenticular", "--lenses", "26", "--ppl", "9", "--rows", "160", "-o", out2))
+                              "--grid", "lenticular", "--lenses", "25", "--ppl", "9", "--rows", "160", "-o", out2))
     assert "contradicts itself" in line and not out2.exists()
     missing = tmp_path / "missing.json"
     missing.write_text(json.dumps({k: v for k, v in record.items() if k != "center"}))
     line = one_error_line(cli("map", h3d, "--mapping", "slanted", "--views", "9", "--calibration", missing,
-                              "--grid", "lenticular", "--lenses", "26", "--ppl", "9", "--rows", "160", "-o", out2))
+                              "--grid", "lenticular", "--lenses", "25", "--ppl", "9", "--rows", "160", "-o", out2))
     assert "lacks 'center'" in line and not out2.exists()
 
 

@@ -109,7 +109,8 @@ def test_both_files_of_one_sheet_are_one_mapping(tmp_path):
     assert sa == pytest.approx(sb, abs=1e-9)
     # A center half a pixel off its phase_px (as an older calibrate wrote it) contradicts the file.
     t = math.radians(with_lg["slant_deg"])
-    stale = {**with_lg, "center": (with_lg["center"] - 0.5 * math.cos(t) / with_lg["pitch_px"]) % 1}
+    assert set(with_lg["center"]) == {"value"}  # written the vendor's way
+    stale = {**with_lg, "center": (with_lg["center"]["value"] - 0.5 * math.cos(t) / with_lg["pitch_px"]) % 1}
     with pytest.raises(ConfigError, match="contradicts itself: center"):
         calibrated_sheet(stale, panel, 1.0)
 
