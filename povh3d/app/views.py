@@ -143,6 +143,16 @@ def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | P
     record = read_sidecar(h3d_path)
     if not record or "lens_array" not in record:
         raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
+    views, _ = h3d_views(h3d, record, h3d_path)
+    lens_array = Display.from_record(record).lens_array
+    source = {"h3d": str(Path(h3d_path).resolve()), "resampled": lens_array.views is None,
+              "lens_centres_mm": lens_array.lens_centres().reshape(-1, 2).tolist()}
+    write_views(views_dir, views, lens_array, source)
+    return {"views": [views.shape[1], views.shape[0]], "view_size_px": [views.shape[3], views.shape[2]]}
+
+
+def h3d_views(h3d: np.ndarray, record: dict[str, Any], h3d_path: str | Path) -> tuple[np.ndarray, str]:
+    """The ``(Ny, Nx, Ly, Lx, C)`` views of an H3D image through its sidecar's lens array, and its grid."""
     lens_array = Display.from_record(record).lens_array
     if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
         raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
@@ -150,7 +160,4 @@ def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | P
     ny, nx = lens_array.views or view_grid(lens_array)
     views = extract_views(h3d, lens_array, (ny, nx)) if lens_array.views is None else \
         extract(h3d[lens_array.bank_region], (ny, nx))
-    source = {"h3d": str(Path(h3d_path).resolve()), "resampled": lens_array.views is None,
-              "lens_centres_mm": lens_array.lens_centres().reshape(-1, 2).tolist()}
-    write_views(views_dir, views, lens_array, source)
-    return {"views": [nx, ny], "view_size_px": [views.shape[3], views.shape[2]]}
+    return views, lens_array.grid
