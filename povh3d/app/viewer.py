@@ -84,6 +84,8 @@ def write_viewer(render: str | Path, output: str | Path, *, fps: float = 12.0, c
     if output.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"the viewer is an HTML page: name it .html, got {str(output)!r}")
     rendered = read_render_views(render)
+    if cdp is not None:
+        _check_header(cdp, rendered)
     content = ViewerContent(rendered.frames, grid=rendered.grid, fps=fps, cdp=cdp,
                             title=title or f"povh3d: {Path(render).name}")
     text = viewer_html(content)
@@ -92,3 +94,19 @@ def write_viewer(render: str | Path, output: str | Path, *, fps: float = 12.0, c
     ny, nx = content.views
     return {"output": str(output), "frames": len(rendered.frames), "views": [nx, ny],
             "view_size_px": [content.view_size[1], content.view_size[0]], "bytes": len(text.encode())}
+
+
+def _check_header(cdp: str, rendered: RenderViews) -> None:
+    """A header made for another render (views, view size, frames) is refused, not drawn wrongly."""
+    from ..hyper.cdp import from_xml
+
+    header = from_xml(cdp.encode("utf-8"))
+    ny, nx, ly, lx = rendered.frames[0].shape[:4]
+    frames = set(rendered.numbers)
+    stray = sorted({b.frame for s in header.scenes for a in s.annotations for b in a.boxes} - frames)
+    if header.views != (nx, ny) or header.view_size != (lx, ly) or stray:
+        raise InputError(f"the 3DCDP header describes {header.views[0]}x{header.views[1]} views of "
+                         f"{header.view_size[0]}x{header.view_size[1]}"
+                         + (f" and frame {stray[0]}" if stray else "")
+                         + f" but the render has {nx}x{ny} of {lx}x{ly}, frames {min(frames)}..{max(frames)}; "
+                         "annotate this render")
