@@ -76,8 +76,9 @@ def read_render_views(render: str | Path) -> RenderViews:
 
 
 def write_viewer(render: str | Path, output: str | Path, *, fps: float = 12.0, cdp: str | None = None,
-                 title: str | None = None) -> dict[str, Any]:
-    """Write the viewer page of ``render`` to ``output`` (atomically); ``cdp`` is a 3DCDP header's text."""
+                 title: str | None = None, objects: str | Path | None = None) -> dict[str, Any]:
+    """Write the viewer page of ``render`` to ``output`` (atomically); ``cdp`` is a 3DCDP header's text,
+    ``objects`` the object masks folder that gives every view its own boxes."""
     from ..hyper.page import ViewerContent, viewer_html
 
     output = Path(output)
@@ -86,8 +87,9 @@ def write_viewer(render: str | Path, output: str | Path, *, fps: float = 12.0, c
     rendered = read_render_views(render)
     if cdp is not None:
         _check_header(cdp, rendered)
-    content = ViewerContent(rendered.frames, grid=rendered.grid, fps=fps, cdp=cdp,
-                            title=title or f"povh3d: {Path(render).name}")
+    view_boxes = _view_boxes(objects, rendered) if objects is not None else None
+    content = ViewerContent(rendered.frames, grid=rendered.grid, fps=fps, cdp=cdp, numbers=rendered.numbers,
+                            view_boxes=view_boxes, title=title or f"povh3d: {Path(render).name}")
     text = viewer_html(content)
     with atomic_path(output) as tmp:
         tmp.write_text(text, encoding="utf-8")
@@ -110,3 +112,17 @@ def _check_header(cdp: str, rendered: RenderViews) -> None:
                          + (f" and frame {stray[0]}" if stray else "")
                          + f" but the render has {nx}x{ny} of {lx}x{ly}, frames {min(frames)}..{max(frames)}; "
                          "annotate this render")
+
+
+def _view_boxes(objects: str | Path, rendered: RenderViews) -> tuple[Any, ...]:
+    """Per frame, view row and column, the boxes of the objects the masks show there."""
+    from ..hyper.boxes import mask_boxes
+    from .objects import read_mask, read_table
+
+    table = read_table(objects)
+    ny, nx, ly, lx = rendered.frames[0].shape[:4]
+    if table.frames != rendered.numbers or table.views != (ny, nx) or table.view_size != (ly, lx):
+        raise InputError(f"the object masks in {str(objects)!r} are of another render (frames, views or size "
+                         "differ); render --objects with the same options")
+    return tuple([[mask_boxes(read_mask(objects, table, n, (l, k))) for k in range(nx)] for l in range(ny)]
+                 for n in rendered.numbers)

@@ -18,7 +18,7 @@ def cmd_viewer(args: argparse.Namespace) -> int:
         from ..app.annotate import read_cdp_text
 
         cdp = read_cdp_text(args.cdp)
-    record = write_viewer(args.render, args.output, fps=args.fps, cdp=cdp, title=args.title)
+    record = write_viewer(args.render, args.output, fps=args.fps, cdp=cdp, title=args.title, objects=args.objects)
     print(f"{record['output']}  {record['frames']} frame(s)  {record['views'][0]}x{record['views'][1]} views of "
           f"{record['view_size_px'][0]}x{record['view_size_px'][1]}  {record['bytes'] / 1e6:.2f} MB")
     return 0
@@ -40,6 +40,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("-o", "--output", required=True, help="the page to write (.html)")
     p.add_argument("--fps", type=float, default=12.0, help="frames per second of an animation (default 12)")
     p.add_argument("--cdp", metavar="FILE", help="a 3DCDP header (povh3d annotate) to hyperlink the objects")
+    p.add_argument("--objects", metavar="DIR", help="the object masks (render --objects DIR): each view's own "
+                   "boxes (else the header's centre-view boxes in every view)")
     p.add_argument("--title", help="the page's title")
     p.set_defaults(func=cmd_viewer)
 

@@ -28,6 +28,9 @@ class ViewerContent:
     fps : frames per second of play
     title : the page's title
     cdp : a 3DCDP header (XML text) to hyperlink, or None
+    numbers : the animation frame number of each frame (default 0, 1, ...)
+    view_boxes : per frame, per view row, per view column ``{object id: (x_min, y_min, x_max, y_max)}``
+        from the object masks; without them every view shows the header's centre-view boxes
     """
 
     frames: tuple[np.ndarray, ...]
@@ -35,10 +38,16 @@ class ViewerContent:
     fps: float = 12.0
     title: str = "povh3d viewer"
     cdp: str | None = None
+    numbers: tuple[int, ...] | None = None
+    view_boxes: tuple[Any, ...] | None = None
 
     def __post_init__(self) -> None:
         if not self.frames:
             raise ValueError("frames: a viewer needs at least one frame")
+        for name in ("numbers", "view_boxes"):
+            value = getattr(self, name)
+            if value is not None and len(value) != len(self.frames):
+                raise ValueError(f"{name}: one per frame ({len(self.frames)}), got {len(value)}")
         shapes = {f.shape for f in self.frames}
         if len(shapes) != 1:
             raise ValueError(f"frames: every frame must have the same views and size, got {sorted(shapes)}")
@@ -86,7 +95,10 @@ def page_data(content: ViewerContent) -> dict[str, Any]:
     ly, lx = content.view_size
     return {"views": [ny, nx], "view_size": [ly, lx], "grid": content.grid, "fps": content.fps,
             "sprites": [png_data_uri(sprite_sheet(_to_8bit(f))) for f in content.frames],
-            "cdp": content.cdp}
+            "cdp": content.cdp, "numbers": list(content.numbers or range(len(content.frames))),
+            "view_boxes": None if content.view_boxes is None else [
+                [[{str(i): list(b) for i, b in view.items()} for view in row] for row in frame]
+                for frame in content.view_boxes]}
 
 
 def viewer_html(content: ViewerContent) -> str:
