@@ -34,7 +34,7 @@ ALLOWED = {
     "image": {"geometry"},
     "devices": set(),
     "dataset": {"image"},
-    "hyper": {"image"},   # the viewer page encodes its sprite sheets with image/png_codec.py
+    "hyper": {"image", "scene"},   # sprite sheets encoded by image/png_codec.py; ids as scene/ codes them
     "scene": set(),
     "geometry": set(),
     "cache": {"image"},   # the one cache writes its entries with image/io.py's atomic writer
