@@ -45,7 +45,7 @@ class ObjectsError(ConfigError):
 @dataclass(frozen=True)
 class MaskScene:
     text: str
-    names: dict[int, str]      # id -> the object's identifier or "keyword, line N"
+    names: dict[int, str]      # id -> the object's identifier (object { Name }) or "keyword_LINE"
 
 
 def id_level(ident: int) -> float:
@@ -99,7 +99,7 @@ def mask_scene(text: str) -> MaskScene:
             inner = toks[i + 2].text if t == "object" and i + 2 < j else ""
             line = text.count("\n", 0, toks[i].start) + 1
             names[ident] = inner if re.match(r"^[A-Za-z_]\w*$", inner) and inner not in OBJECTS \
-                else f"{t}, line {line}"
+                else f"{t}_{line}"
             ends.append((toks[j].start, ident))
         i += 1
     if not names:

@@ -78,7 +78,7 @@ def expected(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray]:
 
 def test_mask_scene_names_and_strips() -> None:
     mask = mask_scene(SCENE)
-    assert mask.names == {1: "sphere, line 7", 2: "Ball", 3: "union, line 12"}
+    assert mask.names == {1: "sphere_7", 2: "Ball", 3: "union_12"}
     for gone in ("checker", "bumps", "ior", "sky_sphere", "fog", "phong 1"):
         assert gone not in mask.text
     assert "#declare Glass = texture" in mask.text          # a declared texture stays (unused)

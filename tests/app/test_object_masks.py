@@ -1,0 +1,44 @@
+"""``render --objects DIR`` end to end on the bundled sample: masks, their header, the page,
+and a scene whose objects cannot be told apart as one line before any render."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from povh3d.app.objects import read_mask, read_table
+from povh3d.scene.object_ids import UNRESOLVED
+from tests.support.cli import run_in_process
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_sample_masks_annotate_and_view(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--preset", "demo", "--quality", "draft",
+                         "-o", tmp_path / "s.png", "--objects", tmp_path / "objs")
+    assert run.code == 0, run.err
+    table = read_table(tmp_path / "objs")
+    assert table.names == {1: "plane_17", 2: "sphere_21", 3: "cylinder_27", 4: "torus_33", 5: "box_37"}
+    centre = read_mask(tmp_path / "objs", table, 0, (3, 3))
+    assert set(np.unique(centre)) == {1, 2, 3, 4, 5} and not (centre == UNRESOLVED).any()
+    # the torus (7, 5, -3) mm sits upper right of the centre view, the box (-5, -7, -3) lower left
+    rows, cols = np.nonzero(centre == 4)
+    assert rows.mean() < 15 and cols.mean() > 20      # a 40x30 view: row 15, column 20 at its middle
+    rows, cols = np.nonzero(centre == 5)
+    assert rows.mean() > 15 and cols.mean() < 20
+    (tmp_path / "links.toml").write_text('[torus_33]\nurl = "https://example.org/torus"\n')
+    assert run_in_process("annotate", tmp_path / "s.png", "--objects", tmp_path / "objs", "-o", tmp_path / "s.xml",
+                          "--links", tmp_path / "links.toml").code == 0
+    assert b'url="https://example.org/torus"' in (tmp_path / "s.xml").read_bytes()
+    assert run_in_process("viewer", tmp_path / "s.png", "--cdp", tmp_path / "s.xml", "--objects", tmp_path / "objs",
+                          "-o", tmp_path / "s.html").code == 0
+
+
+def test_scene_without_separable_objects_is_one_line_before_any_render(tmp_path: Path) -> None:
+    scene = tmp_path / "macro.pov"
+    scene.write_text("#macro M() sphere { 0, 1 } #end\nM()\nlight_source { <0, 0, -9> rgb 1 }\n")
+    run = run_in_process("render", scene, "--preset", "demo", "-o", tmp_path / "m.png", "--objects", tmp_path / "o")
+    assert run.code != 0 and "no top-level object statements" in run.err and run.err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["macro.pov"]
