@@ -21,7 +21,7 @@ import re
 from dataclasses import dataclass
 
 from ..errors import ConfigError
-from .camera import _OPENERS, Token, _depths, tokens
+from .camera import _OPENERS, CameraError, Token, _closing_brace, _depths, tokens
 
 OBJECTS = frozenset(("sphere box cylinder cone torus plane union difference intersection merge object mesh "
                      "mesh2 blob text lathe sor prism superellipsoid height_field isosurface parametric polygon "
@@ -54,12 +54,10 @@ def id_level(ident: int) -> float:
 
 
 def _block_end(toks: list[Token], opening: int) -> int:
-    depth = 0
-    for j in range(opening, len(toks)):
-        depth += {"{": 1, "}": -1}.get(toks[j].text, 0)
-        if depth == 0:
-            return j
-    raise ObjectsError("the scene has a block without its closing brace; fix the scene")
+    try:
+        return _closing_brace(toks, opening)
+    except CameraError:   # its message speaks of the camera; here any block is meant
+        raise ObjectsError("the scene has a block without its closing brace; fix the scene") from None
 
 
 def _macro_bodies(toks: list[Token]) -> list[bool]:
