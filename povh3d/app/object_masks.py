@@ -1,4 +1,5 @@
-"""``render --objects DIR``: the id of the object each pixel's ray first hits, in every view.
+"""``render --objects DIR``: the id of the object each pixel's ray first hits, in every view of
+every frame.
 
 One more render of the same request, on the mask copy of the scene (``scene.object_ids``):
 point-sampled (draft), 16 bits, the same display, method and rays; its views decoded to ids and
@@ -23,8 +24,6 @@ def check_objects_request(request: RenderRequest) -> Any:
     if request.source.suffix.lower() != ".pov":
         raise ConfigError("render --objects takes a POV-Ray scene (.pov) in this version; models and volumes "
                           "are not yet split into objects")
-    if request.frames is not None:
-        raise ConfigError("render --objects makes the masks of a still in this version; drop --frames")
     try:
         text = request.source.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
@@ -36,7 +35,8 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
     """Render the object masks of ``request``'s still into ``folder``; return what was written."""
     from ..hyper.ids import decode_ids
     from .render import render
-    from .views import read_views
+    from ..image.io import read_png, read_sidecar
+    from .views import h3d_views, read_views
 
     mask = check_objects_request(request)
     out = Path(folder)
@@ -45,14 +45,25 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
         scene = work / request.source.name
         scene.write_text(mask.text, encoding="utf-8")
         settings = dataclasses.replace(request.settings, quality="draft", bit_depth=16)
-        masked = dataclasses.replace(request, source=scene, output=work / "mask.png", views_dir=work / "views",
-                                     depth_maps=None, video=None, settings=settings,
+        still = request.frames is None
+        masked = dataclasses.replace(request, source=scene, output=work / "mask.png",
+                                     views_dir=work / "views" if still else None, depth_maps=None, video=None,
+                                     settings=settings,
                                      include_dirs=(request.source.resolve().parent, *request.include_dirs))
-        render(masked)
-        views = read_views(work / "views")
-        ny, nx, ly, lx = views.shape[:4]
-        ids = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(mask.names)).reshape(ny, nx, ly, lx)
-        write_masks(out, ObjectTable(mask.names, (0,), (ny, nx), (ly, lx)), {0: ids})
+        report = render(masked)
+        if still:
+            stacks = {0: read_views(work / "views")}
+        else:   # an animation's views: pulled from each frame's image as 'povh3d extract' does
+            stacks = {}
+            for name in report["frames"]:
+                record = read_sidecar(name)
+                stacks[int(record["animation"]["frame"])] = h3d_views(read_png(name), record, name)[0]
+        masks = {}
+        for n, views in stacks.items():
+            ny, nx, ly, lx = views.shape[:4]
+            masks[n] = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(mask.names)).reshape(ny, nx, ly, lx)
+        write_masks(out, ObjectTable(mask.names, tuple(sorted(masks)), (ny, nx), (ly, lx)), masks)
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    return {"objects": len(mask.names), "unresolved": float((ids == UNRESOLVED).mean()), "folder": str(out)}
+    unresolved = sum(int((m == UNRESOLVED).sum()) for m in masks.values()) / sum(m.size for m in masks.values())
+    return {"objects": len(mask.names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}

@@ -42,3 +42,29 @@ def test_scene_without_separable_objects_is_one_line_before_any_render(tmp_path:
     run = run_in_process("render", scene, "--preset", "demo", "-o", tmp_path / "m.png", "--objects", tmp_path / "o")
     assert run.code != 0 and "no top-level object statements" in run.err and run.err.count("\n") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["macro.pov"]
+
+
+ANIMATION = """#version 3.7;
+global_settings { assumed_gamma 1.0 }
+light_source { <-20, 30, -60> rgb 1 }
+sphere { <-8 + 16 * clock, 3, 2>, 3 pigment { rgb <1, 0, 0> } }
+box { <-3, -9, -2>, <3, -5, 2> pigment { rgb <0, 0, 1> }
+  #if (clock > 0.3 & clock < 0.7) translate 200 * x #end }
+"""
+
+
+def test_animation_masks_give_a_new_annotation_when_an_object_comes_back(tmp_path: Path, monkeypatch) -> None:
+    from povh3d.app.annotate import build_header
+
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "a.pov").write_text(ANIMATION)
+    run = run_in_process("render", tmp_path / "a.pov", "--preset", "demo", "--quality", "draft", "-o",
+                         tmp_path / "a.png", "--frames", "0:4", "--objects", tmp_path / "objs")
+    assert run.code == 0, run.err
+    header = build_header(tmp_path / "a.png", tmp_path / "objs")
+    spans = [(a.object_name, a.start, a.end) for a in header.scenes[0].annotations]
+    assert spans == [("box_5", 0, 1), ("sphere_4", 0, 4), ("box_5", 3, 4)]   # the box is away at clock 0.5
+    sphere = header.scenes[0].annotations[1]
+    lefts = [b.box[0] for b in sphere.boxes if b.space == "view"]
+    assert lefts == sorted(lefts) and lefts[-1] - lefts[0] >= 15     # 16 mm right over 40 lenses of 0.8 mm
+    assert {b.space for b in sphere.boxes} == {"view", "h3d"}
