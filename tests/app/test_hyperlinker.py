@@ -8,6 +8,7 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 from selenium.webdriver.common.action_chains import ActionChains
 from selenium.webdriver.common.by import By
@@ -100,3 +101,45 @@ def test_player_actions_are_timed(page) -> None:
     assert all(0 <= v < 1000 for v in timings.values()), timings
     if os.environ.get("POVH3D_VIEWER_TIMINGS"):       # docs/viewer.md's table: where to write them
         Path(os.environ["POVH3D_VIEWER_TIMINGS"]).write_text(json.dumps(timings, indent=2))
+
+
+def _inside_point(masks: np.ndarray, ident: int) -> tuple[float, float]:
+    """A place ``(fx, fy)`` over the page (fractions of the picture) where the view the mouse picks
+    there shows object ``ident`` at that pixel and all around it."""
+    ny, nx, ly, lx = masks.shape
+    for fy in np.linspace(0.02, 0.98, 97):
+        for fx in np.linspace(0.02, 0.98, 129):
+            l, k = int(fy * ny), int(fx * nx)
+            r, c = int(fy * ly), int(fx * lx)
+            if 1 <= r < ly - 1 and 1 <= c < lx - 1 and (masks[l, k, r - 1:r + 2, c - 1:c + 2] == ident).all() \
+                    and int((fy + 0.01) * ny) == l and int((fx + 0.01) * nx) == k \
+                    and int((fy - 0.01) * ny) == l and int((fx - 0.01) * nx) == k:
+                return float(fx), float(fy)
+    raise AssertionError(f"object {ident} is nowhere under the mouse")
+
+
+def test_click_on_the_bundled_sample_reports_the_torus_link(tmp_path: Path, monkeypatch) -> None:
+    """Masks made by POV-Ray (render --objects), their header and page: a click on the torus."""
+    from povh3d.app.objects import read_mask, read_table
+    from tests.support.cli import run_in_process
+
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    sample = Path(__file__).resolve().parents[2] / "sample_models" / "sample.pov"
+    assert run_in_process("render", sample, "--preset", "demo", "--quality", "draft", "-o", tmp_path / "s.png",
+                          "--objects", tmp_path / "objs").code == 0
+    (tmp_path / "links.toml").write_text('[torus_33]\nurl = "https://example.org/torus"\n'
+                                         '[box_37]\nurl = "https://example.org/box"\n')
+    annotate(tmp_path / "s.png", tmp_path / "objs", tmp_path / "s.xml", links=tmp_path / "links.toml")
+    write_viewer(tmp_path / "s.png", tmp_path / "s.html", cdp=(tmp_path / "s.xml").read_text(),
+                 objects=tmp_path / "objs")
+    table = read_table(tmp_path / "objs")
+    masks = np.stack([[read_mask(tmp_path / "objs", table, 0, (l, k)) for k in range(8)] for l in range(8)])
+    with headless_chromium() as browser:
+        open_page(browser, tmp_path / "s.html")
+        canvas = browser.find_element(By.ID, "view")
+        w, h = canvas.size["width"], canvas.size["height"]
+        for ident, url in ((4, "https://example.org/torus"), (5, "https://example.org/box")):
+            fx, fy = _inside_point(masks, ident)
+            ActionChains(browser).move_to_element_with_offset(canvas, int((fx - 0.5) * w), int((fy - 0.5) * h)) \
+                .click().perform()
+            assert _last_click(browser)["url"] == url
