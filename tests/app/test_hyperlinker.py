@@ -118,6 +118,7 @@ def _inside_point(masks: np.ndarray, ident: int) -> tuple[float, float]:
     raise AssertionError(f"object {ident} is nowhere under the mouse")
 
 
+@pytest.mark.povray
 def test_click_on_the_bundled_sample_reports_the_torus_link(tmp_path: Path, monkeypatch) -> None:
     """Masks made by POV-Ray (render --objects), their header and page: a click on the torus."""
     from povh3d.app.objects import read_mask, read_table

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from povh3d.app.objects import read_mask, read_table
 from povh3d.scene.object_ids import UNRESOLVED
@@ -14,6 +15,7 @@ from tests.support.cli import run_in_process
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.povray
 def test_sample_masks_annotate_and_view(tmp_path: Path, monkeypatch) -> None:
     monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
     run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--preset", "demo", "--quality", "draft",
@@ -53,6 +55,7 @@ box { <-3, -9, -2>, <3, -5, 2> pigment { rgb <0, 0, 1> }
 """
 
 
+@pytest.mark.povray
 def test_animation_masks_give_a_new_annotation_when_an_object_comes_back(tmp_path: Path, monkeypatch) -> None:
     from povh3d.app.annotate import build_header
 

@@ -113,6 +113,7 @@ def test_play_steps_the_frames_of_an_animation(tmp_path: Path, browser) -> None:
     assert frames == {0, 1, 2} and _shown(browser)[2] == paused
 
 
+@pytest.mark.povray
 def test_bundled_sample_page_opens_in_under_a_second(tmp_path: Path, browser) -> None:
     env_cache = {"POVH3D_CACHE": str(tmp_path / "cache")}
     import os

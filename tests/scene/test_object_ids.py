@@ -89,6 +89,7 @@ def test_a_scene_without_top_level_objects_is_one_line() -> None:
         mask_scene("#macro M() sphere { 0, 1 } #end\nM()\n")
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("method, grid", [("multi-ortho", "square"), ("multi-ortho", "lenticular"),
                                           ("single-stage", "square")])
 def test_masks_match_the_analytic_first_hits(tmp_path: Path, method: str, grid: str) -> None:
