@@ -24,6 +24,10 @@ def check_objects_request(request: RenderRequest) -> Any:
     if request.source.suffix.lower() != ".pov":
         raise ConfigError("render --objects takes a POV-Ray scene (.pov) in this version; models and volumes "
                           "are not yet split into objects")
+    if request.display.lens_array.views is None:
+        # views pulled from such an image are resampled (bilinear): two ids would blend into a third
+        raise ConfigError("render --objects needs whole pixels per lens on a square or lenticular grid in this "
+                          "version (hex and fractional-PPL views are resampled); render the masks on such a grid")
     try:
         text = request.source.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:

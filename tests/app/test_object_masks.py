@@ -71,3 +71,11 @@ def test_animation_masks_give_a_new_annotation_when_an_object_comes_back(tmp_pat
     lefts = [b.box[0] for b in sphere.boxes if b.space == "view"]
     assert lefts == sorted(lefts) and lefts[-1] - lefts[0] >= 15     # 16 mm right over 40 lenses of 0.8 mm
     assert {b.space for b in sphere.boxes} == {"view", "h3d"}
+
+
+def test_hex_masks_are_refused_before_any_render(tmp_path: Path) -> None:
+    run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--grid", "hex", "--lenses", "30x20",
+                         "--ppl", "8", "--pixel-pitch", "0.1", "--focal", "1.5", "-o", tmp_path / "h.png",
+                         "--objects", tmp_path / "o")
+    assert run.code != 0 and "whole pixels per lens" in run.err and run.err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
