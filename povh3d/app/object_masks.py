@@ -66,8 +66,27 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
         for n, views in stacks.items():
             ny, nx, ly, lx = views.shape[:4]
             masks[n] = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(mask.names)).reshape(ny, nx, ly, lx)
-        write_masks(out, ObjectTable(mask.names, tuple(sorted(masks)), (ny, nx), (ly, lx)), masks)
+        table = ObjectTable(mask.names, tuple(sorted(masks)), (ny, nx), (ly, lx))
+        write_masks(out, table, masks)
     finally:
         shutil.rmtree(work, ignore_errors=True)
+    _note_in_sidecars(request, out, table)
     unresolved = sum(int((m == UNRESOLVED).sum()) for m in masks.values()) / sum(m.size for m in masks.values())
     return {"objects": len(mask.names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}
+
+
+def _note_in_sidecars(request: RenderRequest, folder: Path, table: ObjectTable) -> None:
+    """The render's own sidecars name the masks folder and the ids' names (the table's copy)."""
+    from ..image.io import read_sidecar, write_sidecar
+    from .animation import frame_path
+
+    if request.frames is None:
+        images = [request.output]
+    else:
+        digits = max(4, len(str(request.frames.last)))
+        images = [frame_path(request.output, n, digits) for n in request.frames.numbers]
+    note = {"folder": str(folder.resolve()), "names": {str(i): n for i, n in sorted(table.names.items())}}
+    for image in images:
+        record = read_sidecar(image)
+        if record is not None:
+            write_sidecar(image, {**record, "objects": note})

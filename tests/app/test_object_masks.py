@@ -23,6 +23,9 @@ def test_sample_masks_annotate_and_view(tmp_path: Path, monkeypatch) -> None:
     assert run.code == 0, run.err
     table = read_table(tmp_path / "objs")
     assert table.names == {1: "plane_17", 2: "sphere_21", 3: "cylinder_27", 4: "torus_33", 5: "box_37"}
+    from povh3d.image.io import read_sidecar
+
+    assert read_sidecar(tmp_path / "s.png")["objects"]["names"]["4"] == "torus_33"   # and the image's hash holds
     centre = read_mask(tmp_path / "objs", table, 0, (3, 3))
     assert set(np.unique(centre)) == {1, 2, 3, 4, 5} and not (centre == UNRESOLVED).any()
     # the torus (7, 5, -3) mm sits upper right of the centre view, the box (-5, -7, -3) lower left
@@ -64,6 +67,9 @@ def test_animation_masks_give_a_new_annotation_when_an_object_comes_back(tmp_pat
     run = run_in_process("render", tmp_path / "a.pov", "--preset", "demo", "--quality", "draft", "-o",
                          tmp_path / "a.png", "--frames", "0:4", "--objects", tmp_path / "objs")
     assert run.code == 0, run.err
+    from povh3d.image.io import read_sidecar
+
+    assert read_sidecar(tmp_path / "a_0002.png")["objects"]["names"] == {"1": "sphere_4", "2": "box_5"}
     header = build_header(tmp_path / "a.png", tmp_path / "objs")
     spans = [(a.object_name, a.start, a.end) for a in header.scenes[0].annotations]
     assert spans == [("box_5", 0, 1), ("sphere_4", 0, 4), ("box_5", 3, 4)]   # the box is away at clock 0.5
