@@ -15,7 +15,7 @@ PRESET ?= demo
 QUALITY ?= normal
 WORKERS ?= 2
 
-.PHONY: help render test test-fast bench povray opengl venv clean
+.PHONY: help render test test-fast bench povray opengl browser venv clean
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
@@ -28,6 +28,10 @@ povray: ## install POV-Ray 3.7 with apt when it is missing
 opengl: ## install Mesa's off-screen OpenGL (EGL) with apt when it is missing: 'povh3d layout' draws with it
 	@$$(command -v ldconfig || echo /sbin/ldconfig) -p | grep -qE 'libEGL_mesa\.so\.0|libOSMesa\.so' || { echo "installing Mesa EGL (apt-get install libegl1 libegl-mesa0)"; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq libegl1 libegl-mesa0 >/dev/null; }
+
+browser: ## install Chromium and its driver with apt when missing: the viewer page's tests drive it headless
+	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || { echo "installing Chromium (apt-get install chromium chromium-driver)"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq chromium chromium-driver >/dev/null; }
 
 $(BIN)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -44,10 +48,10 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 
 # WORKERS pytest processes (pytest-xdist), one a core, each taking whole files (a module's fixtures
 # render once); pytest's exit status is make's (5: no test ran).
-test: povray opengl venv ## run the whole test suite, POV-Ray renders included (WORKERS=2 processes)
+test: povray opengl browser venv ## run the whole test suite, POV-Ray renders included (WORKERS=2 processes)
 	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile
 
-test-fast: venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
+test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
 	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile --fast
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)

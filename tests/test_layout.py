@@ -20,7 +20,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "povh3d"
 
 # Which top-level parts may import which (besides errors, _version, system, cache and extras,
 # which everything may use).  cli -> app -> engine -> povray, beside the libraries.
-LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration", "volume", "devices", "dataset"}
+LIBRARIES = {"geometry", "image", "scene", "mappings", "mesh", "calibration", "volume", "devices", "dataset",
+             "hyper"}
 ALLOWED = {
     "cli": {"app", "geometry", "mappings", "mesh", "scene", "image", "volume", "devices", "dataset"},
     "app": {"engine", *LIBRARIES},
@@ -33,6 +34,7 @@ ALLOWED = {
     "image": {"geometry"},
     "devices": set(),
     "dataset": {"image"},
+    "hyper": {"image", "scene"},   # sprite sheets encoded by image/png_codec.py; ids as scene/ codes them
     "scene": set(),
     "geometry": set(),
     "cache": {"image"},   # the one cache writes its entries with image/io.py's atomic writer

@@ -49,7 +49,7 @@ from ..volume.sources import is_volume_source
 #: Options that change nothing in the files written.
 _IGNORED = ("func", "quiet", "no_cache")
 #: Options whose use sends a request down the normal path (see the module docstring).
-_UNCACHED = ("frames", "video", "views_dir", "depth_maps", "scheduler", "calibration")
+_UNCACHED = ("frames", "video", "views_dir", "depth_maps", "scheduler", "calibration", "objects")
 _PACKAGE = Path(__file__).resolve().parents[1]
 
 

@@ -139,9 +139,9 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: s
     return {"views": to_edge(ppl), "view_size_px": to_edge(views.shape[2:4])}
 
 
-def sidecar_array(h3d: np.ndarray, h3d_path: str | Path) -> LensArray:
-    """The lens array of an H3D image's sidecar, checked against the image's size."""
-    record = read_sidecar(h3d_path)
+def sidecar_array(h3d: np.ndarray, h3d_path: str | Path, record: dict[str, Any] | None = None) -> LensArray:
+    """The lens array of an H3D image's sidecar (``record``, else read), checked against the image's size."""
+    record = read_sidecar(h3d_path) if record is None else record
     if not record or "lens_array" not in record:
         raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
     lens_array = Display.from_record(record).lens_array
@@ -158,6 +158,12 @@ def sidecar_bank(h3d: np.ndarray, lens_array: LensArray) -> np.ndarray:
     if lens_array.views is None:
         return extract_views(h3d, lens_array, view_grid(lens_array))
     return extract(h3d[lens_array.bank_region], lens_array.views)
+
+
+def h3d_views(h3d: np.ndarray, record: dict[str, Any], h3d_path: str | Path) -> tuple[np.ndarray, str]:
+    """The ``(Ny, Nx, Ly, Lx, C)`` views of an H3D image through its sidecar's lens array, and its grid."""
+    lens_array = sidecar_array(h3d, h3d_path, record)
+    return sidecar_bank(h3d, lens_array), lens_array.grid
 
 
 def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | Path) -> dict[str, Any]:

@@ -19,7 +19,7 @@ from typing import NoReturn
 
 from .._version import __version__
 from ..errors import Povh3dError, Povh3dWarning, RenderInterrupted
-from . import calibration, display, layout, render
+from . import calibration, display, hyper, layout, render
 from .options import warn
 
 
@@ -57,6 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
     display.add_parsers(sub)
     calibration.add_parsers(sub)
     layout.add_parsers(sub)
+    hyper.add_parsers(sub)
     return parser
 
 

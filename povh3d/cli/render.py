@@ -120,11 +120,21 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     from ..app.render import render
 
     request = request_from_args(args)
+    if args.objects:
+        from ..app.object_masks import check_objects_request
+
+        check_objects_request(request)
     update, close = progress_bar(not args.quiet and sys.stderr.isatty())
     try:
         result = render(request, update)
     finally:
         close()
+    if args.objects:
+        from ..app.object_masks import render_objects
+
+        masks = render_objects(request, args.objects)
+        print(f"{masks['folder']}  {masks['objects']} objects  {100 * masks['unresolved']:.2f} % of pixels "
+              "unresolved")
     if request.frames is not None:
         names = result["frames"]
         print(f"{names[0]} .. {names[-1]}  {len(names)} frames  {result['rendered']} rendered, "
@@ -258,6 +268,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--threads", type=positive_int, help="POV-Ray threads per process")
     p.add_argument("--timeout", type=float, help="seconds allowed to each POV-Ray run")
     p.add_argument("--views-dir", help="also write the view stack here (v_LLL_KKK.png)")
+    p.add_argument("--objects", metavar="DIR", help="also write per view the id of the object each pixel's "
+                   "ray first hits, and their names (docs/viewer.md); one more POV-Ray pass")
     p.add_argument("--depth-maps", metavar="DIR", help="also write per view the distance along each ray to the "
                    "first surface (d_LLL_KKK.npy, mm) and its disparity (p_LLL_KKK.npy, lenses per view step)")
     p.add_argument("--dataset", metavar="DIR", help="also write the HCI 4D light-field layout here (input_CamNNN.png, "

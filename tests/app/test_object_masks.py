@@ -1,0 +1,87 @@
+"""``render --objects DIR`` end to end on the bundled sample: masks, their header, the page,
+and a scene whose objects cannot be told apart as one line before any render."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from povh3d.app.objects import read_mask, read_table
+from povh3d.scene.object_ids import UNRESOLVED
+from tests.support.cli import run_in_process
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.povray
+def test_sample_masks_annotate_and_view(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--preset", "demo", "--quality", "draft",
+                         "-o", tmp_path / "s.png", "--objects", tmp_path / "objs")
+    assert run.code == 0, run.err
+    table = read_table(tmp_path / "objs")
+    assert table.names == {1: "plane_17", 2: "sphere_21", 3: "cylinder_27", 4: "torus_33", 5: "box_37"}
+    from povh3d.image.io import read_sidecar
+
+    assert read_sidecar(tmp_path / "s.png")["objects"]["names"]["4"] == "torus_33"   # and the image's hash holds
+    centre = read_mask(tmp_path / "objs", table, 0, (3, 3))
+    assert set(np.unique(centre)) == {1, 2, 3, 4, 5} and not (centre == UNRESOLVED).any()
+    # the torus (7, 5, -3) mm sits upper right of the centre view, the box (-5, -7, -3) lower left
+    rows, cols = np.nonzero(centre == 4)
+    assert rows.mean() < 15 and cols.mean() > 20      # a 40x30 view: row 15, column 20 at its middle
+    rows, cols = np.nonzero(centre == 5)
+    assert rows.mean() > 15 and cols.mean() < 20
+    (tmp_path / "links.toml").write_text('[torus_33]\nurl = "https://example.org/torus"\n')
+    assert run_in_process("annotate", tmp_path / "s.png", "--objects", tmp_path / "objs", "-o", tmp_path / "s.xml",
+                          "--links", tmp_path / "links.toml").code == 0
+    assert b'url="https://example.org/torus"' in (tmp_path / "s.xml").read_bytes()
+    assert run_in_process("viewer", tmp_path / "s.png", "--cdp", tmp_path / "s.xml", "--objects", tmp_path / "objs",
+                          "-o", tmp_path / "s.html").code == 0
+
+
+def test_scene_without_separable_objects_is_one_line_before_any_render(tmp_path: Path) -> None:
+    scene = tmp_path / "macro.pov"
+    scene.write_text("#macro M() sphere { 0, 1 } #end\nM()\nlight_source { <0, 0, -9> rgb 1 }\n")
+    run = run_in_process("render", scene, "--preset", "demo", "-o", tmp_path / "m.png", "--objects", tmp_path / "o")
+    assert run.code != 0 and "no top-level object statements" in run.err and run.err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["macro.pov"]
+
+
+ANIMATION = """#version 3.7;
+global_settings { assumed_gamma 1.0 }
+light_source { <-20, 30, -60> rgb 1 }
+sphere { <-8 + 16 * clock, 3, 2>, 3 pigment { rgb <1, 0, 0> } }
+box { <-3, -9, -2>, <3, -5, 2> pigment { rgb <0, 0, 1> }
+  #if (clock > 0.3 & clock < 0.7) translate 200 * x #end }
+"""
+
+
+@pytest.mark.povray
+def test_animation_masks_give_a_new_annotation_when_an_object_comes_back(tmp_path: Path, monkeypatch) -> None:
+    from povh3d.app.annotate import build_header
+
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "a.pov").write_text(ANIMATION)
+    run = run_in_process("render", tmp_path / "a.pov", "--preset", "demo", "--quality", "draft", "-o",
+                         tmp_path / "a.png", "--frames", "0:4", "--objects", tmp_path / "objs")
+    assert run.code == 0, run.err
+    from povh3d.image.io import read_sidecar
+
+    assert read_sidecar(tmp_path / "a_0002.png")["objects"]["names"] == {"1": "sphere_4", "2": "box_5"}
+    header = build_header(tmp_path / "a.png", tmp_path / "objs")
+    spans = [(a.object_name, a.start, a.end) for a in header.scenes[0].annotations]
+    assert spans == [("box_5", 0, 1), ("sphere_4", 0, 4), ("box_5", 3, 4)]   # the box is away at clock 0.5
+    sphere = header.scenes[0].annotations[1]
+    lefts = [b.box[0] for b in sphere.boxes if b.space == "view"]
+    assert lefts == sorted(lefts) and lefts[-1] - lefts[0] >= 15     # 16 mm right over 40 lenses of 0.8 mm
+    assert {b.space for b in sphere.boxes} == {"view", "h3d"}
+
+
+def test_hex_masks_are_refused_before_any_render(tmp_path: Path) -> None:
+    run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--grid", "hex", "--lenses", "30x20",
+                         "--ppl", "8", "--pixel-pitch", "0.1", "--focal", "1.5", "-o", tmp_path / "h.png",
+                         "--objects", tmp_path / "o")
+    assert run.code != 0 and "whole pixels per lens" in run.err and run.err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
