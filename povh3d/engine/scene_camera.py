@@ -1,7 +1,9 @@
 """The scene's camera evaluated by POV-Ray: the runs that turn a scene's last camera into numbers.
 
-``evaluate_camera`` runs the scene's camera statements alone (one row at the
-panel's pixel size, so ``image_width / image_height`` is the H3D image's aspect);
+``evaluate_camera`` runs the scene's camera statements alone (one row of an image
+with the physical panel's aspect, ``physical_size``: ``image_width / image_height`` in
+a scene means the panel's shape in mm, not the pixel grid of a lenticular or mapped
+view space, whose pixels are not square);
 ``evaluate_and_measure`` runs them with the rest of the scene and
 ``templates/camera_depth.pov.j2``, which works out the display frame from the
 declared values and renders the fog depth pass through it in the same run.
@@ -69,18 +71,31 @@ def _keep(path: Any, key: str, meta: dict[str, Any], data: bytes = b"") -> None:
         pass
 
 
+def physical_size(lens_array: LensArray) -> tuple[int, int]:
+    """``(width, height)`` pixels with the physical panel's aspect (its size in mm), about as many rows
+    as the panel: the size the scene's camera is evaluated at.  A lenticular panel's 5760 x 1080
+    subpixel columns are 930 x 523 mm, 16:9, not 5.33:1."""
+    from fractions import Fraction
+
+    width_mm, height_mm = lens_array.panel.size_mm
+    rows = lens_array.panel.height
+    ratio = Fraction(width_mm / height_mm).limit_denominator(max(rows, 1))
+    k = max(1, rows // ratio.denominator)
+    return ratio.numerator * k, ratio.denominator * k
+
+
 def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: int, cache_dir: Any,
                     use_cache: bool) -> tuple[dict[str, Any], float, bool]:
     """The camera's vectors from one POV-Ray run of ``script``, cached by the scene's digest.
 
-    The run has the panel's pixel size, so ``image_width / image_height`` in
-    the camera is the H3D image's aspect; it traces one row.
+    The run has the physical panel's aspect (``physical_size``), so ``image_width / image_height``
+    in the camera is the panel's shape; it traces one row.
     """
     from ..povray.process import PovrayJob, run_jobs
     from ..povray.sandbox import scene_inputs
 
     start = time.perf_counter()
-    w, h = lens_array.panel.width, lens_array.panel.height
+    w, h = physical_size(lens_array)
     key = content_key("scene-camera", __version__, scene.digest, w, h)
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera)
@@ -138,7 +153,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     from ..povray.templates import render_template
 
     start = time.perf_counter()
-    w, h = lens_array.panel.width, lens_array.panel.height
+    w, h = physical_size(lens_array)
     right, up = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0), (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
     target = pass_size(lens_array)[0]
     key = content_key("scene-camera-depth", __version__, scene.digest, w, h, target, right, up, front_clearance,
