@@ -22,6 +22,7 @@ and what the sidecar records of it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -31,7 +32,7 @@ import numpy as np
 from ..errors import ConfigError, warn
 from ..geometry.cameras import ortho_view_frames, pinhole_frames
 from ..geometry.camera_mesh import check_front_clearance, default_front_clearance
-from ..geometry.view_bank import bank_front_clearance, stack_frames, view_bank_frames
+from ..geometry.view_bank import bank_front_clearance, bank_front_clearance_step, stack_frames, view_bank_frames
 from ..geometry.crop import CropSettings
 from ..geometry.footprint import CENTRE, latin_hypercube
 from ..geometry.lattice_mesh import lens_mesh
@@ -47,7 +48,7 @@ from .batch import ShotBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
 from . import subpixel
-from .single_stage import SingleStagePlan, default_depth, lenslet_for
+from .single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
 
 
 #: Pixels between the tiles of a one-pass view bank when antialiasing samples pixel
@@ -180,6 +181,12 @@ class Method:
     default_front_clearance: Callable[[LensArray], float] = default_front_clearance
     # Where the rays really start for a requested clearance (the sidecar's figure).
     round_front_clearance: Callable[[LensArray, float], float] = lambda lens_array, front_clearance: front_clearance
+    # The step (mm) its clearances come in, given the plan's options; 0: any.  Under a limit the
+    # clearance is rounded down to it instead of up.
+    front_clearance_step: Callable[[LensArray, Mapping[str, Any]], float] = lambda lens_array, options: 0.0
+    # Whether only whole steps work (single-stage's depth: 0 is one); else the limit itself, unrounded,
+    # where it is under one step.
+    whole_steps_only: bool = False
     # Whether the method can trace footprint samples (sub-views) for this array;
     # where it cannot, a quality that asks for them falls back to antialiasing.
     takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
@@ -215,11 +222,14 @@ METHODS: dict[str, Method] = {
     # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
     "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
                           confines_antialias=_whole_views,
-                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b),
+                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b,
+                          front_clearance_step=lambda la, o: bank_front_clearance_step(la) if la.views else 0.0),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
-                           supersamples=single_stage_supersamples),
+                           supersamples=single_stage_supersamples,
+                           front_clearance_step=lambda la, o: recentre_unit(la, o.get("supersample", 1)),
+                           whole_steps_only=True),
     "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples),
 }
 
@@ -244,6 +254,7 @@ class MethodResult:
     quality: Quality         # as rendered (after any fallback to antialiasing)
     crop: dict[str, Any] | None = None    # what the crop did, for the sidecar
     record: dict[str, Any] | None = None  # the method's own set-up, for the sidecar
+    front_clearance_reason: str = ""      # why rays start there, for the sidecar and the summary
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
@@ -261,8 +272,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     asked = settings.spec
     header = display_header(lens_array)   # the display's own constants, whatever --depth-scale does
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
-    front_clearance = method.round_front_clearance(
-        lens_array, settings.front_clearance or method.default_front_clearance(lens_array))
+    asked_clearance = settings.front_clearance or method.default_front_clearance(lens_array)
+    front_clearance = method.round_front_clearance(lens_array, asked_clearance)
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if method.confines_antialias is not None and not method.confines_antialias(lens_array):
         quality = quality.footprint_sampled()
@@ -276,6 +287,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         settings = replace(settings, quality=quality)
     if method.gutters:
         plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
+    front_clearance, reason = _limited_front_clearance(method, lens_array, settings, asked_clearance,
+                                                       front_clearance, plan_options)
     samples = quality.samples()
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
@@ -302,4 +315,22 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
         canvas[lens_array.bank_region] = h3d
         h3d = canvas
-    return MethodResult(h3d, stats, front_clearance, quality, crop_info, record)
+    return MethodResult(h3d, stats, front_clearance, quality, crop_info, record, reason)
+
+
+def _limited_front_clearance(method: Method, lens_array: LensArray, settings: RenderSettings, asked: float,
+                             rounded: float, options: Mapping[str, Any]) -> tuple[float, str]:
+    """Where rays start (mm) and why: the clearance asked for (or the method's default), rounded up to
+    the method's step; under ``settings.front_clearance_limit`` rounded down instead (a method whose
+    rounding up passed the scene camera let a wall behind the camera fill the image)."""
+    why = "--front-clearance" if settings.front_clearance else "the method's default"
+    limit = settings.front_clearance_limit
+    if limit is None or rounded <= limit * (1 + 1e-12):
+        step = "" if rounded == asked else f", rounded up to {rounded:.4g} mm (whole view shifts)"
+        return rounded, f"{why}{step}"
+    step = method.front_clearance_step(lens_array, options)
+    if step > 0 and (limit >= step or method.whole_steps_only):
+        used = step * math.floor(limit / step * (1 + 1e-12))
+    else:
+        used = limit
+    return used, f"{settings.front_clearance_reason or 'limited'} ({limit:.4g} mm); {why} was {rounded:.4g} mm"

@@ -1,0 +1,62 @@
+"""Rays never start behind the scene's camera: a wall just behind it, which the 2D render cannot see,
+stays out of the H3D image for every method and with --fit-depth, unless --front-clearance asks."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+ARRAY = ("--preset", "demo", "--quality", "draft", "-q")
+# The camera 10 units out, a red wall 0.3 units behind it (its front face toward the camera),
+# a white sphere at the look_at point.  multi-ortho's view bank rounded 0.9 of the camera's
+# distance (39.6 mm) up to 48 mm, 10.9 units out: behind the wall, which then filled the image.
+SCENE = """#version 3.7;
+camera { location <0, 0, -10> angle 40 right x*image_width/image_height look_at <0, 0, 0> }
+light_source { <5, 5, -20> rgb 1 }
+box { <-1000, -1000, -10.5>, <1000, 1000, -10.3> pigment { rgb <1, 0, 0> } finish { ambient 1 diffuse 0 } }
+sphere { 0, 1 pigment { rgb 1 } }
+"""
+
+
+def red_share(path) -> float:
+    rgb = np.asarray(Image.open(path).convert("RGB"), dtype=np.int32)
+    return float(((rgb[..., 0] > 200) & (rgb[..., 1] < 60)).mean())
+
+
+@pytest.mark.parametrize("extra", [
+    ("--method", "multi-ortho"),
+    ("--method", "multi-ortho", "--fit-depth", "auto"),
+    ("--method", "multi-ortho", "--fit-depth", "auto", "--depth-scale"),
+    ("--method", "multi-ortho-views"),
+    ("--method", "single-stage"),
+])
+def test_a_wall_behind_the_camera_stays_out(cli, tmp_path, extra):
+    scene = tmp_path / "wall.pov"
+    scene.write_text(SCENE)
+    out = tmp_path / "w.png"
+    result = cli("render", str(scene), "-o", str(out), *ARRAY, *extra)
+    assert result.code == 0, result.err
+    record = json.loads(out.with_suffix(".json").read_text())
+    frame = record["display_frame"]
+    distance_mm = 10 / frame["units_per_mm"]
+    used = record["quality"]["front_clearance_mm"]
+    assert used <= 0.9 * distance_mm * (1 + 1e-9)
+    reason = record["quality"]["front_clearance_reason"]
+    assert "scene camera" in reason or (extra[1] == "single-stage" and reason == "the method's default")
+    assert f"rays from {used:.4g} mm" in result.out
+    assert red_share(out) < 0.01
+
+
+def test_an_explicit_front_clearance_may_pass_the_camera(cli, tmp_path):
+    """Negative control: asked for, rays start behind the camera and the wall fills the image."""
+    scene = tmp_path / "wall.pov"
+    scene.write_text(SCENE)
+    out = tmp_path / "w.png"
+    result = cli("render", str(scene), "-o", str(out), *ARRAY, "--front-clearance", "200")
+    assert result.code == 0, result.err
+    record = json.loads(out.with_suffix(".json").read_text())
+    assert record["quality"]["front_clearance_mm"] >= 200
+    assert red_share(out) > 0.9
