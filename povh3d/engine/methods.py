@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import ConfigError, warn
 from ..geometry.cameras import ortho_view_frames, pinhole_frames
 from ..geometry.camera_mesh import check_front_clearance, default_front_clearance
-from ..geometry.view_bank import bank_front_clearance, bank_front_clearance_step, stack_frames, view_bank_frames
+from ..geometry.view_bank import bank_front_clearance, stack_frames, view_bank_frames
 from ..geometry.crop import CropSettings
 from ..geometry.footprint import CENTRE, latin_hypercube
 from ..geometry.lattice_mesh import lens_mesh
@@ -181,12 +181,10 @@ class Method:
     default_front_clearance: Callable[[LensArray], float] = default_front_clearance
     # Where the rays really start for a requested clearance (the sidecar's figure).
     round_front_clearance: Callable[[LensArray, float], float] = lambda lens_array, front_clearance: front_clearance
-    # The step (mm) its clearances come in, given the plan's options; 0: any.  Under a limit the
-    # clearance is rounded down to it instead of up.
+    # Under a limit: the step (mm) its clearances must come in, given the plan's options (single-stage's
+    # depth moves the lens array by whole lenses; 0 is a step), rounded down to it; 0: the limit itself
+    # (a view bank's rounding only makes its corners exact in single precision).
     front_clearance_step: Callable[[LensArray, Mapping[str, Any]], float] = lambda lens_array, options: 0.0
-    # Whether only whole steps work (single-stage's depth: 0 is one); else the limit itself, unrounded,
-    # where it is under one step.
-    whole_steps_only: bool = False
     # Whether the method can trace footprint samples (sub-views) for this array;
     # where it cannot, a quality that asks for them falls back to antialiasing.
     takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
@@ -222,14 +220,12 @@ METHODS: dict[str, Method] = {
     # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
     "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
                           confines_antialias=_whole_views,
-                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b,
-                          front_clearance_step=lambda la, o: bank_front_clearance_step(la) if la.views else 0.0),
+                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
                            supersamples=single_stage_supersamples,
-                           front_clearance_step=lambda la, o: recentre_unit(la, o.get("supersample", 1)),
-                           whole_steps_only=True),
+                           front_clearance_step=lambda la, o: recentre_unit(la, o.get("supersample", 1))),
     "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples),
 }
 
@@ -329,8 +325,5 @@ def _limited_front_clearance(method: Method, lens_array: LensArray, settings: Re
         step = "" if rounded == asked else f", rounded up to {rounded:.4g} mm (whole view shifts)"
         return rounded, f"{why}{step}"
     step = method.front_clearance_step(lens_array, options)
-    if step > 0 and (limit >= step or method.whole_steps_only):
-        used = step * math.floor(limit / step * (1 + 1e-12))
-    else:
-        used = limit
+    used = step * math.floor(limit / step * (1 + 1e-12)) if step > 0 else limit
     return used, f"{settings.front_clearance_reason or 'limited'} ({limit:.4g} mm); {why} was {rounded:.4g} mm"

@@ -84,14 +84,9 @@ def bank_front_clearance(lens_array: LensArray, front_clearance: float) -> float
     multiple of 1/2 (times the samples' 1/GRID grid), so the bank's corners,
     written in lens pitches, are exact in POV-Ray's single precision.
     """
-    unit = bank_front_clearance_step(lens_array)
-    return math.ceil(front_clearance / unit * (1 - 1e-12)) * unit
-
-
-def bank_front_clearance_step(lens_array: LensArray) -> float:
-    """The step (mm) of a view bank's exact front clearances, ``f * lcm(Nx, Ny)``."""
     ny, nx = lens_array.require_views()
-    return lens_array.focal * math.lcm(nx, ny)
+    unit = lens_array.focal * math.lcm(nx, ny)
+    return math.ceil(front_clearance / unit * (1 - 1e-12)) * unit
 
 
 def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None, cols: np.ndarray,
