@@ -82,3 +82,34 @@ def test_the_camera_is_evaluated_at_the_physical_aspect(preset, mapping, aspect)
     assert w / h == pytest.approx(aspect, rel=1e-12)
     # negative control: the pixel grid's aspect is not the panel's on lenticular panels
     assert (array.panel.width / array.panel.height == pytest.approx(aspect)) == (preset == "demo")
+
+
+#: Debian scenes whose camera is not a top-level statement of the scene file: (folder, scene, camera
+#: distance to the frame centre, angle in degrees, whether the views look like the 2D render (a narrow
+#: angle: an orthographic view of a 70-degree perspective differs by design)).
+CAMERA_ELSEWHERE = [
+    ("objects", "prism3a.pov", float(np.sqrt(300)), 20, True),          # in prism3.inc
+    ("incdemo/woods", "wood_1.pov", float(np.hypot(120, 1.1)), 5.4, True),  # in testcam.inc
+    ("animations/speclr", "speclr.pov", float(np.sqrt(1.25**2 + 2.25**2 + 25)), 70, False),  # stdcam.inc
+    # screen.inc builds it in a macro, called five times; no look_at: the axis point nearest the origin
+    ("incdemo", "screen.pov", 1859 / float(np.sqrt(1787)), 70, False),
+]
+
+
+@pytest.mark.parametrize("folder, name, distance, angle, alike", CAMERA_ELSEWHERE)
+def test_a_camera_in_an_include_or_a_macro_frames_the_render(cli, tmp_path, folder, name, distance, angle, alike):
+    """Before: 'frame native', the sidecar said the scene has no camera, the image was dark or nearly empty."""
+    scene = sample(tmp_path, folder) / name
+    out = tmp_path / "h.png"
+    result = cli("render", str(scene), "-o", str(out), "--preset", "demo", "--quality", "draft",
+                 "--display-frame", "camera", "--views-dir", str(tmp_path / "views"), "-q")
+    assert result.code == 0, result.err
+    assert "frame camera" in result.out
+    record = json.loads(out.with_suffix(".json").read_text())["display_frame"]
+    # The frame is the camera's field at the centre: 2 d tan(angle / 2) over the panel's 32 mm.
+    assert record["units_per_mm"] == pytest.approx(2 * distance * np.tan(np.radians(angle) / 2) / 32, rel=1e-3)
+    image = np.asarray(Image.open(out).convert("L"), dtype=np.float64)
+    assert image.std() > 5 and 10 < image.mean() < 245
+    if alike:
+        reference = plain_render(scene, 320, 240)
+        assert framing(tmp_path / "views" / "v_003_003.png", reference) > 0.6
