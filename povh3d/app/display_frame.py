@@ -124,10 +124,14 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
             raise
         found = None   # the camera alone, then a pass of its own, say what failed: the camera or the scene
     if found is None:
-        camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir, use_cache)
+        camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
+                                                  use_cache, script.lines)
         distances = None
     else:
         camera, distances, seconds, cached = found
+    if camera["type"] == "orthographic":
+        raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
+                          f"place the display where it looks: {_orthographic_options(camera)}")
     if camera["type"] != "perspective":
         raise CameraError(f"cannot use the scene's {camera['type']} camera (only a perspective one defines "
                           f"a frame); place the display with {EXPLICIT_OPTIONS}, or --display-frame native")
@@ -147,3 +151,18 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
               "evaluation_from_cache": cached, "warnings": warnings}
     return frame, record, distances
+
+
+def _orthographic_options(camera: dict[str, Any]) -> str:
+    """The ``--display-*`` options that put the display across an orthographic camera's view: centred
+    on its look_at (or its location), facing along its direction, as wide as its ``right``."""
+    import numpy as np
+
+    centre = camera["look_at"] if camera["look_at"] is not None else camera["location"]
+    width = float(np.linalg.norm(camera["right"]))
+
+    def triple(v: Any) -> str:
+        return ",".join(f"{float(x):.6g}" for x in v)
+
+    return (f"--display-center={triple(centre)} --display-normal={triple(camera['direction'])} "
+            f"--display-up={triple(camera['up'])} --display-width {width:.6g}")

@@ -130,9 +130,11 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
         if depth.get("empty") or factor == 1:
             return depth
         after = {**depth, **{k: depth[k] * factor for k in keys}}
-        half = budget / 2
-        after["within_budget"] = bool(-half <= after["near_mm"] + 1e-9 and after["far_mm"] - 1e-9 <= half)
-        after["field_within_budget"] = bool(-half <= after["field_near_mm"] and after["field_far_mm"] <= half)
+        # A thousandth of the budget: what --fit-depth fitted exactly may come back a rounding over.
+        half, slack = budget / 2, budget * 1e-3
+        after["within_budget"] = bool(-half <= after["near_mm"] + slack and after["far_mm"] - slack <= half)
+        after["field_within_budget"] = bool(-half <= after["field_near_mm"] + slack
+                                            and after["field_far_mm"] - slack <= half)
         return after
 
     depth = measure(frame)

@@ -148,8 +148,9 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
         drawn = f"{len(v['surfaces'])} surfaces, {v['triangles']} triangles" if "surfaces" in v else "media"
         mapping += f"  {v['orientation']}, {drawn}"
     summary = f"{w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}"
+    seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
-          f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
+          f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return summary, noted
 
 

@@ -84,9 +84,10 @@ class CameraScript:
 
     script: str
     cameras: int          # camera statements the parse ran (0: known only from the run's log)
-    rest: str = ""        # the scene after its last camera: appended, with a camera of povh3d's own
-                          # (``templates/camera_depth.pov.j2``), the same run renders the scene; the
-                          # block's last values stay declared as ``Povh3d_Cam_location``, ...
+    rest: str = ""        # appended (with a camera of povh3d's own, ``templates/camera_depth.pov.j2``)
+                          # the same run renders the scene; the last block's values stay declared as
+                          # ``Povh3d_Cam_location``, ...
+    lines: tuple[tuple[int, str, int], ...] = ()   # (script line, file, its line): camera_script.source_line
 
 
 def _version(text: str) -> tuple[int, ...]:
@@ -168,8 +169,9 @@ def _rewrite(body: str, store: str | None = None, replay: str = "") -> str:
             out.append(f"#declare Povh3d_Cam_T = transform {{ transform Povh3d_Cam_T {t} {expr}\n}}")
         elif t in _TYPES:
             out.append(f"#declare {store}_{i} = 1;" if store is not None else f'#debug "{TAG} type {t}\\n"')
-            if t != "perspective" and not open_directives:
-                break   # not a perspective camera: its other modifiers (two angles...) need no values
+            if t not in ("perspective", "orthographic") and not open_directives:
+                break   # no frame from it: its other modifiers (two angles...) need no values
+                        # (an orthographic one's give the --display-* options to use instead)
             i += 1
             if i < len(toks) and (t in ("cylinder", "mesh_camera", "user_defined")):
                 _, i = expression(i)

@@ -88,8 +88,12 @@ def camera_script(main: str, read: Callable[[str], str | None]) -> CameraScript 
     if not scene.holds_camera(""):
         return None
     _collect("", scene, 0)
-    body = _rewritten("", scene, 0)
-    return CameraScript(f'#debug "{TAG} parse\\n"\n' + body + "\n", 0)
+    pieces = [(f'#debug "{TAG} parse\\n"\n', None), *_rewritten("", scene, 0), ("\n", None)]
+    lines, line = [], 1
+    for piece, origin in pieces:
+        lines.append((line, *(origin or ("", 0))))
+        line += piece.count("\n")
+    return CameraScript("".join(p for p, _ in pieces), 0, lines=tuple(lines))
 
 
 def _camera_at(toks: list[Token], i: int) -> bool:
@@ -125,14 +129,22 @@ def _which(ident: str, scene: _Scene) -> str:
     return f"Povh3d_W{list(scene.declarations).index(ident)}"
 
 
-def _rewritten(name: str, scene: _Scene, depth: int) -> str:
-    """The text of file ``name`` with its cameras rewritten and its camera-holding includes inlined."""
+Piece = tuple[str, "tuple[str, int] | None"]
+
+
+def _rewritten(name: str, scene: _Scene, depth: int) -> list[Piece]:
+    """The text of file ``name`` with its cameras rewritten and its camera-holding includes inlined, in
+    pieces: ``(text, (file, line))`` for the file's own text from that line, ``(text, None)`` for povh3d's."""
     if depth > MAX_DEPTH:
         raise _cannot(f"its includes nest deeper than {MAX_DEPTH} files")
     text = scene.text(name) or ""
     toks = tokens(text)
-    out, at, version = [], 0, None
-    i = 0
+    out: list[Piece] = []
+    at, version, i = 0, None, 0
+
+    def own(end: int) -> Piece:
+        return text[at:end], (name, text.count("\n", 0, at) + 1)
+
     while i < len(toks):
         t = toks[i].text
         if t == "#version" and i + 1 < len(toks):
@@ -141,7 +153,7 @@ def _rewritten(name: str, scene: _Scene, depth: int) -> str:
         if t == "#include" and i + 1 < len(toks):
             nxt = toks[i + 1].text
             if nxt.startswith('"') and scene.holds_camera(nxt[1:-1]):
-                out += [text[at:toks[i].start], "\n", _rewritten(nxt[1:-1], scene, depth + 1), "\n"]
+                out += [own(toks[i].start), ("\n", None), *_rewritten(nxt[1:-1], scene, depth + 1), ("\n", None)]
                 at = toks[i + 1].end
                 i += 2
                 continue
@@ -152,21 +164,31 @@ def _rewritten(name: str, scene: _Scene, depth: int) -> str:
             if ident is not None:   # keep the declaration, and its values for a later camera { Name }
                 d = scene.sites[(name, i)]
                 undo = "\n".join(f"#ifdef ({d.store}_{k}) #undef {d.store}_{k} #end" for k, _ in d.items)
-                out += [text[at:toks[close].end], "\n", undo, "\n", _rewrite(_plain(body, ident), store=d.store),
-                        f"\n#declare {_which(ident, scene)} = {d.number};\n"]
+                out += [own(toks[close].end), ("\n" + undo + "\n" + _rewrite(_plain(body, ident), store=d.store)
+                                               + f"\n#declare {_which(ident, scene)} = {d.number};\n", None)]
             elif i > 0 and toks[i - 1].text == "=":
                 raise _cannot("a camera is a value inside another declaration, which povh3d cannot follow")
             else:
                 if version is not None and _version(version) < (3, 5):
                     raise _cannot(f"the scene declares #version {version}, whose camera rules (modifiers "
                                   f"applied in order) povh3d does not reproduce")
-                out += [text[at:toks[i].start], "\n", _statement(body, scene), "\n"]
+                out += [own(toks[i].start), ("\n" + _statement(body, scene) + "\n", None)]
             at = toks[close].end
             i = close + 1
             continue
         i += 1
-    out.append(text[at:])
-    return "".join(out)
+    out.append(own(len(text)))
+    return out
+
+
+def source_line(lines: tuple[tuple[int, str, int], ...], line: int, scene_name: str) -> str:
+    """Where line ``line`` of a ``camera_script`` came from: ``"NAME line N"`` (the scene, or the file it
+    includes as NAME), or povh3d's rewrite of a camera statement (file line 0 in ``lines``)."""
+    starts = [entry for entry in lines if entry[0] <= line]
+    if not starts or starts[-1][2] == 0:
+        return f"povh3d's rewrite of a camera statement of {scene_name} or a file it includes"
+    start, name, first = starts[-1]
+    return f"{name or scene_name} line {first + line - start}"
 
 
 def _plain(body: str, ident: str) -> str:
