@@ -146,8 +146,13 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     if camera.get("dropped"):
         warnings.append(f"the scene camera's {', '.join(camera['dropped'])} (focal blur, a normal pattern) "
                         f"are not reproduced: every view is a sharp, undistorted render")
+    # A mirrored frame (a right-handed camera: a negative right) is no warning: the display's x follows
+    # the camera's right as POV-Ray's 2D render does, so the views show what that render shows, the
+    # right way round; the record says ``mirrored`` and why.
     if frame.mirrored:
-        warnings.append("the scene's camera is mirrored (a negative right): the display frame is a mirror image")
+        frame = DisplayFrame(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
+                             frame.note + "; right-handed (a negative right): x follows it, as in the 2D render",
+                             frame.camera_distance)
     record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
               "evaluation_from_cache": cached, "warnings": warnings}
     return frame, record, distances

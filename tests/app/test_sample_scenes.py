@@ -113,3 +113,24 @@ def test_a_camera_in_an_include_or_a_macro_frames_the_render(cli, tmp_path, fold
     if alike:
         reference = plain_render(scene, 320, 240)
         assert framing(tmp_path / "views" / "v_003_003.png", reference) > 0.6
+
+
+def test_a_right_handed_camera_shows_what_its_2d_render_shows(cli, tmp_path):
+    """A negative ``right`` (a right-handed scene) is a mirrored frame; the views match the 2D render the
+    right way round, so no 'mirrored' warning (before: one, where nothing was wrong)."""
+    scene = tmp_path / "rh.pov"
+    scene.write_text("#version 3.7;\ncamera { location <0, 0, -20> right -x*image_width/image_height "
+                     "look_at 0 angle 30 }\nlight_source { <10, 10, -30> rgb 1 }\n"
+                     "box { <-4, -3, 0>, <-1, 3, 1> pigment { rgb <1, 0, 0> } }\n"
+                     "sphere { <2.5, 1.5, 0>, 1 pigment { rgb <0, 0, 1> } }\nplane { z, 2 pigment { rgb 0.6 } }\n")
+    out = tmp_path / "h.png"
+    result = cli("render", str(scene), "-o", str(out), "--preset", "demo", "--quality", "draft",
+                 "--views-dir", str(tmp_path / "views"), "-q")
+    assert result.code == 0 and "mirror" not in result.err, result.err
+    assert json.loads(out.with_suffix(".json").read_text())["display_frame"]["mirrored"] is True
+    reference = plain_render(scene, 320, 240)
+    view = tmp_path / "views" / "v_003_003.png"
+    assert framing(view, reference) > 0.8
+    flipped = tmp_path / "flipped.png"   # negative control: the mirror image does not pass
+    Image.open(view).transpose(Image.FLIP_LEFT_RIGHT).save(flipped)
+    assert framing(flipped, reference) < 0.5
