@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import re
 import sys
 import time
 import warnings
@@ -173,13 +174,17 @@ def _warnings_kept() -> Iterator[list[str]]:
         warnings.showwarning = shown
 
 
+_REASON_END = re.compile(r" \(|;|:")
+
+
 def clearance_phrase(record: dict[str, Any]) -> str:
     """Where the rays start, and why when it is not the method's plain default."""
     q = record.get("quality", {})
     if "front_clearance_mm" not in q:
         return ""
     reason = q.get("front_clearance_reason", "")
-    why = "" if reason == "the method's default" or not reason else f" ({reason.split(' (')[0].split(';')[0]})"
+    short = _REASON_END.split(reason)[0]   # its first words: the sidecar has the rest
+    why = "" if reason == "the method's default" or not reason else f" ({short})"
     return f"rays from {q['front_clearance_mm']:.4g} mm{why}"
 
 

@@ -322,7 +322,7 @@ def _limited_front_clearance(method: Method, lens_array: LensArray, settings: Re
     why = "--front-clearance" if settings.front_clearance else "the method's default"
     limit = settings.front_clearance_limit
     if limit is None or rounded <= limit * (1 + 1e-12):
-        step = "" if rounded == asked else f", rounded up to {rounded:.4g} mm (whole view shifts)"
+        step = "" if rounded == asked else f" {asked:.4g} mm, rounded up (whole view shifts)"
         return rounded, f"{why}{step}"
     step = method.front_clearance_step(lens_array, options)
     used = step * math.floor(limit / step * (1 + 1e-12)) if step > 0 else limit
