@@ -16,6 +16,7 @@ import numpy as np
 
 from ..engine.depth import DepthMap, depth_pass
 from ..engine.methods import get_method
+from ..geometry.camera_mesh import default_front_clearance
 from ..engine.quality import DEPTH_SCALE_RANGE
 from ..errors import ConfigError
 from ..geometry.frame import NATIVE, DisplayFrame
@@ -39,7 +40,9 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
     options = request.display_frame
-    default = get_method(request.method).default_front_clearance(array)
+    # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
+    # what a method starting nearer (single-stage) would cut.
+    default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
     # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
     placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                    use_cache=s.use_cache, front_clearance=s.front_clearance or default)

@@ -60,3 +60,26 @@ def test_an_explicit_front_clearance_may_pass_the_camera(cli, tmp_path):
     record = json.loads(out.with_suffix(".json").read_text())
     assert record["quality"]["front_clearance_mm"] >= 200
     assert red_share(out) > 0.9
+
+
+NEAR = """#version 3.7;
+camera { location <0, 0, -10> angle 40 right x*image_width/image_height look_at <0, 0, 0> }
+light_source { <5, 5, -20> rgb 1 }
+sphere { <0, 0, -6>, 1 pigment { rgb 1 } }
+sphere { 0, 1 pigment { rgb 1 } }
+"""
+
+
+def test_a_foreground_cut_by_the_clearance_is_one_warning(cli, tmp_path):
+    """single-stage's lens array moves in 24 mm steps: within the camera's 39.6 mm it starts rays at 24 mm,
+    and the sphere 6 units out (about 31 mm) is cut; multi-ortho starts at 39.6 mm and cuts nothing."""
+    scene = tmp_path / "near.pov"
+    scene.write_text(NEAR)
+    cut = cli("render", str(scene), "-o", str(tmp_path / "s.png"), *ARRAY, "--method", "single-stage")
+    assert cut.code == 0, cut.err
+    lines = [line for line in cut.err.splitlines() if "foreground" in line]
+    assert len(lines) == 1 and "rays start at z = -24 mm" in lines[0] and "--method multi-ortho" in lines[0]
+    record = json.loads((tmp_path / "s.json").read_text())
+    assert any("foreground" in w for w in record["display_frame"]["warnings"])
+    whole = cli("render", str(scene), "-o", str(tmp_path / "m.png"), *ARRAY)   # negative control
+    assert whole.code == 0 and "foreground" not in whole.err, whole.err
