@@ -65,8 +65,11 @@ class MethodPlan:
     record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
 
 
-def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, gutter: int = 0) -> MethodPlan:
-    if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
+def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, gutter: int = 0,
+                 bank: bool = True) -> MethodPlan:
+    # bank False: a clearance the view bank cannot start at exactly (under one step, kept within a
+    # scene camera): the lens mesh, which starts rays anywhere, traces the same rays.
+    if not lens_array.views or not bank:  # fractional PPL, hex, rotated lattices: one cell per lens
         if len(samples) == 1 and not np.any(samples):
             mesh = lens_mesh(lens_array, front_clearance)
             return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
@@ -181,9 +184,9 @@ class Method:
     default_front_clearance: Callable[[LensArray], float] = default_front_clearance
     # Where the rays really start for a requested clearance (the sidecar's figure).
     round_front_clearance: Callable[[LensArray, float], float] = lambda lens_array, front_clearance: front_clearance
-    # Under a limit: the step (mm) its clearances must come in, given the plan's options (single-stage's
-    # depth moves the lens array by whole lenses; 0 is a step), rounded down to it; 0: the limit itself
-    # (a view bank's rounding only makes its corners exact in single precision).
+    # Under a limit: the step (mm) its clearances must come in, given the plan's options, rounded down to
+    # it (single-stage's depth moves the lens array by whole lenses, 0 is a step; a view bank's rays start
+    # only at whole steps: under one, multi-ortho traces a lens mesh); 0: the limit itself.
     front_clearance_step: Callable[[LensArray, Mapping[str, Any]], float] = lambda lens_array, options: 0.0
     # Whether the method can trace footprint samples (sub-views) for this array;
     # where it cannot, a quality that asks for them falls back to antialiasing.
@@ -220,7 +223,8 @@ METHODS: dict[str, Method] = {
     # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
     "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
                           confines_antialias=_whole_views,
-                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b),
+                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b,
+                          front_clearance_step=lambda la, o: la.focal * math.lcm(*la.require_views()) if la.views else 0.0),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
@@ -285,6 +289,10 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
     front_clearance, reason = _limited_front_clearance(method, lens_array, settings, asked_clearance,
                                                        front_clearance, plan_options)
+    if front_clearance <= 0 and method.crops:   # under one view-bank step: the lens mesh instead
+        front_clearance = settings.front_clearance_limit or front_clearance
+        plan_options["bank"], crop = False, None
+        reason += "; traced through a lens mesh (the view bank starts only at whole steps)"
     samples = quality.samples()
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")

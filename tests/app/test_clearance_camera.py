@@ -83,3 +83,18 @@ def test_a_foreground_cut_by_the_clearance_is_one_warning(cli, tmp_path):
     assert any("foreground" in w for w in record["display_frame"]["warnings"])
     whole = cli("render", str(scene), "-o", str(tmp_path / "m.png"), *ARRAY)   # negative control
     assert whole.code == 0 and "foreground" not in whole.err, whole.err
+
+
+def test_a_camera_nearer_than_one_view_bank_step_is_traced_through_a_lens_mesh(cli, tmp_path):
+    """A 120-degree camera stands 9.2 mm from the demo display: 0.9 of it is under the view bank's 12 mm
+    step, so multi-ortho traces a lens mesh from 8.3 mm (the bank had rounded up, behind the camera)."""
+    scene = tmp_path / "wide.pov"
+    scene.write_text(SCENE.replace("angle 40", "angle 120"))
+    out = tmp_path / "w.png"
+    result = cli("render", str(scene), "-o", str(out), *ARRAY, "--quality", "normal")
+    assert result.code == 0, result.err
+    record = json.loads(out.with_suffix(".json").read_text())
+    used = record["quality"]["front_clearance_mm"]
+    assert used == pytest.approx(0.9 * 32 / (2 * np.tan(np.radians(60))), rel=1e-9)
+    assert "lens mesh" in record["quality"]["front_clearance_reason"]
+    assert red_share(out) < 0.01
