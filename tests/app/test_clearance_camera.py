@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+pytestmark = pytest.mark.povray   # every test renders
+
 ARRAY = ("--preset", "demo", "--quality", "draft", "-q")
 # The camera 10 units out, a red wall 0.3 units behind it (its front face toward the camera),
 # a white sphere at the look_at point.  multi-ortho's view bank rounded 0.9 of the camera's

@@ -42,6 +42,7 @@ def framing(view: Path, reference: np.ndarray) -> float:
     return float(np.corrcoef(image.ravel(), reference.ravel())[0, 1])
 
 
+@pytest.mark.povray
 def test_crater_on_a_lenticular_panel_frames_as_its_2d_render(cli, tmp_path):
     """No ``angle``, ``right x*image_width/image_height``: the field is the panel's 16:9 in mm, not the
     5.33:1 of its subpixel columns (which framed the crater 3x too wide: correlation -0.02, measured)."""
@@ -60,6 +61,7 @@ def test_crater_on_a_lenticular_panel_frames_as_its_2d_render(cli, tmp_path):
         assert framing(tmp_path / "views" / f"v_000_00{k}.png", reference) > 0.75
 
 
+@pytest.mark.povray
 def test_framing_measure_sees_a_frame_three_times_too_wide(tmp_path):
     """Negative control of the correlation: the reference's middle third, blown up, does not pass."""
     scene = sample(tmp_path, "advanced/crater") / "crater.pov"
@@ -96,6 +98,7 @@ CAMERA_ELSEWHERE = [
 ]
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("folder, name, distance, angle, alike", CAMERA_ELSEWHERE)
 def test_a_camera_in_an_include_or_a_macro_frames_the_render(cli, tmp_path, folder, name, distance, angle, alike):
     """Before: 'frame native', the sidecar said the scene has no camera, the image was dark or nearly empty."""
@@ -115,6 +118,7 @@ def test_a_camera_in_an_include_or_a_macro_frames_the_render(cli, tmp_path, fold
         assert framing(tmp_path / "views" / "v_003_003.png", reference) > 0.6
 
 
+@pytest.mark.povray
 def test_a_right_handed_camera_shows_what_its_2d_render_shows(cli, tmp_path):
     """A negative ``right`` (a right-handed scene) is a mirrored frame; the views match the 2D render the
     right way round, so no 'mirrored' warning (before: one, where nothing was wrong)."""

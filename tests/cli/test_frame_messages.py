@@ -7,6 +7,10 @@ import json
 import re
 import shlex
 
+import pytest
+
+pytestmark = pytest.mark.povray   # every test renders
+
 TINY = ["--preset", "demo", "--lenses", "6x4", "--ppl", "4", "--quality", "draft", "-q"]
 LIGHT = "light_source { <0, 20, -50> rgb 1 }\n"
 
