@@ -21,7 +21,8 @@ from typing import TYPE_CHECKING, Any
 from ..errors import ConfigError, PovrayError, PovrayTimeout
 from ..geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame
 from ..geometry.lens_array import LensArray
-from ..scene.camera import CameraError, camera_statements, evaluation_script, tokens
+from ..scene.camera import CameraError
+from ..scene.camera_script import camera_script
 from ..scene.scene import Scene
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -108,10 +109,8 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         return frame, {**frame.as_record(), "warnings": []}, None
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
-    text = scene.path.read_bytes().decode("latin-1")
-    script = evaluation_script(text)
+    script = camera_script(scene.path.read_bytes().decode("latin-1"), scene.include_text)
     if script is None:
-        _check_included_cameras(scene)
         if options.mode == "camera":
             raise ConfigError(f"--display-frame camera: the scene {scene.path.name} has no camera; "
                               f"place the display with {EXPLICIT_OPTIONS}")
@@ -125,10 +124,14 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
             raise
         found = None   # the camera alone, then a pass of its own, say what failed: the camera or the scene
     if found is None:
-        camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir, use_cache)
+        camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
+                                                  use_cache, script.lines)
         distances = None
     else:
         camera, distances, seconds, cached = found
+    if camera["type"] == "orthographic":
+        raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
+                          f"place the display where it looks: {_orthographic_options(camera)}")
     if camera["type"] != "perspective":
         raise CameraError(f"cannot use the scene's {camera['type']} camera (only a perspective one defines "
                           f"a frame); place the display with {EXPLICIT_OPTIONS}, or --display-frame native")
@@ -137,21 +140,34 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
                          note="look_at" if camera["look_at"] is not None else "no look_at: the point of the "
                          "view axis nearest the scene origin")
     warnings = []
-    if script.cameras > 1:
-        warnings.append(f"the scene has {script.cameras} cameras; the last one counts (POV-Ray's rule) "
-                        f"and places the display")
+    if camera.get("cameras", 1) > 1:
+        warnings.append(f"the scene's parse ran {camera['cameras']} camera statements; the last one counts "
+                        f"(POV-Ray's rule) and places the display")
+    if camera.get("dropped"):
+        warnings.append(f"the scene camera's {', '.join(camera['dropped'])} (focal blur, a normal pattern) "
+                        f"are not reproduced: every view is a sharp, undistorted render")
+    # A mirrored frame (a right-handed camera: a negative right) is no warning: the display's x follows
+    # the camera's right as POV-Ray's 2D render does, so the views show what that render shows, the
+    # right way round; the record says ``mirrored`` and why.
     if frame.mirrored:
-        warnings.append("the scene's camera is mirrored (a negative right): the display frame is a mirror image")
+        frame = DisplayFrame(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
+                             frame.note + "; right-handed (a negative right): x follows it, as in the 2D render",
+                             frame.camera_distance)
     record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
               "evaluation_from_cache": cached, "warnings": warnings}
     return frame, record, distances
 
 
-def _check_included_cameras(scene: Scene) -> None:
-    """A camera in an included file cannot be isolated: say so rather than drop it."""
-    for path in scene.files[1:] if len(scene.files) > 1 else ():
-        if path == scene.path or path.suffix.lower() not in (".inc", ".pov"):
-            continue
-        if camera_statements(tokens(path.read_bytes().decode("latin-1"))):
-            raise CameraError(f"cannot use the scene's camera (it is in the included file {path.name}); "
-                              f"place the display with {EXPLICIT_OPTIONS}, or --display-frame native")
+def _orthographic_options(camera: dict[str, Any]) -> str:
+    """The ``--display-*`` options that put the display across an orthographic camera's view: centred
+    on its look_at (or its location), facing along its direction, as wide as its ``right``."""
+    import numpy as np
+
+    centre = camera["look_at"] if camera["look_at"] is not None else camera["location"]
+    width = float(np.linalg.norm(camera["right"]))
+
+    def triple(v: Any) -> str:
+        return ",".join(f"{float(x):.6g}" for x in v)
+
+    return (f"--display-center={triple(centre)} --display-normal={triple(camera['direction'])} "
+            f"--display-up={triple(camera['up'])} --display-width {width:.6g}")

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..engine.depth import DepthMap, depth_pass
 from ..engine.methods import get_method
+from ..geometry.camera_mesh import default_front_clearance
 from ..engine.quality import DEPTH_SCALE_RANGE
 from ..errors import ConfigError
 from ..geometry.frame import NATIVE, DisplayFrame
@@ -39,7 +40,9 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
     options = request.display_frame
-    default = get_method(request.method).default_front_clearance(array)
+    # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
+    # what a method starting nearer (single-stage) would cut.
+    default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
     # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
     placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                    use_cache=s.use_cache, front_clearance=s.front_clearance or default)
@@ -65,16 +68,16 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
                                       "check the frame")
     record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-    limited = s.front_clearance is None and _front_clearance(placed, default) < default
-    settings = replace(s, frame=matrix,
-                       front_clearance=_front_clearance(placed, default) if limited else s.front_clearance,
-                       depth_scale=scale)
+    limit = camera_front_clearance_limit(placed) if s.front_clearance is None else None
+    settings = replace(s, frame=matrix, front_clearance_limit=limit, depth_scale=scale,
+                       front_clearance_reason="" if limit is None else CAMERA_LIMIT_REASON)
     if scale != 1:
         record["depth_scale"] = scale
         record["depth_scale_note"] = (f"a distortion: depth along the display normal shown {scale:.4g} times as "
                                       "deep, lateral sizes kept (traced as every ray's slope times the factor)")
-    if limited:
-        record["front_clearance_note"] = "limited to 0.9 of the scene camera's distance"
+    if limit is not None:
+        record["front_clearance_limit_mm"] = limit
+        record["front_clearance_note"] = CAMERA_LIMIT_REASON
     return replace(request, settings=settings), record
 
 
@@ -89,12 +92,23 @@ def _check_similarity(matrix: tuple[float, ...]) -> None:
                           "no depth-only scale); build it with povh3d.geometry.frame.DisplayFrame")
 
 
-def _front_clearance(frame: DisplayFrame, default: float) -> float:
-    """The front clearance (mm): the method's default, but for a camera frame no farther out than
-    0.9 of the scene camera's distance, since what lies behind the camera (walls) is no part of the view."""
+#: Why a camera frame's rays start no farther out than ``camera_front_clearance_limit``.
+CAMERA_LIMIT_REASON = "within 0.9 of the scene camera's distance: nothing behind the camera enters the image"
+
+
+def camera_front_clearance_limit(frame: DisplayFrame) -> float | None:
+    """How far out (mm) rays may start in a camera frame: 0.9 of the scene camera's distance, since
+    what lies behind the camera (walls) is no part of its view; None for other frames.  The methods
+    round their clearance down to it (``engine.methods``), whatever their default or step."""
     if frame.source != "camera" or frame.camera_distance is None:
-        return default
-    return min(default, 0.9 * frame.camera_distance / frame.units_per_mm)
+        return None
+    return 0.9 * frame.camera_distance / frame.units_per_mm
+
+
+def _front_clearance(frame: DisplayFrame, default: float) -> float:
+    """The front clearance (mm) of the depth pass: the method's default, within the camera's limit."""
+    limit = camera_front_clearance_limit(frame)
+    return default if limit is None else min(default, limit)
 
 
 def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_clearance: float, budget: float,
@@ -119,9 +133,11 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
         if depth.get("empty") or factor == 1:
             return depth
         after = {**depth, **{k: depth[k] * factor for k in keys}}
-        half = budget / 2
-        after["within_budget"] = bool(-half <= after["near_mm"] + 1e-9 and after["far_mm"] - 1e-9 <= half)
-        after["field_within_budget"] = bool(-half <= after["field_near_mm"] and after["field_far_mm"] <= half)
+        # A thousandth of the budget: what --fit-depth fitted exactly may come back a rounding over.
+        half, slack = budget / 2, budget * 1e-3
+        after["within_budget"] = bool(-half <= after["near_mm"] + slack and after["far_mm"] - slack <= half)
+        after["field_within_budget"] = bool(-half <= after["field_near_mm"] + slack
+                                            and after["field_far_mm"] - slack <= half)
         return after
 
     depth = measure(frame)

@@ -44,6 +44,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
 
     Every output is checked before any work and written atomically.
     """
+    started = time.perf_counter()   # the whole time: the camera and depth runs too
     check_memory(request)
     output = png_output(request.output)
     if request.views_dir is not None:
@@ -61,7 +62,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
                     display_frame=frame_record)
     if request.frames is None:
         still = frame(None, progress)
-        _warn_unlit(scene)
+        _warn_unlit(scene, still.image)
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
         depth = None
@@ -80,6 +81,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         if request.display.quilt is not None:
             still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
                                                          request.display.quilt)
+        still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
         write_image(output, still.image, still.record)
         return still.record
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
@@ -88,8 +90,18 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     return report
 
 
-def _warn_unlit(scene: Scene) -> None:
-    # After the render: a scene that fails says only why it failed.
+#: An image whose 99th percentile is under this share of full scale (sRGB: linear 0.21) looks dark: POV-Ray's
+#: default ambient 0.1 shows at 0.35.
+_DARK = 0.5
+
+
+def _warn_unlit(scene: Scene, image: np.ndarray | None = None) -> None:
+    # After the render: a scene that fails says only why it failed.  Objects that light themselves
+    # (finish { ambient 1 }, emission) render bright without a light_source: the image decides.
+    if image is not None and image.size:
+        full = np.iinfo(image.dtype).max if np.issubdtype(image.dtype, np.integer) else 1.0
+        if float(np.quantile(image, 0.99)) >= _DARK * full:
+            return
     if not scene.lit:
         warn(f"{scene.path.name} has no light_source (and no emission): its objects show only their "
              "ambient colour, nearly black; add a light_source")
@@ -164,7 +176,8 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         "h3d", method=request.method, scene=str(scene.path),
         scene_sha256=scene.digest,
         quality={**quality_record(settings, result.quality), "bit_depth": settings.bit_depth,
-                 "front_clearance_mm": result.front_clearance},
+                 "front_clearance_mm": result.front_clearance,
+                 "front_clearance_reason": result.front_clearance_reason},
         output_gamma="sRGB", povray_version=result.stats.povray_version,
         sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
     )
@@ -178,7 +191,8 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if model is not None:
         record[request.content_kind] = model
     if display_frame is not None:
-        record["display_frame"] = display_frame
+        cut = foreground_cut(display_frame, result.front_clearance, request.method)
+        record["display_frame"] = {**display_frame, "warnings": [*display_frame.get("warnings", []), *cut]}
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
     first = request.frames is None or clock is None or clock == request.frames.clock(request.frames.first)
     if first and bank.size and int(bank.max()) == int(bank.min()):
@@ -194,6 +208,28 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         h3d = mapping.apply(h3d, request.image_size)
         record.update(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
     return RenderedImage(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
+
+
+def foreground_cut(display_frame: dict[str, Any], front_clearance: float, method: str) -> list[str]:
+    """A warning when the measured scene reaches out past where the rays start (mm): that part of the
+    foreground is not in the image."""
+    depth = display_frame.get("depth") or {}
+    near = depth.get("near_mm")
+    if depth.get("empty") or near is None or near >= -front_clearance * (1 - 1e-9):
+        return []
+    start = -front_clearance or 0.0
+    limit = display_frame.get("front_clearance_limit_mm")
+    if limit is not None:
+        why = (f"the scene's camera stands {limit / 0.9:.3g} mm out and nothing behind it may enter the image"
+               f"{'; single-stage moves its lenses in steps' if method == 'single-stage' else ''}")
+        fix = ("--fit-depth auto shrinks the scene onto the display" if not depth.get("fit") else
+               "a smaller --fit-depth MM shrinks it further")
+        fix += ", --method multi-ortho starts rays at any distance" if method == "single-stage" else ""
+    else:
+        why = f"--method {method} starts them there"
+        fix = f"--front-clearance {-near:.3g} starts them farther out"
+    return [f"the scene reaches z = {near:.3g} mm, but rays start at z = {start:.3g} mm ({why}): the foreground "
+            f"nearer than that is cut; {fix}"]
 
 
 def quality_record(settings: RenderSettings, rendered: Quality) -> dict[str, Any]:

@@ -10,6 +10,7 @@ import argparse
 import contextlib
 import math
 import os
+import re
 import signal
 import sys
 import threading
@@ -34,10 +35,20 @@ def _finite_float(text: str) -> float:
     return value
 
 
+#: A value that starts with a minus and a digit (``-50,-40,-30``, ``-.5``): argparse takes only a bare
+#: negative number for a value, and a list such as ``--display-normal -50,-40,-30`` for an option.
+_NEGATIVE_VALUE = re.compile(r"-\.?[0-9]")
+
+
 class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.register("type", float, _finite_float)
+
+    def _parse_optional(self, arg_string: str):  # type: ignore[no-untyped-def]
+        if _NEGATIVE_VALUE.match(arg_string):  # no povh3d option starts with a digit
+            return None
+        return super()._parse_optional(arg_string)
 
     def error(self, message: str) -> NoReturn:  # one line, not usage + message
         fail(f"{message} (see '{self.prog} --help')", 2)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import re
 import sys
 import time
 import warnings
@@ -157,9 +158,10 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
         v = result["volume"]
         drawn = f"{len(v['surfaces'])} surfaces, {v['triangles']} triangles" if "surfaces" in v else "media"
         mapping += f"  {v['orientation']}, {drawn}"
-    summary = f"{w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}"
+    summary = f"{w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}"
+    seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
-          f"{t['render_seconds']:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
+          f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return summary, noted
 
 
@@ -180,6 +182,20 @@ def _warnings_kept() -> Iterator[list[str]]:
         yield given
     finally:
         warnings.showwarning = shown
+
+
+_REASON_END = re.compile(r" \(|;|:")
+
+
+def clearance_phrase(record: dict[str, Any]) -> str:
+    """Where the rays start, and why when it is not the method's plain default."""
+    q = record.get("quality", {})
+    if "front_clearance_mm" not in q:
+        return ""
+    reason = q.get("front_clearance_reason", "")
+    short = _REASON_END.split(reason)[0]   # its first words: the sidecar has the rest
+    why = "" if reason == "the method's default" or not reason else f" ({short})"
+    return f"rays from {q['front_clearance_mm']:.4g} mm{why}"
 
 
 def frame_phrase(record: dict[str, Any]) -> str:

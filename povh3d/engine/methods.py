@@ -22,6 +22,7 @@ and what the sidecar records of it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -47,7 +48,7 @@ from .batch import ShotBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
 from .quality import Progress, Quality, RenderSettings, quality_settings
 from . import subpixel
-from .single_stage import SingleStagePlan, default_depth, lenslet_for
+from .single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
 
 
 #: Pixels between the tiles of a one-pass view bank when antialiasing samples pixel
@@ -64,8 +65,11 @@ class MethodPlan:
     record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
 
 
-def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, gutter: int = 0) -> MethodPlan:
-    if not lens_array.views:  # fractional PPL, hex, rotated lattices: one cell per lens
+def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, gutter: int = 0,
+                 bank: bool = True) -> MethodPlan:
+    # bank False: a clearance the view bank cannot start at exactly (under one step, kept within a
+    # scene camera): the lens mesh, which starts rays anywhere, traces the same rays.
+    if not lens_array.views or not bank:  # fractional PPL, hex, rotated lattices: one cell per lens
         if len(samples) == 1 and not np.any(samples):
             mesh = lens_mesh(lens_array, front_clearance)
             return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
@@ -180,6 +184,10 @@ class Method:
     default_front_clearance: Callable[[LensArray], float] = default_front_clearance
     # Where the rays really start for a requested clearance (the sidecar's figure).
     round_front_clearance: Callable[[LensArray, float], float] = lambda lens_array, front_clearance: front_clearance
+    # Under a limit: the step (mm) its clearances must come in, given the plan's options, rounded down to
+    # it (single-stage's depth moves the lens array by whole lenses, 0 is a step; a view bank's rays start
+    # only at whole steps: under one, multi-ortho traces a lens mesh); 0: the limit itself.
+    front_clearance_step: Callable[[LensArray, Mapping[str, Any]], float] = lambda lens_array, options: 0.0
     # Whether the method can trace footprint samples (sub-views) for this array;
     # where it cannot, a quality that asks for them falls back to antialiasing.
     takes_samples: Callable[[LensArray], bool] = lambda lens_array: False
@@ -215,11 +223,13 @@ METHODS: dict[str, Method] = {
     # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
     "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
                           confines_antialias=_whole_views,
-                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b),
+                          round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b,
+                          front_clearance_step=lambda la, o: la.focal * math.lcm(*la.require_views()) if la.views else 0.0),
     "multi-ortho-views": Method(_multi_ortho_views),
     "pinhole": Method(_pinhole),
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
-                           supersamples=single_stage_supersamples),
+                           supersamples=single_stage_supersamples,
+                           front_clearance_step=lambda la, o: recentre_unit(la, o.get("supersample", 1))),
     "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples),
 }
 
@@ -244,6 +254,7 @@ class MethodResult:
     quality: Quality         # as rendered (after any fallback to antialiasing)
     crop: dict[str, Any] | None = None    # what the crop did, for the sidecar
     record: dict[str, Any] | None = None  # the method's own set-up, for the sidecar
+    front_clearance_reason: str = ""      # why rays start there, for the sidecar and the summary
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
@@ -261,8 +272,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     asked = settings.spec
     header = display_header(lens_array)   # the display's own constants, whatever --depth-scale does
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
-    front_clearance = method.round_front_clearance(
-        lens_array, settings.front_clearance or method.default_front_clearance(lens_array))
+    asked_clearance = settings.front_clearance or method.default_front_clearance(lens_array)
+    front_clearance = method.round_front_clearance(lens_array, asked_clearance)
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if method.confines_antialias is not None and not method.confines_antialias(lens_array):
         quality = quality.footprint_sampled()
@@ -276,6 +287,12 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         settings = replace(settings, quality=quality)
     if method.gutters:
         plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
+    front_clearance, reason = _limited_front_clearance(method, lens_array, settings, asked_clearance,
+                                                       front_clearance, plan_options)
+    if front_clearance <= 0 and method.crops:   # under one view-bank step: the lens mesh instead
+        front_clearance = settings.front_clearance_limit or front_clearance
+        plan_options["bank"], crop = False, None
+        reason += "; traced through a lens mesh (the view bank starts only at whole steps)"
     samples = quality.samples()
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
@@ -302,4 +319,19 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
         canvas[lens_array.bank_region] = h3d
         h3d = canvas
-    return MethodResult(h3d, stats, front_clearance, quality, crop_info, record)
+    return MethodResult(h3d, stats, front_clearance, quality, crop_info, record, reason)
+
+
+def _limited_front_clearance(method: Method, lens_array: LensArray, settings: RenderSettings, asked: float,
+                             rounded: float, options: Mapping[str, Any]) -> tuple[float, str]:
+    """Where rays start (mm) and why: the clearance asked for (or the method's default), rounded up to
+    the method's step; under ``settings.front_clearance_limit`` rounded down instead (a method whose
+    rounding up passed the scene camera let a wall behind the camera fill the image)."""
+    why = "--front-clearance" if settings.front_clearance else "the method's default"
+    limit = settings.front_clearance_limit
+    if limit is None or rounded <= limit * (1 + 1e-12):
+        step = "" if rounded == asked else f" {asked:.4g} mm, rounded up (whole view shifts)"
+        return rounded, f"{why}{step}"
+    step = method.front_clearance_step(lens_array, options)
+    used = step * math.floor(limit / step * (1 + 1e-12)) if step > 0 else limit
+    return used, f"{settings.front_clearance_reason or 'limited'} ({limit:.4g} mm); {why} was {rounded:.4g} mm"

@@ -144,6 +144,10 @@ class RenderSettings:
     cache_dir : Path or None    None: ``default_cache_dir()``
     bit_depth : {8, 16}
     front_clearance : float or None    mm in front of the screen where rays start (None: default)
+    front_clearance_limit : float or None   mm: the farthest out rays may start whatever the method's
+                                default or rounding (a camera frame: short of the scene's camera,
+                                so nothing behind it enters the image); None: no limit
+    front_clearance_reason : str   why the limit, for the sidecar
     clock : float or None       POV-Ray's ``clock`` for every run (None: POV-Ray's default, 0);
                                 set only for scenes that read it (see animation.py)
     scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
@@ -162,6 +166,8 @@ class RenderSettings:
     cache_dir: Path | None = None
     bit_depth: int = 8
     front_clearance: float | None = None
+    front_clearance_limit: float | None = None
+    front_clearance_reason: str = ""
     clock: float | None = None
     scheduler: str | None = None
     max_error_db: float | None = None
@@ -190,6 +196,9 @@ class RenderSettings:
             raise ConfigError(f"bit depth must be 8 or 16, got {self.bit_depth}")
         if self.front_clearance is not None and not (np.isfinite(self.front_clearance) and self.front_clearance > 0):
             raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.front_clearance}")
+        limit = self.front_clearance_limit
+        if limit is not None and not (np.isfinite(limit) and limit > 0):
+            raise ConfigError(f"the front clearance limit must be a positive number of mm, got {limit}")
 
         if self.clock is not None and not np.isfinite(self.clock):
             raise ConfigError(f"the clock must be a finite number, got {self.clock}")

@@ -1,7 +1,9 @@
 """The scene's camera evaluated by POV-Ray: the runs that turn a scene's last camera into numbers.
 
-``evaluate_camera`` runs the scene's camera statements alone (one row at the
-panel's pixel size, so ``image_width / image_height`` is the H3D image's aspect);
+``evaluate_camera`` runs the scene's camera statements alone (one row of an image
+with the physical panel's aspect, ``physical_size``: ``image_width / image_height`` in
+a scene means the panel's shape in mm, not the pixel grid of a lenticular or mapped
+view space, whose pixels are not square);
 ``evaluate_and_measure`` runs them with the rest of the scene and
 ``templates/camera_depth.pov.j2``, which works out the display frame from the
 declared values and renders the fog depth pass through it in the same run.
@@ -69,19 +71,33 @@ def _keep(path: Any, key: str, meta: dict[str, Any], data: bytes = b"") -> None:
         pass
 
 
+def physical_size(lens_array: LensArray) -> tuple[int, int]:
+    """``(width, height)`` pixels with the physical panel's aspect (its size in mm), about as many rows
+    as the panel: the size the scene's camera is evaluated at.  A lenticular panel's 5760 x 1080
+    subpixel columns are 930 x 523 mm, 16:9, not 5.33:1."""
+    from fractions import Fraction
+
+    width_mm, height_mm = lens_array.panel.size_mm
+    rows = lens_array.panel.height
+    ratio = Fraction(width_mm / height_mm).limit_denominator(max(rows, 1))
+    k = max(1, rows // ratio.denominator)
+    return ratio.numerator * k, ratio.denominator * k
+
+
 def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: int, cache_dir: Any,
-                    use_cache: bool) -> tuple[dict[str, Any], float, bool]:
+                    use_cache: bool, lines: tuple[tuple[int, str, int], ...] = ()
+                    ) -> tuple[dict[str, Any], float, bool]:
     """The camera's vectors from one POV-Ray run of ``script``, cached by the scene's digest.
 
-    The run has the panel's pixel size, so ``image_width / image_height`` in
-    the camera is the H3D image's aspect; it traces one row.
+    The run has the physical panel's aspect (``physical_size``), so ``image_width / image_height``
+    in the camera is the panel's shape; it traces one row.
     """
-    from ..povray.process import PovrayJob, run_jobs
+    from ..povray.process import PovrayJob
     from ..povray.sandbox import scene_inputs
 
     start = time.perf_counter()
-    w, h = lens_array.panel.width, lens_array.panel.height
-    key = content_key("scene-camera", __version__, scene.digest, w, h)
+    w, h = physical_size(lens_array)
+    key = content_key("scene-camera-2", __version__, scene.digest, w, h)
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera)
     if stored is not None:
@@ -89,11 +105,29 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
     job = PovrayJob(name="scene camera", script=script, width=w, height=h, start_row=0, end_row=1,
                     options=("-A",), threads=1, timeout=120, **scene_inputs(scene))
     logs: list[str] = []
-    run_jobs([job], processes=1, on_result=lambda result: logs.append(result.log))
+    _run(job, lambda result: logs.append(result.log), lines, scene)
     camera = camera_from_log(logs[0] if logs else "", cameras).as_record()
     if use_cache:
         _keep(path, key, camera)
     return camera, time.perf_counter() - start, False
+
+
+def _run(job: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scene: Scene) -> None:
+    """Run the camera's job; an error at a line of the rewritten script names the user's file and line."""
+    from ..errors import PovrayError, PovrayTimeout
+    from ..povray.job import SCENE_FILE
+    from ..povray.process import run_jobs
+    from ..scene.camera_script import source_line
+
+    try:
+        run_jobs([job], processes=1, on_result=on_result)
+    except PovrayError as exc:
+        if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
+            raise
+        message = re.sub(rf"{re.escape(SCENE_FILE)} line (\d+)",
+                         lambda m: source_line(lines, int(m[1]), scene.path.name), str(exc), count=1)
+        raise PovrayError(message, command=exc.command, returncode=exc.returncode,
+                          log_tail=exc.log_tail) from None
 
 
 def measured_size(scene: Scene, width: int, height: int, target: int) -> tuple[int, int] | None:
@@ -133,15 +167,15 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     None when the camera needs a run at the panel's own size (``measured_size``)."""
     from .depth import fog_distances, pass_size
     from ..image.io import read_png
-    from ..povray.process import PovrayJob, run_jobs
+    from ..povray.process import PovrayJob
     from ..povray.sandbox import files_within
     from ..povray.templates import render_template
 
     start = time.perf_counter()
-    w, h = lens_array.panel.width, lens_array.panel.height
+    w, h = physical_size(lens_array)
     right, up = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0), (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
     target = pass_size(lens_array)[0]
-    key = content_key("scene-camera-depth", __version__, scene.digest, w, h, target, right, up, front_clearance,
+    key = content_key("scene-camera-depth-2", __version__, scene.digest, w, h, target, right, up, front_clearance,
                       lens_array.panel.size_mm[0])
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera_and_pass)
@@ -157,7 +191,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
                     include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), bit_depth=16,
                     read_files=files_within(scene.files, scene.include_dirs), timeout=600)
     found: list[tuple[str, list[np.ndarray]]] = []
-    run_jobs([job], processes=1, on_result=lambda r: found.append((r.log, [read_png(i) for i in r.images])))
+    _run(job, lambda r: found.append((r.log, [read_png(i) for i in r.images])), script.lines, scene)
     log, images = found[0] if found else ("", [])
     camera = camera_from_log(log, script.cameras).as_record()
     printed = next((tuple(v) for k, v in parse_log(log) if k == "depth_frame" and isinstance(v, list)), ())

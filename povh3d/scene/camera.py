@@ -1,21 +1,16 @@
 """The scene's own camera, evaluated by POV-Ray itself.
 
 POV-Ray gives a script no access to a camera's vectors once it is parsed.  So
-povh3d finds the scene's last top-level ``camera { ... }`` statement in its
-text (the one POV-Ray uses: a later camera replaces an earlier one), and
-writes an evaluation script: the scene's text up to that statement, then the
-statement's modifiers rewritten as ``#declare``s whose values ``#debug``
-prints.  Every expression is evaluated by POV-Ray in the scene's own
-declaration context (its identifiers, macros, ``#include``d vectors,
-``image_width``); directives inside the block (``#if`` ...) stay in place, so
-they choose as they would in the scene.  Python then applies POV-Ray 3.7's
-camera rules (``Parser::Parse_Camera``, language version >= 3.5: right,
-direction, angle, up, sky, location, look_at, then the camera's transforms)
-to the values, in ``camera_from_log``.
-
-What cannot be isolated this way (a camera inside a ``#macro`` or ``#if``, a
-camera copied from an identifier, a camera in an included file) is a
-``CameraError`` whose message names the ``--display-*`` options.
+povh3d rewrites each ``camera { ... }`` statement's modifiers as ``#declare``s
+whose values ``#debug`` prints (``_rewrite``; which statements, and how the
+scene's includes and declared cameras are followed: ``camera_script``).  Every
+expression is evaluated by POV-Ray in the scene's own declaration context (its
+identifiers, macros, ``#include``d vectors, ``image_width``); directives inside
+the block (``#if`` ...) stay in place, so they choose as they would in the
+scene.  Python then applies POV-Ray 3.7's camera rules (``Parser::Parse_Camera``,
+language version >= 3.5: right, direction, angle, up, sky, location, look_at,
+then the camera's transforms) to the values of the last block the parse
+printed, in ``camera_from_log``.
 
 Pure: text in, text out; the run itself is the caller's.
 """
@@ -23,7 +18,6 @@ Pure: text in, text out; the run itself is the caller's.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -65,31 +59,6 @@ def tokens(text: str) -> list[Token]:
     return out
 
 
-@dataclass(frozen=True)
-class CameraStatement:
-    """A top-level ``camera { ... }`` statement: token indices of ``camera``, ``{`` and ``}``."""
-
-    start: int            # character offset of the keyword
-    body: tuple[int, int]  # character offsets inside the braces
-    directive_depth: int   # open #if/#while/#macro... around it
-
-
-def _depths(toks: list[Token]) -> Iterator[tuple[int, int, int]]:
-    """``(index, brace depth, directive depth)`` of every token, the depths before it."""
-    braces = directives = 0
-    for i, tok in enumerate(toks):
-        yield i, braces, directives
-        t = tok.text
-        if t in _OPENERS:
-            directives += 1
-        elif t == "#end":
-            directives = max(0, directives - 1)
-        elif t == "{":
-            braces += 1
-        elif t == "}":
-            braces -= 1
-
-
 def _closing_brace(toks: list[Token], opening: int) -> int:
     """Index of the ``}`` that closes the ``{`` at ``opening``."""
     depth = 0
@@ -98,17 +67,6 @@ def _closing_brace(toks: list[Token], opening: int) -> int:
         if depth == 0:
             return j
     raise CameraError("the scene's camera block has no closing brace; fix the scene")
-
-
-def camera_statements(toks: list[Token]) -> list[CameraStatement]:
-    """Every ``camera {`` at brace depth 0 that is not a ``#declare X = camera`` value."""
-    found = []
-    for i, braces, directives in _depths(toks):
-        if (toks[i].text == "camera" and braces == 0 and (i == 0 or toks[i - 1].text != "=")
-                and i + 1 < len(toks) and toks[i + 1].text == "{"):
-            j = _closing_brace(toks, i + 1)
-            found.append(CameraStatement(toks[i].start, (toks[i + 1].end, toks[j].start), directives))
-    return found
 
 
 #: The same words as ``geometry.frame.EXPLICIT_OPTIONS`` (scene/ does not import geometry/).
@@ -125,59 +83,11 @@ class CameraScript:
     """The evaluation script and what was found on the way."""
 
     script: str
-    cameras: int          # top-level camera statements in the scene file (the last counts)
-    rest: str = ""        # the scene after its last camera: appended, with a camera of povh3d's own
-                          # (``templates/camera_depth.pov.j2``), the same run renders the scene; the
-                          # block's last values stay declared as ``Povh3d_Cam_location``, ...
-
-
-def evaluation_script(text: str) -> CameraScript | None:
-    """The script that prints the last camera's values, or None when the scene has no camera."""
-    toks = tokens(text)
-    statements = camera_statements(toks)
-    if not statements:
-        if any(t.text == "camera" for t in toks):
-            raise _cannot("its camera is built inside a #macro or declared and copied, which povh3d "
-                          "cannot isolate")
-        return None
-    last = statements[-1]
-    versions = [t for t in toks if t.text == "#version" and t.start < last.start]
-    if versions:
-        number = re.match(r"\s*([0-9.]+)", text[versions[-1].end:])
-        if number and _version(number[1]) < (3, 5):
-            raise _cannot(f"the scene declares #version {number[1]}, whose camera rules (modifiers applied "
-                          f"in order) povh3d does not reproduce")
-    if last.directive_depth:
-        raise _cannot("its last camera sits inside an #if, #while or #macro")
-    # A camera after the last top-level one, inside a directive, would be the one POV-Ray uses.
-    if any(t.text == "camera" and t.start > last.body[1] for t in toks):
-        raise _cannot("a camera after the last top-level one is built by a directive or macro")
-    body = text[last.body[0]:last.body[1]]
-    inner = tokens(body)
-    if inner and inner[0].text not in _KEYWORDS and not inner[0].text.startswith("#"):
-        # camera { Name mods }: the camera declared as Name, then (POV-Ray >= 3.5) transforms only.
-        declared = _declared_camera(toks, text, inner[0].text, last.start)
-        body = declared + "\n" + body[inner[0].end:]
-    return CameraScript(text[:last.start] + "\n" + _rewrite(body) + "\n", len(statements), text[last.body[1] + 1:])
-
-
-def _declared_camera(toks: list[Token], text: str, name: str, before: int) -> str:
-    """The body of the last top-level ``#declare name = camera { ... }`` before ``before``."""
-    found = None
-    for i, braces, directives in _depths(toks):
-        if toks[i].start >= before:
-            break
-        if (toks[i].text in ("#declare", "#local") and braces == 0 and i + 4 < len(toks)
-                and toks[i + 1].text == name and toks[i + 2].text == "=" and toks[i + 3].text == "camera"
-                and toks[i + 4].text == "{"):
-            found = (i + 4, directives)
-    if found is None:
-        raise _cannot(f"it starts from the camera identifier {name!r}, whose top-level declaration "
-                      f"povh3d cannot find")
-    start, depth_at = found
-    if depth_at:
-        raise _cannot(f"its camera identifier {name!r} is declared inside an #if, #while or #macro")
-    return text[toks[start].end:toks[_closing_brace(toks, start)].start]
+    cameras: int          # camera statements the parse ran (0: known only from the run's log)
+    rest: str = ""        # appended (with a camera of povh3d's own, ``templates/camera_depth.pov.j2``)
+                          # the same run renders the scene; the last block's values stay declared as
+                          # ``Povh3d_Cam_location``, ...
+    lines: tuple[tuple[int, str, int], ...] = ()   # (script line, file, its line): camera_script.source_line
 
 
 def _version(text: str) -> tuple[int, ...]:
@@ -185,10 +95,15 @@ def _version(text: str) -> tuple[int, ...]:
     return tuple(int(p) for p in parts[:2]) or (0,)
 
 
-def _rewrite(body: str) -> str:
-    """The camera's modifiers as ``#declare``s and ``#debug`` lines, directives kept in place."""
+def _rewrite(body: str, store: str | None = None, replay: str = "") -> str:
+    """The camera's modifiers as ``#declare``s and ``#debug`` lines, directives kept in place.
+
+    ``store``: a declared camera (``#declare Name = camera {...}``): its values are kept as
+    ``{store}_{i}`` (one a modifier) and its transform as ``{store}_T``, nothing printed, so that
+    ``camera { Name ... }`` prints them later (``replay``: that code, put before the modifiers).
+    """
     toks = tokens(body)
-    out = ["#declare Povh3d_Cam_T = transform { scale 1 }"]
+    out = ["" if store is not None else _RESET, "#declare Povh3d_Cam_T = transform { scale 1 }", replay]
     i, depth = 0, 0
 
     def expression(i: int) -> tuple[str, int]:
@@ -203,6 +118,13 @@ def _rewrite(body: str) -> str:
         if j == start:
             raise _cannot(f"a camera modifier has no value near {body[toks[i - 1].start:][:30]!r}")
         return body[toks[start].start:toks[j - 1].end], j
+
+    def keep(key: str, value: str, n: int = 3) -> str:
+        # print mode: print it and declare Povh3d_Cam_<key>; store mode: keep it as {store}_{i}
+        if store is not None:
+            return f"#declare {store}_{i} = {value};"
+        return (f"#declare Povh3d_Cam_V = {value};\n" + _debug(key, "Povh3d_Cam_V", n)
+                + f"\n#declare Povh3d_Cam_{key} = Povh3d_Cam_V;")
 
     if toks and toks[0].text not in _KEYWORDS and not toks[0].text.startswith("#"):
         raise _cannot(f"it starts from the camera identifier {toks[0].text!r}")
@@ -231,33 +153,84 @@ def _rewrite(body: str) -> str:
             out.append(body[toks[i].start:toks[j - 1].end] if j > i + 1 else t)
             i = j
         elif t in _VECTORS:
+            at = i
             expr, i = expression(i + 1)
-            out.append(f'#declare Povh3d_Cam_V = <0, 0, 0> + ({expr}\n);\n' + _debug(t, "Povh3d_Cam_V"))
-            out.append(f"#declare Povh3d_Cam_{t} = Povh3d_Cam_V;")
+            i, at = at, i
+            out.append(keep(t, f"<0, 0, 0> + ({expr}\n)"))
+            i = at
         elif t == "angle":
+            at = i
             expr, i = expression(i + 1)
-            out.append(f'#declare Povh3d_Cam_F = ({expr}\n);\n' + _debug("angle", "Povh3d_Cam_F", 1))
-            out.append("#declare Povh3d_Cam_angle = Povh3d_Cam_F;")
+            i, at = at, i
+            out.append(keep("angle", f"({expr}\n)", 1))
+            i = at
         elif t in _TRANSFORMS:
             expr, i = expression(i + 1)
             out.append(f"#declare Povh3d_Cam_T = transform {{ transform Povh3d_Cam_T {t} {expr}\n}}")
         elif t in _TYPES:
-            out.append(f'#debug "{TAG} type {t}\\n"')
-            if t != "perspective" and not open_directives:
-                break   # not a perspective camera: its other modifiers (two angles...) need no values
+            out.append(f"#declare {store}_{i} = 1;" if store is not None else f'#debug "{TAG} type {t}\\n"')
+            if t not in ("perspective", "orthographic") and not open_directives:
+                break   # no frame from it: its other modifiers (two angles...) need no values
+                        # (an orthographic one's give the --display-* options to use instead)
             i += 1
             if i < len(toks) and (t in ("cylinder", "mesh_camera", "user_defined")):
                 _, i = expression(i)
         elif t in _DROPPED:
+            out.append(f"#declare {store}_{i} = 1;" if store is not None else f'#debug "{TAG} dropped {t}\\n"')
             _, i = expression(i + 1) if i + 1 < len(toks) else ("", i + 1)
         else:
             raise _cannot(f"povh3d does not know the camera modifier {t!r}")
+    if store is not None:
+        out.append(f"#declare {store}_T = transform {{ Povh3d_Cam_T }}")
+        return "\n".join(out)
     # transforms.inc's vtransform, inlined: the scene need not include it.
-    out.append("#declare Povh3d_Cam_Fn = function { transform { Povh3d_Cam_T } }")
+    # (a camera built by a macro called twice: a function cannot be declared again without #undef)
+    out.append("#ifdef (Povh3d_Cam_Fn) #undef Povh3d_Cam_Fn #end\n"
+               "#declare Povh3d_Cam_Fn = function { transform { Povh3d_Cam_T } }")
     for p in ("0, 0, 0", "1, 0, 0", "0, 1, 0", "0, 0, 1"):
         out.append(f"#declare Povh3d_Cam_V = Povh3d_Cam_Fn({p});\n" + _debug("transform", "Povh3d_Cam_V"))
     out.append(f'#debug "{TAG} end\\n"')
     return "\n".join(out)
+
+
+def stored_items(body: str) -> list[tuple[int, str]]:
+    """``(i, key)`` of each value ``_rewrite(body, store=...)`` keeps as ``{store}_{i}``, in order: key
+    a vector's name, ``angle``, ``type:<kind>`` or ``dropped:<word>``."""
+    toks = tokens(body)
+    found = []
+    for i, tok in enumerate(toks):
+        t = tok.text
+        if t in _VECTORS or t == "angle":
+            found.append((i, t))
+        elif t in _TYPES:
+            found.append((i, f"type:{t}"))
+        elif t in _DROPPED:
+            found.append((i, f"dropped:{t}"))
+    return found
+
+
+def replay_code(store: str, items: list[tuple[int, str]]) -> str:
+    """Print a stored camera's values (``stored_items``) as ``_rewrite`` prints its own, each only if the
+    declaration set it, and start from its transform."""
+    out = []
+    for i, key in items:
+        var = f"{store}_{i}"
+        if key.startswith("type:"):
+            line = f'#debug "{TAG} type {key[5:]}\\n"'
+        elif key.startswith("dropped:"):
+            line = f'#debug "{TAG} dropped {key[8:]}\\n"'
+        else:
+            n = 1 if key == "angle" else 3
+            line = (f"#declare Povh3d_Cam_V = {var};\n" + _debug(key, "Povh3d_Cam_V", n)
+                    + f"\n#declare Povh3d_Cam_{key} = Povh3d_Cam_V;")
+        out.append(f"#ifdef ({var})\n{line}\n#end")
+    out.append(f"#declare Povh3d_Cam_T = transform {{ {store}_T }}")
+    return "\n".join(out)
+
+
+#: A camera statement starts from POV-Ray's defaults: no value of an earlier camera is left.
+_RESET = "\n".join(f"#ifdef (Povh3d_Cam_{k}) #undef Povh3d_Cam_{k} #end" for k in (*_VECTORS, "angle")) \
+    + f'\n#debug "{TAG} begin\\n"'
 
 
 def _debug(key: str, name: str, n: int = 3) -> str:
@@ -283,11 +256,13 @@ class SceneCamera:
     kind: str = "perspective"
     cameras: int = 1
     values: dict = field(default_factory=dict, compare=False)
+    dropped: tuple[str, ...] = ()   # modifiers a display frame does not reproduce (aperture, normal ...)
 
     def as_record(self) -> dict:
         return {"type": self.kind, "location": list(self.location), "direction": list(self.direction),
                 "right": list(self.right), "up": list(self.up),
-                "look_at": None if self.look_at is None else list(self.look_at), "cameras": self.cameras}
+                "look_at": None if self.look_at is None else list(self.look_at), "cameras": self.cameras,
+                "dropped": list(self.dropped)}
 
 
 def parse_log(log: str) -> list[tuple[str, list[float] | str]]:
@@ -302,7 +277,9 @@ def parse_log(log: str) -> list[tuple[str, list[float] | str]]:
         key, rest = parts[0], parts[1:]
         if key == "type":
             items.append((key, rest[0] if rest else "perspective"))
-        elif key == "end":
+        elif key == "dropped":
+            items.append((key, rest[0] if rest else ""))
+        elif key in ("end", "begin", "parse"):
             items.append((key, ""))
         else:  # a number a line: three make a vector (twelve the transform)
             size = {"angle": 1, "transform": 12, "depth_frame": 14}.get(key, 3)
@@ -317,10 +294,21 @@ def parse_log(log: str) -> list[tuple[str, list[float] | str]]:
 def camera_from_log(log: str, cameras: int = 1) -> SceneCamera:
     """POV-Ray 3.7's camera (``Parser::Parse_Camera``, version >= 3.5) from the evaluated modifiers."""
     items = parse_log(log)
+    parses = [i for i, (key, _) in enumerate(items) if key == "parse"]
+    if parses:   # a run of several frames parses the scene once a frame: the first parse
+        items = items[parses[0]:parses[1] if len(parses) > 1 else None]
+    begins = [i for i, (key, _) in enumerate(items) if key == "begin"]
+    if parses and not begins:
+        raise _cannot("POV-Ray's parse reaches none of its camera statements (an #if or a macro never "
+                      "called), so POV-Ray would use its default camera")
+    if begins:   # every camera statement the parse ran printed a block: the last one counts
+        cameras = len(begins)
+        items = items[begins[-1] + 1:]
     ends = [i for i, (key, _) in enumerate(items) if key == "end"]
-    items = items[:ends[0] + 1] if ends else items   # a run of several frames prints it once a frame
+    items = items[:ends[0] + 1] if ends else items
     if not items or items[-1][0] != "end":
         raise _cannot("POV-Ray did not reach the end of its camera block")
+    dropped = tuple(dict.fromkeys(str(v) for k, v in items if k == "dropped"))
     v = {"location": np.zeros(3), "direction": np.array([0.0, 0, 1]), "up": np.array([0.0, 1, 0]),
          "right": np.array([1.33, 0, 0]), "sky": np.array([0.0, 1, 0])}
     look_at = angle = None
@@ -362,4 +350,4 @@ def camera_from_log(log: str, cameras: int = 1) -> SceneCamera:
             look_at = look_at @ lin + origin
     tup = lambda a: tuple(float(x) for x in a)  # noqa: E731
     return SceneCamera(tup(loc), tup(d), tup(r), tup(u), None if look_at is None else tup(look_at), kind,
-                       cameras)
+                       cameras, dropped=dropped)

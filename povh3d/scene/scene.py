@@ -87,6 +87,11 @@ class Scene:
     lit: bool = True
     ascii_names: tuple[tuple[str, Path], ...] = ()
 
+    def include_text(self, name: str) -> str | None:
+        """The text of the file ``#include "name"`` reads (the scene's folders, then POV-Ray's), or None."""
+        found = _find(name, [*self.include_dirs, *system_include_dirs()])
+        return None if found is None else found.read_bytes().decode("latin-1")
+
 
 # A scene with neither shows its objects in their ambient colour only (nearly black).
 _LIGHT_WORDS = frozenset(("light_source", "emission", "radiosity"))

@@ -152,3 +152,25 @@ def test_info_reports_a_model_and_a_volume_as_the_stage_places_them(cli):
         assert depth["far_mm"] - depth["near_mm"] == pytest.approx(size[2], rel=1e-6)
         text = cli("info", str(source), *ARRAY)
         assert f"{kind} " in text.out and "content depth" in text.out and "depth budget +-12 mm" in text.out
+
+
+@pytest.mark.parametrize("form", ["separate", "joined"])
+@pytest.mark.parametrize("option, value, attribute", [
+    ("--display-normal", "-50,-40,-30", "display_normal"),
+    ("--display-center", "-1,2,3", "display_center"),
+    ("--bbox", "-20,-20,-20,20,20,20", "bbox"),
+    ("--front-clearance", "-.5", "front_clearance"),
+])
+def test_a_value_starting_with_a_minus_is_a_value(option, value, attribute, form):
+    """``--opt -1,2,3`` and ``--opt=-1,2,3`` both give the value (argparse alone took ``-1,2,3`` for an option)."""
+    from povh3d.cli.main import build_parser
+
+    args = [option, value] if form == "separate" else [f"{option}={value}"]
+    parsed = build_parser().parse_args(["render", "s.pov", *args])
+    assert str(getattr(parsed, attribute)).lstrip("-.0") != ""
+    assert getattr(parsed, attribute) in (value, float(value) if attribute == "front_clearance" else value)
+
+
+def test_an_unknown_option_is_still_refused(cli, tmp_path):  # negative control: a minus and a letter is an option
+    result = cli("render", str(GALLERY / "tilted.pov"), "--display-normal", "-x,1,2", *ARRAY)
+    assert result.code == 2 and "expected one argument" in result.err

@@ -1,34 +1,43 @@
-"""The scene's camera: the last top-level statement, rewritten for POV-Ray; POV-Ray 3.7's rules."""
+"""The scene's cameras, every statement rewritten for POV-Ray; POV-Ray 3.7's rules on the last one run."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from povh3d.scene.camera import CameraError, camera_from_log, evaluation_script
+from povh3d.scene.camera import CameraError, camera_from_log
+from povh3d.scene.camera_script import camera_script
 
 
-def test_the_last_top_level_camera_is_rewritten_with_directives_in_place():
+def _script(text: str, files: dict[str, str] | None = None) -> str | None:
+    found = camera_script(text, (files or {}).get)
+    return None if found is None else found.script
+
+
+def test_every_camera_statement_is_rewritten_with_directives_in_place():
     text = ('#declare E = <1, 2, -3>;\ncamera { location 0 }\n#declare C = camera { location 5 }\n'
             'camera { location E /* here */ look_at 0\n#if (1) angle 40 #else angle 50 #end\n'
             '#debug "x"\n rotate 10*y }\nsphere { 0, 1 }\n')
-    found = evaluation_script(text)
-    assert found.cameras == 2
-    assert "sphere" not in found.script and found.script.startswith("#declare E")
-    assert "#if (1)" in found.script and "#else" in found.script and '#debug "x"' in found.script
-    assert "transform Povh3d_Cam_T rotate 10*y" in found.script
-    assert evaluation_script("sphere { 0, 1 }") is None
+    script = _script(text)
+    assert script.count("povh3d-camera begin") == 2 and script.count("povh3d-camera end") == 2
+    assert "sphere { 0, 1 }" in script and "camera {" not in script.replace("#declare C = camera {", "")
+    assert "#if (1)" in script and "#else" in script and '#debug "x"' in script
+    assert "transform Povh3d_Cam_T rotate 10*y" in script
+    assert _script("sphere { 0, 1 }") is None
 
 
 def test_an_old_version_scene_is_refused():
     with pytest.raises(CameraError, match="#version 3.1"):
-        evaluation_script("#version 3.1;\ncamera { location -5*z look_at 0 }\n")
-    assert evaluation_script("#version 3.7;\ncamera { location -5*z look_at 0 }\n") is not None
+        _script("#version 3.1;\ncamera { location -5*z look_at 0 }\n")
+    assert _script("#version 3.7;\ncamera { location -5*z look_at 0 }\n") is not None
 
 
-def test_a_camera_inside_a_macro_cannot_be_isolated():
-    with pytest.raises(CameraError, match="--display-center"):
-        evaluation_script("#macro Cam() camera { location -5*z } #end\nCam()\n")
+def test_a_camera_in_a_macro_and_in_an_include_is_rewritten_where_it_is():
+    files = {"cam.inc": "#macro Cam() camera { location -5*z } #end\n", "plain.inc": "#declare A = 1;\n"}
+    script = _script('#include "plain.inc"\n#include "cam.inc"\nCam()\n', files)
+    assert '#include "plain.inc"' in script and '#include "cam.inc"' not in script   # only cameras inlined
+    assert "#macro Cam()" in script and "povh3d-camera begin" in script
+    assert _script('#include "plain.inc"\n', files) is None
 
 
 def _log(**values):
@@ -37,6 +46,17 @@ def _log(**values):
         for v in np.ravel(value):
             lines.append(f"povh3d-camera {key} {float(v)!r}")
     return "\n".join(lines + ["povh3d-camera end"])
+
+
+def test_the_last_block_of_the_first_parse_counts():
+    first = _log(location=[0, 0, -10], look_at=[0, 0, 0])
+    last = _log(location=[0, 0, -20], look_at=[0, 0, 0])
+    log = "\n".join(["povh3d-camera parse", "povh3d-camera begin", first, "povh3d-camera begin", last,
+                     "povh3d-camera parse", "povh3d-camera begin", first])
+    cam = camera_from_log(log)
+    assert cam.location == (0.0, 0.0, -20.0) and cam.cameras == 2
+    with pytest.raises(CameraError, match="reaches none"):
+        camera_from_log("povh3d-camera parse\n")
 
 
 def test_look_at_angle_and_sky_follow_povray_rules():
@@ -52,13 +72,13 @@ def test_look_at_angle_and_sky_follow_povray_rules():
         camera_from_log(_log(location=[1, 1, 1], look_at=[1, 1, 1]))
 
 
-def test_a_camera_from_an_identifier_uses_its_declaration():
+def test_a_camera_from_an_identifier_replays_its_declaration():
     text = ("#declare Camera_0 = camera { location <1, 2, -9> look_at <0, 1, 0> }\n"
             "camera { Camera_0 rotate 30*y }\nsphere { 0, 1 }\n")
-    script = evaluation_script(text).script
-    assert "<1, 2, -9>" in script and "rotate 30*y" in script
+    script = _script(text)
+    assert "<1, 2, -9>" in script and "rotate 30*y" in script and "#switch (Povh3d_W0)" in script
     with pytest.raises(CameraError, match="cannot find"):
-        evaluation_script("camera { Elsewhere }\n")
+        _script("camera { Elsewhere }\n")
 
 
 def test_sky_along_the_view_keeps_the_supplied_right_as_povray_does():
