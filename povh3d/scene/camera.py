@@ -18,6 +18,7 @@ Pure: text in, text out; the run itself is the caller's.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,6 +58,22 @@ def tokens(text: str) -> list[Token]:
             t = "#" + t[1:].strip()
         out.append(Token(t, m.start(), m.end()))
     return out
+
+
+def _depths(toks: list[Token]) -> Iterator[tuple[int, int, int]]:
+    """``(index, brace depth, directive depth)`` of every token, the depths before it."""
+    braces = directives = 0
+    for i, tok in enumerate(toks):
+        yield i, braces, directives
+        t = tok.text
+        if t in _OPENERS:
+            directives += 1
+        elif t == "#end":
+            directives = max(0, directives - 1)
+        elif t == "{":
+            braces += 1
+        elif t == "}":
+            braces -= 1
 
 
 def _closing_brace(toks: list[Token], opening: int) -> int:
