@@ -336,7 +336,9 @@ def add_frame_options(p: argparse.ArgumentParser) -> None:
                    "camera when the scene has one, else native")
     g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
     g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
-    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
+    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: the scene's y projected onto the "
+                   "display, so x is horizontal; a normal along y keeps x = +x; within 10 deg of "
+                   "the y axis a warning asks for this option)")
     g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
     g.add_argument("--fit-depth", metavar="auto|MM",
                    help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
