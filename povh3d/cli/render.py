@@ -248,9 +248,10 @@ def add_parsers(sub: Any) -> None:
                    "or a volume (.vti .nii .nrrd .mha ..., a DICOM folder)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
-    p.add_argument("--quality", choices=QUALITY_NAMES, default="normal",
+    p.add_argument("--quality", default="normal", metavar="{draft,normal,high,auto,N}",
                    help="draft: one ray per pixel; normal: antialiased; high: 256 footprint samples, "
-                   "converged; auto: the fastest that meets --max-error (see 'povh3d bench')")
+                   "converged; N: N footprint samples per pixel; auto: the fastest that meets --max-error "
+                   "(see 'povh3d bench')")
     p.add_argument("--max-error", type=float, metavar="DB",
                    help="with --quality auto: the lowest PSNR against a converged reference to accept")
     p.add_argument("--jobs", type=positive_int, help="parallel POV-Ray processes")

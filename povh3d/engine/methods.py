@@ -269,18 +269,19 @@ class MethodResult:
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
                progress: Progress | None = None, crop: CropSettings | None = None,
-               **options: Any) -> MethodResult:
+               declared: LensArray | None = None, **options: Any) -> MethodResult:
     """Render ``scene`` with method ``name`` and return the H3D image.
 
     ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
     None values count as not given.  ``crop`` (methods that crop): trace each
     view only where objects can be, fill the rest with the background
-    (``cropped``); None renders everything.
+    (``cropped``); None renders everything.  ``declared``: the display the scene is told
+    about (``Povh3d_Panel_Width`` ...) when ``lens_array`` is a window of it (auto's probe).
     """
     method = get_method(name)
     options = method.resolve_options(name, options)
     asked = settings.spec
-    header = display_header(lens_array)   # the display's own constants, whatever --depth-scale does
+    header = display_header(declared or lens_array)   # the display's own constants, whatever --depth-scale does
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
     front_clearance = method.round_front_clearance(
         lens_array, settings.front_clearance or method.default_front_clearance(lens_array))
