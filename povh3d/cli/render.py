@@ -19,6 +19,9 @@ from .options import (add_array_options, add_mapping_options, add_mesh_options, 
 
 METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage", "subpixel")
 QUALITY_NAMES = ("draft", "normal", "high", "auto")
+#: The display options ``povh3d bench`` hands on to the ``povh3d render`` commands it times.
+ARRAY_OPTIONS = ("--preset", "--grid", "--lenses", "--ppl", "--pixel-pitch", "--focal", "--rows", "--panel",
+                 "--lens-rotation", "--lattice")
 
 
 def request_from_args(args: argparse.Namespace) -> Any:
@@ -223,9 +226,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
     lens_array = lens_array_from_args(args)
     scene = load_scene(args.scene, tuple(args.include))
     trials = default_trials(lens_array, args.methods.split(","))
+    # The trials are whole commands: the scene and the display options as given here.
+    scene_args = [str(Path(args.scene).resolve()), *(a for d in args.include for a in ("--include", d))]
+    for option in ARRAY_OPTIONS:
+        value = getattr(args, option.lstrip("-").replace("-", "_"), None)
+        if value is not None:
+            scene_args += [option, str(value)]
     update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "trials")
     try:
-        report = run_bench(scene, lens_array, trials, reference_samples=args.reference_samples,
+        report = run_bench(scene, lens_array, trials, scene_args=scene_args, reference_samples=args.reference_samples,
                            on_trial=(lambda done, total, what: update(done, total)) if update else None)
     finally:
         close()
@@ -320,8 +329,9 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--methods", default="multi-ortho,pinhole",
                    help="comma-separated methods to bench, e.g. multi-ortho,pinhole,single-stage:conic,"
                    "single-stage:spherical (default: multi-ortho,pinhole)")
-    p.add_argument("--reference-samples", type=positive_int, default=256, metavar="N",
-                   help="footprint samples per pixel of the reference (default 256)")
+    p.add_argument("--reference-samples", type=positive_int, default=512, metavar="N",
+                   help="footprint samples per pixel of the reference, drawn twice for its noise floor "
+                   "(default 512)")
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_array_options(p)
