@@ -326,9 +326,10 @@ def add_parsers(sub: Any) -> None:
     p = sub.add_parser("bench", help="run time against error of every method and quality setting")
     p.add_argument("scene", help="POV-Ray scene without a camera (.pov)")
     p.add_argument("-o", "--output", default="bench", help="folder for bench.csv, bench.md, bench.png")
-    p.add_argument("--methods", default="multi-ortho,pinhole",
+    p.add_argument("--methods", default="multi-ortho",
                    help="comma-separated methods to bench, e.g. multi-ortho,pinhole,single-stage:conic,"
-                   "single-stage:spherical (default: multi-ortho,pinhole)")
+                   "single-stage:spherical (default: multi-ortho; pinhole traces a frame per lens, "
+                   "over a minute a level on the demo panel)")
     p.add_argument("--reference-samples", type=positive_int, default=512, metavar="N",
                    help="footprint samples per pixel of the reference, drawn twice for its noise floor "
                    "(default 512)")
