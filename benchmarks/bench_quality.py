@@ -41,9 +41,9 @@ def default_cost(tree: Path, repeats: int, out: Path) -> list[tuple[str, ...]]:
     import subprocess
     import tempfile
 
-    from povh3d.engine.auto import probe_array, reference_quality, to_8bit
+    from povh3d.engine.auto import probe_window, reference_quality
     from povh3d.engine.methods import run_method
-    from povh3d.image.metrics import psnr
+    from povh3d.image.metrics import Reference
 
     env = {**os.environ, "PYTHONPATH": str(tree)}
     scene = load_scene(SAMPLE)
@@ -64,11 +64,12 @@ def default_cost(tree: Path, repeats: int, out: Path) -> list[tuple[str, ...]]:
             p = a["panel"]
             la = LensArray(a["grid"], *a["lenses"], *a["lens_pitch_mm"], a["focal_mm"],
                            Panel(*p["size_px"], *p["pixel_pitch_mm"]))
-        probe = probe_array(la, (48, 40))
+        probe, mask = probe_window(la, (48, 40))
         base = RenderSettings(quality="draft", use_cache=False)
-        reference = to_8bit(run_method("multi-ortho", scene, probe,
-                                       replace(base, quality=reference_quality(256), bit_depth=16)).h3d)
-        error = {level: psnr(run_method("multi-ortho", scene, probe, replace(base, quality=level)).h3d, reference)
+        reference = Reference(*(run_method("multi-ortho", scene, probe, replace(
+            base, quality=reference_quality(512, seed), bit_depth=16), declared=la).h3d for seed in (1, 2)), mask)
+        error = {level: reference.psnr(run_method("multi-ortho", scene, probe, replace(base, quality=level),
+                                                  declared=la).h3d)
                  for level in times}
         med = {level: statistics.median(t) for level, t in times.items()}
         rows.append((preset, *(f"{med[level]:.2f} s ({min(t):.2f}-{max(t):.2f})" for level, t in times.items()),

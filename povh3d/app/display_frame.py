@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ConfigError, PovrayError, PovrayTimeout
-from ..geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame
+from ..geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame, up_warning
 from ..geometry.lens_array import LensArray
 from ..scene.camera import CameraError
 from ..scene.camera_script import camera_script
@@ -106,7 +106,8 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
         frame = explicit_frame(options.center, options.normal, float(options.width), width_mm, options.up)
-        return frame, {**frame.as_record(), "warnings": []}, None
+        warning = up_warning(options.normal, options.up)  # an up chosen for the user near the y axis
+        return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
     script = camera_script(scene.path.read_bytes().decode("latin-1"), scene.include_text)

@@ -20,6 +20,9 @@ from .options import (add_array_options, add_mapping_options, add_mesh_options, 
 
 METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage", "subpixel")
 QUALITY_NAMES = ("draft", "normal", "high", "auto")
+#: The display options ``povh3d bench`` hands on to the ``povh3d render`` commands it times.
+ARRAY_OPTIONS = ("--preset", "--grid", "--lenses", "--ppl", "--pixel-pitch", "--focal", "--rows", "--panel",
+                 "--lens-rotation", "--lattice")
 
 
 def request_from_args(args: argparse.Namespace) -> Any:
@@ -250,9 +253,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
     lens_array = lens_array_from_args(args)
     scene = load_scene(args.scene, tuple(args.include))
     trials = default_trials(lens_array, args.methods.split(","))
+    # The trials are whole commands: the scene and the display options as given here.
+    scene_args = [str(Path(args.scene).resolve()), *(a for d in args.include for a in ("--include", d))]
+    for option in ARRAY_OPTIONS:
+        value = getattr(args, option.lstrip("-").replace("-", "_"), None)
+        if value is not None:
+            scene_args += [option, str(value)]
     update, close = progress_bar(not args.quiet and sys.stderr.isatty(), "trials")
     try:
-        report = run_bench(scene, lens_array, trials, reference_samples=args.reference_samples,
+        report = run_bench(scene, lens_array, trials, scene_args=scene_args, reference_samples=args.reference_samples,
                            on_trial=(lambda done, total, what: update(done, total)) if update else None)
     finally:
         close()
@@ -275,9 +284,10 @@ def add_parsers(sub: Any) -> None:
                    "or a volume (.vti .nii .nrrd .mha ..., a DICOM folder)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
     p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
-    p.add_argument("--quality", choices=QUALITY_NAMES, default="normal",
+    p.add_argument("--quality", default="normal", metavar="{draft,normal,high,auto,N}",
                    help="draft: one ray per pixel; normal: antialiased; high: 256 footprint samples, "
-                   "converged; auto: the fastest that meets --max-error (see 'povh3d bench')")
+                   "converged; N: N footprint samples per pixel; auto: the fastest that meets --max-error "
+                   "(see 'povh3d bench')")
     p.add_argument("--max-error", type=float, metavar="DB",
                    help="with --quality auto: the lowest PSNR against a converged reference to accept")
     p.add_argument("--jobs", type=positive_int, help="parallel POV-Ray processes")
@@ -349,11 +359,13 @@ def add_parsers(sub: Any) -> None:
     p = sub.add_parser("bench", help="run time against error of every method and quality setting")
     p.add_argument("scene", help="POV-Ray scene without a camera (.pov)")
     p.add_argument("-o", "--output", default="bench", help="folder for bench.csv, bench.md, bench.png")
-    p.add_argument("--methods", default="multi-ortho,pinhole",
+    p.add_argument("--methods", default="multi-ortho",
                    help="comma-separated methods to bench, e.g. multi-ortho,pinhole,single-stage:conic,"
-                   "single-stage:spherical (default: multi-ortho,pinhole)")
-    p.add_argument("--reference-samples", type=positive_int, default=256, metavar="N",
-                   help="footprint samples per pixel of the reference (default 256)")
+                   "single-stage:spherical (default: multi-ortho; pinhole traces a frame per lens, "
+                   "over a minute a level on the demo panel)")
+    p.add_argument("--reference-samples", type=positive_int, default=512, metavar="N",
+                   help="footprint samples per pixel of the reference, drawn twice for its noise floor "
+                   "(default 512)")
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_array_options(p)
@@ -369,7 +381,9 @@ def add_frame_options(p: argparse.ArgumentParser) -> None:
                    "camera when the scene has one, else native")
     g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
     g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
-    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: y)")
+    g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: the scene's y projected onto the "
+                   "display, so x is horizontal; a normal along y keeps x = +x; within 10 deg of "
+                   "the y axis a warning asks for this option)")
     g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
     g.add_argument("--fit-depth", metavar="auto|MM",
                    help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import ConfigError, warn
 from ..geometry.cameras import ortho_view_frames, pinhole_frames
-from ..geometry.camera_mesh import check_front_clearance, default_front_clearance
+from ..geometry.camera_mesh import check_front_clearance, clearance_range, default_front_clearance
 from ..geometry.view_bank import bank_front_clearance, stack_frames, view_bank_frames
 from ..geometry.crop import CropSettings
 from ..geometry.footprint import CENTRE, latin_hypercube
@@ -234,6 +234,27 @@ METHODS: dict[str, Method] = {
 }
 
 
+def frame_units(frame: tuple[float, ...] | None) -> float:
+    """Scene units per display mm of a frame matrix (its rows' common length; 1 without a frame)."""
+    return 1.0 if frame is None else float(np.linalg.norm(np.asarray(frame[:3], dtype=np.float64)))
+
+
+def _check_clearance(name: str, method: Method, lens_array: LensArray, front_clearance: float,
+                     units_per_mm: float) -> None:
+    """Refuse a clearance POV-Ray cannot trace in scene units, advising requests that pass once the
+    method has rounded them (a view bank's clearance comes in steps of ``f lcm(Nx, Ny)``)."""
+    least, most = clearance_range(lens_array, units_per_mm)
+    rounded = lambda x: method.round_front_clearance(lens_array, x)  # noqa: E731
+    step = rounded(least)
+    top = most if rounded(most) <= most * (1 + 1e-12) else rounded(most) - step
+    if least <= most and rounded(least) > most and name == "multi-ortho":
+        raise ConfigError(
+            f"multi-ortho's view bank starts its rays a whole {step:.4g} mm (focal x views) in front of the screen, "
+            f"beyond the {most:.4g} mm POV-Ray can trace here; use --method multi-ortho-views "
+            f"--front-clearance {float(f'{0.99 * most:.3g}'):g} (its views start anywhere)")
+    check_front_clearance(lens_array, front_clearance, units_per_mm, accepted=(least, top))
+
+
 def get_method(name: str) -> Method:
     if name not in METHODS:
         raise ConfigError(f"unknown method {name!r}; choose one of: {', '.join(METHODS)}")
@@ -259,21 +280,24 @@ class MethodResult:
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
                progress: Progress | None = None, crop: CropSettings | None = None,
-               **options: Any) -> MethodResult:
+               declared: LensArray | None = None, **options: Any) -> MethodResult:
     """Render ``scene`` with method ``name`` and return the H3D image.
 
     ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
     None values count as not given.  ``crop`` (methods that crop): trace each
     view only where objects can be, fill the rest with the background
-    (``cropped``); None renders everything.
+    (``cropped``); None renders everything.  ``declared``: the display the scene is told
+    about (``Povh3d_Panel_Width`` ...) when ``lens_array`` is a window of it (auto's probe).
     """
     method = get_method(name)
     options = method.resolve_options(name, options)
     asked = settings.spec
-    header = display_header(lens_array)   # the display's own constants, whatever --depth-scale does
+    header = display_header(declared or lens_array)   # the display's own constants, whatever --depth-scale does
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
     asked_clearance = settings.front_clearance or method.default_front_clearance(lens_array)
     front_clearance = method.round_front_clearance(lens_array, asked_clearance)
+    if name != "single-stage":  # its depth is checked by its own optics (check_optics)
+        _check_clearance(name, method, lens_array, front_clearance, frame_units(settings.frame))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if method.confines_antialias is not None and not method.confines_antialias(lens_array):
         quality = quality.footprint_sampled()

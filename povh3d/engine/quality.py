@@ -123,6 +123,19 @@ QUALITY_LEVELS: dict[str, Quality] = {
 AUTO = "auto"  # --quality auto --max-error DB: the fastest setting that meets DB (quality_bench)
 QUALITY_OPTIONS: dict[str, tuple[str, ...]] = {name: q.options for name, q in QUALITY_LEVELS.items()}
 
+
+
+def quality_level(name: str) -> Quality:
+    """A named level, or a whole number ``N``: ``N`` footprint samples per pixel (``high`` is 256;
+    the counts between ``normal`` and ``high`` are the rungs ``--quality auto`` chooses from)."""
+    if name in QUALITY_LEVELS:
+        return QUALITY_LEVELS[name]
+    if isinstance(name, str) and name.isdigit() and 1 <= int(name) <= GRID:
+        return Quality(footprint=int(name))
+    raise ConfigError(f"quality must be one of {', '.join(QUALITY_LEVELS)}, auto or a number of footprint samples "
+                      f"from 1 to {GRID}, got {name!r}")
+
+
 Progress = Callable[[int, int], None]
 #: --depth-scale: a compression beyond 1/1000 leaves nothing of the depth; an expansion past 100
 #: tilts rays further than any lens can.
@@ -135,7 +148,7 @@ class RenderSettings:
 
     Attributes
     ----------
-    quality : {'draft', 'normal', 'high', 'auto'} or Quality
+    quality : {'draft', 'normal', 'high', 'auto'}, 'N' (footprint samples) or Quality
               ('auto' is resolved before rendering; see ``quality_bench.resolve_auto``)
     jobs : int or None          parallel POV-Ray processes (None: chosen per method)
     threads : int or None       POV-Ray threads per process (None: cores / jobs)
@@ -181,8 +194,8 @@ class RenderSettings:
                               f"got {k!r}")
         if self.frame is not None and len(self.frame) != 12:
             raise ConfigError(f"the display frame is a matrix of 12 numbers, got {len(self.frame)}")
-        if not isinstance(self.quality, Quality) and self.quality not in (*QUALITY_LEVELS, AUTO):
-            raise ConfigError(f"quality must be one of {', '.join(QUALITY_LEVELS)} or auto, got {self.quality!r}")
+        if not isinstance(self.quality, Quality) and self.quality != AUTO:
+            quality_level(self.quality)
         if (self.quality == AUTO) != (self.max_error_db is not None):
             raise ConfigError("--quality auto needs --max-error DB (the lowest PSNR to accept), "
                               "and --max-error needs --quality auto")
@@ -207,7 +220,7 @@ class RenderSettings:
     def spec(self) -> Quality:
         if self.quality == AUTO:
             raise RuntimeError("resolve --quality auto first (quality_bench.resolve_auto)")
-        return self.quality if isinstance(self.quality, Quality) else QUALITY_LEVELS[self.quality]
+        return self.quality if isinstance(self.quality, Quality) else quality_level(self.quality)
 
     @property
     def options(self) -> tuple[str, ...]:

@@ -59,31 +59,53 @@ def ray_stretch(lens_array: LensArray) -> float:
     return float(np.sqrt(hx * hx + hy * hy + f * f) / f)
 
 
-def check_front_clearance(lens_array: LensArray, front_clearance: float) -> None:
+def clearance_range(lens_array: LensArray, units_per_mm: float = 1.0) -> tuple[float, float]:
+    """The front clearances (mm) POV-Ray can trace: ``(least, most)``.
+
+    POV-Ray's depth limits are in scene units (``units_per_mm`` per display mm): the
+    screen at least ``MIN_FRONT_CLEARANCE`` scene units from where rays start, the
+    most oblique ray's path to it (``front_clearance * ray_stretch``) under half of
+    ``POVRAY_MAX_DEPTH`` scene units, leaving as much again for the scene behind.
+    Both bounds hold in mm too (the builders check in mm), so the range is never
+    wider than the one at one unit per mm.
+    """
+    units = float(units_per_mm)
+    least = MIN_FRONT_CLEARANCE * max(1.0, 1.0 / units)
+    most = POVRAY_MAX_DEPTH / 2 / ray_stretch(lens_array) / max(1.0, units)
+    return least, most
+
+
+def check_front_clearance(lens_array: LensArray, front_clearance: float, units_per_mm: float = 1.0,
+                          accepted: tuple[float, float] | None = None) -> None:
     """Refuse a front clearance POV-Ray cannot trace (ConfigError naming the range that works).
 
-    Rays start ``front_clearance`` mm in front of the screen; the most oblique travels
-    ``front_clearance * ray_stretch`` to reach it.  That must stay above POV-Ray's
-    nearest intersection depth and under half its furthest, leaving at least
-    as much again for the scene behind the screen.
+    Rays start ``front_clearance`` mm in front of the screen (``clearance_range``; the
+    checks are in scene units, ``units_per_mm`` per mm).  ``accepted``: the range of
+    requests that a method which rounds the clearance (view banks) turns into one that
+    passes, for the advice; the range itself by default.
     """
-    if not front_clearance >= MIN_FRONT_CLEARANCE:
+    least, most = clearance_range(lens_array, units_per_mm)
+    lo, hi = accepted if accepted is not None else (least, most)
+    units = float(units_per_mm)
+    unit = "scene units" if units > 1 else "mm"   # whichever bound binds
+    near_unit = "scene units" if units < 1 else "mm"
+    scale = "" if units == 1 else f" ({units:g} scene units per mm)"
+    if most < least or hi < lo:  # no clearance works: the display itself is out of POV-Ray's reach
+        w, h = lens_array.panel.size_mm
         raise ConfigError(
-            f"the front clearance {front_clearance:g} mm is under {MIN_FRONT_CLEARANCE:g} mm: POV-Ray ignores surfaces "
-            f"nearer than {POVRAY_MIN_DEPTH:g} mm to where a ray starts; use --front-clearance {MIN_FRONT_CLEARANCE:g} or more")
-    stretch = ray_stretch(lens_array)
-    if front_clearance * stretch > POVRAY_MAX_DEPTH / 2:
-        most = POVRAY_MAX_DEPTH / 2 / stretch
-        if most < MIN_FRONT_CLEARANCE:  # no clearance works: the display itself is out of POV-Ray's reach
-            w, h = lens_array.panel.size_mm
-            raise ConfigError(
-                f"a {w:.4g} x {h:.4g} mm display with rays this oblique is beyond POV-Ray's {POVRAY_MAX_DEPTH:g} mm "
-                "ray length whatever the front clearance; check --pixel-pitch and --focal (mm), or model the "
-                "scene and the display in larger units (smaller numbers)")
+            f"a {w:.4g} x {h:.4g} mm display with rays this oblique is beyond POV-Ray's {POVRAY_MAX_DEPTH:g} {unit} "
+            f"ray length{scale} whatever the front clearance; check --pixel-pitch and --focal (mm), or "
+            "model the scene and the display in larger units (smaller numbers)")
+    if not front_clearance >= least:
         raise ConfigError(
-            f"rays starting {front_clearance:.6g} mm in front of the screen travel {front_clearance * stretch:.4g} mm to reach it, "
-            f"over half of POV-Ray's {POVRAY_MAX_DEPTH:g} mm ray length, so the scene behind it would vanish; "
-            f"use --front-clearance between {MIN_FRONT_CLEARANCE:g} and {most:.6g} mm (or model the scene in smaller units)")
+            f"the front clearance {front_clearance:g} mm is under {least:g} mm{scale}: POV-Ray ignores surfaces "
+            f"nearer than {POVRAY_MIN_DEPTH:g} {near_unit} to where a ray starts; use --front-clearance {lo:.6g} or more")
+    if front_clearance > most:
+        path = front_clearance * ray_stretch(lens_array) * max(units, 1.0)
+        raise ConfigError(
+            f"rays starting {front_clearance:.6g} mm in front of the screen travel {path:.4g} {unit} to reach it{scale}, "
+            f"over half of POV-Ray's {POVRAY_MAX_DEPTH:g} {unit} ray length, so the scene behind it would vanish; "
+            f"use --front-clearance between {lo:.6g} and {hi:.6g} mm (or model the scene in smaller units)")
 
 
 # -- the same bank in one pass: a mesh camera ----------------------------------------

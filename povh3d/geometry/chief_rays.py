@@ -17,6 +17,12 @@ POV-Ray, tracing the capture ray from just before ``B``, refracts it at ``B`` an
 lenslet's shape, index or distortion.  A pixel whose backward ray would leave its
 lenslet through a side wall, or meet total internal reflection, cannot be traced
 through the array: ``served`` is False there.
+
+Single-stage rendering (``engine.single_stage``, point 6) builds on this: the capture
+camera is a ``mesh_camera`` with one face per (sub-)pixel (``chief_mesh``), the
+lenslets sit off the display's lattice by an irrational fraction of a pitch
+(``lenslet_offset``), and the index is a real one (``PHYSICAL_IOR``); the pixels whose
+ray cannot pass (``unserved_count``) decide whether the render is refused.
 """
 
 from __future__ import annotations
@@ -26,8 +32,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .lens_array import LensArray
+from ..errors import ConfigError
+from .capture_bank import border_margin
+from .lens_array import LensArray, Panel
 from .optics import Lenslet
+from .rays import pixel_rays
 
 
 @dataclass(frozen=True)
@@ -165,3 +174,114 @@ def _curved_face_hit(centres: np.ndarray, d: np.ndarray, cx: np.ndarray, cy: np.
         good = (zr <= 1e-9 * R + 1e-12) & (zr >= -thick)
         t = np.where(good, roots, -np.inf).max(axis=-1)
         return q + t[..., None] * d, t
+
+
+#: Indices of real lens materials for visible light: water 1.33 up to diamond 2.42 (the
+#: densest optical glasses reach about 2.0).  Outside this range no lenslet can be made.
+PHYSICAL_IOR = (1.3, 2.5)
+#: Share of pixels whose ray may miss every lenslet (at a lens's rim, grazing a corner):
+#: they are traced from past the array along their own ray, still exact, not refracted.
+UNSERVED_SHARE = 0.005
+#: Indices tried, lowest first, when ``--ior`` is not given (1.5: acrylic, crown glass).
+DEFAULT_IORS = tuple(round(1.5 + 0.1 * k, 1) for k in range(11))
+
+
+def check_ior(ior: float | None) -> None:
+    """Refuse, in one line, an index of refraction no lens material has (None, 1 and below: the default)."""
+    lo, hi = PHYSICAL_IOR
+    if ior is not None and ior > 1 and not lo <= ior <= hi:
+        raise ConfigError(f"--ior {ior:g} is no lens material: real lenses have indices from {lo:g} (water 1.33) "
+                          f"to {hi:g} (diamond 2.42); raise --ior above {lo:g} or lower it to {hi:g} at most "
+                          f"(1.5 is glass)")
+
+
+def probe_array(lens_array: LensArray, lenses: int = 24) -> LensArray:
+    """A piece of ``lens_array`` at most ``lenses`` a side, on the same pixels, for trying indices.
+
+    Whether a pixel ray passes a lenslet depends on its offset and slope, which a
+    piece of the array already shows in all their variety; the whole array is checked
+    once the index is chosen (``SingleStagePlan.check_optics``).
+    """
+    la = lens_array
+    lx, ly = min(la.lenses_x, lenses), min(la.lenses_y, lenses)
+    if la.grid == "lenticular":
+        ly = min(la.lenses_y, 4 * lenses)
+    if (lx, ly) == (la.lenses_x, la.lenses_y):
+        return la
+    s_x, s_y = la.panel.pitch_x, la.panel.pitch_y
+    extra = la.pitch_x / 2 if la.grid == "hex" and ly > 1 else 0.0
+    width = math.ceil((lx * la.pitch_x + extra) / s_x - 1e-9)
+    height = ly if la.grid == "lenticular" else math.ceil(ly * la.pitch_y / s_y - 1e-9)
+    width += (la.panel.width - width) % 2  # the same pixel phase about the centre
+    height += (la.panel.height - height) % 2
+    return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, Panel(width, height, s_x, s_y))
+
+
+def lenslet_offset(lens_array: LensArray) -> tuple[float, float]:
+    """Lateral shift of the virtual lenslets (mm), off the display's lattice.
+
+    Per-pixel capture rays do not need the lenslets on the display's centres; off
+    them by an irrational fraction of a pitch, no family of pixel rays (a column of
+    hex pixels with ``u = 0``, say) runs along a lenslet's edge, where POV-Ray's
+    answer depends on rounding.
+    """
+    la = lens_array
+    return (math.sqrt(2) - 1) * 0.5 * la.pitch_x, (0.0 if la.grid == "lenticular" else (math.sqrt(5) - 2) * la.pitch_y)
+
+
+def capture_rays(lens_array: LensArray, capture_array: LensArray, lenslet: Lenslet, depth: float,
+                 supersample: int) -> ChiefRays:
+    """The capture ray of every sub-pixel, ``(H k, W k)`` (``chief_rays``), through the
+    lenslets of ``capture_array`` whose focal plane is ``z = -depth``."""
+    la, k = lens_array, supersample
+    c, _, inside = pixel_rays(la)
+    X, Y = np.meshgrid(*la.panel.pixel_centres())
+    d = (np.arange(k) + 0.5) / k - 0.5  # sub-pixel centres, in pixels, inside the pixel's own lens
+    h, w = inside.shape
+    cs = np.repeat(np.repeat(np.nan_to_num(c), k, 0), k, 1)
+    u = np.repeat(np.repeat(X, k, 0), k, 1) + np.tile(d, w)[None, :] * la.panel.pitch_x - cs[..., 0]
+    v = np.repeat(np.repeat(Y, k, 0), k, 1) - np.tile(d, h)[:, None] * la.panel.pitch_y - cs[..., 1]
+    if la.grid == "lenticular":
+        v = np.zeros_like(v)
+        cs[..., 1] = np.repeat(np.repeat(Y, k, 0), k, 1) - np.tile(d, h)[:, None] * la.panel.pitch_y
+    dirs = np.stack([u, v, np.full(u.shape, la.focal)], axis=-1)
+    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+    rays = chief_rays(capture_array, lenslet, -depth - lenslet.focal, cs, dirs,
+                      air_gap=1e-3 * lenslet.focal, offset=lenslet_offset(la))
+    keep = np.repeat(np.repeat(inside, k, 0), k, 1)
+    return ChiefRays(rays.origins, rays.directions, rays.served & keep)
+
+
+def unserved_count(lens_array: LensArray, rays: ChiefRays, supersample: int) -> int:
+    """Pixels clear of their lens border (0.1 pixel) whose ray cannot pass through a lenslet."""
+    la, k = lens_array, supersample
+    # Sub-pixel rays reach up to (1 - 1/k) / sqrt(2) of a pixel from its centre.
+    reach = 0.1 + (1 - 1 / k) / math.sqrt(2)
+    clear = np.repeat(np.repeat(border_margin(la) > reach * la.panel.pitch_x, k, 0), k, 1)
+    return int(np.sum(clear & ~rays.served))
+
+
+def chief_mesh(lens_array: LensArray, rays: ChiefRays, supersample: int) -> dict[str, np.ndarray]:
+    """One triangle per sub-pixel, centroid at its ray's origin, normal along it.
+
+    ``mesh_camera`` distribution 0 shoots image pixel ``(col, row)`` from the
+    centroid of face ``col + (row - 1) W`` along the face's normal (measured:
+    row 0 repeats row 1, so the image has one extra row on top, cut off).
+    Pixels outside every lens look back (-z) at the background; they are
+    blacked out afterwards.
+    """
+    la, k = lens_array, supersample
+    _, _, inside = pixel_rays(la)
+    keep = np.repeat(np.repeat(inside, k, 0), k, 1).reshape(-1)
+    o = rays.origins.reshape(-1, 3).copy()
+    nrm = rays.directions.reshape(-1, 3).copy()
+    o[~keep] = (0.0, 0.0, -1.0)
+    nrm[~keep] = (0.0, 0.0, -1.0)
+    e1 = np.cross(nrm, (0.0, 1.0, 0.0))
+    e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)
+    e2 = np.cross(nrm, e1)
+    size = la.pitch_x  # large faces: their float32 normals stay exact to ~1e-7
+    r3 = math.sqrt(3) / 2
+    verts = np.stack([o + size * e1, o - size * (0.5 * e1 + r3 * e2), o - size * (0.5 * e1 - r3 * e2)], axis=1)
+    faces = np.arange(3 * len(o), dtype=np.int64).reshape(-1, 3)
+    return {"vertices": verts.reshape(-1, 3), "faces": faces}

@@ -128,20 +128,58 @@ class DisplayFrame:
 NATIVE = DisplayFrame()
 
 
+#: Within this angle (degrees) of the scene's y axis the default up turns fast with the normal:
+#: ``up_warning`` asks for a ``--display-up`` there.
+UP_WARNING_DEG = 10.0
+
+
+def default_up(normal: Any) -> np.ndarray:
+    """The display's up when none is given: the scene's ``+y`` projected onto the display.
+
+    One rule for every normal, with no threshold: the display's ``x`` is horizontal
+    (across the scene's ``y``), and turning the normal turns the image continuously,
+    as a viewer tilting their head would.  Only a normal along ``+-y`` itself has no
+    projection; there the up is the limit reached from a display facing ``+z`` (``x``
+    stays ``+x``): ``-z`` for a normal ``+y``, ``+z`` for ``-y``.
+    """
+    n = np.asarray(normal, dtype=np.float64)
+    n = n / np.linalg.norm(n)
+    up = np.array([0.0, 1.0, 0.0]) - n[1] * n
+    if np.linalg.norm(up) > 1e-9:
+        return up / np.linalg.norm(up)
+    return np.array([0.0, 0.0, -1.0 if n[1] > 0 else 1.0])
+
+
+def up_warning(normal: Any, up: Any = None) -> str | None:
+    """A warning when the up was chosen for the user (``up`` None) and the normal lies within
+    ``UP_WARNING_DEG`` of the scene's y axis, where a small turn of the normal turns the image a lot."""
+    if up is not None:
+        return None
+    n = _vec(normal, "--display-normal")
+    if not np.linalg.norm(n) > 0:
+        return None
+    angle = math.degrees(math.acos(min(1.0, abs(n[1]) / np.linalg.norm(n))))
+    if angle >= UP_WARNING_DEG:
+        return None
+    return (f"the display normal is {angle:.3g} deg from the scene's y axis, so its default up (the scene's y "
+            f"projected onto the display: {', '.join(f'{v:.3g}' for v in default_up(n))}) turns fast with the "
+            f"normal; give --display-up X,Y,Z to fix which way is up")
+
+
 def explicit_frame(centre: Any, normal: Any, width: float, panel_width_mm: float, up: Any = None,
                    *, source: str = "explicit", note: str = "") -> DisplayFrame:
     """The frame from a centre, a normal (away from the viewer), an up and a width in scene units.
 
-    ``up`` defaults to the scene's ``y`` (``z`` when the normal is along ``y``).
-    The display's ``x`` is ``up x normal`` (POV-Ray's ``right`` for a camera
-    with ``sky`` up looking along the normal), ``y`` completes it.
+    ``up`` defaults to ``default_up(normal)``.  The display's ``x`` is ``up x normal``
+    (POV-Ray's ``right`` for a camera with ``sky`` up looking along the normal), ``y``
+    completes it.
     """
     c, n = _vec(centre, "--display-center"), _vec(normal, "--display-normal")
     if not np.linalg.norm(n) > 0:
         raise ConfigError(f"--display-normal must not be zero; use {EXPLICIT_OPTIONS}")
     z = n / np.linalg.norm(n)
     if up is None:
-        up = (0.0, 0.0, 1.0) if abs(z[1]) > 0.999 else (0.0, 1.0, 0.0)
+        up = default_up(z)
     u = _vec(up, "--display-up")
     x = np.cross(u, z)
     if not np.linalg.norm(x) > 1e-9 * max(np.linalg.norm(u), 1e-300):

@@ -117,3 +117,17 @@ def disparity(depth: np.ndarray, lens_array: LensArray) -> np.ndarray:
     length = np.sqrt(a[None, :] ** 2 + b[:, None] ** 2 + 1.0)
     z = depth / length[:, :, None, None]
     return (z * s / (f * p)).astype(np.float32)
+
+
+def cell_contains(grid: str, pitch_x: float, pitch_y: float, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Whether offsets ``(u, v)`` (mm, from a lens centre) lie strictly inside its cell.
+
+    Points on a cell edge count as outside: POV-Ray's ray there grazes two lenslets.
+    """
+    tight = 1 - 1e-9
+    ax, ay = np.abs(u), np.abs(v)
+    if grid == "hex":
+        return (ax < pitch_x / 2 * tight) & (ax / 2 + np.sqrt(3) / 2 * ay < pitch_x / 2 * tight)
+    if grid == "lenticular":
+        return ax < pitch_x / 2 * tight
+    return (ax < pitch_x / 2 * tight) & (ay < pitch_y / 2 * tight)

@@ -15,7 +15,7 @@ import numpy as np
 
 from .colour import decode, encode, linear_to_srgb, srgb_to_linear
 from ..geometry.lens_array import LensArray
-from ..geometry.rays import pixel_rays
+from ..geometry.rays import cell_contains, pixel_rays
 
 
 def lens_index_map(lens_array: LensArray) -> np.ndarray:
@@ -122,20 +122,6 @@ def extract_views(h3d: np.ndarray, lens_array: LensArray, views: tuple[int, int]
     pts[..., 0] = centres[None, None, :, :, 0] + u[None, :, None, None]
     pts[..., 1] = centres[None, None, :, :, 1] + v[:, None, None, None]
     return sample_in_lens(h3d, lens_array, pts, np.broadcast_to(lens, pts.shape[:-1]))
-
-
-def cell_contains(grid: str, pitch_x: float, pitch_y: float, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Whether offsets ``(u, v)`` (mm, from a lens centre) lie strictly inside its cell.
-
-    Points on a cell edge count as outside: POV-Ray's ray there grazes two lenslets.
-    """
-    tight = 1 - 1e-9
-    ax, ay = np.abs(u), np.abs(v)
-    if grid == "hex":
-        return (ax < pitch_x / 2 * tight) & (ax / 2 + np.sqrt(3) / 2 * ay < pitch_x / 2 * tight)
-    if grid == "lenticular":
-        return ax < pitch_x / 2 * tight
-    return (ax < pitch_x / 2 * tight) & (ay < pitch_y / 2 * tight)
 
 
 def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[float, float],

@@ -46,3 +46,28 @@ def pareto_front(seconds: np.ndarray, error_db: np.ndarray) -> np.ndarray:
     no_worse = (t[None, :] <= t[:, None]) & (q[None, :] >= q[:, None])
     better = (t[None, :] < t[:, None]) | (q[None, :] > q[:, None])
     return ~np.any(no_worse & better, axis=1)
+
+
+class Reference:
+    """A converged reference made of two renders that differ only in their random seed.
+
+    ``floor_db`` is the PSNR between the two: the reference's own noise floor.  The
+    reference is their mean (in sRGB-coded values, as PSNR sees them), whose own mean
+    squared error is a quarter of the two renders' mean squared difference; ``psnr``
+    takes it off, so a setting is scored against the converged image, not the noise.
+    """
+
+    def __init__(self, first: np.ndarray, second: np.ndarray, mask: np.ndarray | None = None) -> None:
+        if first.shape != second.shape:
+            raise ValueError(f"references differ in shape: {first.shape} and {second.shape}")
+        self.mask = np.ones(first.shape[:2], bool) if mask is None else np.asarray(mask, bool)
+        a, b = _unit(first)[self.mask], _unit(second)[self.mask]
+        between = float(np.mean((a - b) ** 2))
+        self.floor_db = float("inf") if between == 0 else 10.0 * np.log10(1.0 / between)
+        self.image = (a + b) / 2
+        self.noise_mse = between / 4
+
+    def psnr(self, image: np.ndarray) -> float:
+        """PSNR in dB of ``image`` (integer, the references' shape) against the converged image."""
+        mse = float(np.mean((_unit(image)[self.mask] - self.image) ** 2)) - self.noise_mse
+        return float("inf") if mse <= 0 else 10.0 * np.log10(1.0 / mse)

@@ -380,3 +380,15 @@ def _signal_groups(children: list[_Child], signum: signal.Signals) -> None:
         # Each child leads its own session, so its group id is its pid.
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(child.process.pid, signum)
+
+
+
+def run_command(argv: Sequence[str], *, timeout: float | None = None) -> tuple[int, float, str]:
+    """Run ``argv`` (a povh3d command the bench times) to its exit: ``(exit code, wall s, stderr)``."""
+    start = time.perf_counter()
+    try:
+        done = subprocess.run(list(argv), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                              timeout=timeout, check=False)
+    except subprocess.TimeoutExpired as exc:
+        raise PovrayTimeout(f"{' '.join(map(str, argv[:4]))} ... took over {timeout:g} s") from exc
+    return done.returncode, time.perf_counter() - start, done.stderr or ""

@@ -3,6 +3,7 @@ inputs that used to end in a traceback."""
 
 from __future__ import annotations
 
+import re
 import time
 
 import numpy as np
@@ -38,6 +39,17 @@ def test_a_display_beyond_povray_reach_does_not_suggest_an_empty_range(tmp_path,
     line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", "--quality", "draft", "--pixel-pitch", "100",
                               "--focal", "1e-9"), 2)
     assert "whatever the front clearance" in line and "between 0.01 and 0.0" not in line
+
+
+def test_a_refused_clearance_advises_a_command_that_runs(tmp_path, cli):
+    """Issue 22: ``--focal 1e6`` put multi-ortho's view bank (whole steps of f x views) out of
+    POV-Ray's reach, and the front clearance it advised was refused in turn.  Run the advice."""
+    base = ["render", SAMPLE, *TINY, "--ppl", "6", "--focal", "1e6"]
+    line = one_error_line(cli(*base, "-o", tmp_path / "a.png"), 2)
+    method = re.search(r"--method (\S+)", line).group(1)
+    clearance = re.search(r"--front-clearance ([0-9.e+-]+)", line).group(1)
+    assert cli(*base, "--method", method, "--front-clearance", clearance, "-o", tmp_path / "b.png").code == 0
+    assert (tmp_path / "b.png").exists()
 
 
 def test_info_with_a_nan_pitch(cli):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,9 @@ from povh3d.errors import ConfigError, PovrayError
 from povh3d.geometry.footprint import CENTRE, angular_grid
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
+from povh3d.engine import methods
 from povh3d.engine.methods import METHODS, display_header, run_method
+from povh3d.geometry.frame import DisplayFrame
 from povh3d.povray.format import pov_number
 from povh3d.povray.process import PovrayJob, run_jobs
 from povh3d.engine.quality import RenderSettings
@@ -267,12 +270,43 @@ def test_povray_reads_our_numbers_back_exactly(tmp_path):
 def test_clearance_beyond_povray_reach_is_refused_before_rendering(tmp_path):
     la = scaled_array("square", 1e6)      # a 14 km panel: the default clearance is 58 000 km
     out = tmp_path / "h3d.png"
-    with pytest.raises(ConfigError, match=r"POV-Ray's 1e\+07 mm ray length.*--front-clearance between 0\.01 and"):
+    # multi-ortho's view bank starts whole steps of f x views (9e6 mm) out: past reach whatever the request
+    with pytest.raises(ConfigError, match=r"POV-Ray can trace here; use --method multi-ortho-views --front-clearance"):
         render(write_checker_plane(tmp_path, 6e6, 2.5e6), la, out, settings=DRAFT)
     assert not out.exists() and not out.with_suffix(".json").exists()
+    with pytest.raises(ConfigError, match=r"POV-Ray's 1e\+07 mm ray length.*--front-clearance between 0\.01 and"):
+        run_method("multi-ortho-views", load_scene(write_checker_plane(tmp_path, 6e6, 2.5e6)), la, DRAFT)
     with pytest.raises(ConfigError, match=f"under {MIN_FRONT_CLEARANCE:g} mm"):
         run_method("multi-ortho-views", load_scene(write_checker_plane(tmp_path, 1.0, 1.0)),
                    scaled_array("square", 1.0), RenderSettings(quality="draft", front_clearance=1e-3))
+
+
+def test_a_large_scale_ratio_is_checked_in_scene_units_and_its_advice_renders(tmp_path, monkeypatch):
+    """Issue 22: at 1e6 scene units per mm the default clearance (four panel widths, 57.6 mm)
+    is 5.8e7 scene units, past POV-Ray's 1e7 ray length.  Checked in mm it passed and the
+    image came out black, exit 0; checked in scene units it is refused, and the clearance
+    (or method) the refusal advises renders the analytic checker exactly."""
+    la, units = scaled_array("square", 1.0), 1e6
+    settings = replace(DRAFT, frame=tuple(DisplayFrame(units_per_mm=units).matrix().ravel()))
+    # 2 mm behind the screen: within the half of POV-Ray's ray length kept for the scene
+    scene = load_scene(write_checker_plane(tmp_path, 2 * units, 1.5 * units))
+    expected, clear = point_oracle(la, 2.0, 1.5, margin=1e-3 * 1.5)
+    with pytest.raises(ConfigError, match="scene units") as refused:
+        run_method("multi-ortho-views", scene, la, settings)
+    advised = float(re.search(r"between \S+ and (\S+) mm", str(refused.value)).group(1))
+    assert_matches(run_method("multi-ortho-views", scene, la, replace(settings, front_clearance=advised)).h3d,
+                   expected, clear)
+    # multi-ortho's view bank starts whole steps of f x views (9 mm) out, beyond reach here
+    with pytest.raises(ConfigError, match="--method multi-ortho-views") as refused:
+        run_method("multi-ortho", scene, la, settings)
+    advised = float(re.search(r"--front-clearance (\S+) ", str(refused.value)).group(1))
+    assert_matches(run_method("multi-ortho-views", scene, la, replace(settings, front_clearance=advised)).h3d,
+                   expected, clear)
+    # Negative control: the check in mm (one unit per mm) lets the default through, and it fails the oracle.
+    monkeypatch.setattr(methods, "frame_units", lambda frame: 1.0)
+    h3d = run_method("multi-ortho-views", scene, la, settings).h3d
+    with pytest.raises(AssertionError, match="clear pixels match"):
+        assert_matches(h3d, expected, clear)
 
 
 # -- index of refraction close to 1 (single-stage lenslets) -------------------------

@@ -9,7 +9,6 @@ centre ``c`` with direction ``(u, v, f)``, which meets ``z = z0`` at ``c + (u, v
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,6 +16,7 @@ import numpy as np
 
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import RenderSettings
+from povh3d.geometry.capture_bank import border_margin
 from povh3d.geometry.lens_array import LensArray
 from povh3d.geometry.rays import pixel_rays
 from povh3d.image.colour import decode
@@ -50,18 +50,9 @@ def expected_hits(lens_array: LensArray, z0: float) -> np.ndarray:
 
 
 def border_margin_px(lens_array: LensArray) -> np.ndarray:
-    """(H, W): distance of each pixel centre from its lens cell's border, in pixels (unrotated arrays)."""
-    c, _, inside = pixel_rays(lens_array)
-    X, Y = np.meshgrid(*lens_array.panel.pixel_centres())
-    ax, ay = np.abs(X - c[..., 0]), np.abs(Y - c[..., 1])
-    px, py = lens_array.pitch_x, lens_array.pitch_y
-    if lens_array.grid == "hex":
-        margin = np.minimum(px / 2 - ax, px / 2 - ax / 2 - math.sqrt(3) / 2 * ay)
-    elif lens_array.grid == "lenticular":
-        margin = px / 2 - ax
-    else:
-        margin = np.minimum(px / 2 - ax, py / 2 - ay)
-    return np.where(inside, margin / lens_array.panel.pitch_x, -np.inf)
+    """(H, W): distance of each pixel centre from its lens cell's border, in pixels: which pixels
+    count as clear of a border (a selection of pixels, not an oracle of the rays)."""
+    return border_margin(lens_array) / lens_array.panel.pitch_x
 
 
 def half_for(lens_array: LensArray, z0: float) -> float:
