@@ -43,9 +43,12 @@ def test_clock_follows_povray() -> None:
 
 
 @given(st.integers(0, 10**6), st.integers(1, 5000), st.floats(-1e6, 1e6), st.floats(-1e6, 1e6))
-def test_clock_ends_are_exact_and_monotone(first: int, count: int, a: float, b: float) -> None:
+def test_clock_ends_are_povrays_and_monotone(first: int, count: int, a: float, b: float) -> None:
+    # POV-Ray's own arithmetic (delta * (n - first) + start): exact at the first frame, within a
+    # few ulps at the last (where POV-Ray itself lands; it then rounds to single precision).
     frames = FrameRange(first, first + count, a, b)
-    assert frames.clock(first) == a and frames.clock(first + count) == b
+    assert frames.clock(first) == a
+    assert abs(frames.clock(first + count) - b) <= 4 * np.spacing(max(abs(a), abs(b), 1e-300))
     middle = frames.clock(first + count // 2)
     assert min(a, b) <= middle <= max(a, b)
 
