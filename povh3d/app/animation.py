@@ -98,9 +98,9 @@ class FrameRange:
             raise ConfigError(f"frame {n} is outside {self.first}:{self.last}")
         return povray_clock(n, self.first, self.last, self.clock_start, self.clock_end)
 
-    def sequence(self, n: int, stored: set[str]) -> ClockSequence:
+    def sequence(self, n: int, stored: dict[str, Any]) -> ClockSequence:
         """Frames ``n..last`` as the clock sequence the engine may render in few POV-Ray runs
-        (``stored``: the cache keys the request's runs stored so far)."""
+        (``stored``: the shots the request's runs rendered so far)."""
         return ClockSequence(self.first, self.last, float(self.clock_start), float(self.clock_end), n, stored)
 
 
@@ -177,7 +177,7 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
     report: dict[str, Any] = {"frames": [], "rendered": 0, "from_cache": 0, "copied": 0,
                               "scene_uses_clock": uses_clock, "video": None}
     scale = [1]  # camera frames per animation frame, learnt from the first render
-    stored: set[str] = set()  # cache keys stored by the clock sequences of this request
+    stored: dict[str, Any] = {}  # shots the clock sequences of this request rendered (ClockSequence.stored)
     shown = [0.0]  # the furthest progress reported: a clock sequence reports later frames early
     first: tuple[RenderedImage, Path] | None = None
     try:

@@ -9,6 +9,9 @@ is one POV-Ray run of those frames of the whole animation (``povray.job.ClockRun
 gives each frame the clock it gives it in the whole animation, bit for bit the
 ``+K`` of that frame's own still.  The runs are as few as the cores allow.
 
+Without the image cache (``--no-cache``) the later frames' images are held in
+memory until their frame takes them.
+
 Only a scene that reads ``clock`` alone qualifies: ``frame_number``,
 ``clock_delta`` and the rest differ between a frame rendered alone and inside
 a sequence.  A batch whose shots share runs (``shots_per_job > 1``, e.g. a
@@ -19,6 +22,7 @@ template reads ``frame_number`` as its shot index.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..errors import ConfigError
 
@@ -46,9 +50,10 @@ class ClockSequence:
     clock_start: float
     clock_end: float
     frame: int
-    #: Cache keys this request's sequence runs stored: a later frame finding them counts them
-    #: as rendered by this request, not as from the cache (shared by the frames' sequences).
-    stored: set[str] = field(default_factory=set, compare=False, repr=False)
+    #: Shots this request's sequence runs rendered for later frames, by cache key: None when stored
+    #: in the image cache, else the image itself (no cache: held until its frame takes it).  A
+    #: later frame counts them as rendered by this request (shared by the frames' sequences).
+    stored: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not 0 <= self.first <= self.frame <= self.last:

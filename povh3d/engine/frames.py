@@ -125,8 +125,11 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     keys = shot_keys(stats.povray_version, scene, batch, header, settings)
     images: list[np.ndarray | None] = [None] * len(keys)
     missing: list[int] = []
+    held = settings.sequence.stored if settings.sequence is not None else {}
     for index, key in enumerate(keys):
         hit = cache.load(key) if cache else None
+        if hit is None and held.get(key) is not None:  # rendered by an earlier frame's sequence, no cache
+            hit, held[key] = held[key], None  # taken: memory for one frame at a time
         if hit is not None:
             images[index] = hit
         else:
@@ -148,7 +151,8 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     later = _later_frames(stats.povray_version, scene, batch, header, settings, cache, keys, missing)
     runs = plan_runs(_lanes(settings.sequence, missing, later), cores) if later else []
     units = len(runs) if later else len(chunks)
-    processes = max(1, min(units or 1, settings.jobs or batch.processes or cores))
+    # A clock sequence's runs are independent: one per core (the method's own preference is per frame).
+    processes = max(1, min(units or 1, settings.jobs or (cores if later else batch.processes) or cores))
     threads = settings.threads or max(1, cores // processes)
     stats.jobs, stats.processes, stats.threads = units, processes, threads
 
@@ -189,8 +193,10 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
         index, key = target
         if index is None:
             if key not in settings.sequence.stored:
-                cache.store(key, image_path)
-                settings.sequence.stored.add(key)
+                if cache is not None:
+                    cache.store(key, image_path)
+                # In the cache the later frame finds it; without one it is held here for it.
+                settings.sequence.stored[key] = None if cache is not None else read_png(image_path)
             done += 1
             return
         images[index] = read_png(image_path)  # decoded whole: a complete PNG
@@ -254,7 +260,7 @@ def _later_frames(version: str, scene: Scene, batch: ShotBatch, header: dict[str
     (``engine.clock_runs``).  The keys are this frame's with the other frame's clock, so a later
     frame whose batch turns out different finds nothing and renders its own."""
     sequence = settings.sequence
-    if (sequence is None or cache is None or not sequence.later or settings.clock is None
+    if (sequence is None or not sequence.later or settings.clock is None
             or (batch.shots_per_job > 1 and len(batch.shots) > 1)
             or not scene.animation_words <= SEQUENCE_SAFE_WORDS):
         return {}
@@ -265,7 +271,8 @@ def _later_frames(version: str, scene: Scene, batch: ShotBatch, header: dict[str
         frame_keys = shot_keys(version, scene, batch, header, clocked)
         out[n] = {}
         for shot, key in enumerate(frame_keys):
-            if key not in seen and not cache.path(key).is_file():  # a damaged entry is re-rendered by its frame
+            # (a damaged cache entry is rendered again by its own frame)
+            if key not in seen and key not in sequence.stored and not (cache and cache.path(key).is_file()):
                 out[n][shot] = key
             seen.add(key)
     return out if any(out.values()) else {}
