@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.clock_runs import ClockSequence, povray_clock
+from ..engine.clock_runs import ClockSequence, SequenceLedger, povray_clock
 from ..engine.quality import Progress
 from ..errors import ConfigError, OutputError, PovrayError
 from ..image.io import read_png, write_sidecar
@@ -98,10 +98,10 @@ class FrameRange:
             raise ConfigError(f"frame {n} is outside {self.first}:{self.last}")
         return povray_clock(n, self.first, self.last, self.clock_start, self.clock_end)
 
-    def sequence(self, n: int, stored: dict[str, Any]) -> ClockSequence:
+    def sequence(self, n: int, ledger: SequenceLedger) -> ClockSequence:
         """Frames ``n..last`` as the clock sequence the engine may render in few POV-Ray runs
-        (``stored``: the shots the request's runs rendered so far)."""
-        return ClockSequence(self.first, self.last, float(self.clock_start), float(self.clock_end), n, stored)
+        (``ledger``: what the request's sequences share)."""
+        return ClockSequence(self.first, self.last, float(self.clock_start), float(self.clock_end), n, ledger)
 
 
 def parse_frames(text: str) -> tuple[int, int]:
@@ -177,7 +177,7 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
     report: dict[str, Any] = {"frames": [], "rendered": 0, "from_cache": 0, "copied": 0,
                               "scene_uses_clock": uses_clock, "video": None}
     scale = [1]  # camera frames per animation frame, learnt from the first render
-    stored: dict[str, Any] = {}  # shots the clock sequences of this request rendered (ClockSequence.stored)
+    ledger = SequenceLedger()  # what the clock sequences of this request share
     shown = [0.0]  # the furthest progress reported: a clock sequence reports later frames early
     first: tuple[RenderedImage, Path] | None = None
     try:
@@ -189,7 +189,7 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
                 try:
                     frame = render_image(frames.clock(n) if uses_clock else None,
                                          _frame_progress(progress, index, total, scale, shown),
-                                         sequence=frames.sequence(n, stored) if uses_clock else None)
+                                         sequence=frames.sequence(n, ledger) if uses_clock else None)
                 except PovrayError as exc:  # name the animation frame, not only POV-Ray's camera batch
                     raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {exc}", command=exc.command,
                                     returncode=exc.returncode, log_tail=exc.log_tail) from None

@@ -9,6 +9,10 @@ is one POV-Ray run of those frames of the whole animation (``povray.job.ClockRun
 gives each frame the clock it gives it in the whole animation, bit for bit the
 ``+K`` of that frame's own still.  The runs are as few as the cores allow.
 
+A run's ``--timeout`` is its frames' together.  When a run fails, the rest of
+the request goes frame by frame (``SequenceLedger.failed``): the frames already
+written are in the cache, and the error names the frame that fails.
+
 Without the image cache (``--no-cache``) the later frames' images are held in
 memory until their frame takes them.
 
@@ -40,6 +44,19 @@ def povray_clock(n: int, first: int, last: int, start: float, end: float) -> flo
     return delta * float(n - first) + float(start)
 
 
+@dataclass
+class SequenceLedger:
+    """What the sequences of one request share, from frame to frame.
+
+    ``stored``: the shots their runs rendered for later frames, by cache key: None when stored in
+    the image cache, else the image itself (no cache: held until its frame takes it); a later
+    frame counts them as rendered by this request.  ``failed``: a run failed, so the rest of the
+    request goes frame by frame and an error names the frame that fails."""
+
+    stored: dict[str, Any] = field(default_factory=dict)
+    failed: bool = False
+
+
 @dataclass(frozen=True)
 class ClockSequence:
     """An animation of frames ``first..last`` (clock ``clock_start..clock_end``) being rendered from
@@ -50,10 +67,11 @@ class ClockSequence:
     clock_start: float
     clock_end: float
     frame: int
-    #: Shots this request's sequence runs rendered for later frames, by cache key: None when stored
-    #: in the image cache, else the image itself (no cache: held until its frame takes it).  A
-    #: later frame counts them as rendered by this request (shared by the frames' sequences).
-    stored: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    ledger: SequenceLedger = field(default_factory=lambda: SequenceLedger(), compare=False, repr=False)
+
+    @property
+    def stored(self) -> dict[str, Any]:
+        return self.ledger.stored
 
     def __post_init__(self) -> None:
         if not 0 <= self.first <= self.frame <= self.last:

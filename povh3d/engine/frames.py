@@ -169,7 +169,10 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                                   scene_path=str(scene.path), add_assumed_gamma=add_gamma, header=header)
             name = f"{method} camera {shot + 1}, frames {numbers[0]}" + (f"-{numbers[-1]}" if len(numbers) > 1 else "")
             run = ClockRun(sequence.position(numbers[0]), sequence.total, sequence.clock_start, sequence.clock_end)
-            job = PovrayJob(name=name, script=script, frames=len(numbers), options=plain, clock_run=run, **common)
+            # --timeout is each frame's: a run of several frames gets theirs together.
+            timeout = None if settings.timeout is None else settings.timeout * len(numbers)
+            job = PovrayJob(name=name, script=script, frames=len(numbers), options=plain, clock_run=run,
+                            **{**common, "timeout": timeout})
             jobs.append(job)
             targets_of_job[id(job)] = [(shot, None) if n == sequence.frame else (None, later[n][shot])
                                        for n in numbers]
@@ -232,6 +235,12 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
         try:
             stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
         except PovrayError as exc:
+            if later and not isinstance(exc, PovrayTimeout):
+                # A frame of the sequence failed, maybe a later one: the rest of the request goes frame
+                # by frame (what finished is in the cache), so the error names the frame that fails.
+                settings.sequence.ledger.failed = True
+                return render_frames(scene, batch, replace(settings, sequence=None), method=method, header=header,
+                                     progress=progress)
             if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
                 raise
             raise PovrayError(past_scene_end(str(exc), scene.path.name, SCENE_FILE), command=exc.command,
@@ -260,7 +269,7 @@ def _later_frames(version: str, scene: Scene, batch: ShotBatch, header: dict[str
     (``engine.clock_runs``).  The keys are this frame's with the other frame's clock, so a later
     frame whose batch turns out different finds nothing and renders its own."""
     sequence = settings.sequence
-    if (sequence is None or not sequence.later or settings.clock is None
+    if (sequence is None or sequence.ledger.failed or not sequence.later or settings.clock is None
             or (batch.shots_per_job > 1 and len(batch.shots) > 1)
             or not scene.animation_words <= SEQUENCE_SAFE_WORDS):
         return {}
