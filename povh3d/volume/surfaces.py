@@ -114,15 +114,34 @@ def check_labels(volume: Volume, labels: list[int] | None) -> list[int]:
     return list(labels)
 
 
-def _crop(values: np.ndarray, labels: list[int]) -> tuple[tuple[int, int, int], np.ndarray]:
+def label_boxes(values: np.ndarray) -> dict[int, tuple[slice, ...]] | None:
+    """Each label's box of voxels, from one pass over the volume (``scipy.ndimage.find_objects``);
+    None for values that are not small non-negative integers."""
+    if not np.issubdtype(values.dtype, np.integer) or values.size == 0 or int(values.min()) < 0 \
+            or int(values.max()) > 1 << 16:
+        return None
+    from scipy.ndimage import find_objects
+
+    return {n + 1: box for n, box in enumerate(find_objects(values)) if box is not None}
+
+
+def _crop(values: np.ndarray, labels: list[int],
+          boxes: dict[int, tuple[slice, ...]] | None = None) -> tuple[tuple[int, int, int], np.ndarray]:
     """The box of voxels holding ``labels`` and one voxel round it (SurfaceNets then sees the same
-    boundaries: every other label is background to it anyway), and the index of its first voxel."""
-    inside = np.isin(values, labels, kind="table" if np.issubdtype(values.dtype, np.integer) else None)
-    start, stop = [], []
-    for axis in range(3):
-        hit = np.flatnonzero(inside.any(axis=tuple(a for a in range(3) if a != axis)))
-        start.append(max(int(hit[0]) - 1, 0))
-        stop.append(min(int(hit[-1]) + 2, values.shape[axis]))
+    boundaries: every other label is background to it anyway), and the index of its first voxel;
+    ``boxes``: each label's box (``label_boxes``), else found here."""
+    if boxes is not None:
+        lo = np.min([[b.start for b in boxes[v]] for v in labels], axis=0)
+        hi = np.max([[b.stop for b in boxes[v]] for v in labels], axis=0) - 1
+    else:
+        inside = np.isin(values, labels)
+        lo, hi = [], []
+        for axis in range(3):
+            hit = np.flatnonzero(inside.any(axis=tuple(a for a in range(3) if a != axis)))
+            lo.append(int(hit[0]))
+            hi.append(int(hit[-1]))
+    start = [max(int(a) - 1, 0) for a in lo]
+    stop = [min(int(b) + 2, n) for b, n in zip(hi, values.shape)]
     box = tuple(slice(a, b) for a, b in zip(start, stop))
     return tuple(start), values[box]  # type: ignore[return-value]
 
@@ -153,13 +172,14 @@ def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing
     labels = check_labels(volume, labels)
     opacity = _per_surface(opacity, len(labels))
     iterations = LABEL_SMOOTHING if smoothing is None else int(smoothing)
-    meshes = _label_meshes(volume, labels, iterations, tuple(step))
+    boxes = label_boxes(volume.values)
+    meshes = _label_meshes(volume, labels, iterations, tuple(step), boxes)
     if tuple(step) != (1, 1, 1):
         # A label thinner than a step can fall between the sampled voxels: those few labels are taken
         # again from their own voxels (a small box, a few triangles), never left out.
         thin = [label for label in labels if len(meshes[label][1]) < MIN_SAMPLED_FACES]
         if thin:
-            meshes.update(_label_meshes(volume, thin, iterations, (1, 1, 1)))
+            meshes.update(_label_meshes(volume, thin, iterations, (1, 1, 1), boxes))
     colours = palette(len(labels))
     out = []
     for n, label in enumerate(labels):
@@ -170,12 +190,12 @@ def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing
     return out
 
 
-def _label_meshes(volume: Volume, labels: list[int], iterations: int,
-                  step: tuple[int, int, int]) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+def _label_meshes(volume: Volume, labels: list[int], iterations: int, step: tuple[int, int, int],
+                  boxes: dict[int, tuple[slice, ...]] | None = None) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """label -> (vertices in LPS mm, outward faces): one SurfaceNets pass over every label at once."""
     from .read import vtk_quiet
 
-    start, values = _crop(volume.values, labels)  # a few organs of a whole body: far fewer voxels to visit
+    start, values = _crop(volume.values, labels, boxes)  # a few organs of a whole body: far fewer voxels to visit
     if step != (1, 1, 1):
         values, start = _sample(values, start, step)
     image = _image(volume, values, step)

@@ -157,3 +157,16 @@ def test_a_label_thinner_than_the_step_is_kept_from_its_own_voxels():
     assert area_and_volume(plate.vertices, plate.faces)[1] == pytest.approx((values == 5).sum(), rel=1e-6)
     # Negative control: the sampled voxels alone hold none of it.
     assert not (values[2::4, 2::4, 2::4] == 5).any()
+
+
+def test_label_boxes_crop_as_the_voxels_do():
+    # The boxes from one pass (find_objects) give the crop found by looking at the voxels themselves.
+    from povh3d.volume.surfaces import _crop, label_boxes
+
+    phantom = asymmetric_phantom()
+    boxes = label_boxes(phantom.values)
+    for labels in ([LABEL_LEFT], [LABEL_TOP, LABEL_LEFT], [LABEL_BODY, LABEL_LEFT, LABEL_TOP]):
+        start, box = _crop(phantom.values, labels, boxes)
+        start_here, box_here = _crop(phantom.values, labels)
+        assert start == start_here and np.array_equal(box, box_here)
+    assert label_boxes(phantom.values.astype(np.float32)) is None
