@@ -59,3 +59,11 @@ def whole_process_seconds(command: list[str], cwd: Path, env: dict[str, str]) ->
 def summary(times: list[float]) -> str:
     """``median s (min-max)``."""
     return f"{statistics.median(times):.2f} s ({min(times):.2f}-{max(times):.2f})"
+
+
+def publish(name: str, text: str, docs: bool) -> int:
+    """Print benchmark ``name``'s table and, with ``docs``, write it into docs/benchmarks.md; exit code 0."""
+    print(text)
+    if docs:
+        write_table(name, text)
+    return 0

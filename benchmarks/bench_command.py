@@ -23,7 +23,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import summary, table, whole_process_seconds, write_table  # noqa: E402
+from _common import publish, summary, table, whole_process_seconds  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO / "sample_models" / "sample.pov"
@@ -106,10 +106,7 @@ def main() -> int:
             print(rows[-1])
     text = table(f"Median (min-max) of {args.repeats} interleaved runs",
                  ["command", "whole process", "against", "ratio", "target"], rows, load_before)
-    print(text)
-    if not args.no_docs:
-        write_table("bench_command", text)
-    return 0
+    return publish("bench_command", text, docs=not args.no_docs)
 
 
 if __name__ == "__main__":

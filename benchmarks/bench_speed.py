@@ -32,7 +32,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import summary, table, whole_process_seconds, write_table  # noqa: E402
+from _common import publish, summary, table, whole_process_seconds  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO / "sample_models" / "sample.pov"
@@ -96,10 +96,7 @@ def main() -> int:
     who = "" if Path(args.povh3d_path).resolve() == REPO else f" (povh3d from {args.povh3d_path})"
     text = table(f"Median (min-max) of {args.repeats} interleaved runs{who}",
                  ["case", "povh3d, whole process", "reference", "ratio", "target"], rows, load_before)
-    print(text)
-    if not args.no_docs:
-        write_table("bench_speed", text)
-    return 0
+    return publish("bench_speed", text, docs=not args.no_docs)
 
 
 if __name__ == "__main__":
