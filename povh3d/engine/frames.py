@@ -273,6 +273,11 @@ def _later_frames(version: str, scene: Scene, batch: ShotBatch, header: dict[str
             or (batch.shots_per_job > 1 and len(batch.shots) > 1)
             or not scene.animation_words <= SEQUENCE_SAFE_WORDS):
         return {}
+    if sequence.stored and not any(key in sequence.stored for key in keys):
+        # An earlier frame's sequence planned other shots than this frame asks for: the batch changes
+        # with the clock (a scene camera that moves), so planning ahead only wastes runs.
+        sequence.ledger.failed = True
+        return {}
     seen = set(keys)
     out: dict[int, dict[int, str]] = {}
     for n in sequence.later:
