@@ -189,6 +189,7 @@ def per_frame_oracle(scene: Path, lens, frames: FrameRange, folder: Path, settin
     return images
 
 
+@pytest.mark.povray  # starts POV-Ray (the marker main registers for make test-fast)
 @pytest.mark.parametrize("method, quality", [("multi-ortho", "draft"), ("multi-ortho-views", "draft"),
                                              ("multi-ortho", "normal"), ("pinhole", "draft")])
 def test_clock_sequence_is_pixel_identical_to_frames_rendered_alone(tmp_path: Path, method: str,
@@ -216,6 +217,7 @@ def test_clock_sequence_is_pixel_identical_to_frames_rendered_alone(tmp_path: Pa
         assert timings[0]["povray_jobs"] >= 2 and all(t["povray_jobs"] == 0 for t in timings[1:])
 
 
+@pytest.mark.povray  # starts POV-Ray (the marker main registers for make test-fast)
 def test_clock_sequence_needs_a_scene_reading_only_the_clock(tmp_path: Path) -> None:
     # frame_number differs between a frame alone and inside a sequence: such a scene runs per frame.
     scene = write_moving_scene(tmp_path, extra="#declare Unused = frame_number;")
@@ -225,6 +227,7 @@ def test_clock_sequence_needs_a_scene_reading_only_the_clock(tmp_path: Path) -> 
     assert all(t["povray_jobs"] == 1 for t in timings)
 
 
+@pytest.mark.povray  # starts POV-Ray (the marker main registers for make test-fast)
 def test_clock_sequence_without_cache_and_resume(tmp_path: Path) -> None:
     scene = write_moving_scene(tmp_path)
     frames = FrameRange(0, 5)
