@@ -56,6 +56,7 @@ test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py
+	$(BIN)/python benchmarks/bench_speed.py
 	$(BIN)/python benchmarks/bench_render.py
 	$(BIN)/python benchmarks/bench_quality.py
 	$(BIN)/python benchmarks/bench_mapping.py

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import os
 import re
+import statistics
+import subprocess
+import time
 from pathlib import Path
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
@@ -44,3 +47,23 @@ def write_table(name: str, text: str) -> None:
     if pattern.search(docs) is None:
         raise SystemExit(f"{DOCS} has no {begin} ... {end} markers")
     DOCS.write_text(pattern.sub(lambda m: f"{begin}\n{text}\n{end}", docs), encoding="utf-8")
+
+
+def whole_process_seconds(command: list[str], cwd: Path, env: dict[str, str]) -> float:
+    """Wall seconds of ``command`` from start to exit, its output discarded."""
+    start = time.perf_counter()
+    subprocess.run(command, cwd=cwd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    return time.perf_counter() - start
+
+
+def summary(times: list[float]) -> str:
+    """``median s (min-max)``."""
+    return f"{statistics.median(times):.2f} s ({min(times):.2f}-{max(times):.2f})"
+
+
+def publish(name: str, text: str, docs: bool) -> int:
+    """Print benchmark ``name``'s table and, with ``docs``, write it into docs/benchmarks.md; exit code 0."""
+    print(text)
+    if docs:
+        write_table(name, text)
+    return 0

@@ -18,14 +18,12 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import table, write_table  # noqa: E402
+from _common import publish, summary, table, whole_process_seconds  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO / "sample_models" / "sample.pov"
@@ -67,14 +65,7 @@ ENV = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 
 
 def seconds(command: list[str], cwd: Path) -> float:
-    start = time.perf_counter()
-    subprocess.run(command, cwd=cwd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                   env=ENV)
-    return time.perf_counter() - start
-
-
-def summary(times: list[float]) -> str:
-    return f"{statistics.median(times):.2f} s ({min(times):.2f}-{max(times):.2f})"
+    return whole_process_seconds(command, cwd, ENV)
 
 
 def main() -> int:
@@ -115,10 +106,7 @@ def main() -> int:
             print(rows[-1])
     text = table(f"Median (min-max) of {args.repeats} interleaved runs",
                  ["command", "whole process", "against", "ratio", "target"], rows, load_before)
-    print(text)
-    if not args.no_docs:
-        write_table("bench_command", text)
-    return 0
+    return publish("bench_command", text, docs=not args.no_docs)
 
 
 if __name__ == "__main__":

@@ -6,7 +6,9 @@ cyclic: ``--frames A:B`` is ``+KFI A +KFF B`` (frames A..B, both included) and
 
     clock(n) = KI + (KF - KI) * (n - A) / (B - A)       (KI when A == B)
 
-computed from ``n`` itself, never by adding steps.  Frame ``n`` is written as
+computed from ``n`` itself, never by adding steps, in POV-Ray's own arithmetic
+(``engine.clock_runs.povray_clock``), so a frame's clock is the one POV-Ray's
+2D animation of the same range gives it.  Frame ``n`` is written as
 ``OUT_nnnn.png`` (at least four digits) with its sidecar.
 
 Every frame is rendered by the same function as a still (``app.render``), so a
@@ -15,6 +17,13 @@ own frame machinery is taken: povh3d renders a batch of cameras as the frames of
 one POV-Ray run (the shots of an ``engine.batch.ShotBatch``), so inside a scene
 ``frame_number`` and ``clock_delta`` belong to that batch.  A scene animates
 with ``clock``, which povh3d sets to the same value in every run of a frame.
+
+A scene that reads only ``clock`` is rendered as POV-Ray clock sequences: when
+frame ``n`` is rendered, the engine renders the same shots of frames ``n..last``
+in as few POV-Ray runs as the cores allow (``engine.clock_runs``), storing each
+image in the cache as POV-Ray writes it; the later frames then come from the
+cache.  A run stopped part way keeps every finished image, so a second run
+renders only the missing ones.
 
 Frames whose scene does not change are not rendered again: a scene whose files
 (and the POV-Ray include files they name) never mention the clock looks the same
@@ -37,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from ..engine.clock_runs import ClockSequence, SequenceLedger, povray_clock
 from ..engine.quality import Progress
 from ..errors import ConfigError, OutputError, PovrayError
 from ..image.io import read_png, write_sidecar
@@ -83,15 +93,15 @@ class FrameRange:
         return self.last - self.first + 1
 
     def clock(self, n: int) -> float:
-        """POV-Ray's clock at frame `n` (non-cyclic animation)."""
+        """POV-Ray's clock at frame `n` (non-cyclic animation), computed as POV-Ray does."""
         if not self.first <= n <= self.last:
             raise ConfigError(f"frame {n} is outside {self.first}:{self.last}")
-        if self.last == self.first:
-            return float(self.clock_start)
-        a, b = float(self.clock_start), float(self.clock_end)
-        t = (n - self.first) / (self.last - self.first)
-        # From the nearer end: exact at both ends and constant when a == b.
-        return a + t * (b - a) if t <= 0.5 else b - (1 - t) * (b - a)
+        return povray_clock(n, self.first, self.last, self.clock_start, self.clock_end)
+
+    def sequence(self, n: int, ledger: SequenceLedger) -> ClockSequence:
+        """Frames ``n..last`` as the clock sequence the engine may render in few POV-Ray runs
+        (``ledger``: what the request's sequences share)."""
+        return ClockSequence(self.first, self.last, float(self.clock_start), float(self.clock_end), n, ledger)
 
 
 def parse_frames(text: str) -> tuple[int, int]:
@@ -132,7 +142,7 @@ class RenderedImage:
     from_cache: bool = False            # every shot came from the cache
 
 
-ImageRenderer = Callable[[float | None, Progress | None], RenderedImage]
+ImageRenderer = Callable[..., RenderedImage]  # (clock, progress, sequence=ClockSequence or None)
 
 
 def render_sequence(frames: FrameRange, output: Path, render_image: ImageRenderer, *, uses_clock: bool,
@@ -167,6 +177,8 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
     report: dict[str, Any] = {"frames": [], "rendered": 0, "from_cache": 0, "copied": 0,
                               "scene_uses_clock": uses_clock, "video": None}
     scale = [1]  # camera frames per animation frame, learnt from the first render
+    ledger = SequenceLedger()  # what the clock sequences of this request share
+    shown = [0.0]  # the furthest progress reported: a clock sequence reports later frames early
     first: tuple[RenderedImage, Path] | None = None
     try:
         for index, n in enumerate(frames.numbers):
@@ -176,7 +188,8 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
             if uses_clock or first is None:
                 try:
                     frame = render_image(frames.clock(n) if uses_clock else None,
-                                         _frame_progress(progress, index, total, scale))
+                                         _frame_progress(progress, index, total, scale, shown),
+                                         sequence=frames.sequence(n, ledger) if uses_clock else None)
                 except PovrayError as exc:  # name the animation frame, not only POV-Ray's camera batch
                     raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {exc}", command=exc.command,
                                     returncode=exc.returncode, log_tail=exc.log_tail) from None
@@ -189,7 +202,8 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
                 write_sidecar(staged, {**first[0].record, "animation": info})
                 report["copied"] += 1
             if progress is not None:
-                progress((index + 1) * scale[0], total * scale[0])
+                shown[0] = max(shown[0], (index + 1) * scale[0])
+                progress(shown[0], total * scale[0])
         finals = [frame_path(output, n, digits) for n in frames.numbers]
         for n, final in zip(frames.numbers, finals):
             staged = frame_path(staging / output.name, n, digits)
@@ -206,13 +220,16 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
     return report
 
 
-def _frame_progress(progress: Progress | None, index: int, total: int, scale: list[int]) -> Progress | None:
-    """Progress of frame `index` as a share of the whole animation (in camera frames)."""
+def _frame_progress(progress: Progress | None, index: int, total: int, scale: list[int],
+                    shown: list[float]) -> Progress | None:
+    """Progress of frame `index` as a share of the whole animation (in camera frames); a clock
+    sequence reports more than the frame's own shots (the later frames' as well)."""
     if progress is None:
         return None
 
-    def update(done: int, per_frame: int) -> None:
+    def update(done: float, per_frame: int) -> None:
         scale[0] = max(1, per_frame)
-        progress(index * scale[0] + done, total * scale[0])
+        shown[0] = max(shown[0], index * scale[0] + done)
+        progress(shown[0], total * scale[0])
 
     return update

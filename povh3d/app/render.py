@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..engine.methods import run_method
+from ..engine.clock_runs import ClockSequence
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..errors import ConfigError, warn
 from ..system import available_memory
@@ -158,12 +159,13 @@ def _resolve_quality(request: RenderRequest, scene: Scene,
 
 
 def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
-                 progress: Progress | None = None, *, auto: AutoChoice | None = None,
+                 progress: Progress | None = None, *, sequence: ClockSequence | None = None, auto: AutoChoice | None = None,
                  model: dict[str, Any] | None = None, display_frame: dict[str, Any] | None = None) -> RenderedImage:
-    """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default)."""
+    """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default); ``sequence``:
+    the animation frames from this one to the last, which the engine may render alongside it."""
     array = request.render_array
     start = time.perf_counter()
-    result = run_method(request.method, scene, array, replace(settings, clock=clock), progress,
+    result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence), progress,
                         crop=request.crop, **request.method_options)
     seconds = time.perf_counter() - start
     h3d = result.h3d

@@ -35,6 +35,9 @@ from .request import VolumeOptions
 from .stage import load_manifest, prepare_stage, store_manifest, write_stage
 
 IDENT = "Povh3d_Volume"
+#: Labels are extracted from voxels at most this share of a lens across (``surfaces.voxel_step``):
+#: the display resolves a lens, so finer voxels only feed triangles the decimation removes.
+LABEL_DETAIL = 1 / 5
 #: At most this many distinct integer values make a volume a label map when nothing says what to draw.
 MAX_AUTO_LABELS = 255
 
@@ -127,6 +130,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     record["seconds"] = manifest["seconds"]
     record["silhouette_error"] = manifest["silhouette_error"]
     record["specks_left_out"] = manifest.get("specks_left_out", 0)
+    record["voxel_step"] = manifest.get("voxel_step", [1, 1, 1])
     stage = write_stage(include.parent, model_stage_text(include.name, IDENT, placement, lens_array,
                                                          model=volume.name))
     return stage, record
@@ -138,7 +142,8 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
     import time
 
     key = content_key("volume-surfaces", __version__, digest, kind, options.labels, options.iso,
-                      options.opacity, options.smoothing, np.round(matrix, 12).tolist(), budget, round(speck, 9))
+                      options.opacity, options.smoothing, np.round(matrix, 12).tolist(), budget, round(speck, 9),
+                      LABEL_DETAIL)
     folder = cache.entry_path(root, "volumes", key, "")
     include = folder / "surfaces.inc"
     manifest = load_manifest(folder, key, ("surfaces",))
@@ -147,12 +152,14 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
     folder = cache.cache_folder(folder, "volume")
     include = folder / "surfaces.inc"
     start = time.perf_counter()
-    from ..volume.surfaces import iso_surfaces, label_surfaces
+    from ..volume.surfaces import iso_surfaces, label_surfaces, voxel_step
 
     smoothing, opacity = options.smoothing, list(options.opacity) if options.opacity else None
+    step = (1, 1, 1)
     if kind == "labels":
         labels = None if options.labels in (None, "all") else list(options.labels)
-        surfaces = label_surfaces(volume, labels, smoothing=smoothing, opacity=opacity)
+        step = voxel_step(volume.spacing, LABEL_DETAIL * speck)
+        surfaces = label_surfaces(volume, labels, smoothing=smoothing, opacity=opacity, step=step)
     else:
         surfaces = iso_surfaces(volume, list(options.iso), smoothing=smoothing, opacity=opacity)
     extracted = time.perf_counter() - start
@@ -164,7 +171,7 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
     manifest = {"surfaces": rows, "triangles": sum(r["triangles"] for r in rows),
                 "seconds": {"extract": round(extracted, 4), "decimate": stats["decimate_seconds"],
                             "write": stats["write_seconds"]}, "silhouette_error": stats["silhouette_error"],
-                "specks_left_out": stats["specks_left_out"]}
+                "specks_left_out": stats["specks_left_out"], "voxel_step": list(step)}
     store_manifest(folder, key, manifest)
     return include, {**manifest, "from_cache": False}
 

@@ -163,6 +163,8 @@ class RenderSettings:
     front_clearance_reason : str   why the limit, for the sidecar
     clock : float or None       POV-Ray's ``clock`` for every run (None: POV-Ray's default, 0);
                                 set only for scenes that read it (see animation.py)
+    sequence : ClockSequence or None   the animation frames from ``clock``'s on, which the engine
+                                may render in the same POV-Ray runs (``engine.clock_runs``)
     scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
     max_error_db : float or None   with quality 'auto': the lowest PSNR against the reference to accept
     frame : tuple of 12 floats or None   the display frame's POV-Ray ``matrix`` (display mm -> scene
@@ -182,6 +184,7 @@ class RenderSettings:
     front_clearance_limit: float | None = None
     front_clearance_reason: str = ""
     clock: float | None = None
+    sequence: Any = None
     scheduler: str | None = None
     max_error_db: float | None = None
     frame: tuple[float, ...] | None = None

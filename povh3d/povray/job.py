@@ -21,6 +21,17 @@ _FRAME_NAME = re.compile(rf"{OUTPUT_STEM}(\d+)\.png")
 
 
 @dataclass(frozen=True)
+class ClockRun:
+    """Where a job sits in a POV-Ray animation of frames ``1..total`` whose clock runs
+    ``clock_start..clock_end``: its first frame's number (``+SF``)."""
+
+    first: int
+    total: int
+    clock_start: float
+    clock_end: float
+
+
+@dataclass(frozen=True)
 class PovrayJob:
     """One POV-Ray run: a scene, its size and switches.
 
@@ -34,6 +45,10 @@ class PovrayJob:
         Image size, pixels.
     frames : int
         Above 1, an animation: ``frame_number`` runs 1..frames, one image each.
+    clock_run : ClockRun or None
+        The job is frames ``first..first + frames - 1`` of a longer POV-Ray animation
+        (``+KFI1 +KFF total +KI +KF``, rendered as the subset ``+SF/+EF``), so each
+        frame's ``clock`` is the value POV-Ray gives it in the whole animation.
     include_dirs : tuple of str
         Library folders (``+L``), the scene's own folder first; POV-Ray may
         read anything below them.  Relative paths are taken from the caller's
@@ -75,6 +90,7 @@ class PovrayJob:
     end_row: int | None = None
     read_files: tuple[str, ...] | None = None
     links: tuple[tuple[str, str], ...] = ()
+    clock_run: ClockRun | None = None
 
     def __post_init__(self) -> None:
         if self.read_files is not None:
@@ -104,6 +120,15 @@ class PovrayJob:
         if self.timeout is not None and not self.timeout > 0:
             self._reject("timeout", "must be positive seconds or None", self.timeout)
         self._check_rows()
+        run = self.clock_run
+        if run is not None and not (1 <= run.first and run.first + self.frames - 1 <= run.total):
+            self._reject("clock_run", f"must hold its {self.frames} frames within 1..total", run)
+
+    @property
+    def frame_numbers(self) -> range:
+        """POV-Ray's numbers of the job's frames (1..frames, or a clock run's subset)."""
+        first = 1 if self.clock_run is None else self.clock_run.first
+        return range(first, first + self.frames)
 
     @property
     def rows(self) -> tuple[int, int] | None:
@@ -175,7 +200,13 @@ def build_command(job: PovrayJob, binary: str) -> list[str]:
     command += [f"+L{_quote(os.path.abspath(folder))}" for folder in job.include_dirs]
     if job.threads is not None:
         command.append(f"+WT{job.threads}")
-    if job.frames > 1:
+    run = job.clock_run
+    if run is not None:
+        # POV-Ray's own clock for frames first..last of the whole animation: the same
+        # value, bit for bit, as a still rendered with +K at that frame's clock.
+        command += ["+KFI1", f"+KFF{run.total}", f"+KI{run.clock_start!r}", f"+KF{run.clock_end!r}",
+                    f"+SF{run.first}", f"+EF{run.first + job.frames - 1}"]
+    elif job.frames > 1:
         command += ["+KFI1", f"+KFF{job.frames}"]
     if job.rows is not None:
         # POV-Ray reads a row of 1 or less as a fraction of the height (+ER1
@@ -216,29 +247,32 @@ def _quote(path: str) -> str:
                       f"quote characters: {path!r}.")
 
 
-def collect_images(folder: Path, frames: int) -> tuple[Path, ...] | None:
+def collect_images(folder: Path, job: PovrayJob) -> tuple[Path, ...] | None:
     """The output images in frame order, or None unless all are there."""
-    if frames == 1:
+    if job.frames == 1 and job.clock_run is None:
         path = folder / f"{OUTPUT_STEM}.png"
         return (path,) if path.is_file() else None
     numbered = {int(match[1]): path for path in folder.glob(f"{OUTPUT_STEM}*.png")
                 if (match := _FRAME_NAME.fullmatch(path.name))}
-    if sorted(numbered) != list(range(1, frames + 1)):
+    if sorted(numbered) != list(job.frame_numbers):
         return None
-    return tuple(numbered[number] for number in range(1, frames + 1))
+    return tuple(numbered[number] for number in job.frame_numbers)
 
 
-def frame_image(folder: Path, frames: int, number: int) -> Path:
-    """Where POV-Ray writes frame `number` (1-based) of a job of `frames` frames."""
-    if frames == 1:
+def frame_image(folder: Path, job: PovrayJob, number: int) -> Path:
+    """Where POV-Ray writes frame `number` (1-based, of the job's own frames) of `job`."""
+    if job.frames == 1 and job.clock_run is None:
         return folder / f"{OUTPUT_STEM}.png"
-    return folder / f"{OUTPUT_STEM}{number:0{len(str(frames))}d}.png"
+    # POV-Ray pads the number to the width of the animation's last one.
+    total = job.frames if job.clock_run is None else job.clock_run.total
+    return folder / f"{OUTPUT_STEM}{job.frame_numbers[number - 1]:0{len(str(total))}d}.png"
 
 
 def expected_images(job: PovrayJob) -> str:
-    if job.frames == 1:
+    if job.frames == 1 and job.clock_run is None:
         return f"{OUTPUT_STEM}.png"
-    return f"the {job.frames} frames {OUTPUT_STEM}1.png..{OUTPUT_STEM}{job.frames}.png"
+    first, last = frame_image(Path(), job, 1), frame_image(Path(), job, job.frames)
+    return f"the {job.frames} frames {first}..{last}"
 
 
 _LITERAL = re.compile(r'"([^"\n]*[^\x00-\x7f][^"\n]*)"')

@@ -208,8 +208,8 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
         with open(folder / LOG_FILE, "wb") as log, sandbox.confinement(binary, _inputs(run), folder, shared_libraries) as fd, \
                 _deferred_interrupt():
             process = _spawn(command, folder, env, log, fd)
-            watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job.frames),
-                             functools.partial(frame_image, folder, job.frames))
+            watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job),
+                             functools.partial(frame_image, folder, job))
             running.append(_Child(index, job, folder, command, process, time.monotonic(), watch))
             registered = True
     except BaseException:
@@ -328,7 +328,7 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
     try:
         seconds = (child.ended or time.monotonic()) - child.started
         log = child.log
-        images = collect_images(child.folder, child.job.frames)
+        images = collect_images(child.folder, child.job)
         if (child.process.returncode != 0 and not child.watch.early) or images is None:
             raise _failure(child, log)
         if on_result is not None:

@@ -69,6 +69,8 @@ class Scene:
     sets_assumed_gamma : bool
     features : Features       found in its sources and the POV-Ray include files they name
     uses_clock : bool         whether any of those sources reads the animation clock
+    animation_words : frozenset[str]   which of the animation identifiers they read (``clock``,
+                              ``frame_number`` ...)
     computed_names : bool     whether the scene's own sources read a file through a name
                               computed at parse time (not in ``files`` nor the digest)
     lit : bool                whether its sources mention a light_source, emission or radiosity
@@ -86,6 +88,7 @@ class Scene:
     computed_names: bool = False
     lit: bool = True
     ascii_names: tuple[tuple[str, Path], ...] = ()
+    animation_words: frozenset[str] = frozenset()
 
     def include_text(self, name: str) -> str | None:
         """The text of the file ``#include "name"`` reads (the scene's folders, then POV-Ray's), or None."""
@@ -218,7 +221,8 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         h.update(b"\0")
     return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
                  features_of_words(sources), any(_CLOCK_WORDS & w for w in sources), computed,
-                 any(_LIGHT_WORDS & w for w in sources), _ascii_links(named))
+                 any(_LIGHT_WORDS & w for w in sources), _ascii_links(named),
+                 frozenset().union(*(_CLOCK_WORDS & w for w in sources)))
 
 
 def _computed_name(text: str, words: frozenset[str]) -> bool:

@@ -27,6 +27,9 @@ from .grid import Volume
 
 #: SurfaceNets smoothing iterations for labels when none are asked for (PyVista's default).
 LABEL_SMOOTHING = 16
+#: A label with fewer faces than this from the sampled voxels is extracted from its own voxels
+#: (a closed surface round one voxel has 6 quads, 12 triangles).
+MIN_SAMPLED_FACES = 48
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,20 +56,21 @@ class Surface:
     iso: float | None = None
 
 
-def _image(volume: Volume, values: np.ndarray) -> Any:
+def _image(volume: Volume, values: np.ndarray, step: tuple[int, int, int] = (1, 1, 1)) -> Any:
     import pyvista
 
     if min(volume.shape) < 2:
         raise InputError(f"{volume.name} is {' x '.join(map(str, volume.shape))} voxels: a surface needs at least two "
                          "voxels along every axis (a single slice has no inside)")
 
-    image = pyvista.ImageData(dimensions=values.shape, spacing=volume.spacing)
+    spacing = tuple(float(a) * k for a, k in zip(volume.spacing, step))
+    image = pyvista.ImageData(dimensions=values.shape, spacing=spacing)
     image.point_data["values"] = np.ascontiguousarray(values).ravel(order="F")
     return image
 
 
 def _to_world(volume: Volume, points: np.ndarray, faces: np.ndarray,
-              start: tuple[int, int, int] = (0, 0, 0)) -> tuple[np.ndarray, np.ndarray]:
+              start: tuple[float, float, float] = (0, 0, 0)) -> tuple[np.ndarray, np.ndarray]:
     """Index-frame mm (spacing applied; ``start``: the voxel index of a cropped image's first voxel) -> LPS
     world; a mirroring direction matrix flips the winding back."""
     d = np.asarray(volume.direction, dtype=np.float64)
@@ -110,47 +114,104 @@ def check_labels(volume: Volume, labels: list[int] | None) -> list[int]:
     return list(labels)
 
 
-def _crop(values: np.ndarray, labels: list[int]) -> tuple[tuple[int, int, int], np.ndarray]:
+def label_boxes(values: np.ndarray) -> dict[int, tuple[slice, ...]] | None:
+    """Each label's box of voxels, from one pass over the volume (``scipy.ndimage.find_objects``);
+    None for values that are not small non-negative integers."""
+    if not np.issubdtype(values.dtype, np.integer) or values.size == 0 or int(values.min()) < 0 \
+            or int(values.max()) > 1 << 16:
+        return None
+    from scipy.ndimage import find_objects
+
+    return {n + 1: box for n, box in enumerate(find_objects(values)) if box is not None}
+
+
+def _crop(values: np.ndarray, labels: list[int],
+          boxes: dict[int, tuple[slice, ...]] | None = None) -> tuple[tuple[int, int, int], np.ndarray]:
     """The box of voxels holding ``labels`` and one voxel round it (SurfaceNets then sees the same
-    boundaries: every other label is background to it anyway), and the index of its first voxel."""
-    inside = np.isin(values, labels)
-    start, stop = [], []
-    for axis in range(3):
-        hit = np.flatnonzero(inside.any(axis=tuple(a for a in range(3) if a != axis)))
-        start.append(max(int(hit[0]) - 1, 0))
-        stop.append(min(int(hit[-1]) + 2, values.shape[axis]))
+    boundaries: every other label is background to it anyway), and the index of its first voxel;
+    ``boxes``: each label's box (``label_boxes``), else found here."""
+    if boxes is not None:
+        lo = np.min([[b.start for b in boxes[v]] for v in labels], axis=0)
+        hi = np.max([[b.stop for b in boxes[v]] for v in labels], axis=0) - 1
+    else:
+        inside = np.isin(values, labels)
+        lo, hi = [], []
+        for axis in range(3):
+            hit = np.flatnonzero(inside.any(axis=tuple(a for a in range(3) if a != axis)))
+            lo.append(int(hit[0]))
+            hi.append(int(hit[-1]))
+    start = [max(int(a) - 1, 0) for a in lo]
+    stop = [min(int(b) + 2, n) for b, n in zip(hi, values.shape)]
     box = tuple(slice(a, b) for a, b in zip(start, stop))
     return tuple(start), values[box]  # type: ignore[return-value]
 
 
+def voxel_step(spacing: tuple[float, float, float], detail: float) -> tuple[int, int, int]:
+    """Every how many voxels along each axis to sample a label map so its voxels stay under ``detail``
+    mm (at least 1: the volume's own voxels)."""
+    return tuple(max(1, int(detail // float(a))) if detail > 0 else 1 for a in spacing)  # type: ignore[return-value]
+
+
+def _sample(values: np.ndarray, start: tuple[int, int, int], step: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """The voxels at the centre of every ``step`` block of the whole volume (``values`` is its box from
+    voxel ``start``), with one background voxel round them (so a label at the box's edge still closes),
+    and the volume index of the first one."""
+    offset = np.array([(k // 2 - a) % k for a, k in zip(start, step)])
+    sampled = values[tuple(slice(o, None, k) for o, k in zip(offset, step))]
+    return np.pad(sampled, 1), np.asarray(start) + offset - np.array(step)
+
+
 def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing: int | None = None,
-                   opacity: list[float] | None = None) -> list[Surface]:
+                   opacity: list[float] | None = None, step: tuple[int, int, int] = (1, 1, 1)) -> list[Surface]:
     """One closed surface per label (``None``: every label present), coloured from the label table
-    or the palette; ``smoothing`` iterations (0: the voxels' staircase)."""
+    or the palette; ``smoothing`` iterations (0: the voxels' staircase).
+
+    ``step``: sample the label map every so many voxels along each axis first (``voxel_step``):
+    a display that resolves a lens, far coarser than the voxels, is drawn from far fewer
+    triangles, and SurfaceNets and the decimation then visit that many fewer."""
     labels = check_labels(volume, labels)
     opacity = _per_surface(opacity, len(labels))
     iterations = LABEL_SMOOTHING if smoothing is None else int(smoothing)
+    boxes = label_boxes(volume.values)
+    meshes = _label_meshes(volume, labels, iterations, tuple(step), boxes)
+    if tuple(step) != (1, 1, 1):
+        # A label thinner than a step can fall between the sampled voxels: those few labels are taken
+        # again from their own voxels (a small box, a few triangles), never left out.
+        thin = [label for label in labels if len(meshes[label][1]) < MIN_SAMPLED_FACES]
+        if thin:
+            meshes.update(_label_meshes(volume, thin, iterations, (1, 1, 1), boxes))
+    colours = palette(len(labels))
+    out = []
+    for n, label in enumerate(labels):
+        points, own = meshes[label]
+        name = volume.label_names.get(label, f"label {label}")
+        colour = volume.label_colours.get(label, colours[n])
+        out.append(Surface(name, points, own, colour, opacity[n], label=label))
+    return out
+
+
+def _label_meshes(volume: Volume, labels: list[int], iterations: int, step: tuple[int, int, int],
+                  boxes: dict[int, tuple[slice, ...]] | None = None) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """label -> (vertices in LPS mm, outward faces): one SurfaceNets pass over every label at once."""
     from .read import vtk_quiet
 
-    start, values = _crop(volume.values, labels)  # a few organs of a whole body: far fewer voxels to visit
-    image = _image(volume, values)
+    start, values = _crop(volume.values, labels, boxes)  # a few organs of a whole body: far fewer voxels to visit
+    if step != (1, 1, 1):
+        values, start = _sample(values, start, step)
+    image = _image(volume, values, step)
     with vtk_quiet():
         mesh = image.contour_labels("all", select_inputs=labels, output_mesh_type="triangles",
                                     smoothing=iterations > 0, smoothing_iterations=max(iterations, 1), scalars="values")
     faces = np.asarray(mesh.regular_faces, dtype=np.int64) if mesh.n_cells else np.zeros((0, 3), np.int64)
     pair = np.asarray(mesh.cell_data["boundary_labels"]) if mesh.n_cells else np.zeros((0, 2))
-    colours = palette(len(labels))
-    out = []
-    for n, label in enumerate(labels):
+    out = {}
+    for label in labels:
         mine = (pair == label).any(axis=1)
         own = faces[mine].copy()
         inward = pair[mine][:, 1] == label  # the face points out of the other label: turn it round
         own[inward] = own[inward][:, [0, 2, 1]]
         points, own = _compact(np.asarray(mesh.points), own)
-        points, own = _to_world(volume, points, own, start)
-        name = volume.label_names.get(label, f"label {label}")
-        colour = volume.label_colours.get(label, colours[n])
-        out.append(Surface(name, points, own, colour, opacity[n], label=label))
+        out[label] = _to_world(volume, points, own, tuple(start))
     return out
 
 

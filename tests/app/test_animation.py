@@ -41,9 +41,12 @@ def test_clock_follows_povray() -> None:
 
 
 @given(st.integers(0, 10**6), st.integers(1, 5000), st.floats(-1e6, 1e6), st.floats(-1e6, 1e6))
-def test_clock_ends_are_exact_and_monotone(first: int, count: int, a: float, b: float) -> None:
+def test_clock_ends_are_povrays_and_monotone(first: int, count: int, a: float, b: float) -> None:
+    # POV-Ray's own arithmetic (delta * (n - first) + start): exact at the first frame, within a
+    # few ulps at the last (where POV-Ray itself lands; it then rounds to single precision).
     frames = FrameRange(first, first + count, a, b)
-    assert frames.clock(first) == a and frames.clock(first + count) == b
+    assert frames.clock(first) == a
+    assert abs(frames.clock(first + count) - b) <= 4 * np.spacing(max(abs(a), abs(b), 1e-300))
     middle = frames.clock(first + count // 2)
     assert min(a, b) <= middle <= max(a, b)
 
@@ -162,3 +165,85 @@ def test_cli_bad_animation_input(tmp_path: Path, argv: list[str], message: str, 
     assert result.code == 2
     assert message in result.err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.pov"]  # nothing written
+
+
+# -- clock sequences (engine.clock_runs) -------------------------------------------
+
+def write_moving_scene(folder: Path, name: str = "moving.pov", extra: str = "") -> Path:
+    """A lit ball crossing a checker as the clock runs: every frame differs."""
+    path = folder / name
+    path.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n"
+                    "light_source { <-20, 30, -40> rgb 1 }\n"
+                    "plane { z, 0.4 pigment { checker rgb 0.8 rgb <0.2, 0.3, 0.6> scale 0.1 } }\n"
+                    f"sphere {{ <-0.3 + 0.6 * clock, 0, -0.1>, 0.15 pigment {{ rgb <0.9, 0.2, 0.1> }} }}\n{extra}\n")
+    return path
+
+
+def per_frame_oracle(scene: Path, lens, frames: FrameRange, folder: Path, settings: RenderSettings,
+                     method: str) -> list[np.ndarray]:
+    """Each frame rendered alone as a one-frame animation at that frame's clock (+K, no sequence)."""
+    images = []
+    for n in frames.numbers:
+        c = frames.clock(n)
+        out = folder / f"alone{n}.png"
+        render_animation(scene, lens, out, FrameRange(0, 0, c, c), settings=settings, method=method)
+        images.append(read_png(frame_path(out, 0)))
+    return images
+
+
+@pytest.mark.povray  # starts POV-Ray (the marker main registers for make test-fast)
+@pytest.mark.parametrize("method, quality", [("multi-ortho", "draft"), ("multi-ortho-views", "draft"),
+                                             ("multi-ortho", "normal"), ("pinhole", "draft")])
+def test_clock_sequence_is_pixel_identical_to_frames_rendered_alone(tmp_path: Path, method: str,
+                                                                    quality: str) -> None:
+    # One shot per frame (multi-ortho draft), a shot per view (multi-ortho-views), the footprint
+    # bank of normal quality, and pinhole's shots sharing runs (not sequenced: its frame_number is
+    # its shot index) all give the pixels of each frame rendered alone.
+    scene = write_moving_scene(tmp_path)
+    lens = square_array(6, 4, 2, 2)
+    frames = FrameRange(0, 4)
+    settings = RenderSettings(quality=quality, cache_dir=tmp_path / "cache")
+    out = tmp_path / "seq" / "m.png"
+    out.parent.mkdir()
+    report = render_animation(scene, lens, out, frames, settings=settings, method=method)
+    assert report["rendered"] == 5 and report["from_cache"] == 0
+    alone = per_frame_oracle(scene, lens, frames, tmp_path, RenderSettings(quality=quality, use_cache=False), method)
+    timings = [json.loads(frame_path(out, n).with_suffix(".json").read_text())["timings"] for n in frames.numbers]
+    for n in frames.numbers:
+        assert np.array_equal(read_png(frame_path(out, n)), alone[n]), n
+    # Negative control: the frames differ from one another, so a frame rendered at a neighbour's clock fails.
+    assert not np.array_equal(read_png(frame_path(out, 1)), alone[2])
+    if method == "pinhole":
+        assert all(t["povray_jobs"] >= 1 for t in timings)  # every frame its own runs
+    else:
+        assert timings[0]["povray_jobs"] >= 2 and all(t["povray_jobs"] == 0 for t in timings[1:])
+
+
+@pytest.mark.povray  # starts POV-Ray (the marker main registers for make test-fast)
+def test_clock_sequence_needs_a_scene_reading_only_the_clock(tmp_path: Path) -> None:
+    # frame_number differs between a frame alone and inside a sequence: such a scene runs per frame.
+    scene = write_moving_scene(tmp_path, extra="#declare Unused = frame_number;")
+    out = tmp_path / "f.png"
+    render_animation(scene, LENS, out, FrameRange(0, 2), settings=RenderSettings(quality="draft", use_cache=False))
+    timings = [json.loads(frame_path(out, n).with_suffix(".json").read_text())["timings"] for n in range(3)]
+    assert all(t["povray_jobs"] == 1 for t in timings)
+
+
+@pytest.mark.povray  # starts POV-Ray (the marker main registers for make test-fast)
+def test_clock_sequence_without_cache_and_resume(tmp_path: Path) -> None:
+    scene = write_moving_scene(tmp_path)
+    frames = FrameRange(0, 5)
+    out = tmp_path / "n.png"
+    report = render_animation(scene, LENS, out, frames, settings=RenderSettings(quality="draft", use_cache=False))
+    assert report["rendered"] == 6
+    no_cache = [read_png(frame_path(out, n)) for n in frames.numbers]
+    # A run that stopped after some frames (here: frames 0..2 rendered earlier into the cache)
+    # resumes with only the missing frames.
+    cached = RenderSettings(quality="draft", cache_dir=tmp_path / "cache")
+    render_animation(scene, LENS, tmp_path / "part.png", FrameRange(0, 2, 0, 0.4),
+                     settings=cached)
+    again = render_animation(scene, LENS, out, frames, settings=cached)
+    assert (again["from_cache"], again["rendered"]) == (3, 3)
+    assert all(np.array_equal(read_png(frame_path(out, n)), no_cache[n]) for n in frames.numbers)
+    first = json.loads(frame_path(out, 0).with_suffix(".json").read_text())["timings"]
+    assert first["frames_from_cache"] == 1 and first["povray_jobs"] >= 1

@@ -120,7 +120,13 @@ def test_frog_tissues_renders(cli, tmp_path):
     assert record["volume"]["shape"] == [500, 470, 136] and record["volume"]["spacing_mm"] == [1.0, 1.0, 1.5]
     surfaces = record["surfaces"]
     assert [s["label"] for s in surfaces] == [2, 6, 10]
-    assert all(s["triangles_extracted"] > 10 * s["triangles"] for s in surfaces)   # decimated to the display
+    # Extracted from voxels at most a fifth of a lens across (a lens spans many frog voxels here), then
+    # decimated to the display.
+    fifth = 0.8 / record["placement"]["scale"] / 5                     # a fifth of a lens, in frog mm
+    step, spacing = np.asarray(record["voxel_step"]), np.asarray([1.0, 1.0, 1.5])
+    assert np.all(step * spacing <= fifth) and np.all((step + 1) * spacing > fifth) and min(step) > 1
+    assert all(s["triangles_extracted"] > 2 * s["triangles"] for s in surfaces)
+    assert sum(s["triangles"] for s in surfaces) <= record["triangle_budget"] * 1.02
     assert record["triangle_budget"] == 4 * 32 * 24
     # Where the tissues must appear: their voxels' box through the record's world-to-display matrix, in
     # lenses of the centre view (x right, y up; 0.8 mm lenses, 32 x 24), a lens of slack for the view's slant.

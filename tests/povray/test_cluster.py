@@ -8,6 +8,8 @@ kill one of them by its pid, and kill them all when they end.
 
 from __future__ import annotations
 
+import json
+
 import os
 import time
 from pathlib import Path
@@ -197,6 +199,10 @@ def test_animation_on_the_cluster(tmp_path: Path, address: str) -> None:
                               settings=RenderSettings(quality="draft", scheduler=address))
     assert report["rendered"] == 3
     assert [int(read_png(frame_path(out, n))[0, 0, 0]) for n in range(3)] == [0, 188, 255]
+    # Rendered as clock sequences on the workers: frame 0's runs held every frame.
+    jobs = [json.loads(frame_path(out, n).with_suffix(".json").read_text())["timings"]["povray_jobs"]
+            for n in range(3)]
+    assert jobs[0] >= 1 and jobs[1:] == [0, 0]
 
 
 # --- When things go wrong: a cluster of processes this test starts on 127.0.0.1 and kills. ---

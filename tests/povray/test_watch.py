@@ -5,8 +5,11 @@ from __future__ import annotations
 import os
 import signal
 import time
+from pathlib import Path
 
-from povh3d.povray.job import collect_images
+import pytest
+
+from povh3d.povray.job import ClockRun, PovrayJob, build_command, collect_images, frame_image
 from povh3d.povray.watch import LogProgress, sleep_until_exit
 from tests.support.waiting import wait_until
 
@@ -88,7 +91,7 @@ def _png_bytes() -> bytes:
 def test_images_done_needs_complete_images_and_the_log_s_last_count(tmp_path):
     from povh3d.povray.watch import JobWatch
 
-    watch = JobWatch(tmp_path / "povray.log", 1, lambda: collect_images(tmp_path, 1))
+    watch = JobWatch(tmp_path / "povray.log", 1, lambda: collect_images(tmp_path, job_of(1)))
     assert watch.fd is not None  # Linux: inotify
     try:
         assert not watch.images_done()  # nothing written
@@ -108,7 +111,7 @@ def test_images_done_needs_complete_images_and_the_log_s_last_count(tmp_path):
 def test_images_done_gives_up_without_the_log_s_confirmation(tmp_path):
     from povh3d.povray.watch import JobWatch
 
-    watch = JobWatch(tmp_path / "povray.log", 2, lambda: collect_images(tmp_path, 2))
+    watch = JobWatch(tmp_path / "povray.log", 2, lambda: collect_images(tmp_path, job_of(2)))
     try:
         (tmp_path / "frame1.png").write_bytes(_png_bytes())
         assert not watch.images_done() and not watch.written  # one of two frames
@@ -122,11 +125,10 @@ def test_images_done_gives_up_without_the_log_s_confirmation(tmp_path):
 
 
 def test_finished_frames_need_the_end_chunk_and_the_log_past_them(tmp_path):
-    from povh3d.povray.job import frame_image
     from povh3d.povray.watch import JobWatch
 
-    watch = JobWatch(tmp_path / "povray.log", 12, lambda: collect_images(tmp_path, 12),
-                     lambda n: frame_image(tmp_path, 12, n))
+    watch = JobWatch(tmp_path / "povray.log", 12, lambda: collect_images(tmp_path, job_of(12)),
+                     lambda n: frame_image(tmp_path, job_of(12), n))
     png = _png_bytes()
     log = tmp_path / "povray.log"
     try:
@@ -147,6 +149,29 @@ def test_finished_frames_need_the_end_chunk_and_the_log_past_them(tmp_path):
             f.write("Rendering frame 3 of 12\nRendering frame 4 of 12\nRendered 1 of 4 pixels (25%)\n")
         assert watch.finished_frames() == [3]  # frame 4 has no file yet
         assert watch.finished_frames() == []  # each frame once
-        assert frame_image(tmp_path, 1, 1).name == "frame.png" and frame_image(tmp_path, 100, 7).name == "frame007.png"
+        assert frame_image(tmp_path, job_of(1), 1).name == "frame.png" \
+            and frame_image(tmp_path, job_of(100), 7).name == "frame007.png"
     finally:
         watch.close()
+
+
+
+def job_of(frames: int, clock_run: ClockRun | None = None) -> PovrayJob:
+    return PovrayJob(name="t", script="", width=2, height=2, frames=frames, clock_run=clock_run)
+
+
+def test_a_clock_run_is_a_subset_of_the_whole_animation(tmp_path: Path) -> None:
+    # Frames 5..7 of a 24-frame animation: POV-Ray numbers them as in the whole (padded to 2 digits)
+    # and gives them the whole animation's clock through +KFI/+KFF/+KI/+KF and the subset +SF/+EF.
+    job = job_of(3, ClockRun(first=5, total=24, clock_start=0.0, clock_end=2.5))
+    assert [frame_image(tmp_path, job, n).name for n in (1, 2, 3)] == ["frame05.png", "frame06.png", "frame07.png"]
+    command = build_command(job, "povray")
+    assert ["+KFI1", "+KFF24", "+KI0.0", "+KF2.5", "+SF5", "+EF7"] == [c for c in command if c[:3] in
+                                                                        ("+KF", "+KI", "+SF", "+EF")]
+    for n in (5, 6):
+        (tmp_path / f"frame{n:02d}.png").write_bytes(b"")
+    assert collect_images(tmp_path, job) is None          # frame 7 missing
+    (tmp_path / "frame07.png").write_bytes(b"")
+    assert [p.name for p in collect_images(tmp_path, job)] == ["frame05.png", "frame06.png", "frame07.png"]
+    with pytest.raises(Exception, match="clock_run"):
+        job_of(3, ClockRun(first=23, total=24, clock_start=0.0, clock_end=1.0))   # frames 23..25 of 24

@@ -109,3 +109,64 @@ def test_staircase_surface_wraps_the_labels_voxels_in_world_space(label):
     world = (corners @ phantom.index_to_world().T)[:, :3]
     assert surface.vertices.min(axis=0) == pytest.approx(world.min(axis=0), abs=1e-6)
     assert surface.vertices.max(axis=0) == pytest.approx(world.max(axis=0), abs=1e-6)
+
+
+def test_sampled_label_map_is_the_staircase_of_every_steps_centre_voxel():
+    # A ball of label 7 (radius 9 mm) in a turned, anisotropic volume, sampled every (3, 3, 2) voxels:
+    # unsmoothed, the surface encloses exactly the sampled voxels, each step x spacing in size, and its
+    # box is theirs (centres +- half a step) through the volume's geometry.
+    spacing, shape, step = (1.0, 0.8, 1.5), (40, 44, 30), (3, 3, 2)
+    centre = (np.asarray(shape) - 1) / 2 * spacing + np.array([1.3, -0.7, 0.4])
+    grid = np.stack(np.meshgrid(*(np.arange(n) * s for n, s in zip(shape, spacing)), indexing="ij"), axis=-1)
+    values = np.where(np.linalg.norm(grid - centre, axis=-1) < 9.0, 7, 0).astype(np.uint8)
+    volume = Volume(values, spacing, origin=(10.0, -4.0, 2.0), direction=turn(30.0))
+    (surface,) = label_surfaces(volume, [7], smoothing=0, step=step)
+    assert open_edges(surface.faces) == 0
+    offset = np.array([k // 2 for k in step])
+    sampled = values[offset[0]::3, offset[1]::3, offset[2]::2] == 7
+    _, enclosed = area_and_volume(surface.vertices, surface.faces)
+    assert enclosed == pytest.approx(sampled.sum() * np.prod(spacing) * np.prod(step), rel=1e-6)
+    index = np.argwhere(sampled) * step + offset
+    lo, hi = index.min(axis=0) - np.array(step) / 2, index.max(axis=0) + np.array(step) / 2
+    # The surface taken back to voxel indices through the volume's geometry (origin, spacing, turn).
+    back = (np.c_[surface.vertices, np.ones(len(surface.vertices))] @ np.linalg.inv(volume.index_to_world()).T)[:, :3]
+    assert back.min(axis=0) == pytest.approx(lo, abs=1e-6) and back.max(axis=0) == pytest.approx(hi, abs=1e-6)
+    # The ball's own volume, to a step's resolution; negative control: the grid sampled from voxel 0
+    # (not every step's centre) is another staircase.
+    assert enclosed == pytest.approx(4 / 3 * np.pi * 9.0 ** 3, rel=0.1)
+    assert (values[::3, ::3, ::2] == 7).sum() != sampled.sum()
+
+
+def test_voxel_step_keeps_voxels_under_the_detail():
+    from povh3d.volume.surfaces import voxel_step
+
+    assert voxel_step((1.0, 1.0, 1.5), 5.8) == (5, 5, 3)     # 5 mm, 5 mm, 4.5 mm: each under 5.8 mm
+    assert voxel_step((1.0, 1.0, 1.5), 0.4) == (1, 1, 1)     # finer than a voxel: the voxels themselves
+    assert voxel_step((1.0, 1.0, 1.5), 0.0) == (1, 1, 1)
+
+
+def test_a_label_thinner_than_the_step_is_kept_from_its_own_voxels():
+    # A one-voxel plate (label 5) beside a big block (label 2): sampled every 4 voxels the plate falls
+    # between the samples; it comes back from its own voxels, closed, enclosing exactly its voxels.
+    values = np.zeros((30, 30, 30), dtype=np.uint8)
+    values[3:27, 3:27, 3:20] = 2
+    values[4:26, 4:26, 21] = 5
+    volume = Volume(values, (1.0, 1.0, 1.0))
+    plate, = (s for s in label_surfaces(volume, None, smoothing=0, step=(4, 4, 4)) if s.label == 5)
+    assert open_edges(plate.faces) == 0
+    assert area_and_volume(plate.vertices, plate.faces)[1] == pytest.approx((values == 5).sum(), rel=1e-6)
+    # Negative control: the sampled voxels alone hold none of it.
+    assert not (values[2::4, 2::4, 2::4] == 5).any()
+
+
+def test_label_boxes_crop_as_the_voxels_do():
+    # The boxes from one pass (find_objects) give the crop found by looking at the voxels themselves.
+    from povh3d.volume.surfaces import _crop, label_boxes
+
+    phantom = asymmetric_phantom()
+    boxes = label_boxes(phantom.values)
+    for labels in ([LABEL_LEFT], [LABEL_TOP, LABEL_LEFT], [LABEL_BODY, LABEL_LEFT, LABEL_TOP]):
+        start, box = _crop(phantom.values, labels, boxes)
+        start_here, box_here = _crop(phantom.values, labels)
+        assert start == start_here and np.array_equal(box, box_here)
+    assert label_boxes(phantom.values.astype(np.float32)) is None
