@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, strategies as st
 
 from povh3d.app.animation import FrameRange, frame_path, parse_clock, parse_frames
+from povh3d.engine.quality import RenderSettings
 from tests.support.render import DRAFT, DRAFT_CACHED, render_animation
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.image.io import read_png
