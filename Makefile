@@ -13,7 +13,7 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 PRESET ?= demo
 QUALITY ?= normal
 
-.PHONY: help render test bench povray opengl venv clean
+.PHONY: help render test bench gallery povray povray-examples opengl venv clean
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-8s %s\n", $$1, $$2}'
@@ -22,6 +22,10 @@ povray: ## install POV-Ray 3.7 with apt when it is missing
 	@command -v povray >/dev/null || { echo "installing POV-Ray (apt-get install povray)"; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq povray >/dev/null; }
 	@povray --version 2>&1 | grep -m1 'POV-Ray'
+
+povray-examples: povray ## install POV-Ray's sample scenes (Debian's povray-examples) with apt when they are missing
+	@test -d /usr/share/doc/povray/examples || { echo "installing POV-Ray's sample scenes (apt-get install povray-examples)"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq povray-examples >/dev/null; }
 
 opengl: ## install Mesa's off-screen OpenGL (EGL) with apt when it is missing: 'povh3d layout' draws with it
 	@$$(command -v ldconfig || echo /sbin/ldconfig) -p | grep -qE 'libEGL_mesa\.so\.0|libOSMesa\.so' || { echo "installing Mesa EGL (apt-get install libegl1 libegl-mesa0)"; \
@@ -40,7 +44,7 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 	$(BIN)/povh3d render sample_models/sample.pov --preset $(PRESET) --quality $(QUALITY) \
 	  -o out/sample-h3d.png --views-dir out/views
 
-test: povray opengl venv ## run the test suite (POV-Ray tests included)
+test: povray povray-examples opengl venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
@@ -59,6 +63,9 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_moire.py
 	$(BIN)/python benchmarks/bench_volume_media.py
 	$(BIN)/python benchmarks/bench_volume.py
+
+gallery: povray-examples venv ## render every POV-Ray sample scene with a camera, outcomes into docs/benchmarks.md (GALLERY_ARGS='--scenes advanced/* --limit 10')
+	$(BIN)/python benchmarks/gallery.py $(GALLERY_ARGS)
 
 clean: ## remove outputs (not the cache)
 	rm -rf out
