@@ -148,12 +148,14 @@ def view_psnr(scene: Path, record: dict, views_dir: Path, picks: list[tuple[int,
     return worst
 
 
-def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: int = 2) -> Outcome:
-    """One ``povh3d render`` command on ``scene`` and what came of it."""
+def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: int = 2,
+          display: tuple[str, ...] | None = None) -> Outcome:
+    """One ``povh3d render`` command on ``scene`` and what came of it; ``display``: the display's options
+    (default ``--preset preset``)."""
     name = str(scene.relative_to(EXAMPLES)) if scene.is_relative_to(EXAMPLES) else scene.name
     with tempfile.TemporaryDirectory() as folder:
         out, views_dir = Path(folder) / "h3d.png", Path(folder) / "views"
-        command = [sys.executable, "-m", "povh3d.cli", "render", str(scene), "--preset", preset, "--quality",
+        command = [sys.executable, "-m", "povh3d.cli", "render", str(scene), *(display or ("--preset", preset)), "--quality",
                    "draft", "-q", "-o", str(out), "--views-dir", str(views_dir), "--jobs", "1",
                    "--timeout", str(timeout)]
         start = time.perf_counter()
@@ -164,10 +166,12 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
             return Outcome(name, preset, "timeout", "", "", float("nan"), timeout, seconds_2d, f"over {timeout:g} s")
         seconds = time.perf_counter() - start
         lines = [line for line in done.stderr.splitlines() if line.strip()]
-        err = [line for line in lines if not line.startswith("povh3d: warning")]
         if done.returncode != 0:
-            kind = "refused" if len(err) == 1 else "crash"
-            return Outcome(name, preset, kind, "", "", float("nan"), seconds, seconds_2d, (err or ["?"])[-1][:160])
+            errors = [line for line in lines if line.startswith("povh3d: error")]
+            one_line = len(errors) == 1 and not any("Traceback" in line for line in lines)
+            note = (errors or lines or ["?"])[-1].removeprefix("povh3d: error: ")[:160]
+            return Outcome(name, preset, "refused" if one_line else "crash", "", "", float("nan"), seconds,
+                           seconds_2d, note)
         record = json.loads(out.with_suffix(".json").read_text())
         frame = record.get("display_frame", {})
         depth = frame.get("depth") or {}
@@ -241,8 +245,13 @@ def main() -> int:
     parser.add_argument("--limit", type=int, help="at most this many scenes")
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds allowed to each command")
     parser.add_argument("--workers", type=int, default=2, help="scenes rendered at once (default: 2 cores)")
+    parser.add_argument("--resume", action="store_true", help="skip the scenes the table already holds")
     args = parser.parse_args()
-    scenes = gallery_scenes(args.scenes, args.limit)
+    scenes = gallery_scenes(args.scenes)
+    if args.resume:
+        done = {row[0] for row in _kept_rows(set())}
+        scenes = [p for p in scenes if str(p.relative_to(EXAMPLES)) not in done]
+    scenes = scenes[:args.limit] if args.limit else scenes
     total = len(gallery_scenes())
     print(f"{len(scenes)} of {total} scenes with a camera", flush=True)
     load = os.getloadavg()

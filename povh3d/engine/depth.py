@@ -131,7 +131,7 @@ def fog_distances(dark_images: list[np.ndarray], light_images: list[np.ndarray],
     channel_t = np.where(clipped, np.nan, 1.0 - (light - dark))
     channel_t[every] = 0.0   # no channel left: set below
     t = np.clip(np.nanmedian(channel_t, axis=-1), 0.0, 1.0)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):   # t = 0: nothing hit; fog 0: no pass
         d = -fog * np.log(t)
     # t = 1 at a surface: no fog there.  POV-Ray applies no fog to a ray that starts inside a
     # solid (non-hollow) object, e.g. behind a plane whose inside faces the viewer: the two
