@@ -155,8 +155,8 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
     name = str(scene.relative_to(EXAMPLES)) if scene.is_relative_to(EXAMPLES) else scene.name
     with tempfile.TemporaryDirectory() as folder:
         out, views_dir = Path(folder) / "h3d.png", Path(folder) / "views"
-        command = [sys.executable, "-m", "povh3d.cli", "render", str(scene), *(display or ("--preset", preset)), "--quality",
-                   "draft", "-q", "-o", str(out), "--views-dir", str(views_dir), "--jobs", "1",
+        command = [sys.executable, "-m", "povh3d.cli", "render", str(scene), *(display or ("--preset", preset)),
+                   "--quality", "draft", "-q", "-o", str(out), "--views-dir", str(views_dir), "--jobs", "1",
                    "--timeout", str(timeout)]
         start = time.perf_counter()
         try:
@@ -247,6 +247,9 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=2, help="scenes rendered at once (default: 2 cores)")
     parser.add_argument("--resume", action="store_true", help="skip the scenes the table already holds")
     args = parser.parse_args()
+    if not EXAMPLES.is_dir():
+        raise SystemExit(f"no {EXAMPLES}: install POV-Ray's sample scenes (make gallery runs "
+                         "apt-get install povray-examples)")
     scenes = gallery_scenes(args.scenes)
     if args.resume:
         done = {row[0] for row in _kept_rows(set())}

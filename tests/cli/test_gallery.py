@@ -13,7 +13,8 @@ import pytest
 from benchmarks.gallery import EXAMPLES, MIN_DB, judge
 
 SQUARE = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch", "0.2", "--focal", "2")
-LENTICULAR = ("--grid", "lenticular", "--lenses", "32", "--rows", "96", "--ppl", "4", "--pixel-pitch", "0.25", "--focal", "1.5")
+LENTICULAR = ("--grid", "lenticular", "--lenses", "32", "--rows", "96", "--ppl", "4", "--pixel-pitch", "0.25",
+              "--focal", "1.5")
 INCLUDE = "issue 21 item 1: a camera written in an include is lost (frame native, no depth)"
 
 # scene, the construct it stands for, the display, the outcome expected ('ok' or 'refused')
