@@ -69,7 +69,10 @@ def _code(text: str) -> str:
 
 
 def has_camera(scene: Path) -> bool:
-    """Whether the scene's text or one of the includes beside it writes a camera."""
+    """Whether the scene's text or one of its includes (beside it or POV-Ray's own) writes a camera."""
+    from povh3d.scene.scene import system_include_dirs
+
+    folders = [scene.parent, *system_include_dirs()]
     seen, todo = set(), [scene]
     while todo:
         path = todo.pop()
@@ -79,7 +82,7 @@ def has_camera(scene: Path) -> bool:
         text = _code(path.read_text(encoding="latin-1"))
         if _CAMERA.search(text):
             return True
-        todo.extend(path.parent / name for name in _INCLUDE.findall(text))
+        todo.extend(folder / name for name in _INCLUDE.findall(text) for folder in (path.parent, *folders))
     return False
 
 
