@@ -15,7 +15,7 @@ PRESET ?= demo
 QUALITY ?= normal
 WORKERS ?= 2
 
-.PHONY: help render test test-fast bench povray opengl browser venv clean
+.PHONY: help render test test-fast bench gallery povray povray-examples opengl browser venv clean
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
@@ -24,6 +24,10 @@ povray: ## install POV-Ray 3.7 with apt when it is missing
 	@command -v povray >/dev/null || { echo "installing POV-Ray (apt-get install povray)"; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq povray >/dev/null; }
 	@povray --version 2>&1 | grep -m1 'POV-Ray'
+
+povray-examples: povray ## install POV-Ray's sample scenes (Debian's povray-examples) with apt when they are missing
+	@test -d /usr/share/doc/povray/examples || { echo "installing POV-Ray's sample scenes (apt-get install povray-examples)"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq povray-examples >/dev/null; }
 
 opengl: ## install Mesa's off-screen OpenGL (EGL) with apt when it is missing: 'povh3d layout' draws with it
 	@$$(command -v ldconfig || echo /sbin/ldconfig) -p | grep -qE 'libEGL_mesa\.so\.0|libOSMesa\.so' || { echo "installing Mesa EGL (apt-get install libegl1 libegl-mesa0)"; \
@@ -48,7 +52,7 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 
 # WORKERS pytest processes (pytest-xdist), one a core, each taking whole files (a module's fixtures
 # render once); pytest's exit status is make's (5: no test ran).
-test: povray opengl browser venv ## run the whole test suite, POV-Ray renders included (WORKERS=2 processes)
+test: povray povray-examples opengl browser venv ## run the whole test suite, POV-Ray renders included (WORKERS=2 processes)
 	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile
 
 test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
@@ -71,6 +75,9 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_moire.py
 	$(BIN)/python benchmarks/bench_volume_media.py
 	$(BIN)/python benchmarks/bench_volume.py
+
+gallery: povray-examples venv ## render every POV-Ray sample scene with a camera, outcomes into docs/benchmarks.md (GALLERY_ARGS='--scenes advanced/* --limit 10')
+	$(BIN)/python benchmarks/gallery.py $(GALLERY_ARGS)
 
 clean: ## remove outputs (not the cache)
 	rm -rf out

@@ -66,6 +66,8 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         if depth.get("empty"):
             record["warnings"].append("the depth pass hit nothing in the middle of the framed field: "
                                       "check the frame")
+        elif "reason" in depth:   # blind (inside a solid) or too bright: not an empty scene
+            record["warnings"].append(depth["reason"])
     record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
     limit = camera_front_clearance_limit(placed) if s.front_clearance is None else None
@@ -130,7 +132,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
 
     def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
         # The display shows the measured z times ``factor`` (a depth scale, or 1 / a frame's scale).
-        if depth.get("empty") or factor == 1:
+        if "near_mm" not in depth or factor == 1:
             return depth
         after = {**depth, **{k: depth[k] * factor for k in keys}}
         # A thousandth of the budget: what --fit-depth fitted exactly may come back a rounding over.
@@ -144,6 +146,8 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
     if fit is None:
         return frame, ({**shown(depth, scale), "measured": depth} if scale != 1 else depth), scale
     target = budget if fit == "auto" else float(fit)
+    if "reason" in depth:
+        raise ConfigError(f"--fit-depth cannot fit: {depth['reason']}")
     if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
         raise ConfigError("--fit-depth cannot fit: the depth pass measured nothing in the framed field "
                           "(nothing hit, or the viewpoint inside a solid object); place the display with "

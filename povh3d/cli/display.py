@@ -107,6 +107,9 @@ def _print_scene(report: dict) -> None:
     if d.get("empty"):
         print(f"{'scene depth':22s} nothing hit in the middle of the framed field")
         return
+    if "reason" in d:   # blind or too bright: why, and the fix
+        print(f"{'scene depth':22s} {d['reason']}")
+        return
     verdict = "within" if d["within_budget"] else "BEYOND"
     print(f"{'scene depth':22s} subject z = {d['near_mm']:.3g} .. {d['far_mm']:.3g} mm, whole field "
           f"{d['field_near_mm']:.3g} .. {d['field_far_mm']:.3g} mm; {verdict} the depth budget +-{half:.3g} mm")

@@ -212,7 +212,7 @@ def frame_phrase(record: dict[str, Any]) -> str:
         centre = ",".join(f"{v:.4g}" for v in record["centre"])
         text = f"frame {source} (centre {centre}, {record['units_per_mm']:.4g} units/mm)"
     depth = record.get("depth")
-    if depth and not depth.get("empty"):
+    if depth and "near_mm" in depth:
         fit = f", fitted x{depth['fit']['factor']:.3g}" if depth.get("fit") else ""
         if record.get("depth_scale", 1) != 1:   # fitted by it, or given
             fit = f", {'fitted: ' if fit else ''}depth x{record['depth_scale']:.3g} (distorted)"

@@ -7,8 +7,17 @@ blends a pixel of surface colour ``c`` as ``c t + fog (1 - t)`` with
 ``t = exp(-d / D)`` for a ray of length ``d`` (scene units) and fog distance
 ``D``, so the difference of the two renders is ``1 - t``, independent of ``c``,
 and ``d = -D ln t``.  In linear light at 16 bits the depth resolution is about
-``D / 65535 / t``.  Pixels where nothing is hit (``t`` about 0), or that clip in
-the fog-1 render (a surface brighter than 1), are left out.
+``D / 65535 / t``.  Each colour channel gives ``t`` on its own: a channel that clips
+in the fog-1 render (the surface brighter than 1 there, e.g. the red of an emissive red
+object) is left out, so only a surface brighter than 1 in every channel goes unmeasured
+(``saturated``).  Pixels where nothing is hit (``t`` about 0) are left out too.
+
+POV-Ray applies no fog (nor any media) along a ray segment inside a non-hollow object,
+whatever the fog or media: a pass whose rays start inside a solid (a plane whose inside
+holds the viewer, a room box or a sky sphere around the camera) sees ``t = 1`` exactly at
+every surface.  No POV-Ray 3.7 construct measures depth there without the user's object
+being ``hollow``; those pixels are counted (``unmeasured``) and a pass whose middle is
+all unmeasured is reported as blind, with the cause and the fix, never as an empty scene.
 
 The pass is cached like any frame (the scene's digest, the frame, the size).
 """
@@ -30,6 +39,13 @@ from .quality import RenderSettings
 
 MAX_WIDTH = 160     # pixels across the depth pass
 T_MIN = 1e-3        # below this transmittance a pixel counts as "nothing hit"
+CLIP = 0.9999       # a channel at or above this in the fog-1 render is clipped
+BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (a 'plane' whose inside holds "
+                "the viewer, or a closed 'box' or 'sphere' around the camera such as a room or a sky), and "
+                "POV-Ray applies no fog inside a non-hollow object; add 'hollow' to that object")
+SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
+                    "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
+                    "or place the display with --display-center/--display-normal/--display-width")
 
 
 @dataclass(frozen=True)
@@ -40,6 +56,7 @@ class DepthMap:
     width_mm: float
     height_mm: float
     unmeasured: float = 0.0   # fraction of pixels the fog did not reach (the viewpoint inside a solid)
+    saturated: np.ndarray | None = None   # (H, W) bool: a surface brighter than 1 in every channel
 
     def summary(self, budget_mm: float) -> dict[str, Any]:
         """The framed subject's near and far z against the budget (``2 N f``, centred on the screen).
@@ -53,10 +70,12 @@ class DepthMap:
         hit = self.z[np.isfinite(self.z)]
         middle = self.z[h // 4:h - h // 4, w // 4:w - w // 4]
         middle = middle[np.isfinite(middle)]
+        saturated = self.saturated if self.saturated is not None else np.zeros(self.z.shape, bool)
         record: dict[str, Any] = {"depth_budget_mm": budget_mm, "hit_fraction": float(hit.size / self.z.size),
-                                  "unmeasured_fraction": self.unmeasured, "pixels": [w, h]}
+                                  "unmeasured_fraction": self.unmeasured,
+                                  "saturated_fraction": float(saturated.mean()), "pixels": [w, h]}
         if middle.size == 0:
-            return {**record, "empty": True, "within_budget": True}
+            return {**record, **self._why_unmeasured(), "within_budget": True, "field_within_budget": True}
         near, far = (float(v) for v in np.percentile(middle, [5, 95]))
         field_near, field_far = (float(v) for v in np.percentile(hit, [1, 99]))
         half = budget_mm / 2
@@ -64,6 +83,15 @@ class DepthMap:
                 "field_near_mm": field_near, "field_far_mm": field_far,
                 "within_budget": bool(-half <= near and far <= half),
                 "field_within_budget": bool(-half <= field_near and field_far <= half)}
+
+    def _why_unmeasured(self) -> dict[str, Any]:
+        """Why the middle of the field has no depth: blind (inside a solid), too bright, or nothing there."""
+        h, w = self.z.shape
+        if self.unmeasured > 0.5:
+            return {"empty": False, "blind": True, "reason": BLIND_REASON}
+        if self.saturated is not None and self.saturated[h // 4:h - h // 4, w // 4:w - w // 4].mean() > 0.5:
+            return {"empty": False, "saturated": True, "reason": SATURATED_REASON}
+        return {"empty": True}
 
 
 def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
@@ -79,7 +107,7 @@ def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArr
 
 def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch,
                  fog: float) -> tuple[np.ndarray, np.ndarray]:
-    """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, clipped, unmeasured)
+    """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, unmeasured; -inf: too bright)
     and the fraction of unmeasured pixels per direction."""
     header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
                               "focal": lens_array.focal}   # as methods.display_header
@@ -93,17 +121,27 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
 def fog_distances(dark_images: list[np.ndarray], light_images: list[np.ndarray],
                   fog: float) -> tuple[np.ndarray, np.ndarray]:
     """(n, H, W) ray lengths (scene units) from renders with fog colour 0 and 1 (sRGB-encoded PNG
-    pixels), NaN where nothing is hit, clipped or unmeasured; and the unmeasured fraction per render."""
+    pixels): NaN where nothing is hit or unmeasured, -inf on a surface brighter than 1 in every
+    channel (saturated); and the unmeasured fraction per render."""
     dark = np.stack([decode(img[..., :3]) for img in dark_images])
     light = np.stack([decode(img[..., :3]) for img in light_images])
-    clipped = np.any(light >= 0.9999, axis=-1)
-    t = np.clip(1.0 - np.median(light - dark, axis=-1), 0.0, 1.0)
-    with np.errstate(divide="ignore"):
+    clipped = light >= CLIP   # per channel: c t + (1 - t) clips where the surface's c >= 1
+    every = clipped.all(axis=-1)
+    # t from each channel that does not clip; the median of those.
+    channel_t = np.where(clipped, np.nan, 1.0 - (light - dark))
+    channel_t[every] = 0.0   # no channel left: set below
+    t = np.clip(np.nanmedian(channel_t, axis=-1), 0.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):   # t = 0: nothing hit; fog 0: no pass
         d = -fog * np.log(t)
     # t = 1 at a surface: no fog there.  POV-Ray applies no fog to a ray that starts inside a
-    # solid (non-hollow) object, e.g. behind a plane whose inside faces the viewer.
-    unmeasured = t > 1 - 1e-6
-    d[(t < T_MIN) | clipped | unmeasured] = np.nan
+    # solid (non-hollow) object, e.g. behind a plane whose inside faces the viewer: the two
+    # renders are then the same in every channel.
+    unmeasured = np.abs(light - dark).max(axis=-1) < 1e-6
+    # Clipped in every channel: nothing hit (t about 0: the fog-0 render black there) or a
+    # surface brighter than 1 in every channel (seen in the fog-0 render).
+    saturated = every & ~unmeasured & (dark.max(axis=-1) >= T_MIN)
+    d[every | (t < T_MIN) | unmeasured] = np.nan
+    d[saturated] = -np.inf
     return d, unmeasured.mean(axis=(1, 2))
 
 
@@ -118,7 +156,9 @@ def depth_map(distances: np.ndarray, lens_array: LensArray, front_clearance: flo
               unmeasured: float = 0.0) -> DepthMap:
     """The depth map of ray lengths (scene units) of a pass along the normal from ``front_clearance`` mm."""
     width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
-    return DepthMap(distances / units_per_mm - front_clearance, width_mm, height_mm, unmeasured)
+    saturated = np.isneginf(distances)   # fog_distances' mark
+    z = np.where(saturated, np.nan, distances / units_per_mm - front_clearance)
+    return DepthMap(z, width_mm, height_mm, unmeasured, saturated)
 
 
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
@@ -156,7 +196,7 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
     # The ray starts front_clearance * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
     lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
-    z = d / units_per_mm / lengths - front_clearance
+    z = np.where(np.isneginf(d), np.nan, d) / units_per_mm / lengths - front_clearance
     shown = np.sqrt(((slopes / k) ** 2).sum(axis=1) + 1.0)   # the display's own ray, slope (u, v) / f
     out = k * z * shown[:, None, None]
     return out.reshape(ny, nx, *out.shape[1:]).astype(np.float32)

@@ -105,3 +105,84 @@ def test_view_depth_maps_against_ray_sphere_and_plane(tmp_path):
         assert clean.mean() > 0.8
         worst = max(worst, float(np.abs(maps[l, k] - expected)[clean].max()))
     assert worst < 0.02   # mm
+
+
+# Issue 21: the viewpoint inside a solid (a backdrop plane, a closed room) and bright surfaces.
+# Every depth below is analytic: the pass looks along +z from z = -128 mm, so a face at z = Z
+# reads Z; the sphere of SCENE reads -sqrt(36 - r^2).
+INSIDE = {
+    # plane { z, 10 }: its inside is z < 10, the side that holds the viewer
+    "backdrop plane": ("plane {{ z, 10 pigment {{ rgb 0.5 }} {hollow} }}", 10.0),
+    # a room: a box round the field and the ray starts, its back wall at z = 12
+    "closed room": ("box {{ <-60, -60, -300>, <60, 60, 12> pigment {{ rgb 0.5 }} {hollow} }}", 12.0),
+}
+BASE = """#version 3.7;
+global_settings { assumed_gamma 1.0 }
+light_source { <-40, 60, -80> rgb 1 }
+"""
+SPHERE = "sphere { <0, 0, 0>, 6 pigment { rgb <0.9, 0.4, 0.1> } }\n"
+
+
+def measure(tmp_path, text: str):
+    scene = tmp_path / "s.pov"
+    scene.write_text(BASE + text)
+    return depth_pass(load_scene(scene), array(), RenderSettings(), 128.0, 1.0)
+
+
+@pytest.mark.parametrize("kind", sorted(INSIDE))
+def test_inside_a_solid_is_blind_and_says_so(tmp_path, kind):
+    solid, _ = INSIDE[kind]
+    depth = measure(tmp_path, SPHERE + solid.format(hollow=""))
+    assert depth.unmeasured > 0.9 and not np.isfinite(depth.z).any()
+    s = depth.summary(12.0)
+    # not an empty scene: the cause and the fix, in one line
+    assert s["empty"] is False and s["blind"] is True
+    assert "inside a solid" in s["reason"] and "'hollow'" in s["reason"] and "\n" not in s["reason"]
+
+
+@pytest.mark.parametrize("kind", sorted(INSIDE))
+def test_the_fix_named_measures_the_analytic_depth(tmp_path, kind):
+    """The same scene with the solid 'hollow' (the fix the message names): the sphere before the
+    backdrop or the room's back wall, each at its analytic depth."""
+    solid, back = INSIDE[kind]
+    depth = measure(tmp_path, SPHERE + solid.format(hollow="hollow"))
+    z, clean = expected(depth.z.shape, depth.width_mm, depth.height_mm, back)
+    ok = clean & np.isfinite(depth.z)
+    assert ok.mean() > 0.9 and depth.unmeasured == 0.0
+    assert np.abs(depth.z - z)[ok].max() < 0.02      # mm
+    s = depth.summary(40.0)
+    assert "blind" not in s and s["empty"] is False
+    assert s["field_far_mm"] == pytest.approx(back, abs=0.05)
+
+
+def test_an_emissive_red_surface_is_measured(tmp_path):
+    """A red slab brighter than 1 in red (ambient 1 plus its light) at z = 3 .. 4: red clips in the
+    fog-1 render, green and blue measure it.  Before issue 21 every such pixel was NaN."""
+    slab = "box { <-8, -6, 3>, <8, 6, 4> pigment { rgb <1, 0, 0> } finish { ambient 1 diffuse 0.6 } }\n"
+    depth = measure(tmp_path, slab)
+    h, w = depth.z.shape
+    x = ((np.arange(w) + 0.5) / w - 0.5) * depth.width_mm
+    y = (0.5 - (np.arange(h) + 0.5) / h) * depth.height_mm
+    inside = (np.abs(x)[None, :] < 7.8) & (np.abs(y)[:, None] < 5.8)
+    assert np.isfinite(depth.z[inside]).all()
+    assert np.abs(depth.z[inside] - 3.0).max() < 0.02     # mm
+    assert not np.isfinite(depth.z[~inside & (np.abs(x)[None, :] > 8.2)]).any()   # nothing hit beside it
+    s = depth.summary(12.0)
+    assert s["near_mm"] == pytest.approx(3.0, abs=0.02) and s["saturated_fraction"] == 0.0
+
+
+def test_a_surface_bright_in_every_channel_is_reported_not_empty(tmp_path):
+    """Negative control of the channel rule: a white slab brighter than 1 everywhere cannot be measured
+    by fog; the pass says so (saturated), it does not guess a depth nor call the scene empty."""
+    slab = "box { <-14, -10, 3>, <14, 10, 4> pigment { rgb 1 } finish { ambient 2 } }\n"
+    depth = measure(tmp_path, slab)
+    s = depth.summary(12.0)
+    assert not np.isfinite(depth.z).any()
+    assert s["saturated"] is True and s["empty"] is False and "brighter than 1" in s["reason"]
+    assert s["saturated_fraction"] > 0.5
+
+
+def test_nothing_there_is_still_empty(tmp_path):
+    """Negative control of the blind rule: a scene with nothing in the field is empty, not blind."""
+    s = measure(tmp_path, "sphere { <0, 0, 100>, 1 pigment { rgb 1 } translate <500, 0, 0> }\n").summary(12.0)
+    assert s["empty"] is True and "blind" not in s and "reason" not in s

@@ -1,0 +1,287 @@
+"""The gallery: every scene of Debian's ``povray-examples`` that has a camera, rendered as a user would.
+
+For each scene and each preset (``demo`` and the lenticular ``ipad-retina``, ``--quality
+draft``) one whole ``povh3d render`` command, whose outcome is one of
+
+- ``ok``: exit 0, the scene camera's frame, a finite depth report, a non-empty image, and
+  every sampled view within ``MIN_DB`` of a plain POV-Ray render of the scene through an
+  oblique orthographic camera placed by the frame (point-sampled, as ``bench_frame``);
+- ``refused``: a non-zero exit with one line on stderr (the cause and the fix);
+- ``timeout``: the command ran out of its time (radiosity, media: slow at any quality);
+- ``wrong``: exit 0 but a frame other than the camera's, no finite depth, an empty image or
+  a view below ``MIN_DB`` (the silently wrong image the issue is about);
+- ``crash``: a non-zero exit with more than one line (a traceback).
+
+The command's time is set against a plain 2D ``povray`` render of the scene through its own
+camera at the preset's panel size.  The table is written between the ``gallery`` markers of
+docs/benchmarks.md; rows of scenes not run this time are kept, so runs over subsets add up.
+
+    .venv/bin/python benchmarks/gallery.py [--scenes 'advanced/*'] [--limit N] [--timeout 120]
+"""
+
+from __future__ import annotations
+
+import argparse
+import fnmatch
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from benchmarks._common import write_table  # noqa: E402
+
+EXAMPLES = Path("/usr/share/doc/povray/examples")
+PRESETS = ("demo", "ipad-retina")
+MIN_DB = 35.0
+NON_EMPTY = 0.01        # share of pixels that must be above black for an image to count as non-empty
+_CAMERA = re.compile(r"\bcamera\s*\{")
+_INCLUDE = re.compile(r'#\s*include\s+"([^"]+)"')
+
+
+@dataclass(frozen=True)
+class Outcome:
+    scene: str
+    preset: str
+    kind: str              # ok, refused, timeout, wrong, crash
+    frame: str             # the sidecar's frame source, or ''
+    depth: str             # 'near..far mm', the depth pass's reason, or ''
+    worst_db: float        # the worst sampled view against its oblique orthographic render (nan: none)
+    seconds: float
+    seconds_2d: float
+    note: str              # why (wrong: what; refused/crash: the first line of stderr)
+
+
+def _code(text: str) -> str:
+    """POV-Ray source without its comments."""
+    text = re.sub(r"/\*.*?\*/", " ", text, flags=re.DOTALL)
+    return re.sub(r"//[^\n]*", " ", text)
+
+
+def has_camera(scene: Path) -> bool:
+    """Whether the scene's text or one of its includes (beside it or POV-Ray's own) writes a camera."""
+    from povh3d.scene.scene import system_include_dirs
+
+    folders = [scene.parent, *system_include_dirs()]
+    seen, todo = set(), [scene]
+    while todo:
+        path = todo.pop()
+        if path in seen or not path.is_file():
+            continue
+        seen.add(path)
+        text = _code(path.read_text(encoding="latin-1"))
+        if _CAMERA.search(text):
+            return True
+        todo.extend(folder / name for name in _INCLUDE.findall(text) for folder in (path.parent, *folders))
+    return False
+
+
+def gallery_scenes(patterns: list[str] | None = None, limit: int | None = None) -> list[Path]:
+    """The example scenes with a camera (paths under EXAMPLES), filtered by glob patterns."""
+    scenes = sorted(p for p in EXAMPLES.rglob("*.pov") if has_camera(p))
+    if patterns:
+        scenes = [p for p in scenes if any(fnmatch.fnmatch(str(p.relative_to(EXAMPLES)), pat) for pat in patterns)]
+    # Round robin over the top folders (advanced, animations, ...): a run cut short still covers each.
+    folders: dict[str, list[Path]] = {}
+    for p in scenes:
+        folders.setdefault(p.relative_to(EXAMPLES).parts[0], []).append(p)
+    spread = [p for i in range(max(map(len, folders.values()), default=0)) for group in folders.values()
+              if i < len(group) for p in [group[i]]]
+    return spread[:limit] if limit else spread
+
+
+def _env(cache: str) -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(REPO), "POVH3D_CACHE": cache}
+
+
+def _two_d_seconds(scene: Path, width: int, height: int, timeout: float) -> float:
+    """A plain POV-Ray render of the scene through its own camera at the panel size (nan: timed out)."""
+    with tempfile.TemporaryDirectory() as folder:
+        start = time.perf_counter()
+        try:
+            subprocess.run(["povray", f"+I{scene.name}", f"+O{folder}/2d.png", f"+W{width}", f"+H{height}", "-A",
+                            "-D", "+WT1", f"+L{EXAMPLES}"], cwd=scene.parent, timeout=timeout,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+        except subprocess.TimeoutExpired:
+            return float("nan")
+        return time.perf_counter() - start
+
+
+def view_psnr(scene: Path, record: dict, views_dir: Path, picks: list[tuple[int, int]], timeout: float) -> float:
+    """The worst PSNR (dB) of the picked views against oblique orthographic renders placed by the frame."""
+    from povh3d.geometry.frame import DisplayFrame
+    from povh3d.image.io import read_png
+    from povh3d.image.metrics import psnr
+    from povh3d.povray.format import pov_vector
+    from povh3d.povray.process import PovrayJob, run_jobs
+
+    f, la = record["display_frame"], record["lens_array"]
+    if "centre" in f:
+        frame = DisplayFrame(tuple(f["centre"]), tuple(f["axis_x"]), tuple(f["axis_y"]), tuple(f["normal"]),
+                             f["units_per_mm"], f["source"])
+    else:
+        frame = DisplayFrame((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), 1.0, "native")
+    back = record["quality"]["front_clearance_mm"]
+    nx, ny = la["views"]
+    (s, sy), fl = la["panel"]["pixel_pitch_mm"], la["focal_mm"]
+    width_mm, height_mm = la["lenses"][0] * la["lens_pitch_mm"][0], la["lenses"][1] * la["lens_pitch_mm"][1]
+    worst = float("inf")
+    for l, k in picks:
+        view = read_png(views_dir / f"v_{l:03d}_{k:03d}.png")
+        d = np.array([(k + 0.5 - nx / 2) * s / fl, (ny / 2 - l - 0.5) * sy / fl, 1.0])
+        script = (f'#include "{scene.name}"\ncamera {{ orthographic location {pov_vector(frame.to_scene(-back * d))} '
+                  f'direction {pov_vector(frame.directions_to_scene(d))} '
+                  f'right {pov_vector(frame.directions_to_scene([width_mm, 0, 0]))} '
+                  f'up {pov_vector(frame.directions_to_scene([0, height_mm, 0]))} }}\n')
+        images: list[np.ndarray] = []
+        run_jobs([PovrayJob(name="oracle", script=script, width=view.shape[1], height=view.shape[0],
+                            include_dirs=(str(scene.parent), str(EXAMPLES)), options=("-A",), timeout=timeout)],
+                 processes=1, on_result=lambda r: images.append(read_png(r.images[0])))
+        worst = min(worst, psnr(view[..., :3], images[0][..., :3]))
+    return worst
+
+
+def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: int = 2,
+          display: tuple[str, ...] | None = None) -> Outcome:
+    """One ``povh3d render`` command on ``scene`` and what came of it; ``display``: the display's options
+    (default ``--preset preset``)."""
+    name = str(scene.relative_to(EXAMPLES)) if scene.is_relative_to(EXAMPLES) else scene.name
+    with tempfile.TemporaryDirectory() as folder:
+        out, views_dir = Path(folder) / "h3d.png", Path(folder) / "views"
+        command = [sys.executable, "-m", "povh3d.cli", "render", str(scene), *(display or ("--preset", preset)),
+                   "--quality", "draft", "-q", "-o", str(out), "--views-dir", str(views_dir), "--jobs", "1",
+                   "--timeout", str(timeout)]
+        start = time.perf_counter()
+        try:
+            done = subprocess.run(command, env=_env(str(Path(folder) / "cache")), cwd=scene.parent,
+                                  capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return Outcome(name, preset, "timeout", "", "", float("nan"), timeout, seconds_2d, f"over {timeout:g} s")
+        seconds = time.perf_counter() - start
+        lines = [line for line in done.stderr.splitlines() if line.strip()]
+        if done.returncode != 0:
+            errors = [line for line in lines if line.startswith("povh3d: error")]
+            one_line = len(errors) == 1 and not any("Traceback" in line for line in lines)
+            note = (errors or lines or ["?"])[-1].removeprefix("povh3d: error: ")[:160]
+            return Outcome(name, preset, "refused" if one_line else "crash", "", "", float("nan"), seconds,
+                           seconds_2d, note)
+        record = json.loads(out.with_suffix(".json").read_text())
+        frame = record.get("display_frame", {})
+        depth = frame.get("depth") or {}
+        problems = []
+        if frame.get("source") != "camera":
+            problems.append(f"frame {frame.get('source')}")
+        if "near_mm" in depth and np.isfinite([depth["near_mm"], depth["far_mm"]]).all():
+            depth_text = f"{depth['near_mm']:.3g}..{depth['far_mm']:.3g}"
+        else:
+            depth_text = "blind" if depth.get("blind") else "saturated" if depth.get("saturated") else "none"
+            problems.append(f"depth {depth_text}")
+        from povh3d.image.io import read_png
+
+        image = read_png(out)
+        full = 65535 if image.dtype == np.uint16 else 255
+        lit = float((image[..., :3].max(axis=-1) > 8 / 255 * full).mean())
+        if lit < NON_EMPTY:
+            problems.append(f"image {100 * lit:.1f} % lit")
+        nx, ny = record["lens_array"]["views"]
+        picks = [(ny // 2, nx // 2), (0, 0)][:views]
+        try:
+            worst = view_psnr(scene, record, views_dir, picks, timeout)
+        except Exception as error:   # the oracle's own render failed: say so, do not hide the row
+            worst, problems = float("nan"), problems + [f"oracle: {str(error).splitlines()[0][:80]}"]
+        if not worst >= MIN_DB:
+            problems.append(f"view {worst:.1f} dB")
+        warnings = [line.removeprefix("povh3d: warning: ") for line in lines if line.startswith("povh3d: warning")]
+        note = "; ".join(problems) or (warnings[0][:120] if warnings else "")
+        return Outcome(name, preset, "wrong" if problems else "ok", frame.get("source", ""), depth_text, worst,
+                       seconds, seconds_2d, note)
+
+
+def run_scene(scene: Path, timeout: float) -> list[Outcome]:
+    """Both presets on one scene (one worker of the pool)."""
+    from povh3d.geometry.presets import lens_array
+
+    out = []
+    for preset in PRESETS:
+        panel = lens_array(preset).panel
+        out.append(judge(scene, preset, timeout, _two_d_seconds(scene, panel.width, panel.height, timeout)))
+    return out
+
+
+def _row(o: Outcome) -> tuple[str, ...]:
+    db = f"{o.worst_db:.1f}" if np.isfinite(o.worst_db) else ("inf" if o.worst_db == float("inf") else "")
+    ratio = f"{o.seconds / o.seconds_2d:.1f}x" if np.isfinite(o.seconds_2d) and o.kind != "timeout" else ""
+    return (o.scene, o.preset, o.kind, o.frame, o.depth, db, f"{o.seconds:.1f}",
+            f"{o.seconds_2d:.1f}" if np.isfinite(o.seconds_2d) else "timeout", ratio, o.note.replace("|", "/"))
+
+
+HEADER = ["scene", "preset", "outcome", "frame", "depth, mm", "worst view, dB", "s", "2D s", "vs 2D", "note"]
+
+
+def _kept_rows(run: set[tuple[str, str]]) -> list[tuple[str, ...]]:
+    """Rows of the current table for (scene, preset) pairs not run this time."""
+    from benchmarks._common import DOCS, markers
+
+    begin, end = markers("gallery")
+    text = DOCS.read_text(encoding="utf-8")
+    if begin not in text:
+        return []
+    body = text[text.index(begin):text.index(end)]
+    rows = [tuple(c.strip() for c in line.strip().strip("|").split("|")) for line in body.splitlines()
+            if line.startswith("| ") and not line.startswith("| scene")]
+    return [r for r in rows if len(r) == len(HEADER) and (r[0], r[1]) not in run]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenes", nargs="*", help="glob patterns under the examples folder, e.g. 'advanced/*'")
+    parser.add_argument("--limit", type=int, help="at most this many scenes")
+    parser.add_argument("--timeout", type=float, default=120.0, help="seconds allowed to each command")
+    parser.add_argument("--workers", type=int, default=2, help="scenes rendered at once (default: 2 cores)")
+    parser.add_argument("--resume", action="store_true", help="skip the scenes the table already holds")
+    args = parser.parse_args()
+    if not EXAMPLES.is_dir():
+        raise SystemExit(f"no {EXAMPLES}: install POV-Ray's sample scenes (make gallery runs "
+                         "apt-get install povray-examples)")
+    scenes = gallery_scenes(args.scenes)
+    if args.resume:
+        done = {row[0] for row in _kept_rows(set())}
+        scenes = [p for p in scenes if str(p.relative_to(EXAMPLES)) not in done]
+    scenes = scenes[:args.limit] if args.limit else scenes
+    total = len(gallery_scenes())
+    print(f"{len(scenes)} of {total} scenes with a camera", flush=True)
+    load = os.getloadavg()
+    kept = _kept_rows({(str(p.relative_to(EXAMPLES)), preset) for p in scenes for preset in PRESETS})
+    outcomes: list[Outcome] = []
+    with ProcessPoolExecutor(args.workers) as pool:
+        for result in pool.map(run_scene, scenes, [args.timeout] * len(scenes)):
+            for o in result:
+                outcomes.append(o)
+                print(" | ".join(_row(o)), flush=True)
+            _write(kept + [_row(o) for o in outcomes], total, args, load)   # after each scene: a stop keeps them
+    return 0
+
+
+def _write(rows: list[tuple[str, ...]], total: int, args: argparse.Namespace, load: tuple[float, ...]) -> None:
+    from benchmarks._common import table
+
+    rows = sorted(rows)
+    counts = {kind: sum(r[2] == kind for r in rows) for kind in ("ok", "refused", "timeout", "wrong", "crash")}
+    caption = (f"Gallery: {len({r[0] for r in rows})} of the {total} example scenes with a camera "
+               f"({', '.join(f'{v} {k}' for k, v in counts.items())} over {len(rows)} renders); "
+               f"`--quality draft`, each command capped at {args.timeout:g} s, {args.workers} at once")
+    write_table("gallery", table(caption, HEADER, rows, load))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
