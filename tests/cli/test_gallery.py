@@ -15,7 +15,10 @@ from benchmarks.gallery import EXAMPLES, MIN_DB, judge
 SQUARE = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch", "0.2", "--focal", "2")
 LENTICULAR = ("--grid", "lenticular", "--lenses", "32", "--rows", "96", "--ppl", "4", "--pixel-pitch", "0.25",
               "--focal", "1.5")
-INCLUDE = "issue 21 item 1: a camera written in an include is lost (frame native, no depth)"
+# The camera is found (frame camera, finite depth) but the views score 15 dB against the oblique
+# orthographic renders: screen.inc places its objects in front of the camera, on the camera's own
+# screen; why the views then differ is not yet known.
+SCREEN = "screen.inc's on-screen objects: views 15 dB against the oblique orthographic renders (open)"
 
 # scene, the construct it stands for, the display, the outcome expected ('ok' or 'refused')
 CASES = [
@@ -29,10 +32,9 @@ CASES = [
     ("advanced/sunsethf.pov", "large units (camera 310 units away), height field", SQUARE, "ok"),
     ("templates/Basic_Scenes/Orthographic_scene.pov", "orthographic camera", SQUARE, "refused"),
     ("camera/cylinder1.pov", "cylinder camera", SQUARE, "refused"),
-    pytest.param("objects/prism3a.pov", "camera in an include", SQUARE, "ok", marks=pytest.mark.xfail(
-        strict=True, reason=INCLUDE)),
+    pytest.param("objects/prism3a.pov", "camera in an include", SQUARE, "ok"),
     pytest.param("incdemo/screen.pov", "camera in an include (screen.inc)", SQUARE, "ok", marks=pytest.mark.xfail(
-        strict=True, reason=INCLUDE)),
+        strict=True, reason=SCREEN)),
 ]
 
 
