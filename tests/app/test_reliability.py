@@ -385,3 +385,55 @@ def test_unusable_cache_with_a_mesh_model(tmp_path, cli):
     lines = [line for line in result.err.splitlines() if line.strip()]
     assert lines and all(line.startswith("povh3d: warning: ") and "cache" in line for line in lines)
     assert read_png(tmp_path / "m.png").shape == (16, 24, 3)
+
+
+# -- issue 25: the cache never returns a stale image ------------------------------------------------
+LIT_SPHERE = "sphere {{ <0, 0, 3>, 5 pigment {{ rgb {} }} finish {{ emission 1 }} }}\n"
+
+
+@pytest.mark.parametrize("line", ['#declare T = now;', '#declare R = seed(floor(now * 86400));',
+                                  '#declare D = datetime(now);', '#if (file_exists("flag.txt")) #end'])
+def test_a_scene_that_reads_the_clock_or_the_disk_is_never_cached(tmp_path, cli, line):
+    scene = tmp_path / "s.pov"
+    scene.write_text(f"#version 3.7;\nglobal_settings {{ assumed_gamma 1.0 }}\n{line}\n" + LIT_SPHERE.format(1))
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    first = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert first.code == 0 and "not reproducible" in first.err, first.err
+    assert "not reproducible" in json.loads((tmp_path / "a.json").read_text())["timings"]["image_cache"]
+    assert not _entries(tmp_path / "cache"), "nothing stored: a second run must render again"
+    second = cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env)
+    assert second.code == 0 and json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] == 0
+
+
+def test_a_constant_scene_is_still_cached(tmp_path, cli):  # negative control of the test above
+    scene = tmp_path / "s.pov"
+    scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#declare T = "now";// now\n'
+                     + LIT_SPHERE.format(1))
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    assert cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env).code == 0
+    assert cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env).code == 0
+    assert json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] > 0
+
+
+@pytest.mark.parametrize("sandbox", ["require", "off"])
+def test_a_comment_mark_in_a_string_hides_no_include(tmp_path, cli, sandbox):
+    """``"a//b"`` is a string, not a comment: the ``#include`` after it on the line is read, so the
+    sandbox lets POV-Ray open it and the cache key sees its edits."""
+    (tmp_path / "part.inc").write_text(LIT_SPHERE.format(1))
+    scene = tmp_path / "s.pov"
+    scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n'
+                     '#declare U = "http://example.org"; #include "part.inc"\n')
+    env = {"POVH3D_SANDBOX": sandbox, "POVH3D_CACHE": str(tmp_path / "cache")}
+    first = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert first.code == 0, first.err
+    (tmp_path / "part.inc").write_text(LIT_SPHERE.format("<1, 0, 0>"))
+    assert cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env).code == 0
+    a, b = read_png(tmp_path / "a.png"), read_png(tmp_path / "b.png")
+    assert not np.array_equal(a, b), "the edit of the include shows"
+
+
+def test_a_binary_file_named_pov_is_not_a_text_scene(tmp_path, cli):
+    scene = tmp_path / "s.pov"
+    scene.write_bytes(bytes(range(256)) * 8)
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY), 3)
+    assert "not a text scene" in line and not (tmp_path / "a.png").exists()
