@@ -16,7 +16,7 @@ import numpy as np
 
 from PIL import Image
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, Povh3dError
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import Panel
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
@@ -35,7 +35,7 @@ from ..image.resample import resample_micro_images, trade_views_for_lenses
 def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | None,
               pixel_pitch: float | None) -> dict[str, Any]:
     """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
-    side = (read_sidecar(h3d_path) or {}).get("lens_array") or {}
+    side = lens_record(h3d_path)
     check_against_sidecar(h3d_path, side)
     if ppl is not None and side.get("views") and list(side["views"]) != to_edge(ppl):
         raise ConfigError(f"--ppl {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
@@ -49,6 +49,18 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
         pixel_pitch = side["panel"]["pixel_pitch_mm"][0]
     return {"ppl": ppl, "focal": focal, "pixel_pitch": pixel_pitch,
             "pixel_pitch_y": (side.get("panel") or {}).get("pixel_pitch_mm", [None, pixel_pitch])[1] or pixel_pitch}
+
+
+def lens_record(path: str | Path, key: str = "lens_array") -> dict[str, Any]:
+    """The sidecar's lens array entry (``{}`` without one), checked whole by ``Display.from_record``:
+    a damaged or forged one is one ``ConfigError`` here, not a crash in the work that reads it."""
+    from .display_setup import Display
+
+    side = (read_sidecar(path) or {}).get(key)
+    if side is None or side == {}:
+        return {}
+    Display.from_record({"lens_array": side})
+    return side
 
 
 def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
@@ -69,8 +81,8 @@ def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
 def is_lenticular(path: str | Path) -> bool:
     """Whether the sidecar of ``path`` describes a lenticular (horizontal-only) lens array."""
     try:
-        side = (read_sidecar(path) or {}).get("lens_array") or {}
-    except InputError:
+        side = lens_record(path)
+    except Povh3dError:
         return False
     return side.get("grid") == "lenticular"
 
@@ -110,7 +122,7 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
              panel: tuple[int, int] | None = None) -> dict[str, Any]:
     """Map an unmapped view-space H3D PNG onto a panel and write ``output`` with its sidecar."""
     image = read_png(input_path)
-    side = (read_sidecar(input_path) or {}).get("lens_array") or {}
+    side = lens_record(input_path)
     if side.get("grid") not in (None, "lenticular"):
         views = "x".join(map(str, side.get("views") or [])) or "its"
         raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
@@ -227,7 +239,7 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
                      source=str(Path(quilt_path).resolve()), size_px=to_edge(h3d.shape[:2]),
                      output_gamma="sRGB")
-    side = (read_sidecar(quilt_path) or {}).get("source_lens_array") or {}
+    side = lens_record(quilt_path, "source_lens_array")
     if side.get("views") == [int(views.shape[0]), 1] and side.get("panel", {}).get("size_px") == \
             to_edge(h3d.shape[:2]):
         record["lens_array"] = side

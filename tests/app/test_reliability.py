@@ -437,3 +437,77 @@ def test_a_binary_file_named_pov_is_not_a_text_scene(tmp_path, cli):
     scene.write_bytes(bytes(range(256)) * 8)
     line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY), 3)
     assert "not a text scene" in line and not (tmp_path / "a.png").exists()
+
+
+# -- issue 25: a views folder holds one render, complete ---------------------------------------------
+_VIEW_WRITER = """
+import sys, numpy as np
+from povh3d.app.views import write_views
+from tests.app.test_reliability import _stack
+seed, folder, rounds = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+for r in range(rounds):
+    write_views(folder, _stack(seed, r), None, {"seed": seed, "round": r})
+"""
+
+
+def _stack(seed: int, round_: int) -> np.ndarray:
+    """The views writer ``seed`` writes in its round ``round_``: every view differs, every render too."""
+    return np.random.default_rng([seed, round_]).integers(0, 256, (4, 4, 24, 32, 3), dtype=np.uint8)
+
+
+def _one_render(folder: Path) -> int:
+    """The seed of the one render the folder holds: its views are exactly that render's."""
+    from povh3d.app.views import read_views
+
+    source = json.loads((folder / "views.json").read_text())["source"]
+    assert np.array_equal(read_views(folder), _stack(source["seed"], source["round"])), "views of two renders"
+    return source["seed"]
+
+
+def test_two_writers_into_one_views_folder_leave_one_render(tmp_path):
+    folder = tmp_path / "views"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    for round_ in range(20):
+        writers = [subprocess.Popen([sys.executable, "-c", _VIEW_WRITER, str(seed), str(folder), "1"], env=env,
+                                    cwd=env["PYTHONPATH"])
+                   for seed in (round_ * 2 + 1, round_ * 2 + 2)]
+        assert [w.wait() for w in writers] == [0, 0]
+        assert _one_render(folder) in (round_ * 2 + 1, round_ * 2 + 2)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["views"], "no sibling left behind"
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
+def test_a_kill_while_views_are_written_leaves_one_render(tmp_path, signum):
+    folder = tmp_path / "views"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    subprocess.run([sys.executable, "-c", _VIEW_WRITER, "0", str(folder), "1"], env=env, check=True, cwd=env["PYTHONPATH"])
+    rng = np.random.default_rng(int(signum))
+    for trial in range(8):
+        writer = subprocess.Popen([sys.executable, "-c", _VIEW_WRITER, str(trial + 1), str(folder), "50"], env=env,
+                                  cwd=env["PYTHONPATH"])
+        time.sleep(0.4 + rng.uniform(0, 0.8))  # past the imports, somewhere in the writes
+        writer.send_signal(signum)
+        writer.wait()
+        assert _one_render(folder) in range(trial + 2)
+        assert not list(folder.glob("*.part")) and not list(folder.glob(".*"))
+    subprocess.run([sys.executable, "-c", _VIEW_WRITER, "99", str(folder), "1"], env=env, check=True, cwd=env["PYTHONPATH"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["views"], "the next write sweeps the killed one's sibling"
+
+
+def test_interleave_refuses_a_view_of_another_render(tmp_path, cli):
+    from povh3d.app.views import write_views
+
+    views = np.random.default_rng(3).integers(0, 256, (2, 2, 6, 8, 3), dtype=np.uint8)
+    write_views(tmp_path / "v", views, None)
+    assert cli("interleave", tmp_path / "v", "-o", tmp_path / "a.png").code == 0  # negative control
+    image_io.write_png(tmp_path / "v" / "v_001_000.png", views[0, 0])  # same size, another render's
+    line = one_error_line(cli("interleave", tmp_path / "v", "-o", tmp_path / "b.png"), 3)
+    assert "mixed" in line and not (tmp_path / "b.png").exists()
+
+
+def test_a_views_folder_with_other_files_is_refused_before_work(tmp_path, cli):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("keep me")
+    line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--views-dir", folder), 4)
+    assert "other files" in line and (folder / "notes.txt").read_text() == "keep me"
