@@ -61,11 +61,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command ``argv`` (None: ``sys.argv``, the command line's own run)."""
+    try:
+        return _main(argv)
+    finally:
+        if argv is None:
+            # The work is done and said: a signal from here on would end the interpreter's shutdown
+            # by signal (exit -15, no word), once Python has put back the default actions.  Ignored
+            # (process-wide: NumPy's threads take signals too), the exit code is the run's.
+            with contextlib.suppress(ValueError, OSError):
+                for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+                    signal.signal(signum, signal.SIG_IGN)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
+    _RECEIVED.clear()
     try:
         with _signals_as_interrupt(), _warnings_as_lines():
             return args.func(args)
@@ -81,23 +96,41 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f" {exc.filename!s}:" if exc.filename else ""
         fail(f"{where} {exc.strerror or exc}".strip(), 1)
     except Exception as exc:  # noqa: BLE001 - a bug: still one line, the traceback on request
+        if _RECEIVED:  # the KeyboardInterrupt hit an import in C (NumPy's): an ImportError says it
+            fail("interrupted", 130)
         if os.environ.get("POVH3D_DEBUG"):
             raise
         fail(f"internal error (a bug in povh3d, please report it): {type(exc).__name__}: {exc}; "
              "set POVH3D_DEBUG=1 for the traceback", 70)
 
 
+_RECEIVED: list[int] = []   # the signals that stopped this run
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    _RECEIVED.append(signum)
+    raise KeyboardInterrupt
+
+
+def redeliver() -> None:
+    """Send the last signal again (``povh3d.cli._unraisable``: its KeyboardInterrupt was swallowed)."""
+    if _RECEIVED:
+        signal.raise_signal(_RECEIVED[-1])
+
+
 @contextlib.contextmanager
 def _signals_as_interrupt():
     """SIGTERM and SIGHUP stop a run as Ctrl-C does: every child stopped, every temporary
     folder removed, no output replaced (they raise KeyboardInterrupt themselves: a shell
-    starts a background job with SIGINT ignored, and SIGTERM must still stop it)."""
+    starts a background job with SIGINT ignored, and SIGTERM must still stop it).  Afterwards
+    the handlers of ``povh3d.cli`` are back: a signal as the command ends is one line too."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     previous = {}
-    for signum in (signal.SIGTERM, signal.SIGHUP):
-        previous[signum] = signal.signal(signum, signal.default_int_handler)
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        if signum != signal.SIGINT or signal.getsignal(signum) is not signal.SIG_IGN:
+            previous[signum] = signal.signal(signum, _interrupt)
     try:
         yield
     finally:

@@ -511,3 +511,28 @@ def test_a_views_folder_with_other_files_is_refused_before_work(tmp_path, cli):
     (folder / "notes.txt").write_text("keep me")
     line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--views-dir", folder), 4)
     assert "other files" in line and (folder / "notes.txt").read_text() == "keep me"
+
+
+# -- issue 25: signals as the command starts and ends ------------------------------------------------
+_STARTER = ("import sys, importlib.util, povh3d; importlib.util.find_spec('povh3d.cli'); sys.stderr.write('up\\n'); sys.stderr.flush(); from povh3d.cli.main import main; "
+            "sys.argv[1:] = ['info', '--preset', 'demo']; sys.exit(main())")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_the_command_starts_or_ends_is_one_line(signum):
+    """From the moment ``povh3d.cli`` is imported (the interpreter's start-up and ``import povh3d``, a
+    library import that installs no handler, come before it): Ctrl-C during
+    the imports was a traceback, SIGTERM after the output an exit by signal without a word."""
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    rng = np.random.default_rng(int(signum))
+    for _ in range(25):
+        proc = subprocess.Popen([sys.executable, "-c", _STARTER], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                env=env)
+        assert proc.stderr.readline() == b"up\n"
+        time.sleep(rng.uniform(0.01, 0.5))  # 10 ms: the three lines before povh3d.cli's handlers
+        proc.send_signal(signum)
+        _, err = proc.communicate()
+        assert proc.returncode in (0, 130), (proc.returncode, err)
+        assert b"Traceback" not in err, err
+        if proc.returncode:
+            assert err.decode().strip().splitlines()[-1] == "povh3d: error: interrupted", err
