@@ -536,3 +536,19 @@ def test_a_signal_while_the_command_starts_or_ends_is_one_line(signum):
         assert b"Traceback" not in err, err
         if proc.returncode:
             assert err.decode().strip().splitlines()[-1] == "povh3d: error: interrupted", err
+
+
+def test_one_lens_one_pixel_is_refused_not_a_povray_crash(tmp_path, cli):
+    line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", "--preset", "demo", "--lenses", "1x1",
+                              "--ppl", "1", "--quality", "draft", "-q"), 2)
+    assert "one pixel wide" in line and "signal" not in line and not (tmp_path / "a.png").exists()
+    # negative control: two lenses across render
+    assert cli("render", SAMPLE, "-o", tmp_path / "b.png", "--preset", "demo", "--lenses", "2x1", "--ppl", "1",
+               "--quality", "draft", "-q").code == 0
+
+
+def test_a_scene_name_with_a_backslash_is_one_line(tmp_path, cli):
+    scene = tmp_path / "a\\b.pov"
+    scene.write_text("#version 3.7;\nsphere { <0, 0, 3>, 1 pigment { rgb 1 }\n")  # unclosed: past the end
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY))
+    assert "read past the end of a\\b.pov" in line and "internal error" not in line
