@@ -17,6 +17,7 @@ import numpy as np
 from PIL import Image
 
 from ..errors import ConfigError, InputError, Povh3dError
+from .budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_disk, check_memory
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import Panel
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
@@ -154,6 +155,14 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
                   ppl_out: tuple[int, int], mode: str = "micro") -> dict[str, Any]:
     image = read_png(input_path)
     out = png_output(output)
+    ny_in, nx_in = ppl_in
+    scale = (ppl_out[0] / max(ny_in, 1)) * (ppl_out[1] / max(nx_in, 1))
+    pixels = image.shape[0] * image.shape[1] * scale
+    # the output in float64 beside its encoded copy, and the input's float copy: 64 bytes a pixel
+    check_memory(f"resampling to {ppl_out[1]}x{ppl_out[0]} pixels per lens ({pixels:.3g} pixels)",
+                 pixels * 64 + image.size * 8, "give a smaller --ppl-out")
+    check_disk(out.parent, f"a {pixels:.3g} pixel image", pixels * image.shape[2] * image.itemsize,
+               "give a smaller --ppl-out or free some space")
     try:
         if mode == "micro":
             result = resample_micro_images(image, ppl_in, ppl_out)
@@ -269,9 +278,15 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
 
     A sweep writes ``output`` as the contact sheet and ``stem_NNN.png`` per plane beside it.
     """
+    if sweep is not None:
+        check_count("--sweep (planes)", int(sweep[2]), MAX_PLANES, "a sweep finds the sharpest depth in far fewer")
     image = read_png(h3d_path)
     views, offsets, pitch, focal = _views_geometry(image, info)
     out = png_output(output)
+    count = 1 if sweep is None else int(sweep[2])
+    plane = views.shape[2] * views.shape[3] * views.shape[4]
+    check_memory(f"{count} refocused plane(s)", (count * 3 * 4 + 4 * views.shape[0] * views.shape[1]) * plane,
+                 "give fewer planes (--sweep)")
     lin = to_linear(views, np.float32)
     depths = [float(depth)] if sweep is None else list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
     if not depths or (sweep is not None and int(sweep[2]) < 2):
@@ -311,6 +326,11 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
                           f"{nx}x{ny} pixels; check --ppl")
     if frames < 2:
         raise ConfigError("--frames must be at least 2")
+    check_count("--frames", frames, MAX_PREVIEW_FRAMES, "a preview of a few dozen frames shows the parallax")
+    # each frame: one pixel a lens, enlarged to about 480 pixels across (or by --scale), and its GIF copy
+    side = 480 if scale is None else scale * max(image.shape[1] // nx, image.shape[0] // ny)
+    check_memory(f"a preview of {frames} frames", frames * (2 * side * side * 3 + image.size // (nx * ny) * 8)
+                 + image.size * 8, "give fewer --frames or a smaller --scale")
     sheet_path = output.with_suffix(".png")
     check_writable(output)
     check_writable(sheet_path)

@@ -57,6 +57,10 @@ def build_parser() -> argparse.ArgumentParser:
     display.add_parsers(sub)
     calibration.add_parsers(sub)
     layout.add_parsers(sub)
+    for command in sub.choices.values():
+        command.add_argument("--max-memory", metavar="SIZE", default=None,
+                             help="most memory the command and each POV-Ray it starts may use, e.g. 4G "
+                                  "(default: the memory available; also POVH3D_MAX_MEMORY)")
     return parser
 
 
@@ -82,7 +86,7 @@ def _main(argv: Sequence[str] | None) -> int:
         return 2
     _RECEIVED.clear()
     try:
-        with _signals_as_interrupt(), _warnings_as_lines():
+        with _signals_as_interrupt(), _warnings_as_lines(), _memory_limit(getattr(args, "max_memory", None)):
             return args.func(args)
     except RenderInterrupted as exc:
         fail(str(exc) or "interrupted; every POV-Ray process was stopped", exc.exit_code)
@@ -136,6 +140,27 @@ def _signals_as_interrupt():
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+
+
+@contextlib.contextmanager
+def _memory_limit(size: str | None):
+    """``--max-memory``: kept in ``POVH3D_MAX_MEMORY`` for the run (``app.budget``, the POV-Ray
+    processes' own limit) and put back after it (``main`` also runs in-process, in tests)."""
+    if size is None:
+        yield
+        return
+    from ..app.budget import LIMIT_ENV, parse_size
+
+    parse_size(size)  # a bad size is one line before any work
+    previous = os.environ.get(LIMIT_ENV)
+    os.environ[LIMIT_ENV] = size
+    try:
+        yield
+    finally:
+        if previous is None:
+            os.environ.pop(LIMIT_ENV, None)
+        else:
+            os.environ[LIMIT_ENV] = previous
 
 
 @contextlib.contextmanager

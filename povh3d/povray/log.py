@@ -99,6 +99,9 @@ def parse_error(log: str) -> str | None:
     for find in (_first_error, _access_error, _fatal_error, _plain_error):
         message = find(lines)
         if message is not None:
+            if "bad_alloc" in message or "out of memory" in message.lower():
+                message += (" (POV-Ray ran out of the memory it may use: the memory available, or "
+                            "--max-memory; look for huge arrays or meshes in the scene)")
             return message
     return None
 

@@ -552,3 +552,36 @@ def test_a_scene_name_with_a_backslash_is_one_line(tmp_path, cli):
     scene.write_text("#version 3.7;\nsphere { <0, 0, 3>, 1 pigment { rgb 1 }\n")  # unclosed: past the end
     line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY))
     assert "read past the end of a\\b.pov" in line and "internal error" not in line
+
+
+# -- issue 25: bounds on memory, disk and work ----------------------------------------------------------
+def test_povray_runs_under_a_memory_limit_of_its_own(tmp_path, cli):
+    scene = tmp_path / "big.pov"
+    scene.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\nlight_source { <0, 0, -50> rgb 1 }\n"
+                     "#declare A = array[150000000];\n#declare B = array[150000000];\n"
+                     "sphere { <0, 0, 3>, 1 pigment { rgb 1 } }\n")  # 2.4 GB in POV-Ray, unbounded
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY, "--no-cache", "--max-memory", "1G"))
+    assert "bad_alloc" in line and "--max-memory" in line and not (tmp_path / "a.png").exists()
+
+
+def test_a_normal_render_fits_in_the_smallest_limit(tmp_path, cli):  # negative control of the above
+    assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--no-cache", "--max-memory", "1G").code == 0
+
+
+@pytest.mark.parametrize("command, estimate", [
+    (["resample", "{h3d}", "-o", "{out}", "--ppl-out", "1e9"], "of memory"),
+    (["resample", "{h3d}", "-o", "{out}", "--ppl-out", "1000", "--max-memory", "100M"], "your --max-memory limit"),
+    (["refocus", "{h3d}", "-o", "{out}", "--sweep", "100000"], "over 1000"),
+    (["preview", "{h3d}", "-o", "{gif}", "--frames", "100000"], "over 1000"),
+    (["render", str(SAMPLE), "-o", "{out}", *TINY, "--frames", "0:100000000"], "of disk"),
+    (["render", str(SAMPLE), "-o", "{out}", "--preset", "demo", "--max-memory", "1M"], "of memory"),
+])
+def test_work_past_the_machine_is_refused_at_once_with_its_estimate(tmp_path, cli, command, estimate):
+    h3d = tmp_path / "h.png"
+    assert cli("render", SAMPLE, "-o", h3d, *TINY).code == 0
+    before = sorted(p.name for p in tmp_path.iterdir())
+    start = time.monotonic()
+    args = [a.format(h3d=h3d, out=tmp_path / "o.png", gif=tmp_path / "o.gif") for a in command]
+    line = one_error_line(cli(*args), 2)
+    assert time.monotonic() - start < 5 and estimate in line, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == before, "nothing written"
