@@ -11,6 +11,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -585,3 +586,86 @@ def test_work_past_the_machine_is_refused_at_once_with_its_estimate(tmp_path, cl
     line = one_error_line(cli(*args), 2)
     assert time.monotonic() - start < 5 and estimate in line, line
     assert sorted(p.name for p in tmp_path.iterdir()) == before, "nothing written"
+
+
+# -- the fault table as a matrix: faults x commands x moments (docs/reliability.md) ---------------------
+MATRIX_COMMANDS = {
+    "render": ["render", str(SAMPLE), "-o", "out.png", *TINY],
+    "render-views": ["render", str(SAMPLE), "-o", "out.png", *TINY, "--views-dir", "views"],
+    "resample": ["resample", "h3d.png", "-o", "out.png", "--ppl-out", "2"],
+    "interleave": ["interleave", "views", "-o", "out.png"],
+}
+_FULL_DISK = ("import resource, signal, sys; signal.signal(signal.SIGXFSZ, signal.SIG_IGN); "
+              "from povh3d.cli.main import main; resource.setrlimit(resource.RLIMIT_FSIZE, (2000, 2000)); "
+              "sys.exit(main(sys.argv[1:]))")
+
+
+@pytest.fixture(scope="module")
+def matrix_reference(tmp_path_factory) -> Path:
+    """A folder with the inputs (h3d.png, views/) and, under ``clean/<command>``, each command's clean output."""
+    root = tmp_path_factory.mktemp("matrix")
+    env = {**os.environ, "POVH3D_CACHE": str(root / "cache")}
+    subprocess.run(cli_command("render", SAMPLE, "-o", root / "h3d.png", *TINY, "--views-dir", root / "views"),
+                   check=True, env=env, capture_output=True)
+    for name, args in MATRIX_COMMANDS.items():
+        work = root / "clean" / name
+        _matrix_inputs(root, work)
+        subprocess.run(cli_command(*args), cwd=work, check=True, env=env, capture_output=True)
+    return root
+
+
+def _matrix_inputs(root: Path, work: Path) -> None:
+    import shutil
+
+    work.mkdir(parents=True)
+    shutil.copy(root / "h3d.png", work / "h3d.png")
+    shutil.copy(root / "h3d.json", work / "h3d.json")
+    shutil.copytree(root / "views", work / "views")
+    write_image(work / "out.png", _noise(seed=5), base_record("h3d", note="previous"))  # the user's previous output
+
+
+def _views_state(folder: Path):
+    from povh3d.app.views import read_views
+
+    return read_views(folder)
+
+
+# The file-size limit holds from the start: one moment for it.
+@pytest.mark.parametrize("fault, moment", [("SIGTERM", "start"), ("SIGTERM", "work"), ("SIGKILL", "start"),
+                                           ("SIGKILL", "work"), ("full-disk", "start")])
+@pytest.mark.parametrize("command", sorted(MATRIX_COMMANDS))
+def test_fault_matrix(tmp_path, matrix_reference, command, fault, moment):
+    """Every fault at every moment of every command that writes: the previous output pair or the
+    new one, whole and equal to a clean run's; the views folder one render's; no traceback."""
+    work = tmp_path / "w"
+    _matrix_inputs(matrix_reference, work)
+    previous = (work / "out.png").read_bytes(), (work / "out.json").read_bytes()
+    previous_views = _views_state(work / "views")
+    env = {**os.environ, "POVH3D_CACHE": str(tmp_path / "cache")}
+    args = MATRIX_COMMANDS[command]
+    if fault == "full-disk":
+        proc = subprocess.Popen([sys.executable, "-c", _FULL_DISK, *args], cwd=work, env=env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    else:
+        proc = subprocess.Popen(cli_command(*args), cwd=work, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        rng = np.random.default_rng(zlib.crc32(f"{command} {fault} {moment}".encode()))
+        time.sleep(rng.uniform(0.05, 0.3) if moment == "start" else rng.uniform(0.6, 2.0))
+        proc.send_signal(getattr(signal, fault))
+    _, err = proc.communicate(timeout=120)
+    err = err.decode()
+    assert "Traceback" not in err and "internal error" not in err, err
+    assert proc.returncode in (0, 1, 4, 130, -signal.SIGKILL), (proc.returncode, err)
+    if proc.returncode not in (0, -signal.SIGKILL):
+        assert err.strip().splitlines()[-1].startswith("povh3d: error: "), err
+    clean = matrix_reference / "clean" / command
+    now = (work / "out.png").read_bytes(), (work / "out.json").read_bytes()
+    if now != previous:  # replaced: whole, and a clean run's pixels
+        assert read_sidecar(work / "out.png") is not None
+        assert np.array_equal(read_png(work / "out.png"), read_png(clean / "out.png"))
+    else:
+        assert proc.returncode != 0, "a run that succeeded replaced its output"
+    views = _views_state(work / "views")  # raises on a mixed folder
+    if command == "render-views" and not np.array_equal(views, previous_views):
+        assert np.array_equal(views, _views_state(clean / "views"))
+    if proc.returncode != -signal.SIGKILL:
+        assert not list(work.glob(".*.part")) and not list(work.glob(".views*")), sorted(os.listdir(work))
