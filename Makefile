@@ -13,7 +13,7 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 PRESET ?= demo
 QUALITY ?= normal
 
-.PHONY: help render test bench povray opengl venv clean
+.PHONY: help render test soak bench povray opengl venv clean
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-8s %s\n", $$1, $$2}'
@@ -42,6 +42,9 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 
 test: povray opengl venv ## run the test suite (POV-Ray tests included)
 	$(BIN)/python -m pytest -q
+
+soak: povray venv ## 200 random kills over renders, view writes and cache writes, each output checked (minutes)
+	$(BIN)/python -m pytest -q -s -m soak tests/app/test_soak.py
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py
