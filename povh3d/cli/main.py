@@ -112,14 +112,18 @@ _RECEIVED: list[int] = []   # the signals that stopped this run
 
 
 def _interrupt(signum: int, frame: object) -> None:
-    _RECEIVED.append(signum)
+    if signum != signal.SIGALRM:  # SIGALRM: ``redeliver``'s timer, the same stop again
+        _RECEIVED.append(signum)
     raise KeyboardInterrupt
 
 
 def redeliver() -> None:
-    """Send the last signal again (``povh3d.cli._unraisable``: its KeyboardInterrupt was swallowed)."""
+    """The KeyboardInterrupt of a signal was swallowed (raised in a callback: ``povh3d.cli._unraisable``):
+    raise it again in 10 ms, from a timer, out of the hook (raised in the hook it would be swallowed
+    too, with a traceback printed)."""
     if _RECEIVED:
-        signal.raise_signal(_RECEIVED[-1])
+        signal.signal(signal.SIGALRM, _interrupt)
+        signal.setitimer(signal.ITIMER_REAL, 0.01)
 
 
 @contextlib.contextmanager
@@ -138,6 +142,8 @@ def _signals_as_interrupt():
     try:
         yield
     finally:
+        if _RECEIVED:  # a stop delivered again (``redeliver``) must not outlive the run
+            signal.setitimer(signal.ITIMER_REAL, 0)
         for signum, handler in previous.items():
             signal.signal(signum, handler)
 
