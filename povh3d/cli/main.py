@@ -74,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             # by signal (exit -15, no word), once Python has put back the default actions.  Ignored
             # (process-wide: NumPy's threads take signals too), the exit code is the run's.
             with contextlib.suppress(ValueError, OSError):
-                for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+                for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGALRM):
                     signal.signal(signum, signal.SIG_IGN)
 
 
@@ -122,8 +122,11 @@ def redeliver() -> None:
     raise it again in 10 ms, from a timer, out of the hook (raised in the hook it would be swallowed
     too, with a traceback printed)."""
     if _RECEIVED:
-        signal.signal(signal.SIGALRM, _interrupt)
+        _ALARM.setdefault("previous", signal.signal(signal.SIGALRM, _interrupt))
         signal.setitimer(signal.ITIMER_REAL, 0.01)
+
+
+_ALARM: dict[str, object] = {}   # the SIGALRM handler ``redeliver`` replaced
 
 
 @contextlib.contextmanager
@@ -142,8 +145,9 @@ def _signals_as_interrupt():
     try:
         yield
     finally:
-        if _RECEIVED:  # a stop delivered again (``redeliver``) must not outlive the run
+        if "previous" in _ALARM:  # a stop delivered again (``redeliver``) must not outlive the run
             signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, _ALARM.pop("previous"))
         for signum, handler in previous.items():
             signal.signal(signum, handler)
 
