@@ -9,40 +9,16 @@ has no use past a count (refocus planes, preview frames) is refused over that co
 
 from __future__ import annotations
 
-import os
-import re
 import shutil
 from pathlib import Path
 
 from ..errors import ConfigError
-from ..system import available_memory
+from ..system import LIMIT_ENV, memory_budget, memory_limit, parse_size
 
-LIMIT_ENV = "POVH3D_MAX_MEMORY"
-_SIZE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([kmgt]?)i?b?\s*$", re.I)
-_UNITS = {"": 1, "k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
+__all__ = ["LIMIT_ENV", "check_count", "check_disk", "check_memory", "memory_budget", "parse_size"]
 # Past these the output is of no use to anyone and the work runs for minutes.
 MAX_PLANES = 1000
 MAX_PREVIEW_FRAMES = 1000
-
-
-def parse_size(text: str) -> int:
-    """``"4G"``, ``"512M"``, ``"2.5GiB"``, ``"1000000"`` (bytes) -> bytes; a ConfigError otherwise."""
-    match = _SIZE.match(str(text))
-    if not match or float(match[1]) <= 0:
-        raise ConfigError(f"--max-memory takes a size such as 4G or 512M, got {text!r}")
-    return int(float(match[1]) * _UNITS[match[2].lower()])
-
-
-def memory_limit() -> int | None:
-    """The user's limit in bytes (``--max-memory`` / ``POVH3D_MAX_MEMORY``), or None."""
-    text = os.environ.get(LIMIT_ENV)
-    return parse_size(text) if text else None
-
-
-def memory_budget() -> int | None:
-    """Bytes a run may use: the smaller of the user's limit and the memory available (None: unknown)."""
-    known = [b for b in (memory_limit(), available_memory()) if b is not None]
-    return min(known) if known else None
 
 
 def gib(n: float) -> str:

@@ -25,7 +25,6 @@ import contextlib
 import functools
 import os
 import re
-import resource
 import shutil
 import signal
 import subprocess
@@ -38,7 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
-from . import sandbox
+from . import limits, sandbox
 from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
     RenderInterrupted)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
@@ -230,39 +229,14 @@ def _spawn(command: list[str], folder: Path, env: dict[str, str],
         return subprocess.Popen(
             command, cwd=folder, env=env, stdin=subprocess.DEVNULL, stdout=log,
             stderr=subprocess.STDOUT, start_new_session=True,
-            preexec_fn=functools.partial(_child_setup, os.getpid(), ruleset_fd, _memory_limit(command)))
+            preexec_fn=functools.partial(_child_setup, os.getpid(), ruleset_fd, limits.address_space(command)))
     except OSError as error:
         raise PovrayNotFound(f"Cannot run POV-Ray at {command[0]}: "
                              f"{error.strerror}; {INSTALL_HINT}.") from None
 
 
-# Address space POV-Ray 3.7 reserves before a scene asks for anything: measured 400 MB (VmPeak)
-# for a small scene with 2 threads, most of it thread stacks and malloc arenas, which grow with
-# the threads.  A limit below this would break real renders, so it is never set lower.
-_BASE_ADDRESS_SPACE = 512 * 2**20
-_THREAD_ADDRESS_SPACE = 80 * 2**20
-
-
-def _memory_limit(command: list[str]) -> int | None:
-    """The address-space limit of one POV-Ray run (bytes): ``app.budget.memory_budget`` (the
-    user's ``--max-memory`` or the memory available), never under what POV-Ray reserves."""
-    from ..app.budget import memory_budget
-
-    budget = memory_budget()
-    if budget is None:
-        return None
-    threads = next((int(a[3:]) for a in command if a.startswith("+WT") and a[3:].isdigit()), os.cpu_count() or 1)
-    return max(budget, _BASE_ADDRESS_SPACE + threads * _THREAD_ADDRESS_SPACE)
-
-
 def _child_setup(parent: int, ruleset_fd: int | None, address_space: int | None) -> None:
-    """Before exec: POV-Ray's memory limit (a scene's ``array[150000000]`` fails in POV-Ray, not in
-    the machine), then the sandbox (``sandbox.child_setup``)."""
-    if address_space is not None:
-        try:
-            resource.setrlimit(resource.RLIMIT_AS, (address_space, address_space))
-        except (ValueError, OSError):
-            pass  # a hard limit already lower: it holds anyway
+    limits.set_address_space(address_space)  # POV-Ray's own memory limit (``limits``)
     sandbox.child_setup(parent, ruleset_fd)
 
 

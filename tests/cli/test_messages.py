@@ -171,7 +171,7 @@ def test_a_lit_scene_has_no_warning(tmp_path, cli):  # negative control of the t
 
 
 def test_a_panel_larger_than_memory_is_refused_before_rendering(tmp_path, cli, monkeypatch):
-    import povh3d.app.budget as budget_module
+    import povh3d.system as budget_module
 
     monkeypatch.setattr(budget_module, "available_memory", lambda: 2**20)  # 1 MiB free
     line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", "--quality", "draft"), 2)
