@@ -15,14 +15,11 @@ def _stop_quietly(signum, frame):  # noqa: ARG001 - a signal handler's signature
 
 def _unraisable(info):
     """A stop raised inside a callback Python cannot raise from (a weakref's, in an import) would
-    be printed as "Exception ignored ... Traceback" and lost: say it once and stop, or deliver the
-    signal again so that it lands where it can be raised."""
+    be printed as "Exception ignored ... Traceback" and lost.  Before ``main``: stop (the line is
+    said).  In ``main``: say nothing; ``main`` sees the signal it recorded and stops."""
     if isinstance(info.exc_value, SystemExit):
-        os._exit(130)  # ``_stop_quietly`` said it already; nothing to clean up before ``main``
+        os._exit(130)
     if isinstance(info.exc_value, KeyboardInterrupt):
-        from .main import redeliver
-
-        redeliver()
         return
     _previous_hook(info)
 

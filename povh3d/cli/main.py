@@ -74,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             # by signal (exit -15, no word), once Python has put back the default actions.  Ignored
             # (process-wide: NumPy's threads take signals too), the exit code is the run's.
             with contextlib.suppress(ValueError, OSError):
-                for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGALRM):
+                for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
                     signal.signal(signum, signal.SIG_IGN)
 
 
@@ -87,7 +87,10 @@ def _main(argv: Sequence[str] | None) -> int:
     _RECEIVED.clear()
     try:
         with _signals_as_interrupt(), _warnings_as_lines(), _memory_limit(getattr(args, "max_memory", None)):
-            return args.func(args)
+            code = args.func(args)
+        if _RECEIVED:  # its KeyboardInterrupt was swallowed (raised in a callback): still a stop
+            raise KeyboardInterrupt
+        return code
     except RenderInterrupted as exc:
         fail(str(exc) or "interrupted; every POV-Ray process was stopped", exc.exit_code)
     except KeyboardInterrupt:
@@ -112,21 +115,8 @@ _RECEIVED: list[int] = []   # the signals that stopped this run
 
 
 def _interrupt(signum: int, frame: object) -> None:
-    if signum != signal.SIGALRM:  # SIGALRM: ``redeliver``'s timer, the same stop again
-        _RECEIVED.append(signum)
+    _RECEIVED.append(signum)
     raise KeyboardInterrupt
-
-
-def redeliver() -> None:
-    """The KeyboardInterrupt of a signal was swallowed (raised in a callback: ``povh3d.cli._unraisable``):
-    raise it again in 10 ms, from a timer, out of the hook (raised in the hook it would be swallowed
-    too, with a traceback printed)."""
-    if _RECEIVED:
-        _ALARM.setdefault("previous", signal.signal(signal.SIGALRM, _interrupt))
-        signal.setitimer(signal.ITIMER_REAL, 0.01)
-
-
-_ALARM: dict[str, object] = {}   # the SIGALRM handler ``redeliver`` replaced
 
 
 @contextlib.contextmanager
@@ -145,9 +135,6 @@ def _signals_as_interrupt():
     try:
         yield
     finally:
-        if "previous" in _ALARM:  # a stop delivered again (``redeliver``) must not outlive the run
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, _ALARM.pop("previous"))
         for signum, handler in previous.items():
             signal.signal(signum, handler)
 
