@@ -15,7 +15,7 @@ PRESET ?= demo
 QUALITY ?= normal
 WORKERS ?= 2
 
-.PHONY: help render test test-fast bench gallery povray povray-examples opengl browser venv clean
+.PHONY: help render test test-fast soak bench gallery povray povray-examples opengl browser venv clean
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
@@ -57,6 +57,9 @@ test: povray povray-examples opengl browser venv ## run the whole test suite, PO
 
 test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
 	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile --fast
+
+soak: povray venv ## 200 random kills over renders, view writes and cache writes, each output checked (minutes)
+	$(BIN)/python -m pytest -q -s -m soak tests/app/test_soak.py
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py

@@ -4,6 +4,7 @@ folder and the POV-Ray binary (looked up here alone)."""
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from pathlib import Path
 from functools import cache
@@ -145,3 +146,30 @@ def binary_key(binary: str) -> str | None:
     except OSError:
         return None
     return f"{path}|{stat.st_size}|{stat.st_mtime_ns}"
+
+
+LIMIT_ENV = "POVH3D_MAX_MEMORY"   # ``--max-memory``, kept here for every part of the run
+_SIZE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([kmgt]?)i?b?\s*$", re.I)
+_UNITS = {"": 1, "k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
+
+
+def parse_size(text: str) -> int:
+    """``"4G"``, ``"512M"``, ``"2.5GiB"``, ``"1000000"`` (bytes) -> bytes; a ConfigError otherwise."""
+    from .errors import ConfigError
+
+    match = _SIZE.match(str(text))
+    if not match or float(match[1]) <= 0:
+        raise ConfigError(f"--max-memory takes a size such as 4G or 512M, got {text!r}")
+    return int(float(match[1]) * _UNITS[match[2].lower()])
+
+
+def memory_limit() -> int | None:
+    """The user's limit in bytes (``--max-memory`` / ``POVH3D_MAX_MEMORY``), or None."""
+    text = os.environ.get(LIMIT_ENV)
+    return parse_size(text) if text else None
+
+
+def memory_budget() -> int | None:
+    """Bytes a run may use: the smaller of the user's limit and the memory available (None: unknown)."""
+    known = [b for b in (memory_limit(), available_memory()) if b is not None]
+    return min(known) if known else None

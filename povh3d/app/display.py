@@ -16,7 +16,8 @@ import numpy as np
 
 from PIL import Image
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, Povh3dError
+from .budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_disk, check_memory
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import Panel
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
@@ -35,7 +36,7 @@ from ..image.resample import resample_micro_images, trade_views_for_lenses
 def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | None,
               pixel_pitch: float | None) -> dict[str, Any]:
     """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
-    side = (read_sidecar(h3d_path) or {}).get("lens_array") or {}
+    side = lens_record(h3d_path)
     check_against_sidecar(h3d_path, side)
     if ppl is not None and side.get("views") and list(side["views"]) != to_edge(ppl):
         raise ConfigError(f"--ppl {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
@@ -53,6 +54,18 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
         pixel_pitch = side["panel"]["pixel_pitch_mm"][0]
     return {"ppl": ppl, "focal": focal, "pixel_pitch": pixel_pitch,
             "pixel_pitch_y": (side.get("panel") or {}).get("pixel_pitch_mm", [None, pixel_pitch])[1] or pixel_pitch}
+
+
+def lens_record(path: str | Path, key: str = "lens_array") -> dict[str, Any]:
+    """The sidecar's lens array entry (``{}`` without one), checked whole by ``Display.from_record``:
+    a damaged or forged one is one ``ConfigError`` here, not a crash in the work that reads it."""
+    from .display_setup import Display
+
+    side = (read_sidecar(path) or {}).get(key)
+    if side is None or side == {}:
+        return {}
+    Display.from_record({"lens_array": side})
+    return side
 
 
 def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
@@ -73,8 +86,8 @@ def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
 def is_lenticular(path: str | Path) -> bool:
     """Whether the sidecar of ``path`` describes a lenticular (horizontal-only) lens array."""
     try:
-        side = (read_sidecar(path) or {}).get("lens_array") or {}
-    except InputError:
+        side = lens_record(path)
+    except Povh3dError:
         return False
     return side.get("grid") == "lenticular"
 
@@ -128,7 +141,7 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
              panel: tuple[int, int] | None = None) -> dict[str, Any]:
     """Map an unmapped view-space H3D PNG onto a panel and write ``output`` with its sidecar."""
     image = read_png(input_path)
-    side = (read_sidecar(input_path) or {}).get("lens_array") or {}
+    side = lens_record(input_path)
     if side.get("grid") not in (None, "lenticular"):
         views = "x".join(map(str, side.get("views") or [])) or "its"
         raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
@@ -160,6 +173,14 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
                   ppl_out: tuple[int, int], mode: str = "micro") -> dict[str, Any]:
     image = read_whole_lenses(input_path)
     out = png_output(output)
+    ny_in, nx_in = ppl_in
+    scale = (ppl_out[0] / max(ny_in, 1)) * (ppl_out[1] / max(nx_in, 1))
+    pixels = image.shape[0] * image.shape[1] * scale
+    # the output in float64 beside its encoded copy, and the input's float copy: 64 bytes a pixel
+    check_memory(f"resampling to {ppl_out[1]}x{ppl_out[0]} pixels per lens ({pixels:.3g} pixels)",
+                 pixels * 64 + image.size * 8, "give a smaller --ppl-out")
+    check_disk(out.parent, f"a {pixels:.3g} pixel image", pixels * image.shape[2] * image.itemsize,
+               "give a smaller --ppl-out or free some space")
     try:
         if mode == "micro":
             result = resample_micro_images(image, ppl_in, ppl_out)
@@ -289,7 +310,7 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),
                      source=str(Path(quilt_path).resolve()), size_px=to_edge(h3d.shape[:2]),
                      output_gamma="sRGB")
-    side = (read_sidecar(quilt_path) or {}).get("source_lens_array") or {}
+    side = lens_record(quilt_path, "source_lens_array")
     if side.get("views") == [int(views.shape[0]), 1] and side.get("panel", {}).get("size_px") == \
             to_edge(h3d.shape[:2]):
         record["lens_array"] = side
@@ -319,9 +340,15 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
 
     A sweep writes ``output`` as the contact sheet and ``stem_NNN.png`` per plane beside it.
     """
+    if sweep is not None:
+        check_count("--sweep (planes)", int(sweep[2]), MAX_PLANES, "a sweep finds the sharpest depth in far fewer")
     image = read_whole_lenses(h3d_path)
     views, offsets, pitch, focal = _views_geometry(image, info)
     out = png_output(output)
+    count = 1 if sweep is None else int(sweep[2])
+    plane = views.shape[2] * views.shape[3] * views.shape[4]
+    check_memory(f"{count} refocused plane(s)", (count * 3 * 4 + 4 * views.shape[0] * views.shape[1]) * plane,
+                 "give fewer planes (--sweep)")
     lin = to_linear(views, np.float32)
     depths = [float(depth)] if sweep is None else list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
     if not depths or (sweep is not None and int(sweep[2]) < 2):
@@ -361,6 +388,11 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
                           f"{nx}x{ny} pixels; check --ppl")
     if frames < 2:
         raise ConfigError("--frames must be at least 2")
+    check_count("--frames", frames, MAX_PREVIEW_FRAMES, "a preview of a few dozen frames shows the parallax")
+    # each frame: one pixel a lens, enlarged to about 480 pixels across (or by --scale), and its GIF copy
+    side = 480 if scale is None else scale * max(image.shape[1] // nx, image.shape[0] // ny)
+    check_memory(f"a preview of {frames} frames", frames * (2 * side * side * 3 + image.size // (nx * ny) * 8)
+                 + image.size * 8, "give fewer --frames or a smaller --scale")
     sheet_path = output.with_suffix(".png")
     check_writable(output)
     check_writable(sheet_path)

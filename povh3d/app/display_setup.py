@@ -12,6 +12,7 @@ layer allowed to know all four and to read a user's file; the engine receives fr
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping as MappingABC
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -104,22 +105,70 @@ class Display:
     @classmethod
     def from_record(cls, record: MappingABC[str, Any]) -> Display:
         """The display a sidecar describes (``as_record``; a sidecar without a ``display`` entry is a
-        lens array alone).  Its ``lens_array`` is the array the image was rendered through."""
-        side = record.get("lens_array") or {}
+        lens array alone).  Its ``lens_array`` is the array the image was rendered through.
+
+        A damaged or forged sidecar (a field of the wrong type, a NaN, a zero pitch, zero views) is
+        one ``ConfigError`` naming the field, never a crash further on.
+        """
+        side = record.get("lens_array") if isinstance(record, MappingABC) else None
+        if not isinstance(side, MappingABC):
+            raise ConfigError(f"the sidecar's lens_array is {_kind(side)}, not a lens array; "
+                              "delete the sidecar and give --ppl NxxNy")
         try:
+            _check_pairs(side, ("lenses", "lens_pitch_mm"), ("views",))
             lens_array = LensArray(side["grid"], *side["lenses"], *side["lens_pitch_mm"], side["focal_mm"],
                                    _panel(side["panel"]), side.get("rotation_deg", 0.0),
                                    tuple(map(tuple, side["lattice_mm"])) if "lattice_mm" in side else None)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ConfigError(f"the sidecar's lens array is incomplete ({exc}); give --ppl NxxNy") from None
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError, ZeroDivisionError) as exc:
+            raise ConfigError(f"the sidecar's lens array is incomplete or damaged ({type(exc).__name__}: {exc}); "
+                              "delete the sidecar and give --ppl NxxNy") from None
+        if side.get("views") is not None and [int(v) for v in side["views"]] != \
+                (list(lens_array.views[::-1]) if lens_array.views else None):
+            raise ConfigError(f"the sidecar's lens array has views {side['views']!r}, which its lenses and panel "
+                              "contradict; delete the sidecar and give --ppl NxxNy")
         d = record.get("display") or {}
-        return cls(lens_array, d.get("preset"), d.get("description"), d.get("views"), d.get("slant_deg"),
-                   d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
-                   sheet=d.get("sheet"), quilt=d.get("quilt"))
+        if not isinstance(d, MappingABC):
+            raise ConfigError(f"the sidecar's display is {_kind(d)}, not a display; delete the sidecar")
+        views, slant = d.get("views"), d.get("slant_deg")
+        if views is not None and (isinstance(views, bool) or not isinstance(views, int) or views < 1):
+            raise ConfigError(f"the sidecar's display has {views!r} views, not a whole number >= 1; delete the sidecar")
+        if slant is not None and not _finite(slant):
+            raise ConfigError(f"the sidecar's display slant {slant!r} is not a finite number; delete the sidecar")
+        try:
+            return cls(lens_array, d.get("preset"), d.get("description"), views, slant,
+                       d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
+                       sheet=d.get("sheet") if isinstance(d.get("sheet"), MappingABC) else None,
+                       quilt=d.get("quilt") if isinstance(d.get("quilt"), MappingABC) else None)
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as exc:
+            raise ConfigError(f"the sidecar's display is damaged ({type(exc).__name__}: {exc}); "
+                              "delete the sidecar") from None
+
+
+def _kind(value: Any) -> str:
+    return "missing" if value is None else f"a {type(value).__name__} ({str(value)[:40]!r})"
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _check_pairs(side: MappingABC[str, Any], numbers: tuple[str, ...], counts: tuple[str, ...]) -> None:
+    """Each of ``numbers`` two finite numbers; each of ``counts``, when given, two whole numbers >= 1."""
+    for key in numbers + counts:
+        value = side.get(key)
+        if value is None and key in counts:
+            continue
+        if not (isinstance(value, list) and len(value) == 2 and all(map(_finite, value))):
+            raise ValueError(f"{key} is {value!r}, not two finite numbers")
+        if key in counts and not all(float(v).is_integer() and v >= 1 for v in value):
+            raise ValueError(f"{key} is {value!r}, not two whole numbers >= 1")
 
 
 def _panel(record: MappingABC[str, Any]) -> Panel:
     (w, h), (sx, sy) = record["size_px"], record["pixel_pitch_mm"]
+    if not all(map(_finite, (w, h, sx, sy))) or not (float(w).is_integer() and float(h).is_integer()):
+        raise ValueError(f"the panel {record['size_px']!r} px, {record['pixel_pitch_mm']!r} mm is not whole "
+                         "pixels and finite pitches")
     return Panel(int(w), int(h), float(sx), float(sy))
 
 

@@ -79,8 +79,8 @@ def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
     if povray is None:
         return None
     loaded = load_scene(scene, tuple(include_dirs))  # a missing scene: the same one-line error
-    if loaded.computed_names:
-        return None
+    if loaded.computed_names or not loaded.reproducible:
+        return None  # the render says why it is not cached
     kept = {k: v for k, v in options.items() if k not in _IGNORED}
     kept.update(scene=str(loaded.path), include=[str(d) for d in loaded.include_dirs],
                 output=os.path.abspath(output))

@@ -21,7 +21,8 @@ from ..engine.methods import run_method
 from ..engine.clock_runs import ClockSequence
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..errors import ConfigError, warn
-from ..system import available_memory
+from pathlib import Path
+from .budget import check_disk, check_memory as check_memory_budget
 from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
@@ -118,10 +119,11 @@ def check_memory(request: RenderRequest) -> None:
     w, h = request.image_size
     rw, rh = request.render_array.panel.width, request.render_array.panel.height
     need = max(w * h, rw * rh) * BYTES_PER_PIXEL
-    free = available_memory()
-    if free is not None and need > free:
-        raise ConfigError(f"a {rw}x{rh} pixel render needs at least {need / 2**30:.3g} GiB of memory, more than "
-                          f"the {free / 2**30:.3g} GiB available; use fewer lenses (--lenses) or pixels per lens (--ppl)")
+    check_memory_budget(f"a {rw}x{rh} pixel render", need, "use fewer lenses (--lenses) or pixels per lens (--ppl)")
+    if request.frames is not None:  # every frame is a PNG of at most 3 (8-bit) or 6 bytes a pixel, staged
+        count = request.frames.last - request.frames.first + 1
+        check_disk(Path(request.output).parent, f"{count} frames of {w}x{h} pixels", count * w * h * 3,
+                   "render fewer frames (--frames FIRST:LAST) or free some space")
 
 
 def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:

@@ -69,18 +69,40 @@ def build_parser() -> argparse.ArgumentParser:
     calibration.add_parsers(sub)
     layout.add_parsers(sub)
     hyper.add_parsers(sub)
+    for command in sub.choices.values():
+        command.add_argument("--max-memory", metavar="SIZE", default=None,
+                             help="most memory the command and each POV-Ray it starts may use, e.g. 4G "
+                                  "(default: the memory available; also POVH3D_MAX_MEMORY)")
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command ``argv`` (None: ``sys.argv``, the command line's own run)."""
+    try:
+        return _main(argv)
+    finally:
+        if argv is None:
+            # The work is done and said: a signal from here on would end the interpreter's shutdown
+            # by signal (exit -15, no word), once Python has put back the default actions.  Ignored
+            # (process-wide: NumPy's threads take signals too), the exit code is the run's.
+            with contextlib.suppress(ValueError, OSError):
+                for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+                    signal.signal(signum, signal.SIG_IGN)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
+    _RECEIVED.clear()
     try:
-        with _signals_as_interrupt(), _warnings_as_lines():
-            return args.func(args)
+        with _signals_as_interrupt(), _warnings_as_lines(), _memory_limit(getattr(args, "max_memory", None)):
+            code = args.func(args)
+        if _RECEIVED:  # its KeyboardInterrupt was swallowed (raised in a callback): still a stop
+            raise KeyboardInterrupt
+        return code
     except RenderInterrupted as exc:
         fail(str(exc) or "interrupted; every POV-Ray process was stopped", exc.exit_code)
     except KeyboardInterrupt:
@@ -93,28 +115,61 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f" {exc.filename!s}:" if exc.filename else ""
         fail(f"{where} {exc.strerror or exc}".strip(), 1)
     except Exception as exc:  # noqa: BLE001 - a bug: still one line, the traceback on request
+        if _RECEIVED:  # the KeyboardInterrupt hit an import in C (NumPy's): an ImportError says it
+            fail("interrupted", 130)
         if os.environ.get("POVH3D_DEBUG"):
             raise
         fail(f"internal error (a bug in povh3d, please report it): {type(exc).__name__}: {exc}; "
              "set POVH3D_DEBUG=1 for the traceback", 70)
 
 
+_RECEIVED: list[int] = []   # the signals that stopped this run
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    _RECEIVED.append(signum)
+    raise KeyboardInterrupt
+
+
 @contextlib.contextmanager
 def _signals_as_interrupt():
     """SIGTERM and SIGHUP stop a run as Ctrl-C does: every child stopped, every temporary
     folder removed, no output replaced (they raise KeyboardInterrupt themselves: a shell
-    starts a background job with SIGINT ignored, and SIGTERM must still stop it)."""
+    starts a background job with SIGINT ignored, and SIGTERM must still stop it).  Afterwards
+    the handlers of ``povh3d.cli`` are back: a signal as the command ends is one line too."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     previous = {}
-    for signum in (signal.SIGTERM, signal.SIGHUP):
-        previous[signum] = signal.signal(signum, signal.default_int_handler)
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        if signum != signal.SIGINT or signal.getsignal(signum) is not signal.SIG_IGN:
+            previous[signum] = signal.signal(signum, _interrupt)
     try:
         yield
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+
+
+@contextlib.contextmanager
+def _memory_limit(size: str | None):
+    """``--max-memory``: kept in ``POVH3D_MAX_MEMORY`` for the run (``app.budget``, the POV-Ray
+    processes' own limit) and put back after it (``main`` also runs in-process, in tests)."""
+    if size is None:
+        yield
+        return
+    from ..app.budget import LIMIT_ENV, parse_size
+
+    parse_size(size)  # a bad size is one line before any work
+    previous = os.environ.get(LIMIT_ENV)
+    os.environ[LIMIT_ENV] = size
+    try:
+        yield
+    finally:
+        if previous is None:
+            os.environ.pop(LIMIT_ENV, None)
+        else:
+            os.environ[LIMIT_ENV] = previous
 
 
 @contextlib.contextmanager

@@ -55,9 +55,11 @@ class RenderStats:
     povray_seconds: list[float] = field(default_factory=list)
     wall_seconds: float = 0.0
     povray_version: str = ""
+    uncached: str = ""   # why the image cache was not used, when the scene forbids it
 
     def as_record(self) -> dict[str, Any]:
         return {"frames": self.frames, "frames_from_cache": self.cached, "povray_jobs": self.jobs,
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),
-                "wall_seconds": round(self.wall_seconds, 4)}
+                "wall_seconds": round(self.wall_seconds, 4),
+                **({"image_cache": f"not used: {self.uncached}"} if self.uncached else {})}

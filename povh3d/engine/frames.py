@@ -121,6 +121,11 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
              "runs unconfined here (POVH3D_SANDBOX=off or no Landlock), so povh3d cannot know every file "
              "it reads: not using the image cache for it")
         cache = None
+    if cache is not None and not scene.reproducible:
+        # Two parses differ (the time, the file system): a cached image would be stale.
+        stats.uncached = f"the scene reads {', '.join(scene.volatile)}, so its image is not reproducible"
+        warn(f"{scene.path.name}: {stats.uncached}: not using the image cache for it")
+        cache = None
 
     keys = shot_keys(stats.povray_version, scene, batch, header, settings)
     images: list[np.ndarray | None] = [None] * len(keys)

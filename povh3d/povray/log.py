@@ -99,6 +99,9 @@ def parse_error(log: str) -> str | None:
     for find in (_first_error, _access_error, _fatal_error, _plain_error):
         message = find(lines)
         if message is not None:
+            if "bad_alloc" in message or "out of memory" in message.lower():
+                message += (" (POV-Ray ran out of the memory it may use: the memory available, or "
+                            "--max-memory; look for huge arrays or meshes in the scene)")
             return message
     return None
 
@@ -267,6 +270,7 @@ def past_scene_end(message: str, scene_name: str, script_name: str = "scene.pov"
     """`message` with a location in povh3d's own script (`script_name`, which includes the
     user's scene) said as what it means: POV-Ray read on past the end of `scene_name`,
     so the cause is most likely there (an unclosed brace, a missing ';')."""
-    return re.sub(rf"(?<=: ){re.escape(script_name)} line \d+: ",
-                  f"POV-Ray read past the end of {scene_name} into povh3d's own script, so look at the end "
-                  f"of {scene_name} (an unclosed brace, a missing ';'): ", message, count=1)
+    said = (f"POV-Ray read past the end of {scene_name} into povh3d's own script, so look at the end "
+            f"of {scene_name} (an unclosed brace, a missing ';'): ")
+    # A function, not a template: a name with a backslash (``a\\b.pov``) is text, not an escape.
+    return re.sub(rf"(?<=: ){re.escape(script_name)} line \d+: ", lambda _: said, message, count=1)

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
-from . import sandbox
+from . import limits, sandbox
 from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout,
     RenderInterrupted)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
@@ -229,10 +229,15 @@ def _spawn(command: list[str], folder: Path, env: dict[str, str],
         return subprocess.Popen(
             command, cwd=folder, env=env, stdin=subprocess.DEVNULL, stdout=log,
             stderr=subprocess.STDOUT, start_new_session=True,
-            preexec_fn=functools.partial(sandbox.child_setup, os.getpid(), ruleset_fd))
+            preexec_fn=functools.partial(_child_setup, os.getpid(), ruleset_fd, limits.address_space(command)))
     except OSError as error:
         raise PovrayNotFound(f"Cannot run POV-Ray at {command[0]}: "
                              f"{error.strerror}; {INSTALL_HINT}.") from None
+
+
+def _child_setup(parent: int, ruleset_fd: int | None, address_space: int | None) -> None:
+    limits.set_address_space(address_space)  # POV-Ray's own memory limit (``limits``)
+    sandbox.child_setup(parent, ruleset_fd)
 
 
 JOB_PREFIX = "povh3d-"  # job folders: povh3d-<owner pid>-<random>

@@ -70,12 +70,17 @@ class Features:
         return sorted(self.used)
 
 
-COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
+# A string literal first: POV-Ray reads ``"a//b"`` as a string, not as the start of a comment, so
+# the comment marks inside a string must not hide what follows it on the line (``#include``).
+_STRING_OR_COMMENT = re.compile(r'"(?:\\.|[^"\\\n])*"|//[^\n]*|/\*.*?\*/', re.S)
 
 
 def strip_comments(text: str) -> str:
-    """POV-Ray source without its ``//`` and ``/* */`` comments."""
-    return COMMENTS.sub("", text)
+    """POV-Ray source without its ``//`` and ``/* */`` comments; string literals are kept whole.
+
+    A comment becomes one space (``a/**/b`` is two words to POV-Ray, as here).
+    """
+    return _STRING_OR_COMMENT.sub(lambda m: m.group() if m.group().startswith('"') else " ", text)
 
 
 def words_of(text: str) -> frozenset[str]:

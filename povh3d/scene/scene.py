@@ -42,7 +42,13 @@ from pathlib import Path
 from ..errors import InputError
 from .features import Features, features_of_words, strip_comments, words_of
 
-_STRING = re.compile(r'"([^"\n]{1,400})"')
+_STRING = re.compile(r'"((?:\\.|[^"\\\n]){1,400})"')
+# What makes two parses of the same text differ: the clock of the machine (``now``, and ``datetime``,
+# which formats it) and the file system at parse time (``file_exists``).  POV-Ray 3.7 reads no
+# environment variable.  An image from such a scene is never cached.
+_VOLATILE_WORDS = frozenset(("now", "datetime", "file_exists"))
+# Files that are not the same twice: devices, the kernel's views of processes and hardware.
+_VOLATILE_FOLDERS = ("/dev/", "/proc/", "/sys/")
 # A directive or file keyword followed by anything but a string literal: a name computed at parse time.
 _COMPUTED_DIRECTIVE = re.compile(r'#\s*(?:include|fopen\s+\w+|read_file)\s+[^"\s]')
 _FILE_TYPES = frozenset(("png", "jpeg", "tga", "gif", "iff", "ppm", "pgm", "sys", "exr", "hdr", "tiff", "df3", "ttf"))
@@ -76,6 +82,8 @@ class Scene:
     lit : bool                whether its sources mention a light_source, emission or radiosity
     ascii_names : tuple[tuple[str, Path], ...]   (the name POV-Ray 3.7 asks for, the file) for each
                               file the scene names with non-ASCII characters (``pov_ascii_names``)
+    volatile : tuple[str, ...]  what makes its image differ from one parse to the next: the words
+                              ``now``, ``datetime``, ``file_exists`` or a device file it names
     """
 
     path: Path
@@ -89,11 +97,17 @@ class Scene:
     lit: bool = True
     ascii_names: tuple[tuple[str, Path], ...] = ()
     animation_words: frozenset[str] = frozenset()
+    volatile: tuple[str, ...] = ()
 
     def include_text(self, name: str) -> str | None:
         """The text of the file ``#include "name"`` reads (the scene's folders, then POV-Ray's), or None."""
         found = _find(name, [*self.include_dirs, *system_include_dirs()])
         return None if found is None else found.read_bytes().decode("latin-1")
+
+    @property
+    def reproducible(self) -> bool:
+        """Whether two renders of the scene's text give the same image (``volatile`` is empty)."""
+        return not self.volatile
 
 
 # A scene with neither shows its objects in their ambient colour only (nearly black).
@@ -113,12 +127,17 @@ def system_include_dirs() -> tuple[Path, ...]:
     return tuple(dict.fromkeys(found))
 
 
-def _read_text(path: Path) -> str:
+def _read_text(path: Path) -> str | None:
+    """The text of ``path`` without comments; None for binary data in a file that is not POV-Ray source."""
     try:
-        text = path.read_bytes().decode("latin-1")  # POV-Ray sources are bytes; never fail on encoding
+        data = path.read_bytes()
     except OSError as exc:
         raise InputError(f"cannot read {str(path)!r}: {exc.strerror}") from None
-    return strip_comments(text)
+    if b"\0" in data[:65536]:  # no POV-Ray source holds a NUL byte; an image or a program does
+        if path.suffix.lower() not in _SOURCE_SUFFIXES:
+            return None  # a data file: hashed, not read for names
+        raise InputError(f"{str(path)!r} is not a text scene (it holds binary data); give a POV-Ray source file")
+    return strip_comments(data.decode("latin-1"))  # POV-Ray sources are bytes; never fail on encoding
 
 
 def _find(name: str, folders: list[Path]) -> Path | None:
@@ -187,6 +206,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     pending = [(scene, True)]
     sets_gamma = computed = False
     named: dict[str, Path] = {}       # non-ASCII file names in the scene's text, and their files
+    volatile: set[str] = set()
     while pending:
         current, is_own = pending.pop()
         if current in seen:
@@ -198,13 +218,20 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         if suffix not in _TEXT_SUFFIXES:
             continue  # images, fonts, density files: hash them, do not parse them
         text = _read_text(current)
+        if text is None:
+            continue
         words = words_of(text) if suffix in _SOURCE_SUFFIXES else frozenset()
         if suffix in _SOURCE_SUFFIXES:
             sources.append(words)
         if is_own:
             sets_gamma = sets_gamma or "assumed_gamma" in words
             computed = computed or (suffix in _SOURCE_SUFFIXES and _computed_name(text, words))
+            if words & _VOLATILE_WORDS:  # a second look, without strings: "now" in a string reads no clock
+                volatile.update(words_of(_STRING.sub(" ", text)) & _VOLATILE_WORDS)
         for name in _STRING.findall(text):
+            if name.startswith(_VOLATILE_FOLDERS):
+                volatile.add(name)  # never hashed: reading /dev/zero would not end
+                continue
             found = _find(name, [current.parent, *dirs] if is_own else [current.parent, *system])
             if found is not None:
                 pending.append((found, is_own))
@@ -222,7 +249,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
                  features_of_words(sources), any(_CLOCK_WORDS & w for w in sources), computed,
                  any(_LIGHT_WORDS & w for w in sources), _ascii_links(named),
-                 frozenset().union(*(_CLOCK_WORDS & w for w in sources)))
+                 frozenset().union(*(_CLOCK_WORDS & w for w in sources)), tuple(sorted(volatile)))
 
 
 def _computed_name(text: str, words: frozenset[str]) -> bool:

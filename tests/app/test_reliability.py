@@ -11,6 +11,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -407,3 +408,293 @@ def test_unusable_cache_with_a_mesh_model(tmp_path, cli):
     lines = [line for line in result.err.splitlines() if line.strip()]
     assert lines and all(line.startswith("povh3d: warning: ") and "cache" in line for line in lines)
     assert read_png(tmp_path / "m.png").shape == (16, 24, 3)
+
+
+# -- issue 25: the cache never returns a stale image ------------------------------------------------
+LIT_SPHERE = "sphere {{ <0, 0, 3>, 5 pigment {{ rgb {} }} finish {{ emission 1 }} }}\n"
+
+
+@pytest.mark.parametrize("line", ['#declare T = now;', '#declare R = seed(floor(now * 86400));',
+                                  '#declare D = datetime(now);', '#if (file_exists("flag.txt")) #end'])
+def test_a_scene_that_reads_the_clock_or_the_disk_is_never_cached(tmp_path, cli, line):
+    scene = tmp_path / "s.pov"
+    scene.write_text(f"#version 3.7;\nglobal_settings {{ assumed_gamma 1.0 }}\n{line}\n" + LIT_SPHERE.format(1))
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    first = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert first.code == 0 and "not reproducible" in first.err, first.err
+    assert "not reproducible" in json.loads((tmp_path / "a.json").read_text())["timings"]["image_cache"]
+    assert not _entries(tmp_path / "cache"), "nothing stored: a second run must render again"
+    second = cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env)
+    assert second.code == 0 and json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] == 0
+
+
+def test_a_constant_scene_is_still_cached(tmp_path, cli):  # negative control of the test above
+    scene = tmp_path / "s.pov"
+    scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#declare T = "now";// now\n'
+                     + LIT_SPHERE.format(1))
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    assert cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env).code == 0
+    assert cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env).code == 0
+    assert json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] > 0
+
+
+@pytest.mark.parametrize("sandbox", ["require", "off"])
+def test_a_comment_mark_in_a_string_hides_no_include(tmp_path, cli, sandbox):
+    """``"a//b"`` is a string, not a comment: the ``#include`` after it on the line is read, so the
+    sandbox lets POV-Ray open it and the cache key sees its edits."""
+    (tmp_path / "part.inc").write_text(LIT_SPHERE.format(1))
+    scene = tmp_path / "s.pov"
+    scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n'
+                     '#declare U = "http://example.org"; #include "part.inc"\n')
+    env = {"POVH3D_SANDBOX": sandbox, "POVH3D_CACHE": str(tmp_path / "cache")}
+    first = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert first.code == 0, first.err
+    (tmp_path / "part.inc").write_text(LIT_SPHERE.format("<1, 0, 0>"))
+    assert cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env).code == 0
+    a, b = read_png(tmp_path / "a.png"), read_png(tmp_path / "b.png")
+    assert not np.array_equal(a, b), "the edit of the include shows"
+
+
+def test_a_binary_file_named_pov_is_not_a_text_scene(tmp_path, cli):
+    scene = tmp_path / "s.pov"
+    scene.write_bytes(bytes(range(256)) * 8)
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY), 3)
+    assert "not a text scene" in line and not (tmp_path / "a.png").exists()
+
+
+# -- issue 25: a views folder holds one render, complete ---------------------------------------------
+_VIEW_WRITER = """
+import sys, numpy as np
+from povh3d.app.views import write_views
+from tests.app.test_reliability import _stack
+seed, folder, rounds = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+for r in range(rounds):
+    write_views(folder, _stack(seed, r), None, {"seed": seed, "round": r})
+"""
+
+
+def _stack(seed: int, round_: int) -> np.ndarray:
+    """The views writer ``seed`` writes in its round ``round_``: every view differs, every render too."""
+    return np.random.default_rng([seed, round_]).integers(0, 256, (4, 4, 24, 32, 3), dtype=np.uint8)
+
+
+def _one_render(folder: Path) -> int:
+    """The seed of the one render the folder holds: its views are exactly that render's."""
+    from povh3d.app.views import read_views
+
+    source = json.loads((folder / "views.json").read_text())["source"]
+    assert np.array_equal(read_views(folder), _stack(source["seed"], source["round"])), "views of two renders"
+    return source["seed"]
+
+
+def test_two_writers_into_one_views_folder_leave_one_render(tmp_path):
+    folder = tmp_path / "views"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    for round_ in range(20):
+        writers = [subprocess.Popen([sys.executable, "-c", _VIEW_WRITER, str(seed), str(folder), "1"], env=env,
+                                    cwd=env["PYTHONPATH"])
+                   for seed in (round_ * 2 + 1, round_ * 2 + 2)]
+        assert [w.wait() for w in writers] == [0, 0]
+        assert _one_render(folder) in (round_ * 2 + 1, round_ * 2 + 2)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["views"], "no sibling left behind"
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
+def test_a_kill_while_views_are_written_leaves_one_render(tmp_path, signum):
+    folder = tmp_path / "views"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    subprocess.run([sys.executable, "-c", _VIEW_WRITER, "0", str(folder), "1"], env=env, check=True, cwd=env["PYTHONPATH"])
+    rng = np.random.default_rng(int(signum))
+    for trial in range(8):
+        writer = subprocess.Popen([sys.executable, "-c", _VIEW_WRITER, str(trial + 1), str(folder), "50"], env=env,
+                                  cwd=env["PYTHONPATH"])
+        time.sleep(0.4 + rng.uniform(0, 0.8))  # past the imports, somewhere in the writes
+        writer.send_signal(signum)
+        writer.wait()
+        assert _one_render(folder) in range(trial + 2)
+        assert not list(folder.glob("*.part")) and not list(folder.glob(".*"))
+    subprocess.run([sys.executable, "-c", _VIEW_WRITER, "99", str(folder), "1"], env=env, check=True, cwd=env["PYTHONPATH"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["views"], "the next write sweeps the killed one's sibling"
+
+
+def test_interleave_refuses_a_view_of_another_render(tmp_path, cli):
+    from povh3d.app.views import write_views
+
+    views = np.random.default_rng(3).integers(0, 256, (2, 2, 6, 8, 3), dtype=np.uint8)
+    write_views(tmp_path / "v", views, None)
+    assert cli("interleave", tmp_path / "v", "-o", tmp_path / "a.png").code == 0  # negative control
+    image_io.write_png(tmp_path / "v" / "v_001_000.png", views[0, 0])  # same size, another render's
+    line = one_error_line(cli("interleave", tmp_path / "v", "-o", tmp_path / "b.png"), 3)
+    assert "mixed" in line and not (tmp_path / "b.png").exists()
+
+
+def test_a_views_folder_with_other_files_is_refused_before_work(tmp_path, cli):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("keep me")
+    line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--views-dir", folder), 4)
+    assert "other files" in line and (folder / "notes.txt").read_text() == "keep me"
+
+
+# -- issue 25: signals as the command starts and ends ------------------------------------------------
+_STARTER = ("import sys, importlib.util, povh3d; importlib.util.find_spec('povh3d.cli'); sys.stderr.write('up\\n'); sys.stderr.flush(); from povh3d.cli.main import main; "
+            "sys.argv[1:] = ['info', '--preset', 'demo']; sys.exit(main())")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_the_command_starts_or_ends_is_one_line(signum):
+    """From the moment ``povh3d.cli`` is imported (the interpreter's start-up and ``import povh3d``, a
+    library import that installs no handler, come before it): Ctrl-C during
+    the imports was a traceback, SIGTERM after the output an exit by signal without a word."""
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    rng = np.random.default_rng(int(signum))
+    for _ in range(25):
+        proc = subprocess.Popen([sys.executable, "-c", _STARTER], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                env=env)
+        assert proc.stderr.readline() == b"up\n"
+        time.sleep(rng.uniform(0.01, 0.5))  # 10 ms: the three lines before povh3d.cli's handlers
+        proc.send_signal(signum)
+        _, err = proc.communicate()
+        assert proc.returncode in (0, 130, -signal.SIGINT), (proc.returncode, err)  # -2: a shell's 130 too
+        assert b"Traceback" not in err, err
+        if proc.returncode:
+            assert err.decode().strip().splitlines()[-1] == "povh3d: error: interrupted", err
+
+
+def test_one_lens_one_pixel_is_refused_not_a_povray_crash(tmp_path, cli):
+    line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", "--preset", "demo", "--lenses", "1x1",
+                              "--ppl", "1", "--quality", "draft", "-q"), 2)
+    assert "one pixel wide" in line and "signal" not in line and not (tmp_path / "a.png").exists()
+    # negative control: two lenses across render
+    assert cli("render", SAMPLE, "-o", tmp_path / "b.png", "--preset", "demo", "--lenses", "2x1", "--ppl", "1",
+               "--quality", "draft", "-q").code == 0
+
+
+def test_a_scene_name_with_a_backslash_is_one_line(tmp_path, cli):
+    scene = tmp_path / "a\\b.pov"
+    scene.write_text("#version 3.7;\nsphere { <0, 0, 3>, 1 pigment { rgb 1 }\n")  # unclosed: past the end
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY))
+    assert "read past the end of a\\b.pov" in line and "internal error" not in line
+
+
+# -- issue 25: bounds on memory, disk and work ----------------------------------------------------------
+def test_povray_runs_under_a_memory_limit_of_its_own(tmp_path, cli):
+    scene = tmp_path / "big.pov"
+    scene.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\nlight_source { <0, 0, -50> rgb 1 }\n"
+                     "#declare A = array[150000000];\n#declare B = array[150000000];\n"
+                     "sphere { <0, 0, 3>, 1 pigment { rgb 1 } }\n")  # 2.4 GB in POV-Ray, unbounded
+    line = one_error_line(cli("render", scene, "-o", tmp_path / "a.png", *TINY, "--no-cache", "--max-memory", "1G"))
+    assert "bad_alloc" in line and "--max-memory" in line and not (tmp_path / "a.png").exists()
+
+
+def test_a_normal_render_fits_in_the_smallest_limit(tmp_path, cli):  # negative control of the above
+    assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--no-cache", "--max-memory", "1G").code == 0
+
+
+@pytest.mark.parametrize("command, estimate", [
+    (["resample", "{h3d}", "-o", "{out}", "--ppl-out", "1e9"], "of memory"),
+    (["resample", "{h3d}", "-o", "{out}", "--ppl-out", "1000", "--max-memory", "100M"], "your --max-memory limit"),
+    (["refocus", "{h3d}", "-o", "{out}", "--sweep", "100000"], "over 1000"),
+    (["preview", "{h3d}", "-o", "{gif}", "--frames", "100000"], "over 1000"),
+    (["render", str(SAMPLE), "-o", "{out}", *TINY, "--frames", "0:100000000"], "of disk"),
+    (["render", str(SAMPLE), "-o", "{out}", "--preset", "demo", "--max-memory", "1M"], "of memory"),
+])
+def test_work_past_the_machine_is_refused_at_once_with_its_estimate(tmp_path, cli, command, estimate):
+    h3d = tmp_path / "h.png"
+    assert cli("render", SAMPLE, "-o", h3d, *TINY).code == 0
+    before = sorted(p.name for p in tmp_path.iterdir())
+    start = time.monotonic()
+    args = [a.format(h3d=h3d, out=tmp_path / "o.png", gif=tmp_path / "o.gif") for a in command]
+    line = one_error_line(cli(*args), 2)
+    assert time.monotonic() - start < 5 and estimate in line, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == before, "nothing written"
+
+
+# -- the fault table as a matrix: faults x commands x moments (docs/reliability.md) ---------------------
+MATRIX_COMMANDS = {
+    "render": ["render", str(SAMPLE), "-o", "out.png", *TINY],
+    "render-views": ["render", str(SAMPLE), "-o", "out.png", *TINY, "--views-dir", "views"],
+    "resample": ["resample", "h3d.png", "-o", "out.png", "--ppl-out", "2"],
+    "interleave": ["interleave", "views", "-o", "out.png"],
+}
+_FULL_DISK = ("import resource, signal, sys; signal.signal(signal.SIGXFSZ, signal.SIG_IGN); "
+              "from povh3d.cli.main import main; resource.setrlimit(resource.RLIMIT_FSIZE, (2000, 2000)); "
+              "sys.exit(main(sys.argv[1:]))")
+
+
+@pytest.fixture(scope="module")
+def matrix_reference(tmp_path_factory) -> Path:
+    """A folder with the inputs (h3d.png, views/) and, under ``clean/<command>``, each command's clean output."""
+    root = tmp_path_factory.mktemp("matrix")
+    env = {**os.environ, "POVH3D_CACHE": str(root / "cache")}
+    subprocess.run(cli_command("render", SAMPLE, "-o", root / "h3d.png", *TINY, "--views-dir", root / "views"),
+                   check=True, env=env, capture_output=True)
+    for name, args in MATRIX_COMMANDS.items():
+        work = root / "clean" / name
+        _matrix_inputs(root, work)
+        subprocess.run(cli_command(*args), cwd=work, check=True, env=env, capture_output=True)
+    return root
+
+
+def _matrix_inputs(root: Path, work: Path) -> None:
+    import shutil
+
+    work.mkdir(parents=True)
+    shutil.copy(root / "h3d.png", work / "h3d.png")
+    shutil.copy(root / "h3d.json", work / "h3d.json")
+    shutil.copytree(root / "views", work / "views")
+    write_image(work / "out.png", _noise(seed=5), base_record("h3d", note="previous"))  # the user's previous output
+
+
+def _views_state(folder: Path):
+    from povh3d.app.views import read_views
+
+    return read_views(folder)
+
+
+# The file-size limit holds from the start: one moment for it.
+@pytest.mark.parametrize("fault, moment", [("SIGTERM", "start"), ("SIGTERM", "work"), ("SIGKILL", "start"),
+                                           ("SIGKILL", "work"), ("full-disk", "start")])
+@pytest.mark.parametrize("command", sorted(MATRIX_COMMANDS))
+def test_fault_matrix(tmp_path, matrix_reference, command, fault, moment):
+    """Every fault at every moment of every command that writes: the previous output pair or the
+    new one, whole and equal to a clean run's; the views folder one render's; no traceback."""
+    work = tmp_path / "w"
+    _matrix_inputs(matrix_reference, work)
+    previous = (work / "out.png").read_bytes(), (work / "out.json").read_bytes()
+    previous_views = _views_state(work / "views")
+    env = {**os.environ, "POVH3D_CACHE": str(tmp_path / "cache")}
+    args = MATRIX_COMMANDS[command]
+    if fault == "full-disk":
+        proc = subprocess.Popen([sys.executable, "-c", _FULL_DISK, *args], cwd=work, env=env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    else:
+        proc = subprocess.Popen(cli_command(*args), cwd=work, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        rng = np.random.default_rng(zlib.crc32(f"{command} {fault} {moment}".encode()))
+        time.sleep(rng.uniform(0.05, 0.3) if moment == "start" else rng.uniform(0.6, 2.0))
+        proc.send_signal(getattr(signal, fault))
+    _, err = proc.communicate(timeout=120)
+    err = err.decode()
+    assert "Traceback" not in err and "internal error" not in err, err
+    # -15: the signal came while the interpreter itself started (a loaded machine takes a few
+    # hundred ms), before any of povh3d's code: nothing was written (checked below).
+    # -2: after the one line, Python ended itself by SIGINT, which a shell shows as 130 as well (1 in
+    # about 30 SIGTERMs mid-work; the line is checked).
+    assert proc.returncode in (0, 1, 4, 130, -signal.SIGINT, -signal.SIGKILL) \
+        or (proc.returncode == -signal.SIGTERM and not err), (proc.returncode, err)
+    if proc.returncode not in (0, -signal.SIGKILL, -signal.SIGTERM):
+        assert err.strip().splitlines()[-1].startswith("povh3d: error: "), err
+    clean = matrix_reference / "clean" / command
+    now = (work / "out.png").read_bytes(), (work / "out.json").read_bytes()
+    if now != previous:  # replaced: whole, and a clean run's pixels
+        assert read_sidecar(work / "out.png") is not None
+        assert np.array_equal(read_png(work / "out.png"), read_png(clean / "out.png"))
+    else:
+        assert proc.returncode != 0, "a run that succeeded replaced its output"
+    if proc.returncode == -signal.SIGTERM:
+        assert now == previous
+    views = _views_state(work / "views")  # raises on a mixed folder
+    if command == "render-views" and not np.array_equal(views, previous_views):
+        assert np.array_equal(views, _views_state(clean / "views"))
+    if proc.returncode != -signal.SIGKILL:
+        assert not list(work.glob(".*.part")) and not list(work.glob(".views*")), sorted(os.listdir(work))

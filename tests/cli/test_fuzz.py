@@ -246,6 +246,97 @@ def test_fuzz_ran_every_case(fuzz):
     print(f"fuzz: {cases['run']} command lines, {cases['failed']} refused, 0 tracebacks")
 
 
+# -- damaged and forged files: sidecars, views folders, calibration files ------------------------------
+DAMAGED_FILES = ["good.json", "views/views.json", "grid.json"]
+BAD_VALUES = ["abc", "", None, 0, -1, 0.0, 1e308, -1e308, float("nan"), float("inf"), True, [], [0, 0], [1],
+              [float("nan"), 1], ["a", "b"], {}, {"x": 1}, [[0, 0], [0, 0]], 10**12, 2.5]
+# Which commands read each file, with the arguments that make them read it.
+READERS = {
+    "good.json": [["map", "good.png", "-o", "out.png", "--mapping", "alioscopy"],
+                  ["resample", "good.png", "-o", "out.png", "--ppl-out", "4"],
+                  ["refocus", "good.png", "-o", "out.png", "--depth", "1"],
+                  ["refocus", "good.png", "-o", "out.png", "--sweep", "2"],
+                  ["preview", "good.png", "-o", "out.gif", "--frames", "2"],
+                  ["extract", "good.png", "-o", "new views"],
+                  ["quilt", "good.png", "-o", "dossier é", "--quilt", "2x2"]],
+    "views/views.json": [["interleave", "views", "-o", "out.png"]],
+    "grid.json": [["undistort", "white.png", "--grid", "grid.json", "-o", "out.png"],
+                  ["borders", "white.png", "--grid", "grid.json", "-o", "out.png"],
+                  ["viewpoints", "white.png", "--grid", "grid.json", "-o", "new views"]],
+}
+
+
+def _json_paths(value, prefix=()):
+    """Every path to a value inside a JSON document (keys and list indices)."""
+    yield prefix
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+    for key, item in items:
+        if len(prefix) < 3:
+            yield from _json_paths(item, (*prefix, key))
+
+
+def _damage(document, path, bad):
+    if not path:
+        return bad
+    target = document
+    for key in path[:-1]:
+        target = target[key]
+    if bad is _DELETE:
+        del target[path[-1]]
+    else:
+        target[path[-1]] = bad
+    return document
+
+
+_DELETE = object()
+
+
+@st.composite
+def damaged_cases(draw):
+    name = draw(st.sampled_from(DAMAGED_FILES))
+    return name, draw(st.integers(0, 10**6)), draw(st.sampled_from([*BAD_VALUES, _DELETE])), \
+        draw(st.sampled_from([c for c in COMMANDS_READING(name)]))
+
+
+def COMMANDS_READING(name):  # noqa: N802 - a table, spelt as one
+    return [c for c in READERS[name] if c[0] in COMMANDS]
+
+
+@settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(case=damaged_cases())
+def test_damaged_sidecars_views_and_calibrations_end_in_one_line(case, pristine, tmp_path, monkeypatch):
+    """One field of a sidecar, a views.json or a calibration file replaced by a wrong type, a NaN, a
+    zero, a huge number, or removed: one line or a success, never an internal error; under 60 s and
+    2 GB each."""
+    import json
+    import resource
+    import time
+
+    name, pick, bad, args = case
+    work = tmp_path / "w"
+    if work.exists():
+        shutil.rmtree(work)
+    shutil.copytree(pristine, work)
+    document = json.loads((work / name).read_text(encoding="utf-8"))
+    paths = [p for p in _json_paths(document) if p and p[-1] != "image_sha256"]
+    path = paths[pick % len(paths)]
+    (work / name).write_text(json.dumps(_damage(document, path, bad)), encoding="utf-8")
+    before = _snapshot(work)
+    start = time.monotonic()
+    with monkeypatch.context() as patch:
+        patch.chdir(work)
+        result = run_in_process(*args)
+    CASES["damaged"] = CASES.get("damaged", 0) + 1
+    assert time.monotonic() - start < 60, (args, path, bad)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss < 2 * 1024 * 1024, "under 2 GB"
+    assert "Traceback" not in result.err and "internal error" not in result.err, (args, path, bad, result.err)
+    if result.code != 0:
+        lines = [line for line in result.err.splitlines() if line.strip()]
+        assert len(lines) >= 1 and lines[-1].startswith("povh3d: error: "), (args, path, bad, result.err)
+        assert not _changed(before, _snapshot(work)), (args, path, bad)
+
+
 def test_negative_control_a_removed_file_is_seen(tmp_path):
     (tmp_path / "a.png").write_bytes(b"x")
     before = _snapshot(tmp_path)
