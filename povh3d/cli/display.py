@@ -148,7 +148,7 @@ def cmd_resample(args: argparse.Namespace) -> int:
 
 
 def cmd_quilt(args: argparse.Namespace) -> int:
-    from ..app.display import export_quilt, import_quilt
+    from ..app.quilt_files import export_quilt, import_quilt
 
     auto = args.quilt == "auto"
     grid = parse_size(args.quilt, "--quilt", "COLSxROWS like 8x6, or auto") if args.quilt and not auto else None

@@ -189,10 +189,6 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
     see ``CameraMesh``) turn them into UV here and only here.
     """
     W, H = size
-    if W < 2:  # measured: +W2 (W = 1 plus the extra column) crashes it, +H2 does not
-        raise ConfigError("POV-Ray 3.7's mesh camera crashes (segmentation fault) on an image one pixel wide: "
-                          "give at least 2 lenses or 2 pixels per lens across (--lenses, --ppl), or use "
-                          "--method single-stage")
     shape = np.broadcast_shapes(origin_x.shape, origin_y.shape, u.shape, v.shape, col.shape, row.shape)
     def full(*values):
         return [np.broadcast_to(np.asarray(a, dtype=np.float64), shape) for a in values]

@@ -36,7 +36,7 @@ from ..errors import ConfigError
 from .capture_bank import border_margin
 from .lens_array import LensArray, Panel
 from .optics import Lenslet
-from .rays import pixel_rays
+from .rays import nearest_hex_lens, pixel_rays
 
 
 @dataclass(frozen=True)
@@ -61,18 +61,8 @@ def nearest_lens(array: LensArray, x: np.ndarray, y: np.ndarray) -> tuple[np.nda
     Lx, Ly = array.lenses_x, array.lenses_y
     px, py = array.pitch_x, array.pitch_y
     if array.grid == "hex":
-        i0 = np.rint(Ly / 2 - 0.5 - y / py).astype(np.int64)
-        best = np.full(x.shape, np.inf)
-        cx, cy = np.zeros(x.shape), np.zeros(x.shape)
-        for di in (-1, 0, 1):
-            i = np.clip(i0 + di, 0, Ly - 1)
-            j = np.clip(np.rint(x / px + Lx / 2 - 0.5 - (i % 2) / 2).astype(np.int64), 0, Lx - 1)
-            c = centres[i, j]
-            dd = (x - c[..., 0]) ** 2 + (y - c[..., 1]) ** 2
-            better = dd < best
-            best = np.where(better, dd, best)
-            cx, cy = np.where(better, c[..., 0], cx), np.where(better, c[..., 1], cy)
-        return cx, cy
+        c = centres[nearest_hex_lens(centres, x, y, px, py)]
+        return c[..., 0], c[..., 1]
     j = np.clip(np.floor(x / px + Lx / 2).astype(np.int64), 0, Lx - 1)
     if array.grid == "lenticular":
         return centres[0, j, 0], y.copy()

@@ -12,6 +12,24 @@ if TYPE_CHECKING:  # only its attributes are read: the rays need no more than Nu
     from .lens_array import LensArray
 
 
+def nearest_hex_lens(centres: np.ndarray, X: np.ndarray, Y: np.ndarray, px: float,
+                     py: float) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column ``(i, j)`` of the hex lens whose centre is nearest each point ``(X, Y)`` mm
+    (its Voronoi cell), from the array's ``(Ly, Lx, 2)`` lattice centres, unrotated."""
+    Ly, Lx = centres.shape[:2]
+    i0 = np.rint(Ly / 2 - 0.5 - Y / py).astype(np.int64)
+    best_d = np.full(X.shape, np.inf)
+    best_i = np.zeros(X.shape, np.int64)
+    best_j = np.zeros(X.shape, np.int64)
+    for di in (-1, 0, 1):  # the nearest centre lies in the nearest row or one beside it
+        i = np.clip(i0 + di, 0, Ly - 1)
+        j = np.clip(np.rint(X / px + Lx / 2 - 0.5 - (i % 2) / 2).astype(np.int64), 0, Lx - 1)
+        d = (X - centres[i, j, 0]) ** 2 + (Y - centres[i, j, 1]) ** 2
+        better = d < best_d
+        best_d, best_i, best_j = np.where(better, d, best_d), np.where(better, i, best_i), np.where(better, j, best_j)
+    return best_i, best_j
+
+
 def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The ray of every panel pixel (docs/geometry.md, "The ray of a pixel").
 
@@ -38,17 +56,7 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
     px, py = lens_array.pitch_x, lens_array.pitch_y
     if lens_array.grid == "hex":
-        i0 = np.rint(Ly / 2 - 0.5 - Y / py).astype(np.int64)
-        best_d = np.full(X.shape, np.inf)
-        best_i = np.zeros(X.shape, np.int64)
-        best_j = np.zeros(X.shape, np.int64)
-        for di in (-1, 0, 1):  # the nearest centre lies in the nearest row or one beside it
-            i = np.clip(i0 + di, 0, Ly - 1)
-            j = np.clip(np.rint(X / px + Lx / 2 - 0.5 - (i % 2) / 2).astype(np.int64), 0, Lx - 1)
-            d = (X - centres[i, j, 0]) ** 2 + (Y - centres[i, j, 1]) ** 2
-            better = d < best_d
-            best_d, best_i, best_j = np.where(better, d, best_d), np.where(better, i, best_i), np.where(better, j, best_j)
-        i, j = best_i, best_j
+        i, j = nearest_hex_lens(centres, X, Y, px, py)
         # Inside the true hexagon (flat sides at |dx| = px/2, slanted sides at
         # |dx|/2 + sqrt(3)/2 |dy| = px/2), not its circumradius disc: the disc pokes
         # out past the slanted sides on the outer rows, where no lens lies.
