@@ -83,7 +83,7 @@ def test_scene_may_include_files_beside_it(tmp_path, cli):
     (["info", "--focal", "-1"], "focal length"),
     (["render", SAMPLE, "--quality", "auto", "-q"], "--quality auto needs --max-error"),
     pytest.param(["render", SAMPLE, "--lenses", "12x8", "--ppl", "4x4", "--quality", "auto", "--max-error", "99",
-                  "-q", "-o", "/tmp/povh3d-never.png"], "lower --max-error", marks=pytest.mark.povray),
+                  "-q", "-o", "/tmp/povh3d-never.png"], "use --max-error", marks=pytest.mark.povray),
 ])
 def test_bad_input_is_one_line(args, fragment, cli):
     assert fragment in one_error_line(cli(*args))

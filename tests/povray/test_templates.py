@@ -48,7 +48,7 @@ def test_numbers_in_scripts_round_trip():
 
 def test_scene_with_quote_in_path_is_refused():
     from povh3d.errors import ConfigError
-    la = square_array(lx=1, ly=1, nx=1, ny=1)
+    la = square_array(lx=2, ly=1, nx=1, ny=1)  # POV-Ray needs two pixels across a mesh camera
     batch = METHODS["multi-ortho"].plan(la, 10.0, CENTRE).batch
     with pytest.raises(ConfigError, match="rename"):
         build_script(batch, batch.shots, method="x", scene_path='/a"b.pov', add_assumed_gamma=True,
