@@ -414,6 +414,7 @@ def test_unusable_cache_with_a_mesh_model(tmp_path, cli):
 LIT_SPHERE = "sphere {{ <0, 0, 3>, 5 pigment {{ rgb {} }} finish {{ emission 1 }} }}\n"
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("line", ['#declare T = now;', '#declare R = seed(floor(now * 86400));',
                                   '#declare D = datetime(now);', '#if (file_exists("flag.txt")) #end'])
 def test_a_scene_that_reads_the_clock_or_the_disk_is_never_cached(tmp_path, cli, line):
@@ -428,6 +429,7 @@ def test_a_scene_that_reads_the_clock_or_the_disk_is_never_cached(tmp_path, cli,
     assert second.code == 0 and json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] == 0
 
 
+@pytest.mark.povray
 def test_a_constant_scene_is_still_cached(tmp_path, cli):  # negative control of the test above
     scene = tmp_path / "s.pov"
     scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#declare T = "now";// now\n'
@@ -438,6 +440,7 @@ def test_a_constant_scene_is_still_cached(tmp_path, cli):  # negative control of
     assert json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] > 0
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("sandbox", ["require", "off"])
 def test_a_comment_mark_in_a_string_hides_no_include(tmp_path, cli, sandbox):
     """``"a//b"`` is a string, not a comment: the ``#include`` after it on the line is read, so the
@@ -487,6 +490,7 @@ def _one_render(folder: Path) -> int:
     return source["seed"]
 
 
+@pytest.mark.povray
 def test_two_writers_into_one_views_folder_leave_one_render(tmp_path):
     folder = tmp_path / "views"
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
@@ -499,6 +503,7 @@ def test_two_writers_into_one_views_folder_leave_one_render(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["views"], "no sibling left behind"
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
 def test_a_kill_while_views_are_written_leaves_one_render(tmp_path, signum):
     folder = tmp_path / "views"
@@ -541,6 +546,7 @@ _STARTER = ("import sys, importlib.util, povh3d; importlib.util.find_spec('povh3
             "sys.argv[1:] = ['info', '--preset', 'demo']; sys.exit(main())")
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_while_the_command_starts_or_ends_is_one_line(signum):
     """From the moment ``povh3d.cli`` is imported (the interpreter's start-up and ``import povh3d``, a
@@ -561,6 +567,7 @@ def test_a_signal_while_the_command_starts_or_ends_is_one_line(signum):
             assert err.decode().strip().splitlines()[-1] == "povh3d: error: interrupted", err
 
 
+@pytest.mark.povray
 def test_one_lens_one_pixel_is_refused_not_a_povray_crash(tmp_path, cli):
     line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "a.png", "--preset", "demo", "--lenses", "1x1",
                               "--ppl", "1", "--quality", "draft", "-q"), 2)
@@ -570,6 +577,7 @@ def test_one_lens_one_pixel_is_refused_not_a_povray_crash(tmp_path, cli):
                "--quality", "draft", "-q").code == 0
 
 
+@pytest.mark.povray
 def test_a_scene_name_with_a_backslash_is_one_line(tmp_path, cli):
     scene = tmp_path / "a\\b.pov"
     scene.write_text("#version 3.7;\nsphere { <0, 0, 3>, 1 pigment { rgb 1 }\n")  # unclosed: past the end
@@ -578,6 +586,7 @@ def test_a_scene_name_with_a_backslash_is_one_line(tmp_path, cli):
 
 
 # -- issue 25: bounds on memory, disk and work ----------------------------------------------------------
+@pytest.mark.povray
 def test_povray_runs_under_a_memory_limit_of_its_own(tmp_path, cli):
     scene = tmp_path / "big.pov"
     scene.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\nlight_source { <0, 0, -50> rgb 1 }\n"
@@ -587,6 +596,7 @@ def test_povray_runs_under_a_memory_limit_of_its_own(tmp_path, cli):
     assert "bad_alloc" in line and "--max-memory" in line and not (tmp_path / "a.png").exists()
 
 
+@pytest.mark.povray
 def test_a_normal_render_fits_in_the_smallest_limit(tmp_path, cli):  # negative control of the above
     assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY, "--no-cache", "--max-memory", "1G").code == 0
 
@@ -599,6 +609,7 @@ def test_a_normal_render_fits_in_the_smallest_limit(tmp_path, cli):  # negative 
     (["render", str(SAMPLE), "-o", "{out}", *TINY, "--frames", "0:100000000"], "of disk"),
     (["render", str(SAMPLE), "-o", "{out}", "--preset", "demo", "--max-memory", "1M"], "of memory"),
 ])
+@pytest.mark.povray
 def test_work_past_the_machine_is_refused_at_once_with_its_estimate(tmp_path, cli, command, estimate):
     h3d = tmp_path / "h.png"
     assert cli("render", SAMPLE, "-o", h3d, *TINY).code == 0
@@ -653,6 +664,7 @@ def _views_state(folder: Path):
 
 
 # The file-size limit holds from the start: one moment for it.
+@pytest.mark.povray
 @pytest.mark.parametrize("fault, moment", [("SIGTERM", "start"), ("SIGTERM", "work"), ("SIGKILL", "start"),
                                            ("SIGKILL", "work"), ("full-disk", "start")])
 @pytest.mark.parametrize("command", sorted(MATRIX_COMMANDS))

@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
+pytestmark = pytest.mark.povray  # every test here renders with POV-Ray
+
 ARRAY = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch", "0.2", "--focal", "2")
 SCENE = """#version 3.7;
 camera {{ location <0, 0, -20> look_at <0, 0, 0> angle 30 }}

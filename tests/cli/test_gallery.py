@@ -12,6 +12,8 @@ import pytest
 
 from benchmarks.gallery import EXAMPLES, MIN_DB, judge
 
+pytestmark = pytest.mark.povray  # every test here renders with POV-Ray
+
 SQUARE = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch", "0.2", "--focal", "2")
 LENTICULAR = ("--grid", "lenticular", "--lenses", "32", "--rows", "96", "--ppl", "4", "--pixel-pitch", "0.25",
               "--focal", "1.5")

@@ -41,6 +41,7 @@ def test_a_display_beyond_povray_reach_does_not_suggest_an_empty_range(tmp_path,
     assert "whatever the front clearance" in line and "between 0.01 and 0.0" not in line
 
 
+@pytest.mark.povray
 def test_a_refused_clearance_advises_a_command_that_runs(tmp_path, cli):
     """Issue 22: ``--focal 1e6`` put multi-ortho's view bank (whole steps of f x views) out of
     POV-Ray's reach, and the front clearance it advised was refused in turn.  Run the advice."""

@@ -33,6 +33,8 @@ from povh3d.scene.scene import load_scene
 
 from tests.support.arrays import lenticular_array, square_array
 
+pytestmark = pytest.mark.povray  # every test here renders with POV-Ray
+
 Z_SLAB = 6.0
 X_EDGE, Y_EDGE = 0.8, -0.6   # mm: the lit L is x > X_EDGE or y < Y_EDGE
 

@@ -87,6 +87,7 @@ def test_auto_quality_takes_the_first_rung_that_meets_the_target(textured):
     assert all("footprint" not in s for s, _ in choice.tried)
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("grid", ["square", "hex"])
 def test_the_probe_is_a_window_of_the_full_render(grid):
     """sample.pov fits itself to the declared panel (``Povh3d_Panel_Width``): the probe
@@ -108,6 +109,7 @@ def test_the_probe_is_a_window_of_the_full_render(grid):
     assert np.mean(np.any(own[mask] != full[mask], axis=-1)) > 0.3
 
 
+@pytest.mark.povray
 @pytest.mark.parametrize("target", [25, 35])
 def test_auto_meets_the_target_on_the_full_image(textured, target):
     """The full image at the chosen level, scored against a converged reference of the full

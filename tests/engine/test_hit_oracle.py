@@ -39,6 +39,8 @@ from povh3d.geometry.rays import pixel_rays
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.hit_oracle import expected_hits, half_for, render_hits, score
 
+pytestmark = pytest.mark.povray  # every test here renders with POV-Ray
+
 GRIDS = {
     "hex-5.6": presets.lens_array("hex-5.6", lenses=(30, 24)),
     "hex-6.5": LensArray("hex", 20, 16, 0.65, 0.65 * math.sqrt(3) / 2, 1.5, Panel(134, 91, 0.1, 0.1)),

@@ -281,6 +281,7 @@ def test_clearance_beyond_povray_reach_is_refused_before_rendering(tmp_path):
                    scaled_array("square", 1.0), RenderSettings(quality="draft", front_clearance=1e-3))
 
 
+@pytest.mark.povray
 def test_a_large_scale_ratio_is_checked_in_scene_units_and_its_advice_renders(tmp_path, monkeypatch):
     """Issue 22: at 1e6 scene units per mm the default clearance (four panel widths, 57.6 mm)
     is 5.8e7 scene units, past POV-Ray's 1e7 ray length.  Checked in mm it passed and the
