@@ -32,6 +32,7 @@ from povh3d.engine.single_stage import SingleStagePlan, default_depth, lenslet_f
 
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.cli import one_error_line
+from tests.support import hit_oracle
 from tests.support.hit_oracle import border_margin_px
 from tests.support.scenes import checker_oracle, classify, write_checker_plane, write_textured_scene
 from tests.support.render import DRAFT
@@ -40,17 +41,8 @@ HALF = 70.0  # position code covers -HALF..HALF mm
 
 
 def write_position_plane(folder: Path, z0: float, half: float = HALF) -> Path:
-    """An emissive plane at ``z0`` whose red and green encode x and y in ``-half..half`` mm."""
-    path = folder / f"position_{z0:+g}.pov"
-    path.write_text(f"""#version 3.7;
-global_settings {{ assumed_gamma 1.0 }}
-plane {{ z, {z0!r}
-  pigment {{ average pigment_map {{
-    [1 function {{ (x + {half!r}) / {2 * half!r} }} color_map {{ [0 rgb 0] [1 rgb <2, 0, 0>] }}]
-    [1 function {{ (y + {half!r}) / {2 * half!r} }} color_map {{ [0 rgb 0] [1 rgb <0, 2, 0>] }}] }} }}
-  finish {{ emission 1 diffuse 0 ambient 0 }} }}
-""")
-    return path
+    """The hit oracle's position plane (``tests/support/hit_oracle.py``), black where a ray misses."""
+    return hit_oracle.write_position_plane(folder, z0, half, miss_blue=False)
 
 
 def render_linear16(batch, method: str, scene: Path, lens_array) -> list[np.ndarray]:

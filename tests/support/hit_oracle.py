@@ -28,13 +28,14 @@ TOLERANCE_MM = 0.05
 BORDER_PX = 0.1
 
 
-def write_position_plane(folder: Path, z0: float, half: float) -> Path:
-    """An emissive plane at ``z0`` whose red and green encode x and y in ``-half..half`` mm."""
+def write_position_plane(folder: Path, z0: float, half: float, *, miss_blue: bool = True) -> Path:
+    """An emissive plane at ``z0`` whose red and green encode x and y in ``-half..half`` mm;
+    a ray that misses it reads blue (``miss_blue``) or black."""
     path = folder / f"hit_plane_{z0:+g}.pov"
+    background = "background { rgb <0, 0, 1> }\n" if miss_blue else ""
     path.write_text(f"""#version 3.7;
 global_settings {{ assumed_gamma 1.0 }}
-background {{ rgb <0, 0, 1> }}
-plane {{ z, {z0!r}
+{background}plane {{ z, {z0!r}
   pigment {{ average pigment_map {{
     [1 function {{ (x + {half!r}) / {2 * half!r} }} color_map {{ [0 rgb 0] [1 rgb <2, 0, 0>] }}]
     [1 function {{ (y + {half!r}) / {2 * half!r} }} color_map {{ [0 rgb 0] [1 rgb <0, 2, 0>] }}] }} }}
