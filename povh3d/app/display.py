@@ -95,12 +95,12 @@ def read_whole_lenses(path: str | Path) -> np.ndarray:
     341 lenses of 6 px is centred on a 2048 px panel (``ipad-retina``), so 1 px either side
     is no lens's; ``extract`` reads the same region.  Without a sidecar, the whole image."""
     image = read_png(path)
-    side = (read_sidecar(path) or {}).get("lens_array")
-    if not side:
+    record = read_sidecar(path) or {}
+    if not record.get("lens_array"):
         return image
     from .views import sidecar_array
 
-    lens_array = sidecar_array(image, path)
+    lens_array = sidecar_array(image, path, record)
     return image[lens_array.bank_region] if lens_array.views is not None else image
 
 

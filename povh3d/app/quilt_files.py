@@ -42,7 +42,7 @@ def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, 
         display = Display.from_record(record)
         if ppl is not None and display.lens_array.views not in (None, tuple(ppl)):
             raise ConfigError(f"--ppl contradicts the sidecar of {str(h3d_path)!r}; leave --ppl out")
-        bank = sidecar_bank(image, sidecar_array(image, h3d_path))
+        bank = sidecar_bank(image, sidecar_array(image, h3d_path, record))
     else:
         if ppl is None:
             raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
