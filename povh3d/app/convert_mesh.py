@@ -52,6 +52,7 @@ class ConversionResult:
     up: str = "y"                 # the model's up axis taken (``mesh.orient``)
     up_reason: str = ""
     scale: float = 1.0            # applied to the model's mm (``normalize``: 1 / its largest extent)
+    part_names: list[str] = field(default_factory=list)   # of the include's mesh2 blocks, in order
 
     def summary(self) -> str:
         return (f"{self.parts} part{'s' if self.parts != 1 else ''}, {self.triangles} triangles, "
@@ -212,7 +213,7 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
         parts=len(parts), triangles=sum(p.triangles for p in parts),
         vertices=sum(len(p.vertices) for p in parts), smooth=smooth, files_read=loaded.files, clean=report,
         warnings=_warnings(report, loaded.parts, loaded.missing, loaded.warnings), simplification=simplification,
-        up=up, up_reason=up_reason, scale=scale)
+        up=up, up_reason=up_reason, scale=scale, part_names=[p.name for p in parts])
     step(3, 4)
     text = include_text(blocks, ident, (lo, hi), source=model.name, summary=result.summary())
     _write_all(output, text, textures)

@@ -8,31 +8,65 @@ written with their names (``app.objects``)."""
 from __future__ import annotations
 
 import dataclasses
+import re
 import shutil
 import tempfile
 from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError, InputError
-from ..scene.object_ids import UNRESOLVED, mask_scene
+from ..scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from .objects import ObjectTable, write_masks
-from .request import RenderRequest
+from .request import ModelOptions, RenderRequest, VolumeOptions
 
 
-def check_objects_request(request: RenderRequest) -> Any:
-    """Refuse, before any work, what the masks cannot be made for; return the mask copy."""
-    if request.source.suffix.lower() != ".pov":
-        raise ConfigError("render --objects takes a POV-Ray scene (.pov) in this version; models and volumes "
-                          "are not yet split into objects")
+def check_objects_request(request: RenderRequest) -> MaskScene | None:
+    """Refuse, before any work, what the masks cannot be made for; return the mask copy of a scene
+    (None for a model or a volume: its parts are known once it is converted)."""
+    if request.is_model:
+        if request.volume.volume:
+            raise ConfigError("a volume drawn as a medium (--volume) has no surfaces to tell apart; render the "
+                              "masks of its --labels or --iso surfaces")
+    elif request.source.suffix.lower() != ".pov":
+        raise ConfigError(f"render --objects takes a POV-Ray scene (.pov), a model or a volume, not "
+                          f"{request.source.name!r}")
     if request.display.lens_array.views is None:
         # views pulled from such an image are resampled (bilinear): two ids would blend into a third
         raise ConfigError("render --objects needs whole pixels per lens on a square or lenticular grid in this "
                           "version (hex and fractional-PPL views are resampled); render the masks on such a grid")
+    if request.is_model:
+        return None
     try:
         text = request.source.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read the scene {str(request.source)!r} ({exc})") from None
     return mask_scene(text)
+
+
+def staged_mask(request: RenderRequest, folder: Path) -> tuple[Path, dict[int, str]]:
+    """The mask copy of a model's or a volume's stage written into ``folder``: its include with every
+    part its own id (``scene.part_ids``), named after the parts (OBJ objects and groups, glTF nodes,
+    3MF objects) or the surfaces (the label table's names, ``label N``, ``iso V``).  The model is
+    staged as for the colour pass (from the cache): the same include, the same placement."""
+    import warnings
+
+    from ..scene.part_ids import part_ids_include, part_table
+    from .render import load_content
+
+    with warnings.catch_warnings():      # the colour pass has said them
+        warnings.simplefilter("ignore")
+        scene, record = load_content(request)
+    stage = scene.path.read_text(encoding="utf-8")
+    found = re.search(r'#include\s+"([^"]+)"', stage)
+    if found is None or record is None:
+        raise RuntimeError(f"the stage {str(scene.path)!r} includes no converted model")   # a bug
+    names = [row["name"] for row in record["surfaces"]] if "surfaces" in record else record["parts"]
+    table = part_table(names)
+    include = (scene.path.parent / found[1]).read_text(encoding="utf-8")
+    (folder / "parts.inc").write_text(part_ids_include(include, len(table)), encoding="utf-8")
+    path = folder / "stage.pov"
+    path.write_text(mask_scene(stage.replace(found[0], '#include "parts.inc"')).text, encoding="utf-8")
+    return path, table
 
 
 def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]:
@@ -46,13 +80,16 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
     out = Path(folder)
     work = Path(tempfile.mkdtemp(prefix=".povh3d-objects-", dir=out.parent if str(out.parent) else "."))
     try:
-        scene = work / request.source.name
-        scene.write_text(mask.text, encoding="utf-8")
+        if mask is None:
+            scene, names = staged_mask(request, work)
+        else:
+            scene, names = work / request.source.name, mask.names
+            scene.write_text(mask.text, encoding="utf-8")
         settings = dataclasses.replace(request.settings, quality="draft", bit_depth=16)
         still = request.frames is None
         masked = dataclasses.replace(request, source=scene, output=work / "mask.png",
                                      views_dir=work / "views" if still else None, depth_maps=None, video=None,
-                                     settings=settings,
+                                     settings=settings, model=ModelOptions(), volume=VolumeOptions(),
                                      include_dirs=(request.source.resolve().parent, *request.include_dirs))
         report = render(masked)
         if still:
@@ -65,14 +102,14 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
         masks = {}
         for n, views in stacks.items():
             ny, nx, ly, lx = views.shape[:4]
-            masks[n] = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(mask.names)).reshape(ny, nx, ly, lx)
-        table = ObjectTable(mask.names, tuple(sorted(masks)), (ny, nx), (ly, lx))
+            masks[n] = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(names)).reshape(ny, nx, ly, lx)
+        table = ObjectTable(names, tuple(sorted(masks)), (ny, nx), (ly, lx))
         write_masks(out, table, masks)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     _note_in_sidecars(request, out, table)
     unresolved = sum(int((m == UNRESOLVED).sum()) for m in masks.values()) / sum(m.size for m in masks.values())
-    return {"objects": len(mask.names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}
+    return {"objects": len(names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}
 
 
 def _note_in_sidecars(request: RenderRequest, folder: Path, table: ObjectTable) -> None:

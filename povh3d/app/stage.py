@@ -82,9 +82,11 @@ def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: i
         from ..errors import InputError
 
         raise InputError(f"model file {str(model)!r} does not exist; check the path")
-    key = content_key("mesh", __version__, _sha256(model), shading, max_triangles, up, rotate, unit, "normalized")
+    # "part-names": manifests before the part names (object masks) are converted again
+    key = content_key("mesh", __version__, _sha256(model), shading, max_triangles, up, rotate, unit, "normalized",
+                      "part-names")
     folder = cache.entry_path(cache.cache_root(cache_dir), "meshes", key, "")
-    manifest = load_manifest(folder, key, ("include", "files"))
+    manifest = load_manifest(folder, key, ("include", "files", "part_names"))
     if manifest is not None and isinstance(manifest["files"], dict) and (folder / manifest["include"]).is_file():
         if all(Path(p).is_file() and _sha256(Path(p)) == h for p, h in manifest["files"].items()):
             manifest["from_cache"] = True
@@ -94,7 +96,8 @@ def cached_include(model: str | Path, *, shading: str = "auto", max_triangles: i
     result = convert_mesh(model, folder / f"{ident}.inc", shading=shading, max_triangles=max_triangles,
                           up=up, rotate=rotate, unit=unit, center=True, normalize=True)
     manifest = {"include": result.include.name, "ident": result.ident, "bounds": result.bounds,
-                "triangles": result.triangles, "parts": result.parts, "warnings": result.warnings,
+                "triangles": result.triangles, "parts": result.parts, "part_names": result.part_names,
+                "warnings": result.warnings,
                 "simplification": result.simplification, "model": str(model.resolve()),
                 "up": result.up, "up_reason": result.up_reason, "mm_per_unit_size": 1.0 / result.scale,
                 "files": {str(p): _sha256(p) for p in result.files_read if p.is_file()}}
@@ -127,6 +130,7 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
     for message in warnings[len(said):]:
         warn(message)
     record = {"model": str(Path(model)), "include": str(include), "triangles": manifest["triangles"],
+              "parts": manifest["part_names"],
               "conversion_from_cache": manifest["from_cache"], "warnings": warnings,
               "up": manifest.get("up"), "up_reason": manifest.get("up_reason"),
               "simplification": manifest["simplification"],

@@ -27,6 +27,9 @@ from .formats import FORMATS, UNITS, MeshFormat
 
 _FLIP = np.array([1.0, 1.0, -1.0])
 _DEFAULT_BASE = np.array([204, 204, 204, 255], dtype=np.uint8)  # light neutral grey
+#: An OBJ split into more objects and groups than this is read by material only (some exporters write
+#: a group per face; object masks tell at most 1000 ids apart anyway).
+MAX_SPLIT_PARTS = 1000
 
 
 @dataclass(frozen=True, eq=False)
@@ -311,11 +314,17 @@ def load_model(path: str | Path, *, unit: str | None = None) -> LoadedModel:
     logger = logging.getLogger("trimesh")
     level = logger.level
     logger.setLevel(logging.CRITICAL)
+    # OBJ: one part per object (o) and group (g) as well as per material, so that each is its own id
+    # in object masks; trimesh merges them by material unless asked.
+    split = {"split_objects": True, "split_groups": True} if fmt.file_type == "obj" else {}
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             scene = trimesh.load(str(path), file_type=fmt.file_type, resolver=resolver,
-                                 force="scene", process=False)
+                                 force="scene", process=False, **split)
+            if split and len(scene.geometry) > MAX_SPLIT_PARTS:   # a group per face: by material as before
+                scene = trimesh.load(str(path), file_type=fmt.file_type, resolver=resolver,
+                                     force="scene", process=False)
     except Exception as exc:  # trimesh raises anything from ValueError to struct.error on bad bytes
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"cannot read {str(path)!r} as {fmt.name}: {reason}") from None

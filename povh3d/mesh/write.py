@@ -72,7 +72,8 @@ def mesh2_text(part: Part, *, smooth: bool, normals: np.ndarray | None, texture_
     ident : str                the model's identifier (for ``IDENT_Dir``)
     """
     # POV-Ray keeps vertices and normals as floats: their shortest float32 text (text32.py).
-    out = [f"mesh2 {{  // {part.name}\n",
+    # the name is a comment: a line break in it (a glTF node may have one) would end the comment early
+    out = [f"mesh2 {{  // {' '.join(part.name.splitlines())}\n",
            _block("vertex_vectors", len(part.vertices), format_vectors32(part.vertices))]
     if smooth:
         out.append(_block("normal_vectors", len(normals), format_vectors32(normals)))

@@ -85,3 +85,17 @@ def test_other_ply_layouts_go_to_trimesh(tmp_path):
         assert load._binary_ply(path, path.read_bytes(), load.FORMATS[".ply"], None) is None
     assert load_model(coloured).parts[0].vertex_colors is not None
     assert load_model(quads).parts[0].triangles == 2  # trimesh splits the quad
+
+
+def test_obj_objects_and_groups_are_parts(tmp_path, monkeypatch):
+    # one part per object (o) and group (g), named after it, as object masks need; a file with more
+    # groups than masks tell apart is read by material, as trimesh reads it by default
+    box = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf {a} {b} {c}\nf {a} {b} {d}\n"
+    text = "".join(f"{key} {name}\n" + box.format(a=4 * n + 1, b=4 * n + 2, c=4 * n + 3, d=4 * n + 4)
+                   for n, (key, name) in enumerate([("o", "lid"), ("g", "handle"), ("g", "body")]))
+    (tmp_path / "pot.obj").write_text(text)
+    parts = load_model(tmp_path / "pot.obj").parts
+    # a group inside an object is named after both (trimesh)
+    assert sorted(p.name for p in parts) == ["lid", "lid_body", "lid_handle"] and all(p.triangles == 2 for p in parts)
+    monkeypatch.setattr(load, "MAX_SPLIT_PARTS", 2)
+    assert [p.triangles for p in load_model(tmp_path / "pot.obj").parts] == [6]

@@ -11,11 +11,10 @@ import pytest
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
-from povh3d.geometry.rays import pixel_rays
 from povh3d.hyper.ids import decode_ids
 from povh3d.scene.object_ids import UNRESOLVED, ObjectsError, mask_scene
 from povh3d.scene.scene import load_scene
-from tests.support.hit_oracle import border_margin_px
+from tests.support.id_oracle import expected_ids
 
 # (kind, centre or min corner, radius or max corner), display mm: screen z = 0, viewer on -z
 SPHERES = [((-6.0, 3.0, 4.0), 4.0), ((5.0, -3.0, -2.0), 3.0)]
@@ -39,41 +38,8 @@ ARRAYS = {
     "square": LensArray("square", 40, 30, 0.8, 0.8, 1.5, Panel(320, 240, 0.1, 0.1)),
     "lenticular": LensArray("lenticular", 40, 240, 0.8, 0.1, 1.5, Panel(320, 240, 0.1, 0.1)),
 }
-
-
-def first_hit_ids(origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
-    """(H, W) id (1, 2: the spheres in scene order, 3: the box, 0: nothing) of the first object
-    along the whole line ``origins + t directions`` (the scene in front of the screen counts)."""
-    best = np.full(origins.shape[:2], np.inf)
-    ids = np.zeros(origins.shape[:2], np.int64)
-    for ident, (centre, radius) in enumerate(SPHERES, start=1):
-        oc = origins - np.array(centre)
-        b = (oc * directions).sum(-1)
-        disc = b * b - ((oc * oc).sum(-1) - radius * radius)
-        t = np.where(disc > 0, -b - np.sqrt(np.maximum(disc, 0)), np.inf)
-        ids = np.where(t < best, ident, ids)
-        best = np.minimum(best, t)
-    lo, hi = np.array(BOX[0]), np.array(BOX[1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t0, t1 = (lo - origins) / directions, (hi - origins) / directions
-    near = np.nanmax(np.minimum(t0, t1), -1)
-    far = np.nanmin(np.maximum(t0, t1), -1)
-    t = np.where(near < far, near, np.inf)
-    return np.where(t < best, 3, ids)
-
-
-def expected(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray]:
-    """The ids of every pixel's ray and where they can be scored: away from lens borders and from
-    object edges (the id is the same for the ray moved half a lens pitch each way)."""
-    c, d, inside = pixel_rays(lens_array)
-    origins = np.concatenate([np.nan_to_num(c), np.zeros(c.shape[:2] + (1,))], axis=-1)
-    d = np.nan_to_num(d, nan=1.0)
-    want = first_hit_ids(origins, d)
-    clear = inside & (border_margin_px(lens_array) > 0.1)
-    step = lens_array.pitch_x / 2
-    for shift in ((step, 0, 0), (-step, 0, 0), (0, step, 0), (0, -step, 0)):
-        clear &= first_hit_ids(origins + np.array(shift), d) == want
-    return want, clear
+# ids 1, 2: the spheres in scene order, 3: the box
+SHAPES = [("sphere", *SPHERES[0]), ("sphere", *SPHERES[1]), ("box", *BOX)]
 
 
 def test_mask_scene_names_and_strips() -> None:
@@ -100,7 +66,7 @@ def test_masks_match_the_analytic_first_hits(tmp_path: Path, method: str, grid: 
     settings = RenderSettings(quality="draft", use_cache=False, bit_depth=16, front_clearance=8.0)
     h3d = run_method(method, load_scene(path), lens_array, settings).h3d
     got = decode_ids(h3d, len(mask.names))
-    want, clear = expected(lens_array)
+    want, clear = expected_ids(lens_array, SHAPES)
     assert clear.mean() > 0.6 and len(np.unique(want[clear])) == 4
     share = (got[clear] == want[clear]).mean()
     assert share >= 0.995, f"{100 * share:.2f} % of {clear.sum()} clear pixels right"
