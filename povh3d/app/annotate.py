@@ -69,7 +69,7 @@ def _check_against(table: ObjectTable, frames: list[int], record: dict[str, Any]
 
 def _h3d_offset(record: dict[str, Any]) -> tuple[int, int] | None:
     """Where the view bank sits in the H3D image ``(row, col)``, or None when the views do not
-    tile it (hex, fractional PPL): those headers carry centre-view boxes only."""
+    tile it (hex, fractional PPL): those take their H3D boxes from the panel masks."""
     from .display_setup import Display
 
     if "lens_array" not in record:
@@ -90,7 +90,10 @@ def frame_boxes(masks: Path, table: ObjectTable, frame: int, centre: tuple[int, 
     out: dict[int, dict[str, Any]] = {}
     for ident, box in mask_boxes(read_mask(masks, table, frame, centre)).items():
         out.setdefault(ident, {})["view"] = box
-    if h3d_offset is not None:
+    if h3d_offset is None and table.panel is not None:    # hex, fractional PPL: the panel's own mask
+        for ident, box in mask_boxes(read_mask(masks, table, frame, None)).items():
+            out.setdefault(ident, {})["h3d"] = box
+    elif h3d_offset is not None:
         ny, nx = table.views
         stack = np.stack([[read_mask(masks, table, frame, (l, k)) for k in range(nx)] for l in range(ny)])
         dy, dx = h3d_offset
@@ -118,7 +121,8 @@ def build_header(render: str | Path, masks: str | Path, links: str | Path | None
     digest = record.get("image_sha256") or render.name
     return CdpHeader(str(uuid.uuid5(uuid.NAMESPACE_URL, f"povh3d:{digest}")), render.stem, render.name,
                      (nx, ny), centre, (table.view_size[1], table.view_size[0]),
-                     tuple(size) if size and offset is not None else None, "povh3d render", (scene,))
+                     tuple(size) if size and (offset is not None or table.panel) else None, "povh3d render",
+                     (scene,))
 
 
 def annotate(render: str | Path, masks: str | Path, output: str | Path, *,

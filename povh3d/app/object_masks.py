@@ -1,9 +1,11 @@
 """``render --objects DIR``: the id of the object each pixel's ray first hits, in every view of
 every frame.
 
-One more render of the same request, on the mask copy of the scene (``scene.object_ids``):
-point-sampled (draft), 16 bits, the same display, method and rays; its views decoded to ids and
-written with their names (``app.objects``)."""
+One more render of the same request, on the mask copy of the scene (``scene.object_ids``) or of
+a model's or volume's stage (``staged_mask``): point-sampled (draft), 16 bits, the same display,
+method and rays; its views decoded to ids and written with their names (``app.objects``).  On a
+hex or fractional-PPL array the panel's pixels are decoded (each its own ray, as in the colour
+pass) and the views picked from them, the nearest pixel of each lens, never blended."""
 
 from __future__ import annotations
 
@@ -14,7 +16,10 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..errors import ConfigError, InputError
+from ..geometry.lens_array import LensArray
 from ..scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from .objects import ObjectTable, write_masks
 from .request import ModelOptions, RenderRequest, VolumeOptions
@@ -30,10 +35,13 @@ def check_objects_request(request: RenderRequest) -> MaskScene | None:
     elif request.source.suffix.lower() != ".pov":
         raise ConfigError(f"render --objects takes a POV-Ray scene (.pov), a model or a volume, not "
                           f"{request.source.name!r}")
-    if request.display.lens_array.views is None:
-        # views pulled from such an image are resampled (bilinear): two ids would blend into a third
-        raise ConfigError("render --objects needs whole pixels per lens on a square or lenticular grid in this "
-                          "version (hex and fractional-PPL views are resampled); render the masks on such a grid")
+    if request.method == "subpixel":
+        raise ConfigError("--method subpixel traces each colour channel of a pixel along its own ray, so a pixel "
+                          "has no one object id; render the masks with --method multi-ortho")
+    if request.display.mapping is not None and (request.frames is not None or request.render_array.views is None):
+        # the image written is the mapped panel: its pixels mix views, and only a still's views are kept whole
+        raise ConfigError("the object masks of a mapped display come from the views of a still; render one "
+                          "frame (no --frames) for them")
     if request.is_model:
         return None
     try:
@@ -74,7 +82,7 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
     from ..hyper.ids import decode_ids
     from .render import render
     from ..image.io import read_png, read_sidecar
-    from .views import h3d_views, read_views
+    from .views import read_views
 
     mask = check_objects_request(request)
     out = Path(folder)
@@ -86,30 +94,47 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
             scene, names = work / request.source.name, mask.names
             scene.write_text(mask.text, encoding="utf-8")
         settings = dataclasses.replace(request.settings, quality="draft", bit_depth=16)
-        still = request.frames is None
+        array = request.render_array
+        banked = request.frames is None and array.views is not None    # a still's views, whole
         masked = dataclasses.replace(request, source=scene, output=work / "mask.png",
-                                     views_dir=work / "views" if still else None, depth_maps=None, video=None,
+                                     views_dir=work / "views" if banked else None, depth_maps=None, video=None,
                                      settings=settings, model=ModelOptions(), volume=VolumeOptions(),
                                      include_dirs=(request.source.resolve().parent, *request.include_dirs))
         report = render(masked)
-        if still:
-            stacks = {0: read_views(work / "views")}
-        else:   # an animation's views: pulled from each frame's image as 'povh3d extract' does
-            stacks = {}
-            for name in report["frames"]:
-                record = read_sidecar(name)
-                stacks[int(record["animation"]["frame"])] = h3d_views(read_png(name), record, name)[0]
-        masks = {}
-        for n, views in stacks.items():
+        masks, panels = {}, {}
+        if banked:
+            views = read_views(work / "views")
             ny, nx, ly, lx = views.shape[:4]
-            masks[n] = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(names)).reshape(ny, nx, ly, lx)
-        table = ObjectTable(names, tuple(sorted(masks)), (ny, nx), (ly, lx))
-        write_masks(out, table, masks)
+            masks[0] = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(names)).reshape(ny, nx, ly, lx)
+        else:   # each frame's panel (the lens mesh's rays, point-sampled), then its views
+            images = {0: work / "mask.png"} if request.frames is None else \
+                {int(read_sidecar(name)["animation"]["frame"]): name for name in report["frames"]}
+            for n, name in images.items():
+                ids = decode_ids(read_png(name), len(names))
+                masks[n] = mask_views(ids, array)
+                if array.views is None:
+                    panels[n] = ids
+        ny, nx, ly, lx = next(iter(masks.values())).shape
+        table = ObjectTable(names, tuple(sorted(masks)), (ny, nx), (ly, lx),
+                            (array.panel.height, array.panel.width) if panels else None)
+        write_masks(out, table, masks, panels)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     _note_in_sidecars(request, out, table)
     unresolved = sum(int((m == UNRESOLVED).sum()) for m in masks.values()) / sum(m.size for m in masks.values())
     return {"objects": len(names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}
+
+
+def mask_views(ids: np.ndarray, lens_array: LensArray) -> np.ndarray:
+    """``(Ny, Nx, Ly, Lx)`` view masks of a panel's ``(H, W)`` ids: the camera bank's region, or on a
+    hex or fractional-PPL array each view pixel the id of its lens's pixel nearest the view's point
+    (the pixel ``extract_views`` weighs most: ids are never blended)."""
+    from ..image.elemental import nearest_in_lens, view_points
+    from ..image.interleave import extract
+
+    if lens_array.views is not None:
+        return extract(ids[lens_array.bank_region][..., None], lens_array.views)[..., 0]
+    return nearest_in_lens(ids, lens_array, *view_points(lens_array))
 
 
 def _note_in_sidecars(request: RenderRequest, folder: Path, table: ObjectTable) -> None:

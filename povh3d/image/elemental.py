@@ -91,24 +91,12 @@ def view_grid(lens_array: LensArray) -> tuple[int, int]:
     return ny, nx
 
 
-def extract_views(h3d: np.ndarray, lens_array: LensArray, views: tuple[int, int] | None = None) -> np.ndarray:
-    """Viewpoint images of any array: each lens resampled at the view offsets.
+def view_points(lens_array: LensArray, views: tuple[int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Where each view pixel reads the panel: ``(Ny, Nx, Ly, Lx, 2)`` mm and the lens ``(Ny, Nx, Ly, Lx)``.
 
-    View ``(l, k)`` pixel ``(i, j)`` is the H3D image at ``c_ij + (u_k, v_l)`` with
-    ``u_k = (k + 0.5 - Nx/2) s``, ``v_l = (Ny/2 - l - 0.5) s`` (the multi-ortho
-    offsets), read from lens ``(j, i)``'s own pixels.  With whole PPL on a square
-    grid the samples land on pixel centres and this equals ``interleave.extract``.
-
-    Parameters
-    ----------
-    h3d : (H, W, C) array
-    views : (Ny, Nx), optional       default ``view_grid(lens_array)``
-
-    Returns
-    -------
-    (Ny, Nx, Ly, Lx, C) array.  Hex cells are narrower than the square of view
-    offsets at their corners: those views read the nearest pixel of the lens.
-    """
+    View ``(l, k)`` pixel ``(i, j)`` is the point ``c_ij + (u_k, v_l)`` with
+    ``u_k = (k + 0.5 - Nx/2) s``, ``v_l = (Ny/2 - l - 0.5) s`` (the multi-ortho offsets),
+    read from lens ``(j, i)``'s own pixels; ``views`` default ``view_grid(lens_array)``."""
     ny, nx = views or view_grid(lens_array)
     s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
     u = (np.arange(nx) + 0.5 - nx / 2) * s_x
@@ -121,7 +109,68 @@ def extract_views(h3d: np.ndarray, lens_array: LensArray, views: tuple[int, int]
     pts = np.empty((ny, nx, ly, lx, 2))
     pts[..., 0] = centres[None, None, :, :, 0] + u[None, :, None, None]
     pts[..., 1] = centres[None, None, :, :, 1] + v[:, None, None, None]
-    return sample_in_lens(h3d, lens_array, pts, np.broadcast_to(lens, pts.shape[:-1]))
+    return pts, np.broadcast_to(lens, pts.shape[:-1])
+
+
+def extract_views(h3d: np.ndarray, lens_array: LensArray, views: tuple[int, int] | None = None) -> np.ndarray:
+    """Viewpoint images of any array: each lens resampled at the view offsets (``view_points``).
+
+    With whole PPL on a square grid the samples land on pixel centres and this equals
+    ``interleave.extract``.
+
+    Parameters
+    ----------
+    h3d : (H, W, C) array
+    views : (Ny, Nx), optional       default ``view_grid(lens_array)``
+
+    Returns
+    -------
+    (Ny, Nx, Ly, Lx, C) array.  Hex cells are narrower than the square of view
+    offsets at their corners: those views read the nearest pixel of the lens.
+    """
+    return sample_in_lens(h3d, lens_array, *view_points(lens_array, views))
+
+
+def nearest_in_lens(labels: np.ndarray, lens_array: LensArray, points: np.ndarray, lens: np.ndarray,
+                    lens_map: np.ndarray | None = None) -> np.ndarray:
+    """The value of the pixel of ``lens`` nearest each panel point: what ``sample_in_lens`` weighs
+    most, for values that must not be blended (object ids).
+
+    Parameters
+    ----------
+    labels : (H, W) array                   one value per panel pixel
+    points : (..., 2) float, mm
+    lens : (...) int                        the lens each point must be read from
+
+    Returns
+    -------
+    (...) array of ``labels.dtype``.  A point none of whose four neighbours belongs to its
+    lens takes the nearest pixel, as ``sample_in_lens`` does.
+    """
+    panel = lens_array.panel
+    H, W = panel.height, panel.width
+    lens_map = lens_index_map(lens_array) if lens_map is None else lens_map
+    col = points[..., 0] / panel.pitch_x + W / 2 - 0.5
+    row = H / 2 - 0.5 - points[..., 1] / panel.pitch_y
+    c0, r0 = np.floor(col).astype(np.int64), np.floor(row).astype(np.int64)
+    fc, fr = col - c0, row - r0
+    # A point halfway between two pixels (whole PPL of a hex array's views) weighs both alike: the one
+    # nearer the lens centre wins, so views left and right of it pick alike and never a pixel on the
+    # cell's border, whose ray the neighbouring lens may own.
+    centre = lens_array.lens_centres().reshape(-1, 2)[np.clip(lens, 0, None)]
+    best = np.full(points.shape[:-1], -np.inf)
+    out = labels[np.clip(np.rint(row).astype(np.int64), 0, H - 1), np.clip(np.rint(col).astype(np.int64), 0, W - 1)]
+    for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, 1, (1 - fr) * fc),
+                      (1, 0, fr * (1 - fc)), (1, 1, fr * fc)):
+        r, c = r0 + dr, c0 + dc
+        rc, cc = np.clip(r, 0, H - 1), np.clip(c, 0, W - 1)
+        off = np.hypot((c + 0.5 - W / 2) * panel.pitch_x - centre[..., 0],
+                       (H / 2 - r - 0.5) * panel.pitch_y - centre[..., 1]) / panel.pitch_x
+        w = w - 1e-6 * off
+        own = (r >= 0) & (r < H) & (c >= 0) & (c < W) & (lens_map[rc, cc] == lens) & (w > best)
+        out = np.where(own, labels[rc, cc], out)
+        best = np.where(own, w, best)
+    return out
 
 
 def sample_turned_bank(capture: np.ndarray, lens_array: LensArray, pitch: tuple[float, float],

@@ -79,9 +79,55 @@ def test_animation_masks_give_a_new_annotation_when_an_object_comes_back(tmp_pat
     assert {b.space for b in sphere.boxes} == {"view", "h3d"}
 
 
-def test_hex_masks_are_refused_before_any_render(tmp_path: Path) -> None:
-    run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--grid", "hex", "--lenses", "30x20",
-                         "--ppl", "8", "--pixel-pitch", "0.1", "--focal", "1.5", "-o", tmp_path / "h.png",
+@pytest.mark.povray
+def test_hex_masks_hold_every_panel_pixel_and_views_never_blended(tmp_path: Path, monkeypatch) -> None:
+    # the panel mask: each pixel's own ray (the lens mesh's, as in the colour pass); the views: each
+    # view pixel the id of the lens pixel nearest the view's point, scored against the view's own ray
+    from povh3d.app.display_setup import Display
+    from povh3d.image.io import read_sidecar
+    from tests.support.id_oracle import SCENE, SHAPES, expected_ids, expected_view_ids
+
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "s.pov").write_text(SCENE)
+    run = run_in_process("render", tmp_path / "s.pov", "--grid", "hex", "--lenses", "30x20", "--ppl", "6",
+                         "--pixel-pitch", "0.1", "--focal", "1.5", "--quality", "draft", "-o", tmp_path / "h.png",
                          "--objects", tmp_path / "o")
-    assert run.code != 0 and "whole pixels per lens" in run.err and run.err.count("\n") == 1
+    assert run.code == 0, run.err
+    lens_array = Display.from_record(read_sidecar(tmp_path / "h.png")).lens_array
+    table = read_table(tmp_path / "o")
+    assert table.panel == (lens_array.panel.height, lens_array.panel.width) and len(table.names) == 3
+    panel = read_mask(tmp_path / "o", table, 0, None)
+    want, clear = expected_ids(lens_array, SHAPES)
+    assert clear.mean() > 0.5 and set(np.unique(want[clear])) == {0, 1, 2, 3}
+    share = (panel[clear] == want[clear]).mean()
+    assert share >= 0.995, f"{100 * share:.2f} % of the panel's clear pixels right"
+    ny, nx = table.views
+    views = np.stack([[read_mask(tmp_path / "o", table, 0, (l, k)) for k in range(nx)] for l in range(ny)])
+    want, clear = expected_view_ids(lens_array, table.views, SHAPES)
+    # a view whose point lies outside the hex cell (its corners) has no ray of the lens: it reads the
+    # nearest pixel, as the colour views do, and is not scored
+    px, py = lens_array.pitch_x, lens_array.pitch_y
+    u = (np.arange(nx) + 0.5 - nx / 2) * lens_array.panel.pitch_x
+    v = (ny / 2 - np.arange(ny) - 0.5) * lens_array.panel.pitch_y
+    offsets = np.stack(np.broadcast_arrays(u[None, :], v[:, None]), axis=-1)
+    neighbours = np.array([[px, 0], [-px, 0], [px / 2, py], [-px / 2, py], [px / 2, -py], [-px / 2, -py]])
+    in_cell = (np.linalg.norm(offsets, axis=-1)[..., None]
+               < np.linalg.norm(offsets[..., None, :] - neighbours, axis=-1)).all(axis=-1)
+    assert in_cell.sum() == ny * nx - 4
+    clear &= in_cell[:, :, None, None]
+    view_share = (views[clear] == want[clear]).mean()
+    assert view_share >= 0.995, f"{100 * view_share:.2f} % of the views' clear pixels right"
+    swapped = np.choose(want, [0, 2, 1, 3])    # negative control: the two spheres' ids swapped
+    assert (swapped[clear & (want > 0)] == views[clear & (want > 0)]).mean() < 0.8
+    print(f"hex: panel {100 * share:.3f} %, views {100 * view_share:.3f} % of clear pixels right")
+    (tmp_path / "links.toml").write_text('[Ball]\nurl = "https://example.org/ball"\n')
+    assert run_in_process("annotate", tmp_path / "h.png", "--objects", tmp_path / "o", "-o", tmp_path / "h.xml",
+                          "--links", tmp_path / "links.toml").code == 0
+    assert b'space="h3d"' in (tmp_path / "h.xml").read_bytes()    # the panel mask's boxes
+
+
+def test_subpixel_masks_are_refused_before_any_render(tmp_path: Path) -> None:
+    run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--preset", "demo", "--method", "subpixel",
+                         "-o", tmp_path / "h.png", "--objects", tmp_path / "o")
+    assert run.code != 0 and "own ray" in run.err and run.err.count("\n") == 1, run.err
     assert list(tmp_path.iterdir()) == []

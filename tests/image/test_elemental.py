@@ -88,3 +88,37 @@ def test_hex_inside_is_the_true_hexagon():
             c = cs[ii * la.lenses_x + jj]
             near |= (X - c[..., 0]) ** 2 + (Y - c[..., 1]) ** 2 <= r2
     assert near.sum() - inside.sum() > 2000
+
+
+@pytest.mark.parametrize("la", [LensArray("hex", 12, 10, 0.6, 0.6 * math.sqrt(3) / 2, 1.5, Panel(80, 60, 0.1, 0.1)),
+                                LensArray("square", 11, 8, 0.7, 0.7, 1.5, Panel(80, 60, 0.1, 0.1))],
+                         ids=["hex", "fractional"])
+def test_nearest_in_lens_picks_the_lens_pixel_weighed_most(la):
+    # ids are picked, never blended: each view pixel takes a pixel of its own lens, the nearest of the
+    # four the bilinear sample weighs (or, with none of them in the lens, the nearest pixel at all)
+    from povh3d.image.elemental import nearest_in_lens, view_points
+
+    pts, lens = view_points(la)
+    lens_map = lens_index_map(la)
+    H, W = lens_map.shape
+    picked = nearest_in_lens(np.arange(H * W).reshape(H, W), la, pts, lens)
+    r, c = np.divmod(picked, W)
+    centre = np.stack([(c + 0.5 - W / 2) * 0.1, (H / 2 - r - 0.5) * 0.1], axis=-1)
+    distance = np.linalg.norm(centre - pts, axis=-1)
+    own = lens_map[r, c] == lens
+    col, row = pts[..., 0] / 0.1 + W / 2 - 0.5, H / 2 - 0.5 - pts[..., 1] / 0.1
+    any_own = np.zeros(lens.shape, bool)
+    nearest_own = np.full(lens.shape, np.inf)
+    for dr in (0, 1):
+        for dc in (0, 1):
+            rr = np.clip(np.floor(row).astype(int) + dr, 0, H - 1)
+            cc = np.clip(np.floor(col).astype(int) + dc, 0, W - 1)
+            mine = lens_map[rr, cc] == lens
+            any_own |= mine
+            d = np.hypot((cc + 0.5 - W / 2) * 0.1 - pts[..., 0], (H / 2 - rr - 0.5) * 0.1 - pts[..., 1])
+            nearest_own = np.where(mine, np.minimum(nearest_own, d), nearest_own)
+    assert own[any_own].all() and any_own.mean() > 0.9
+    assert np.allclose(distance[any_own], nearest_own[any_own])
+    # negative control: the plain nearest pixel crosses into a neighbouring lens
+    plain = lens_map[np.clip(np.rint(row).astype(int), 0, H - 1), np.clip(np.rint(col).astype(int), 0, W - 1)]
+    assert (plain[any_own] != lens[any_own]).any()

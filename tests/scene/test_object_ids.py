@@ -3,6 +3,7 @@ first hit of its conventions ray on an analytic scene (spheres and a box at know
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -14,32 +15,15 @@ from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.hyper.ids import decode_ids
 from povh3d.scene.object_ids import UNRESOLVED, ObjectsError, mask_scene
 from povh3d.scene.scene import load_scene
-from tests.support.id_oracle import expected_ids
+from tests.support.id_oracle import SCENE, SHAPES, expected_ids
 
-# (kind, centre or min corner, radius or max corner), display mm: screen z = 0, viewer on -z
-SPHERES = [((-6.0, 3.0, 4.0), 4.0), ((5.0, -3.0, -2.0), 3.0)]
-BOX = ((0.0, 2.0, -1.0), (9.0, 8.0, 3.0))
-SCENE = f"""#version 3.7;
-global_settings {{ assumed_gamma 2.2 }}
-#declare Glass = texture {{ pigment {{ rgbt <1, 1, 1, 0.9> }} finish {{ reflection 0.5 }} }}
-light_source {{ <-20, 30, -60> rgb 1 }}
-sky_sphere {{ pigment {{ rgb <0.3, 0.5, 0.9> }} }}
-fog {{ distance 50 rgb 0.5 }}
-sphere {{ <{SPHERES[0][0][0]}, {SPHERES[0][0][1]}, {SPHERES[0][0][2]}>, {SPHERES[0][1]}
-  texture {{ Glass }} }}
-#declare Ball = sphere {{ <{SPHERES[1][0][0]}, {SPHERES[1][0][1]}, {SPHERES[1][0][2]}>, {SPHERES[1][1]}
-  pigment {{ checker rgb 1 rgb 0 scale 0.5 }} finish {{ phong 1 }} }};
-object {{ Ball }}
-union {{ box {{ <{BOX[0][0]}, {BOX[0][1]}, {BOX[0][2]}>, <{BOX[1][0]}, {BOX[1][1]}, {BOX[1][2]}>
-              pigment {{ rgb <1, 0, 0> }} normal {{ bumps 0.5 }} }}
-        interior {{ ior 1.5 }} }}
-"""
 ARRAYS = {
     "square": LensArray("square", 40, 30, 0.8, 0.8, 1.5, Panel(320, 240, 0.1, 0.1)),
     "lenticular": LensArray("lenticular", 40, 240, 0.8, 0.1, 1.5, Panel(320, 240, 0.1, 0.1)),
+    # no camera bank: a lens mesh with one ray per panel pixel
+    "hex": LensArray("hex", 39, 34, 0.8, 0.8 * math.sqrt(3) / 2, 1.5, Panel(320, 240, 0.1, 0.1)),
+    "fractional": LensArray("square", 42, 31, 0.75, 0.75, 1.5, Panel(320, 240, 0.1, 0.1)),
 }
-# ids 1, 2: the spheres in scene order, 3: the box
-SHAPES = [("sphere", *SPHERES[0]), ("sphere", *SPHERES[1]), ("box", *BOX)]
 
 
 def test_mask_scene_names_and_strips() -> None:
@@ -57,7 +41,8 @@ def test_a_scene_without_top_level_objects_is_one_line() -> None:
 
 @pytest.mark.povray
 @pytest.mark.parametrize("method, grid", [("multi-ortho", "square"), ("multi-ortho", "lenticular"),
-                                          ("single-stage", "square")])
+                                          ("single-stage", "square"), ("multi-ortho", "hex"),
+                                          ("multi-ortho", "fractional")])
 def test_masks_match_the_analytic_first_hits(tmp_path: Path, method: str, grid: str) -> None:
     lens_array = ARRAYS[grid]
     mask = mask_scene(SCENE)
