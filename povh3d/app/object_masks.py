@@ -22,6 +22,7 @@ from ..errors import ConfigError, InputError
 from ..geometry.lens_array import LensArray
 from ..scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from .objects import ObjectTable, write_masks
+from .display_frame import DisplayFrameOptions
 from .request import ModelOptions, RenderRequest, VolumeOptions
 
 
@@ -99,7 +100,10 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
         masked = dataclasses.replace(request, source=scene, output=work / "mask.png",
                                      views_dir=work / "views" if banked else None, depth_maps=None, video=None,
                                      settings=settings, model=ModelOptions(), volume=VolumeOptions(),
-                                     include_dirs=(request.source.resolve().parent, *request.include_dirs))
+                                     include_dirs=(request.source.resolve().parent, *request.include_dirs),
+                                     # a stage is in display mm, as its colour pass knew (app.placement): no
+                                     # camera to look for in the model's include
+                                     display_frame=request.display_frame if mask else DisplayFrameOptions("native"))
         report = render(masked)
         masks, panels = {}, {}
         if banked:
