@@ -38,7 +38,13 @@ def parts_model(folder: Path, kind: str) -> Path:
 
     scene = trimesh.Scene()
     for name, bounds in BOXES.items():
-        scene.add_geometry(trimesh.creation.box(bounds=bounds), node_name=name, geom_name=name)
+        box = trimesh.creation.box(bounds=bounds)
+        # colours (kept by the glb: a texture list per face colour, a translucent rgbt) must not hide the ids
+        if name == "wall":
+            box.visual.face_colors = np.tile([[255, 0, 0, 255], [0, 255, 0, 255]], (6, 1))
+        elif name == "front":
+            box.visual.vertex_colors = np.tile([[0, 0, 255, 100]], (8, 1))
+        scene.add_geometry(box, node_name=name, geom_name=name)
     path = folder / f"parts.{kind}"
     scene.export(path)
     if kind == "obj":   # trimesh writes objects (o); the groups of most exporters are g

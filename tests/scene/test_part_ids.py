@@ -18,25 +18,29 @@ FACES = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
 
 
 def include(parts: list[Part]) -> str:
-    blocks = [mesh2_text(p, smooth=False, normals=None, texture_file=None, ident="M") for p in parts]
+    blocks = [mesh2_text(p, smooth=False, normals=None, texture_file=f"M_{i}.png" if p.uv is not None else None,
+                         ident="M") for i, p in enumerate(parts)]
     return include_text(blocks, "M", (TETRA.min(0), TETRA.max(0)), source="m.obj", summary="test")
 
 
 def test_every_texture_of_a_part_becomes_its_id() -> None:
     colours = np.array([[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 0, 0, 255]], np.uint8)
     parts = [Part("plain {x}", TETRA, FACES), Part("faces", TETRA + 2, FACES, face_colors=colours),
-             Part("verts", TETRA - 2, FACES, vertex_colors=colours)]
+             Part("verts", TETRA - 2, FACES, vertex_colors=colours),
+             Part("image", TETRA * 2, FACES, uv=TETRA[:, :2], texture=np.zeros((2, 2, 3), np.uint8))]
     text = include(parts)
-    masked = part_ids_include(text, 3)
+    assert "image_map" in text
+    masked = part_ids_include(text, 4)
+    assert "image_map" not in masked and "uv_vectors" in masked     # the UVs stay, unused
     blocks = masked.split("mesh2 {")[1:]
-    assert len(blocks) == 3
+    assert len(blocks) == 4
     for ident, block in enumerate(blocks, start=1):
         textures = re.findall(r"texture \{[^\n]*", block)
         assert textures and all(t.startswith(id_texture(ident)) for t in textures), block
     assert masked.count(id_texture(2)) == 3          # the texture_list of three colours, each one the id
     assert "Povh3d_Mesh_Finish }" not in masked.split("#declare M =")[1]
     # everything but the textures is kept: vertices, faces with their texture indices
-    strip = lambda s: re.sub(r"texture \{.*?\} \}( \})?", "T", s)  # noqa: E731
+    strip = lambda s: re.sub(r"(?m)^.*\btexture \{.*$", "T", s)  # noqa: E731  (the writer: one a line)
     assert strip(masked) == strip(text)
     assert repr(id_level(3)) in blocks[2]
 
