@@ -32,8 +32,12 @@ from ..image.resample import resample_micro_images, trade_views_for_lenses
 
 # -- lens geometry of an input image -----------------------------------------------------------------
 def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | None,
-              pixel_pitch: float | None) -> dict[str, Any]:
-    """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
+              pixel_pitch: float | None, *, resampled: bool = False) -> dict[str, Any]:
+    """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar.
+
+    ``resampled``: the caller reads views as ``extract`` does, so a sidecar's array without a
+    camera bank (hex, fractional PPL) is taken, as ``lens_array`` with its view grid as ``ppl``;
+    otherwise such an array is one error line saying why."""
     side = lens_record(h3d_path)
     check_against_sidecar(h3d_path, side)
     if ppl is not None and side.get("views") and list(side["views"]) != to_edge(ppl):
@@ -42,7 +46,12 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
     if ppl is None and side.get("views"):
         ppl = from_edge([int(v) for v in side["views"]])
     if side and not side.get("views"):  # hex, fractional PPL: each lens resampled, as extract does
-        return _resampled_info(h3d_path, side, ppl, focal, pixel_pitch)
+        if resampled:
+            return _resampled_info(h3d_path, side, ppl, focal, pixel_pitch)
+        if ppl is None:
+            from .display_setup import Display
+
+            Display.from_record({"lens_array": side}).lens_array.require_views()
     if ppl is None:
         raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
     focal = focal if focal is not None else side.get("focal_mm")

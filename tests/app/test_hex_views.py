@@ -69,7 +69,7 @@ def hex_render(tmp_path_factory):
     folder = tmp_path_factory.mktemp("hex")
     render(write_wave_plane(folder), hex_array(), folder / "h.png", settings=DRAFT)
     assert run_in_process("extract", folder / "h.png", "-o", folder / "views").code == 0
-    record = refocus_file(folder / "h.png", folder / "sweep.png", lens_info(folder / "h.png", None, None, None),
+    record = refocus_file(folder / "h.png", folder / "sweep.png", lens_info(folder / "h.png", None, None, None, resampled=True),
                           sweep=SWEEP)
     return folder, record
 
@@ -144,3 +144,10 @@ def test_refocus_of_a_hex_image_accepts_no_contradicting_options(tmp_path, cli):
         assert not (tmp_path / "r.png").exists()
     assert cli("refocus", path, "--depth", "2", "--focal", "2", "-o", tmp_path / "r.png").code == 0
     assert read_png(tmp_path / "r.png").shape[:2] == (5, 6)   # one pixel a lens, as the views
+
+
+def test_resample_still_refuses_a_hex_image_in_one_line(tmp_path, cli):
+    """resample resizes whole-pixel micro-images; a hex lens's are not: one line, nothing written."""
+    path, _ = _noise_hex(tmp_path)
+    line = one_error_line(cli("resample", path, "--ppl-out", "3", "-o", tmp_path / "r.png"))
+    assert "hex lens array" in line and not (tmp_path / "r.png").exists()
