@@ -5,6 +5,9 @@ nearest-view mode) one subpixel at a time, with scalar math and the shader's own
 texel: a quilt texture coordinate, scaled by ``viewPortion``, read at the nearest texel.  It
 shares no code with ``quilt_to_native``.  It is checked on a Portrait-size panel at 200,000
 seeded random subpixels (a full scalar loop over 9.4 million subpixels takes minutes).
+
+At the end: the view ``quilt_to_native`` gives every subpixel against the one POV-Ray traced for
+it, ``render --method subpixel --calibration visual.json`` read back from a direction-coding sky.
 """
 
 from __future__ import annotations
