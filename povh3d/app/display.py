@@ -25,15 +25,19 @@ from .records import base_record, png_output, write_image
 from ..image.interleave import extract
 from ..mappings import Mapping
 from ..mappings.sampling import Source
-from ..image.refocus import contact_sheet, gradient_energy, refocus_linear
+from ..image.refocus import bank_steps, contact_sheet, gradient_energy, lens_steps, shift_and_add
 from ..image.colour import from_linear, to_linear
 from ..image.resample import resample_micro_images, trade_views_for_lenses
 
 
 # -- lens geometry of an input image -----------------------------------------------------------------
 def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | None,
-              pixel_pitch: float | None) -> dict[str, Any]:
-    """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar."""
+              pixel_pitch: float | None, *, resampled: bool = False) -> dict[str, Any]:
+    """Pixels per lens ``(Ny, Nx)``, focal and pixel pitch (mm): options first, then the sidecar.
+
+    ``resampled``: the caller reads views as ``extract`` does, so a sidecar's array without a
+    camera bank (hex, fractional PPL) is taken, as ``lens_array`` with its view grid as ``ppl``;
+    otherwise such an array is one error line saying why."""
     side = lens_record(h3d_path)
     check_against_sidecar(h3d_path, side)
     if ppl is not None and side.get("views") and list(side["views"]) != to_edge(ppl):
@@ -41,10 +45,13 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
                           f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
     if ppl is None and side.get("views"):
         ppl = from_edge([int(v) for v in side["views"]])
-    if ppl is None and side:  # a sidecar whose array has no whole-pixel views (hex, fractional PPL): say why
-        from .display_setup import Display
+    if side and not side.get("views"):  # hex, fractional PPL: each lens resampled, as extract does
+        if resampled:
+            return _resampled_info(h3d_path, side, ppl, focal, pixel_pitch)
+        if ppl is None:
+            from .display_setup import Display
 
-        Display.from_record({"lens_array": side}).lens_array.require_views()
+            Display.from_record({"lens_array": side}).lens_array.require_views()
     if ppl is None:
         raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
     focal = focal if focal is not None else side.get("focal_mm")
@@ -52,6 +59,28 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
         pixel_pitch = side["panel"]["pixel_pitch_mm"][0]
     return {"ppl": ppl, "focal": focal, "pixel_pitch": pixel_pitch,
             "pixel_pitch_y": (side.get("panel") or {}).get("pixel_pitch_mm", [None, pixel_pitch])[1] or pixel_pitch}
+
+
+def _resampled_info(h3d_path: str | Path, side: dict[str, Any], ppl: tuple[int, int] | None,
+                    focal: float | None, pixel_pitch: float | None) -> dict[str, Any]:
+    """``lens_info`` of an image whose sidecar's array has no camera bank: the array itself, whose
+    views ``extract`` resamples lens by lens; ``--focal`` may replace its focal length."""
+    from dataclasses import replace
+
+    from ..image.elemental import view_grid
+    from .display_setup import Display
+
+    la = Display.from_record({"lens_array": side}).lens_array
+    what = f"{la.grid} lens array" if la.grid != "square" else f"{la.ppl_x:g} x {la.ppl_y:g} pixels per lens"
+    if ppl is not None:
+        raise ConfigError(f"--ppl contradicts the sidecar of {str(h3d_path)!r} ({what}, whose views are resampled "
+                          "lens by lens); leave --ppl out")
+    if pixel_pitch is not None and not np.isclose(pixel_pitch, la.panel.pitch_x, rtol=1e-9):
+        raise ConfigError(f"--pixel-pitch {pixel_pitch:g} contradicts the sidecar of {str(h3d_path)!r} "
+                          f"({la.panel.pitch_x:g} mm); leave --pixel-pitch out")
+    la = replace(la, focal=focal) if focal is not None else la
+    return {"ppl": view_grid(la), "focal": la.focal, "pixel_pitch": la.panel.pitch_x,
+            "pixel_pitch_y": la.panel.pitch_y, "lens_array": la}
 
 
 def lens_record(path: str | Path, key: str = "lens_array") -> dict[str, Any]:
@@ -223,7 +252,17 @@ def _resampled_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tu
 
 
 # -- quilts ------------------------------------------------------------------------------------------
-def _views_geometry(h3d: np.ndarray, info: dict[str, Any]) -> tuple[np.ndarray, tuple, tuple, float]:
+def _refocus_views(h3d: np.ndarray, info: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The views, each view's shift in lenses per mm of depth (``refocus.lens_steps``), the views
+    to sum and the odd rows' offset: from the sidecar's array when its views are resampled (hex,
+    fractional PPL, as ``extract``), else from the pixels per lens of the camera bank."""
+    la = info.get("lens_array")
+    if la is not None:
+        from .views import sidecar_bank
+
+        views = sidecar_bank(h3d[..., :3], la)
+        steps, used, row_shift = lens_steps(la, views.shape[:2])
+        return views, steps, used, row_shift
     ny, nx = info["ppl"]
     focal = _need(info["focal"], "focal length", "--focal")
     sx = _need(info["pixel_pitch"], "pixel pitch", "--pixel-pitch")
@@ -234,8 +273,7 @@ def _views_geometry(h3d: np.ndarray, info: dict[str, Any]) -> tuple[np.ndarray, 
         raise ConfigError(str(exc)) from None
     u = (np.arange(nx) + 0.5 - nx / 2) * sx
     v = (ny / 2 - np.arange(ny) - 0.5) * sy
-    pitch = (nx * sx, ny * sy)
-    return views, (u, v), pitch, focal
+    return views, bank_steps((u, v), (nx * sx, ny * sy), focal), np.ones((ny, nx), bool), 0.0
 
 
 def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any], *,
@@ -247,7 +285,7 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     if sweep is not None:
         check_count("--sweep (planes)", int(sweep[2]), MAX_PLANES, "a sweep finds the sharpest depth in far fewer")
     image = read_whole_lenses(h3d_path)
-    views, offsets, pitch, focal = _views_geometry(image, info)
+    views, steps, used, row_shift = _refocus_views(image, info)
     out = png_output(output)
     count = 1 if sweep is None else int(sweep[2])
     plane = views.shape[2] * views.shape[3] * views.shape[4]
@@ -257,7 +295,7 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     depths = [float(depth)] if sweep is None else list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
     if not depths or (sweep is not None and int(sweep[2]) < 2):
         raise ConfigError("--sweep needs at least 2 planes")
-    planes = [refocus_linear(lin, offsets, pitch, focal, d) for d in depths]
+    planes = [shift_and_add(lin, steps * d, row_shift=row_shift, used=used) for d in depths]
     energy = [gradient_energy(p) for p in planes]
     record = base_record("refocus", source=str(Path(h3d_path).resolve()), depths_mm=depths,
                      gradient_energy=energy, output_gamma="sRGB")
@@ -278,7 +316,7 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     """Write ``output`` (.gif) sweeping the viewing angle, and ``stem.png``, its contact sheet."""
     from PIL import Image
 
-    from ..image.preview import enlarge, preview_frames, viewer_angles
+    from ..image.preview import bank_frames, enlarge, preview_frames, viewer_angles
 
     output = Path(output)
     if output.suffix.lower() != ".gif":
@@ -287,7 +325,7 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     ny, nx = info["ppl"]
     focal = _need(info["focal"], "focal length", "--focal")
     sx = _need(info["pixel_pitch"], "pixel pitch", "--pixel-pitch")
-    if image.shape[0] % ny or image.shape[1] % nx:
+    if info.get("lens_array") is None and (image.shape[0] % ny or image.shape[1] % nx):
         raise ConfigError(f"a {image.shape[1]}x{image.shape[0]} image does not hold whole lenses of "
                           f"{nx}x{ny} pixels; check --ppl")
     if frames < 2:
@@ -301,7 +339,12 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     check_writable(output)
     check_writable(sheet_path)
     angles = viewer_angles(nx * sx, focal, frames)
-    shots = preview_frames(image[..., :3], (ny, nx), sx, focal, angles)
+    if info.get("lens_array") is not None:  # hex, fractional PPL: the views extract writes
+        from .views import sidecar_bank
+
+        shots = bank_frames(sidecar_bank(image[..., :3], info["lens_array"]), sx, focal, angles)
+    else:
+        shots = preview_frames(image[..., :3], (ny, nx), sx, focal, angles)
     if shots.dtype == np.uint16:
         shots = (shots >> 8).astype(np.uint8)
     aspect = max(1, round(nx / ny)) if ny < nx else 1  # a lenticular lens is nx pixels wide, one row high

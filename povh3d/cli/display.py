@@ -168,7 +168,7 @@ def cmd_refocus(args: argparse.Namespace) -> int:
     from ..app.display import lens_info, refocus_file
 
     info = lens_info(args.input, ppl_arg(args.ppl, lenticular=_lenticular(args.input)), args.focal,
-                     args.pixel_pitch)
+                     args.pixel_pitch, resampled=True)
     if (args.depth is None) == (args.sweep is None):
         raise ConfigError("give one of --depth MM or --sweep N")
     sweep = None
@@ -186,7 +186,7 @@ def cmd_preview(args: argparse.Namespace) -> int:
     from ..app.display import lens_info, preview_file
 
     info = lens_info(args.input, ppl_arg(args.ppl, lenticular=_lenticular(args.input)), args.focal,
-                     args.pixel_pitch)
+                     args.pixel_pitch, resampled=True)
     preview_file(args.input, args.output, info, frames=args.frames, scale=args.scale)
     print(f"{args.output}  {args.frames} frames, contact sheet {Path(args.output).with_suffix('.png')}")
     return 0

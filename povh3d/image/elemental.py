@@ -91,6 +91,15 @@ def view_grid(lens_array: LensArray) -> tuple[int, int]:
     return ny, nx
 
 
+def view_offsets(lens_array: LensArray, views: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """The offsets ``extract_views`` reads each lens at: ``u`` (Nx,) and ``v`` (Ny,) mm, the
+    multi-ortho offsets of ``views = (Ny, Nx)`` (lenticular: ``v = 0``)."""
+    ny, nx = views
+    u = (np.arange(nx) + 0.5 - nx / 2) * lens_array.panel.pitch_x
+    v = (ny / 2 - np.arange(ny) - 0.5) * lens_array.panel.pitch_y
+    return u, (np.zeros(1) if lens_array.grid == "lenticular" else v)
+
+
 def view_points(lens_array: LensArray, views: tuple[int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Where each view pixel reads the panel: ``(Ny, Nx, Ly, Lx, 2)`` mm and the lens ``(Ny, Nx, Ly, Lx)``.
 
@@ -98,14 +107,10 @@ def view_points(lens_array: LensArray, views: tuple[int, int] | None = None) -> 
     ``u_k = (k + 0.5 - Nx/2) s``, ``v_l = (Ny/2 - l - 0.5) s`` (the multi-ortho offsets),
     read from lens ``(j, i)``'s own pixels; ``views`` default ``view_grid(lens_array)``."""
     ny, nx = views or view_grid(lens_array)
-    s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
-    u = (np.arange(nx) + 0.5 - nx / 2) * s_x
-    v = (ny / 2 - np.arange(ny) - 0.5) * s_y
+    u, v = view_offsets(lens_array, (ny, nx))
     centres = lens_array.lens_centres()                     # (Ly, Lx, 2)
     ly, lx = centres.shape[:2]
     lens = np.arange(ly * lx).reshape(ly, lx)
-    if lens_array.grid == "lenticular":
-        v = np.zeros(1)
     pts = np.empty((ny, nx, ly, lx, 2))
     pts[..., 0] = centres[None, None, :, :, 0] + u[None, :, None, None]
     pts[..., 1] = centres[None, None, :, :, 1] + v[:, None, None, None]

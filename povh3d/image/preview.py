@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .interleave import extract
+
 
 def viewer_angles(pitch: float, focal: float, frames: int) -> np.ndarray:
     """``frames`` viewer positions (degrees, + = right of the screen) across the viewing angle."""
@@ -44,12 +46,17 @@ def preview_frames(h3d: np.ndarray, ppl: tuple[int, int], pixel_pitch: float, fo
     angles_deg : (F,) horizontal viewer positions
     vertical_deg : the viewer's vertical position (omnidirectional arrays)
     """
-    ny, nx = ppl
-    h, w, c = h3d.shape
-    lenses = h3d.reshape(h // ny, ny, w // nx, nx, c)
+    return bank_frames(extract(h3d, ppl), pixel_pitch, focal, angles_deg, vertical_deg)
+
+
+def bank_frames(views: np.ndarray, pixel_pitch: float, focal: float, angles_deg: np.ndarray,
+                vertical_deg: float = 0.0) -> np.ndarray:
+    """The view each viewer angle sees, ``(F, Ly, Lx, C)``, out of a bank ``(Ny, Nx, Ly, Lx, C)``
+    whose view ``(l, k)`` is every lens read at the offsets ``(u_k, v_l)`` (a camera bank, or the
+    lens-by-lens resampled views of a hex or fractional-PPL array, ``elemental.extract_views``)."""
+    ny, nx = views.shape[:2]
     l = ny - 1 - seen_view(vertical_deg, ny, pixel_pitch, focal)  # rows count down, v up
-    ks = [seen_view(a, nx, pixel_pitch, focal) for a in angles_deg]
-    return np.stack([lenses[:, l, :, k] for k in ks])
+    return np.stack([views[l, seen_view(a, nx, pixel_pitch, focal)] for a in angles_deg])
 
 
 def enlarge(frame: np.ndarray, scale: tuple[int, int]) -> np.ndarray:
