@@ -114,34 +114,30 @@ def check_labels(volume: Volume, labels: list[int] | None) -> list[int]:
     return list(labels)
 
 
-def label_boxes(values: np.ndarray) -> dict[int, tuple[slice, ...]] | None:
-    """Each label's box of voxels, from one pass over the volume (``scipy.ndimage.find_objects``);
-    None for values that are not small non-negative integers."""
-    if not np.issubdtype(values.dtype, np.integer) or values.size == 0 or int(values.min()) < 0 \
-            or int(values.max()) > 1 << 16:
-        return None
-    from scipy.ndimage import find_objects
+def _inside(values: np.ndarray, labels: list[int], every: bool = False) -> np.ndarray:
+    """``values in labels`` as a bool array (``every``: the labels are all the non-zero values).
 
-    return {n + 1: box for n, box in enumerate(find_objects(values)) if box is not None}
+    8- and 16-bit labels go through a look-up table, one gather (``np.isin`` sorts, several times
+    slower on a 32-million-voxel volume); a signed value reads its two's complement slot."""
+    if every:
+        return values != 0
+    if np.issubdtype(values.dtype, np.integer) and values.dtype.itemsize <= 2:
+        table = np.zeros(1 << (8 * values.dtype.itemsize), dtype=bool)
+        table[np.asarray(labels, dtype=np.int64) % len(table)] = True
+        return table[values.view(values.dtype.str.replace("i", "u"))]
+    return np.isin(values, labels)
 
 
-def _crop(values: np.ndarray, labels: list[int],
-          boxes: dict[int, tuple[slice, ...]] | None = None) -> tuple[tuple[int, int, int], np.ndarray]:
+def _crop(values: np.ndarray, labels: list[int], every: bool = False) -> tuple[tuple[int, int, int], np.ndarray]:
     """The box of voxels holding ``labels`` and one voxel round it (SurfaceNets then sees the same
     boundaries: every other label is background to it anyway), and the index of its first voxel;
-    ``boxes``: each label's box (``label_boxes``), else found here."""
-    if boxes is not None:
-        lo = np.min([[b.start for b in boxes[v]] for v in labels], axis=0)
-        hi = np.max([[b.stop for b in boxes[v]] for v in labels], axis=0) - 1
-    else:
-        inside = np.isin(values, labels)
-        lo, hi = [], []
-        for axis in range(3):
-            hit = np.flatnonzero(inside.any(axis=tuple(a for a in range(3) if a != axis)))
-            lo.append(int(hit[0]))
-            hi.append(int(hit[-1]))
-    start = [max(int(a) - 1, 0) for a in lo]
-    stop = [min(int(b) + 2, n) for b, n in zip(hi, values.shape)]
+    ``every``: the labels are all the volume holds."""
+    inside = _inside(values, labels, every)
+    plane = inside.any(axis=2)   # one reduction of the whole volume, then of a plane
+    hits = [np.flatnonzero(plane.any(axis=1)), np.flatnonzero(plane.any(axis=0)),
+            np.flatnonzero(inside.any(axis=(0, 1)))]
+    start = [max(int(hit[0]) - 1, 0) for hit in hits]
+    stop = [min(int(hit[-1]) + 2, n) for hit, n in zip(hits, values.shape)]
     box = tuple(slice(a, b) for a, b in zip(start, stop))
     return tuple(start), values[box]  # type: ignore[return-value]
 
@@ -169,17 +165,17 @@ def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing
     ``step``: sample the label map every so many voxels along each axis first (``voxel_step``):
     a display that resolves a lens, far coarser than the voxels, is drawn from far fewer
     triangles, and SurfaceNets and the decimation then visit that many fewer."""
+    every = labels is None
     labels = check_labels(volume, labels)
     opacity = _per_surface(opacity, len(labels))
     iterations = LABEL_SMOOTHING if smoothing is None else int(smoothing)
-    boxes = label_boxes(volume.values)
-    meshes = _label_meshes(volume, labels, iterations, tuple(step), boxes)
+    meshes = _label_meshes(volume, labels, iterations, tuple(step), every)
     if tuple(step) != (1, 1, 1):
         # A label thinner than a step can fall between the sampled voxels: those few labels are taken
         # again from their own voxels (a small box, a few triangles), never left out.
         thin = [label for label in labels if len(meshes[label][1]) < MIN_SAMPLED_FACES]
         if thin:
-            meshes.update(_label_meshes(volume, thin, iterations, (1, 1, 1), boxes))
+            meshes.update(_label_meshes(volume, thin, iterations, (1, 1, 1)))
     colours = palette(len(labels))
     out = []
     for n, label in enumerate(labels):
@@ -191,11 +187,12 @@ def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing
 
 
 def _label_meshes(volume: Volume, labels: list[int], iterations: int, step: tuple[int, int, int],
-                  boxes: dict[int, tuple[slice, ...]] | None = None) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """label -> (vertices in LPS mm, outward faces): one SurfaceNets pass over every label at once."""
+                  every: bool = False) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """label -> (vertices in LPS mm, outward faces): one SurfaceNets pass over every label at once
+    (``every``: the labels are all the volume holds)."""
     from .read import vtk_quiet
 
-    start, values = _crop(volume.values, labels, boxes)  # a few organs of a whole body: far fewer voxels to visit
+    start, values = _crop(volume.values, labels, every)  # a few organs of a whole body: far fewer voxels to visit
     if step != (1, 1, 1):
         values, start = _sample(values, start, step)
     image = _image(volume, values, step)
