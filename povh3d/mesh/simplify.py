@@ -53,9 +53,15 @@ def simplify_part(part: Part, target: int) -> Part:
         colours = np.zeros((len(part.vertices), 4), dtype=np.uint8)
         for k in range(3):
             colours[part.faces[:, k]] = part.face_colors
-    points, faces, collapses = fast_simplification.simplify(
-        part.vertices, part.faces, target_count=max(1, target), return_collapses=True)
-    points, faces, mapping = fast_simplification.replay_simplification(part.vertices, part.faces, collapses)
+    if colours is None and part.uv is None:
+        # Nothing to carry across (a volume's surfaces): the library's own result, without replaying
+        # its collapses for a vertex map (a tenth of the decimation's time on a segmentation).
+        points, faces = fast_simplification.simplify(part.vertices, part.faces, target_count=max(1, target))
+        mapping = np.zeros(0, dtype=np.int64)
+    else:
+        points, faces, collapses = fast_simplification.simplify(
+            part.vertices, part.faces, target_count=max(1, target), return_collapses=True)
+        points, faces, mapping = fast_simplification.replay_simplification(part.vertices, part.faces, collapses)
     n = len(points)
     out = dataclasses.replace(
         part, vertices=np.asarray(points, dtype=np.float64), faces=np.asarray(faces, dtype=np.int64),
