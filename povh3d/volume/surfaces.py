@@ -201,14 +201,20 @@ def _label_meshes(volume: Volume, labels: list[int], iterations: int, step: tupl
                                     smoothing=iterations > 0, smoothing_iterations=max(iterations, 1), scalars="values")
     faces = np.asarray(mesh.regular_faces, dtype=np.int64) if mesh.n_cells else np.zeros((0, 3), np.int64)
     pair = np.asarray(mesh.cell_data["boundary_labels"]) if mesh.n_cells else np.zeros((0, 2))
+    # Every face once for each label it bounds, in face order within a label (one sort, not a pass
+    # over all faces per label); as its second label's face it is turned round (it points out of the first).
+    n = len(faces)
+    owner = np.concatenate([pair[:, 0], pair[:, 1]]).astype(np.int64)
+    both = np.concatenate([faces, faces[:, [0, 2, 1]]])
+    order = np.argsort(owner * max(n, 1) + np.tile(np.arange(n), 2), kind="stable")
+    owner, both = owner[order], both[order]
+    first = np.searchsorted(owner, labels)
+    last = np.searchsorted(owner, labels, side="right")
+    points = np.asarray(mesh.points)
     out = {}
-    for label in labels:
-        mine = (pair == label).any(axis=1)
-        own = faces[mine].copy()
-        inward = pair[mine][:, 1] == label  # the face points out of the other label: turn it round
-        own[inward] = own[inward][:, [0, 2, 1]]
-        points, own = _compact(np.asarray(mesh.points), own)
-        out[label] = _to_world(volume, points, own, tuple(start))
+    for label, a, b in zip(labels, first, last):
+        own_points, own = _compact(points, both[a:b])
+        out[label] = _to_world(volume, own_points, own, tuple(start))
     return out
 
 
