@@ -88,8 +88,9 @@ def silhouette_error(before: list[Part], after: list[Part], width: int = 512) ->
     return 1.0 - iou(*masks)
 
 
-def simplify_parts(parts: list[Part], budget: int) -> tuple[list[Part], dict]:
-    """Share ``budget`` triangles among ``parts`` in proportion to their counts, decimate, measure."""
+def simplify_parts(parts: list[Part], budget: int, *, width: int = 512) -> tuple[list[Part], dict]:
+    """Share ``budget`` triangles among ``parts`` in proportion to their counts, decimate, measure
+    (the silhouette error on a window ``width`` pixels across)."""
     total = sum(p.triangles for p in parts)
     targets = [max(4, math.floor(budget * p.triangles / total)) for p in parts]
     out = [simplify_part(p, t) for p, t in zip(parts, targets)]
@@ -98,4 +99,4 @@ def simplify_parts(parts: list[Part], budget: int) -> tuple[list[Part], dict]:
     out = [clean_part(p)[0] for p in out]  # decimation can leave slivers and unused vertices
     after = sum(p.triangles for p in out)
     return out, {"budget": budget, "triangles_before": total, "triangles_after": after,
-                 "silhouette_error": silhouette_error(parts, out)}
+                 "silhouette_error": silhouette_error(parts, out, width)}

@@ -21,6 +21,10 @@ from ..mesh.load import Part
 from ..mesh.write import include_text, mesh2_text
 from .surfaces import Surface
 
+#: Pixels across the window of the decimation's silhouette error (a segmentation's thousands of
+#: small triangles make the rasterising the cost; a display resolves fewer lenses than this).
+SILHOUETTE_WIDTH = 256
+
 
 def surface_part(surface: Surface, matrix: np.ndarray) -> Part:
     """``surface`` in display-frame mm: ``matrix`` (3, 3) applied; a mirroring matrix (LPS is
@@ -95,7 +99,9 @@ def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | 
     if budget is not None and sum(p.triangles for p in parts) > budget:
         from ..mesh.simplify import simplify_parts
 
-        parts, report = simplify_parts(parts, budget)
+        # The frog's 25 surfaces (185,000 triangles to 4,800) give the same error to three digits on
+        # 256 and 512 pixels (0.5719, 0.5717 at a tenth of the budget), at 2.5x less time.
+        parts, report = simplify_parts(parts, budget, width=SILHOUETTE_WIDTH)
         silhouette = report["silhouette_error"]
     decimated = time.perf_counter() - start
     start = time.perf_counter()
