@@ -161,11 +161,15 @@ def test_a_label_thinner_than_the_step_is_kept_from_its_own_voxels():
 
 @pytest.mark.parametrize("dtype", ["uint8", "int8", "uint16", "int16", "int32", "float32"])
 @pytest.mark.parametrize("order", ["C", "F"])
-def test_crop_is_the_labels_voxel_box_and_one_voxel_round_it(dtype, order):
-    # The crop against the box of np.argwhere over the labels' own voxels, for every dtype (the
-    # look-up table of 8- and 16-bit labels, a signed value's slot, np.isin for the others) and
-    # both memory orders (VTK's files are Fortran-ordered).
+@pytest.mark.parametrize("few", [8, 0], ids=["compared", "table"])
+def test_crop_is_the_labels_voxel_box_and_one_voxel_round_it(dtype, order, few, monkeypatch):
+    # The crop against the box of np.argwhere over the labels' own voxels, for every dtype (label by
+    # label; or the look-up table of 8- and 16-bit labels, a signed value's slot, np.isin for the
+    # others) and both memory orders (VTK's files are Fortran-ordered).
+    from povh3d.volume import surfaces
     from povh3d.volume.surfaces import _crop
+
+    monkeypatch.setattr(surfaces, "FEW_LABELS", few)
 
     phantom = asymmetric_phantom()
     values = np.asarray(phantom.values, dtype=dtype, order=order)
