@@ -2,7 +2,9 @@
 
 Two cases, each a whole process timed around the child, interleaved with its
 reference (reference, povh3d, reference, povh3d, ...) so a change of load hits
-both sides; median and spread (min-max) and the load before and after:
+both sides; median and spread (min-max) and the load before and after; and the median CPU
+seconds of each side (the command's and its children's, POV-Ray's: on a loaded machine the wall
+seconds follow the scheduler, the CPU seconds much less):
 
 - a 24-frame animation of the bundled sample with a ball crossing it as the
   clock runs (``demo``, 320x240, ``--quality draft --frames 0:23 --no-cache``)
@@ -30,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import statistics
 import sys
@@ -51,10 +54,17 @@ def frog() -> Path:
     return Path(pyvista.__file__).parent / "examples" / "frog_tissues.vti"
 
 
-def seconds(command: list[str], cwd: Path, env: dict[str, str], before: tuple[Path, ...] = ()) -> float:
+def seconds(command: list[str], cwd: Path, env: dict[str, str], before: tuple[Path, ...] = (),
+            cpu: list[float] | None = None) -> float:
+    """Wall seconds of ``command``; its CPU seconds (with its children's: POV-Ray's) appended to ``cpu``."""
     for path in before:  # a cold cache: removed before the clock starts
         shutil.rmtree(path, ignore_errors=True)
-    return whole_process_seconds(command, cwd, env)
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    wall = whole_process_seconds(command, cwd, env)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if cpu is not None:
+        cpu.append(after.ru_utime + after.ru_stime - used.ru_utime - used.ru_stime)
+    return wall
 
 
 def entries(cache: Path) -> tuple[Path, ...]:
@@ -99,7 +109,7 @@ def main() -> int:
                  "`povh3d render` of the resulting stage, `--no-cache`", "3x", "volumes")):
             if args.volume_only and cold_cache is None:
                 continue
-            refs, mine = [], []
+            refs, mine, ref_cpu, my_cpu = [], [], [], []
             if cold_cache:
                 # The reference renders the resulting stage (its include beside it) as any scene.
                 seconds(cold, tmp, env)
@@ -108,16 +118,20 @@ def main() -> int:
                 reference = [*povh3d, "render", str(tmp / "stage" / stage.name), "--preset", "demo", "--quality",
                              "draft", "--no-cache", "-q", "-o", "stage.png"]
             for _ in range(args.repeats):  # interleaved
-                refs.append(seconds(reference, tmp, env))
+                refs.append(seconds(reference, tmp, env, cpu=ref_cpu))
                 cold_entries = (() if cold_cache is None else (cache / "volumes",) if cold_cache == "volumes"
                                 else entries(cache))
-                mine.append(seconds(ours, tmp, env, before=cold_entries))
+                mine.append(seconds(ours, tmp, env, before=cold_entries, cpu=my_cpu))
             ratio = statistics.median(mine) / statistics.median(refs)
-            rows.append((case, summary(mine), f"{ref_name}: {summary(refs)}", f"**{ratio:.2f}x**", target))
+            cpu_ratio = statistics.median(my_cpu) / statistics.median(ref_cpu)
+            rows.append((case, summary(mine), f"{ref_name}: {summary(refs)}", f"**{ratio:.2f}x**",
+                         f"{statistics.median(my_cpu):.2f} s / {statistics.median(ref_cpu):.2f} s = {cpu_ratio:.2f}x",
+                         target))
             print(rows[-1], flush=True)
     who = "" if Path(args.povh3d_path).resolve() == REPO else f" (povh3d from {args.povh3d_path})"
     text = table(f"Median (min-max) of {args.repeats} interleaved runs{who}",
-                 ["case", "povh3d, whole process", "reference", "ratio", "target"], rows, load_before)
+                 ["case", "povh3d, whole process", "reference", "ratio", "CPU seconds, median (with POV-Ray's)",
+                  "target"], rows, load_before)
     return publish("bench_speed", text, docs=not (args.no_docs or args.volume_only))
 
 
