@@ -38,6 +38,26 @@ def omni(lenses: tuple[int, int], ppl: int = 8, s: float = 0.1, f: float = 1.5) 
     return LensArray("square", *lenses, ppl * s, ppl * s, f, Panel(lenses[0] * ppl, lenses[1] * ppl, s, s))
 
 
+def probe_errors(scene, sidecar: Path, qualities: list) -> list[float]:
+    """PSNR of each quality (a name or a ``Quality``) against the converged footprint reference (512
+    samples, two seeds), on the central lenses of the array the render's ``sidecar`` names (a slanted
+    preset's view space)."""
+    from povh3d.engine.auto import probe_window, reference_quality
+    from povh3d.engine.methods import run_method
+    from povh3d.image.metrics import Reference
+
+    a = json.loads(sidecar.read_text())["lens_array"]
+    p = a["panel"]
+    la = LensArray(a["grid"], *a["lenses"], *a["lens_pitch_mm"], a["focal_mm"],
+                   Panel(*p["size_px"], *p["pixel_pitch_mm"]))
+    probe, mask = probe_window(la, (48, 40))
+    base = RenderSettings(quality="draft", use_cache=False)
+    reference = Reference(*(run_method("multi-ortho", scene, probe, replace(
+        base, quality=reference_quality(512, seed), bit_depth=16), declared=la).h3d for seed in (1, 2)), mask)
+    return [reference.psnr(run_method("multi-ortho", scene, probe, replace(base, quality=quality), declared=la).h3d)
+            for quality in qualities]
+
+
 def default_cost(tree: Path, repeats: int, out: Path) -> list[tuple[str, ...]]:
     """Rows ``(preset, draft s, normal s, ratio, draft dB, normal dB)``: whole commands, interleaved."""
     import os
@@ -45,11 +65,8 @@ def default_cost(tree: Path, repeats: int, out: Path) -> list[tuple[str, ...]]:
     import subprocess
     import tempfile
 
-    from povh3d.engine.auto import probe_window, reference_quality
-    from povh3d.engine.methods import run_method
-    from povh3d.image.metrics import Reference
 
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(tree)}
     scene = load_scene(SAMPLE)
     rows = []
     for preset in ("demo", "alioscopy-42"):
@@ -62,19 +79,7 @@ def default_cost(tree: Path, repeats: int, out: Path) -> list[tuple[str, ...]]:
                     start = time.perf_counter()
                     subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
                     times[level].append(time.perf_counter() - start)
-            # The error: on the array the method rendered (a slanted preset's view space, from the
-            # sidecar), its central lenses.
-            a = json.loads(Path(f"{folder}/draft.json").read_text())["lens_array"]
-            p = a["panel"]
-            la = LensArray(a["grid"], *a["lenses"], *a["lens_pitch_mm"], a["focal_mm"],
-                           Panel(*p["size_px"], *p["pixel_pitch_mm"]))
-        probe, mask = probe_window(la, (48, 40))
-        base = RenderSettings(quality="draft", use_cache=False)
-        reference = Reference(*(run_method("multi-ortho", scene, probe, replace(
-            base, quality=reference_quality(512, seed), bit_depth=16), declared=la).h3d for seed in (1, 2)), mask)
-        error = {level: reference.psnr(run_method("multi-ortho", scene, probe, replace(base, quality=level),
-                                                  declared=la).h3d)
-                 for level in times}
+            error = dict(zip(times, probe_errors(scene, Path(f"{folder}/draft.json"), list(times))))
         med = {level: statistics.median(t) for level, t in times.items()}
         rows.append((preset, *(f"{med[level]:.2f} s ({min(t):.2f}-{max(t):.2f})" for level, t in times.items()),
                      f"{med['normal'] / med['draft']:.2f}x", f"{error['draft']:.2f}", f"{error['normal']:.2f}"))
@@ -101,7 +106,7 @@ WRAPPER = ("import sys; from povh3d.engine import quality as q; q.QUALITY_LEVELS
 
 
 def frontier(tree: Path, repeats: int, presets: list[str]) -> list[tuple[str, ...]]:
-    """Rows ``(preset, setting, seconds, ratio to draft, dB)``: every candidate as a whole command,
+    """Rows ``(preset, setting, seconds, ratio, CPU seconds, ratio, dB)``: every candidate as a whole command,
     interleaved with draft (draft, c1, c2, ... per round), PSNR on the probe of ``default_cost``."""
     import os
     import resource
@@ -110,11 +115,8 @@ def frontier(tree: Path, repeats: int, presets: list[str]) -> list[tuple[str, ..
     import tempfile
 
     from povh3d.engine import quality as q
-    from povh3d.engine.auto import probe_window, reference_quality
-    from povh3d.engine.methods import run_method
-    from povh3d.image.metrics import Reference
 
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(tree)}
     scene = load_scene(SAMPLE)
     settings = {"draft": "Quality()", **CANDIDATES}
     rows = []
@@ -135,18 +137,9 @@ def frontier(tree: Path, repeats: int, presets: list[str]) -> list[tuple[str, ..
                 print(preset, {k: (round(v[-1], 2), round(cpu[k][-1], 2)) for k, v in times.items()},
                       f"load {os.getloadavg()[0]:.2f}",
                       file=sys.stderr, flush=True)
-            a = json.loads(Path(f"{folder}/0.json").read_text())["lens_array"]
-            p = a["panel"]
-            la = LensArray(a["grid"], *a["lenses"], *a["lens_pitch_mm"], a["focal_mm"],
-                           Panel(*p["size_px"], *p["pixel_pitch_mm"]))
-        probe, mask = probe_window(la, (48, 40))
-        base = RenderSettings(quality="draft", use_cache=False)
-        reference = Reference(*(run_method("multi-ortho", scene, probe, replace(
-            base, quality=reference_quality(512, seed), bit_depth=16), declared=la).h3d for seed in (1, 2)), mask)
+            errors = probe_errors(scene, Path(f"{folder}/0.json"), [eval(code, vars(q)) for code in settings.values()])
         draft, draft_cpu = statistics.median(times["draft"]), statistics.median(cpu["draft"])
-        for name, code in settings.items():
-            db = reference.psnr(run_method("multi-ortho", scene, probe, replace(base, quality=eval(code, vars(q))),
-                                           declared=la).h3d)
+        for name, db in zip(settings, errors):
             med, med_cpu = statistics.median(times[name]), statistics.median(cpu[name])
             rows.append((preset, name, f"{med:.2f} s ({min(times[name]):.2f}-{max(times[name]):.2f})",
                          f"{med / draft:.2f}x", f"{med_cpu:.2f} s ({min(cpu[name]):.2f}-{max(cpu[name]):.2f})",
