@@ -141,7 +141,7 @@ def _crop(values: np.ndarray, labels: list[int], every: bool = False) -> tuple[t
     boundaries: every other label is background to it anyway), and the index of its first voxel;
     ``every``: the labels are all the volume holds."""
     inside = _inside(values, labels, every)
-    plane = inside.any(axis=2)   # one reduction of the whole volume, then of a plane
+    plane = inside.any(axis=2)   # the rows and columns from this plane, the slices from the volume
     hits = [np.flatnonzero(plane.any(axis=1)), np.flatnonzero(plane.any(axis=0)),
             np.flatnonzero(inside.any(axis=(0, 1)))]
     start = [max(int(hit[0]) - 1, 0) for hit in hits]
