@@ -168,3 +168,31 @@ def test_a_damaged_camera_entry_is_a_warning_not_an_internal_error(tmp_path, cli
     result = cli("render", GALLERY / "tilted.pov", "-o", tmp_path / "b.png", *args, env=env)
     assert result.code == 0, result.err
     assert "damaged" in result.err and "internal error" not in result.err
+
+
+@pytest.mark.parametrize("order", ["C", "F"])
+def test_volume_digest_sees_every_voxel_and_the_geometry(order):
+    # The volume cache's data key, hashed in the voxels' own memory order (no C-ordered copy of a
+    # Fortran-ordered volume): equal volumes agree, a change of one voxel or of the spacing does not.
+    from povh3d.app.volume import volume_digest
+    from povh3d.volume.grid import Volume
+    from tests.support.volumes import asymmetric_phantom
+
+    phantom = asymmetric_phantom()
+    values = np.array(phantom.values, order=order)
+    digest = volume_digest(Volume(values, phantom.spacing))
+    assert digest == volume_digest(Volume(np.array(values, order=order), phantom.spacing))
+    changed = values.copy(order=order)
+    changed[23, 19, 15] = 2           # the last voxel in either order
+    assert volume_digest(Volume(changed, phantom.spacing)) != digest
+    changed = values.copy(order=order)
+    changed[0, 0, 1] = 2
+    assert volume_digest(Volume(changed, phantom.spacing)) != digest
+    assert volume_digest(Volume(values, (1.0, 1.5, 2.5))) != digest
+    # A view that is neither order is hashed through a copy: the same voxels, the same key as C order.
+    every_other = np.zeros((24, 20, 32), dtype=values.dtype)
+    every_other[:, :, ::2] = values
+    view = every_other[:, :, ::2]
+    assert not (view.flags.c_contiguous or view.flags.f_contiguous)
+    assert volume_digest(Volume(view, phantom.spacing)) == volume_digest(Volume(np.ascontiguousarray(values),
+                                                                              phantom.spacing))

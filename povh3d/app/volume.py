@@ -44,10 +44,15 @@ MAX_AUTO_LABELS = 255
 
 def volume_digest(volume: Volume) -> str:
     """sha256 of the voxels and their geometry: the cache key's part that is the data."""
+    values = volume.values
+    # The voxels' bytes in their own memory order (VTK's files are Fortran-ordered): a C-ordered copy
+    # of a 32-million-voxel volume costs more than hashing it.  The order is part of the key.
+    order = "F" if values.flags.f_contiguous and not values.flags.c_contiguous else "C"
+    data = values.T if order == "F" else np.ascontiguousarray(values)
     h = hashlib.sha256()
-    h.update(str((volume.values.dtype.str, volume.shape, volume.spacing, volume.origin)).encode())
+    h.update(str((values.dtype.str, volume.shape, volume.spacing, volume.origin, order)).encode())
     h.update(np.asarray(volume.direction, dtype=np.float64).tobytes())
-    h.update(np.ascontiguousarray(volume.values).tobytes())
+    h.update(memoryview(data).cast("B"))
     return h.hexdigest()
 
 

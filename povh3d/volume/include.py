@@ -21,6 +21,10 @@ from ..mesh.load import Part
 from ..mesh.write import include_text, mesh2_text
 from .surfaces import Surface
 
+#: Pixels across the window of the decimation's silhouette error (a segmentation's thousands of
+#: small triangles make the rasterising the cost; a display resolves fewer lenses than this).
+SILHOUETTE_WIDTH = 256
+
 
 def surface_part(surface: Surface, matrix: np.ndarray) -> Part:
     """``surface`` in display-frame mm: ``matrix`` (3, 3) applied; a mirroring matrix (LPS is
@@ -31,6 +35,34 @@ def surface_part(surface: Surface, matrix: np.ndarray) -> Part:
     return Part(surface.name, surface.vertices @ m.T + 0.0, np.asarray(faces, dtype=np.int64), base_color=rgba)
 
 
+def vertex_pieces(faces: np.ndarray, count: int) -> tuple[int, np.ndarray]:
+    """The connected pieces of a mesh's ``count`` vertices through the edges of ``faces`` (m, 3):
+    how many, and each vertex's piece (0..pieces-1, in order of each piece's lowest vertex).
+
+    Each round hooks the root of every edge's ends to the smaller of the two, then follows the
+    roots to their ends; it stops when no edge joins two roots.  A segmentation's surfaces need
+    2-6 rounds (the frog's 25 take 0.04 s): a tenth of importing SciPy's sparse graphs for it."""
+    a = np.concatenate([faces[:, 0], faces[:, 1]])
+    b = np.concatenate([faces[:, 1], faces[:, 2]])
+    root = np.arange(count)
+    while True:
+        ra, rb = root[a], root[b]
+        lower = np.minimum(ra, rb)
+        hooked = root.copy()
+        np.minimum.at(hooked, ra, lower)
+        np.minimum.at(hooked, rb, lower)
+        while True:   # every vertex straight to its root: hooked[x] <= x, so the chains end
+            deeper = hooked[hooked]
+            if np.array_equal(deeper, hooked):
+                break
+            hooked = deeper
+        if np.array_equal(hooked, root):
+            break
+        root = hooked
+    roots, piece = np.unique(root, return_inverse=True)
+    return len(roots), piece.reshape(-1)
+
+
 def drop_specks(part: Part, size: float) -> tuple[Part, int]:
     """``part`` without its connected pieces whose box diagonal is under ``size`` (the largest piece
     always stays), and how many pieces went.
@@ -39,15 +71,8 @@ def drop_specks(part: Part, size: float) -> tuple[Part, int]:
     alone has 292): smaller than one lens they are not resolved on the display, yet each
     closed piece keeps at least four triangles through any decimation, so together
     they can hold more triangles than the display's whole budget."""
-    from ..extras import require
-
-    coo_matrix = require("scipy.sparse", "volume", "a volume's surfaces").coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     f, n = part.faces, len(part.vertices)
-    edges = coo_matrix((np.ones(2 * len(f), dtype=bool),
-                        (np.concatenate([f[:, 0], f[:, 1]]), np.concatenate([f[:, 1], f[:, 2]]))), shape=(n, n))
-    count, piece = connected_components(edges, directed=False)
+    count, piece = vertex_pieces(f, n)
     lo = np.full((count, 3), np.inf)
     hi = np.full((count, 3), -np.inf)
     np.minimum.at(lo, piece, part.vertices)
@@ -95,7 +120,9 @@ def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | 
     if budget is not None and sum(p.triangles for p in parts) > budget:
         from ..mesh.simplify import simplify_parts
 
-        parts, report = simplify_parts(parts, budget)
+        # The frog's 25 surfaces (185,000 triangles to 4,800) give the same error to three digits on
+        # 256 and 512 pixels (0.5719, 0.5717 at a tenth of the budget), at 2.5x less time.
+        parts, report = simplify_parts(parts, budget, width=SILHOUETTE_WIDTH)
         silhouette = report["silhouette_error"]
     decimated = time.perf_counter() - start
     start = time.perf_counter()

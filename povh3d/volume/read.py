@@ -150,14 +150,16 @@ def _vtk_read(reader: Any, path: Path, what: str) -> Any:
 
 
 def _read_vtk(path: Path, spacing: Any) -> Volume:
-    # The VTK modules themselves, not ``import vtk`` (which loads all of VTK's 150 libraries).
-    from vtkmodules.vtkIOLegacy import vtkDataSetReader
-    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
-
+    # The VTK modules themselves, not ``import vtk`` (which loads all of VTK's 150 libraries), and
+    # only the one the file needs (the legacy reader's module alone costs 0.1 s).
     if is_polydata_vtk(path):
         raise InputError(f"{path.name!r} is a polygon mesh, not a volume; render it as a model")
     if path.suffix.lower() == ".vti":
+        from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+
         return _from_image(_vtk_read(vtkXMLImageDataReader(), path, "VTK XML image data"), path.name)
+    from vtkmodules.vtkIOLegacy import vtkDataSetReader
+
     data = _vtk_read(vtkDataSetReader(), path, "a legacy VTK file")
     if not data.IsA("vtkImageData"):
         raise InputError(f"{path.name!r} holds a {data.GetClassName()}, not image data (a regular voxel grid)")

@@ -101,3 +101,39 @@ def test_povray_itself_reads_the_same_floats(workdir):
         assert int(got[str(i)]) == float(value) * 2.0 ** _scaled(float(value)), (i, value, texts[i])
     # POV-Ray keeps floats, not the doubles it parsed: "0.1" is stored as float32(0.1), which is not 0.1
     assert int(got["240"]) == 13421773 != 0.1 * 2.0 ** _scaled(0.1)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_numpy_path_writes_the_kernels_text(seed):
+    # The NumPy-and-Python writer (a process's first numbers) against the numba kernel, character for
+    # character: every form (120, 12e5, 12.5, .0125), signs, zeros, the out-of-range slots ("@").
+    from povh3d.mesh.text32 import _POW10, _small_rows, _write_rows
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 2000))
+    values = (rng.standard_normal((n, 3)) * 10 ** rng.uniform(-16, 16, (n, 3))).astype(np.float32)
+    values[rng.random((n, 3)) < 0.05] = 0
+    values = values.astype(np.float64)
+    kernel = _write_rows()(values, 3, _POW10, False).tobytes().decode("ascii")
+    assert _small_rows(values, 3, False) == kernel
+    ints = rng.integers(-10 ** 6, 10 ** 6, (n, 3))
+    assert _small_rows(ints, 4, True) == _write_rows()(ints, 4, _POW10, True).tobytes().decode("ascii")
+    # Negative control: Python's shortest double repr is another text.
+    assert _small_rows(values, 3, False) != format_vectors(values, per_line=3)
+
+
+def test_the_python_path_stops_at_small_numbers(monkeypatch):
+    # A process writes at most SMALL numbers in Python, then loads the kernel (the same text either way).
+    import sys
+
+    from povh3d.mesh import text32
+
+    monkeypatch.delitem(sys.modules, "povh3d.mesh.kernels", raising=False)
+    monkeypatch.setattr(text32, "_written_in_python", [0])
+    monkeypatch.setattr(text32, "SMALL", 10)
+    calls = []
+    monkeypatch.setattr(text32, "_small_rows", lambda *a: calls.append(a[0].size) or "")
+    monkeypatch.setattr(text32, "_write_rows", lambda: lambda *a: calls.append(-a[0].size) or np.zeros(0, np.uint8))
+    for _ in range(3):
+        format_vectors32(np.ones((2, 3)))
+    assert calls == [6, -6, -6]

@@ -4,6 +4,7 @@ lens left out, the rest decimated to the budget (the counts are the oracles)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from povh3d.volume.grid import Volume
 from povh3d.volume.include import drop_specks, surface_part, surfaces_include
@@ -44,3 +45,24 @@ def test_surfaces_reach_the_budget():
     assert stats["specks_left_out"] == 60
     assert rows[0]["triangles"] <= 1.1 * budget < rows[0]["triangles_extracted"]
     assert text.count("mesh2") >= 1
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_vertex_pieces_are_scipys_connected_components(seed):
+    # Random faces over a few hundred vertices (many pieces, chains, isolated vertices) against SciPy's
+    # graph search, the same numbering (each piece by its lowest vertex).
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from povh3d.volume.include import vertex_pieces
+
+    rng = np.random.default_rng(seed)
+    n = 400
+    faces = rng.integers(0, n, (int(rng.integers(50, 300)), 3))
+    a, b = np.concatenate([faces[:, 0], faces[:, 1]]), np.concatenate([faces[:, 1], faces[:, 2]])
+    expected = connected_components(coo_matrix((np.ones(len(a), bool), (a, b)), shape=(n, n)), directed=False)
+    count, piece = vertex_pieces(faces, n)
+    assert count == expected[0] and np.array_equal(piece, expected[1])
+    # Negative control: a strip of faces cut in the middle is two pieces and the vertex left alone.
+    path = np.array([[0, 1, 2], [2, 3, 4], [4, 5, 6], [6, 7, 8]])
+    assert vertex_pieces(path, 9)[0] == 1 and vertex_pieces(path[[0, 1, 3]], 9)[0] == 3

@@ -159,14 +159,46 @@ def test_a_label_thinner_than_the_step_is_kept_from_its_own_voxels():
     assert not (values[2::4, 2::4, 2::4] == 5).any()
 
 
-def test_label_boxes_crop_as_the_voxels_do():
-    # The boxes from one pass (find_objects) give the crop found by looking at the voxels themselves.
-    from povh3d.volume.surfaces import _crop, label_boxes
+@pytest.mark.parametrize("dtype", ["uint8", "int8", "uint16", "int16", "int32", "float32"])
+@pytest.mark.parametrize("order", ["C", "F"])
+@pytest.mark.parametrize("few", [8, 0], ids=["compared", "table"])
+def test_crop_is_the_labels_voxel_box_and_one_voxel_round_it(dtype, order, few, monkeypatch):
+    # The crop against the box of np.argwhere over the labels' own voxels, for every dtype (label by
+    # label; or the look-up table of 8- and 16-bit labels, a signed value's slot, np.isin for the
+    # others) and both memory orders (VTK's files are Fortran-ordered).
+    from povh3d.volume import surfaces
+    from povh3d.volume.surfaces import _crop
+
+    monkeypatch.setattr(surfaces, "FEW_LABELS", few)
 
     phantom = asymmetric_phantom()
-    boxes = label_boxes(phantom.values)
-    for labels in ([LABEL_LEFT], [LABEL_TOP, LABEL_LEFT], [LABEL_BODY, LABEL_LEFT, LABEL_TOP]):
-        start, box = _crop(phantom.values, labels, boxes)
-        start_here, box_here = _crop(phantom.values, labels)
-        assert start == start_here and np.array_equal(box, box_here)
-    assert label_boxes(phantom.values.astype(np.float32)) is None
+    values = np.asarray(phantom.values, dtype=dtype, order=order)
+    if dtype in ("int8", "int16"):
+        values[1, 1, 1] = -3   # a negative label far from the others: its slot must stay its own
+    for labels, every in (([LABEL_LEFT], False), ([LABEL_TOP, LABEL_LEFT], False), ([-3], False),
+                          ([LABEL_BODY, LABEL_LEFT, LABEL_TOP], dtype not in ("int8", "int16"))):
+        if -3 in labels and dtype not in ("int8", "int16"):
+            continue
+        index = np.argwhere(np.isin(values, labels))
+        lo = np.maximum(index.min(axis=0) - 1, 0)
+        hi = np.minimum(index.max(axis=0) + 2, values.shape)
+        start, box = _crop(values, labels, every)
+        assert start == tuple(lo) and np.array_equal(box, values[tuple(slice(a, b) for a, b in zip(lo, hi))])
+    # Negative control: the labels' box without its one-voxel margin is another crop.
+    assert _crop(values, [LABEL_LEFT])[0] != tuple(np.argwhere(values == LABEL_LEFT).min(axis=0))
+
+
+@pytest.mark.parametrize("dtype", ["uint8", "uint16", "int16", "int64", "float64"])
+def test_present_labels_are_numpys_unique_values(dtype):
+    from povh3d.volume.grid import present_labels
+
+    rng = np.random.default_rng(7)
+    values = np.asfortranarray(rng.choice([0, 1, 5, 200, 255], size=(30, 20, 10)).astype(dtype))
+    if dtype in ("int16", "float64"):
+        values[0, 0, 0] = -4   # negative: the np.unique path, where -4 is a label too
+    expected = [int(v) for v in np.unique(values) if v != 0]
+    assert present_labels(values) == expected
+    assert present_labels(np.zeros((2, 2, 2), dtype)) == []
+    # Negative control: a value removed is not reported.
+    values[values == 5] = 0
+    assert 5 not in present_labels(values)
