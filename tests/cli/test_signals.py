@@ -49,7 +49,8 @@ def _run_module(folder, source: str, *args, **popen):
 def _run_inside_exec(folder, signum: int, control: str = "") -> tuple[int, str]:
     proc = _run_module(folder, _INSIDE_EXEC.format(control=control), int(signum), stdout=subprocess.DEVNULL,
                        stderr=subprocess.PIPE, text=True)
-    return proc.returncode if proc.wait(60) is not None else None, proc.stderr.read()
+    err = proc.communicate(timeout=60)[1]
+    return proc.returncode, err
 
 
 @pytest.mark.povray
