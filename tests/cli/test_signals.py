@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -103,3 +104,28 @@ def test_sigterm_early_in_a_render_never_ends_by_a_signal(tmp_path):
         if proc.returncode:
             assert len(err.splitlines()) == 1 and err.startswith("povh3d: error: "), err
     assert codes.count(130) >= TRIALS // 2, codes  # the signals did land in the work
+
+
+# What ``import povh3d`` imports comes before povh3d.cli's handlers (the console script imports
+# povh3d.cli.main, so the package first): a signal then is Python's (a traceback) or the default
+# action's (an end by signal, silent).  It stays the standard library's import machinery.
+_NEW_MODULES = ("import json, sys; before = set(sys.modules); {prelude}import povh3d; "
+                "print(json.dumps(sorted(set(sys.modules) - before)))")
+_AT_START = {"__future__", "importlib", "importlib._bootstrap", "importlib._bootstrap_external", "povh3d",
+             "povh3d._version", "warnings"}
+
+
+def _imported_by_povh3d(prelude: str = "") -> set[str]:
+    done = subprocess.run([sys.executable, "-c", _NEW_MODULES.format(prelude=prelude)], capture_output=True,
+                          text=True, env=ENV, timeout=60, check=True)
+    return set(json.loads(done.stdout))
+
+
+@pytest.mark.povray
+def test_import_povh3d_before_the_handlers_stays_small():
+    assert _imported_by_povh3d() <= _AT_START  # typing (7 ms of the window) was among them
+
+
+@pytest.mark.povray
+def test_negative_control_the_probe_sees_an_import():
+    assert "typing" in _imported_by_povh3d("import povh3d.geometry.lens_array; ")
