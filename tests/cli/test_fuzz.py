@@ -196,6 +196,11 @@ def _cpu_seconds() -> float:
     return sum(u.ru_utime + u.ru_stime for u in map(resource.getrusage, (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)))
 
 
+def _wall_limit() -> float:
+    """60 s on an idle machine; in proportion to the load average per core when other work shares the cores."""
+    return SECONDS * max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))
+
+
 def _bounded(run, args: list[str], work: Path):
     """``run(args)`` in ``work``, checked against the bounds every case keeps: 60 s of CPU, 60 s of
     wall time on an idle machine (more in proportion when other work loads the cores), 2 GB.  The
@@ -208,7 +213,7 @@ def _bounded(run, args: list[str], work: Path):
     CASES["slowest"] = max(CASES["slowest"], seconds)
     CASES["most_cpu"] = max(CASES.get("most_cpu", 0.0), cpu)
     assert cpu < SECONDS, (args, cpu)
-    assert seconds < SECONDS * max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1)), (args, seconds)
+    assert seconds < _wall_limit(), (args, seconds)
     assert _peak_bytes() < BYTES, (args, _peak_bytes())
     return result
 
@@ -297,7 +302,7 @@ def test_fuzzed_command_lines_as_a_process_end_by_their_exit_code(args, pristine
     one line or output."""
     env = {"POVH3D_CACHE": str(tmp_path / "cache")}
     before = _fresh(pristine, tmp_path / "p")
-    done = _bounded(lambda a: run_subprocess(*a, cwd=tmp_path / "p", env=env, timeout=SECONDS), args, tmp_path / "p")
+    done = _bounded(lambda a: run_subprocess(*a, cwd=tmp_path / "p", env=env, timeout=_wall_limit()), args, tmp_path / "p")
     CASES["processes"] += 1
     assert done.code >= 0, (args, done.code, done.err)  # negative: ended by a signal
     _one_line_or_output(args, done, before, _snapshot(tmp_path / "p"), "as a process")
