@@ -15,7 +15,7 @@ PRESET ?= demo
 QUALITY ?= normal
 WORKERS ?= 2
 
-.PHONY: help render test test-fast soak bench gallery povray povray-examples opengl browser venv clean
+.PHONY: help render test test-fast soak fuzz bench gallery povray povray-examples opengl browser venv clean
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
@@ -60,6 +60,11 @@ test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in
 
 soak: povray venv ## 200 random kills over renders, view writes and cache writes, each output checked (minutes)
 	$(BIN)/python -m pytest -q -s -m soak tests/app/test_soak.py
+
+# make test runs 100 + 100 + 6 of these cases; the counts below make the 2,000 (docs/reliability.md).
+fuzz: povray venv ## 2,000 hostile cases: 1,200 command lines, 700 damaged sidecars, views folders and calibrations, 100 command lines as processes (minutes)
+	POVH3D_FUZZ_LINES=1200 POVH3D_FUZZ_DAMAGED=700 POVH3D_FUZZ_PROCESSES=100 \
+	  $(BIN)/python -m pytest -q -s tests/cli/test_fuzz.py
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py

@@ -14,10 +14,13 @@ The names below are loaded when first used, so ``import povh3d`` (and the
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
 
 from ._version import __version__
 
+# Not ``typing.TYPE_CHECKING``: importing typing took 7 ms of the command's start-up before
+# ``povh3d.cli`` installs its signal handlers (a Ctrl-C then is Python's traceback); type checkers
+# read a constant named TYPE_CHECKING as theirs.
+TYPE_CHECKING = False
 if TYPE_CHECKING:  # what type checkers and editors see
     from .api import (borders, calibrate, convert_mesh, equalise, extract, info, interleave, layout, map, moire,
                       preview, read_h3d, refocus, resample, quilt, stitch, undistort, unquilt, viewpoints)
@@ -58,7 +61,7 @@ __all__ = ["__version__", "render", "Display", "build_display", "RenderRequest",
            "calibrate", "undistort", "borders", "equalise", "viewpoints", "stitch", "convert_mesh", "layout"]
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     if name in _MODULES:
         return importlib.import_module(_MODULES[name])
     if name in _PUBLIC:

@@ -20,6 +20,7 @@ from ..errors import ConfigError, InputError, Povh3dError
 from .budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_disk, check_memory
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import Panel
+from ..geometry.lens_array import _positive as positive_length  # the lens array's own rule
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
 from .records import base_record, png_output, write_image
 from ..image.interleave import extract
@@ -54,6 +55,9 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
             Display.from_record({"lens_array": side}).lens_array.require_views()
     if ppl is None:
         raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
+    for value, name, flag in ((focal, "focal length", "--focal 1.5"), (pixel_pitch, "pixel pitch", "--pixel-pitch 0.1")):
+        if value is not None:  # --focal 0 divided by zero in refocus (an internal error)
+            positive_length(f"the {name}", value, f"give it in mm, e.g. {flag}")
     focal = focal if focal is not None else side.get("focal_mm")
     if pixel_pitch is None and side.get("panel"):
         pixel_pitch = side["panel"]["pixel_pitch_mm"][0]

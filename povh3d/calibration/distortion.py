@@ -22,6 +22,9 @@ from ..errors import ConfigError
 from ..image.colour import from_linear, to_linear
 
 
+MAX_SCALE_PX = 1e9  # a half diagonal far beyond any image a panel holds (2^30 pixels at most)
+
+
 @dataclass(frozen=True)
 class Brown:
     """Radial Brown model of one image size.
@@ -44,9 +47,13 @@ class Brown:
     def __post_init__(self) -> None:
         if not (np.isfinite(self.k1) and np.isfinite(self.k2)):
             raise ConfigError(f"distortion coefficients must be finite, got k1={self.k1!r}, k2={self.k2!r}")
-        if not self.scale > 0:
-            raise ConfigError(f"distortion scale must be positive, got {self.scale!r}")
+        # The half diagonal of an image: a damaged grid file's 1e308 overflowed scale**2 (an internal error).
+        if not (np.isfinite(self.scale) and 0 < self.scale <= MAX_SCALE_PX):
+            raise ConfigError(f"distortion scale must be a positive number of pixels up to {MAX_SCALE_PX:g}, "
+                              f"got {self.scale!r}")
         object.__setattr__(self, "centre", (float(self.centre[0]), float(self.centre[1])))
+        if not np.all(np.isfinite(self.centre)):
+            raise ConfigError(f"distortion centre must be finite, got {self.centre!r}")
 
     @classmethod
     def for_image(cls, width: int, height: int, k1: float = 0.0, k2: float = 0.0) -> Brown:

@@ -156,6 +156,16 @@ def _worker_povray() -> tuple[bool, str]:
         return False, str(error)
 
 
+def _gone(answer: object) -> bool:
+    """A worker's answer to a broadcast that says it died (its connection closed); another error
+    raised on a worker is raised here."""
+    if isinstance(answer, OSError):  # distributed's CommClosedError, a refused connection
+        return True
+    if isinstance(answer, BaseException):
+        raise answer
+    return False
+
+
 def job_files(job: PovrayJob) -> list[str]:
     """Absolute paths of the files `job` reads: its allow-list, else its include folders' files."""
     if job.read_files is not None:
@@ -266,7 +276,12 @@ class DaskRunner:
         if known is not None and known[0] == workers:  # the same workers as last time
             self.version, self.workers = known[1], len(workers)
             return
-        answers = self.client.run(_worker_povray)
+        # A worker killed since the scheduler last heard of it answers with a closed connection (the
+        # second batch of a render whose worker died in the first): it is gone, not a failure.
+        answers = {worker: answer for worker, answer in self.client.run(_worker_povray, on_error="return").items()
+                   if not _gone(answer)}
+        if not answers:
+            raise ConfigError(f"no Dask worker at {address} answered; start some with 'dask worker {address}'")
         missing = {w: why for w, (ok, why) in answers.items() if not ok}
         if missing:
             worker, why = sorted(missing.items())[0]

@@ -110,3 +110,13 @@ def test_bad_options():
         correct_borders(img, grid, threshold=1.5)
     with pytest.raises(ConfigError):
         viewpoints(img, grid, 0)
+
+
+@pytest.mark.parametrize("scale, centre", [(1e308, (1.0, 1.0)), (float("inf"), (1.0, 1.0)), (0.0, (1.0, 1.0)),
+                                           (60.0, (float("nan"), 1.0))])
+def test_a_damaged_distortion_is_refused_on_construction(scale, centre):
+    # Issue 25's fuzz: a grid file's scale_px of 1e308 overflowed scale**2 in undistort (an internal error).
+    with pytest.raises(ConfigError, match="distortion (scale|centre)"):
+        Brown(0.01, 0.0, centre, scale)
+    image = np.ones((4, 4), np.float32)
+    assert undistort_image(image, Brown(0.01, 0.0, (1.5, 1.5), 1e9)).shape == image.shape  # the largest accepted

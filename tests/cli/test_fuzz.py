@@ -14,8 +14,10 @@ from __future__ import annotations
 import argparse
 import hashlib
 import os
+import resource
 import shutil
 import struct
+import time
 import zlib
 from pathlib import Path
 
@@ -31,10 +33,14 @@ from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.interleave import extract
 from povh3d.calibration.gridfile import write_grid
 from povh3d.calibration.lattice import calibrate
-from tests.support.cli import run_in_process
+from tests.support.cli import run_in_process, run_subprocess
 from tests.support.synth import WhiteSpec, render_white, to_uint
 
-EXAMPLES = int(os.environ.get("POVH3D_FUZZ_EXAMPLES", "250"))
+# Cases of each kind: a cheap subset in ``make test``; ``make fuzz`` runs 2,000 (docs/reliability.md).
+LINES = int(os.environ.get("POVH3D_FUZZ_LINES", "100"))          # command lines, in this process
+DAMAGED = int(os.environ.get("POVH3D_FUZZ_DAMAGED", "100"))      # damaged files, in this process
+PROCESSES = int(os.environ.get("POVH3D_FUZZ_PROCESSES", "6"))    # command lines, as a process of their own
+SECONDS, BYTES = 60, 2 * 1024**3                                  # every case's bounds
 TINY = ["--preset", "demo", "--lenses", "4x3", "--ppl", "2", "--quality", "draft", "-q", "--timeout", "5"]
 # Options whose real values would leave this machine or run for minutes; the fuzz
 # gives them only values that must be refused.
@@ -67,7 +73,7 @@ GOOD_OUTPUT = {"render": ["out.png", "good.png", "sub dir/é.png"], "extract": [
                "quilt": ["dossier é", "new views"], "viewpoints": ["new views"], "calibrate": ["out.json"],
                "preview": ["out.gif"], "convert-mesh": ["out.inc", "sub dir/é.inc"],
                "layout": ["out.png", "good.png", "sub dir/é.png"]}
-CASES = {"run": 0, "failed": 0}
+CASES = {"run": 0, "failed": 0, "damaged": 0, "processes": 0, "slowest": 0.0}
 
 
 def _png_header(width: int, height: int) -> bytes:
@@ -179,34 +185,74 @@ def pristine(tmp_path_factory):
     return root
 
 
-def _one_case(args: list[str], pristine: Path, work: Path) -> None:
-    """One command line run in a fresh copy of ``pristine``: one error line or the asked-for output."""
+def _peak_bytes() -> int:
+    """The largest resident size this process or any child it waited for (POV-Ray) has had."""
+    return 1024 * max(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
+                      resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+
+
+def _cpu_seconds() -> float:
+    """CPU time of this process and of the children it waited for (POV-Ray), user and system."""
+    return sum(u.ru_utime + u.ru_stime for u in map(resource.getrusage, (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)))
+
+
+def _wall_limit() -> float:
+    """60 s on an idle machine; in proportion to the load average per core when other work shares the cores."""
+    return SECONDS * max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))
+
+
+def _bounded(run, args: list[str], work: Path):
+    """``run(args)`` in ``work``, checked against the bounds every case keeps: 60 s of CPU, 60 s of
+    wall time on an idle machine (more in proportion when other work loads the cores), 2 GB.  The
+    peak sizes only grow, so a peak under 2 GB after the case is one under 2 GB during it."""
+    start, cpu = time.monotonic(), _cpu_seconds()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.chdir(work)
+        result = run(args)  # in this process: an exception escaping main fails the test here
+    seconds, cpu = time.monotonic() - start, _cpu_seconds() - cpu
+    CASES["slowest"] = max(CASES["slowest"], seconds)
+    CASES["most_cpu"] = max(CASES.get("most_cpu", 0.0), cpu)
+    assert cpu < SECONDS, (args, cpu)
+    assert seconds < _wall_limit(), (args, seconds)
+    assert _peak_bytes() < BYTES, (args, _peak_bytes())
+    return result
+
+
+def _one_line_or_output(args: list[str], result, before: dict, after: dict, *extra) -> None:
+    """One final error line and every file untouched, or success and only the asked-for outputs changed."""
+    assert "Traceback" not in result.err, (args, *extra, result.err)
+    assert "internal error" not in result.err, (args, *extra, result.err)
+    if result.code != 0:
+        lines = [line for line in result.err.splitlines() if line.strip()]
+        errors = [line for line in lines if line.startswith("povh3d: error: ")]
+        assert len(errors) == 1 and errors[0] == lines[-1], (args, *extra, result.err)
+        assert not _changed(before, after), (args, *extra, _changed(before, after), result.err)
+    else:
+        assert all(_may_change(name, args) for name in _changed(before, after)), \
+            (args, *extra, _changed(before, after))
+
+
+def _fresh(pristine: Path, work: Path) -> dict:
     if work.exists():
         shutil.rmtree(work)
     shutil.copytree(pristine, work)
-    before = _snapshot(work)
+    return _snapshot(work)
+
+
+def _one_case(args: list[str], pristine: Path, work: Path) -> None:
+    """One command line run in a fresh copy of ``pristine``: one error line or the asked-for output."""
+    before = _fresh(pristine, work)
     if os.environ.get("POVH3D_FUZZ_LOG"):
         with open(os.environ["POVH3D_FUZZ_LOG"], "a", encoding="utf-8") as log:
             log.write(f"run\t{args}\n")
-    with pytest.MonkeyPatch.context() as patch:
-        patch.chdir(work)
-        result = run_in_process(*args)  # an exception escaping main fails the test here
+    result = _bounded(lambda a: run_in_process(*a), args, work)
     after = _snapshot(work)
     CASES["run"] += 1
     if os.environ.get("POVH3D_FUZZ_LOG"):  # to see what the cases reach: one line per case
         with open(os.environ["POVH3D_FUZZ_LOG"], "a", encoding="utf-8") as log:
             log.write(f"{result.code}\t{args}\t{(result.err.strip().splitlines() or [''])[-1]}\n")
     CASES["failed"] += result.code != 0
-    assert "Traceback" not in result.err, (args, result.err)
-    assert "internal error" not in result.err, (args, result.err)
-    if result.code != 0:
-        lines = [line for line in result.err.splitlines() if line.strip()]
-        errors = [line for line in lines if line.startswith("povh3d: error: ")]
-        assert len(errors) == 1 and errors[0] == lines[-1], (args, result.err)
-        assert not _changed(before, after), (args, _changed(before, after), result.err)
-    else:
-        assert all(_may_change(name, args) for name in _changed(before, after)), \
-            (args, _changed(before, after))
+    _one_line_or_output(args, result, before, after)
 
 
 @pytest.fixture(scope="module")
@@ -215,7 +261,7 @@ def fuzz(pristine, tmp_path_factory):
     command lines it ran and the error it ended in (None when every case passed)."""
     work = tmp_path_factory.mktemp("fuzz-work") / "w"
 
-    @settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,
+    @settings(max_examples=LINES, deadline=None, derandomize=True, database=None,
               suppress_health_check=[HealthCheck.too_slow])
     @given(args=command_lines())
     def run_cases(args):
@@ -242,8 +288,30 @@ def test_hostile_command_lines_end_in_one_line(fuzz):
 def test_fuzz_ran_every_case(fuzz):
     # The count of the hypothesis run of the fixture, whichever test asked for it first.
     cases, _ = fuzz
-    assert cases["run"] >= EXAMPLES * 0.9, cases
+    assert cases["run"] >= LINES * 0.9, cases
     print(f"fuzz: {cases['run']} command lines, {cases['failed']} refused, 0 tracebacks")
+
+
+@pytest.mark.povray
+@settings(max_examples=PROCESSES, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(args=command_lines())
+def test_fuzzed_command_lines_as_a_process_end_by_their_exit_code(args, pristine, tmp_path):
+    """The command as users run it (``python -m povh3d.cli``, its own process): the exit code the
+    in-process runs read from SystemExit is the process's, never an end by signal, and the same
+    one line or output."""
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    before = _fresh(pristine, tmp_path / "p")
+    done = _bounded(lambda a: run_subprocess(*a, cwd=tmp_path / "p", env=env, timeout=_wall_limit()), args, tmp_path / "p")
+    CASES["processes"] += 1
+    assert done.code >= 0, (args, done.code, done.err)  # negative: ended by a signal
+    _one_line_or_output(args, done, before, _snapshot(tmp_path / "p"), "as a process")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("POVH3D_CACHE", env["POVH3D_CACHE"])
+        _fresh(pristine, tmp_path / "i")
+        inside = _bounded(lambda a: run_in_process(*a), args, tmp_path / "i")
+    if "did not finish within" not in done.err + inside.err:  # a timeout depends on the machine's load
+        assert inside.code == done.code, (args, inside.err, done.err)
 
 
 # -- damaged and forged files: sidecars, views folders, calibration files ------------------------------
@@ -302,39 +370,34 @@ def COMMANDS_READING(name):  # noqa: N802 - a table, spelt as one
     return [c for c in READERS[name] if c[0] in COMMANDS]
 
 
-@settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
+@settings(max_examples=DAMAGED, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(case=damaged_cases())
-def test_damaged_sidecars_views_and_calibrations_end_in_one_line(case, pristine, tmp_path, monkeypatch):
+def test_damaged_sidecars_views_and_calibrations_end_in_one_line(case, pristine, tmp_path):
     """One field of a sidecar, a views.json or a calibration file replaced by a wrong type, a NaN, a
     zero, a huge number, or removed: one line or a success, never an internal error; under 60 s and
     2 GB each."""
     import json
-    import resource
-    import time
 
     name, pick, bad, args = case
     work = tmp_path / "w"
-    if work.exists():
-        shutil.rmtree(work)
-    shutil.copytree(pristine, work)
+    _fresh(pristine, work)
     document = json.loads((work / name).read_text(encoding="utf-8"))
     paths = [p for p in _json_paths(document) if p and p[-1] != "image_sha256"]
     path = paths[pick % len(paths)]
     (work / name).write_text(json.dumps(_damage(document, path, bad)), encoding="utf-8")
     before = _snapshot(work)
-    start = time.monotonic()
-    with monkeypatch.context() as patch:
-        patch.chdir(work)
-        result = run_in_process(*args)
-    CASES["damaged"] = CASES.get("damaged", 0) + 1
-    assert time.monotonic() - start < 60, (args, path, bad)
-    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss < 2 * 1024 * 1024, "under 2 GB"
-    assert "Traceback" not in result.err and "internal error" not in result.err, (args, path, bad, result.err)
-    if result.code != 0:
-        lines = [line for line in result.err.splitlines() if line.strip()]
-        assert len(lines) >= 1 and lines[-1].startswith("povh3d: error: "), (args, path, bad, result.err)
-        assert not _changed(before, _snapshot(work)), (args, path, bad)
+    result = _bounded(lambda a: run_in_process(*a), args, work)
+    CASES["damaged"] += 1
+    _one_line_or_output(args, result, before, _snapshot(work), path, bad)
+
+
+def test_fuzz_summary():
+    # Last in the file: what ``make fuzz`` reports (docs/reliability.md quotes it).
+    print(f"\nfuzz: {CASES['run']} command lines ({CASES['failed']} refused), {CASES['damaged']} damaged files, "
+          f"{CASES['processes']} command lines as processes; slowest case {CASES['slowest']:.1f} s "
+          f"({CASES.get('most_cpu', 0.0):.1f} s of CPU at most), load {os.getloadavg()[0]:.1f}, "
+          f"peak resident size {_peak_bytes() / 1024**2:.0f} MB")
 
 
 def test_negative_control_a_removed_file_is_seen(tmp_path):

@@ -57,6 +57,22 @@ def test_info_with_a_nan_pitch(cli):
     assert "finite" in one_error_line(cli("info", "--pixel-pitch", "nan"), 2)
 
 
+@pytest.mark.parametrize("command, option", [("refocus", ["--focal", "0"]), ("refocus", ["--pixel-pitch", "-1"]),
+                                             ("preview", ["--focal", "0"]), ("refocus", [])])
+def test_a_zero_focal_or_pitch_for_a_display_command_is_one_line(tmp_path, cli, command, option):
+    # Issue 25's fuzz: refocus --focal 0 divided by zero, an internal error (exit 70).  [] is the control.
+    array = LensArray("square", 4, 3, 0.8, 0.8, 1.5, Panel(32, 24, 0.1, 0.1))
+    write_image(tmp_path / "h.png", np.random.default_rng(1).integers(0, 256, (24, 32, 3), np.uint8),
+                base_record("h3d", array))
+    out = tmp_path / ("o.gif" if command == "preview" else "o.png")
+    extra = ["--depth", "0"] if command == "refocus" else ["--frames", "2"]
+    result = cli(command, tmp_path / "h.png", "-o", out, *extra, *option)
+    if not option:
+        assert result.code == 0 and out.exists(), result.err
+        return
+    assert "must be a positive finite number" in one_error_line(result, 2) and not out.exists()
+
+
 def test_output_naming_a_folder(tmp_path, cli):
     (tmp_path / "out.png").mkdir()
     line = one_error_line(cli("render", SAMPLE, "-o", tmp_path / "out.png", *TINY), 4)
