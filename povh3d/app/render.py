@@ -172,7 +172,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     else:
         result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
                             progress, crop=request.crop, **request.method_options)
-    seconds = time.perf_counter() - start
+    seconds = auto.seconds if result is getattr(auto, "image", None) else time.perf_counter() - start
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)
     if h3d.shape[:2] != expected:  # a bug, never the user's doing
