@@ -81,7 +81,7 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     """
     if settings.quality != AUTO:
         return settings, None
-    if METHODS[method].takes_samples(lens_array):
+    if full_image_auto(method, lens_array):
         try:
             quality, fields, image = seeded_auto(scene, lens_array, method, settings, progress, **options)
         except GroupsUnsupported:
@@ -129,6 +129,19 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     choice = AutoChoice(quality, target, tuple(tried), (window.lenses_x, window.lenses_y),
                         time.perf_counter() - start, samples, reference.floor_db)
     return replace(settings, quality=quality, max_error_db=None), choice
+
+
+#: Panels up to this many pixels are chosen for on the full image (``auto_seeds``, which holds each
+#: run's two seeds in linear light: 24 MB an image here); larger ones on the probe window, a small
+#: share of them.
+FULL_IMAGE_PIXELS = 1_000_000
+
+
+def full_image_auto(method: str, lens_array: LensArray) -> bool:
+    """Whether ``--quality auto`` renders the full image while choosing (``auto_seeds``): a method
+    that traces footprint samples in a view bank, on a panel of at most ``FULL_IMAGE_PIXELS``."""
+    return (METHODS[method].takes_samples(lens_array)
+            and lens_array.panel.width * lens_array.panel.height <= FULL_IMAGE_PIXELS)
 
 
 def probe_reference(scene: Scene, window: LensArray, declared: LensArray, mask: np.ndarray,

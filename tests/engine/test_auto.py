@@ -8,7 +8,8 @@ from povh3d.errors import ConfigError
 from povh3d.geometry.footprint import latin_hypercube
 from povh3d.geometry.rays import pixel_rays
 from povh3d.engine.methods import run_method
-from povh3d.engine.auto import AUTO_LADDER, probe_window, resolve_auto, window_offset
+from povh3d.engine.auto import (AUTO_LADDER, FULL_IMAGE_PIXELS, full_image_auto, probe_window, resolve_auto,
+                                window_offset)
 from povh3d.engine.auto_seeds import view_seeds
 from povh3d.geometry.view_bank import view_bank_frames
 from povh3d.geometry.lens_array import LensArray, Panel
@@ -163,6 +164,14 @@ def test_auto_refuses_a_target_past_its_samples(textured):
         resolve_auto(textured, la, "multi-ortho", RenderSettings(quality="auto", max_error_db=99))
     with pytest.raises(ConfigError, match=r"1024 footprint samples reach .* use --max-error [0-9.]+ or less"):
         resolve_auto(textured, la, "multi-ortho", RenderSettings(quality="auto", max_error_db=57, bit_depth=16))
+
+
+def test_auto_renders_the_full_image_only_where_it_can_split_samples_and_hold_them():
+    small = square_array(lx=20, ly=15, nx=8, ny=8)
+    assert full_image_auto("multi-ortho", small)
+    assert not full_image_auto("pinhole", small)   # no footprint samples: the probe
+    big = square_array(lx=250, ly=150, nx=8, ny=8)   # 2000 x 1200 pixels: the probe window
+    assert big.panel.width * big.panel.height > FULL_IMAGE_PIXELS and not full_image_auto("multi-ortho", big)
 
 
 def test_auto_needs_a_target_and_a_target_needs_auto():
