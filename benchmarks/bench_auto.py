@@ -7,6 +7,10 @@ noise floor stated).  Then ``--quality auto --max-error X`` runs as a whole comm
 probe included, cold cache) and is scored the same way.  A case passes when the full image
 reaches X within 0.2 dB at no more than 1.25x the time of the fastest rung that reaches X.
 
+Every command runs ``--repeat`` times, the rounds interleaved (each round: every rung, then each
+target's auto); ``--before CHECKOUT`` times that checkout's auto beside this one's in each round
+(who goes first alternating), for a before/after on a shared machine.
+
 Writes bench-out/auto.json and the table between the ``auto`` markers of docs/benchmarks.md.
 """
 
@@ -14,15 +18,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
+import statistics
 import sys
 import tempfile
 from dataclasses import replace
 from pathlib import Path
 
-from _common import table, write_table
+from _common import publish, summary, table, whole_process_seconds
 from povh3d.engine.auto import AUTO_LADDER
-from povh3d.engine.commands import time_povh3d
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import QUALITY_LEVELS, Quality, RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
@@ -50,24 +55,39 @@ def rung_name(q: Quality) -> str:
     return named.get(q, str(q.footprint))
 
 
+def povh3d_seconds(tree: Path, args: list[object]) -> float:
+    """Wall seconds of ``python -m povh3d ARGS`` run from checkout ``tree`` (start-up to exit)."""
+    # Bytecode kept (written by the warm-up): PYTHONDONTWRITEBYTECODE would recompile povh3d in every
+    # command, a constant that pulls every ratio towards 1.
+    env = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(tree)}
+    return whole_process_seconds([sys.executable, "-m", "povh3d", *map(str, args)], tree, env)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=REPO / "bench-out")
     parser.add_argument("--reference-samples", type=int, default=1024)
+    parser.add_argument("--repeat", type=int, default=3, help="timed runs of every command, interleaved")
+    parser.add_argument("--before", type=Path, help="another checkout whose auto is timed beside this one's")
     parser.add_argument("--no-docs", action="store_true", help="do not write docs/benchmarks.md")
     args = parser.parse_args()
     load_before = os.getloadavg()
+    loads = [load_before[0]]
     args.out.mkdir(parents=True, exist_ok=True)
     folder = Path(tempfile.mkdtemp(prefix="bench-auto-"))
     (folder / "unseen.pov").write_text(UNSEEN)
     scenes = {"sample.pov": REPO / "sample_models" / "sample.pov",
               "fine_texture.pov": REPO / "sample_models" / "fine_texture.pov", "unseen.pov": folder / "unseen.pov"}
+    trees = {"after": REPO, **({"before": args.before.resolve()} if args.before else {})}
     rows, results = [], []
+    for tree in trees.values():   # compiled kernels and bytecode cached before anything is timed
+        povh3d_seconds(tree, ["render", scenes["sample.pov"], *ARRAY_ARGS, "--quality", "auto", "--max-error", 20,
+                              "--no-cache", "-q", "-o", folder / "warm.png"])
     for name, targets in CASES.items():
         path = scenes[name]
         out = folder / name.replace(".pov", "")
         out.mkdir()
-        time_povh3d(["render", path, *ARRAY_ARGS, "--quality", "draft", "--no-cache", "-q", "-o", out / "a.png"])
+        povh3d_seconds(REPO, ["render", path, *ARRAY_ARGS, "--quality", "draft", "--no-cache", "-q", "-o", out / "a.png"])
         a = json.loads((out / "a.json").read_text())["lens_array"]
         p = a["panel"]
         la = LensArray(a["grid"], *a["lenses"], *a["lens_pitch_mm"], a["focal_mm"],
@@ -76,40 +96,58 @@ def main() -> int:
         base = RenderSettings(quality="draft", bit_depth=16)
         reference = Reference(*(run_method("multi-ortho", scene, la, replace(
             base, quality=Quality(footprint=args.reference_samples, seed=seed))).h3d for seed in (1, 2)))
-        ladder = []
-        for q in AUTO_LADDER:
-            rung = rung_name(q)
-            image = out / f"{rung}.png"
-            seconds = time_povh3d(["render", path, *ARRAY_ARGS, "--quality", rung, "--no-cache", "-q", "-o", image])
-            ladder.append((rung, seconds, reference.psnr(read_png(image))))
-            print(f"{name} {rung}: {seconds:.2f} s {ladder[-1][2]:.2f} dB", flush=True)
-            if ladder[-1][2] > max(targets) + 1:
-                break
+        rungs: dict[str, list] = {}        # name -> [dB, seconds...]
+        autos: dict[tuple, list] = {}      # (tree, target) -> [dB, chosen, seconds...]
+        for run in range(args.repeat):
+            for q in AUTO_LADDER:
+                rung = rung_name(q)
+                if run and rung not in rungs:
+                    break
+                image = out / f"{rung}.png"
+                seconds = povh3d_seconds(REPO, ["render", path, *ARRAY_ARGS, "--quality", rung, "--no-cache", "-q",
+                                                "-o", image])
+                rungs.setdefault(rung, [reference.psnr(read_png(image))]).append(seconds)
+                print(f"{name} {rung}: {seconds:.2f} s {rungs[rung][0]:.2f} dB", flush=True)
+                if rungs[rung][0] > max(targets) + 1:
+                    break
+            for target in targets:
+                order = list(trees) if run % 2 == 0 else list(trees)[::-1]   # who goes first alternates
+                for tree in order:
+                    image = out / f"auto-{tree}-{target}.png"
+                    seconds = povh3d_seconds(trees[tree], ["render", path, *ARRAY_ARGS, "--quality", "auto",
+                                                           "--max-error", target, "--no-cache", "-q", "-o", image])
+                    chosen = json.loads(image.with_suffix(".json").read_text())["quality"]["auto"]["chosen"]
+                    autos.setdefault((tree, target), [reference.psnr(read_png(image)), chosen]).append(seconds)
+                    print(f"{name} auto {tree} {target}: {seconds:.2f} s {autos[tree, target][0]:.2f} dB {chosen}",
+                          flush=True)
+            loads.append(os.getloadavg()[0])
+        median = {rung: statistics.median(v[1:]) for rung, v in rungs.items()}
         for target in targets:
-            image = out / f"auto-{target}.png"
-            seconds = time_povh3d(["render", path, *ARRAY_ARGS, "--quality", "auto", "--max-error", target,
-                                   "--no-cache", "-q", "-o", image])
-            got = reference.psnr(read_png(image))
-            chosen = json.loads(image.with_suffix(".json").read_text())["quality"]["auto"]["chosen"]
-            meets = [r for r in ladder if r[2] >= target]
-            fastest = min(meets, key=lambda r: r[1]) if meets else None
-            ok = got >= target - 0.2 and fastest is not None and seconds <= 1.25 * fastest[1]
-            results.append({"scene": name, "target_db": target, "auto_s": seconds, "auto_db": got,
-                            "chosen": chosen, "fastest": fastest, "floor_db": reference.floor_db, "pass": ok})
-            rows.append((name, f"{target}", f"{got:.2f}", chosen, f"{seconds:.2f}",
-                         f"{fastest[0]} {fastest[1]:.2f} s" if fastest else "none",
-                         f"{seconds / fastest[1]:.2f}x" if fastest else "-", f"{reference.floor_db:.1f}",
-                         "yes" if ok else "no"))
+            meets = [r for r, v in rungs.items() if v[0] >= target]
+            fastest = min(meets, key=median.get) if meets else None
+            got, chosen, *times = autos["after", target]
+            ratio = statistics.median(times) / median[fastest] if fastest else math.inf
+            ok = got >= target - 0.2 and ratio <= 1.25
+            before = autos.get(("before", target))
+            results.append({"scene": name, "target_db": target, "auto_s": times, "auto_db": got, "chosen": chosen,
+                            "fastest": fastest, "fastest_s": rungs[fastest][1:] if fastest else None,
+                            "before_s": before[2:] if before else None, "before_db": before[0] if before else None,
+                            "floor_db": reference.floor_db, "pass": ok})
+            rows.append((name, f"{target}", f"{got:.2f}", chosen.replace("-A, ", "").replace("-A", "draft"),
+                         summary(times), f"{fastest} {summary(rungs[fastest][1:])}" if fastest else "none",
+                         f"{ratio:.2f}x", *((f"{before[0]:.2f}", summary(before[2:]),
+                                             f"{statistics.median(before[2:]) / median[fastest]:.2f}x") if before
+                                            else ()),
+                         f"{reference.floor_db:.1f}", "yes" if ok else "no"))
             print(" | ".join(rows[-1]), flush=True)
     (args.out / "auto.json").write_text(json.dumps(results, indent=1))
+    header = ["scene", "X dB", "full image dB", "chosen", "auto s", "fastest rung reaching X", "ratio",
+              *(["before: dB", "before: auto s", "before: ratio"] if args.before else []), "reference floor dB", "pass"]
     text = table(f"`--quality auto --max-error X`, {' '.join(ARRAY_ARGS)}, full image against two seeds of "
-                 f"{args.reference_samples} footprint samples; whole commands (auto's probe included)",
-                 ["scene", "X dB", "full image dB", "chosen", "auto s", "fastest rung reaching X", "ratio",
-                  "reference floor dB", "pass"], rows, load_before)
-    print(text)
-    if not args.no_docs:
-        write_table("auto", text)
-    return 0
+                 f"{args.reference_samples} footprint samples; whole commands (auto's own renders included), "
+                 f"median (min-max) of {args.repeat} interleaved runs; load average (1 min) after each round "
+                 f"{', '.join(f'{x:.1f}' for x in loads[1:])}", header, rows, load_before)
+    return publish("auto", text, not args.no_docs)
 
 
 if __name__ == "__main__":

@@ -167,9 +167,12 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     the animation frames from this one to the last, which the engine may render alongside it."""
     array = request.render_array
     start = time.perf_counter()
-    result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence), progress,
-                        crop=request.crop, **request.method_options)
-    seconds = time.perf_counter() - start
+    if auto is not None and auto.image is not None and request.frames is None:
+        result = auto.image   # --quality auto rendered the full image while choosing it
+    else:
+        result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
+                            progress, crop=request.crop, **request.method_options)
+    seconds = auto.seconds if result is getattr(auto, "image", None) else time.perf_counter() - start
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)
     if h3d.shape[:2] != expected:  # a bug, never the user's doing

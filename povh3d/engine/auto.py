@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -20,7 +20,8 @@ from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
 from ..geometry.rays import pixel_rays
 from ..image.metrics import Reference
-from .methods import METHODS, run_method
+from .auto_seeds import seeded_auto
+from .methods import METHODS, GroupsUnsupported, MethodResult, run_method
 from .quality import AUTO, QUALITY_LEVELS, Progress, Quality, RenderSettings
 from ..scene.scene import Scene
 
@@ -56,12 +57,15 @@ class AutoChoice:
     seconds: float
     reference_samples: int = 256
     reference_floor_db: float = math.inf   # PSNR between the reference's two seeds
+    # The full image already rendered at the choice (``auto_seeds``): written as it is, not rendered again.
+    image: MethodResult | None = field(default=None, compare=False, repr=False)
 
     def as_record(self) -> dict[str, Any]:
         return {"max_error_db": self.min_psnr_db, "chosen": self.quality.label,
                 "probe_lenses": list(self.probe_lenses), "probe_seconds": round(self.seconds, 3),
                 "probe_reference_samples": self.reference_samples,
                 "probe_reference_floor_db": round(self.reference_floor_db, 2),
+                "full_image": self.image is not None,
                 "tried": [{"setting": s, "psnr_db": round(p, 2)} for s, p in self.tried]}
 
 
@@ -77,6 +81,15 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     """
     if settings.quality != AUTO:
         return settings, None
+    if full_image_auto(method, lens_array):
+        try:
+            quality, fields, image = seeded_auto(scene, lens_array, method, settings, progress, **options)
+        except GroupsUnsupported:
+            pass   # a lens mesh (a clearance under one view-bank step): the probe below
+        else:
+            choice = AutoChoice(quality, float(settings.max_error_db), probe_lenses=(lens_array.lenses_x,
+                                lens_array.lenses_y), image=image, **fields)
+            return replace(settings, quality=quality, max_error_db=None), choice
     start = time.perf_counter()
     target = float(settings.max_error_db)
     window, mask = probe_window(lens_array)
@@ -116,6 +129,19 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     choice = AutoChoice(quality, target, tuple(tried), (window.lenses_x, window.lenses_y),
                         time.perf_counter() - start, samples, reference.floor_db)
     return replace(settings, quality=quality, max_error_db=None), choice
+
+
+#: Panels up to this many pixels are chosen for on the full image (``auto_seeds``, which holds each
+#: run's two seeds in linear light: 24 MB an image here); larger ones on the probe window, a small
+#: share of them.
+FULL_IMAGE_PIXELS = 1_000_000
+
+
+def full_image_auto(method: str, lens_array: LensArray) -> bool:
+    """Whether ``--quality auto`` renders the full image while choosing (``auto_seeds``): a method
+    that traces footprint samples in a view bank, on a panel of at most ``FULL_IMAGE_PIXELS``."""
+    return (METHODS[method].takes_samples(lens_array)
+            and lens_array.panel.width * lens_array.panel.height <= FULL_IMAGE_PIXELS)
 
 
 def probe_reference(scene: Scene, window: LensArray, declared: LensArray, mask: np.ndarray,

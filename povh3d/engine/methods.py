@@ -39,7 +39,7 @@ from ..geometry.lattice_mesh import lens_mesh
 from ..geometry.lens_array import LensArray
 from ..geometry.phase_tiles import phase_tiles, tiles_mesh, uncovered
 from ..geometry.rays import depth_scaled_rays
-from ..image.colour import mean_in_linear_light
+from ..image.colour import decode, encode, mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
 from ..system import cpu_count
@@ -63,6 +63,9 @@ class MethodPlan:
     batch: ShotBatch
     assemble: Callable[[list[np.ndarray]], np.ndarray]
     record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
+    # The H3D image of each run of consecutive samples (their counts), in linear light, from the
+    # same images: what --quality auto scores its seeds with (None: the method cannot split them).
+    assemble_groups: Callable[[list[np.ndarray], list[int]], list[np.ndarray]] | None = None
 
 
 def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, gutter: int = 0,
@@ -82,7 +85,9 @@ def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndar
     # samples pixel borders), one bank per footprint sample, a few banks a frame.
     meshes = view_bank_frames(lens_array, front_clearance, samples, gutter=gutter)
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
-                      lambda images: banks_to_h3d(lens_array, stack_frames(images, meshes)))
+                      lambda images: banks_to_h3d(lens_array, stack_frames(images, meshes)),
+                      assemble_groups=lambda images, counts: bank_groups(lens_array, stack_frames(images, meshes),
+                                                                         counts))
 
 
 def banks_to_h3d(lens_array: LensArray, image: np.ndarray) -> np.ndarray:
@@ -91,6 +96,16 @@ def banks_to_h3d(lens_array: LensArray, image: np.ndarray) -> np.ndarray:
     banks = image.shape[0] // (ny * lens_array.lenses_y)
     bank = mean_in_linear_light(image.reshape(banks, -1, *image.shape[1:])) if banks > 1 else image
     return interleave(untile_views(bank, (ny, nx)))
+
+
+def bank_groups(lens_array: LensArray, image: np.ndarray, counts: list[int]) -> list[np.ndarray]:
+    """The linear-light H3D image of each run of ``counts`` consecutive banks of ``image`` (stacked
+    one per footprint sample, as ``banks_to_h3d`` reads them)."""
+    ny, nx = lens_array.require_views()
+    banks = image.reshape(sum(counts), -1, *image.shape[1:])
+    ends = np.cumsum([0, *counts])
+    return [interleave(untile_views(sum(decode(b) for b in banks[a:e]) / (e - a), (ny, nx)))
+            for a, e in zip(ends[:-1], ends[1:])]
 
 
 def _multi_ortho_views(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
@@ -267,6 +282,10 @@ def display_header(lens_array: LensArray) -> dict[str, Any]:
             "focal": lens_array.focal}
 
 
+class GroupsUnsupported(ConfigError):
+    """``footprint_groups`` asked of a plan that cannot split its samples (checked before any trace)."""
+
+
 @dataclass
 class MethodResult:
     h3d: np.ndarray          # (H, W, C) uint8 or uint16
@@ -276,11 +295,13 @@ class MethodResult:
     crop: dict[str, Any] | None = None    # what the crop did, for the sidecar
     record: dict[str, Any] | None = None  # the method's own set-up, for the sidecar
     front_clearance_reason: str = ""      # why rays start there, for the sidecar and the summary
+    groups: list[np.ndarray] | None = None   # ``footprint_groups``: each group's H3D image, linear light
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
                progress: Progress | None = None, crop: CropSettings | None = None,
-               declared: LensArray | None = None, **options: Any) -> MethodResult:
+               declared: LensArray | None = None, footprint_groups: list[np.ndarray] | None = None,
+               **options: Any) -> MethodResult:
     """Render ``scene`` with method ``name`` and return the H3D image.
 
     ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
@@ -288,6 +309,9 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     view only where objects can be, fill the rest with the background
     (``cropped``); None renders everything.  ``declared``: the display the scene is told
     about (``Povh3d_Panel_Width`` ...) when ``lens_array`` is a window of it (auto's probe).
+    ``footprint_groups``: footprint sample sets ``(K_i, 4)`` traced in the one run instead of the
+    quality's own (a method whose plan splits them; no crop), each group's image in ``groups`` and
+    their mean over every sample in ``h3d``: --quality auto's seeds and its draft, priced as one render.
     """
     method = get_method(name)
     options = method.resolve_options(name, options)
@@ -317,7 +341,10 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         front_clearance = settings.front_clearance_limit or front_clearance
         plan_options["bank"], crop = False, None
         reason += "; traced through a lens mesh (the view bank starts only at whole steps)"
-    samples = quality.samples()
+    if footprint_groups is not None and (plan_options.get("bank") is False or not method.takes_samples(lens_array)
+                                         or name != "multi-ortho"):
+        raise GroupsUnsupported(f"{name} cannot return footprint sample groups here (no view bank)")
+    samples = quality.samples() if footprint_groups is None else np.concatenate(footprint_groups)
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
     settings_needed = quality_settings(scene.features, quality)
@@ -326,8 +353,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     def trace(batch: ShotBatch, label: str, progress: Progress | None) -> tuple[list[np.ndarray], RenderStats]:
         return render_frames(scene, batch, settings, method=label, header=header, progress=progress)
 
-    h3d, crop_info, record = None, None, None
-    if method.crops and crop is not None:
+    h3d, crop_info, record, groups = None, None, None, None
+    if method.crops and crop is not None and footprint_groups is None:
         tiles = render_cropped_tiles(trace, scene, lens_array, front_clearance, settings, crop, progress, samples,
                                      plan_options.get("gutter", 0))
         crop_info = tiles.info
@@ -336,14 +363,24 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     if h3d is None:
         plan = method.plan(lens_array, front_clearance, samples, **plan_options)
         images, stats = trace(plan.batch, name, progress)
-        h3d, record = plan.assemble(images), plan.record
+        if footprint_groups is None:
+            h3d, record = plan.assemble(images), plan.record
+        else:
+            counts = [len(g) for g in footprint_groups]
+            groups = [on_panel(lens_array, g) for g in plan.assemble_groups(images, counts)]
+            h3d = encode(sum(n * g for n, g in zip(counts, groups)) / sum(counts), images[0].dtype)
+    return MethodResult(on_panel(lens_array, h3d), stats, front_clearance, quality, crop_info, record, reason,
+                        groups=groups)
+
+
+def on_panel(lens_array: LensArray, h3d: np.ndarray) -> np.ndarray:
+    """``h3d`` on the whole panel: a camera bank covers the lens array; the margin outside it stays black."""
     panel_shape = (lens_array.panel.height, lens_array.panel.width)
-    if h3d.shape[:2] != panel_shape:
-        # A camera bank covers the lens array; the panel margin outside it stays black.
-        canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
-        canvas[lens_array.bank_region] = h3d
-        h3d = canvas
-    return MethodResult(h3d, stats, front_clearance, quality, crop_info, record, reason)
+    if h3d.shape[:2] == panel_shape:
+        return h3d
+    canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
+    canvas[lens_array.bank_region] = h3d
+    return canvas
 
 
 def _limited_front_clearance(method: Method, lens_array: LensArray, settings: RenderSettings, asked: float,

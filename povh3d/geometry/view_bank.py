@@ -37,10 +37,17 @@ def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) ->
     divisor of the count not above the cheapest size (see ``FRAME_SECONDS``), so a
     small probe takes 64 banks a frame, a 480x272 panel 16 and a 1920x1088 one 4.
     """
-    samples = np.asarray(samples, dtype=np.float64).reshape(-1, 4)
+    samples = _per_bank(samples)
     best = math.sqrt(FRAME_SECONDS / (SCAN_SECONDS * max(1, rays_per_bank) * max(1, faces_per_bank)))
     size = max(d for d in range(1, min(max(1, int(best)), len(samples)) + 1) if len(samples) % d == 0)
     return [samples[i:i + size] for i in range(0, len(samples), size)]
+
+
+def _per_bank(samples: np.ndarray) -> np.ndarray:
+    """Footprint samples ``(K, 4)``, one per bank, or ``(K, Ny, Nx, 4)``, one per bank and view
+    (views whose samples are independent: --quality auto's seeds, ``engine.auto_seeds``)."""
+    samples = np.asarray(samples, dtype=np.float64)
+    return samples if samples.ndim == 4 else samples.reshape(-1, 4)
 
 
 def view_bank_frames(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None = None,
@@ -60,7 +67,7 @@ def view_bank_frames(lens_array: LensArray, front_clearance: float, samples: np.
     pixels between any two quads (``_bank_mesh``), cut off by ``stack_frames``.
     """
     cols, rows, size = _bank_tiles(lens_array, plan)
-    samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
+    samples = _per_bank(CENTRE if samples is None else samples)
     groups = bank_groups(samples, 2 * len(cols) * len(rows), size[0] * size[1])
     return [_bank_mesh(lens_array, front_clearance, group, cols, rows, size, gutter) for group in groups]
 
@@ -112,7 +119,7 @@ def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarra
     check_front_clearance(lens_array, front_clearance)
     px, py, f = lens_array.pitch_x, lens_array.pitch_y, lens_array.focal
     s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
-    samples = np.asarray(CENTRE if samples is None else samples, dtype=np.float64).reshape(-1, 4)
+    samples = _per_bank(CENTRE if samples is None else samples)
     width, height = size
     if gutter:
         # Segment n moves n gutters on (segments are in image order), banks one more each.
@@ -126,7 +133,10 @@ def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarra
     c = np.tile(cols, (len(rows) * len(samples), 1))                      # ... times every column segment, per bank
     k, j0, j1, col0 = (c[:, n:n + 1] for n in range(4))
     l, i0, i1, row0 = (r[:, n:n + 1] for n in range(4))
-    ax, ay, du, dv = (samples[b, n] for n in range(4))                   # (quads, 1) each
+    if samples.ndim == 2:
+        ax, ay, du, dv = (samples[b, n] for n in range(4))               # (quads, 1) each
+    else:   # a sample per bank and view
+        ax, ay, du, dv = (samples[b, l, k, n] for n in range(4))
     # Corners counter-clockwise from bottom left, half a lens outside the kept lens
     # centres, in lens pitches (the conventions' centres, on the 1/GRID grid: exact).
     centres = lens_array.lens_centres()

@@ -1,0 +1,206 @@
+"""``--quality auto`` on the full image, scored by its own seeds: no probe, no separate reference.
+
+A footprint render of ``N`` samples drawn as two independent seeds ``A`` and ``B`` of ``N/2``
+is its own error gauge: each seed is an unbiased estimate of the converged image, so the mean
+squared difference of the two is twice each one's error, and their mean (the image written)
+has a quarter of it (``image.metrics.Reference``: its ``floor_db`` plus 6.02 dB).  So:
+
+1. one POV-Ray run traces the point-sampled centre (``draft``) and two seeds of a few samples;
+   the seeds are the reference ``draft`` is scored against (its noise taken off) and tell how
+   the error falls with the samples (as ``1/N``);
+2. where ``draft`` misses the target and the seeds' mean too, one more run adds the samples the
+   ``1/N`` law says the target needs, to each seed, and the seeds score the result again; a
+   third run and on, rarely, where the law fell short;
+3. the image that met the target is the output: nothing is rendered twice.
+
+Every sample is traced once, in as few POV-Ray runs as the target allows, and on the full image,
+so the score is the written image's own.  ``auto.resolve_auto`` uses this where the method can
+split its footprint samples (``MethodPlan.assemble_groups``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..geometry.footprint import CENTRE, latin_hypercube
+from ..geometry.lens_array import LensArray
+from ..image.colour import encode, linear_to_srgb
+from ..image.metrics import Reference
+from ..scene.scene import Scene
+from .methods import MethodResult, run_method
+from .quality import Progress, Quality, RenderSettings
+
+#: The samples a target of X dB needs, as a first guess: ``PRIOR_SAMPLES_40`` at 40 dB, times
+#: 10 ** (PRIOR_SLOPE (X - 40)) (from 8 to 240 samples the three scenes of benchmarks/bench_auto.py
+#: needed half to twice it).  The first run traces ``FIRST_SHARE`` of it (at least two per seed):
+#: the runs after it add what the measured error says is missing.
+PRIOR_SAMPLES_40, PRIOR_SLOPE, FIRST_SHARE = 50.0, 0.09, 0.4
+#: Targets up to this also try ``draft`` (the point-sampled centre, in the first run): it reaches
+#: 20-25 dB on textured scenes.
+DRAFT_UP_TO_DB = 30.0
+#: The most footprint samples auto renders (both seeds); past them the target is refused.
+MAX_SAMPLES = 1024
+#: dB the estimate must clear above the target: two seeds of per-view samples gave their mean's
+#: error to within 0.2 dB (the estimate the higher) on the bundled sample.
+MARGIN_DB = 0.15
+#: How the error falls with the count N, as N ** -ALPHA: a little faster than ``1/N`` from a few
+#: samples (1.04-1.19 from 2 per seed on the three scenes; the lower end taken: a run too many
+#: costs more than a few samples too many on a small image), ``1/N`` from more on.
+FEW_SAMPLES, FEW_ALPHA, MANY_ALPHA = 4, 1.05, 1.0
+#: Extra samples over the law's count, and the least a further run adds (of those so far).
+LAW_SAFETY, LEAST_MORE = 1.1, 0.25
+MAX_RUNS = 5
+
+
+@dataclass
+class SeedRuns:
+    """Each run's two seeds (linear light) and samples per seed, and the centre (``draft``).
+
+    The runs are combined weighted by the inverse of each run's own error (its seeds'
+    difference): a first run of a few samples would otherwise add its noise to the many
+    of the next.  Any fixed weights keep both seeds unbiased and independent.
+    """
+
+    seeds: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    counts: list[int] = field(default_factory=list)
+    draft: np.ndarray | None = None
+    result: MethodResult | None = None
+
+    def add(self, result: MethodResult, per_seed: int) -> None:
+        groups = list(result.groups or [])
+        if len(groups) == 3:
+            self.draft = groups.pop(0)
+        self.seeds.append((groups[0], groups[1]))
+        self.counts.append(per_seed)
+        self.result = result
+
+    def errors(self) -> np.ndarray:
+        """Each run's mean squared error of its seeds' mean (sRGB codes): a quarter of their difference."""
+        return np.array([max(_coded_mse(a, b) / 4, 1e-30) for a, b in self.seeds])
+
+    def combined(self) -> tuple[np.ndarray, np.ndarray]:
+        weights = 1 / self.errors()
+        weights /= weights.sum()
+        return tuple(sum(w * run[k] for w, run in zip(weights, self.seeds)) for k in (0, 1))
+
+    @property
+    def total(self) -> int:
+        return 2 * sum(self.counts)
+
+    def reference(self) -> Reference:
+        return Reference(*(encode(x, np.uint16) for x in self.combined()))
+
+    def image(self, dtype: type) -> np.ndarray:
+        a, b = self.combined()
+        return encode((a + b) / 2, dtype)
+
+
+def _coded_mse(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.mean((linear_to_srgb(a) - linear_to_srgb(b)) ** 2))
+
+
+def view_seeds(count: int, seed: int, views: tuple[int, int]) -> np.ndarray:
+    """``(count, Ny, Nx, 4)``: an independent Latin hypercube of ``count`` footprint samples per view.
+
+    A view bank traces one sample for every lens of a view: with one set for all views a seed's
+    error is one pattern over the whole image, so two seeds' difference says little of the error
+    of their mean (on the bundled sample their errors correlated by -0.07 to 0.38).  A set per view
+    makes the errors of the views independent, and the seeds' difference a measure of the error."""
+    ny, nx = views
+    return np.stack([latin_hypercube(count, seed * 1_000_003 + v) for v in range(ny * nx)], axis=1).reshape(
+        count, ny, nx, 4)
+
+
+def quantisation_mse(bit_depth: int) -> float:
+    """Mean squared error rounding to the output's codes adds (uniform over one code)."""
+    return 1.0 / (12.0 * (2 ** bit_depth - 1) ** 2)
+
+
+def mean_psnr(reference: Reference, quantisation: float) -> float:
+    """PSNR of the two seeds' mean as written: a quarter of their squared difference, plus rounding."""
+    mse = 10 ** (-reference.floor_db / 10) / 4 + quantisation
+    return -10 * math.log10(mse)
+
+
+def with_rounding(psnr_db: float, quantisation: float) -> float:
+    return -10 * math.log10(10 ** (-psnr_db / 10) + quantisation) if math.isfinite(psnr_db) else \
+        -10 * math.log10(quantisation)
+
+
+def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: RenderSettings,
+                progress: Progress | None = None, **options: Any):
+    """The fastest image that reaches ``settings.max_error_db`` on the full image (see the module),
+    as ``(quality, record fields, MethodResult of the image written)``; a one-line refusal where
+    ``MAX_SAMPLES`` would not reach it."""
+    start = time.perf_counter()
+    target = float(settings.max_error_db)
+    need = target + MARGIN_DB
+    rounding = quantisation_mse(settings.bit_depth)
+    if need >= -10 * math.log10(rounding):
+        raise ConfigError(f"--max-error {target:g} dB is above the noise floor of {settings.bit_depth}-bit "
+                          f"codes themselves ({-10 * math.log10(rounding):.1f} dB); use --max-error "
+                          f"{math.floor(-10 * math.log10(rounding) - 3):g} or less")
+    base = replace(settings, quality=Quality(footprint=1), max_error_db=None)
+    runs = SeedRuns()
+    tried: list[tuple[str, float]] = []
+    seed = 1
+
+    def render(groups: list[np.ndarray]) -> Reference:
+        result = run_method(method, scene, lens_array, base, footprint_groups=groups, **options)
+        runs.add(result, len(groups[-1]))
+        if progress is not None:
+            progress(len(runs.counts), len(runs.counts) + 1)
+        return runs.reference()
+
+    views = lens_array.require_views()
+    prior = PRIOR_SAMPLES_40 * 10 ** (PRIOR_SLOPE * (target - 40))
+    first = min(max(2, math.ceil(FIRST_SHARE * prior / 2)), MAX_SAMPLES // 8)
+    centre = [np.broadcast_to(CENTRE[:, None, None, :], (1, *views, 4))] if target <= DRAFT_UP_TO_DB else []
+    reference = render([*centre, view_seeds(first, seed, views), view_seeds(first, seed + 1, views)])
+    chosen: tuple[Quality, np.ndarray | None] | None = None
+    if centre:
+        draft_db = with_rounding(reference.psnr(encode(runs.draft, np.uint16)), rounding)
+        tried.append(("draft", draft_db))
+        # draft: scored against the seeds, trusted where their floor is no more than 3 dB under the
+        # target (each seed then reaches it itself: 3 dB over the floor).
+        if draft_db >= need and reference.floor_db >= target - 3:
+            chosen = (Quality(), runs.draft)
+    allowed = 10 ** (-need / 10) - rounding
+    for _ in range(MAX_RUNS):
+        if chosen is not None:
+            break
+        got = mean_psnr(reference, rounding)
+        tried.append((f"{runs.total} footprint samples", got))
+        if got >= need:
+            chosen = (Quality(footprint=runs.total), None)
+            break
+        # The next run's seeds must bring the combined error (inverse errors add) down to ``allowed``.
+        error, last = 10 ** (-reference.floor_db / 10) / 4, runs.errors()[-1]
+        wanted = 1 / max(1 / allowed - 1 / error, 1e-30)
+        alpha = FEW_ALPHA if runs.counts[-1] <= FEW_SAMPLES else MANY_ALPHA
+        more = math.ceil(runs.counts[-1] * (last / wanted) ** (1 / alpha) * LAW_SAFETY)
+        more = max(more, math.ceil(LEAST_MORE * runs.total / 2) if len(runs.counts) > 1 else 1)
+        more += -more % 4 if more > 8 else 0   # frames of a few banks each (``view_bank.bank_groups``)
+        if runs.total + 2 * more > MAX_SAMPLES:
+            best = with_rounding(-10 * math.log10(error * runs.total / MAX_SAMPLES), rounding)
+            raise ConfigError(f"--max-error {target:g} dB is above what {MAX_SAMPLES} footprint samples reach on "
+                              f"this scene (about {best:.1f} dB by the noise floor of two seeds of "
+                              f"{runs.counts[-1]}); use --max-error {math.floor(best * 10) / 10:g} or less")
+        seed += 2
+        reference = render([view_seeds(more, seed, views), view_seeds(more, seed + 1, views)])
+    if chosen is None:
+        raise ConfigError(f"--quality auto did not reach {target:g} dB in {MAX_RUNS} runs; lower --max-error "
+                          f"or give --quality {runs.total}")
+    quality, image = chosen
+    dtype = np.uint8 if settings.bit_depth == 8 else np.uint16
+    h3d = encode(image, dtype) if image is not None else runs.image(dtype)
+    result = replace(runs.result, h3d=h3d, quality=quality, groups=None)
+    fields = {"tried": tuple(tried), "seconds": time.perf_counter() - start,
+              "reference_samples": runs.counts[0], "reference_floor_db": reference.floor_db}
+    return quality, fields, result
