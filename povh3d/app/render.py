@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine.methods import run_method
+from ..engine.methods import get_method, run_method
 from ..engine.clock_runs import ClockSequence
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..errors import ConfigError, warn
@@ -26,6 +26,7 @@ from .budget import check_disk, check_memory as check_memory_budget
 from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
+from .ray_state import check_ray_state
 from .depth_maps import check_depth_dir, write_depth_maps
 from .dataset import check_dataset_dir, write_dataset
 from .device_quilt import check_device_render, write_device_outputs
@@ -59,6 +60,8 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
     request, frame_record = place_display(request, scene)
+    check_ray_state(request.method, get_method(request.method).shares_ray_state, scene.features,
+                    frame_record.get("depth"))
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
                     display_frame=frame_record)

@@ -1,0 +1,50 @@
+"""Refuse a render whose fog or media would depend on which ray POV-Ray traces first.
+
+POV-Ray leaves fog and media out of a ray segment inside a solid (non-hollow) object, so it
+must know which solids a ray starts in.  Its orthographic camera works that out for every
+ray; its mesh camera (``--method multi-ortho``, ``subpixel``) in POV-Ray 3.7 works it out
+once, for the first ray a render thread traces, and gives every later ray the same state
+(tested in tests/povray/test_mesh_camera_state.py).  Where the display's rays start partly
+inside a solid and partly outside (a ground plane the front clearance reaches below, a room
+or a sky sphere the frame cuts), a mesh-camera image puts fog where an orthographic view has
+none, or the other way round: a wrong image with nothing to show it.  The depth pass (an
+orthographic camera from the same clearance) measures that share: the pixels its fog did not
+reach (``unmeasured_fraction``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from ..errors import ConfigError
+from ..scene.features import Features
+
+#: Features POV-Ray leaves out inside a solid object.
+STATE_FEATURES = ("fog", "media")
+
+
+def check_ray_state(method: str, shares_ray_state: bool, features: Features,
+                    depth: Mapping[str, Any] | None) -> None:
+    """Raise ConfigError when ``method`` would give rays inside and outside a solid one state.
+
+    Parameters
+    ----------
+    method : str                 the method's name, for the message
+    shares_ray_state : bool      whether it traces with POV-Ray's mesh camera (``Method``)
+    features : Features          the scene's
+    depth : mapping or None      the depth pass's record (``display_frame.depth``); None: not measured
+    """
+    if not shares_ray_state or not depth:
+        return
+    used = [f for f in STATE_FEATURES if f in features]
+    inside = float(depth.get("unmeasured_fraction", 0.0))
+    if not used or not 0.0 < inside < 1.0:
+        return
+    raise ConfigError(
+        f"{100 * inside:.3g} % of the display's rays start inside a solid object (a ground 'plane' the rays "
+        f"start below, a room or a sky around the camera) and the scene has {' and '.join(used)}, which POV-Ray "
+        f"leaves out inside a solid; --method {method} traces with POV-Ray's mesh camera, which gives every ray "
+        f"the inside/outside state of the first one it traces, so the {used[0]} would be wrong on part of the "
+        "image: add 'hollow' to that object, or use --method multi-ortho-views (an orthographic camera a view, "
+        "which tests each ray)")
