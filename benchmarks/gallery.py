@@ -270,8 +270,8 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
                                                       if stochastic else "") + _cross_check(
                 scene, [*(display or ("--preset", preset))], picks, timeout, record["method"]))
         warnings = [line.removeprefix("povh3d: warning: ") for line in lines if line.startswith("povh3d: warning")]
-        if problems:
-            note = "; ".join(problems)
+        if problems:   # wrong; and whether a warning said so (not silent, though exit 0)
+            note = "; ".join(problems) + (f"; warned: {warnings[0][:100]}" if warnings else "")
         elif verdict == "stochastic":
             note = f"stochastic: two of POV-Ray's own realizations differ by {realizations:.1f} dB"
         else:
