@@ -50,6 +50,8 @@ STOCHASTIC_MARGIN_DB = 3.0
 #: and jittered area lights are checked too: where two realizations agree, the 35 dB rule applies as is
 STOCHASTIC = ("radiosity", "photons", "area_light")
 NON_EMPTY = 0.01        # share of pixels that must be above black for an image to count as non-empty
+#: the depth budget's warnings, which say nothing of whether an image is right
+_BUDGET_WARNINGS = ("the framed scene spans", "something beyond the framed subject")
 _CAMERA = re.compile(r"\bcamera\s*\{")
 _INCLUDE = re.compile(r'#\s*include\s+"([^"]+)"')
 
@@ -271,7 +273,8 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
                 scene, [*(display or ("--preset", preset))], picks, timeout, record["method"]))
         warnings = [line.removeprefix("povh3d: warning: ") for line in lines if line.startswith("povh3d: warning")]
         if problems:   # wrong; and whether a warning said so (not silent, though exit 0)
-            note = "; ".join(problems) + (f"; warned: {warnings[0][:100]}" if warnings else "")
+            said = [w for w in warnings if not w.startswith(_BUDGET_WARNINGS)]   # not the depth budget's
+            note = "; ".join(problems) + (f"; warned: {said[0][:100]}" if said else "")
         elif verdict == "stochastic":
             note = f"stochastic: two of POV-Ray's own realizations differ by {realizations:.1f} dB"
         else:
