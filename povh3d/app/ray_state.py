@@ -1,16 +1,17 @@
-"""Refuse a render whose fog or media would depend on which ray POV-Ray traces first.
+"""Refuse a render whose fog, media or refraction would depend on which ray POV-Ray traces first.
 
-POV-Ray leaves fog and media out of a ray segment inside a solid (non-hollow) object, so it
-must know which solids a ray starts in.  Its orthographic camera works that out for every
-ray; its mesh camera (``--method multi-ortho``, ``subpixel``) in POV-Ray 3.7 works it out
-once, for the first ray a render thread traces, and gives every later ray the same state
-(tested in tests/povray/test_mesh_camera_state.py).  Where the display's rays start partly
-inside a solid and partly outside (a ground plane the front clearance reaches below, a room
-or a sky sphere the frame cuts), a mesh-camera image puts fog where an orthographic view has
-none, or the other way round: a wrong image with nothing to show it.  The depth pass (an
-orthographic camera from the same clearance) measures that share: the pixels its fog did not
-reach (``unmeasured_fraction``).  It looks along the display normal only: a ray of an oblique
-view that starts inside a solid where the normal's rays do not is not seen (docs/methods.md).
+POV-Ray leaves fog and media out of a ray segment inside a solid (non-hollow) object, and
+refracts a ray leaving one by its interior's ``ior``, so it must know which solids a ray
+starts in.  Its orthographic camera works that out for every ray; its mesh camera
+(``--method multi-ortho``, ``subpixel``) in POV-Ray 3.7 works it out once, for the first ray
+a render thread traces, and gives every later ray the same state (tests/app/test_ray_state.py).
+Where the display's rays start partly inside a solid and partly outside (a ground plane the
+front clearance reaches below, a room or a sky sphere the frame cuts), a mesh-camera image
+puts fog where an orthographic view has none, or the other way round: a wrong image with
+nothing to show it.  The depth pass (an orthographic camera from about the same clearance)
+measures that share: the pixels its fog did not reach (``unmeasured_fraction``).  It looks
+along the display normal only: a ray of an oblique view that starts inside a solid where the
+normal's rays do not is not seen (docs/methods.md).
 """
 
 from __future__ import annotations
@@ -21,8 +22,9 @@ from typing import Any
 from ..errors import ConfigError
 from ..scene.features import Features
 
-#: Features POV-Ray leaves out inside a solid object.
-STATE_FEATURES = ("fog", "media")
+#: Features whose look POV-Ray works out from the solids a ray starts in: fog and media, left out
+#: inside a solid; an interior's ior, by which a ray refracts (or reflects, with fresnel) on leaving one.
+STATE_FEATURES = ("fog", "media", "ior")
 
 
 def check_ray_state(method: str, shares_ray_state: bool, features: Features,
@@ -47,7 +49,7 @@ def check_ray_state(method: str, shares_ray_state: bool, features: Features,
     raise ConfigError(
         f"{100 * inside:.3g} % of the display's rays start inside a solid object (a ground 'plane' the rays "
         f"start below, a room or a sky around the camera) and the scene has {' and '.join(used)}, which POV-Ray "
-        f"leaves out inside a solid; --method {method} traces with POV-Ray's mesh camera, which gives every ray "
-        f"the inside/outside state of the first one it traces, so the {used[0]} would be wrong on part of the "
-        "image: add 'hollow' to that object, or use --method multi-ortho-views (an orthographic camera a view, "
+        f"works out from the solids a ray starts in; --method {method} traces with POV-Ray's mesh camera, which "
+        f"gives every ray the inside/outside state of the first one it traces, so part of the image would be "
+        "wrong: add 'hollow' to that object, or use --method multi-ortho-views (an orthographic camera a view, "
         "which tests each ray)")

@@ -22,9 +22,10 @@ FOG = Features(frozenset({"fog"}))
 
 
 @pytest.mark.parametrize("inside", [0.05, 0.5, 1.0])   # 1.0: the views' oblique rays reach beyond the pass
-def test_a_mesh_camera_refuses_rays_partly_inside_a_solid_with_fog(inside):
-    with pytest.raises(ConfigError, match=r"inside a solid.*hollow.*--method multi-ortho-views") as error:
-        check_ray_state("multi-ortho", True, FOG, {"unmeasured_fraction": inside})
+@pytest.mark.parametrize("feature", ["fog", "media", "ior"])
+def test_a_mesh_camera_refuses_rays_partly_inside_a_solid_with_fog(inside, feature):
+    with pytest.raises(ConfigError, match=rf"inside a solid.*{feature}.*hollow.*--method multi-ortho-views") as error:
+        check_ray_state("multi-ortho", True, Features(frozenset({feature})), {"unmeasured_fraction": inside})
     assert "\n" not in str(error.value)
 
 
