@@ -20,11 +20,21 @@ from collections.abc import Mapping
 from typing import Any
 
 from ..errors import ConfigError
-from ..scene.features import Features
+from ..scene.features import Features, features_of_text
+from ..scene.scene import Scene
 
 #: Features whose look POV-Ray works out from the solids a ray starts in: fog and media, left out
 #: inside a solid; an interior's ior, by which a ray refracts (or reflects, with fresnel) on leaving one.
 STATE_FEATURES = ("fog", "media", "ior")
+
+
+def state_features(scene: Scene) -> Features:
+    """The scene's features that depend on a ray's inside/outside state: fog and media wherever they are
+    written, an ``ior`` only in the scene's own files.  POV-Ray's textures.inc and glass.inc declare glass
+    interiors with an ior that most scenes including them never apply (advanced/sunsethf.pov)."""
+    own = features_of_text(p.read_text(encoding="latin-1") for p in scene.files
+                           if p.suffix.lower() in (".pov", ".inc", ".mcr") and p.is_file())
+    return Features(frozenset(f for f in STATE_FEATURES if f in (own if f == "ior" else scene.features)))
 
 
 def check_ray_state(method: str, shares_ray_state: bool, features: Features,
@@ -35,7 +45,7 @@ def check_ray_state(method: str, shares_ray_state: bool, features: Features,
     ----------
     method : str                 the method's name, for the message
     shares_ray_state : bool      whether it traces with POV-Ray's mesh camera (``Method``)
-    features : Features          the scene's
+    features : Features          the scene's (``state_features``)
     depth : mapping or None      the depth pass's record (``display_frame.depth``); None: not measured
     """
     if not shares_ray_state or not depth:

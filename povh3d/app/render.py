@@ -26,7 +26,7 @@ from .budget import check_disk, check_memory as check_memory_budget
 from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
-from .ray_state import check_ray_state
+from .ray_state import check_ray_state, state_features
 from .depth_maps import check_depth_dir, write_depth_maps
 from .dataset import check_dataset_dir, write_dataset
 from .device_quilt import check_device_render, write_device_outputs
@@ -66,7 +66,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
              "scene builds from them differs from its 2D render; use only image_width/image_height, or "
              "#declare the sizes the scene needs")
     request, frame_record = place_display(request, scene)
-    check_ray_state(request.method, get_method(request.method).shares_ray_state, scene.features,
+    check_ray_state(request.method, get_method(request.method).shares_ray_state, state_features(scene),
                     frame_record.get("depth"))
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,

@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 
-from povh3d.app.ray_state import check_ray_state
+from povh3d.app.ray_state import check_ray_state, state_features
 from povh3d.errors import ConfigError
 from povh3d.image.io import read_png
 from povh3d.povray.process import PovrayJob, run_jobs
@@ -37,6 +37,18 @@ def test_a_mesh_camera_refuses_rays_partly_inside_a_solid_with_fog(inside, featu
 def test_what_one_shared_state_renders_right_passes(method, shares, features, inside):
     check_ray_state(method, shares, features, {"unmeasured_fraction": inside})
     check_ray_state(method, shares, features, None)           # not measured: nothing to go by
+
+
+def test_an_ior_counts_only_in_the_scenes_own_files(tmp_path):
+    """textures.inc declares glass with an ior that a scene including it need not apply (sunsethf.pov):
+    only the scene's own ior counts; fog counts wherever it is written."""
+    from povh3d.scene.scene import load_scene
+
+    scene = tmp_path / "s.pov"
+    scene.write_text('#version 3.7;\n#include "textures.inc"\nsphere { 0, 1 pigment { rgb 1 } }\n')
+    assert "ior" in load_scene(scene).features and not state_features(load_scene(scene)).used
+    scene.write_text('#version 3.7;\nsphere { 0, 1 pigment { rgbf 1 } interior { ior 1.33 } }\nfog { distance 9 }\n')
+    assert state_features(load_scene(scene)).used == {"ior", "fog"}
 
 
 # A fog of colour green over a background of blue; a ground plane y < H holds the lower rays' origins.
