@@ -235,7 +235,9 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
         lines = [line for line in done.stderr.splitlines() if line.strip()]
         if done.returncode != 0:
             errors = [line for line in lines if line.startswith("povh3d: error")]
-            one_line = len(errors) == 1 and not any("Traceback" in line for line in lines)
+            # povh3d's own bugs come out in one line too ("internal error ..."): a crash, not a refusal
+            one_line = (len(errors) == 1 and not any("Traceback" in line for line in lines)
+                        and "internal error" not in errors[0])
             note = (errors or lines or ["?"])[-1].removeprefix("povh3d: error: ")[:160]
             return Outcome(name, preset, "refused" if one_line else "crash", "", "", float("nan"), seconds,
                            seconds_2d, note)
