@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine.methods import run_method
+from ..engine.methods import get_method, run_method
 from ..engine.clock_runs import ClockSequence
 from ..engine.quality import Progress, Quality, RenderSettings
 from ..errors import ConfigError, warn
@@ -26,10 +26,12 @@ from .budget import check_disk, check_memory as check_memory_budget
 from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
+from .ray_state import check_ray_state, state_features
 from .depth_maps import check_depth_dir, write_depth_maps
 from .dataset import check_dataset_dir, write_dataset
 from .device_quilt import check_device_render, write_device_outputs
 from ..engine.depth import view_depth_maps
+from ..engine.scene_camera import uses_image_size
 from ..engine.frames import sandbox_in_use as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import RenderedImage, render_sequence
@@ -58,7 +60,14 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.dataset is not None:
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
+    if model_record is None and uses_image_size(scene):
+        warn(f"{scene.path.name} uses image_width or image_height other than as their ratio: in povh3d's "
+             "renders they are the size of each POV-Ray run (a bank of views), not the panel's, so what the "
+             "scene builds from them differs from its 2D render; use only image_width/image_height, or "
+             "#declare the sizes the scene needs")
     request, frame_record = place_display(request, scene)
+    check_ray_state(request.method, get_method(request.method).shares_ray_state, state_features(scene),
+                    frame_record.get("depth"))
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
                     display_frame=frame_record)

@@ -218,6 +218,10 @@ class Method:
     # Whether POV-Ray's own antialiasing stays inside each pixel's footprint on this array;
     # where not, a quality that asks for it traces footprint samples (``Quality.footprint_sampled``).
     confines_antialias: Callable[[LensArray], bool] | None = None
+    # Whether POV-Ray traces it with its mesh camera, which in POV-Ray 3.7 gives every ray the
+    # inside/outside state (of solid objects) of the first ray a render thread traces; orthographic and
+    # perspective cameras work it out for each ray (or at their one location): app/ray_state.py.
+    shares_ray_state: bool = False
 
     def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
         """``given`` (None values count as not given) over the defaults; unknown names refused."""
@@ -237,7 +241,7 @@ METHODS: dict[str, Method] = {
     # A lens mesh (hex, fractional PPL, turned lattices) lays neighbouring lenses side by side in
     # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
     "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
-                          confines_antialias=_whole_views,
+                          confines_antialias=_whole_views, shares_ray_state=True,
                           round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b,
                           front_clearance_step=lambda la, o: la.focal * math.lcm(*la.require_views()) if la.views else 0.0),
     "multi-ortho-views": Method(_multi_ortho_views),
@@ -245,7 +249,8 @@ METHODS: dict[str, Method] = {
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
                            supersamples=single_stage_supersamples,
                            front_clearance_step=lambda la, o: recentre_unit(la, o.get("supersample", 1))),
-    "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples),
+    "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples,
+                       shares_ray_state=True),
 }
 
 

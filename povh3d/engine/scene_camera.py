@@ -141,9 +141,9 @@ def measured_size(scene: Scene, width: int, height: int, target: int) -> tuple[i
     one that uses them otherwise (``#declare IW = image_width``), the panel's size, so
     the depth is measured by a pass of its own.
     """
-    text = "\n".join(p.read_bytes().decode("latin-1") for p in scene.files if p.is_file())
+    text = _scene_text(scene)
     named = re.search(r"\bimage_(width|height)\b", text)
-    if re.search(r"\bimage_(width|height)\b", _RATIO.sub("", text)):
+    if uses_image_size(scene, text):
         return None
     if not named:
         w = min(target, width)
@@ -153,6 +153,17 @@ def measured_size(scene: Scene, width: int, height: int, target: int) -> tuple[i
         if common % m == 0 and width // m <= target:
             return width // m, height // m
     return (width, height) if width <= 2 * target else None
+
+
+def _scene_text(scene: Scene) -> str:
+    return "\n".join(p.read_bytes().decode("latin-1") for p in scene.files if p.is_file())
+
+
+def uses_image_size(scene: Scene, text: str | None = None) -> bool:
+    """Whether the scene names ``image_width`` or ``image_height`` other than as their ratio
+    (``#declare N = image_width * image_height``): what it builds from them then depends on the
+    size of each POV-Ray run, which for the views is not the panel's."""
+    return re.search(r"\bimage_(width|height)\b", _RATIO.sub("", _scene_text(scene) if text is None else text)) is not None
 
 
 _RATIO = re.compile(r"\bimage_width\s*/\s*image_height\b|\bimage_height\s*/\s*image_width\b")

@@ -31,6 +31,9 @@ FEATURE_WORDS: dict[str, frozenset[str]] = {name: frozenset(words) for name, wor
     "reflection": ("reflection", "reflection_exponent"),
     "refraction": ("ior", "refraction", "dispersion", "transmit", "filter", "rgbt", "rgbf", "rgbft"),
     "fog": ("fog",),
+    # an interior's index of refraction (refraction, fresnel reflection): worked out from the solids a
+    # ray is in, unlike the refraction words, which colors.inc's rgbf colours name in nearly every scene
+    "ior": ("ior",),
     "sky_sphere": ("sky_sphere",),
     "rainbow": ("rainbow",),
 }.items()}

@@ -258,3 +258,28 @@ def test_the_camera_is_evaluated_at_a_size_it_cannot_tell_apart(tmp_path, camera
     scene = load_scene(_scene(tmp_path, camera))
     assert measured_size(scene, 320, 240, 80) == size
     assert measured_size(scene, 320, 250, 80) == odd
+
+
+@pytest.mark.parametrize("camera, uses", [
+    ("camera { location -5*z look_at 0 }", False),
+    ("camera { location -5*z right x*image_width/image_height look_at 0 }", False),   # the ratio: the panel's
+    ("#declare N = image_width * image_height;\ncamera { location -5*z look_at 0 }", True),   # language/image_size
+])
+def test_a_scene_that_builds_from_the_image_size_is_told(tmp_path, camera, uses):
+    from povh3d.engine.scene_camera import uses_image_size
+
+    assert uses_image_size(load_scene(_scene(tmp_path, camera))) == uses
+
+
+@pytest.mark.povray
+def test_the_render_warns_a_scene_built_from_the_image_size(cli, tmp_path):
+    """language/image_size.pov prints the image's pixel count: each POV-Ray run (a bank of views) has its
+    own, not the panel's.  Negative control: the ratio alone, no warning."""
+    display = ("--grid", "square", "--lenses", "8x6", "--ppl", "2x2", "--quality", "draft", "-q")
+    for camera, warned in [("#declare N = image_width;\ncamera { location -5*z look_at 0 }", True),
+                           ("camera { location -5*z right x*image_width/image_height look_at 0 }", False)]:
+        folder = tmp_path / str(warned)
+        folder.mkdir()
+        result = cli("render", str(_scene(folder, camera)), "-o", str(folder / "o.png"), *display)
+        assert result.code == 0, result.err
+        assert ("image_width or image_height other than as their ratio" in result.err) == warned, result.err

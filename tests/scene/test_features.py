@@ -34,6 +34,7 @@ USES = {
     "reflection": "plane { y, -2 pigment { rgb 1 } finish { reflection 0.4 } }",
     "refraction": "sphere { 0, 1 pigment { rgbf 0.9 } interior { ior 1.5 } }",
     "fog": "fog { distance 30 rgb 0.5 }",
+    "ior": "sphere { 0, 1 pigment { rgb 1 } interior { ior 1.33 } }",
     "sky_sphere": "sky_sphere { pigment { gradient y color_map { [0 rgb 0] [1 rgb 1] } } }",
     "rainbow": "rainbow { angle 42 width 5 distance 100 direction <0, 0, 1> jitter 0.01 "
                "color_map { [0 rgbt 1] [1 rgbt 1] } }",
@@ -53,7 +54,7 @@ def test_each_feature_is_found(feature):
     found = features_of_text([PLAIN + USES[feature] + "\n"]).used
     assert feature in found
     # refraction snippets say rgbt/ior; nothing else should appear from one snippet
-    assert found <= {feature, "refraction"}
+    assert found <= {feature, "refraction", "ior"}
 
 
 def test_features_in_included_and_system_files(tmp_path):
