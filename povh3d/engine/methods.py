@@ -9,15 +9,13 @@
 - ``single-stage``: a virtual array of CSG lenslets with an index of
   refraction, rendered by one orthographic camera (thesis 3.3): a physical
   simulation, compared with the others by an error figure (``single_stage``).
-- ``subpixel``: a slanted lenticular panel with every R, G and B subpixel's own
-  ray through its lenticule, in one pass at ``3W x H``, written as the panel
-  image directly (``subpixel``).
+- ``subpixel``: a slanted lenticular panel, every R, G and B subpixel's own ray
+  through its lenticule, one pass at ``3W x H`` written as the panel image.
 
 Every method traces the ray of a pixel (docs/geometry.md); point-sampled they
 agree.  A method is pure around the renderer: its ``plan`` says which frames to
 ask POV-Ray for and how to assemble the returned images into the H3D image;
-its hooks say what it supports (footprint samples, crop, front-clearance rounding)
-and what the sidecar records of it.
+its hooks say what it supports and what the sidecar records of it.
 """
 
 from __future__ import annotations
@@ -218,9 +216,8 @@ class Method:
     # Whether POV-Ray's own antialiasing stays inside each pixel's footprint on this array;
     # where not, a quality that asks for it traces footprint samples (``Quality.footprint_sampled``).
     confines_antialias: Callable[[LensArray], bool] | None = None
-    # Whether POV-Ray traces it with its mesh camera, which in POV-Ray 3.7 gives every ray the
-    # inside/outside state (of solid objects) of the first ray a render thread traces; orthographic and
-    # perspective cameras work it out for each ray (or at their one location): app/ray_state.py.
+    # Traced by POV-Ray 3.7's mesh camera, which gives every ray the inside-solid state of a thread's
+    # first ray (other cameras work it out per ray): app/ray_state.py.
     shares_ray_state: bool = False
 
     def resolve_options(self, name: str, given: Mapping[str, Any]) -> dict[str, Any]:
@@ -249,8 +246,7 @@ METHODS: dict[str, Method] = {
     "single-stage": Method(_single_stage, {"lenslet": "conic", "ior": None}, default_depth,
                            supersamples=single_stage_supersamples,
                            front_clearance_step=lambda la, o: recentre_unit(la, o.get("supersample", 1))),
-    "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples,
-                       shares_ray_state=True),
+    "subpixel": Method(_subpixel, {"sheet_shift_mm": 0.0}, supersamples=single_stage_supersamples, shares_ray_state=True),
 }
 
 
