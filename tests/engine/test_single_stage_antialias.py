@@ -1,12 +1,13 @@
 """Single-stage antialiasing stays inside each pixel's own lens, at every quality.
 
-The set-up of the defect report: an emissive checker 7.3 mm behind (and in
-front of) the screen, 40x30 square lenses of 6x6 pixels, f = 1.2.  The oracle
+The set-up of the defect report, at a quarter of its lenses: an emissive checker 7.3 mm
+behind (and in front of) the screen, 20x15 square lenses of 6x6 pixels, f = 1.2.  The oracle
 is docs/geometry.md's ray of a pixel (``checker_oracle``); "clear" pixels have
 their whole footprint away from checker edges, so any antialiasing must leave
 them their oracle colour.  The negative control is the former scheme, POV-Ray's
 adaptive antialiasing on the capture: its samples on pixel corners lie on lens
-borders and graze the neighbouring lenslet (96 % of clear pixels right).
+borders and graze the neighbouring lenslet (98.6 % of clear pixels right here, 96 % on the
+report's 40x30 lenses), below the 99.5 % the oracle asks.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from povh3d.scene.scene import load_scene
 from tests.support.arrays import square_array
 from tests.support.scenes import checker_oracle, classify, write_checker_plane
 
-REPORT = square_array(lx=40, ly=30, nx=6, ny=6, s=0.1, f=1.2)
+REPORT = square_array(lx=20, ly=15, nx=6, ny=6, s=0.1, f=1.2)
 PERIOD = 2.0
 
 
@@ -60,7 +61,7 @@ def test_povray_antialiasing_on_the_capture_fails(tmp_path):
     images, _ = render_frames(scene, plan.batch(), settings, method="single-stage",
                               header=display_header(REPORT))
     match = clear_match(plan.assemble(images[0]), REPORT, z0)
-    assert match < 0.99, f"the control should mix lenslets at lens borders, got {match:.4f}"
+    assert match < 0.995, f"the control should mix lenslets at lens borders and fail the oracle, got {match:.4f}"
 
 
 @pytest.mark.povray
