@@ -13,7 +13,9 @@ BIN := $(VENV)/bin
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 PRESET ?= demo
 QUALITY ?= normal
-WORKERS ?= 2
+# Three test processes a core, at most 16: a POV-Ray run idles about 0.7 s at start-up and 0.3 s
+# a frame (POV-Ray 3.7's front end polls), so two processes a core leave the cores idle.
+WORKERS ?= $(shell n=$$(( 3 * $$(nproc) )); [ $$n -gt 16 ] && n=16; echo $$n)
 
 .PHONY: help render test test-fast soak fuzz bench gallery povray povray-examples opengl browser venv clean
 
@@ -50,13 +52,14 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 	$(BIN)/povh3d render sample_models/sample.pov --preset $(PRESET) --quality $(QUALITY) \
 	  -o out/sample-h3d.png --views-dir out/views
 
-# WORKERS pytest processes (pytest-xdist), one a core, each taking whole files (a module's fixtures
-# render once); pytest's exit status is make's (5: no test ran).
-test: povray povray-examples opengl browser venv ## run the whole test suite, POV-Ray renders included (WORKERS=2 processes)
-	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile
+# WORKERS pytest processes (pytest-xdist) taking tests one by one, but a module with a module-wide
+# fixture whole (tests/conftest.py groups it, so its fixture renders once); pytest's exit status
+# is make's (5: no test ran).
+test: povray povray-examples opengl browser venv ## run the whole test suite, POV-Ray renders included (WORKERS processes, 3 a core)
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadgroup
 
 test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
-	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadfile --fast
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadgroup --fast
 
 soak: povray venv ## 200 random kills over renders, view writes and cache writes, each output checked (minutes)
 	$(BIN)/python -m pytest -q -s -m soak tests/app/test_soak.py

@@ -6,6 +6,7 @@ the tests marked ``povray`` or ``slow`` and fails any other test that starts POV
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -35,6 +36,34 @@ def pytest_configure(config):
 
 
 _REFUSED = pytest.StashKey[tuple]()
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup``: the tests spread one by one over the workers, which keeps every worker
+    busy to the end, but a module with a module- or session-wide fixture (a shared render, a
+    cluster, a browser) goes whole to one worker, so that the fixture is made once.
+
+    Our own, because pytest-xdist 3.8's loadgroup marks a test's group in ``item._nodeid``,
+    which pytest 9 no longer reads (its groups were lost, or no test ran)."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class SharedFixtureScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = nodeid.split("::", 1)[0]
+            return module if module in _SHARED_FIXTURE_MODULES else nodeid
+
+    return SharedFixtureScheduling(config, log)
+
+
+def _modules_with_shared_fixtures() -> frozenset[str]:
+    shared = re.compile(r"""scope\s*=\s*["'](module|package|session)["']""")
+    return frozenset(str(path.relative_to(REPO)) for path in (REPO / "tests").rglob("test_*.py")
+                     if shared.search(path.read_text(encoding="utf-8")))
+
+
+_SHARED_FIXTURE_MODULES = _modules_with_shared_fixtures()
 
 
 def pytest_collection_modifyitems(config, items):
