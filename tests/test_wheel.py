@@ -41,7 +41,10 @@ def installed(tmp_path_factory) -> tuple[Path, Path]:
     wheel, = (root / "dist").glob("povh3d-*.whl")
     venv.EnvBuilder(with_pip=True, clear=True).create(root / "env")
     python = root / "env" / "bin" / "python"
-    _run([str(python), "-m", "pip", "install", "-q", "--disable-pip-version-check", str(wheel)], cwd=root)
+    # --no-compile: byte-compiling VTK, numba and matplotlib at install is most of the install's CPU;
+    # what the test imports compiles as it is imported.
+    _run([str(python), "-m", "pip", "install", "-q", "--no-compile", "--disable-pip-version-check", str(wheel)],
+         cwd=root)
     work = root / "work"
     work.mkdir()
     return python, work

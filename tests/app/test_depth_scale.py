@@ -115,12 +115,15 @@ def test_pinhole_behind_the_screen(tmp_path):
     scene.write_text(SCENE.format(far=9).replace("<1.5, -0.5, -2>", "<1.5, -0.5, 5>"))
     squashed = tmp_path / "squashed.pov"
     squashed.write_text(f"#declare K = {k!r};\n#include \"s.pov\"\n")
-    array = small()
+    # A quarter of small()'s lenses: pinhole renders one camera a lens.
+    array = LensArray("square", 10, 8, 1.2, 1.2, 2.0, Panel(60, 48, 0.2, 0.2))
     render(scene, array, tmp_path / "a.png", method="pinhole", settings=RenderSettings(quality="draft",
                                                                                         depth_scale=k))
     render(squashed, array, tmp_path / "b.png", method="pinhole", settings=RenderSettings(quality="draft"))
-    a, b = read_png(tmp_path / "a.png").astype(int), read_png(tmp_path / "b.png").astype(int)
+    render(scene, array, tmp_path / "c.png", method="pinhole", settings=RenderSettings(quality="draft"))
+    a, b, c = (read_png(tmp_path / f"{n}.png").astype(int) for n in "abc")
     assert (np.abs(a - b).max(-1) > 2).mean() < 0.002
+    assert (np.abs(a - c).max(-1) > 2).mean() > 0.05   # negative control: uncompressed differs
 
 
 @pytest.mark.povray
