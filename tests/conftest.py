@@ -6,14 +6,13 @@ the tests marked ``povray`` or ``slow`` and fails any other test that starts POV
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import tempfile
 from pathlib import Path
 
 import pytest
 
-from tests.support import processes
+from tests.support import processes, scheduling
 from tests.support.cli import Result, run_in_process
 
 REPO = Path(__file__).resolve().parents[1]
@@ -40,8 +39,9 @@ _REFUSED = pytest.StashKey[tuple]()
 
 def pytest_xdist_make_scheduler(config, log):
     """``--dist loadgroup``: the tests spread one by one over the workers, which keeps every worker
-    busy to the end, but a module with a module- or session-wide fixture (a shared render, a
-    cluster, a browser) goes whole to one worker, so that the fixture is made once.
+    busy to the end, but the tests of a module that share a module- or session-wide fixture (a
+    render, a cluster, a browser) go to one worker together, so that the fixture is made once
+    (tests/support/scheduling.py).
 
     Our own, because pytest-xdist 3.8's loadgroup marks a test's group in ``item._nodeid``,
     which pytest 9 no longer reads (its groups were lost, or no test ran)."""
@@ -49,21 +49,13 @@ def pytest_xdist_make_scheduler(config, log):
         return None
     from xdist.scheduler import LoadScopeScheduling
 
+    groups = scheduling.shared_fixture_groups(REPO, REPO / "tests")
+
     class SharedFixtureScheduling(LoadScopeScheduling):
         def _split_scope(self, nodeid: str) -> str:
-            module = nodeid.split("::", 1)[0]
-            return module if module in _SHARED_FIXTURE_MODULES else nodeid
+            return scheduling.group_of(nodeid, groups)
 
     return SharedFixtureScheduling(config, log)
-
-
-def _modules_with_shared_fixtures() -> frozenset[str]:
-    shared = re.compile(r"""scope\s*=\s*["'](module|package|session)["']""")
-    return frozenset(str(path.relative_to(REPO)) for path in (REPO / "tests").rglob("test_*.py")
-                     if shared.search(path.read_text(encoding="utf-8")))
-
-
-_SHARED_FIXTURE_MODULES = _modules_with_shared_fixtures()
 
 
 def pytest_collection_modifyitems(config, items):
