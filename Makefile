@@ -13,8 +13,10 @@ BIN := $(VENV)/bin
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 PRESET ?= demo
 QUALITY ?= normal
-# Three test processes a core, at most 16: a POV-Ray run idles about 0.7 s at start-up and 0.3 s
-# a frame (POV-Ray 3.7's front end polls), so two processes a core leave the cores idle.
+# The fast subset is NumPy work: one test process a core.
+CORES := $(shell nproc)
+# make test: three test processes a core, at most 16: a POV-Ray run idles about 0.7 s at start-up
+# and 0.3 s a frame (POV-Ray 3.7's front end polls), so one process a core leaves the cores idle.
 WORKERS ?= $(shell n=$$(( 3 * $$(nproc) )); [ $$n -gt 16 ] && n=16; echo $$n)
 
 .PHONY: help render test test-fast soak fuzz bench gallery povray povray-examples opengl browser venv clean
@@ -59,7 +61,7 @@ test: povray povray-examples opengl browser venv ## run the whole test suite, PO
 	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadgroup
 
 test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)
-	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadgroup --fast
+	$(BIN)/python -m pytest -q -n $(CORES) --dist loadgroup --fast
 
 soak: povray venv ## 200 random kills over renders, view writes and cache writes, each output checked (minutes)
 	$(BIN)/python -m pytest -q -s -m soak tests/app/test_soak.py
