@@ -8,17 +8,26 @@ import sys
 def _stop_quietly(signum, frame):  # noqa: ARG001 - a signal handler's signature
     """Ctrl-C, SIGTERM or SIGHUP while the command starts or ends (outside ``main``'s own
     handling): one line and exit code 130, never a traceback nor a silent death by signal.
-    ``os.write``: a print here could land inside another print and raise."""
+
+    The process ends here, raising nothing: nothing is under way yet (no child, no temporary
+    folder, no output), and an exception raised from a handler can land anywhere.  A SystemExit
+    that landed in a class body's ``__set_name__`` (``ipaddress``, imported by ``pathlib`` while
+    ``povh3d.cli.main`` imports) became CPython 3.11's "RuntimeError: Error calling __set_name__",
+    a traceback and exit 1 after the line.  ``os.write``: a print here could land inside another
+    print and raise."""
     os.write(2, b"povh3d: error: interrupted\n")
-    raise SystemExit(130)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except Exception:  # noqa: BLE001, S110 - a flush interrupted mid-way ("reentrant call"): the line is out
+            pass
+    os._exit(130)
 
 
 def _unraisable(info):
     """A stop raised inside a callback Python cannot raise from (a weakref's, in an import) would
-    be printed as "Exception ignored ... Traceback" and lost.  Before ``main``: stop (the line is
-    said).  In ``main``: say nothing; ``main`` sees the signal it recorded and stops."""
-    if isinstance(info.exc_value, SystemExit):
-        os._exit(130)
+    be printed as "Exception ignored ... Traceback" and lost.  ``main`` sees the signal it
+    recorded and stops: say nothing here."""
     if isinstance(info.exc_value, KeyboardInterrupt):
         return
     _previous_hook(info)

@@ -98,29 +98,52 @@ def _main(argv: Sequence[str] | None) -> int:
         return 2
     _RECEIVED.clear()
     try:
-        with _signals_as_interrupt(), _warnings_as_lines(), _memory_limit(getattr(args, "max_memory", None)):
+        with (_signals_as_interrupt(then_ignore=argv is None), _warnings_as_lines(),
+              _memory_limit(getattr(args, "max_memory", None))):
             code = args.func(args)
         if _RECEIVED:  # its KeyboardInterrupt was swallowed (raised in a callback): still a stop
             raise _Stopped
         return code
     except RenderInterrupted as exc:
         fail(str(exc) or "interrupted; every POV-Ray process was stopped", exc.exit_code)
+    except Exception as exc:
+        if _RECEIVED or _raised_by_a_stop(exc):
+            # The stop, whatever became of it on the way: wrapped (3.11's "Error calling
+            # __set_name__", an ImportError from an import in C) or a later failure of what it
+            # cut short (a module left half imported, read again; a swallowed import error).
+            fail("interrupted", 130)
+        _fail_on(exc)
     except KeyboardInterrupt:
         fail("interrupted", 130)
-    except Povh3dError as exc:
+
+
+def _fail_on(exc: Exception) -> NoReturn:
+    if isinstance(exc, Povh3dError):
         fail(str(exc), exc.exit_code)
-    except MemoryError:
+    if isinstance(exc, MemoryError):
         fail("out of memory; use a smaller panel (--lenses, --ppl) or close other programs", 1)
-    except OSError as exc:  # the environment's fault (a full disk, a permission), not the user's input
+    if isinstance(exc, OSError):  # the environment's fault (a full disk, a permission), not the user's input
         where = f" {exc.filename!s}:" if exc.filename else ""
         fail(f"{where} {exc.strerror or exc}".strip(), 1)
-    except Exception as exc:  # noqa: BLE001 - a bug: still one line, the traceback on request
-        if _RECEIVED:  # the KeyboardInterrupt hit an import in C (NumPy's): an ImportError says it
-            fail("interrupted", 130)
-        if os.environ.get("POVH3D_DEBUG"):
-            raise
-        fail(f"internal error (a bug in povh3d, please report it): {type(exc).__name__}: {exc}; "
-             "set POVH3D_DEBUG=1 for the traceback", 70)
+    if os.environ.get("POVH3D_DEBUG"):  # a bug: still one line, the traceback on request
+        raise exc
+    fail(f"internal error (a bug in povh3d, please report it): {type(exc).__name__}: {exc}; "
+         "set POVH3D_DEBUG=1 for the traceback", 70)
+
+
+def _raised_by_a_stop(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is ``exc`` or in its chain (``__cause__``, ``__context__``, an
+    exception group's members): an error raised while a stop propagated."""
+    pending, seen = [exc], set()
+    while pending:
+        current = pending.pop()
+        if current is None or id(current) in seen:
+            continue
+        if isinstance(current, KeyboardInterrupt):
+            return True
+        seen.add(id(current))
+        pending += [current.__cause__, current.__context__, *getattr(current, "exceptions", ())]
+    return False
 
 
 _RECEIVED: list[int] = []   # the signals that stopped this run
@@ -142,11 +165,13 @@ def _interrupt(signum: int, frame: object) -> None:
 
 
 @contextlib.contextmanager
-def _signals_as_interrupt():
+def _signals_as_interrupt(*, then_ignore: bool = False):
     """SIGTERM and SIGHUP stop a run as Ctrl-C does: every child stopped, every temporary
     folder removed, no output replaced (they raise KeyboardInterrupt themselves: a shell
     starts a background job with SIGINT ignored, and SIGTERM must still stop it).  Afterwards
-    the handlers of ``povh3d.cli`` are back: a signal as the command ends is one line too."""
+    the handlers of ``povh3d.cli`` are back, or, ``then_ignore`` (the command line's own run),
+    the signals are ignored: the run is over, and its line ("interrupted" or another) is the
+    only one (povh3d.cli's handler would add a second "interrupted")."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -158,7 +183,7 @@ def _signals_as_interrupt():
         yield
     finally:
         for signum, handler in previous.items():
-            signal.signal(signum, handler)
+            signal.signal(signum, signal.SIG_IGN if then_ignore else handler)
 
 
 @contextlib.contextmanager

@@ -129,3 +129,127 @@ def test_import_povh3d_before_the_handlers_stays_small():
 @pytest.mark.povray
 def test_negative_control_the_probe_sees_an_import():
     assert "typing" in _imported_by_povh3d("import povh3d.geometry.lens_array; ")
+
+
+# A module whose class body sends the process SIGNUM from a descriptor's ``__set_name__``, as a
+# stop can land in ``ipaddress``'s ``cached_property`` while ``povh3d.cli.main`` imports (pathlib
+# imports it): CPython 3.11 wraps whatever ``__set_name__`` raises in a RuntimeError.
+_SET_NAME = """
+import os
+
+class _Sends:
+    def __set_name__(self, owner, name):
+        if int(os.environ["SIGNUM"]):
+            os.kill(os.getpid(), int(os.environ["SIGNUM"]))
+            for _ in range(100000): pass
+
+class Lens:
+    pitch = _Sends()
+"""
+
+# Before ``main``, with povh3d.cli's handlers in place.  {control} can put back a handler that
+# raises SystemExit(130) after the line, as povh3d.cli's did.
+_BEFORE_MAIN = """
+import os, signal, sys
+import povh3d.cli
+{control}
+import povh3d_set_name
+sys.exit(0)
+"""
+
+_RAISING = """
+def _raising(signum, frame):
+    os.write(2, b"povh3d: error: interrupted\\n")
+    raise SystemExit(130)
+signal.signal(int(sys.argv[1]), _raising)
+"""
+
+
+def _run(folder, source: str, signum: int) -> tuple[int, str]:
+    (folder / "povh3d_set_name.py").write_text(_SET_NAME, encoding="utf-8")
+    proc = _run_module(folder, source, int(signum), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                       env={"SIGNUM": str(int(signum))})
+    err = proc.communicate(timeout=60)[1]
+    return proc.returncode, err
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_inside_set_name_as_the_command_starts_is_one_line(signum, tmp_path):
+    """1 in 25 SIGINTs as the command started: the line, then "RuntimeError: Error calling
+    __set_name__ on 'cached_property' instance 'hostmask' in 'IPv6Interface'" and exit 1."""
+    code, err = _run(tmp_path, _BEFORE_MAIN.format(control=""), signum)
+    assert (code, err.splitlines()) == (130, ["povh3d: error: interrupted"]), (code, err)
+
+
+@pytest.mark.povray
+def test_negative_control_a_raised_stop_there_is_a_traceback(tmp_path):
+    code, err = _run(tmp_path, _BEFORE_MAIN.format(control=_RAISING), signal.SIGINT)
+    assert code == 1 and "RuntimeError: Error calling __set_name__" in err, (code, err)
+    assert err.startswith("povh3d: error: interrupted\n"), err
+
+
+# In ``main``: the command imports a module the signal lands in, takes its failure for an optional
+# module's (swallowed), and then fails as that absence makes it fail.  {control} sends the signal
+# a second time once the "interrupted" line is out.
+_IN_MAIN = """
+import os, signal, sys
+import povh3d.cli.display as display
+from povh3d.cli.main import main
+from povh3d.errors import Povh3dError
+cli_main = sys.modules["povh3d.cli.main"]
+{control}
+
+def cmd_presets(args):
+    try:
+        import povh3d_set_name
+    except Exception:
+        pass
+    raise Povh3dError("no presets found")
+
+display.cmd_presets = cmd_presets
+signum = int(sys.argv[1])
+sys.argv[1:] = ["presets"]
+sys.exit(main())
+"""
+
+_SECOND_SIGNAL = """
+class _Echo:  # stderr that brings the signal again once the line is written
+    def __init__(self, stream):
+        self.stream, self.said = stream, ""
+    def write(self, text):
+        self.stream.write(text)
+        self.stream.flush()
+        self.said += text
+        if self.said.endswith("interrupted\\n"):
+            os.kill(os.getpid(), int(os.environ["SIGNUM"]))
+            for _ in range(100000): pass
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
+
+sys.stderr = _Echo(sys.stderr)
+"""
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_failure_after_a_swallowed_stop_is_the_stop(signum, tmp_path):
+    """An error that follows a stop (here a Povh3dError) was said as that error, exit 1."""
+    code, err = _run(tmp_path, _IN_MAIN.format(control=""), signum)
+    assert (code, err.splitlines()) == (130, ["povh3d: error: interrupted"]), (code, err)
+
+
+@pytest.mark.povray
+def test_negative_control_without_a_signal_the_error_is_its_own(tmp_path):
+    code, err = _run(tmp_path, _IN_MAIN.format(control=""), 0)
+    assert (code, err.splitlines()) == (1, ["povh3d: error: no presets found"]), (code, err)
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("control, lines", [
+    ("", 1),
+    # negative control: povh3d.cli's handlers put back after the run, as before, say it twice
+    ("run = cli_main._signals_as_interrupt\ncli_main._signals_as_interrupt = lambda then_ignore: run()", 2)])
+def test_a_second_signal_after_the_line_adds_nothing(control, lines, tmp_path):
+    code, err = _run(tmp_path, _IN_MAIN.format(control=_SECOND_SIGNAL + control), signal.SIGINT)
+    assert (code, err.splitlines()) == (130, ["povh3d: error: interrupted"] * lines), (code, err)
