@@ -3,6 +3,7 @@ writing it into docs/benchmarks.md."""
 
 from __future__ import annotations
 
+import argparse
 import os
 import re
 import statistics
@@ -67,3 +68,11 @@ def publish(name: str, text: str, docs: bool) -> int:
     if docs:
         write_table(name, text)
     return 0
+
+
+def repeat_arguments(doc: str, repeats: int) -> argparse.Namespace:
+    """The options every interleaved benchmark takes: ``--repeats`` rounds and ``--no-docs``."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    ap.add_argument("--repeats", type=int, default=repeats)
+    ap.add_argument("--no-docs", action="store_true", help="print the table, leave docs/benchmarks.md alone")
+    return ap.parse_args()

@@ -15,7 +15,6 @@ between the ``bench_command`` markers.
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import sys
@@ -23,7 +22,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import publish, summary, table, whole_process_seconds  # noqa: E402
+from _common import publish, repeat_arguments, summary, table, whole_process_seconds  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO / "sample_models" / "sample.pov"
@@ -69,10 +68,7 @@ def seconds(command: list[str], cwd: Path) -> float:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--no-docs", action="store_true", help="print the table, leave docs/benchmarks.md alone")
-    args = ap.parse_args()
+    args = repeat_arguments(__doc__, 5)
     load_before = os.getloadavg()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:

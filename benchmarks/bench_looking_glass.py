@@ -14,7 +14,6 @@ docs/benchmarks.md between the ``bench_looking_glass`` markers.
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import sys
@@ -22,7 +21,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import table, write_table  # noqa: E402
+from _common import repeat_arguments, table, write_table  # noqa: E402
 from bench_command import SAMPLE, povh3d, seconds, summary  # noqa: E402
 
 TARGET = 1.5
@@ -51,10 +50,7 @@ def plain_2d_command(folder: Path) -> list[str]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--no-docs", action="store_true", help="print the table, leave docs/benchmarks.md alone")
-    args = ap.parse_args()
+    args = repeat_arguments(__doc__, 3)
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
