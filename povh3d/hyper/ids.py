@@ -14,11 +14,10 @@ def decode_ids(image: np.ndarray, count: int) -> np.ndarray:
     ``UNRESOLVED`` where the colour is no id (grey channels disagree or fall between levels)."""
     rgb = image[..., :3]
     # A table of the 65,536 codes' levels, gathered: the same numbers as decoding every pixel
-    # through sRGB, at a fifth of the time on a panel (2.8 s of a 5760x1080 mask pass before).
+    # through sRGB (on a 5760x1080 mask: 1.9 s of the pass, was 2.8 s).
     level = _levels()[rgb] if rgb.dtype == np.uint16 else _level(rgb.astype(np.float64) / 65535.0)
     ids = np.rint(level)
-    off = np.abs(level - ids).max(axis=-1)
-    grey = (level.max(axis=-1) - level.min(axis=-1) < 0.25) & (off < 0.25)
+    grey = (np.ptp(level, axis=-1) < 0.25) & (np.abs(level - ids).max(axis=-1) < 0.25)
     ident = ids[..., 0].astype(np.int64)
     ok = grey & (ident >= 0) & (ident <= count)
     return np.where(ok, ident, UNRESOLVED).astype(np.uint16)
