@@ -1,4 +1,5 @@
-"""Display preparation on files: map, resample, refocus, preview (quilts: ``app/quilt_files.py``).
+"""Display preparation on files: map, refocus, preview (quilts: ``app/quilt_files.py``; resample:
+``app/resample_files.py``).
 
 Each function reads PNGs, calls the pure NumPy modules (``mappings``,
 ``resample``, ``quilt``, ``refocus``, ``preview``) and writes its outputs
@@ -17,9 +18,8 @@ import numpy as np
 from PIL import Image
 
 from ..errors import ConfigError, InputError, Povh3dError
-from .budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_disk, check_memory
+from .budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_memory
 from ..geometry.axes import from_edge, to_edge
-from ..geometry.lens_array import Panel
 from ..geometry.lens_array import _positive as positive_length  # the lens array's own rule
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
 from .records import base_record, png_output, write_image
@@ -28,7 +28,6 @@ from ..mappings import Mapping
 from ..mappings.sampling import Source
 from ..image.refocus import bank_steps, contact_sheet, gradient_energy, lens_steps, shift_and_add
 from ..image.colour import from_linear, to_linear
-from ..image.resample import resample_micro_images, trade_views_for_lenses
 
 
 # -- lens geometry of an input image -----------------------------------------------------------------
@@ -197,62 +196,6 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
 
 def _params(mapping: Mapping) -> dict[str, Any]:
     return {k: v for k, v in vars(mapping).items() if isinstance(v, (int, float, str, bool))}
-
-
-# -- resample ----------------------------------------------------------------------------------------
-def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int, int],
-                  ppl_out: tuple[int, int], mode: str = "micro") -> dict[str, Any]:
-    image = read_whole_lenses(input_path)
-    out = png_output(output)
-    ny_in, nx_in = ppl_in
-    scale = (ppl_out[0] / max(ny_in, 1)) * (ppl_out[1] / max(nx_in, 1))
-    pixels = image.shape[0] * image.shape[1] * scale
-    # the output in float64 beside its encoded copy, and the input's float copy: 64 bytes a pixel
-    check_memory(f"resampling to {ppl_out[1]}x{ppl_out[0]} pixels per lens ({pixels:.3g} pixels)",
-                 pixels * 64 + image.size * 8, "give a smaller --ppl-out")
-    check_disk(out.parent, f"a {pixels:.3g} pixel image", pixels * image.shape[2] * image.itemsize,
-               "give a smaller --ppl-out or free some space")
-    try:
-        if mode == "micro":
-            result = resample_micro_images(image, ppl_in, ppl_out)
-        elif mode == "lenses":
-            result = trade_views_for_lenses(image, ppl_in, ppl_out)
-        else:
-            raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
-    except ValueError as exc:
-        raise ConfigError(f"{exc}; check --ppl and --ppl-out") from None
-    record = base_record("h3d", method=f"resample-{mode}", ppl_in=to_edge(ppl_in),
-                     ppl_out=to_edge(ppl_out), source=str(Path(input_path).resolve()),
-                     size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
-    if mode == "lenses":
-        record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
-                            "focal_scale": ppl_out[1] / ppl_in[1]}
-    else:
-        resampled = _resampled_array(input_path, result.shape[:2], ppl_out)
-        if resampled is not None:
-            record["lens_array"] = resampled.as_record()
-    write_image(out, result, record)
-    return record
-
-
-def _resampled_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tuple[int, int]) -> Any:
-    """The input's lens array with ``ppl_out`` pixels under each lens (same lenses, same
-    physical panel), or None when the input has none or it does not fit ``shape``."""
-    from ..geometry.lens_array import LensArray
-    from .display_setup import Display
-
-    side = read_sidecar(input_path) or {}
-    if not side.get("lens_array"):
-        return None
-    try:
-        a = Display.from_record(side).lens_array
-        ny, nx = ppl_out
-        panel = Panel(a.lenses_x * nx, a.lenses_y * ny if a.grid != "lenticular" else a.panel.height,
-                      a.pitch_x / nx, a.pitch_y / ny if a.grid != "lenticular" else a.panel.pitch_y)
-        out = LensArray(a.grid, a.lenses_x, a.lenses_y, a.pitch_x, a.pitch_y, a.focal, panel)
-    except ConfigError:
-        return None
-    return out if (out.panel.height, out.panel.width) == tuple(shape) else None
 
 
 # -- quilts ------------------------------------------------------------------------------------------

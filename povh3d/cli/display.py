@@ -10,7 +10,7 @@ from typing import Any
 
 from ..errors import ConfigError
 from .options import (add_array_options, add_image_lens_options, add_mapping_options, display_from_args,
-                      lens_array_from_args, parse_size, positive_int, ppl_arg)
+                      lens_array_from_args, parse_pair, parse_size, positive_int, ppl_arg)
 
 
 def cmd_interleave(args: argparse.Namespace) -> int:
@@ -135,14 +135,24 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 
 def cmd_resample(args: argparse.Namespace) -> int:
-    from ..app.display import lens_info, resample_file
-
-    from ..app.display import is_lenticular
+    from ..app.display import is_lenticular, lens_info, lens_record
+    from ..app.resample_files import needs_panel_resample, resample_file, resample_panel_file
+    from ..geometry.axes import from_edge
 
     lenticular = is_lenticular(args.input)
-    info = lens_info(args.input, ppl_arg(args.ppl, lenticular=lenticular), None, None)
-    ppl_out = ppl_arg(args.ppl_out, "--ppl-out", lenticular=lenticular or info["ppl"][0] == 1)
-    record = resample_file(args.input, args.output, info["ppl"], ppl_out, args.mode)
+    out = parse_pair(args.ppl_out, "--ppl-out", integral=False)
+    ppl_out = from_edge(out) if isinstance(out, tuple) else ((1.0, out) if lenticular else (out, out))
+    side = lens_record(args.input)
+    if needs_panel_resample(side, ppl_out):  # hex, fractional PPL: each new pixel's ray on the same panel
+        lens_info(args.input, ppl_arg(args.ppl, lenticular=lenticular), None, None, resampled=True)
+        record = resample_panel_file(args.input, args.output, ppl_out, args.mode)
+    else:
+        info = lens_info(args.input, ppl_arg(args.ppl, lenticular=lenticular), None, None)
+        if not all(float(v).is_integer() for v in ppl_out):
+            raise ConfigError(f"--ppl-out {args.ppl_out} is not whole pixels per lens, which needs the input's lens "
+                              "array from its sidecar; give whole numbers, or resample a render with its sidecar")
+        whole = ppl_arg(args.ppl_out, "--ppl-out", lenticular=lenticular or info["ppl"][0] == 1)
+        record = resample_file(args.input, args.output, info["ppl"], whole, args.mode)
     print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  {args.mode}")
     return 0
 
@@ -249,7 +259,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("input")
     p.add_argument("-o", "--output", required=True)
     p.add_argument("--ppl", help="pixels per lens of the input (default: from the sidecar)")
-    p.add_argument("--ppl-out", required=True, help="pixels per lens of the output")
+    p.add_argument("--ppl-out", required=True, help="pixels per lens of the output (from a sidecar's hex or "
+                   "fractional array, or to a fractional one: the same lenses on the same panel)")
     p.add_argument("--mode", choices=("micro", "lenses"), default="micro",
                    help="micro: resize micro-images; lenses: fewer pixels per lens, more lenses")
     p.set_defaults(func=cmd_resample)
