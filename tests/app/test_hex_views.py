@@ -146,8 +146,10 @@ def test_refocus_of_a_hex_image_accepts_no_contradicting_options(tmp_path, cli):
     assert read_png(tmp_path / "r.png").shape[:2] == (5, 6)   # one pixel a lens, as the views
 
 
-def test_resample_still_refuses_a_hex_image_in_one_line(tmp_path, cli):
-    """resample resizes whole-pixel micro-images; a hex lens's are not: one line, nothing written."""
-    path, _ = _noise_hex(tmp_path)
-    line = one_error_line(cli("resample", path, "--ppl-out", "3", "-o", tmp_path / "r.png"))
-    assert "hex lens array" in line and not (tmp_path / "r.png").exists()
+def test_resample_of_a_hex_image_keeps_its_lenses(tmp_path, cli):
+    """resample takes a hex image as extract does (tests/app/test_resample_any.py holds its oracle);
+    the output's sidecar is the same hex lenses at the new pixels per lens."""
+    path, la = _noise_hex(tmp_path)
+    assert cli("resample", path, "--ppl-out", "3", "-o", tmp_path / "r.png").code == 0
+    out = lens_info(tmp_path / "r.png", None, None, None, resampled=True)["lens_array"]
+    assert out.grid == "hex" and out.ppl_x == 3 and np.allclose(out.lens_centres(), la.lens_centres())
