@@ -83,14 +83,19 @@ def extract(h3d: np.ndarray, lens: LensArray | Ppl) -> np.ndarray:
     Parameters
     ----------
     h3d : (H, W, C) array
-    lens : LensArray or (Ny, Nx)    whole pixels per lens, rows then columns
+    lens : LensArray or (Ny, Nx)    a lens array (``read_h3d``'s: hex and fractional PPL resampled
+                                    lens by lens, as ``povh3d extract``), or whole pixels per lens
 
     Returns
     -------
-    (Ny, Nx, H/Ny, W/Nx, C) array
+    (Ny, Nx, Ly, Lx, C) array
     """
     from .image.interleave import extract as _extract
 
+    if not isinstance(lens, tuple):
+        from .app.views import image_views
+
+        return image_views(np.asarray(h3d), lens)
     try:
         return _extract(np.asarray(h3d), _ppl(lens))
     except ValueError as exc:
@@ -205,24 +210,27 @@ def refocus(h3d: np.ndarray, lens_array: LensArray, depth: float) -> np.ndarray:
 
     Parameters
     ----------
-    h3d : (Ly*Ny, Lx*Nx, C) array
+    h3d : (H, W, C) array     an image of ``lens_array`` (any grid, as ``extract``)
     lens_array : LensArray    its views, focal length and pixel pitch
-    depth : float, mm         the plane in focus, in front of (+) or behind (-) the lens array
+    depth : float, mm         the plane in focus, behind (+) or in front of (-) the screen
 
     Returns
     -------
     (Ly, Lx, 3) array of ``h3d``'s dtype
     """
     from .image.colour import from_linear, to_linear
-    from .image.refocus import refocus_linear
+    from .image.refocus import bank_steps, lens_steps, shift_and_add
 
     h3d = np.asarray(h3d)
-    ny, nx = _ppl(lens_array)
-    sx, sy = lens_array.panel.pitch_x, lens_array.panel.pitch_y
-    views = extract(h3d[..., :3], (ny, nx))
-    u = (np.arange(nx) + 0.5 - nx / 2) * sx
-    v = (ny / 2 - np.arange(ny) - 0.5) * sy
-    plane = refocus_linear(to_linear(views, np.float32), (u, v), (nx * sx, ny * sy), lens_array.focal, float(depth))
+    views = extract(h3d[..., :3], lens_array)
+    ny, nx = views.shape[:2]
+    if lens_array.views is None:  # hex, fractional PPL: the odd rows' offset, as the command
+        steps, used, row_shift = lens_steps(lens_array, (ny, nx))
+    else:
+        sx, sy = lens_array.panel.pitch_x, lens_array.panel.pitch_y
+        u, v = (np.arange(nx) + 0.5 - nx / 2) * sx, (ny / 2 - np.arange(ny) - 0.5) * sy
+        steps, used, row_shift = bank_steps((u, v), (nx * sx, ny * sy), lens_array.focal), None, 0.0
+    plane = shift_and_add(to_linear(views, np.float32), steps * float(depth), row_shift=row_shift, used=used)
     return from_linear(plane, h3d.dtype)
 
 
@@ -231,7 +239,7 @@ def preview(h3d: np.ndarray, lens_array: LensArray, *, frames: int = 12, scale: 
 
     Parameters
     ----------
-    h3d : (Ly*Ny, Lx*Nx, C) array
+    h3d : (H, W, C) array     an image of ``lens_array`` (any grid, as ``extract``)
     lens_array : LensArray
     frames : int             viewer positions, evenly over the viewing angle
     scale : int              pixels per lens in the frames (default: about 480 pixels across, as the GIF)
@@ -240,15 +248,14 @@ def preview(h3d: np.ndarray, lens_array: LensArray, *, frames: int = 12, scale: 
     -------
     (frames, Ly*scale, Lx*scale*a, 3) uint8 array (``a``: the lens's aspect, ``Nx`` on a lenticular sheet)
     """
-    from .image.preview import enlarge, preview_frames, viewer_angles
+    from .image.preview import bank_frames, enlarge, viewer_angles
 
-    h3d = np.asarray(h3d)
-    ny, nx = _ppl(lens_array)
     if frames < 2:
         raise ConfigError("frames must be at least 2")
+    views = extract(np.asarray(h3d)[..., :3], lens_array)
+    ny, nx = views.shape[:2]
     sx = lens_array.panel.pitch_x
-    shots = preview_frames(h3d[..., :3], (ny, nx), sx, lens_array.focal,
-                           viewer_angles(nx * sx, lens_array.focal, frames))
+    shots = bank_frames(views, sx, lens_array.focal, viewer_angles(nx * sx, lens_array.focal, frames))
     if shots.dtype == np.uint16:
         shots = (shots >> 8).astype(np.uint8)
     aspect = max(1, round(nx / ny)) if ny < nx else 1

@@ -277,6 +277,22 @@ def sidecar_bank(h3d: np.ndarray, lens_array: LensArray) -> np.ndarray:
     return extract(h3d[lens_array.bank_region], lens_array.views)
 
 
+def image_views(h3d: np.ndarray, lens_array: LensArray) -> np.ndarray:
+    """``(Ny, Nx, Ly, Lx, C)`` views of an image of ``lens_array`` (the Python API's): the whole
+    panel as ``extract`` reads it (``sidecar_bank``: hex and fractional PPL resampled), or, on a
+    camera bank, an image of whole lenses (the bank's region, or any whole number of them)."""
+    panel = lens_array.panel
+    if h3d.shape[:2] == (panel.height, panel.width):
+        return sidecar_bank(h3d, lens_array)
+    if lens_array.views is None:
+        raise ConfigError(f"the image is {h3d.shape[1]}x{h3d.shape[0]} but its {lens_array.grid} lens array's "
+                          f"panel is {panel.width}x{panel.height}; pass the image and lens array read_h3d gives")
+    try:
+        return extract(h3d, lens_array.views)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
 def h3d_views(h3d: np.ndarray, record: dict[str, Any], h3d_path: str | Path) -> tuple[np.ndarray, str]:
     """The ``(Ny, Nx, Ly, Lx, C)`` views of an H3D image through its sidecar's lens array, and its grid."""
     lens_array = sidecar_array(h3d, h3d_path, record)
