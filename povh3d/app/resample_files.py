@@ -48,7 +48,7 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
         else:
             raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
     except ValueError as exc:
-        raise ConfigError(f"{exc}; check --ppl and --ppl-out") from None
+        raise ConfigError(f"{str(exc).removesuffix('; check --ppl')}; check --ppl and --ppl-out") from None
     record = base_record("h3d", method=f"resample-{mode}", ppl_in=to_edge(ppl_in),
                          ppl_out=to_edge(ppl_out), source=str(Path(input_path).resolve()),
                          size_px=to_edge(result.shape[:2]), output_gamma="sRGB")

@@ -11,6 +11,7 @@ import pytest
 
 from povh3d.app.records import base_record, write_image
 from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.image.io import write_png
 from tests.conftest import SAMPLE
 from tests.support.cli import one_error_line
 
@@ -214,3 +215,19 @@ def test_a_panel_larger_than_memory_is_refused_before_rendering(tmp_path, cli, m
     assert "320x240 pixel render needs about" in line and "available" in line
     monkeypatch.setattr(budget_module, "available_memory", lambda: 2**34)  # negative control: 16 GiB
     assert cli("render", SAMPLE, "-o", tmp_path / "a.png", *TINY).code == 0
+
+
+@pytest.mark.parametrize("command, extra, out", [
+    ("extract", ["--ppl", "4"], "views"),
+    ("resample", ["--ppl", "4", "--ppl-out", "2"], "r.png"),
+    ("refocus", ["--ppl", "4", "--focal", "1", "--pixel-pitch", "0.1", "--depth", "1"], "f.png"),
+    ("preview", ["--ppl", "4", "--focal", "1", "--pixel-pitch", "0.1"], "p.gif"),
+    ("quilt", ["--ppl", "4", "--quilt", "2x2"], "q"),
+])
+def test_an_image_of_no_whole_lenses_is_one_line_and_nothing_written(tmp_path, cli, command, extra, out):
+    """Issue 23's bad input: 13 x 7 pixels hold no whole 4 px lenses (nor views)."""
+    write_png(tmp_path / "odd.png", np.zeros((7, 13, 3), np.uint8))
+    line = one_error_line(cli(command, tmp_path / "odd.png", "-o", tmp_path / out, *extra))
+    assert "13x7" in line and "whole lenses" in line and "--ppl" in line, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["odd.png"]
+    assert line.count("check --ppl") == 1, line
