@@ -64,3 +64,16 @@ def test_preview_is_the_commands(image, tmp_path, cli):
     frames = povh3d.preview(h3d, la, frames=4)
     assert np.array_equal(contact_sheet(list(frames)), read_png(tmp_path / "p.png"))
     assert not np.array_equal(contact_sheet(list(frames[::-1])), read_png(tmp_path / "p.png"))  # the other way
+
+
+def test_resample_through_the_library_is_the_commands(image, tmp_path, cli):
+    """The panel path from Python (docs/api.md): ``resample_panel`` onto ``resampled_array``."""
+    from povh3d.image.resample import resample_panel, resampled_array
+
+    path, h3d, la = image
+    _ok(cli("resample", path, "--ppl-out", "3.5", "-o", tmp_path / "r.png"))
+    out, array = povh3d.read_h3d(tmp_path / "r.png")
+    ppl = (1, 3.5) if la.grid == "lenticular" else (3.5, 3.5)
+    assert array == resampled_array(la, ppl)
+    assert np.array_equal(resample_panel(h3d, la, array), out)
+    assert not np.array_equal(resample_panel(h3d[:, ::-1], la, array), out)   # negative control
