@@ -119,9 +119,12 @@ def resample_panel_file(input_path: str | Path, output: str | Path, ppl_out: tup
         raise ConfigError(f"a lenticular sheet keeps its rows (1 pixel per lens vertically), got --ppl-out "
                           f"{mx:g}x{my:g}; give one number, e.g. --ppl-out {mx:g}")
     out = png_output(output)
-    lens_out = resampled_array(lens_in, ppl_out)   # a new pixel under one pixel: the array's own error line
-    pixels = lens_out.panel.width * lens_out.panel.height
+    # the budget first, from the scale alone (a huge --ppl-out is no panel to build)
+    scale_x = mx * lens_in.panel.pitch_x / lens_in.pitch_x
+    scale_y = {"lenticular": 1.0, "hex": scale_x}.get(lens_in.grid, my * lens_in.panel.pitch_y / lens_in.pitch_y)
+    pixels = image.shape[0] * image.shape[1] * scale_x * scale_y
     _check_budget(out, pixels, image.size, image.shape[2], image.itemsize, ppl_out)
+    lens_out = resampled_array(lens_in, ppl_out)   # a new pixel under one pixel: the array's own error line
     result = resample_panel(image, lens_in, lens_out)
     record = base_record("h3d", lens_out, method="resample-micro", ppl_in=[lens_in.ppl_x, lens_in.ppl_y],
                          ppl_out=[lens_out.ppl_x, lens_out.ppl_y], source=str(Path(input_path).resolve()),
