@@ -112,6 +112,8 @@ def resample_panel_file(input_path: str | Path, output: str | Path, ppl_out: tup
     if mode != "micro":
         raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
     my, mx = ppl_out
+    if min(mx, my) < 1:
+        raise ConfigError(f"--ppl-out {mx:g}x{my:g} puts a lens under one pixel; give at least 1 pixel per lens")
     if lens_in.grid == "hex" and my != mx:
         raise ConfigError(f"a hex lens's pixels per lens are one number (its pitch over the pixel pitch, pixels "
                           f"keeping their shape), got --ppl-out {mx:g}x{my:g}; give one, e.g. --ppl-out {mx:g}")

@@ -223,7 +223,7 @@ def _noise_hex(tmp_path):
     (["--mode", "lenses", "--ppl-out", "3"], ("--mode lenses", "hex lens array", "use --mode micro")),
     (["--ppl-out", "3x2"], ("one number", "--ppl-out 3")),
     (["--ppl", "5", "--ppl-out", "3"], ("--ppl contradicts",)),
-    (["--ppl-out", "0.5"], ("under one pixel",)),
+    (["--ppl-out", "0.5"], ("--ppl-out 0.5x0.5", "under one pixel")),
     (["--ppl-out", "1e9"], ("of memory", "give a smaller --ppl-out")),
 ])
 def test_bad_resamples_of_a_hex_image_are_one_line(tmp_path, cli, args, words):
