@@ -39,6 +39,20 @@ def test_sample_masks_annotate_and_view(tmp_path: Path, monkeypatch) -> None:
     assert b'url="https://example.org/torus"' in (tmp_path / "s.xml").read_bytes()
     assert run_in_process("viewer", tmp_path / "s.png", "--cdp", tmp_path / "s.xml", "--objects", tmp_path / "objs",
                           "-o", tmp_path / "s.html").code == 0
+    # the Python API's objects= writes the same masks as the command
+    import povh3d
+
+    record = povh3d.render(ROOT / "sample_models" / "sample.pov", tmp_path / "api.png", preset="demo",
+                           quality="draft", objects=tmp_path / "api_objs")
+    assert record["object_masks"]["objects"] == 5 and record["object_masks"]["unresolved"] == 0
+    assert read_table(tmp_path / "api_objs") == table
+    ny, nx = table.views
+    for l in range(ny):
+        for k in range(nx):
+            api, command = (read_mask(tmp_path / name, table, 0, (l, k)) for name in ("api_objs", "objs"))
+            assert (api == command).all()
+    names = read_sidecar(tmp_path / "s.png")["objects"]["names"]
+    assert read_sidecar(tmp_path / "api.png")["objects"]["names"] == names
 
 
 def test_scene_without_separable_objects_is_one_line_before_any_render(tmp_path: Path) -> None:
@@ -130,6 +144,12 @@ def test_subpixel_masks_are_refused_before_any_render(tmp_path: Path) -> None:
     run = run_in_process("render", ROOT / "sample_models" / "sample.pov", "--preset", "demo", "--method", "subpixel",
                          "-o", tmp_path / "h.png", "--objects", tmp_path / "o")
     assert run.code != 0 and "own ray" in run.err and run.err.count("\n") == 1, run.err
+    assert list(tmp_path.iterdir()) == []
+    import povh3d
+
+    with pytest.raises(povh3d.ConfigError, match="own ray"):     # the API refuses it the same way
+        povh3d.render(ROOT / "sample_models" / "sample.pov", tmp_path / "h.png", method="subpixel",
+                      objects=tmp_path / "o")
     assert list(tmp_path.iterdir()) == []
 
 
