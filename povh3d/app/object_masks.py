@@ -4,9 +4,9 @@ every frame.
 One more render of the same request, on the mask copy of the scene (``scene.object_ids``) or of
 a model's or volume's stage (``staged_mask``): point-sampled (draft), 8 bits, the same display,
 method and rays; its views decoded to ids and written with their names (``app.objects``).  A
-still's panel stays in memory (``_trace_still``); an animation's frames go through ``app.render``.  On a
-hex or fractional-PPL array the panel's pixels are decoded (each its own ray, as in the colour
-pass) and the views picked from them, the nearest pixel of each lens, never blended."""
+still's panel stays in memory (``_trace_still``); an animation's frames go through ``app.render``.
+On a hex or fractional-PPL array the panel's pixels are decoded (each its own ray, as in the
+colour pass) and the views picked from them, the nearest pixel of each lens, never blended."""
 
 from __future__ import annotations
 
@@ -80,7 +80,8 @@ def staged_mask(request: RenderRequest, folder: Path) -> tuple[Path, dict[int, s
 
 
 def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]:
-    """Render the object masks of ``request``'s still or frames into ``folder``; return what was written."""
+    """Render the object masks of ``request``'s still or frames into ``folder``; return what was
+    written."""
     from ..hyper.ids import decode_ids
     from .render import render
     from ..image.io import read_png, read_sidecar
