@@ -52,9 +52,20 @@ def write_table(name: str, text: str) -> None:
 
 def whole_process_seconds(command: list[str], cwd: Path, env: dict[str, str]) -> float:
     """Wall seconds of ``command`` from start to exit, its output discarded."""
+    return whole_process_times(command, cwd, env)[0]
+
+
+def whole_process_times(command: list[str], cwd: Path, env: dict[str, str]) -> tuple[float, float]:
+    """Wall and CPU seconds (user + system, of ``command`` and the processes it waited for: POV-Ray's)
+    from start to exit, its output discarded.  On a shared machine the CPU time is the steadier."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(command, cwd=cwd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def summary(times: list[float]) -> str:

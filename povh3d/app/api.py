@@ -25,7 +25,7 @@ _SETTINGS = tuple(f.name for f in fields(RenderSettings))
 def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens_array: LensArray | None = None,
            mapping: str | None = None, mapping_options: dict[str, Any] | None = None,
            calibration: str | Path | None = None, progress: Progress | None = None,
-           **options: Any) -> dict[str, Any]:
+           objects: str | Path | None = None, **options: Any) -> dict[str, Any]:
     """Render a scene or a mesh model into ``output`` (PNG + JSON sidecar); return the sidecar record.
 
     Parameters
@@ -39,6 +39,9 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
                               ``reverse``, ``blend``), as ``povh3d map`` takes them
     calibration : path        a calibration file: the sheet of ``mapping='slanted'``, or of
                               ``method='subpixel'`` (a calibrated subpixel render)
+    objects : path            also write the object masks into this folder, as ``render --objects DIR``
+                              (docs/viewer.md); the record gets ``object_masks`` (the folder, the number
+                              of objects and frames, the share of pixels no id) and the sidecar ``objects``
     **options
         Any field of ``RenderRequest`` (``method``, ``method_options``, ``views_dir``,
         ``frames`` ...) or of ``RenderSettings`` (``quality``, ``jobs``, ``bit_depth`` ...).
@@ -47,11 +50,17 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
     unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
     if unknown:
         raise ConfigError(f"render() takes no option {', '.join(map(repr, unknown))}; it takes: "
-                          f"preset, lens_array, mapping, mapping_options, calibration, "
+                          f"preset, lens_array, mapping, mapping_options, calibration, objects, "
                           f"{', '.join(_REQUEST + _SETTINGS)}")
     display = build_display(preset, lens_array=lens_array, method=options.get("method", "multi-ortho"),
                             mapping=mapping, mapping_options=mapping_options, calibration=calibration)
     settings = RenderSettings(**{k: v for k, v in options.items() if k in _SETTINGS})
     request = RenderRequest(source=Path(source), display=display, output=Path(output), settings=settings,
                             **{k: v for k, v in options.items() if k in _REQUEST})
-    return render_request(request, progress)
+    if objects is None:
+        return render_request(request, progress)
+    from .object_masks import check_objects_request, render_objects
+
+    check_objects_request(request)          # before any work, as the command does
+    record = render_request(request, progress)
+    return {**record, "object_masks": render_objects(request, objects)}

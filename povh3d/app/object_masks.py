@@ -2,10 +2,11 @@
 every frame.
 
 One more render of the same request, on the mask copy of the scene (``scene.object_ids``) or of
-a model's or volume's stage (``staged_mask``): point-sampled (draft), 16 bits, the same display,
-method and rays; its views decoded to ids and written with their names (``app.objects``).  On a
-hex or fractional-PPL array the panel's pixels are decoded (each its own ray, as in the colour
-pass) and the views picked from them, the nearest pixel of each lens, never blended."""
+a model's or volume's stage (``staged_mask``): point-sampled (draft), 8 bits, the same display,
+method and rays; its views decoded to ids and written with their names (``app.objects``).  A
+still's panel stays in memory (``_trace_still``); an animation's frames go through ``app.render``.
+On a hex or fractional-PPL array the panel's pixels are decoded (each its own ray, as in the
+colour pass) and the views picked from them, the nearest pixel of each lens, never blended."""
 
 from __future__ import annotations
 
@@ -79,11 +80,11 @@ def staged_mask(request: RenderRequest, folder: Path) -> tuple[Path, dict[int, s
 
 
 def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]:
-    """Render the object masks of ``request``'s still into ``folder``; return what was written."""
+    """Render the object masks of ``request``'s still or frames into ``folder``; return what was
+    written."""
     from ..hyper.ids import decode_ids
     from .render import render
     from ..image.io import read_png, read_sidecar
-    from .views import read_views
 
     mask = check_objects_request(request)
     out = Path(folder)
@@ -94,30 +95,27 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
         else:
             scene, names = work / request.source.name, mask.names
             scene.write_text(mask.text, encoding="utf-8")
-        settings = dataclasses.replace(request.settings, quality="draft", bit_depth=16)
+        # 8 bits: the ids' codes are whole 8-bit sRGB codes (scene.object_ids), which Pillow reads fast
+        settings = dataclasses.replace(request.settings, quality="draft", bit_depth=8)
         array = request.render_array
-        banked = request.frames is None and array.views is not None    # a still's views, whole
-        masked = dataclasses.replace(request, source=scene, output=work / "mask.png",
-                                     views_dir=work / "views" if banked else None, depth_maps=None, video=None,
-                                     settings=settings, model=ModelOptions(), volume=VolumeOptions(),
+        masked = dataclasses.replace(request, source=scene, output=work / "mask.png", views_dir=None,
+                                     depth_maps=None, dataset=None, video=None, settings=settings,
+                                     model=ModelOptions(), volume=VolumeOptions(),
                                      include_dirs=(request.source.resolve().parent, *request.include_dirs),
                                      # a stage is in display mm, as its colour pass knew (app.placement): no
                                      # camera to look for in the model's include
                                      display_frame=request.display_frame if mask else DisplayFrameOptions("native"))
-        report = render(masked)
+        if request.frames is None:   # a still: its panel kept in memory, no image, sidecar or views written
+            images = {0: _trace_still(masked)}
+        else:                        # each frame's panel (the lens mesh's rays, point-sampled)
+            report = render(masked)
+            images = {int(read_sidecar(name)["animation"]["frame"]): read_png(name) for name in report["frames"]}
         masks, panels = {}, {}
-        if banked:
-            views = read_views(work / "views")
-            ny, nx, ly, lx = views.shape[:4]
-            masks[0] = decode_ids(views.reshape(ny * nx * ly, lx, -1), len(names)).reshape(ny, nx, ly, lx)
-        else:   # each frame's panel (the lens mesh's rays, point-sampled), then its views
-            images = {0: work / "mask.png"} if request.frames is None else \
-                {int(read_sidecar(name)["animation"]["frame"]): name for name in report["frames"]}
-            for n, name in images.items():
-                ids = decode_ids(read_png(name), len(names))
-                masks[n] = mask_views(ids, array)
-                if array.views is None:
-                    panels[n] = ids
+        for n, h3d in images.items():
+            ids = decode_ids(h3d, len(names))
+            masks[n] = mask_views(ids, array)
+            if array.views is None:
+                panels[n] = ids
         ny, nx, ly, lx = next(iter(masks.values())).shape
         table = ObjectTable(names, tuple(sorted(masks)), (ny, nx), (ly, lx),
                             (array.panel.height, array.panel.width) if panels else None)
@@ -129,15 +127,32 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
     return {"objects": len(names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}
 
 
+def _trace_still(masked: RenderRequest) -> np.ndarray:
+    """The mask copy's panel image, unmapped, traced as ``app.render`` traces a still (placed the same
+    way, the same method, rays and crop), without its outputs: no PNG, views or sidecar to write and
+    read back."""
+    from ..engine.methods import run_method
+    from ..scene.scene import load_scene
+    from .placement import place_display
+
+    scene = load_scene(masked.source, masked.include_dirs)
+    placed, _ = place_display(masked, scene)
+    return run_method(placed.method, scene, placed.render_array, placed.settings, crop=placed.crop,
+                      **placed.method_options).h3d
+
+
 def mask_views(ids: np.ndarray, lens_array: LensArray) -> np.ndarray:
     """``(Ny, Nx, Ly, Lx)`` view masks of a panel's ``(H, W)`` ids: the camera bank's region, or on a
     hex or fractional-PPL array each view pixel the id of its lens's pixel nearest the view's point
     (the pixel ``extract_views`` weighs most: ids are never blended)."""
     from ..image.elemental import nearest_in_lens, view_points
-    from ..image.interleave import extract
 
     if lens_array.views is not None:
-        return extract(ids[lens_array.bank_region][..., None], lens_array.views)[..., 0]
+        # image.interleave.extract's layout, copied by NumPy: 2 bytes a pixel cost less than loading its
+        # compiled gather (about 1 s a process)
+        (ny, nx), bank = lens_array.views, ids[lens_array.bank_region]
+        h, w = bank.shape
+        return np.ascontiguousarray(bank.reshape(h // ny, ny, w // nx, nx).transpose(1, 3, 0, 2))
     return nearest_in_lens(ids, lens_array, *view_points(lens_array))
 
 

@@ -1,34 +1,35 @@
-"""Object ids read back from a mask render of ``scene.object_ids.mask_scene``."""
+"""Object ids read back from a mask render of ``scene.object_ids.mask_scene``: integer arithmetic
+on the codes POV-Ray wrote (``object_ids.id_code``), no colour conversion."""
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
-from ..scene.object_ids import MAX_OBJECTS, UNRESOLVED
+from ..scene.object_ids import ID_MULTIPLIER, UNRESOLVED
+
+_INVERSE = pow(ID_MULTIPLIER, -1, 1 << 24)
 
 
 def decode_ids(image: np.ndarray, count: int) -> np.ndarray:
-    """Object ids ``(H, W)`` uint16 from a 16-bit sRGB mask render ``(H, W, C)``: 0 background,
-    ``UNRESOLVED`` where the colour is no id (grey channels disagree or fall between levels)."""
+    """Object ids ``(H, W)`` uint16 from an 8- or 16-bit sRGB mask render ``(H, W, C)``: 0 background,
+    ``UNRESOLVED`` where the colour is no id (its number decodes past ``count``, or a 16-bit code
+    is not 257 times an 8-bit one)."""
     rgb = image[..., :3]
-    # A table of the 65,536 codes' levels, gathered: the same numbers as decoding every pixel
-    # through sRGB (on a 5760x1080 mask: 1.9 s of the pass, was 2.8 s).
-    level = _levels()[rgb] if rgb.dtype == np.uint16 else _level(rgb.astype(np.float64) / 65535.0)
-    ids = np.rint(level)
-    grey = (np.ptp(level, axis=-1) < 0.25) & (np.abs(level - ids).max(axis=-1) < 0.25)
-    ident = ids[..., 0].astype(np.int64)
-    ok = grey & (ident >= 0) & (ident <= count)
-    return np.where(ok, ident, UNRESOLVED).astype(np.uint16)
-
-
-def _level(codes: np.ndarray) -> np.ndarray:
-    from ..image.colour import srgb_to_linear
-
-    return srgb_to_linear(codes) * (MAX_OBJECTS + 1)
-
-
-@functools.cache
-def _levels() -> np.ndarray:
-    return _level(np.arange(65536, dtype=np.float64) / 65535.0)
+    exact = None
+    if rgb.dtype == np.uint16:    # 8-bit code c written at 16 bits is 257 c
+        codes = (rgb.astype(np.uint32) + 128) // 257
+        exact = (codes * 257 == rgb).all(axis=-1)
+        rgb = codes
+    elif rgb.dtype != np.uint8:
+        raise ValueError(f"decode_ids takes an 8- or 16-bit image, got {rgb.dtype}")   # a bug
+    # in place on one uint32 plane (on 5760x1080: 0.03 s); the product wraps mod 2**32, so mod 2**24 holds
+    number = rgb[..., 0].astype(np.uint32) << 16
+    number |= rgb[..., 1].astype(np.uint32) << 8
+    number |= rgb[..., 2]
+    number *= np.uint32(_INVERSE)
+    number &= 0xFFFFFF
+    ids = number.astype(np.uint16)
+    ids[number > count] = UNRESOLVED
+    if exact is not None:
+        ids[~exact] = UNRESOLVED
+    return ids

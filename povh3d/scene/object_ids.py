@@ -5,8 +5,16 @@ inside it.  So the copy is made from the scene's text: every texture-like block 
 statement (``texture``, ``pigment``, ``finish``, ``normal``, ``material``, ``interior``...) is
 removed, the blocks that are a ``#declare``'s value are kept (unused), the atmosphere and the
 background go, and each top-level object statement ends with one texture of pure emission whose
-grey level codes its id (``id_level``).  Rendered without antialiasing at 16 bits, every pixel
-is the id of the object its ray first hits.
+colour codes its id (``id_colour``).  Rendered without antialiasing, every pixel is the id of the
+object its ray first hits.
+
+The code: object ``k``'s 24-bit number ``k * ID_MULTIPLIER mod 2**24`` split into three bytes,
+each the 8-bit sRGB code of one channel, its pigment the linear value of that code.  POV-Ray
+writes exactly those codes (8 bits) or 257 times them (16 bits), so the id is read back by
+integer arithmetic (``hyper.ids``): the number times the multiplier's inverse.  A colour that is
+no id (black is the background, 0) decodes past ``MAX_OBJECTS`` but for one colour in 16,777
+(1000 in 2**24); every grey, and every colour of one channel or of two equal ones, does (the
+red below included).
 
 What it cannot split: objects made by a macro or a loop at the top level, objects in included
 files with their own textures, ``mesh2`` texture lists; their pixels carry a colour that is no
@@ -29,8 +37,9 @@ OBJECTS = frozenset(("sphere box cylinder cone torus plane union difference inte
                      "sphere_sweep ovus lemon quadric").split())
 _SURFACE = frozenset(("texture pigment finish normal material interior interior_texture").split())
 _ATMOSPHERE = frozenset(("fog sky_sphere background rainbow media").split())
-MAX_OBJECTS = 1000            # grey levels 1/1001 apart stay >= 29 codes apart in 16-bit sRGB
+MAX_OBJECTS = 1000            # of the 2**24 codes: a colour that is no id passes for one at 1000 / 2**24
 UNRESOLVED = 65535
+ID_MULTIPLIER = 0x9E3779      # odd (invertible mod 2**24); neighbouring ids get unlike colours
 # objects no top-level statement paints (made by macros, in include files) show pure red: no id
 # (#version first: before it POV-Ray reads an older language, where emission is not a finish)
 _GAMMA = re.compile(r"\bassumed_gamma\s+(?:srgb\b|[0-9.+\-*/() ]+)", re.I)
@@ -48,9 +57,20 @@ class MaskScene:
     names: dict[int, str]      # id -> the object's identifier (object { Name }) or "keyword_LINE"
 
 
-def id_level(ident: int) -> float:
-    """The linear grey of object ``ident`` (1..MAX_OBJECTS)."""
-    return ident / (MAX_OBJECTS + 1)
+def id_code(ident: int) -> tuple[int, int, int]:
+    """The 8-bit sRGB codes (R, G, B) of object ``ident`` (1..MAX_OBJECTS)."""
+    number = (int(ident) * ID_MULTIPLIER) & 0xFFFFFF
+    return number >> 16, (number >> 8) & 0xFF, number & 0xFF
+
+
+def id_colour(ident: int) -> str:
+    """The linear ``rgb <r, g, b>`` vector POV-Ray writes as object ``ident``'s codes (sRGB output)."""
+    return "<" + ", ".join(repr(_srgb_to_linear(c / 255)) for c in id_code(ident)) + ">"
+
+
+def _srgb_to_linear(v: float) -> float:
+    # IEC 61966-2-1, as POV-Ray's sRGB output encodes it (its inverse): each code comes back exactly
+    return v / 12.92 if v <= 0.04045 else ((v + 0.055) / 1.055) ** 2.4
 
 
 def _block_end(toks: list[Token], opening: int) -> int:
@@ -106,7 +126,7 @@ def mask_scene(text: str) -> MaskScene:
     if len(names) > MAX_OBJECTS:
         raise ObjectsError(f"the scene has {len(names)} top-level objects; object masks tell at most "
                            f"{MAX_OBJECTS} apart")
-    inserts = {at: f" texture {{ pigment {{ rgb {id_level(k)!r} }} {_ID_FINISH} }} " for at, k in ends}
+    inserts = {at: f" texture {{ pigment {{ rgb {id_colour(k)} }} {_ID_FINISH} }} " for at, k in ends}
     out, pos = [], 0
     for at in sorted([(s, e, None) for s, e in cut] + [(a, a, v) for a, v in inserts.items()]):
         start, end, insert = at
@@ -117,7 +137,7 @@ def mask_scene(text: str) -> MaskScene:
             out.append(insert)
         pos = end
     out.append(text[pos:])
-        # the ids are linear greys: the scene's own assumed_gamma would bend them, and POV-Ray keeps
+    # the ids are linear colours: the scene's own assumed_gamma would bend them, and POV-Ray keeps
     # the first one it reads, so it goes and povh3d's comes first
     body = _GAMMA.sub(" ", "".join(out))
     return MaskScene(_UNSPLIT + body + "\nbackground { rgb 0 }\n", names)

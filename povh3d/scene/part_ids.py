@@ -5,7 +5,7 @@ povh3d writes a model (``mesh.write``) and a volume's surfaces (``volume.include
 object, the surface of one label or one iso value.  The copy gives part ``n`` (the include's
 ``n``-th ``mesh2``) the id ``n``: every ``texture`` block inside its ``mesh2`` (its own, and
 each one of its ``texture_list``, so that a face's texture index still finds one) becomes the
-id's emission texture (``object_ids.id_level``); a ``mesh2`` without one gets it.
+id's emission texture (``object_ids.id_colour``); a ``mesh2`` without one gets it.
 
 Pure: text in, text out.  Only braces, comments and strings are scanned, not the numbers, so
 a model of millions of triangles is copied at the speed of a regular expression.
@@ -15,14 +15,14 @@ from __future__ import annotations
 
 import re
 
-from .object_ids import _ID_FINISH, MAX_OBJECTS, ObjectsError, id_level
+from .object_ids import _ID_FINISH, MAX_OBJECTS, ObjectsError, id_colour
 
 _SCAN = re.compile(r'//[^\n]*|/\*.*?\*/|"(?:[^"\\\n]|\\.)*"|\bmesh2\b|\btexture\b|[{}]', re.S)
 
 
 def id_texture(ident: int) -> str:
-    """The emission texture whose linear grey is object ``ident``'s id."""
-    return f"texture {{ pigment {{ rgb {id_level(ident)!r} }} {_ID_FINISH} }}"
+    """The emission texture whose colour codes object ``ident``'s id."""
+    return f"texture {{ pigment {{ rgb {id_colour(ident)} }} {_ID_FINISH} }}"
 
 
 def part_ids_include(text: str, parts: int) -> str:

@@ -39,6 +39,20 @@ def test_sample_masks_annotate_and_view(tmp_path: Path, monkeypatch) -> None:
     assert b'url="https://example.org/torus"' in (tmp_path / "s.xml").read_bytes()
     assert run_in_process("viewer", tmp_path / "s.png", "--cdp", tmp_path / "s.xml", "--objects", tmp_path / "objs",
                           "-o", tmp_path / "s.html").code == 0
+    # the Python API's objects= writes the same masks as the command
+    import povh3d
+
+    record = povh3d.render(ROOT / "sample_models" / "sample.pov", tmp_path / "api.png", preset="demo",
+                           quality="draft", objects=tmp_path / "api_objs")
+    assert record["object_masks"]["objects"] == 5 and record["object_masks"]["unresolved"] == 0
+    assert read_table(tmp_path / "api_objs") == table
+    ny, nx = table.views
+    for l in range(ny):
+        for k in range(nx):
+            api, command = (read_mask(tmp_path / name, table, 0, (l, k)) for name in ("api_objs", "objs"))
+            assert (api == command).all()
+    names = read_sidecar(tmp_path / "s.png")["objects"]["names"]
+    assert read_sidecar(tmp_path / "api.png")["objects"]["names"] == names
 
 
 def test_scene_without_separable_objects_is_one_line_before_any_render(tmp_path: Path) -> None:
@@ -131,3 +145,83 @@ def test_subpixel_masks_are_refused_before_any_render(tmp_path: Path) -> None:
                          "-o", tmp_path / "h.png", "--objects", tmp_path / "o")
     assert run.code != 0 and "own ray" in run.err and run.err.count("\n") == 1, run.err
     assert list(tmp_path.iterdir()) == []
+    import povh3d
+
+    with pytest.raises(povh3d.ConfigError, match="own ray"):     # the API refuses it the same way
+        povh3d.render(ROOT / "sample_models" / "sample.pov", tmp_path / "h.png", method="subpixel",
+                      objects=tmp_path / "o")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("grid", ["square", "lenticular"])
+def test_view_masks_are_the_views_extract_cuts(grid: str) -> None:
+    # mask_views copies extract's layout without its compiled gather: the same views, pixel for pixel
+    from povh3d.app.object_masks import mask_views
+    from povh3d.geometry.lens_array import LensArray, Panel
+    from povh3d.image.interleave import extract
+
+    lens_array = {"square": LensArray("square", 40, 30, 0.8, 0.8, 1.5, Panel(324, 242, 0.1, 0.1)),
+                  "lenticular": LensArray("lenticular", 40, 240, 0.8, 0.1, 1.5, Panel(320, 240, 0.1, 0.1))}[grid]
+    ids = np.random.default_rng(3).integers(0, 1000, (242 if grid == "square" else 240, lens_array.panel.width),
+                                            dtype=np.uint16)
+    got = mask_views(ids, lens_array)
+    want = extract(ids[lens_array.bank_region][..., None], lens_array.views)[..., 0]
+    assert got.shape == want.shape == (*lens_array.views, lens_array.lenses_y, lens_array.lenses_x)
+    assert (got == want).all()
+    assert (got[0, 0] != got[0, 1]).mean() > 0.9    # the views differ: the comparison can fail
+
+
+# An isosurface (a sphere's distance function, gradient 1) and a one-component blob (density
+# s (1 - (d/r)^2)^2 = threshold t: a sphere of radius r sqrt(1 - sqrt(t/s))) beside a box, display mm
+ISO = ((-6.0, 3.0, 4.0), 4.0)
+BLOB = ((5.0, -3.0, -2.0), 3.0)
+ISO_BOX = ((0.0, 2.0, -1.0), (9.0, 8.0, 3.0))
+ISO_SCENE = f"""#version 3.7;
+global_settings {{ assumed_gamma 1.0 }}
+light_source {{ <-20, 30, -60> rgb 1 }}
+isosurface {{ function {{ sqrt(x * x + y * y + z * z) - {ISO[1]} }} contained_by {{ box {{ -4.5, 4.5 }} }}
+  max_gradient 1.1 translate <{ISO[0][0]}, {ISO[0][1]}, {ISO[0][2]}> pigment {{ rgb <0.2, 0.8, 0.3> }} }}
+blob {{ threshold 0.25 sphere {{ <{BLOB[0][0]}, {BLOB[0][1]}, {BLOB[0][2]}>, {BLOB[1] / 0.5 ** 0.5!r}, 1 }}
+  pigment {{ rgb <0.9, 0.6, 0.1> }} finish {{ phong 1 }} }}
+box {{ <{ISO_BOX[0][0]}, {ISO_BOX[0][1]}, {ISO_BOX[0][2]}>, <{ISO_BOX[1][0]}, {ISO_BOX[1][1]}, {ISO_BOX[1][2]}>
+  pigment {{ rgb <0.3, 0.3, 1> }} }}
+"""
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("grid, lenses", [("square", ["--lenses", "40x30", "--ppl", "8"]),
+                                          ("lenticular", ["--lenses", "40", "--rows", "240", "--ppl", "8"])])
+def test_isosurface_and_blob_masks_match_their_analytic_projection_in_every_view(tmp_path: Path, monkeypatch,
+                                                                                grid: str, lenses: list[str]) -> None:
+    from povh3d.app.display_setup import Display
+    from povh3d.app.object_masks import mask_views
+    from povh3d.image.io import read_sidecar
+    from tests.support.id_oracle import expected_ids
+
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "iso.pov").write_text(ISO_SCENE)
+    run = run_in_process("render", tmp_path / "iso.pov", "--grid", grid, *lenses, "--pixel-pitch", "0.1",
+                         "--focal", "1.5", "--quality", "draft", "-o", tmp_path / "i.png", "--objects", tmp_path / "o")
+    assert run.code == 0, run.err
+    table = read_table(tmp_path / "o")
+    assert table.names == {1: "isosurface_4", 2: "blob_6", 3: "box_8"}
+    lens_array = Display.from_record(read_sidecar(tmp_path / "i.png")).lens_array
+    ny, nx = table.views
+    got = np.stack([[read_mask(tmp_path / "o", table, 0, (l, k)) for k in range(nx)] for l in range(ny)])
+    shapes = [("sphere", *ISO), ("sphere", *BLOB), ("box", *ISO_BOX)]
+    want, clear = (mask_views(a, lens_array) for a in expected_ids(lens_array, shapes))
+    assert clear.mean() > 0.6 and set(np.unique(want[clear])) == {0, 1, 2, 3}
+    worst = worst_view(got, want, clear)
+    assert worst >= 0.995, f"a view with {100 * worst:.2f} % of its clear pixels right"
+    # negative controls: the oracle fails masks whose isosurface, or blob, is 2 mm (2.5 lens pitches) off
+    for moved_shapes in ([("sphere", (ISO[0][0] + 2.0, *ISO[0][1:]), ISO[1]), *shapes[1:]],
+                         [shapes[0], ("sphere", (BLOB[0][0], BLOB[0][1] - 2.0, BLOB[0][2]), BLOB[1]), shapes[2]]):
+        moved, moved_clear = (mask_views(a, lens_array) for a in expected_ids(lens_array, moved_shapes))
+        assert worst_view(got, moved, clear & moved_clear) < 0.995
+    print(f"{grid}: the worst view {100 * worst:.3f} % of its clear pixels right")
+
+
+def worst_view(got: np.ndarray, want: np.ndarray, clear: np.ndarray) -> float:
+    """The smallest share of a view's clear pixels whose id is right, over all the views."""
+    return min((got[l, k][clear[l, k]] == want[l, k][clear[l, k]]).mean()
+               for l in range(got.shape[0]) for k in range(got.shape[1]))

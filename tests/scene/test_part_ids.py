@@ -10,7 +10,7 @@ import pytest
 
 from povh3d.mesh.load import Part
 from povh3d.mesh.write import include_text, mesh2_text
-from povh3d.scene.object_ids import ObjectsError, id_level
+from povh3d.scene.object_ids import ObjectsError, id_colour
 from povh3d.scene.part_ids import id_texture, part_ids_include, part_table
 
 TETRA = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
@@ -42,7 +42,7 @@ def test_every_texture_of_a_part_becomes_its_id() -> None:
     # everything but the textures is kept: vertices, faces with their texture indices
     strip = lambda s: re.sub(r"(?m)^.*\btexture \{.*$", "T", s)  # noqa: E731  (the writer: one a line)
     assert strip(masked) == strip(text)
-    assert repr(id_level(3)) in blocks[2]
+    assert id_colour(3) in blocks[2]
 
 
 def test_a_part_without_texture_gets_its_id() -> None:
