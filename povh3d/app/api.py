@@ -63,4 +63,4 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
 
     check_objects_request(request)          # before any work, as the command does
     record = render_request(request, progress)
-    return {**record, "object_masks": render_objects(request, objects)}
+    return {**record, "object_masks": render_objects(request, objects, record)}

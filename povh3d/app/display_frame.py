@@ -172,3 +172,16 @@ def _orthographic_options(camera: dict[str, Any]) -> str:
 
     return (f"--display-center={triple(centre)} --display-normal={triple(camera['direction'])} "
             f"--display-up={triple(camera['up'])} --display-width {width:.6g}")
+
+
+def recorded_frame(record: dict[str, Any]) -> tuple[float, ...] | None:
+    """The POV-Ray matrix of a sidecar's ``display_frame`` entry (None: native): what a later pass
+    over the same rays takes as ``RenderSettings.frame`` instead of evaluating the scene again."""
+    if "matrix" in record:
+        return tuple(float(v) for v in record["matrix"])
+    if not record or record.get("source") == "native":
+        return None
+    frame = DisplayFrame(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
+                         tuple(record["normal"]), float(record["units_per_mm"]))
+    return None if frame.is_native else tuple(frame.matrix().ravel().tolist())
+

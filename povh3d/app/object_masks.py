@@ -23,7 +23,7 @@ from ..errors import ConfigError, InputError
 from ..geometry.lens_array import LensArray
 from ..scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from .objects import ObjectTable, write_masks
-from .display_frame import DisplayFrameOptions
+from .display_frame import DisplayFrameOptions, recorded_frame
 from .request import ModelOptions, RenderRequest, VolumeOptions
 
 
@@ -79,9 +79,10 @@ def staged_mask(request: RenderRequest, folder: Path) -> tuple[Path, dict[int, s
     return path, table
 
 
-def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]:
+def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str, Any] | None = None) -> dict[str, Any]:
     """Render the object masks of ``request``'s still or frames into ``folder``; return what was
-    written."""
+    written.  ``colour``: the still's colour pass record (its sidecar), whose placement the masks
+    take as it is (no camera or depth run again)."""
     from ..hyper.ids import decode_ids
     from .render import render
     from ..image.io import read_png, read_sidecar
@@ -106,7 +107,7 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
                                      # camera to look for in the model's include
                                      display_frame=request.display_frame if mask else DisplayFrameOptions("native"))
         if request.frames is None:   # a still: its panel kept in memory, no image, sidecar or views written
-            images = {0: _trace_still(masked)}
+            images = {0: _trace_still(_placed_as(masked, colour))}
         else:                        # each frame's panel (the lens mesh's rays, point-sampled)
             report = render(masked)
             images = {int(read_sidecar(name)["animation"]["frame"]): read_png(name) for name in report["frames"]}
@@ -125,6 +126,20 @@ def render_objects(request: RenderRequest, folder: str | Path) -> dict[str, Any]
     _note_in_sidecars(request, out, table)
     unresolved = sum(int((m == UNRESOLVED).sum()) for m in masks.values()) / sum(m.size for m in masks.values())
     return {"objects": len(names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}
+
+
+def _placed_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRequest:
+    """``masked`` with the colour pass's frame, front clearance and depth scale as settings (the
+    Python API's matrix path of ``app.placement``): the same rays without evaluating the scene's
+    camera or measuring its depth again (a POV-Ray run each)."""
+    frame_record = (colour or {}).get("display_frame") or {}
+    clearance = ((colour or {}).get("quality") or {}).get("front_clearance_mm")
+    frame = recorded_frame(frame_record) if frame_record and clearance is not None else None
+    if frame is None or masked.is_model:   # native or staged in mm: placed without a POV-Ray run
+        return masked
+    settings = dataclasses.replace(masked.settings, frame=frame, front_clearance=float(clearance),
+                                   depth_scale=float(frame_record.get("depth_scale", 1.0)))
+    return dataclasses.replace(masked, settings=settings)
 
 
 def _trace_still(masked: RenderRequest) -> np.ndarray:

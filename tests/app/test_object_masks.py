@@ -225,3 +225,46 @@ def worst_view(got: np.ndarray, want: np.ndarray, clear: np.ndarray) -> float:
     """The smallest share of a view's clear pixels whose id is right, over all the views."""
     return min((got[l, k][clear[l, k]] == want[l, k][clear[l, k]]).mean()
                for l in range(got.shape[0]) for k in range(got.shape[1]))
+
+
+@pytest.mark.povray
+def test_a_camera_scenes_masks_take_the_colour_pass_placement(tmp_path: Path, monkeypatch) -> None:
+    """A scene with its own camera: the masks reuse the colour pass's frame and clearance (no camera or
+    depth run again), and equal the masks placed again from the scene (the same rays)."""
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    import povh3d
+    from povh3d.app import object_masks, placement
+
+    scene = tmp_path / "cam.pov"
+    scene.write_text("camera { location <3, 2, -40> look_at <0, 0, 0> }\n"
+                     "light_source { <0, 20, -30> rgb 1 }\n"
+                     "sphere { <-2, 1, 0>, 2.5 pigment { rgb 1 } }\n"
+                     "box { <1, -3, -1>, <4, 0, 2> pigment { rgb <1, 0, 0> } }\n"
+                     "plane { z, 6 pigment { rgb 0.5 } }\n")
+    record = povh3d.render(scene, tmp_path / "c.png", preset="demo", quality="draft", use_cache=False)
+    assert record["display_frame"]["source"] == "camera"
+    from povh3d.app.display_setup import build_display
+    from povh3d.app.request import RenderRequest
+    from povh3d.engine.quality import RenderSettings
+
+    request = RenderRequest(source=scene, display=build_display("demo"), output=tmp_path / "c.png",
+                            settings=RenderSettings(quality="draft", use_cache=False))
+    placed = []
+    real = placement.place_display
+    monkeypatch.setattr(placement, "place_display", lambda r, s: placed.append(r.settings.frame) or real(r, s))
+    reused = object_masks.render_objects(request, tmp_path / "reused", record)
+    again = object_masks.render_objects(request, tmp_path / "again")
+    assert placed[0] is not None and placed[1] is None   # the first took the recorded frame as its matrix
+    table = read_table(tmp_path / "reused")
+    assert read_table(tmp_path / "again") == table and reused["objects"] == again["objects"] == 3
+    ny, nx = table.views
+    for l in range(ny):
+        for k in range(nx):
+            a, b = (read_mask(tmp_path / name, table, 0, (l, k)) for name in ("reused", "again"))
+            assert (a == b).all()
+    # control: a frame moved by 1 mm gives other masks, so the equality above can fail
+    shifted = dict(record, display_frame={**record["display_frame"],
+                                          "centre": [c + 1.0 for c in record["display_frame"]["centre"]]})
+    object_masks.render_objects(request, tmp_path / "moved", shifted)
+    assert any((read_mask(tmp_path / "moved", table, 0, (l, k)) != read_mask(tmp_path / "again", table, 0, (l, k))).any()
+               for l in range(ny) for k in range(nx))
