@@ -68,10 +68,11 @@ def _mask(pid: int, field: str) -> int | None:
     return None
 
 
-def arrivals(command: list[str], env: dict[str, str]) -> dict[str, float]:
-    """Milliseconds after the start until the process blocks SIGINT (the launcher's env), catches
-    it (Python's handler; the launcher's Python does so with it blocked) and catches SIGTERM
-    (povh3d's handlers), read from /proc/PID/status in a tight loop."""
+def arrivals(command: list[str], env: dict[str, str], shell: str) -> dict[str, float]:
+    """Milliseconds after the start until the launcher's env blocks SIGINT, Python catches it
+    (under the launcher, with it blocked) and povh3d catches SIGTERM (its handlers), read from
+    /proc/PID/status in a tight loop.  ``shell``: the launcher's process name, its file's (dash
+    catches SIGINT while it waits for a child and blocks every signal while it forks one)."""
     bit_int, bit_term = 1 << (signal.SIGINT - 1), 1 << (signal.SIGTERM - 1)
     start = time.perf_counter()
     proc = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
@@ -80,20 +81,24 @@ def arrivals(command: list[str], env: dict[str, str]) -> dict[str, float]:
         ours = own.read()
     execed = False
     while "povh3d's handlers" not in seen and proc.poll() is None:
-        if not execed:  # until its exec the child is this Python, with this Python's handlers
-            try:
+        try:
+            if not execed:  # until its exec the child is this Python, with this Python's handlers
                 with open(f"/proc/{proc.pid}/cmdline", "rb") as cmdline:
                     execed = cmdline.read() not in (ours, b"")
-            except (FileNotFoundError, ProcessLookupError):
-                pass
+                continue
+            with open(f"/proc/{proc.pid}/comm") as comm:
+                name = comm.read().strip()
+        except (FileNotFoundError, ProcessLookupError):
             continue
         blocked, caught = _mask(proc.pid, "SigBlk:"), _mask(proc.pid, "SigCgt:")
         now = (time.perf_counter() - start) * 1000
-        if blocked is not None and blocked & bit_int:
+        if name == shell or blocked is None or caught is None:
+            continue
+        if blocked & bit_int:
             seen.setdefault("SIGINT blocked", now)
-        if caught is not None and caught & bit_int:
+        if name != "env" and caught & bit_int:
             seen.setdefault("Python's SIGINT handler", now)
-        if caught is not None and caught & bit_term:
+        if name != "env" and caught & bit_term:
             seen.setdefault("povh3d's handlers", now)
     proc.kill()
     proc.wait()
@@ -159,7 +164,8 @@ def print_arrivals(variants: dict[str, list[str]], starts: int, env: dict[str, s
     times: dict[str, dict[str, list[float]]] = {name: collections.defaultdict(list) for name in variants}
     for _ in range(starts):
         for name, command in variants.items():
-            for event, ms in arrivals(command, env).items():
+            shell = Path(command[0]).name[:15] if name == "launcher" else ""
+            for event, ms in arrivals(command, env, shell).items():
                 times[name][event].append(ms)
     print(f"{starts} starts of each command, interleaved, ms after the start (median / 90%); {os.cpu_count()} "
           f"cores, load average {load:.2f} before, {os.getloadavg()[0]:.2f} after (1 min).\n")
