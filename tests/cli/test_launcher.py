@@ -140,3 +140,27 @@ def test_povray_starts_with_no_signal_blocked(env_bin, tmp_path, marker, blocked
     masks = {int(line.split()[1], 16) for line in log.read_text().splitlines()}
     wanted = (1 << signal.SIGINT - 1) | (1 << signal.SIGTERM - 1) | (1 << signal.SIGHUP - 1)
     assert masks and all((mask & wanted == wanted) if blocked else mask == 0 for mask in masks), masks
+
+
+def test_without_a_python_beside_or_block_signal_it_still_runs(env_bin, tmp_path):
+    """No Python beside the launcher (``pip install --user``): the ``python3`` on PATH.  An ``env``
+    without ``--block-signal`` (busybox): Python is started without it, as before the launcher;
+    the control is the same run with the real env, where the signal from ``site`` waits."""
+    alone = tmp_path / "user-bin"
+    alone.mkdir()
+    shutil.copy2(REPO / "bin" / "povh3d", alone / "povh3d")
+    old_env = tmp_path / "old-env"
+    old_env.mkdir()
+    (old_env / "env").write_text('#!/bin/sh\ncase $1 in --block-signal*) echo "env: unrecognized option" >&2; '
+                                 'exit 1;; esac\nexec /usr/bin/env "$@"\n')
+    (old_env / "env").chmod(0o755)
+    prefix_file = tmp_path / "prefix"
+    path = f"{env_bin}{os.pathsep}/usr/bin{os.pathsep}/bin"
+    done = _run([alone / "povh3d", "--version"], env_bin, PATH=path, POVH3D_TEST_PREFIX_FILE=str(prefix_file))
+    assert (done.returncode, done.stderr) == (0, ""), done
+    assert prefix_file.read_text() == str(env_bin.parent)
+    for folder, code in ((old_env, 1), (None, 130)):
+        done = _run([alone / "povh3d", "--version"], env_bin, PATH=f"{folder}{os.pathsep}{path}" if folder else path,
+                    POVH3D_TEST_SIGNAL=str(int(signal.SIGINT)))
+        assert done.returncode == code, done
+        assert ("Traceback" in done.stderr) == (folder is not None), done.stderr
