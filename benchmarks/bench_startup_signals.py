@@ -120,6 +120,9 @@ def main() -> None:
         raise SystemExit(f"{launcher} is not the shell launcher (reinstall: pip install -e .)")
     python = launcher.parent / "python3"
     rng = random.Random(args.seed)
+    # Started in the background (``cmd &`` in a script), this process ignores SIGINT and so would
+    # the commands: they are to start with the default action, as from a terminal.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="povh3d-startup-") as tmp:
         folder = Path(tmp)
