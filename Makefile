@@ -89,6 +89,7 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_volume_media.py
 	$(BIN)/python benchmarks/bench_volume.py
 	$(BIN)/python benchmarks/bench_objects.py
+	$(BIN)/python benchmarks/bench_startup_signals.py
 
 gallery: povray-examples venv ## render every POV-Ray sample scene with a camera at low priority, outcomes into docs/benchmarks.md (GALLERY_ARGS='--resume', '--scenes advanced/* --limit 10')
 	nice -n 19 $(BIN)/python benchmarks/gallery.py $(GALLERY_ARGS)

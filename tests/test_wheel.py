@@ -72,6 +72,15 @@ def test_wheel_installs_lean_and_renders_the_sample(installed):
     povh3d = python.parent / "povh3d"
     _run([str(povh3d), "render", "scene.pov", "--preset", "demo", "--quality", "draft", "-q", "-o", "out.png"],
          cwd=work, env=env)
+    # The command is the launcher (bin/povh3d): a SIGINT while Python starts (sent from `site`,
+    # before any code of povh3d's) waits for povh3d's handlers (tests/cli/test_launcher.py).
+    assert povh3d.read_text().startswith("#!/bin/sh\n") and os.access(povh3d, os.X_OK)
+    (work / "hooks").mkdir()
+    (work / "hooks" / "sitecustomize.py").write_text("import os, signal\nos.kill(os.getpid(), signal.SIGINT)\n"
+                                                     "for _ in range(100000): pass\n")
+    done = subprocess.run([str(povh3d), "--version"], cwd=work, env={**env, "PYTHONPATH": str(work / "hooks")},
+                          capture_output=True, text=True, timeout=60, check=False)
+    assert (done.returncode, done.stderr) == (130, "povh3d: error: interrupted\n"), done
     image = np.asarray(Image.open(work / "out.png"))
     record = json.loads((work / "out.json").read_text())
     assert record["kind"] == "h3d" and record["display"]["preset"] == "demo"

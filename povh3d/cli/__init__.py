@@ -47,6 +47,12 @@ for _signum, _default in ((_signal.SIGINT, _signal.default_int_handler), (_signa
     except ValueError:  # imported in a thread other than the main one: no handlers there
         break
 
+# The ``povh3d`` launcher (bin/povh3d) starts Python with these signals blocked: one that came
+# while the interpreter started is pending, and is delivered here, to the handlers above.  Before
+# any thread or child process (POV-Ray, Dask) starts: both inherit the mask.
+if os.environ.pop("POVH3D_SIGNALS_BLOCKED", None):
+    _signal.pthread_sigmask(_signal.SIG_UNBLOCK, (_signal.SIGINT, _signal.SIGTERM, _signal.SIGHUP))
+
 from .main import main  # noqa: E402 - after the handlers, on purpose
 
 __all__ = ["main"]

@@ -106,9 +106,10 @@ def test_sigterm_early_in_a_render_never_ends_by_a_signal(tmp_path):
     assert codes.count(130) >= TRIALS // 2, codes  # the signals did land in the work
 
 
-# What ``import povh3d`` imports comes before povh3d.cli's handlers (the console script imports
-# povh3d.cli.main, so the package first): a signal then is Python's (a traceback) or the default
-# action's (an end by signal, silent).  It stays the standard library's import machinery.
+# What ``import povh3d`` imports comes before povh3d.cli's handlers (``python -m povh3d`` imports
+# povh3d.cli.main, so the package first): without the launcher (bin/povh3d, which blocks the
+# signals until then) a signal then is Python's (a traceback) or the default action's (an end by
+# signal, silent).  It stays the standard library's import machinery.
 _NEW_MODULES = ("import json, sys; before = set(sys.modules); {prelude}import povh3d; "
                 "print(json.dumps(sorted(set(sys.modules) - before)))")
 _AT_START = {"__future__", "importlib", "importlib._bootstrap", "importlib._bootstrap_external", "povh3d",
