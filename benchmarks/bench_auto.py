@@ -100,6 +100,7 @@ def main() -> int:
         rungs: dict[str, list] = {}        # name -> [dB, seconds...]
         autos: dict[tuple, list] = {}      # (tree, target) -> [dB, chosen, seconds...]
         cpu: dict[object, list[float]] = {}   # rung name or (tree, target) -> CPU seconds
+        estimates: dict[tuple, float] = {}
         for run in range(args.repeat):
             for q in AUTO_LADDER:
                 rung = rung_name(q)
@@ -120,7 +121,9 @@ def main() -> int:
                     seconds, used = povh3d_seconds(trees[tree], ["render", path, *ARRAY_ARGS, "--quality", "auto",
                                                                  "--max-error", target, "--no-cache", "-q", "-o", image])
                     cpu.setdefault((tree, target), []).append(used)
-                    chosen = json.loads(image.with_suffix(".json").read_text())["quality"]["auto"]["chosen"]
+                    record = json.loads(image.with_suffix(".json").read_text())["quality"]["auto"]
+                    chosen = record["chosen"]
+                    estimates.setdefault((tree, target), record["tried"][-1]["psnr_db"])   # auto's own, of its image
                     autos.setdefault((tree, target), [reference.psnr(read_png(image)), chosen]).append(seconds)
                     print(f"{name} auto {tree} {target}: {seconds:.2f} s (CPU {used:.2f} s) {autos[tree, target][0]:.2f} "
                           f"dB {chosen}", flush=True)
@@ -138,8 +141,9 @@ def main() -> int:
                             "fastest": fastest, "fastest_s": rungs[fastest][1:] if fastest else None,
                             "before_s": before[2:] if before else None, "before_db": before[0] if before else None,
                             "floor_db": reference.floor_db, "pass": ok, "auto_cpu_s": cpu["after", target],
+                            "auto_estimate_db": estimates.get(("after", target)),
                             "fastest_cpu_s": cpu[fastest] if fastest else None, "cpu_ratio": cpu_ratio})
-            rows.append((name, f"{target}", f"{got:.2f}", chosen.replace("-A, ", "").replace("-A", "draft"),
+            rows.append((name, f"{target}", f"{got:.2f}", f"{estimates['after', target]:.2f}", chosen.replace("-A, ", "").replace("-A", "draft"),
                          summary(times), f"{fastest} {summary(rungs[fastest][1:])}" if fastest else "none",
                          f"{ratio:.2f}x", summary(cpu["after", target]),
                          summary(cpu[fastest]) if fastest else "-", f"{cpu_ratio:.2f}x", *((f"{before[0]:.2f}", summary(before[2:]),
@@ -148,7 +152,7 @@ def main() -> int:
                          f"{reference.floor_db:.1f}", "yes" if ok else "no"))
             print(" | ".join(rows[-1]), flush=True)
     (args.out / "auto.json").write_text(json.dumps(results, indent=1))
-    header = ["scene", "X dB", "full image dB", "chosen", "auto s", "fastest rung reaching X", "ratio", "auto CPU s",
+    header = ["scene", "X dB", "full image dB", "auto's estimate dB", "chosen", "auto s", "fastest rung reaching X", "ratio", "auto CPU s",
               "fastest rung CPU s", "CPU ratio",
               *(["before: dB", "before: auto s", "before: ratio"] if args.before else []), "reference floor dB", "pass"]
     text = table(f"`--quality auto --max-error X`, {' '.join(ARRAY_ARGS)}, full image against two seeds of "
