@@ -143,7 +143,8 @@ def main() -> int:
                             "floor_db": reference.floor_db, "pass": ok, "auto_cpu_s": cpu["after", target],
                             "auto_estimate_db": estimates.get(("after", target)),
                             "fastest_cpu_s": cpu[fastest] if fastest else None, "cpu_ratio": cpu_ratio})
-            rows.append((name, f"{target}", f"{got:.2f}", f"{estimates['after', target]:.2f}", chosen.replace("-A, ", "").replace("-A", "draft"),
+            rows.append((name, f"{target}", f"{got:.2f}", f"{estimates['after', target]:.2f}",
+                         chosen.replace("-A, ", "").replace("-A", "draft"),
                          summary(times), f"{fastest} {summary(rungs[fastest][1:])}" if fastest else "none",
                          f"{ratio:.2f}x", summary(cpu["after", target]),
                          summary(cpu[fastest]) if fastest else "-", f"{cpu_ratio:.2f}x", *((f"{before[0]:.2f}", summary(before[2:]),
