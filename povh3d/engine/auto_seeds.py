@@ -172,7 +172,9 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
     views = lens_array.require_views()
     prior = PRIOR_SAMPLES_40 * 10 ** (PRIOR_SLOPE * (target - 40))
     first = min(max(2, math.ceil(FIRST_SHARE * prior / 2)), MAX_SAMPLES // 8)
-    spare = math.ceil(SPARE_SHARE * prior / 2) - first if 2 * math.ceil(SPARE_SHARE * prior / 2) <= SPARE_UP_TO else 0
+    # (not on a Dask cluster: its runs cannot be stopped from here)
+    spare = math.ceil(SPARE_SHARE * prior / 2) - first if (2 * math.ceil(SPARE_SHARE * prior / 2) <= SPARE_UP_TO
+                                                          and not settings.scheduler) else 0
     centre = [np.broadcast_to(CENTRE[:, None, None, :], (1, *views, 4))] if target <= DRAFT_UP_TO_DB else []
     beside = SpareRun(method, scene, lens_array, base, options, [view_seeds(spare, seed + 2, views),
                                                                  view_seeds(spare, seed + 3, views)]) if spare > 0 else None
