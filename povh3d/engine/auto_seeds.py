@@ -8,10 +8,13 @@ has a quarter of it (``image.metrics.Reference``: its ``floor_db`` plus 6.02 dB)
 1. one POV-Ray run traces the point-sampled centre (``draft``) and two seeds of a few samples;
    the seeds are the reference ``draft`` is scored against (its noise taken off) and tell how
    the error falls with the samples (as ``1/N``);
-2. where ``draft`` misses the target and the seeds' mean too, one more run adds the samples the
+2. where few samples are asked for, a spare run of more seeds starts beside the first (a second
+   POV-Ray process, ``SpareRun``), killed where the first reaches the target, added where not:
+   a run's start-up is about 0.5 s, most of it idle;
+3. where ``draft`` misses the target and the seeds' mean too, one more run adds the samples the
    ``1/N`` law says the target needs, to each seed, and the seeds score the result again; a
    third run and on, rarely, where the law fell short;
-3. the image that met the target is the output: nothing is rendered twice.
+4. the image that met the target is the output: nothing is rendered twice.
 
 Every sample is traced once, in as few POV-Ray runs as the target allows, and on the full image,
 so the score is the written image's own.  ``auto.resolve_auto`` uses this where the method can
