@@ -14,7 +14,8 @@ has a quarter of it (``image.metrics.Reference``: its ``floor_db`` plus 6.02 dB)
 3. where ``draft`` misses the target and the seeds' mean too, one more run adds the samples the
    ``1/N`` law says the target needs, to each seed, and the seeds score the result again; a
    third run and on, rarely, where the law fell short;
-4. the image that met the target is the output: nothing is rendered twice.
+4. the image that met the target is the output: nothing is rendered twice (a killed spare
+   run's samples are dropped).
 
 Every sample is traced once, in as few POV-Ray runs as the target allows, and on the full image,
 so the score is the written image's own.  ``auto.resolve_auto`` uses this where the method can
