@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import resource
 import statistics
 import subprocess
 import time
@@ -66,6 +67,14 @@ def whole_process_times(command: list[str], cwd: Path, env: dict[str, str]) -> t
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def whole_process_times(command: list[str], cwd: Path, env: dict[str, str]) -> tuple[float, float]:
+    """Wall and CPU seconds (user + system, the command and every process it waited for) of ``command``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    wall = whole_process_seconds(command, cwd, env)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
 
 
 def summary(times: list[float]) -> str:

@@ -26,7 +26,7 @@ import tempfile
 from dataclasses import replace
 from pathlib import Path
 
-from _common import publish, summary, table, whole_process_seconds
+from _common import publish, summary, table, whole_process_times
 from povh3d.engine.auto import AUTO_LADDER
 from povh3d.engine.methods import run_method
 from povh3d.engine.quality import QUALITY_LEVELS, Quality, RenderSettings
@@ -55,12 +55,13 @@ def rung_name(q: Quality) -> str:
     return named.get(q, str(q.footprint))
 
 
-def povh3d_seconds(tree: Path, args: list[object]) -> float:
-    """Wall seconds of ``python -m povh3d ARGS`` run from checkout ``tree`` (start-up to exit)."""
+def povh3d_seconds(tree: Path, args: list[object]) -> tuple[float, float]:
+    """Wall and CPU seconds of ``python -m povh3d ARGS`` run from checkout ``tree`` (start-up to exit;
+    CPU: the interpreter and its POV-Ray processes, which other helpers' renders do not inflate)."""
     # Bytecode kept (written by the warm-up): PYTHONDONTWRITEBYTECODE would recompile povh3d in every
     # command, a constant that pulls every ratio towards 1.
     env = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(tree)}
-    return whole_process_seconds([sys.executable, "-m", "povh3d", *map(str, args)], tree, env)
+    return whole_process_times([sys.executable, "-m", "povh3d", *map(str, args)], tree, env)
 
 
 def main() -> int:
@@ -98,28 +99,34 @@ def main() -> int:
             base, quality=Quality(footprint=args.reference_samples, seed=seed))).h3d for seed in (1, 2)))
         rungs: dict[str, list] = {}        # name -> [dB, seconds...]
         autos: dict[tuple, list] = {}      # (tree, target) -> [dB, chosen, seconds...]
+        cpu: dict[object, list[float]] = {}   # rung name or (tree, target) -> CPU seconds
+        estimates: dict[tuple, float] = {}
         for run in range(args.repeat):
             for q in AUTO_LADDER:
                 rung = rung_name(q)
                 if run and rung not in rungs:
                     break
                 image = out / f"{rung}.png"
-                seconds = povh3d_seconds(REPO, ["render", path, *ARRAY_ARGS, "--quality", rung, "--no-cache", "-q",
-                                                "-o", image])
+                seconds, used = povh3d_seconds(REPO, ["render", path, *ARRAY_ARGS, "--quality", rung, "--no-cache",
+                                                      "-q", "-o", image])
                 rungs.setdefault(rung, [reference.psnr(read_png(image))]).append(seconds)
-                print(f"{name} {rung}: {seconds:.2f} s {rungs[rung][0]:.2f} dB", flush=True)
+                cpu.setdefault(rung, []).append(used)
+                print(f"{name} {rung}: {seconds:.2f} s (CPU {used:.2f} s) {rungs[rung][0]:.2f} dB", flush=True)
                 if rungs[rung][0] > max(targets) + 1:
                     break
             for target in targets:
                 order = list(trees) if run % 2 == 0 else list(trees)[::-1]   # who goes first alternates
                 for tree in order:
                     image = out / f"auto-{tree}-{target}.png"
-                    seconds = povh3d_seconds(trees[tree], ["render", path, *ARRAY_ARGS, "--quality", "auto",
-                                                           "--max-error", target, "--no-cache", "-q", "-o", image])
-                    chosen = json.loads(image.with_suffix(".json").read_text())["quality"]["auto"]["chosen"]
+                    seconds, used = povh3d_seconds(trees[tree], ["render", path, *ARRAY_ARGS, "--quality", "auto",
+                                                                 "--max-error", target, "--no-cache", "-q", "-o", image])
+                    cpu.setdefault((tree, target), []).append(used)
+                    record = json.loads(image.with_suffix(".json").read_text())["quality"]["auto"]
+                    chosen = record["chosen"]
+                    estimates.setdefault((tree, target), record["tried"][-1]["psnr_db"])   # auto's own, of its image
                     autos.setdefault((tree, target), [reference.psnr(read_png(image)), chosen]).append(seconds)
-                    print(f"{name} auto {tree} {target}: {seconds:.2f} s {autos[tree, target][0]:.2f} dB {chosen}",
-                          flush=True)
+                    print(f"{name} auto {tree} {target}: {seconds:.2f} s (CPU {used:.2f} s) {autos[tree, target][0]:.2f} "
+                          f"dB {chosen}", flush=True)
             loads.append(os.getloadavg()[0])
         median = {rung: statistics.median(v[1:]) for rung, v in rungs.items()}
         for target in targets:
@@ -127,25 +134,32 @@ def main() -> int:
             fastest = min(meets, key=median.get) if meets else None
             got, chosen, *times = autos["after", target]
             ratio = statistics.median(times) / median[fastest] if fastest else math.inf
+            cpu_ratio = statistics.median(cpu["after", target]) / statistics.median(cpu[fastest]) if fastest else math.inf
             ok = got >= target - 0.2 and ratio <= 1.25
             before = autos.get(("before", target))
             results.append({"scene": name, "target_db": target, "auto_s": times, "auto_db": got, "chosen": chosen,
                             "fastest": fastest, "fastest_s": rungs[fastest][1:] if fastest else None,
                             "before_s": before[2:] if before else None, "before_db": before[0] if before else None,
-                            "floor_db": reference.floor_db, "pass": ok})
-            rows.append((name, f"{target}", f"{got:.2f}", chosen.replace("-A, ", "").replace("-A", "draft"),
+                            "floor_db": reference.floor_db, "pass": ok, "auto_cpu_s": cpu["after", target],
+                            "auto_estimate_db": estimates.get(("after", target)),
+                            "fastest_cpu_s": cpu[fastest] if fastest else None, "cpu_ratio": cpu_ratio})
+            rows.append((name, f"{target}", f"{got:.2f}", f"{estimates['after', target]:.2f}",
+                         chosen.replace("-A, ", "").replace("-A", "draft"),
                          summary(times), f"{fastest} {summary(rungs[fastest][1:])}" if fastest else "none",
-                         f"{ratio:.2f}x", *((f"{before[0]:.2f}", summary(before[2:]),
+                         f"{ratio:.2f}x", summary(cpu["after", target]),
+                         summary(cpu[fastest]) if fastest else "-", f"{cpu_ratio:.2f}x", *((f"{before[0]:.2f}", summary(before[2:]),
                                              f"{statistics.median(before[2:]) / median[fastest]:.2f}x") if before
                                             else ()),
                          f"{reference.floor_db:.1f}", "yes" if ok else "no"))
             print(" | ".join(rows[-1]), flush=True)
     (args.out / "auto.json").write_text(json.dumps(results, indent=1))
-    header = ["scene", "X dB", "full image dB", "chosen", "auto s", "fastest rung reaching X", "ratio",
+    header = ["scene", "X dB", "full image dB", "auto's estimate dB", "chosen", "auto s", "fastest rung reaching X", "ratio", "auto CPU s",
+              "fastest rung CPU s", "CPU ratio",
               *(["before: dB", "before: auto s", "before: ratio"] if args.before else []), "reference floor dB", "pass"]
     text = table(f"`--quality auto --max-error X`, {' '.join(ARRAY_ARGS)}, full image against two seeds of "
                  f"{args.reference_samples} footprint samples; whole commands (auto's own renders included), "
-                 f"median (min-max) of {args.repeat} interleaved runs; load average (1 min) after each round "
+                 f"median (min-max) of {args.repeat} interleaved runs, wall and CPU (user + system of the command "
+                 f"and its POV-Ray processes); pass: wall ratio at most 1.25; load average (1 min) after each round "
                  f"{', '.join(f'{x:.1f}' for x in loads[1:])}", header, rows, load_before)
     return publish("auto", text, not args.no_docs)
 

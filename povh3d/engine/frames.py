@@ -54,9 +54,10 @@ class LocalRunner:
 
     def run(self, jobs: list[PovrayJob], *, processes: int, on_result: Callable[[JobResult], None],
             on_running: Callable[[dict[int, float]], None] | None = None,
-            on_frame: Callable[[PovrayJob, int, Path], None] | None = None) -> list[float]:
+            on_frame: Callable[[PovrayJob, int, Path], None] | None = None,
+            should_stop: Callable[[], bool] | None = None) -> list[float]:
         return run_jobs(jobs, processes=processes, on_result=on_result, binary=self.binary,
-                        on_running=on_running, on_frame=on_frame)
+                        on_running=on_running, on_frame=on_frame, should_stop=should_stop)
 
 
 def _canonical(value: Any) -> Any:
@@ -234,7 +235,8 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
         progress(done + sum(rendered.values()), len(keys))
 
     if jobs:
-        extra: dict[str, Any] = {"on_frame": frame_done} if isinstance(runner, LocalRunner) else {}
+        extra: dict[str, Any] = ({"on_frame": frame_done, "should_stop": settings.should_stop}
+                                 if isinstance(runner, LocalRunner) else {})
         if progress and isinstance(runner, LocalRunner):
             extra["on_running"] = running
         try:

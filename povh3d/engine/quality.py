@@ -4,7 +4,7 @@ how POV-Ray is run (``RenderSettings``); none of it changes the geometry."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -171,6 +171,8 @@ class RenderSettings:
                                 units, ``geometry.frame.DisplayFrame.matrix``); None: native
     depth_scale : float             compress depth along the display normal by this factor (1: none); a
                                 distortion, traced as every ray's slope times it (``depth_scaled_rays``)
+    should_stop : callable or None  polled while local POV-Ray runs; True stops them (``RenderInterrupted``):
+                                --quality auto's spare run, cancelled when the first run reaches the target
     """
 
     quality: str | Quality = "normal"
@@ -189,6 +191,7 @@ class RenderSettings:
     max_error_db: float | None = None
     frame: tuple[float, ...] | None = None
     depth_scale: float = 1.0
+    should_stop: Callable[[], bool] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         k = self.depth_scale
