@@ -3,8 +3,9 @@ HCI 4D light-field benchmark layout (``dataset.hci.write_hci``; docs/datasets.md
 
 The views are those ``extract`` writes (the camera bank, or each lens resampled at the view offsets;
 a hex array's then interpolated onto the grid of its lens columns, ``export_grid``); the depth is
-the render's depth pass along the ray of each exported pixel (``engine.depth.view_depth_maps``: mm of the display frame from the screen, negative in
-front, NaN where nothing is hit), which is what ``write_hci`` takes.  From an existing render the
+the render's depth pass along the ray of each exported pixel (``engine.depth.view_depth_maps``:
+mm of the display frame from the screen, negative in front, NaN where nothing is hit), which is
+what ``write_hci`` takes.  From an existing render the
 depth pass is made again from its sidecar: the scene, the display frame and the front clearance
 it was rendered with.
 """
