@@ -55,6 +55,7 @@ def export_grid(lens_array: LensArray) -> ExportGrid:
     columns (pitch ``p`` both ways, HCI's one disparity for both axes)."""
     la = lens_array
     if la.views is not None:
+        centre_camera(la.views)   # HCI's centre camera is the centre only of an odd grid: refuse before work
         return ExportGrid(la.views, la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, False)
     if la.grid == "lattice" or la.rotation:
         what = "a slanted sheet's (--lens-rotation)" if la.rotation else "a --lattice array's"
@@ -62,7 +63,7 @@ def export_grid(lens_array: LensArray) -> ExportGrid:
                           "off them; export an unslanted square, lenticular or hex render (--lens-rotation 0), or "
                           "take its views with 'povh3d extract'")
     views = view_grid(la)
-    centre_camera(views)      # HCI's centre camera is the centre only of an odd grid: refuse before work
+    centre_camera(views)
     if la.grid != "hex":
         return ExportGrid(views, la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, False)
     # Lx - 1 columns centred on the origin are the odd rows' lens centres, halfway between the even

@@ -107,6 +107,13 @@ def test_hex_render_exports_exact_disparity_and_views_on_the_grid(tmp_path, cli,
         r, c = divmod(cam, 5)
         u = (5 - 1 - c + 0.5 - 2.5) * S
         assert _ramp_error(read_png(folder / f"input_Cam{cam:03d}.png"), xs, u, z0) < 0.1, cam
+    if z0 > 0:   # from the render and its sidecar afterwards, every camera's ground truth
+        again = tmp_path / "again"
+        result = cli("dataset", out, "-o", again, "--all-views")
+        assert result.code == 0, result.err
+        assert np.array_equal(toolkit_read_pfm(again / "gt_disp_lowres.pfm"), disp)
+        for cam in range(25):
+            assert np.abs(toolkit_read_pfm(again / f"gt_disp_lowres_Cam{cam:03d}.pfm") - expected).max() < 0.01
 
 
 @pytest.mark.povray
@@ -140,3 +147,17 @@ def test_slanted_sheet_is_one_line_and_nothing_written(tmp_path, cli):
                               "--dataset", tmp_path / "d", "-o", out))
     assert "slanted" in line and "--lens-rotation 0" in line
     assert not out.exists() and not (tmp_path / "d").exists()
+
+
+def test_even_views_are_refused_before_any_work(tmp_path):
+    """``check_dataset_dir`` runs before the render: an even view count (bank or resampled) stops there."""
+    from povh3d.app.dataset import check_dataset_dir
+    from povh3d.errors import ConfigError
+
+    bank = LensArray("lenticular", 10, 4, 0.8, S, F, Panel(80, 4, S, S))                 # 8 views
+    hex6 = LensArray("hex", 6, 5, 0.6, 0.6 * math.sqrt(3) / 2, F, Panel(66, 30, S, S))   # 6x6 views
+    for la in (bank, hex6):
+        with pytest.raises(ConfigError, match="odd count"):
+            check_dataset_dir(tmp_path / "d", la)
+    check_dataset_dir(tmp_path / "d", LensArray("hex", 6, 5, 0.5, 0.5 * math.sqrt(3) / 2, F, Panel(56, 30, S, S)))
+    assert not (tmp_path / "d").exists()
