@@ -103,23 +103,27 @@ def export_views(h3d: np.ndarray, lens_array: LensArray) -> np.ndarray:
 def hex_onto_grid(views: np.ndarray, lens_array: LensArray, grid: ExportGrid) -> np.ndarray:
     """Hex views (one sample per lens centre) on the rectangular ``grid``, in linear light: along
     each of the two lens rows around a grid row, linearly between the row's lens centres (odd rows
-    half a pitch right), then linearly between the rows; at the array's edge the nearest lens."""
+    half a pitch right), then linearly between the rows (``export_grid`` keeps every grid pixel
+    between lenses of both rows: nothing is extrapolated)."""
     la = lens_array
-    lin = decode(views)
     xs = (np.arange(grid.cols) + 0.5 - grid.cols / 2) * grid.pitch_x
     ys = (grid.rows / 2 - np.arange(grid.rows) - 0.5) * grid.pitch_y
     t = la.lenses_y / 2 - 0.5 - ys / la.pitch_y            # fractional lens row of each grid row
     i0 = np.clip(np.floor(t).astype(np.int64), 0, max(la.lenses_y - 2, 0))
     ft = np.clip(t - i0, 0.0, 1.0)
-    out = 0.0
+    taps = []    # per lens row around a grid row: its weight, the row, two lens columns and their weight
     for r, w in ((i0, 1.0 - ft), (np.minimum(i0 + 1, la.lenses_y - 1), ft)):
         col = xs[None, :] / la.pitch_x + la.lenses_x / 2 - 0.5 - (r % 2)[:, None] * 0.5
         j0 = np.clip(np.floor(col).astype(np.int64), 0, max(la.lenses_x - 2, 0))
-        fj = np.clip(col - j0, 0.0, 1.0)[..., None]
-        j1 = np.minimum(j0 + 1, la.lenses_x - 1)
-        along = (1.0 - fj) * lin[:, :, r[:, None], j0] + fj * lin[:, :, r[:, None], j1]
-        out = out + w[:, None, None] * along
-    return encode(out, views.dtype)
+        taps.append((w[:, None, None], r[:, None], j0, np.minimum(j0 + 1, la.lenses_x - 1),
+                     np.clip(col - j0, 0.0, 1.0)[..., None]))
+    out = np.empty(views.shape[:2] + (grid.rows, grid.cols, views.shape[-1]), views.dtype)
+    for l in range(views.shape[0]):
+        for k in range(views.shape[1]):     # one view at a time: a large panel's stack in floats is GBs
+            lin = decode(views[l, k])
+            value = sum(w * ((1.0 - fj) * lin[r, j0] + fj * lin[r, j1]) for w, r, j0, j1, fj in taps)
+            out[l, k] = encode(value, views.dtype)
+    return out
 
 
 def check_dataset_dir(folder: Path, lens_array: LensArray, *, mapped: bool = False) -> None:
