@@ -2,9 +2,10 @@
 views ``extract`` writes, a hex array's interpolated onto the square grid of its lens columns, and
 the ground truth made along the rays of the exported pixels.
 
-The oracle is a plane at depth z0 whose pigment is a linear ramp across x (``(x + 8) / 16`` in
-linear light): view pixel at screen point X with view offset u shows ``(X + u z0 / f + 8) / 16``,
-so both where each exported pixel sits and its disparity ``-z0 s / (f p)`` are known exactly."""
+The oracle is a plane at depth z0 whose pigment is a linear ramp (``(x + 8 + (y + 8) / 2) / 24``
+in linear light): the view pixel at screen point (X, Y) with view offset (u, v) shows the ramp at
+``(X, Y) + (u, v) z0 / f``, so both where each exported pixel sits and its disparity
+``-z0 s / (f p)`` are known exactly."""
 
 from __future__ import annotations
 
@@ -32,16 +33,16 @@ def _ramp(folder, z0):
     path.write_text(f"""#version 3.7;
 global_settings {{ assumed_gamma 1.0 }}
 background {{ rgb 0 }}
-plane {{ -z, {-z0!r} pigment {{ gradient x color_map {{ [0 rgb 0] [1 rgb 1] }} scale 16 translate -8*x }}
+plane {{ -z, {-z0!r} pigment {{ function {{ (x + 8 + 0.5 * (y + 8)) / 24 }} color_map {{ [0 rgb 0] [1 rgb 1] }} }}
         finish {{ ambient 1 diffuse 0 }} }}
 """)
     return path
 
 
-def _ramp_error(view, xs, u, z0):
-    """Largest error of a view against the ramp, in pixels of the exported grid's pitch."""
-    pitch = xs[1] - xs[0]
-    return float(np.abs(decode(view)[..., 0] - (xs + u * z0 / F + 8) / 16).max() * 16 / pitch)
+def _ramp_error(view, xs, ys, u, v, z0):
+    """Largest error of a view against the ramp, in pixels (of x) of the exported grid's pitch."""
+    want = (xs[None, :] + u * z0 / F + 8 + 0.5 * (ys[:, None] + v * z0 / F + 8)) / 24
+    return float(np.abs(decode(view)[..., 0] - want).max() * 24 / (xs[1] - xs[0]))
 
 
 # -- the hex resampling, without POV-Ray -----------------------------------------------------------
@@ -86,11 +87,13 @@ def test_hex_render_exports_exact_disparity_and_views_on_the_grid(tmp_path, cli,
     outside = {int(c) for c in extra.get("meta", "povh3d_cameras_outside_lens_cell").split(",")}
     assert outside == {0, 4, 20, 24}                      # the cell's corners: (+-2, +-2) px
     # the views sit on the grid of lens columns: the centre camera shows the ramp at those columns
-    xs = (np.arange(7) + 0.5 - 3.5) * p
+    xs, ys = (np.arange(7) + 0.5 - 3.5) * p, (np.arange(5)[::-1] + 0.5 - 2.5) * p
     from povh3d.image.io import read_png
 
     centre = read_png(folder / "input_Cam012.png")
-    assert _ramp_error(centre, xs, 0.0, z0) < 0.05
+    assert _ramp_error(centre, xs, ys, 0.0, 0.0, z0) < 0.05       # measured 0.0007
+    hex_rows = (3 - np.arange(5) - 0.5) * p * math.sqrt(3) / 2
+    assert _ramp_error(centre, xs, hex_rows, 0.0, 0.0, z0) > 0.2   # control: the lens rows' heights (0.35)
     # control: the same views without the odd rows' half pitch (extract's lens order) miss by p / 2
     from povh3d.app.dataset import export_views
     from povh3d.app.views import sidecar_bank
@@ -100,13 +103,16 @@ def test_hex_render_exports_exact_disparity_and_views_on_the_grid(tmp_path, cli,
     la = Display.from_record(read_sidecar(out)).lens_array
     assert np.array_equal(export_views(read_png(out), la)[2, 2], centre)
     raw = sidecar_bank(read_png(out), la)[2, 2, :5, :7]
-    assert _ramp_error(raw, xs, 0.0, z0) > 0.4
+    assert _ramp_error(raw, xs, ys, 0.0, 0.0, z0) > 0.4
     # the inner 3x3 cameras show the ramp shifted by -d per camera to the right (the outer ones read
     # pixels on or near the cell's edge, half a pixel off their ray at odd PPL: extract's limit)
     for cam in (6, 7, 8, 11, 13, 16, 17, 18):
         r, c = divmod(cam, 5)
-        u = (5 - 1 - c + 0.5 - 2.5) * S
-        assert _ramp_error(read_png(folder / f"input_Cam{cam:03d}.png"), xs, u, z0) < 0.1, cam
+        u, v = (5 - 1 - c + 0.5 - 2.5) * S, (2.5 - (5 - 1 - r) - 0.5) * S     # bank view (4 - r, 4 - c)
+        view = read_png(folder / f"input_Cam{cam:03d}.png")
+        assert _ramp_error(view, xs, ys, u, v, z0) < 0.1, cam       # measured 0.001
+        if v:   # control: the bank's own vertical order (camera row r as bank view l = r) fails
+            assert _ramp_error(view, xs, ys, u, -v, z0) > 0.2, cam
     if z0 > 0:   # from the render and its sidecar afterwards, every camera's ground truth
         again = tmp_path / "again"
         result = cli("dataset", out, "-o", again, "--all-views")
@@ -129,11 +135,12 @@ def test_fractional_ppl_render_and_its_dataset_afterwards(tmp_path, cli):
     assert np.abs(disp - (-z0 * S / (F * 0.7))).max() > 0.01   # control: the whole-PPL lens pitch fails
     from povh3d.image.io import read_png
 
-    xs = (np.arange(12) + 0.5 - 6) * p
+    xs, ys = (np.arange(12) + 0.5 - 6) * p, (np.arange(6)[::-1] + 0.5 - 3) * S
     # the inner cameras show the ramp on the lens centres (the outer ones read near the lens's edge,
     # where extract's in-lens interpolation falls back to the nearest pixel: 0.18 px measured)
     for cam in (2, 3, 4):
-        assert _ramp_error(read_png(folder / f"input_Cam{cam:03d}.png"), xs, (6 - cam + 0.5 - 3.5) * S, z0) < 0.1
+        assert _ramp_error(read_png(folder / f"input_Cam{cam:03d}.png"), xs, ys, (6 - cam + 0.5 - 3.5) * S, 0.0,
+                           z0) < 0.1
     again = tmp_path / "again"
     result = cli("dataset", out, "-o", again)
     assert result.code == 0, result.err
