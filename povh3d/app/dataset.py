@@ -63,7 +63,11 @@ def export_grid(lens_array: LensArray) -> ExportGrid:
                           "off them; export an unslanted square, lenticular or hex render (--lens-rotation 0), or "
                           "take its views with 'povh3d extract'")
     views = view_grid(la)
-    centre_camera(views)
+    if views[0] % 2 == 0 or views[1] % 2 == 0:
+        ny, nx = views
+        raise ConfigError(f"the HCI toolkit's centre camera is the centre only of an odd grid, and this "
+                          f"{la.grid} array's {la.ppl_x:g} pixels per lens give {nx}x{ny} views (extract's: "
+                          "whole pixels, rounded); render with an odd --ppl, e.g. 5 or 7")
     if la.grid != "hex":
         return ExportGrid(views, la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, False)
     # Lx - 1 columns centred on the origin are the odd rows' lens centres, halfway between the even
