@@ -28,7 +28,7 @@ from .stage import prepare_stage
 from .placement import place_display
 from .ray_state import check_ray_state, state_features
 from .depth_maps import check_depth_dir, write_depth_maps
-from .dataset import check_dataset_dir, write_dataset
+from .dataset import check_dataset_dir, dataset_depth, write_dataset
 from .device_quilt import check_device_render, write_device_outputs
 from ..engine.depth import view_depth_maps
 from ..engine.scene_camera import uses_image_size
@@ -77,12 +77,12 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         if still.views is not None:
             write_views(request.views_dir, still.views, request.render_array, still.record)
         depth = None
-        if request.depth_maps is not None or request.dataset is not None:
-            units = frame_record.get("units_per_mm", 1.0)
-            depth = view_depth_maps(scene, request.render_array, settings,
-                                    still.record["quality"]["front_clearance_mm"], units)
-        if request.dataset is not None:
-            write_dataset(request.dataset, still.image, request.render_array, depth,
+        units, clearance = frame_record.get("units_per_mm", 1.0), still.record["quality"]["front_clearance_mm"]
+        if request.depth_maps is not None:
+            depth = view_depth_maps(scene, request.render_array, settings, clearance, units)
+        if request.dataset is not None:   # the exported pixels' rays (a hex array's: the grid of lens columns)
+            write_dataset(request.dataset, still.image, request.render_array,
+                          dataset_depth(scene, request.render_array, settings, clearance, units),
                           all_views=request.dataset_all_views, scene=scene.path.stem)
             still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
         if request.depth_maps is not None:

@@ -112,10 +112,11 @@ def hci_depth_m(z: np.ndarray, geometry: BankGeometry) -> np.ndarray:
 
 
 def parameters_cfg(geometry: BankGeometry, shape: tuple[int, int], disp_range: tuple[float, float], *,
-                   scene: str = "povh3d") -> str:
+                   scene: str = "povh3d", meta: dict[str, str] | None = None) -> str:
     """``parameters.cfg`` text with every key the HCI toolkit's ``read_parameters`` reads.
 
     shape : (height, width) of a view, pixels.
+    meta : more ``[meta]`` keys (the toolkit reads only its own).
     """
     h, w = shape
     ny, nx = geometry.views
@@ -151,18 +152,20 @@ def parameters_cfg(geometry: BankGeometry, shape: tuple[int, int], disp_range: t
         f"frustum_disp_min = {lo!r}",
         f"frustum_disp_max = {hi!r}",
         "depth_map_scale = 1.0",
+        *(f"{k} = {v}" for k, v in (meta or {}).items()),
         "",
     ])
 
 
 def write_hci(folder: str | Path, bank: np.ndarray, ray_depth: np.ndarray, geometry: BankGeometry, *,
-              all_views: bool = False, scene: str = "povh3d") -> list[Path]:
+              all_views: bool = False, scene: str = "povh3d", meta: dict[str, str] | None = None) -> list[Path]:
     """Write the HCI layout of a camera bank into ``folder`` (created if missing).
 
     bank : (Ny, Nx, H, W, 3) uint8 or uint16 views, bank order (conventions)
     ray_depth : (Ny, Nx, H, W) float, mm along each view's ray from the display plane
                 (positive behind the screen), NaN where nothing is hit
     all_views : also ``gt_disp_lowres_CamNNN.pfm`` / ``gt_depth_lowres_CamNNN.pfm`` per camera
+    meta : more ``[meta]`` keys for ``parameters.cfg``
 
     Every file is checked before any is written; existing files are refused, not replaced.
     Returns the paths written.
@@ -189,7 +192,8 @@ def write_hci(folder: str | Path, bank: np.ndarray, ray_depth: np.ndarray, geome
     files: dict[Path, object] = {}
     for i, view in enumerate(to_hci_order(bank)):
         files[folder / f"input_Cam{i:03d}.png"] = ("png", view)
-    files[folder / "parameters.cfg"] = ("text", parameters_cfg(geometry, bank.shape[2:4], disp_range, scene=scene))
+    files[folder / "parameters.cfg"] = ("text", parameters_cfg(geometry, bank.shape[2:4], disp_range, scene=scene,
+                                                                  meta=meta))
     files[folder / "gt_disp_lowres.pfm"] = ("pfm", disp)
     files[folder / "gt_depth_lowres.pfm"] = ("pfm", hci_depth_m(z_centre, geometry))
     if all_views:

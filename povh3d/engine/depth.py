@@ -95,10 +95,11 @@ class DepthMap:
 
 
 def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
-               fog: float, width: int, height: int) -> ShotBatch:
-    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames."""
-    right = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0)
-    up = (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
+               fog: float, width: int, height: int, field: tuple[float, float] | None = None) -> ShotBatch:
+    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames.
+    ``field`` (mm, centred on the origin) defaults to the lens array's."""
+    width_mm, height_mm = field or (lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y)
+    right, up = (width_mm, 0.0, 0.0), (0.0, height_mm, 0.0)
     frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
     return ShotBatch("depth.pov.j2", {"fog_distance": fog, "front_clearance": front_clearance, "right": right, "up": up},
                       frames, width, height, shots_per_job=max(2, min(400, len(frames))), processes=1,
@@ -172,7 +173,8 @@ def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, fr
 
 
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
-                    units_per_mm: float) -> np.ndarray:
+                    units_per_mm: float, *, views: tuple[int, int] | None = None,
+                    grid: tuple[int, int, float, float] | None = None) -> np.ndarray:
     """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
     (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
 
@@ -180,11 +182,18 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     shows it: the rays traced have slopes ``k (u, v) / f`` (``depth_scaled_rays``), a hit at
     depth ``z`` of the scene shows at ``k z``.
 
+    ``views`` (Ny, Nx) default the camera bank's; a resampled array passes its own
+    (``elemental.view_grid``).  ``grid`` ``(cols, rows, pitch_x, pitch_y)`` puts the rays'
+    screen crossings on that rectangular grid centred on the origin (a hex array's views
+    resampled onto lens columns) instead of the lens centres of a rectangular array.
+
     Returns
     -------
-    (Ny, Nx, Ly, Lx) float32, mm; NaN where nothing is hit (or it cannot be measured).
+    (Ny, Nx, Ly, Lx) float32, mm (``grid``: rows x cols); NaN where nothing is hit (or it
+    cannot be measured).
     """
-    ny, nx = lens_array.require_views()
+    ny, nx = views or lens_array.require_views()
+    cols, rows, gx, gy = grid or (lens_array.lenses_x, lens_array.lenses_y, lens_array.pitch_x, lens_array.pitch_y)
     s, sy = lens_array.panel.pitch_x, lens_array.panel.pitch_y
     k = settings.depth_scale
     f = depth_scaled_rays(lens_array, k).focal
@@ -192,7 +201,7 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
                        for l in range(ny) for j in range(nx)])
     directions = [(a, b, 1.0) for a, b in slopes.tolist()]
     fog = front_clearance * units_per_mm
-    batch = _fog_batch(directions, lens_array, front_clearance, fog, lens_array.lenses_x, lens_array.lenses_y)
+    batch = _fog_batch(directions, lens_array, front_clearance, fog, cols, rows, (cols * gx, rows * gy))
     d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
     # The ray starts front_clearance * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
     lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
