@@ -169,7 +169,7 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
     """``povh3d dataset``: the HCI folder of an existing render, its depth pass made again from its
     sidecar (scene, display frame, front clearance, depth scale)."""
     from ..engine.quality import RenderSettings
-    from ..geometry.frame import DisplayFrame
+    from .display_frame import recorded_frame
     from ..scene.scene import load_scene
     from .display_setup import Display
 
@@ -195,19 +195,8 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
         raise InputError(f"the scene {str(scene_path)!r} the sidecar names is gone; the depth pass needs it: "
                          "render again with --dataset")
     frame_record = record.get("display_frame") or {}
-    frame = _frame(frame_record, DisplayFrame)
+    frame = recorded_frame(frame_record)
     settings = RenderSettings(quality="draft", frame=frame, depth_scale=float(frame_record.get("depth_scale", 1.0)))
     depth = dataset_depth(load_scene(scene_path), lens_array, settings, record["quality"]["front_clearance_mm"],
                           float(frame_record.get("units_per_mm", 1.0)))
     return write_dataset(folder, h3d, lens_array, depth, all_views=all_views, scene=scene_path.stem)
-
-
-def _frame(record: dict[str, Any], frame_type: Any) -> tuple[float, ...] | None:
-    """The POV-Ray matrix of the sidecar's display frame (None: native)."""
-    if "matrix" in record:
-        return tuple(float(v) for v in record["matrix"])
-    if not record or record.get("source") == "native":
-        return None
-    frame = frame_type(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
-                       tuple(record["normal"]), float(record["units_per_mm"]))
-    return None if frame.is_native else tuple(frame.matrix().ravel().tolist())
