@@ -1,4 +1,5 @@
-"""Refuse a render whose fog, media or refraction would depend on which ray POV-Ray traces first.
+"""Refuse (or, where the method was not chosen, re-route) a render whose fog, media or refraction would
+depend on which ray POV-Ray traces first.
 
 POV-Ray leaves fog and media out of a ray segment inside a solid (non-hollow) object, and
 refracts a ray leaving one by its interior's ``ior``, so it must know which solids a ray
@@ -8,20 +9,32 @@ a render thread traces, and gives every later ray the same state (tests/app/test
 Where the display's rays start partly inside a solid and partly outside (a ground plane the
 front clearance reaches below, a room or a sky sphere the frame cuts), a mesh-camera image
 puts fog where an orthographic view has none, or the other way round: a wrong image with
-nothing to show it.  The depth pass (an orthographic camera from about the same clearance)
-measures that share: the pixels its fog did not reach (``unmeasured_fraction``).  It looks
-along the display normal only: a ray of an oblique view that starts inside a solid where the
-normal's rays do not is not seen (docs/methods.md).
+nothing to show it.  A fog pass over the plane that holds every view's ray origins (the
+lens array's field widened by the clearance times the most oblique slope: an oblique view's
+rays start further out, ``engine.depth.origins_inside``) measures the share inside a solid.
+Some but not all: refused, or, where the user did not choose ``--method``, rendered with
+``multi-ortho-views`` (an orthographic camera a view), and the sidecar says why.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
 
-from ..errors import ConfigError
+from ..engine.clearance import planned_front_clearance
+from ..engine.depth import origins_inside
+from ..engine.methods import frame_units, get_method
+from ..engine.scene_camera import uses_image_size
+from ..errors import ConfigError, warn
+from ..geometry.rays import depth_scaled_rays
 from ..scene.features import Features, features_of_text
 from ..scene.scene import Scene
+
+if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from .request import RenderRequest
+
+#: The method a render falls back to when the default's mesh camera would share one state.
+FALLBACK = "multi-ortho-views"
 
 #: Features whose look POV-Ray works out from the solids a ray starts in: fog and media, left out
 #: inside a solid; an interior's ior, by which a ray refracts (or reflects, with fresnel) on leaving one.
@@ -37,8 +50,7 @@ def state_features(scene: Scene) -> Features:
     return Features(frozenset(f for f in STATE_FEATURES if f in (own if f == "ior" else scene.features)))
 
 
-def check_ray_state(method: str, shares_ray_state: bool, features: Features,
-                    depth: Mapping[str, Any] | None) -> None:
+def check_ray_state(method: str, shares_ray_state: bool, features: Features, inside: float | None) -> None:
     """Raise ConfigError when ``method`` would give rays inside and outside a solid one state.
 
     Parameters
@@ -46,20 +58,70 @@ def check_ray_state(method: str, shares_ray_state: bool, features: Features,
     method : str                 the method's name, for the message
     shares_ray_state : bool      whether it traces with POV-Ray's mesh camera (``Method``)
     features : Features          the scene's (``state_features``)
-    depth : mapping or None      the depth pass's record (``display_frame.depth``); None: not measured
+    inside : float or None       the share of the ray origins inside a solid (``origins_inside``); None: not measured
     """
-    if not shares_ray_state or not depth:
+    if not shares_ray_state or inside is None:
         return
     used = [f for f in STATE_FEATURES if f in features]
-    inside = float(depth.get("unmeasured_fraction", 0.0))
-    # All of the depth pass's rays inside is no safer than some: the views' oblique rays start beyond its
-    # field, and the mesh camera's first ray (a corner view's) may start outside (the gallery's skies).
-    if not used or not inside > 0.0:
+    # All inside (a sky sphere around every origin) is one state for every ray, as is all outside.
+    if not used or not 0.0 < inside < 1.0:
         return
     raise ConfigError(
-        f"{100 * inside:.3g} % of the display's rays start inside a solid object (a ground 'plane' the rays "
-        f"start below, a room or a sky around the camera) and the scene has {' and '.join(used)}, which POV-Ray "
-        f"works out from the solids a ray starts in; --method {method} traces with POV-Ray's mesh camera, which "
-        f"gives every ray the inside/outside state of the first one it traces, so part of the image would be "
-        "wrong: add 'hollow' to that object, or use --method multi-ortho-views (an orthographic camera a view, "
+        f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside a solid object (a ground "
+        f"'plane' the rays start below, a room or a sky around the camera) and the scene has {' and '.join(used)}, "
+        f"which POV-Ray works out from the solids a ray starts in; --method {method} traces with POV-Ray's mesh "
+        f"camera, which gives every ray the inside/outside state of the first one it traces, so part of the image "
+        f"would be wrong: add 'hollow' to that object, or use --method {FALLBACK} (an orthographic camera a view, "
         "which tests each ray)")
+
+
+def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None) -> str | None:
+    """Why ``method`` renders a scene that builds something from ``image_width``/``image_height`` (other
+    than their ratio) unlike each view's own render, or None.  POV-Ray gives them the size of the run:
+    ``FALLBACK`` renders each view in a run of the view's size, as a plain render of that view is;
+    the other methods trace many views (or lenses) in one run of another size."""
+    if method == FALLBACK or not uses_image_size(scene):
+        return None
+    fix = (f"use --method {FALLBACK} (each view a POV-Ray run of its own size)" if views is not None
+           else "use a display with whole views and --method " + FALLBACK)
+    return (f"{scene.path.name} builds something from image_width or image_height (other than their ratio), "
+            f"which POV-Ray sets to the size of each run; --method {method} traces many views in one run of "
+            f"another size, so each view would differ from a render of that view: {fix}, or #declare the sizes "
+            "the scene needs")
+
+
+def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any] | None]:
+    """``request`` as it may render (its display placed): unchanged, or with the default method replaced by
+    ``FALLBACK`` where it would render the scene wrong (its mesh camera's one ray state, or the size of its
+    runs seen through ``image_width``); and the sidecar's record of the check (None: nothing to check).
+    A chosen method is refused instead, in one line naming the fix."""
+    if request.is_model:
+        return request, None
+    method, views = get_method(request.method), request.render_array.views
+    features = state_features(scene)
+    record: dict[str, Any] = {}
+    problem = image_size_problem(scene, request.method, views)
+    if problem is None and method.shares_ray_state and features.used:
+        s = request.settings
+        clearance = planned_front_clearance(method, request.render_array, s)
+        rays = depth_scaled_rays(request.render_array, s.depth_scale)
+        inside = origins_inside(scene, rays, s, clearance, frame_units(s.frame))
+        record = {"origins_inside_fraction": inside, "front_clearance_mm": clearance,
+                  "depends_on": sorted(features.used)}
+        try:
+            check_ray_state(request.method, True, features, inside)
+        except ConfigError as error:
+            problem = str(error)
+    if problem is None:
+        if request.method == FALLBACK and uses_image_size(scene):
+            warn(f"{scene.path.name} uses image_width or image_height other than as their ratio: each view is "
+                 "a POV-Ray run of the view's own size, which the scene sees there (not the panel's, as in its "
+                 "2D render)")
+        return request, record or None
+    if request.method_chosen or views is None:
+        raise ConfigError(problem)
+    cause = problem.split(": add 'hollow'")[0].split(": use --method")[0]
+    note = f"{FALLBACK}, not the default {request.method} (slower: one POV-Ray frame a view): {cause}"
+    short = "rays start partly inside a solid" if record else "the scene reads image_width/image_height"
+    return replace(request, method=FALLBACK, method_options={}), {**record, "method_note": note,
+                                                                  "method_fallback": short}

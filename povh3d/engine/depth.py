@@ -95,10 +95,11 @@ class DepthMap:
 
 
 def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
-               fog: float, width: int, height: int) -> ShotBatch:
-    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames."""
-    right = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0)
-    up = (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
+               fog: float, width: int, height: int, field: tuple[float, float] | None = None) -> ShotBatch:
+    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames.
+    ``field``: the cameras' width and height (mm; default the lens array's)."""
+    w, h = field or (lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y)
+    right, up = (w, 0.0, 0.0), (0.0, h, 0.0)
     frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
     return ShotBatch("depth.pov.j2", {"fog_distance": fog, "front_clearance": front_clearance, "right": right, "up": up},
                       frames, width, height, shots_per_job=max(2, min(400, len(frames))), processes=1,
@@ -169,6 +170,37 @@ def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, fr
     d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
                                                                           front_clearance, fog, w, h), fog)
     return depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
+
+
+def origin_field(lens_array: LensArray, front_clearance: float) -> tuple[float, float]:
+    """Width and height (mm) of the plane ``z = -front_clearance`` that holds every pixel ray's origin: the
+    lens array's field, widened on each side by the clearance times the most oblique ray's slope (the
+    largest pixel offset from a lens centre over ``f``; a lenticular sheet's rays keep their row)."""
+    f = lens_array.focal
+    if lens_array.grid == "hex":
+        hx = hy = lens_array.pitch_x / np.sqrt(3)   # the cell's circumradius
+    elif lens_array.grid == "lattice":
+        a1, a2 = np.abs(np.array(lens_array.basis, dtype=np.float64))
+        hx, hy = (a1 + a2) / 2
+    else:
+        hx = lens_array.pitch_x / 2
+        hy = 0.0 if lens_array.grid == "lenticular" else lens_array.pitch_y / 2
+    return (lens_array.lenses_x * lens_array.pitch_x + 2 * front_clearance * hx / f,
+            lens_array.lenses_y * lens_array.pitch_y + 2 * front_clearance * hy / f)
+
+
+def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
+                   units_per_mm: float) -> float:
+    """The share of the plane of every view's ray origins (``origin_field``, ``front_clearance`` mm out)
+    that lies inside a solid: a fog pass along the normal over that plane (the pixels the fog does not
+    reach).  ``lens_array``: the rays as traced (``depth_scaled_rays``)."""
+    field = origin_field(lens_array, front_clearance)
+    w = MAX_WIDTH
+    h = max(1, min(4 * MAX_WIDTH, round(w * field[1] / field[0])))
+    fog = front_clearance * units_per_mm
+    batch = _fog_batch([(0.0, 0.0, 1.0)], lens_array, front_clearance, fog, w, h, field)
+    _, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog)
+    return float(unmeasured[0])
 
 
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,

@@ -21,21 +21,22 @@ from povh3d.scene.features import Features
 FOG = Features(frozenset({"fog"}))
 
 
-@pytest.mark.parametrize("inside", [0.05, 0.5, 1.0])   # 1.0: the views' oblique rays reach beyond the pass
+@pytest.mark.parametrize("inside", [0.05, 0.5, 0.999])
 @pytest.mark.parametrize("feature", ["fog", "media", "ior"])
 def test_a_mesh_camera_refuses_rays_partly_inside_a_solid_with_fog(inside, feature):
     with pytest.raises(ConfigError, match=rf"inside a solid.*{feature}.*hollow.*--method multi-ortho-views") as error:
-        check_ray_state("multi-ortho", True, Features(frozenset({feature})), {"unmeasured_fraction": inside})
+        check_ray_state("multi-ortho", True, Features(frozenset({feature})), inside)
     assert "\n" not in str(error.value)
 
 
 @pytest.mark.parametrize("method, shares, features, inside", [
     ("multi-ortho", True, FOG, 0.0),                          # every ray outside: one state is right
+    ("multi-ortho", True, FOG, 1.0),                          # every ray inside (a sky around them all): too
     ("multi-ortho", True, Features(frozenset({"reflection"})), 0.3),   # nothing that depends on it
     ("multi-ortho-views", False, FOG, 0.3),                   # an orthographic camera tests each ray
 ])
 def test_what_one_shared_state_renders_right_passes(method, shares, features, inside):
-    check_ray_state(method, shares, features, {"unmeasured_fraction": inside})
+    check_ray_state(method, shares, features, inside)
     check_ray_state(method, shares, features, None)           # not measured: nothing to go by
 
 
@@ -131,7 +132,7 @@ def test_the_refused_frame_would_be_wrong(cli, tmp_path, monkeypatch, hollow, wr
     from benchmarks.gallery import oracle_view
     from povh3d.image.metrics import psnr
 
-    monkeypatch.setattr("povh3d.app.render.check_ray_state", lambda *args: None)
+    monkeypatch.setattr("povh3d.app.render.settle_method", lambda request, scene: (request, None))
     scene = tmp_path / "ground.pov"
     scene.write_text(GROUND.format(fog="fog { rgb 0.8 distance 20 }", hollow=hollow))
     out, views = tmp_path / "g.png", tmp_path / "views"
