@@ -18,7 +18,10 @@ Some but not all: refused, or, where the user did not choose ``--method``, rende
 
 from __future__ import annotations
 
+import re
+import tempfile
 from dataclasses import replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..engine.clearance import planned_front_clearance
@@ -27,8 +30,8 @@ from ..engine.methods import frame_units, get_method
 from ..engine.scene_camera import uses_image_size
 from ..errors import ConfigError, warn
 from ..geometry.rays import depth_scaled_rays
-from ..scene.features import Features, features_of_text
-from ..scene.scene import Scene
+from ..scene.features import Features, features_of_text, strip_comments
+from ..scene.scene import Scene, load_scene
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from .request import RenderRequest
@@ -41,13 +44,46 @@ FALLBACK = "multi-ortho-views"
 STATE_FEATURES = ("fog", "media", "ior")
 
 
+def _own_sources(scene: Scene) -> list[Path]:
+    return [p for p in scene.files if p.suffix.lower() in (".pov", ".inc", ".mcr") and p.is_file()]
+
+
+#: An interior or material an include declares, applied in the scene's own text (``interior { I_Glass_Exp(2)``).
+_APPLIED = re.compile(r"\b(?:interior\s*\{\s*I_|material\s*\{\s*M_)\w")
+
+
 def state_features(scene: Scene) -> Features:
     """The scene's features that depend on a ray's inside/outside state: fog and media wherever they are
-    written, an ``ior`` only in the scene's own files.  POV-Ray's textures.inc and glass.inc declare glass
+    written; an ``ior`` in the scene's own files, or in an include whose interior (``I_...``) or material
+    (``M_...``) the scene's own text applies.  POV-Ray's textures.inc and glass.inc declare glass
     interiors with an ior that most scenes including them never apply (advanced/sunsethf.pov)."""
-    own = features_of_text(p.read_text(encoding="latin-1") for p in scene.files
-                           if p.suffix.lower() in (".pov", ".inc", ".mcr") and p.is_file())
-    return Features(frozenset(f for f in STATE_FEATURES if f in (own if f == "ior" else scene.features)))
+    texts = [p.read_text(encoding="latin-1") for p in _own_sources(scene)]
+    own = features_of_text(texts)
+    applied = "ior" in scene.features and any(_APPLIED.search(strip_comments(t)) for t in texts)
+    return Features(frozenset(f for f in STATE_FEATURES
+                              if f in (own if f == "ior" and not applied else scene.features)))
+
+
+#: Features that depend on the hollow objects a ray starts in too: media inside them, the ior a ray leaves
+#: by (fog fills a hollow object: the state of a hollow one does not change it).
+HOLLOW_FEATURES = ("media", "ior")
+_HOLLOW = re.compile(r"\bhollow\b(?:\s+(?:on|off|true|false|yes|no)\b)?")
+
+
+def without_hollow(scene: Scene, folder: Path) -> Scene | None:
+    """A copy of the scene in ``folder`` with every ``hollow`` of its own files turned off, so that the
+    origin pass's fog stops at a hollow object too; None when no own file names ``hollow``."""
+    sources = _own_sources(scene)
+    if not any(_HOLLOW.search(strip_comments(p.read_text(encoding="latin-1"))) for p in sources):
+        return None
+    root = scene.path.parent
+    for p in sources:
+        if p.is_relative_to(root):   # an include from elsewhere stays as it is
+            target = folder / p.relative_to(root)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_text(_HOLLOW.sub("hollow off", p.read_text(encoding="latin-1")), encoding="latin-1")
+    # The original folders after the copy's: images, fonts and data files are read from there.
+    return load_scene(folder / scene.path.relative_to(root), (root, *scene.include_dirs))
 
 
 def check_ray_state(method: str, shares_ray_state: bool, features: Features, inside: float | None) -> None:
@@ -73,6 +109,19 @@ def check_ray_state(method: str, shares_ray_state: bool, features: Features, ins
         f"camera, which gives every ray the inside/outside state of the first one it traces, so part of the image "
         f"would be wrong: add 'hollow' to that object, or use --method {FALLBACK} (an orthographic camera a view, "
         "which tests each ray)")
+
+
+def hollow_problem(method: str, used: list[str], inside: float) -> str | None:
+    """Why a mesh-camera ``method`` would render wrong with ``inside`` of the ray origins inside an object,
+    hollow ones counted (``without_hollow``), and the scene's media or ior; None where all or none are."""
+    if not 0.0 < inside < 1.0:
+        return None
+    return (f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside an object, hollow ones "
+            f"counted (a room or a sky around the camera that the frame cuts), and the scene has {' and '.join(used)}, "
+            f"which POV-Ray works out from the objects a ray starts in, hollow or not; --method {method} traces "
+            "with POV-Ray's mesh camera, which gives every ray the inside/outside state of the first one it "
+            f"traces, so part of the image would be wrong: use --method {FALLBACK} (an orthographic camera a "
+            "view, which tests each ray)")
 
 
 def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None) -> str | None:
@@ -112,6 +161,14 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
             check_ray_state(request.method, True, features, inside)
         except ConfigError as error:
             problem = str(error)
+        hollow_used = [f for f in HOLLOW_FEATURES if f in features]
+        if problem is None and hollow_used:
+            with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
+                solid = without_hollow(scene, Path(folder))
+                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, frame_units(s.frame))
+            if anywhere is not None:
+                record["origins_inside_hollow_or_solid_fraction"] = anywhere
+                problem = hollow_problem(request.method, hollow_used, anywhere)
     if problem is None:
         if request.method == FALLBACK and uses_image_size(scene):
             warn(f"{scene.path.name} uses image_width or image_height other than as their ratio: each view is "
@@ -122,6 +179,6 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         raise ConfigError(problem)
     cause = problem.split(": add 'hollow'")[0].split(": use --method")[0]
     note = f"{FALLBACK}, not the default {request.method} (slower: one POV-Ray frame a view): {cause}"
-    short = "rays start partly inside a solid" if record else "the scene reads image_width/image_height"
+    short = "rays start partly inside an object" if record else "the scene reads image_width/image_height"
     return replace(request, method=FALLBACK, method_options={}), {**record, "method_note": note,
                                                                   "method_fallback": short}
