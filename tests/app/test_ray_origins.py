@@ -161,3 +161,49 @@ def test_a_scene_built_from_image_width_renders_each_view_at_its_own_size(cli, t
     assert record["method"] == ("multi-ortho-views" if outcome == "fallback" else "multi-ortho")
     assert ("image_width" in record.get("method_note", "")) == (outcome == "fallback")
     assert _worst_db(scene, record, views, picks=((0, 0), (2, 2))) >= 35
+
+
+# A hollow box of glowing media that the lower half of the origins (y < 0) starts in (a room the frame
+# cuts): fog would fill it, but its own media and an ior depend on which objects a ray starts in.
+ROOM = """#version 3.7;
+global_settings {{ assumed_gamma 1 }}
+light_source {{ <20, 40, -80> rgb 1 }}
+background {{ rgb <0.1, 0.1, 0.3> }}
+sphere {{ <0, 0, 10>, 4 pigment {{ rgb <1, 0.3, 0.1> }} }}
+box {{ <-200, -200, -200>, <200, {top}, 200> hollow pigment {{ rgbt 1 }}
+      interior {{ media {{ emission <0.02, 0.2, 0.02> }} }} }}
+"""
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("top, method, outcome", [
+    (0, None, "fallback"),            # half the origins inside the hollow room: right, one camera a view
+    (0, "multi-ortho", "refused"),
+    (200, None, "kept"),              # every origin inside it: one state, right
+])
+def test_origins_partly_inside_a_hollow_room_of_media(cli, tmp_path, top, method, outcome):
+    scene = tmp_path / "room.pov"
+    scene.write_text(ROOM.format(top=top))
+    result, out, views, record = _render(cli, tmp_path, scene, *(("--method", method) if method else ()))
+    if outcome == "refused":
+        lines = [line for line in result.err.splitlines() if line.strip()]
+        assert result.code != 0 and not out.exists() and len(lines) == 1, result.err
+        assert "hollow ones counted" in lines[0] and "media" in lines[0] and "multi-ortho-views" in lines[0]
+        return
+    assert result.code == 0, result.err
+    state = record["display_frame"]["ray_state"]
+    assert state["origins_inside_fraction"] == 0.0   # fog would pass: the hollow room holds no solid
+    assert state["origins_inside_hollow_or_solid_fraction"] == pytest.approx(0.5 if top == 0 else 1.0, abs=0.03)
+    assert record["method"] == ("multi-ortho-views" if outcome == "fallback" else "multi-ortho")
+    assert _worst_db(scene, record, views) >= 35
+
+
+@pytest.mark.povray
+def test_past_the_rule_the_mesh_camera_misses_the_hollow_rooms_media(cli, tmp_path, monkeypatch):
+    """Negative control: the rule skipped, multi-ortho's lower views miss POV-Ray's own renders."""
+    monkeypatch.setattr("povh3d.app.render.settle_method", lambda request, scene: (request, None))
+    scene = tmp_path / "room.pov"
+    scene.write_text(ROOM.format(top=0))
+    result, _, views, record = _render(cli, tmp_path, scene)
+    assert result.code == 0 and record["method"] == "multi-ortho", result.err
+    assert _worst_db(scene, record, views) < 35
