@@ -50,6 +50,11 @@ def test_an_ior_counts_only_in_the_scenes_own_files(tmp_path):
     assert "ior" in load_scene(scene).features and not state_features(load_scene(scene)).used
     scene.write_text('#version 3.7;\nsphere { 0, 1 pigment { rgbf 1 } interior { ior 1.33 } }\nfog { distance 9 }\n')
     assert state_features(load_scene(scene)).used == {"ior", "fog"}
+    # An included interior the scene applies counts (lights/glassthing.pov: interior { I_Glass_Exp(2) ... }).
+    scene.write_text('#version 3.7;\n#include "glass.inc"\nsphere { 0, 1 pigment { rgbf 1 } interior { I_Glass1 } }\n')
+    assert state_features(load_scene(scene)).used == {"ior"}
+    scene.write_text('#version 3.7;\n#include "glass.inc"\nsphere { 0, 1 pigment { rgbf 1 } }\n// interior { I_Glass1 }\n')
+    assert not state_features(load_scene(scene)).used   # a comment applies nothing
 
 
 # A fog of colour green over a background of blue; a ground plane y < H holds the lower rays' origins.

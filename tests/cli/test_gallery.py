@@ -40,6 +40,8 @@ CASES = [
     ("incdemo/screen.pov", "camera in an include (screen.inc); fog, rays starting below the ground", CHOSEN,
      "refused"),
     ("incdemo/screen.pov", "the same by default: an orthographic camera a view (9 views)", VIEWS, "ok"),
+    # glass.inc's and textures.inc's glass (an ior) included, never applied: not the ray-state rule's
+    ("templates/Basic_Scenes/Sea_blue_sky.pov", "included glass it does not apply, a chrome sea", SQUARE, "ok"),
     # fog; only the oblique views' rays start below the ground (8.6 dB before the origin pass)
     ("textures/finishes/metallicreflection.pov", "fog, oblique rays starting below the ground", VIEWS, "ok"),
 ]
