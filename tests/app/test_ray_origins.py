@@ -207,3 +207,21 @@ def test_past_the_rule_the_mesh_camera_misses_the_hollow_rooms_media(cli, tmp_pa
     result, _, views, record = _render(cli, tmp_path, scene)
     assert result.code == 0 and record["method"] == "multi-ortho", result.err
     assert _worst_db(scene, record, views) < 35
+
+
+@pytest.mark.parametrize("method, limit, expected", [
+    ("multi-ortho", None, 64.0),          # four panel widths, a whole number of view-bank steps (f lcm = 8)
+    ("multi-ortho", 30.0, 24.0),          # under a scene camera's limit: rounded down to a step
+    ("multi-ortho", 5.0, 5.0),            # under one step: the lens mesh, from the limit itself
+    ("multi-ortho-views", 30.0, 30.0),    # its views start anywhere
+])
+def test_the_origin_pass_looks_from_where_the_method_will_trace(method, limit, expected):
+    """engine/clearance.py works the clearance out as run_method does (test_one_state_... checks a render)."""
+    from povh3d.engine.clearance import planned_front_clearance
+    from povh3d.engine.methods import get_method
+    from povh3d.engine.quality import RenderSettings
+    from povh3d.geometry.lens_array import LensArray, Panel
+
+    array = LensArray("square", 16, 12, 1.0, 1.0, 2.0, Panel(64, 48, 0.25, 0.25))
+    settings = RenderSettings(front_clearance_limit=limit)
+    assert planned_front_clearance(get_method(method), array, settings) == pytest.approx(expected)
