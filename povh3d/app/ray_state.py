@@ -12,7 +12,7 @@ puts fog where an orthographic view has none, or the other way round: a wrong im
 nothing to show it.  A fog pass over the plane that holds every view's ray origins (the
 lens array's field widened by the clearance times the most oblique slope: an oblique view's
 rays start further out, ``engine.depth.origins_inside``) measures the share inside a solid.
-Some but not all: refused, or, where the user did not choose ``--method``, rendered with
+Any of them: refused, or, where the user did not choose ``--method``, rendered with
 ``multi-ortho-views`` (an orthographic camera a view), and the sidecar says why.
 """
 
@@ -99,8 +99,9 @@ def check_ray_state(method: str, shares_ray_state: bool, features: Features, ins
     if not shares_ray_state or inside is None:
         return
     used = [f for f in STATE_FEATURES if f in features]
-    # All inside (a sky sphere around every origin) is one state for every ray, as is all outside.
-    if not used or not 0.0 < inside < 1.0:
+    # All inside would be one state for every ray, but the pass cannot tell it from a scene whose own fog
+    # hides the pass's (templates/Basic_Scenes/Desert_blue_sky.pov's ground fog: 1.0 there, 29.9 dB past it).
+    if not used or not inside > 0.0:
         return
     raise ConfigError(
         f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside a solid object (a ground "
@@ -113,8 +114,8 @@ def check_ray_state(method: str, shares_ray_state: bool, features: Features, ins
 
 def hollow_problem(method: str, used: list[str], inside: float) -> str | None:
     """Why a mesh-camera ``method`` would render wrong with ``inside`` of the ray origins inside an object,
-    hollow ones counted (``without_hollow``), and the scene's media or ior; None where all or none are."""
-    if not 0.0 < inside < 1.0:
+    hollow ones counted (``without_hollow``), and the scene's media or ior; None where none are."""
+    if not inside > 0.0:
         return None
     return (f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside an object, hollow ones "
             f"counted (a room or a sky around the camera that the frame cuts), and the scene has {' and '.join(used)}, "
