@@ -180,6 +180,6 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         raise ConfigError(problem)
     cause = problem.split(": add 'hollow'")[0].split(": use --method")[0]
     note = f"{FALLBACK}, not the default {request.method} (slower: one POV-Ray frame a view): {cause}"
-    short = "rays start partly inside an object" if record else "the scene reads image_width/image_height"
+    short = "rays start inside an object" if record else "the scene reads image_width/image_height"
     return replace(request, method=FALLBACK, method_options={}), {**record, "method_note": note,
                                                                   "method_fallback": short}
