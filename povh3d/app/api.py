@@ -55,6 +55,8 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
     display = build_display(preset, lens_array=lens_array, method=options.get("method", "multi-ortho"),
                             mapping=mapping, mapping_options=mapping_options, calibration=calibration)
     settings = RenderSettings(**{k: v for k, v in options.items() if k in _SETTINGS})
+    # No method given: the default, which the render may trade for one that renders the scene right.
+    options.setdefault("method_chosen", "method" in options)
     request = RenderRequest(source=Path(source), display=display, output=Path(output), settings=settings,
                             **{k: v for k, v in options.items() if k in _REQUEST})
     if objects is None:

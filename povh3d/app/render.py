@@ -26,12 +26,11 @@ from .budget import check_disk, check_memory as check_memory_budget
 from ..image.interleave import extract
 from .stage import prepare_stage
 from .placement import place_display
-from .ray_state import check_ray_state, state_features
+from .ray_state import settle_method
 from .depth_maps import check_depth_dir, write_depth_maps
 from .dataset import check_dataset_dir, dataset_depth, write_dataset
 from .device_quilt import check_device_render, write_device_outputs
 from ..engine.depth import view_depth_maps
-from ..engine.scene_camera import uses_image_size
 from ..engine.frames import sandbox_in_use as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import RenderedImage, render_sequence
@@ -60,14 +59,10 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.dataset is not None:
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
-    if model_record is None and uses_image_size(scene):
-        warn(f"{scene.path.name} uses image_width or image_height other than as their ratio: in povh3d's "
-             "renders they are the size of each POV-Ray run (a bank of views), not the panel's, so what the "
-             "scene builds from them differs from its 2D render; use only image_width/image_height, or "
-             "#declare the sizes the scene needs")
     request, frame_record = place_display(request, scene)
-    check_ray_state(request.method, get_method(request.method).shares_ray_state, state_features(scene),
-                    frame_record.get("depth"))
+    request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
+    if ray_state is not None:
+        frame_record = {**frame_record, "ray_state": ray_state}
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
                     display_frame=frame_record)
@@ -198,6 +193,10 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
     )
     record.update(request.display.as_record())  # the sidecar's lens_array and display entries
+    record["method_chosen"] = request.method_chosen
+    note = ((display_frame or {}).get("ray_state") or {}).get("method_note")
+    if note:
+        record.update(method_note=note, method_fallback=display_frame["ray_state"]["method_fallback"])
     if auto is not None:
         record["quality"].update(level="auto", auto=auto.as_record())
     if result.record is not None:

@@ -124,6 +124,8 @@ class RenderRequest:
     display : Display              the display: its lens array, preset and mapping (``build_display``)
     output : Path                  the PNG to write (frames: ``OUT_nnnn.png``)
     method : str                   a name in ``engine.methods.METHODS``
+    method_chosen : bool           False: ``method`` is the default, which the render may trade for one
+                                   that renders the scene right (``app.ray_state``; the sidecar says so)
     method_options : mapping       the method's own options (single-stage: lenslet, ior);
                                    defaults filled in from the method, unknown names refused;
                                    subpixel's ``sheet_shift_mm`` comes from the display's sheet
@@ -147,6 +149,7 @@ class RenderRequest:
     display: Display
     output: Path
     method: str = "multi-ortho"
+    method_chosen: bool = True
     method_options: MappingABC[str, Any] = field(default_factory=dict)
     settings: RenderSettings = field(default_factory=RenderSettings)
     crop: CropSettings | None = None

@@ -32,7 +32,8 @@ def request_from_args(args: argparse.Namespace) -> Any:
     from ..app.request import RenderSettings
     from ..geometry.crop import CropSettings, parse_bbox
 
-    display = display_from_args(args, method=args.method, mapped=True)
+    method = args.method or "multi-ortho"   # None: not chosen, the render may trade it (app/ray_state.py)
+    display = display_from_args(args, method=method, mapped=True)
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
                               timeout=args.timeout, use_cache=not args.no_cache,
                               bit_depth=args.bit_depth, front_clearance=args.front_clearance,
@@ -45,7 +46,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
         raise ConfigError("--clock needs --frames FIRST:LAST")
     return RenderRequest(
         source=Path(args.scene), display=display, output=output_path(args),
-        method=args.method, method_options=_method_options(args), settings=settings,
+        method=method, method_chosen=args.method is not None, method_options=_method_options(args), settings=settings,
         crop=CropSettings(args.crop, parse_bbox(args.bbox) if args.bbox else None),
         include_dirs=tuple(Path(d) for d in args.include),
         views_dir=Path(args.views_dir) if args.views_dir else None,
@@ -161,7 +162,10 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
         v = result["volume"]
         drawn = f"{len(v['surfaces'])} surfaces, {v['triangles']} triangles" if "surfaces" in v else "media"
         mapping += f"  {v['orientation']}, {drawn}"
-    summary = f"{w}x{h}  {request.method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}"
+    method = result.get("method", request.method)
+    if result.get("method_note"):   # the default traded for one that renders the scene right
+        method += f" (not the default {request.method}: {result.get('method_fallback', 'see the sidecar')})"
+    summary = f"{w}x{h}  {method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}"
     seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
           f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
@@ -283,7 +287,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("scene", help="POV-Ray scene (.pov; its camera places the display), a mesh model (.obj .stl .ply ...), "
                    "or a volume (.vti .nii .nrrd .mha ..., a DICOM folder)")
     p.add_argument("-o", "--output", help="H3D PNG to write (default: SCENE-h3d.png)")
-    p.add_argument("--method", choices=METHOD_NAMES, default="multi-ortho")
+    p.add_argument("--method", choices=METHOD_NAMES, default=None,
+                   help="default multi-ortho (or multi-ortho-views where its mesh camera would render the scene wrong)")
     p.add_argument("--quality", default="normal", metavar="{draft,normal,high,auto,N}",
                    help="draft: one ray per pixel; normal: antialiased; high: 256 footprint samples, "
                    "converged; N: N footprint samples per pixel; auto: the fastest that meets --max-error "

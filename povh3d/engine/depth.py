@@ -172,6 +172,37 @@ def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, fr
     return depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
 
 
+def origin_field(lens_array: LensArray, front_clearance: float) -> tuple[float, float]:
+    """Width and height (mm) of the plane ``z = -front_clearance`` that holds every pixel ray's origin: the
+    lens array's field, widened on each side by the clearance times the most oblique ray's slope (the
+    largest pixel offset from a lens centre over ``f``; a lenticular sheet's rays keep their row)."""
+    f = lens_array.focal
+    if lens_array.grid == "hex":
+        hx = hy = lens_array.pitch_x / np.sqrt(3)   # the cell's circumradius
+    elif lens_array.grid == "lattice":
+        a1, a2 = np.abs(np.array(lens_array.basis, dtype=np.float64))
+        hx, hy = (a1 + a2) / 2
+    else:
+        hx = lens_array.pitch_x / 2
+        hy = 0.0 if lens_array.grid == "lenticular" else lens_array.pitch_y / 2
+    return (lens_array.lenses_x * lens_array.pitch_x + 2 * front_clearance * hx / f,
+            lens_array.lenses_y * lens_array.pitch_y + 2 * front_clearance * hy / f)
+
+
+def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
+                   units_per_mm: float) -> float:
+    """The share of the plane of every view's ray origins (``origin_field``, ``front_clearance`` mm out)
+    that lies inside a solid: a fog pass along the normal over that plane (the pixels the fog does not
+    reach).  ``lens_array``: the rays as traced (``depth_scaled_rays``)."""
+    field = origin_field(lens_array, front_clearance)
+    w = MAX_WIDTH
+    h = max(1, min(4 * MAX_WIDTH, round(w * field[1] / field[0])))
+    fog = front_clearance * units_per_mm
+    batch = _fog_batch([(0.0, 0.0, 1.0)], lens_array, front_clearance, fog, w, h, field)
+    _, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog)
+    return float(unmeasured[0])
+
+
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
                     units_per_mm: float, *, views: tuple[int, int] | None = None,
                     grid: tuple[int, int, float, float] | None = None) -> np.ndarray:

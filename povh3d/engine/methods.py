@@ -41,6 +41,7 @@ from ..image.colour import decode, encode, mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
 from ..system import cpu_count
+from .clearance import limited_front_clearance
 from .cropped import render_cropped_tiles
 from .batch import ShotBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
@@ -336,8 +337,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         settings = replace(settings, quality=quality)
     if method.gutters:
         plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
-    front_clearance, reason = _limited_front_clearance(method, lens_array, settings, asked_clearance,
-                                                       front_clearance, plan_options)
+    front_clearance, reason = limited_front_clearance(method, lens_array, settings, asked_clearance,
+                                                      front_clearance, plan_options)
     if front_clearance <= 0 and method.crops:   # under one view-bank step: the lens mesh instead
         front_clearance = settings.front_clearance_limit or front_clearance
         plan_options["bank"], crop = False, None
@@ -382,18 +383,3 @@ def on_panel(lens_array: LensArray, h3d: np.ndarray) -> np.ndarray:
     canvas = np.zeros(panel_shape + h3d.shape[2:], h3d.dtype)
     canvas[lens_array.bank_region] = h3d
     return canvas
-
-
-def _limited_front_clearance(method: Method, lens_array: LensArray, settings: RenderSettings, asked: float,
-                             rounded: float, options: Mapping[str, Any]) -> tuple[float, str]:
-    """Where rays start (mm) and why: the clearance asked for (or the method's default), rounded up to
-    the method's step; under ``settings.front_clearance_limit`` rounded down instead (a method whose
-    rounding up passed the scene camera let a wall behind the camera fill the image)."""
-    why = "--front-clearance" if settings.front_clearance else "the method's default"
-    limit = settings.front_clearance_limit
-    if limit is None or rounded <= limit * (1 + 1e-12):
-        step = "" if rounded == asked else f" {asked:.4g} mm, rounded up (whole view shifts)"
-        return rounded, f"{why}{step}"
-    step = method.front_clearance_step(lens_array, options)
-    used = step * math.floor(limit / step * (1 + 1e-12)) if step > 0 else limit
-    return used, f"{settings.front_clearance_reason or 'limited'} ({limit:.4g} mm); {why} was {rounded:.4g} mm"

@@ -30,6 +30,7 @@ from ..cache import content_key
 from ..geometry.frame import EXPLICIT_OPTIONS, DisplayFrame
 from ..geometry.lens_array import LensArray
 from ..scene.camera import CameraError, CameraScript, camera_from_log, parse_log
+from ..scene.features import strip_comments
 from ..scene.scene import Scene
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -163,7 +164,8 @@ def uses_image_size(scene: Scene, text: str | None = None) -> bool:
     """Whether the scene names ``image_width`` or ``image_height`` other than as their ratio
     (``#declare N = image_width * image_height``): what it builds from them then depends on the
     size of each POV-Ray run, which for the views is not the panel's."""
-    return re.search(r"\bimage_(width|height)\b", _RATIO.sub("", _scene_text(scene) if text is None else text)) is not None
+    code = strip_comments(_scene_text(scene) if text is None else text)   # a comment names them freely
+    return re.search(r"\bimage_(width|height)\b", _RATIO.sub("", code)) is not None
 
 
 _RATIO = re.compile(r"\bimage_width\s*/\s*image_height\b|\bimage_height\s*/\s*image_width\b")

@@ -21,11 +21,11 @@ from povh3d.scene.features import Features
 FOG = Features(frozenset({"fog"}))
 
 
-@pytest.mark.parametrize("inside", [0.05, 0.5, 1.0])   # 1.0: the views' oblique rays reach beyond the pass
+@pytest.mark.parametrize("inside", [0.05, 0.5, 1.0])   # 1.0: or the scene's own fog hid the pass's
 @pytest.mark.parametrize("feature", ["fog", "media", "ior"])
 def test_a_mesh_camera_refuses_rays_partly_inside_a_solid_with_fog(inside, feature):
     with pytest.raises(ConfigError, match=rf"inside a solid.*{feature}.*hollow.*--method multi-ortho-views") as error:
-        check_ray_state("multi-ortho", True, Features(frozenset({feature})), {"unmeasured_fraction": inside})
+        check_ray_state("multi-ortho", True, Features(frozenset({feature})), inside)
     assert "\n" not in str(error.value)
 
 
@@ -35,7 +35,7 @@ def test_a_mesh_camera_refuses_rays_partly_inside_a_solid_with_fog(inside, featu
     ("multi-ortho-views", False, FOG, 0.3),                   # an orthographic camera tests each ray
 ])
 def test_what_one_shared_state_renders_right_passes(method, shares, features, inside):
-    check_ray_state(method, shares, features, {"unmeasured_fraction": inside})
+    check_ray_state(method, shares, features, inside)
     check_ray_state(method, shares, features, None)           # not measured: nothing to go by
 
 
@@ -49,6 +49,11 @@ def test_an_ior_counts_only_in_the_scenes_own_files(tmp_path):
     assert "ior" in load_scene(scene).features and not state_features(load_scene(scene)).used
     scene.write_text('#version 3.7;\nsphere { 0, 1 pigment { rgbf 1 } interior { ior 1.33 } }\nfog { distance 9 }\n')
     assert state_features(load_scene(scene)).used == {"ior", "fog"}
+    # An included interior the scene applies counts (lights/glassthing.pov: interior { I_Glass_Exp(2) ... }).
+    scene.write_text('#version 3.7;\n#include "glass.inc"\nsphere { 0, 1 pigment { rgbf 1 } interior { I_Glass1 } }\n')
+    assert state_features(load_scene(scene)).used == {"ior"}
+    scene.write_text('#version 3.7;\n#include "glass.inc"\nsphere { 0, 1 pigment { rgbf 1 } }\n// interior { I_Glass1 }\n')
+    assert not state_features(load_scene(scene)).used   # a comment applies nothing
 
 
 # A fog of colour green over a background of blue; a ground plane y < H holds the lower rays' origins.
@@ -131,7 +136,7 @@ def test_the_refused_frame_would_be_wrong(cli, tmp_path, monkeypatch, hollow, wr
     from benchmarks.gallery import oracle_view
     from povh3d.image.metrics import psnr
 
-    monkeypatch.setattr("povh3d.app.render.check_ray_state", lambda *args: None)
+    monkeypatch.setattr("povh3d.app.render.settle_method", lambda request, scene: (request, None))
     scene = tmp_path / "ground.pov"
     scene.write_text(GROUND.format(fog="fog { rgb 0.8 distance 20 }", hollow=hollow))
     out, views = tmp_path / "g.png", tmp_path / "views"

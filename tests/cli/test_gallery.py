@@ -19,10 +19,10 @@ LENTICULAR = ("--grid", "lenticular", "--lenses", "32", "--rows", "96", "--ppl",
               "--focal", "1.5")
 # screen.inc's scene has fog over a ground plane the display's lower rays start below: POV-Ray's mesh
 # camera (multi-ortho) would give them the outside state of its first ray and fog them, where each
-# view's own orthographic render does not (15 dB); povh3d refuses it in one line (app/ray_state.py),
-# and an orthographic camera a view renders it right.
-VIEWS = ("--grid", "square", "--lenses", "24x18", "--ppl", "3x3", "--pixel-pitch", "0.2", "--focal", "2",
-         "--method", "multi-ortho-views")   # 9 views: one POV-Ray frame each
+# view's own orthographic render does not (15 dB); povh3d refuses it in one line where multi-ortho is
+# chosen (app/ray_state.py), and by default renders it with an orthographic camera a view, right.
+VIEWS = ("--grid", "square", "--lenses", "24x18", "--ppl", "3x3", "--pixel-pitch", "0.2", "--focal", "2")
+CHOSEN = (*SQUARE, "--method", "multi-ortho")
 
 # scene, the construct it stands for, the display, the outcome expected ('ok' or 'refused')
 CASES = [
@@ -37,9 +37,13 @@ CASES = [
     ("templates/Basic_Scenes/Orthographic_scene.pov", "orthographic camera", SQUARE, "refused"),
     ("camera/cylinder1.pov", "cylinder camera", SQUARE, "refused"),
     pytest.param("objects/prism3a.pov", "camera in an include", SQUARE, "ok"),
-    ("incdemo/screen.pov", "camera in an include (screen.inc); fog, rays starting below the ground", SQUARE,
+    ("incdemo/screen.pov", "camera in an include (screen.inc); fog, rays starting below the ground", CHOSEN,
      "refused"),
-    ("incdemo/screen.pov", "the same, an orthographic camera a view", VIEWS, "ok"),
+    ("incdemo/screen.pov", "the same by default: an orthographic camera a view (9 views)", VIEWS, "ok"),
+    # glass.inc's and textures.inc's glass (an ior) included, never applied: not the ray-state rule's
+    ("templates/Basic_Scenes/Sea_blue_sky.pov", "included glass it does not apply, a chrome sea", SQUARE, "ok"),
+    # fog; only the oblique views' rays start below the ground (8.6 dB before the origin pass)
+    ("textures/finishes/metallicreflection.pov", "fog, oblique rays starting below the ground", VIEWS, "ok"),
 ]
 
 
