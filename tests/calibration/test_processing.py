@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from povh3d.calibration.borders import correct_borders
@@ -23,7 +23,28 @@ from povh3d.errors import ConfigError
 def test_brown_undistort_inverts_distort(k1, k2, x, y):
     model = Brown.for_image(640, 480, k1, k2)
     p = np.array([x, y])
+    # Strong barrel distortion folds back past some radius: a recorded point beyond the largest radius
+    # the model reaches (outside the image: k1 = -0.0625, k2 = -0.03 at x = 690) has no ideal point.
+    rho = np.linspace(0.0, 3.0, 30001)
+    reached = rho * (1 + k1 * rho**2 + k2 * rho**4)
+    fold = np.argmax(np.diff(reached) <= 0) or len(rho) - 1
+    recorded = np.hypot(*(p - model.centre)) / model.scale
+    assume(recorded < 0.999 * reached[fold])
     np.testing.assert_allclose(model.distort(model.undistort(p)), p, atol=1e-6)
+
+
+def test_every_recorded_pixel_of_the_image_has_an_ideal_point():
+    """The inverse above holds on the whole image for every coefficient the calibration accepts: the
+    corners (rho = 1) are reached before the fold of the strongest barrel distortion."""
+    rho = np.linspace(0.0, 3.0, 30001)
+    reached = rho * (1 - 0.08 * rho**2 - 0.03 * rho**4)
+    assert reached[np.argmax(np.diff(reached) <= 0)] > 1.0
+    model = Brown.for_image(640, 480, -0.08, -0.03)
+    corners = np.array([[0.0, 0.0], [639.0, 479.0], [0.0, 479.0], [639.0, 0.0]])
+    np.testing.assert_allclose(model.distort(model.undistort(corners)), corners, atol=1e-6)
+    # control: past the fold (the failing case hypothesis found) the round trip is far off
+    outside = np.array([690.0, 530.0])
+    assert np.abs(model.distort(model.undistort(outside)) - outside).max() > 1.0
 
 
 @pytest.mark.slow
