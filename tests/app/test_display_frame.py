@@ -276,12 +276,22 @@ def test_a_scene_that_builds_from_the_image_size_is_told(tmp_path, camera, uses)
 @pytest.mark.povray
 def test_the_render_warns_a_scene_built_from_the_image_size(cli, tmp_path):
     """language/image_size.pov prints the image's pixel count: each POV-Ray run (a bank of views) has its
-    own, not the panel's.  Negative control: the ratio alone, no warning."""
-    display = ("--grid", "square", "--lenses", "8x6", "--ppl", "2x2", "--quality", "draft", "-q")
-    for camera, warned in [("#declare N = image_width;\ncamera { location -5*z look_at 0 }", True),
-                           ("camera { location -5*z right x*image_width/image_height look_at 0 }", False)]:
-        folder = tmp_path / str(warned)
+    own, not the panel's.  The default method falls back to one run a view (said in the sidecar and the
+    summary); a chosen multi-ortho-views warns that each view sees its own size.  Negative control: the
+    ratio alone, neither."""
+    from povh3d.image.io import read_sidecar
+
+    display = ("--grid", "square", "--lenses", "8x6", "--ppl", "2x2", "--quality", "draft")
+    for camera, told in [("#declare N = image_width;\ncamera { location -5*z look_at 0 }", True),
+                         ("camera { location -5*z right x*image_width/image_height look_at 0 }", False)]:
+        folder = tmp_path / str(told)
         folder.mkdir()
-        result = cli("render", str(_scene(folder, camera)), "-o", str(folder / "o.png"), *display)
+        scene = _scene(folder, camera)
+        result = cli("render", str(scene), "-o", str(folder / "o.png"), *display)
         assert result.code == 0, result.err
-        assert ("image_width or image_height other than as their ratio" in result.err) == warned, result.err
+        side = read_sidecar(folder / "o.png")
+        assert (side["method"] == "multi-ortho-views") == told, side["method"]
+        assert ("not the default multi-ortho" in result.out) == told, result.out
+        chosen = cli("render", str(scene), "-o", str(folder / "v.png"), *display, "-q", "--method", "multi-ortho-views")
+        assert chosen.code == 0, chosen.err
+        assert ("image_width or image_height other than as their ratio" in chosen.err) == told, chosen.err
