@@ -23,6 +23,7 @@ from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.colour import decode, to_linear
 from povh3d.image.io import read_png
 from povh3d.image.refocus import contact_sheet, lens_steps, shift_and_add
+from tests.support import scenes
 from tests.support.cli import one_error_line
 
 S, F = 0.1, 1.5                 # pixel pitch, focal length (mm)
@@ -46,17 +47,7 @@ def texture(x, y):
 
 
 def write_wave_plane(folder):
-    path = folder / "wave.pov"
-    path.write_text(f"""#version 3.7;
-global_settings {{ assumed_gamma 1.0 }}
-#declare P = {PERIOD!r};
-plane {{ z, {DEPTH!r}
-  pigment {{ function {{ 0.5 + 0.25 * (sin(2 * pi * x / P) + sin(2 * pi * y / P)) }}
-            color_map {{ [0 rgb 0] [1 rgb 1] }} }}
-  finish {{ emission 1 diffuse 0 ambient 0 }}
-}}
-""")
-    return path
+    return scenes.write_wave_plane(folder, DEPTH, PERIOD)
 
 
 @pytest.fixture(scope="module")

@@ -28,6 +28,7 @@ from povh3d.image.elemental import lens_index_map
 from povh3d.image.interleave import extract
 from povh3d.image.io import read_png, read_sidecar
 from povh3d.image.resample import resample_micro_images, resample_panel, resampled_array
+from tests.support import scenes
 from tests.support.cli import one_error_line
 
 S, F = 0.1, 1.5            # pixel pitch, focal length (mm)
@@ -35,17 +36,7 @@ DEPTH, PERIOD = 3.0, 4.0   # the plane behind the screen and its texture's perio
 
 
 def write_wave_plane(folder):
-    path = folder / "wave.pov"
-    path.write_text(f"""#version 3.7;
-global_settings {{ assumed_gamma 1.0 }}
-#declare P = {PERIOD!r};
-plane {{ z, {DEPTH!r}
-  pigment {{ function {{ 0.5 + 0.25 * (sin(2 * pi * x / P) + sin(2 * pi * y / P)) }}
-            color_map {{ [0 rgb 0] [1 rgb 1] }} }}
-  finish {{ emission 1 diffuse 0 ambient 0 }}
-}}
-""")
-    return path
+    return scenes.write_wave_plane(folder, DEPTH, PERIOD)
 
 
 def hex_array(lenses=(12, 10), ppl=8) -> LensArray:

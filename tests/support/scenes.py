@@ -31,6 +31,22 @@ plane {{ z, {z0!r}
     return path
 
 
+def write_wave_plane(folder: Path, depth: float, period: float) -> Path:
+    """An emissive plane ``depth`` mm behind the screen whose grey level is
+    ``0.5 + 0.25 (sin(2 pi x / period) + sin(2 pi y / period))`` in linear light."""
+    path = folder / "wave.pov"
+    path.write_text(f"""#version 3.7;
+global_settings {{ assumed_gamma 1.0 }}
+#declare P = {period!r};
+plane {{ z, {depth!r}
+  pigment {{ function {{ 0.5 + 0.25 * (sin(2 * pi * x / P) + sin(2 * pi * y / P)) }}
+            color_map {{ [0 rgb 0] [1 rgb 1] }} }}
+  finish {{ emission 1 diffuse 0 ambient 0 }}
+}}
+""")
+    return path
+
+
 def checker_oracle(lens_array: LensArray, z0: float, period: float,
                    pseudoscopic: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Expected checker parity (0 = A, 1 = B) of every pixel, and whether its footprint is clear of edges.
