@@ -259,10 +259,15 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     return [img for img in images if img is not None], stats
 
 
+#: Raised when what a shot's image depends on changes without a change the key sees: 2, a still's
+#: runs of several shots keep POV-Ray's clock at 0 (povray.job), where shots before saw it run 0..1.
+KEY_REVISION = 2
+
+
 def shot_keys(version: str, scene: Scene, batch: ShotBatch, header: dict[str, Any],
               settings: RenderSettings) -> list[str]:
     """The cache key of every shot of ``batch``: what the image depends on, nothing else."""
-    common_key = content_key(__version__, version, scene.digest, batch.template,
+    common_key = content_key(__version__, KEY_REVISION, version, scene.digest, batch.template,
                              _template_digest(batch.template), _canonical(batch.context),
                              _canonical(header), batch.width, batch.height, settings.options,
                              settings.bit_depth, scene.sets_assumed_gamma, batch.options)

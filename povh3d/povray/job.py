@@ -207,7 +207,10 @@ def build_command(job: PovrayJob, binary: str) -> list[str]:
         command += ["+KFI1", f"+KFF{run.total}", f"+KI{run.clock_start!r}", f"+KF{run.clock_end!r}",
                     f"+SF{run.first}", f"+EF{run.first + job.frames - 1}"]
     elif job.frames > 1:
-        command += ["+KFI1", f"+KFF{job.frames}"]
+        # Frames here are shots of one still (views, lenses, depth passes), not an animation: the
+        # clock stays a still's (0) in each; POV-Ray's default runs it 0..1 over the frames, which a
+        # scene reading `clock` would see.  A set clock (RenderSettings.options) comes later and wins.
+        command += ["+KFI1", f"+KFF{job.frames}", "+KI0", "+KF0"]
     if job.rows is not None:
         # POV-Ray reads a row of 1 or less as a fraction of the height (+ER1
         # means the last row); "n.5" is above 1 and truncates to row n.

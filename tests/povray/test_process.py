@@ -123,7 +123,8 @@ def test_build_command() -> None:
                             "+H6", "+FN16", "File_Gamma=1.0", "-D", "+V", "+MI128",
                             '+L"/a b"']
     assert f'+L"{os.path.abspath("rel")}"' in command
-    assert command[-6:] == ["+WT2", "+KFI1", "+KFF3", "+SR1.5", "+ER1.5", "+A0.3"]
+    # three shots of a still: the clock held at a still's 0 (POV-Ray would run it 0..1 over them)
+    assert command[-8:] == ["+WT2", "+KFI1", "+KFF3", "+KI0", "+KF0", "+SR1.5", "+ER1.5", "+A0.3"]
 
 
 def test_povray_conf() -> None:
