@@ -14,9 +14,10 @@ computed from ``n`` itself, never by adding steps, in POV-Ray's own arithmetic
 Every frame is rendered by the same function as a still (``app.render``), so a
 mapping, a mesh model, a method's options and the quality apply alike.  POV-Ray's
 own frame machinery is taken: povh3d renders a batch of cameras as the frames of
-one POV-Ray run (the shots of an ``engine.batch.ShotBatch``), so inside a scene
-``frame_number`` and ``clock_delta`` belong to that batch.  A scene animates
-with ``clock``, which povh3d sets to the same value in every run of a frame.
+one POV-Ray run (the shots of an ``engine.batch.ShotBatch``); a scene that reads
+``frame_number``, ``clock_delta`` and the like gets each shot in a run of its own,
+where they have a still's values (``engine.frames``).  A scene animates with
+``clock``, which povh3d sets to the same value in every run of a frame.
 
 A scene that reads only ``clock`` is rendered as POV-Ray clock sequences: when
 frame ``n`` is rendered, the engine renders the same shots of frames ``n..last``

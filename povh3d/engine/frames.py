@@ -152,6 +152,10 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     # Frames reach the cache one by one as POV-Ray writes them (``take``), so the method's
     # batching into runs costs nothing when a run is stopped (Ctrl-C, timeout, crash).
     per_job = batch.shots_per_job
+    if scene.animation_words - SEQUENCE_SAFE_WORDS:
+        # A run of several shots is a POV-Ray animation, whose frame_number (clock_delta, ...) would
+        # differ from shot to shot: a scene reading them gets each shot in a still's run of its own.
+        per_job = 1
     chunks = [missing[i:i + per_job] for i in range(0, len(missing), per_job)]
     cores = cpu_count()
     later = _later_frames(stats.povray_version, scene, batch, header, settings, cache, keys, missing)

@@ -251,18 +251,19 @@ def test_clock_sequence_without_cache_and_resume(tmp_path: Path) -> None:
 
 
 @pytest.mark.povray
-@pytest.mark.parametrize("method", ["multi-ortho-views", "pinhole"])
-def test_a_still_of_a_clock_scene_sees_clock_0_in_every_view(tmp_path: Path, method: str) -> None:
+@pytest.mark.parametrize("method, word", [("multi-ortho-views", "clock"), ("pinhole", "clock"),
+                                          ("multi-ortho-views", "frame_number")])
+def test_a_still_of_a_clock_scene_sees_clock_0_in_every_view(tmp_path: Path, method: str, word: str) -> None:
     """Methods that render a still as several POV-Ray frames in one run (a view or a lens each) must
-    keep the scene's clock at a still's 0 in each, not POV-Ray's animation clock running 0..1 over
-    them (a sphere at x = 3 clock moved between views).  Control: the scene at clock 1 differs."""
+    give each the still's clock 0 and frame_number 0, not POV-Ray's animation values running over
+    them (a sphere at x = 3 clock moved between views).  Control: the scene at 1 differs."""
     from tests.support.cli import run_in_process
 
     body = ("light_source {{ <0, 0, -100> rgb 1 }}\n"
             "sphere {{ <{x} * 3, 0, 2>, 2 pigment {{ rgb <1, 0.5, 0.2> }} finish {{ ambient 0.2 }} }}\n"
             "plane {{ z, 8 pigment {{ checker rgb 0.2 rgb 0.9 scale 2 }} }}\n")
     images = {}
-    for name, x in (("clock", "clock"), ("zero", "0"), ("one", "1")):
+    for name, x in (("clock", word), ("zero", "0"), ("one", "1")):
         scene = tmp_path / f"{name}.pov"
         scene.write_text("#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n" + body.format(x=x))
         run = run_in_process("render", scene, "--grid", "square", "--lenses", "8x6", "--ppl", "3", "--quality",
