@@ -76,8 +76,10 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         if request.depth_maps is not None:
             depth = view_depth_maps(scene, request.render_array, settings, clearance, units)
         if request.dataset is not None:   # the exported pixels' rays (a hex array's: the grid of lens columns)
+            # a camera bank exports its own lens centres: the depth maps' pass, when it was made, is the same
+            same = depth is not None and request.render_array.views is not None
             write_dataset(request.dataset, still.image, request.render_array,
-                          dataset_depth(scene, request.render_array, settings, clearance, units),
+                          depth if same else dataset_depth(scene, request.render_array, settings, clearance, units),
                           all_views=request.dataset_all_views, scene=scene.path.stem)
             still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
         if request.depth_maps is not None:
