@@ -27,6 +27,7 @@ _LOCATION = re.compile(r"^File '(?P<file>.+?)' line (?P<line>\d+): (?P<message>.
 _ERROR = re.compile(r"^(?:[A-Z]\w* )?Error: ")
 _POSSIBLE = re.compile(r"^Possible \w+ Error: ")
 _FATAL = re.compile(r"^Fatal error in \w+: ")
+_NAMES_FILE = re.compile(r"Cannot find file '")
 # I/O restriction messages of POV-Ray 3.7 builds whose restrictions work (the
 # Debian build ignores its [File I/O Security] setting) and the OS's refusal.
 _ACCESS = re.compile(r"IO Restrictions prohibit|is not permitted|Permission denied")
@@ -148,14 +149,20 @@ def _fatal_error(lines: list[str]) -> str | None:
 
 
 def _cause(before: list[str]) -> str | None:
-    """The first of the located possible errors that end `before`."""
-    cause = None
+    """The located possible error, of those that end `before`, that names the missing file.
+
+    Other warnings of the same line may come first (a PNG's gamma notice, in
+    ``cliche.pov``): the one that names a file says what to fix; without one,
+    the first of the run.
+    """
+    run: list[str] = []
     for line in reversed(before):
         where, message = _split_location(line)
         if not (where and _POSSIBLE.match(message)):
             break
-        cause = _join(where, _POSSIBLE.sub("", message))
-    return cause
+        run.insert(0, _join(where, _POSSIBLE.sub("", message)))
+    named = [cause for cause in run if _NAMES_FILE.search(cause)]
+    return (named or run or [None])[0]
 
 
 def _plain_error(lines: list[str]) -> str | None:
