@@ -14,12 +14,13 @@ import dataclasses
 import re
 import shutil
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, Povh3dWarning
 from ..geometry.lens_array import LensArray
 from ..scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from .objects import ObjectTable, write_masks
@@ -81,8 +82,9 @@ def staged_mask(request: RenderRequest, folder: Path) -> tuple[Path, dict[int, s
 
 def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str, Any] | None = None) -> dict[str, Any]:
     """Render the object masks of ``request``'s still or frames into ``folder``; return what was
-    written.  ``colour``: the still's colour pass record (its sidecar), whose placement the masks
-    take as it is (no camera or depth run again)."""
+    written.  ``colour``: the colour pass's record (a still's sidecar, an animation's report), whose method
+    the masks trace (the default may have fallen back) and whose placement a still's take as it is (no
+    camera or depth run again); None: the mask copy settles its own."""
     from ..hyper.ids import decode_ids
     from .render import render
     from ..image.io import read_png, read_sidecar
@@ -106,11 +108,15 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
                                      # a stage is in display mm, as its colour pass knew (app.placement): no
                                      # camera to look for in the model's include
                                      display_frame=request.display_frame if mask else DisplayFrameOptions("native"))
-        if request.frames is None:   # a still: its panel kept in memory, no image, sidecar or views written
-            images = {0: _trace_still(_placed_as(masked, colour))}
-        else:                        # each frame's panel (the lens mesh's rays, point-sampled)
-            report = render(masked)
-            images = {int(read_sidecar(name)["animation"]["frame"]): read_png(name) for name in report["frames"]}
+        traced = _colour_pass(request, colour)
+        masked = _method_as(masked, traced)
+        with warnings.catch_warnings():   # the colour pass has said what its method sees of the scene
+            warnings.filterwarnings("ignore", message=_SAID, category=Povh3dWarning)
+            if request.frames is None:   # a still: its panel kept in memory, no image, sidecar or views written
+                images = {0: _trace_still(_placed_as(masked, traced), settle=traced is None)}
+            else:                        # each frame's panel (the lens mesh's rays, point-sampled)
+                report = render(masked)
+                images = {int(read_sidecar(name)["animation"]["frame"]): read_png(name) for name in report["frames"]}
         masks, panels = {}, {}
         for n, h3d in images.items():
             ids = decode_ids(h3d, len(names))
@@ -128,6 +134,32 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
     return {"objects": len(names), "frames": len(masks), "unresolved": unresolved, "folder": str(out)}
 
 
+#: The warning of a scene that reads image_width rendered with ``ray_state.FALLBACK``: the colour pass's.
+_SAID = r".* uses image_width or image_height other than as their ratio"
+
+
+def _colour_pass(request: RenderRequest, colour: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The colour pass's record: a still's sidecar, or an animation's first frame's (its frames share
+    one method: ``app.render`` settles it once); None: not known."""
+    from ..image.io import read_sidecar
+
+    if colour is not None and request.frames is not None:
+        names = colour.get("frames") or []
+        return read_sidecar(names[0]) if names else None
+    return colour
+
+
+def _method_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRequest:
+    """``masked`` traced with the method the colour pass used: the default may have fallen back to
+    ``ray_state.FALLBACK`` (the sidecar's ``method_note``), and a scene that reads ``image_width``
+    builds other geometry in a mesh-camera run than in each view's own."""
+    method = (colour or {}).get("method")
+    if method is None or method == masked.method:
+        return masked
+    # as ``ray_state.settle_method`` trades it; chosen, so that the mask pass trades nothing again
+    return dataclasses.replace(masked, method=method, method_options={}, method_chosen=True)
+
+
 def _placed_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRequest:
     """``masked`` with the colour pass's frame, front clearance and depth scale as settings (the
     Python API's matrix path of ``app.placement``): the same rays without evaluating the scene's
@@ -142,16 +174,20 @@ def _placed_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRe
     return dataclasses.replace(masked, settings=settings)
 
 
-def _trace_still(masked: RenderRequest) -> np.ndarray:
+def _trace_still(masked: RenderRequest, settle: bool = False) -> np.ndarray:
     """The mask copy's panel image, unmapped, traced as ``app.render`` traces a still (placed the same
     way, the same method, rays and crop), without its outputs: no PNG, views or sidecar to write and
-    read back."""
+    read back.  ``settle``: no colour pass to take the method from; the mask copy's own check picks it
+    (``ray_state.settle_method``: it reads image_width as the scene does; it has no fog to check)."""
     from ..engine.methods import run_method
     from ..scene.scene import load_scene
     from .placement import place_display
+    from .ray_state import settle_method
 
     scene = load_scene(masked.source, masked.include_dirs)
     placed, _ = place_display(masked, scene)
+    if settle:
+        placed, _ = settle_method(placed, scene)
     return run_method(placed.method, scene, placed.render_array, placed.settings, crop=placed.crop,
                       **placed.method_options).h3d
 

@@ -137,7 +137,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     if args.objects:
         from ..app.object_masks import render_objects
 
-        masks = render_objects(request, args.objects, result if request.frames is None else None)
+        masks = render_objects(request, args.objects, result)
         print(f"{masks['folder']}  {masks['objects']} objects  {100 * masks['unresolved']:.2f} % of pixels "
               "unresolved")
     if request.frames is not None:

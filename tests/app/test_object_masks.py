@@ -268,3 +268,56 @@ def test_a_camera_scenes_masks_take_the_colour_pass_placement(tmp_path: Path, mo
     object_masks.render_objects(request, tmp_path / "moved", shifted)
     assert any((read_mask(tmp_path / "moved", table, 0, (l, k)) != read_mask(tmp_path / "again", table, 0, (l, k))).any()
                for l in range(ny) for k in range(nx))
+
+
+# A bar as wide as image_width says (tests/app/test_ray_origins.py): each view's own run (16 pixels wide)
+# builds it a quarter as wide as a run of the 64-pixel panel, so the default falls back to one run a view.
+# Flat emission colours: the colour image's silhouettes are its channels (red the bar, green the sphere).
+SIZED = """#version 3.7;
+global_settings { assumed_gamma 1 }
+background { rgb 0 }
+box { <-8, -2, 0>, <-8 + image_width / 10, 2, 1> pigment { rgb <1, 0, 0> } finish { emission 1 diffuse 0 } }
+sphere { <5, 3, 0>, 2.5 pigment { rgb <0, 1, 0> } finish { emission 1 diffuse 0 } }
+"""
+
+
+@pytest.mark.povray
+def test_the_masks_of_a_render_that_fell_back_trace_its_method(tmp_path: Path, monkeypatch) -> None:
+    """The colour pass's default fell back to multi-ortho-views (the scene reads image_width): its masks
+    are traced the same way and match the colour views' silhouettes.  Control: traced with the mesh
+    camera the request named, the bar is another width and the masks miss the silhouettes."""
+    import povh3d
+    from povh3d.app import object_masks
+    from povh3d.app.display_setup import build_display
+    from povh3d.app.request import RenderRequest
+    from povh3d.engine.quality import RenderSettings
+    from povh3d.geometry.lens_array import LensArray, Panel
+    from povh3d.image.io import read_png
+
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    scene = tmp_path / "sized.pov"
+    scene.write_text(SIZED)
+    array = LensArray("square", 16, 12, 1.0, 1.0, 2.0, Panel(64, 48, 0.25, 0.25))
+    record = povh3d.render(scene, tmp_path / "s.png", lens_array=array, quality="draft",
+                           views_dir=tmp_path / "views", objects=tmp_path / "objs")
+    assert record["method"] == "multi-ortho-views" and "image_width" in record["method_note"]
+    table = read_table(tmp_path / "objs")
+    ids = {name: i for i, name in table.names.items()}
+    bar, ball = ids["box_4"], ids["sphere_5"]
+
+    def misses(folder: Path) -> int:
+        """Pixels, over every view, where the mask's id is not the colour view's object."""
+        wrong = 0
+        for l in range(table.views[0]):
+            for k in range(table.views[1]):
+                view = read_png(tmp_path / "views" / f"v_{l:03d}_{k:03d}.png")[..., :3].astype(int)
+                full = np.iinfo(read_png(tmp_path / "views" / "v_000_000.png").dtype).max
+                seen = np.where(view[..., 0] > full // 2, bar, np.where(view[..., 1] > full // 2, ball, 0))
+                wrong += int((read_mask(folder, table, 0, (l, k)) != seen).sum())
+        return wrong
+
+    assert misses(tmp_path / "objs") == 0
+    request = RenderRequest(source=scene, display=build_display(None, lens_array=array), output=tmp_path / "s.png",
+                            settings=RenderSettings(quality="draft"), method_chosen=False)
+    object_masks.render_objects(request, tmp_path / "mesh", {**record, "method": "multi-ortho"})
+    assert misses(tmp_path / "mesh") > 100        # the bar 4.8 mm wider: some 20 view pixels in each of 16 views
