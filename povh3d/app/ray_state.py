@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import re
 import tempfile
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -86,8 +86,40 @@ def without_hollow(scene: Scene, folder: Path) -> Scene | None:
     return load_scene(folder / scene.path.relative_to(root), (root, *scene.include_dirs))
 
 
-def check_ray_state(method: str, shares_ray_state: bool, features: Features, inside: float | None) -> None:
-    """Raise ConfigError when ``method`` would give rays inside and outside a solid one state.
+@dataclass(frozen=True)
+class MethodProblem:
+    """Why a method would render the scene wrong: the refusal's one line and the fallback's note are both
+    made from it, so they say the same.
+
+    Attributes
+    ----------
+    cause : str    what goes wrong with the method, and why
+    fix : str      what renders it right (the refusal names it; the fallback does it)
+    short : str    the cause in a few words, for the summary line (``method_fallback``)
+    """
+
+    cause: str
+    fix: str
+    short: str
+
+    def line(self) -> str:
+        """The refusal of a chosen method."""
+        return f"{self.cause}: {self.fix}"
+
+    def note(self, default: str) -> str:
+        """The sidecar's ``method_note`` when the default ``default`` falls back to ``FALLBACK``."""
+        return f"{FALLBACK}, not the default {default} (slower: one POV-Ray frame a view): {self.cause}"
+
+
+_ORIGINS_INSIDE = "rays start inside an object"
+_MESH_CAMERA = ("traces with POV-Ray's mesh camera, which gives every ray the inside/outside state of the first "
+                "one it traces, so part of the image would be wrong")
+_ORTHOGRAPHIC = f"use --method {FALLBACK} (an orthographic camera a view, which tests each ray)"
+
+
+def ray_state_problem(method: str, shares_ray_state: bool, features: Features, inside: float | None
+                      ) -> MethodProblem | None:
+    """Why ``method`` would give rays inside and outside a solid one state, or None.
 
     Parameters
     ----------
@@ -97,35 +129,40 @@ def check_ray_state(method: str, shares_ray_state: bool, features: Features, ins
     inside : float or None       the share of the ray origins inside a solid (``origins_inside``); None: not measured
     """
     if not shares_ray_state or inside is None:
-        return
+        return None
     used = [f for f in STATE_FEATURES if f in features]
     # All inside would be one state for every ray, but the pass cannot tell it from a scene whose own fog
     # hides the pass's (templates/Basic_Scenes/Desert_blue_sky.pov's ground fog: 1.0 there, 29.9 dB past it).
     if not used or not inside > 0.0:
-        return
-    raise ConfigError(
+        return None
+    return MethodProblem(
         f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside a solid object (a ground "
         f"'plane' the rays start below, a room or a sky around the camera) and the scene has {' and '.join(used)}, "
-        f"which POV-Ray works out from the solids a ray starts in; --method {method} traces with POV-Ray's mesh "
-        f"camera, which gives every ray the inside/outside state of the first one it traces, so part of the image "
-        f"would be wrong: add 'hollow' to that object, or use --method {FALLBACK} (an orthographic camera a view, "
-        "which tests each ray)")
+        f"which POV-Ray works out from the solids a ray starts in; --method {method} {_MESH_CAMERA}",
+        f"add 'hollow' to that object, or {_ORTHOGRAPHIC}", _ORIGINS_INSIDE)
 
 
-def hollow_problem(method: str, used: list[str], inside: float) -> str | None:
+def check_ray_state(method: str, shares_ray_state: bool, features: Features, inside: float | None) -> None:
+    """Raise ConfigError when ``method`` would give rays inside and outside a solid one state
+    (``ray_state_problem``, whose parameters these are)."""
+    problem = ray_state_problem(method, shares_ray_state, features, inside)
+    if problem is not None:
+        raise ConfigError(problem.line())
+
+
+def hollow_problem(method: str, used: list[str], inside: float) -> MethodProblem | None:
     """Why a mesh-camera ``method`` would render wrong with ``inside`` of the ray origins inside an object,
     hollow ones counted (``without_hollow``), and the scene's media or ior; None where none are."""
     if not inside > 0.0:
         return None
-    return (f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside an object, hollow ones "
-            f"counted (a room or a sky around the camera that the frame cuts), and the scene has {' and '.join(used)}, "
-            f"which POV-Ray works out from the objects a ray starts in, hollow or not; --method {method} traces "
-            "with POV-Ray's mesh camera, which gives every ray the inside/outside state of the first one it "
-            f"traces, so part of the image would be wrong: use --method {FALLBACK} (an orthographic camera a "
-            "view, which tests each ray)")
+    return MethodProblem(
+        f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside an object, hollow ones "
+        f"counted (a room or a sky around the camera that the frame cuts), and the scene has {' and '.join(used)}, "
+        f"which POV-Ray works out from the objects a ray starts in, hollow or not; --method {method} {_MESH_CAMERA}",
+        _ORTHOGRAPHIC, _ORIGINS_INSIDE)
 
 
-def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None) -> str | None:
+def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None) -> MethodProblem | None:
     """Why ``method`` renders a scene that builds something from ``image_width``/``image_height`` (other
     than their ratio) unlike each view's own render, or None.  POV-Ray gives them the size of the run:
     ``FALLBACK`` renders each view in a run of the view's size, as a plain render of that view is;
@@ -134,10 +171,11 @@ def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None)
         return None
     fix = (f"use --method {FALLBACK} (each view a POV-Ray run of its own size)" if views is not None
            else "use a display with whole views and --method " + FALLBACK)
-    return (f"{scene.path.name} builds something from image_width or image_height (other than their ratio), "
-            f"which POV-Ray sets to the size of each run; --method {method} traces many views in one run of "
-            f"another size, so each view would differ from a render of that view: {fix}, or #declare the sizes "
-            "the scene needs")
+    return MethodProblem(
+        f"{scene.path.name} builds something from image_width or image_height (other than their ratio), "
+        f"which POV-Ray sets to the size of each run; --method {method} traces many views in one run of "
+        "another size, so each view would differ from a render of that view",
+        f"{fix}, or #declare the sizes the scene needs", "the scene reads image_width/image_height")
 
 
 def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any] | None]:
@@ -158,10 +196,7 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         inside = origins_inside(scene, rays, s, clearance, frame_units(s.frame))
         record = {"origins_inside_fraction": inside, "front_clearance_mm": clearance,
                   "depends_on": sorted(features.used)}
-        try:
-            check_ray_state(request.method, True, features, inside)
-        except ConfigError as error:
-            problem = str(error)
+        problem = ray_state_problem(request.method, True, features, inside)
         hollow_used = [f for f in HOLLOW_FEATURES if f in features]
         if problem is None and hollow_used:
             with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
@@ -177,9 +212,6 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
                  "2D render)")
         return request, record or None
     if request.method_chosen or views is None:
-        raise ConfigError(problem)
-    cause = problem.split(": add 'hollow'")[0].split(": use --method")[0]
-    note = f"{FALLBACK}, not the default {request.method} (slower: one POV-Ray frame a view): {cause}"
-    short = "rays start inside an object" if record else "the scene reads image_width/image_height"
-    return replace(request, method=FALLBACK, method_options={}), {**record, "method_note": note,
-                                                                  "method_fallback": short}
+        raise ConfigError(problem.line())
+    return replace(request, method=FALLBACK, method_options={}), {**record, "method_note": problem.note(request.method),
+                                                                  "method_fallback": problem.short}

@@ -39,6 +39,26 @@ def test_what_one_shared_state_renders_right_passes(method, shares, features, in
     check_ray_state(method, shares, features, None)           # not measured: nothing to go by
 
 
+def test_the_refusal_and_the_fallback_note_say_the_same_cause(tmp_path):
+    """Each problem's refusal is its cause and its fix in one line; the fallback's note is that cause, after
+    the method it falls back to (the fix is what it did), and the summary's few words."""
+    from povh3d.app.ray_state import hollow_problem, image_size_problem, ray_state_problem
+    from povh3d.scene.scene import load_scene
+
+    scene = tmp_path / "size.pov"
+    scene.write_text("#declare N = image_width;\nsphere { 0, 1 }\n")
+    problems = [(ray_state_problem("multi-ortho", True, FOG, 0.25), "hollow", "inside an object"),
+                (hollow_problem("multi-ortho", ["media"], 0.5), "--method multi-ortho-views", "inside an object"),
+                (image_size_problem(load_scene(scene), "multi-ortho", (4, 4)), "#declare", "image_width")]
+    for problem, fix, short in problems:
+        line = problem.line()
+        assert "\n" not in line and line == f"{problem.cause}: {problem.fix}" and fix in problem.fix
+        note = problem.note("multi-ortho")
+        assert note.startswith("multi-ortho-views, not the default multi-ortho") and note.endswith(": " + problem.cause)
+        assert problem.fix not in note and short in problem.short
+    assert ray_state_problem("multi-ortho", True, FOG, 0.0) is None and hollow_problem("multi-ortho", ["ior"], 0.0) is None
+
+
 def test_an_ior_counts_only_in_the_scenes_own_files(tmp_path):
     """textures.inc declares glass with an ior that a scene including it need not apply (sunsethf.pov):
     only the scene's own ior counts; fog counts wherever it is written."""
