@@ -41,7 +41,7 @@ from ..image.colour import decode, encode, mean_in_linear_light
 from ..image.interleave import interleave, tile_elemental_images, untile_views
 from ..scene.scene import Scene
 from ..system import cpu_count
-from .clearance import limited_front_clearance
+from .clearance import front_clearance as front_clearance_for
 from .cropped import render_cropped_tiles
 from .batch import ShotBatch, RenderStats, mesh_camera_batch
 from .frames import render_frames
@@ -320,10 +320,6 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     asked = settings.spec
     header = display_header(declared or lens_array)   # the display's own constants, whatever --depth-scale does
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)
-    asked_clearance = settings.front_clearance or method.default_front_clearance(lens_array)
-    front_clearance = method.round_front_clearance(lens_array, asked_clearance)
-    if name != "single-stage":  # its depth is checked by its own optics (check_optics)
-        _check_clearance(name, method, lens_array, front_clearance, frame_units(settings.frame))
     quality = settings.spec if method.takes_samples(lens_array) else settings.spec.point_sampled()
     if method.confines_antialias is not None and not method.confines_antialias(lens_array):
         quality = quality.footprint_sampled()
@@ -337,12 +333,12 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         settings = replace(settings, quality=quality)
     if method.gutters:
         plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
-    front_clearance, reason = limited_front_clearance(method, lens_array, settings, asked_clearance,
-                                                      front_clearance, plan_options)
-    if front_clearance <= 0 and method.crops:   # under one view-bank step: the lens mesh instead
-        front_clearance = settings.front_clearance_limit or front_clearance
+    clearance = front_clearance_for(method, lens_array, settings, plan_options)
+    if name != "single-stage":  # its depth is checked by its own optics (check_optics)
+        _check_clearance(name, method, lens_array, clearance.rounded, frame_units(settings.frame))
+    front_clearance, reason = clearance.used, clearance.reason
+    if clearance.lens_mesh:
         plan_options["bank"], crop = False, None
-        reason += "; traced through a lens mesh (the view bank starts only at whole steps)"
     if footprint_groups is not None and (plan_options.get("bank") is False or not method.takes_samples(lens_array)
                                          or name != "multi-ortho"):
         raise GroupsUnsupported(f"{name} cannot return footprint sample groups here (no view bank)")
