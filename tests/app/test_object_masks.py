@@ -310,9 +310,9 @@ def test_the_masks_of_a_render_that_fell_back_trace_its_method(tmp_path: Path, m
         wrong = 0
         for l in range(table.views[0]):
             for k in range(table.views[1]):
-                view = read_png(tmp_path / "views" / f"v_{l:03d}_{k:03d}.png")[..., :3].astype(int)
-                full = np.iinfo(read_png(tmp_path / "views" / "v_000_000.png").dtype).max
-                seen = np.where(view[..., 0] > full // 2, bar, np.where(view[..., 1] > full // 2, ball, 0))
+                view = read_png(tmp_path / "views" / f"v_{l:03d}_{k:03d}.png")[..., :3]
+                half = np.iinfo(view.dtype).max // 2
+                seen = np.where(view[..., 0] > half, bar, np.where(view[..., 1] > half, ball, 0))
                 wrong += int((read_mask(folder, table, 0, (l, k)) != seen).sum())
         return wrong
 
