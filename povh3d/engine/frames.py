@@ -168,7 +168,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
 
     common = dict(width=batch.width, height=batch.height, threads=threads, bit_depth=settings.bit_depth,
                   file_gamma="sRGB", timeout=settings.timeout, **scene_inputs(scene))
-    add_gamma = not scene.sets_assumed_gamma
+    add_gamma = scene.adds_assumed_gamma
     jobs, targets_of_job = [], {}
     if later:
         # Shot j of consecutive animation frames: one POV-Ray run of the request's clock sequence.
@@ -274,7 +274,7 @@ def shot_keys(version: str, scene: Scene, batch: ShotBatch, header: dict[str, An
     common_key = content_key(__version__, KEY_REVISION, version, scene.digest, batch.template,
                              _template_digest(batch.template), _canonical(batch.context),
                              _canonical(header), batch.width, batch.height, settings.options,
-                             settings.bit_depth, scene.sets_assumed_gamma, batch.options)
+                             settings.bit_depth, scene.adds_assumed_gamma, batch.options)
     return [content_key(common_key, _canonical(frame)) for frame in batch.shots]
 
 

@@ -14,7 +14,9 @@ renders:
   settings a quality level may add;
 - whether it reads the animation clock: a scene that never mentions ``clock``
   or the other animation identifiers looks the same at every clock value;
-- whether it sets ``assumed_gamma`` (povh3d adds one where it does not);
+- whether it sets ``assumed_gamma``, and whether its own text asks for a POV-Ray
+  language before 3.7 (``#version 3.6;``): povh3d adds ``assumed_gamma 1.0`` only where
+  plain POV-Ray would use it too (``Scene.adds_assumed_gamma``);
 - whether it reads a file whose name is computed while POV-Ray parses
   (``#include concat(...)``): such a file cannot be found by this walk, so it
   is not in the digest; confined by the sandbox POV-Ray cannot read it, but
@@ -84,6 +86,7 @@ class Scene:
                               file the scene names with non-ASCII characters (``pov_ascii_names``)
     volatile : tuple[str, ...]  what makes its image differ from one parse to the next: the words
                               ``now``, ``datetime``, ``file_exists`` or a device file it names
+    legacy_version : bool     its own text's first ``#version`` is before 3.7 (``#version 3.6;``)
     """
 
     path: Path
@@ -98,6 +101,16 @@ class Scene:
     ascii_names: tuple[tuple[str, Path], ...] = ()
     animation_words: frozenset[str] = frozenset()
     volatile: tuple[str, ...] = ()
+    legacy_version: bool = False
+
+    @property
+    def adds_assumed_gamma(self) -> bool:
+        """Whether povh3d's header sets ``assumed_gamma 1.0`` for the scene: where it sets none and
+        its language is 3.7.  POV-Ray 3.7 turns gamma correction off for a scene whose language
+        at the end of parsing is older (its log: "assumed_gamma not specified, so gamma_correction
+        is turned off"); the header must not change that, or every colour comes out brighter
+        (``incdemo/woods/teak.pov``: 11 dB from plain POV-Ray)."""
+        return not (self.sets_assumed_gamma or self.legacy_version)
 
     def include_text(self, name: str) -> str | None:
         """The text of the file ``#include "name"`` reads (the scene's folders, then POV-Ray's), or None."""
@@ -205,6 +218,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     sources: list[frozenset[str]] = []   # the words of POV-Ray source texts, the scene's and the system's
     pending = [(scene, True)]
     sets_gamma = computed = False
+    legacy = _legacy_version(_read_text(scene) or "") if scene.suffix.lower() in _SOURCE_SUFFIXES else False
     named: dict[str, Path] = {}       # non-ASCII file names in the scene's text, and their files
     volatile: set[str] = set()
     while pending:
@@ -249,7 +263,18 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     return Scene(scene, tuple(dirs), tuple(sorted(own)), h.hexdigest(), sets_gamma,
                  features_of_words(sources), any(_CLOCK_WORDS & w for w in sources), computed,
                  any(_LIGHT_WORDS & w for w in sources), _ascii_links(named),
-                 frozenset().union(*(_CLOCK_WORDS & w for w in sources)), tuple(sorted(volatile)))
+                 frozenset().union(*(_CLOCK_WORDS & w for w in sources)), tuple(sorted(volatile)), legacy)
+
+
+_VERSION = re.compile(r"#\s*version\s+([0-9]+(?:\.[0-9]*)?)")
+
+
+def _legacy_version(text: str) -> bool:
+    """Whether the scene's first ``#version`` (a number) names a language before 3.7.  Later ones
+    are the include files' save-and-restore (``#version Old_Version;``) or its own; a scene
+    without one is read as 3.7 under povh3d's header."""
+    found = _VERSION.search(text)
+    return found is not None and float(found[1]) < 3.7
 
 
 def _computed_name(text: str, words: frozenset[str]) -> bool:
