@@ -27,8 +27,10 @@ and the atomic writers of ``image/io.py`` (which load NumPy only when decoding).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
@@ -131,3 +133,28 @@ def cache_folder(folder: Path, noun: str) -> Path:
 
         warn(f"the {noun} cache {str(folder.parent.parent)!r} cannot be used ({exc}); working without it")
         return Path(tempfile.mkdtemp(prefix=owned_prefix("povh3d-")))  # swept after this run ends
+
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+@functools.cache
+def code_stamp() -> str:
+    """Names, sizes and modification times of povh3d's source files and templates, hashed: in every
+    key of what povh3d's own code makes (a POV-Ray run's options, a template), so an entry made by
+    other code is never read (the version number alone stays while the code changes)."""
+    h = hashlib.sha256()
+    folders = [_PACKAGE, _PACKAGE / "templates", _PACKAGE.parent / "templates"]
+    while folders:
+        folder = folders.pop()
+        try:
+            entries = sorted(os.scandir(folder), key=lambda e: e.name)
+        except OSError:
+            continue
+        for entry in entries:
+            if entry.is_dir() and entry.name not in ("__pycache__", "templates"):
+                folders.append(Path(entry.path))
+            elif entry.name.endswith((".py", ".pov", ".inc", ".j2", ".toml", ".txt")):
+                stat = entry.stat()
+                h.update(f"{entry.path}|{stat.st_size}|{stat.st_mtime_ns}\n".encode())
+    return h.hexdigest()

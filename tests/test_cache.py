@@ -196,3 +196,43 @@ def test_volume_digest_sees_every_voxel_and_the_geometry(order):
     assert not (view.flags.c_contiguous or view.flags.f_contiguous)
     assert volume_digest(Volume(view, phantom.spacing)) == volume_digest(Volume(np.ascontiguousarray(values),
                                                                               phantom.spacing))
+
+
+def test_code_stamp_follows_the_code() -> None:
+    """A source file touched gives another stamp; nothing touched, the same (the control)."""
+    import os
+
+    from povh3d import cache
+
+    source = Path(cache.__file__).resolve().parent / "_version.py"
+    before = os.stat(source)
+    first = cache.code_stamp.__wrapped__()
+    assert cache.code_stamp.__wrapped__() == first
+    try:
+        os.utime(source, ns=(before.st_atime_ns, before.st_mtime_ns + 1000))
+        assert cache.code_stamp.__wrapped__() != first
+    finally:
+        os.utime(source, ns=(before.st_atime_ns, before.st_mtime_ns))
+
+
+@pytest.mark.povray
+def test_a_scene_cameras_evaluation_made_by_other_code_is_not_read(tmp_path: Path, monkeypatch) -> None:
+    """The camera evaluation's entry is keyed by the code too: a depth pass whose POV-Ray options
+    changed (a still's clock) must not come back from an older povh3d's cache."""
+    from povh3d import cache
+    from povh3d.engine.scene_camera import evaluate_camera
+    from povh3d.geometry.presets import lens_array
+    from povh3d.scene.camera_script import camera_script
+    from povh3d.scene.scene import load_scene
+
+    path = tmp_path / "s.pov"
+    path.write_text("#version 3.7;\ncamera { location <0, 0, -5> look_at 0 }\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    scene, array = load_scene(path), lens_array("demo")
+    script = camera_script(path.read_text(), scene.include_text)
+
+    def cached() -> bool:
+        return evaluate_camera(scene, script.script, array, script.cameras, tmp_path / "cache", True, script.lines)[2]
+
+    assert not cached() and cached()   # the control: the same code reads its own entry
+    monkeypatch.setattr(cache, "code_stamp", lambda: "other code")
+    assert not cached()

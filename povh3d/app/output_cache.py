@@ -50,7 +50,6 @@ from ..volume.sources import is_volume_source
 _IGNORED = ("func", "quiet", "no_cache")
 #: Options whose use sends a request down the normal path (see the module docstring).
 _UNCACHED = ("frames", "video", "views_dir", "depth_maps", "scheduler", "calibration", "objects")
-_PACKAGE = Path(__file__).resolve().parents[1]
 
 
 @dataclass(frozen=True)
@@ -84,28 +83,9 @@ def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
     kept = {k: v for k, v in options.items() if k not in _IGNORED}
     kept.update(scene=str(loaded.path), include=[str(d) for d in loaded.include_dirs],
                 output=os.path.abspath(output))
-    parts = {"povh3d": [__version__, _code_stamp()], "options": kept, "scene": loaded.digest,
+    parts = {"povh3d": [__version__, cache.code_stamp()], "options": kept, "scene": loaded.digest,
              "povray": povray, "env": {k: os.environ.get(k) for k in ("POVH3D_POVRAY", "POVH3D_SANDBOX")}}
     return cache.content_key(parts)
-
-
-def _code_stamp() -> str:
-    """Names, sizes and modification times of povh3d's source files and templates, hashed."""
-    h = hashlib.sha256()
-    folders = [_PACKAGE, _PACKAGE / "templates", _PACKAGE.parent / "templates"]
-    while folders:
-        folder = folders.pop()
-        try:
-            entries = sorted(os.scandir(folder), key=lambda e: e.name)
-        except OSError:
-            continue
-        for entry in entries:
-            if entry.is_dir() and entry.name not in ("__pycache__", "templates"):
-                folders.append(Path(entry.path))
-            elif entry.name.endswith((".py", ".pov", ".inc", ".j2", ".toml", ".txt")):
-                stat = entry.stat()
-                h.update(f"{entry.path}|{stat.st_size}|{stat.st_mtime_ns}\n".encode())
-    return h.hexdigest()
 
 
 def _entry_path(key: str, cache_dir: Path | None = None) -> Path:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..cache import cache_root, content_key
+from ..cache import cache_root, code_stamp, content_key
 from .cache import ImageCache
 from ..image.io import read_png
 from ..povray.job import SCENE_FILE
@@ -271,7 +271,7 @@ KEY_REVISION = 2
 def shot_keys(version: str, scene: Scene, batch: ShotBatch, header: dict[str, Any],
               settings: RenderSettings) -> list[str]:
     """The cache key of every shot of ``batch``: what the image depends on, nothing else."""
-    common_key = content_key(__version__, KEY_REVISION, version, scene.digest, batch.template,
+    common_key = content_key(__version__, code_stamp(), KEY_REVISION, version, scene.digest, batch.template,
                              _template_digest(batch.template), _canonical(batch.context),
                              _canonical(header), batch.width, batch.height, settings.options,
                              settings.bit_depth, scene.adds_assumed_gamma, batch.options)

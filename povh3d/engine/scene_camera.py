@@ -98,7 +98,7 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
 
     start = time.perf_counter()
     w, h = physical_size(lens_array)
-    key = content_key("scene-camera-2", __version__, scene.digest, w, h)
+    key = content_key("scene-camera-2", __version__, cache.code_stamp(), scene.digest, w, h)
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera)
     if stored is not None:
@@ -188,7 +188,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     w, h = physical_size(lens_array)
     right, up = (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0), (0.0, lens_array.lenses_y * lens_array.pitch_y, 0.0)
     target = pass_size(lens_array)[0]
-    key = content_key("scene-camera-depth-2", __version__, scene.digest, w, h, target, right, up, front_clearance,
+    key = content_key("scene-camera-depth-2", __version__, cache.code_stamp(), scene.digest, w, h, target, right, up, front_clearance,
                       lens_array.panel.size_mm[0])
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera_and_pass)
