@@ -11,6 +11,8 @@ draft``) one whole ``povh3d render`` command, whose outcome is one of
 - ``timeout``: the command, or the oracle that judges it, ran out of its time;
 - ``stochastic``: as ok, but a view below ``MIN_DB`` in a scene whose lighting POV-Ray samples per
   render, within ``STOCHASTIC_MARGIN_DB`` of the gap between two of POV-Ray's own renders (``view_verdict``);
+- ``chaotic``: as ok, but a view below ``MIN_DB`` in a scene whose oracle moved by the render's own
+  precision (``chaotic_shift_mm``) falls below it too, and within ``CHAOTIC_MARGIN_DB`` of that gap;
 - ``wrong``: exit 0 but a frame other than the camera's, no finite depth and no word why, an empty
   image or a view below that bar (the silently wrong image the issue is about);
 - ``crash``: a non-zero exit with more than one line (a traceback).
@@ -43,12 +45,11 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from benchmarks._common import write_table  # noqa: E402
+from benchmarks.gallery_oracle import (  # noqa: E402, F401  (the judge's oracle, re-exported for the tests)
+    CHAOTIC_MARGIN_DB, EXAMPLES, GRID_SHIFTS, MIN_DB, STOCHASTIC_MARGIN_DB, chaotic_floor, chaotic_shift_mm,
+    grid_shifts, oracle_view, realizations_psnr, view_psnr, view_verdict)
 
-EXAMPLES = Path("/usr/share/doc/povray/examples")
 PRESETS = ("demo", "ipad-retina")
-MIN_DB = 35.0
-#: dB a stochastic scene's view may fall below the gap between two of POV-Ray's own realizations
-STOCHASTIC_MARGIN_DB = 3.0
 #: features whose lighting POV-Ray samples anew with the camera's pixels (radiosity's pretrace); photons
 #: and jittered area lights are checked too: where two realizations agree, the 35 dB rule applies as is
 STOCHASTIC = ("radiosity", "photons", "area_light")
@@ -63,7 +64,7 @@ _INCLUDE = re.compile(r'#\s*include\s+"([^"]+)"')
 class Outcome:
     scene: str
     preset: str
-    kind: str              # ok, stochastic, refused, timeout, wrong, crash
+    kind: str              # ok, stochastic, chaotic, refused, timeout, wrong, crash
     frame: str             # the sidecar's frame source, or ''
     depth: str             # 'near..far mm', the depth pass's reason, or ''
     worst_db: float        # the worst sampled view against its oblique orthographic render (nan: none)
@@ -125,108 +126,6 @@ def _two_d_seconds(scene: Path, width: int, height: int, timeout: float) -> floa
         except subprocess.TimeoutExpired:
             return float("nan")
         return time.perf_counter() - start
-
-
-def _frame_of(record: dict):
-    """The display frame a sidecar records (native: the identity)."""
-    from povh3d.geometry.frame import DisplayFrame
-
-    f = record["display_frame"]
-    if "centre" in f:
-        return DisplayFrame(tuple(f["centre"]), tuple(f["axis_x"]), tuple(f["axis_y"]), tuple(f["normal"]),
-                            f["units_per_mm"], f["source"])
-    return DisplayFrame((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), 1.0, "native")
-
-
-def oracle_view(scene: Path, record: dict, view: tuple[int, int], shape: tuple[int, int], timeout: float,
-                supersample: int = 1, shift: int = 0) -> np.ndarray:
-    """View ``(l, k)`` of ``shape`` (rows, cols) as a plain POV-Ray render of the scene through an oblique
-    orthographic camera placed by the frame, point-sampled.
-
-    ``supersample`` (odd): render that many times finer and keep each pixel's centre sample, the same
-    rays.  ``shift``: render ``shift`` more pixels along the view's shorter side (columns on the left, or
-    rows on top) and cut them off, the same rays again.  Both change where POV-Ray's image grid lies over
-    the scene; radiosity's pretrace samples sit on that grid (``pretrace_start``/``pretrace_end`` are
-    fractions of the image's larger side), so each gives another realization of its lighting.
-    """
-    from povh3d.image.io import read_png
-    from povh3d.povray.format import pov_vector
-    from povh3d.povray.process import PovrayJob, run_jobs
-
-    if supersample < 1 or supersample % 2 == 0:
-        raise ValueError(f"supersample must be odd, got {supersample}")
-    frame, la = _frame_of(record), record["lens_array"]
-    back = record["quality"]["front_clearance_mm"]
-    nx, ny = la["views"]
-    (s, sy), fl = la["panel"]["pixel_pitch_mm"], la["focal_mm"]
-    width_mm, height_mm = la["lenses"][0] * la["lens_pitch_mm"][0], la["lenses"][1] * la["lens_pitch_mm"][1]
-    l, k = view
-    d = np.array([(k + 0.5 - nx / 2) * s / fl, (ny / 2 - l - 0.5) * sy / fl, 1.0])
-    rows, cols = shape
-    across = shift > 0 and cols <= rows        # the shift widens the shorter side: max(W, H) stays
-    extra_cols, extra_rows = (shift, 0) if across else (0, shift)
-    # the image grows to the left (or upwards) by whole pixels, its centre by half of that
-    centre = -back * d + np.array([-extra_cols * width_mm / cols / 2, extra_rows * height_mm / rows / 2, 0.0])
-    script = (f'#include "{scene.name}"\ncamera {{ orthographic location {pov_vector(frame.to_scene(centre))} '
-              f'direction {pov_vector(frame.directions_to_scene(d))} '
-              f'right {pov_vector(frame.directions_to_scene([width_mm * (cols + extra_cols) / cols, 0, 0]))} '
-              f'up {pov_vector(frame.directions_to_scene([0, height_mm * (rows + extra_rows) / rows, 0]))} }}\n')
-    images: list[np.ndarray] = []
-    m = supersample
-    run_jobs([PovrayJob(name="oracle", script=script, width=(cols + extra_cols) * m, height=(rows + extra_rows) * m,
-                        include_dirs=(str(scene.parent), str(EXAMPLES)), options=("-A",), timeout=timeout)],
-             processes=1, on_result=lambda r: images.append(read_png(r.images[0])))
-    return images[0][m // 2::m, m // 2::m][extra_rows:, extra_cols:]
-
-
-#: Where the realizations' image grids start, as fractions of the view's shorter side (at least a pixel each).
-GRID_SHIFTS = (0.02, 0.1, 0.3)
-
-
-def grid_shifts(shape: tuple[int, int]) -> list[int]:
-    """The pixel shifts of ``GRID_SHIFTS`` for a view of ``shape`` (rows, cols): distinct, each >= 1."""
-    short = min(shape)
-    return sorted({max(1, round(f * short)) for f in GRID_SHIFTS})
-
-
-def realizations_psnr(scene: Path, record: dict, view: tuple[int, int], oracle: np.ndarray, timeout: float) -> float:
-    """The worst PSNR (dB) between ``oracle`` (view ``view``'s render) and POV-Ray's own renders of the
-    same rays with the image grid shifted (``grid_shifts``): how far apart two of its own realizations of
-    stochastic lighting may lie.  inf where the lighting does not depend on the grid."""
-    from povh3d.image.metrics import psnr
-
-    return min(psnr(oracle_view(scene, record, view, oracle.shape[:2], timeout, shift=p)[..., :3], oracle[..., :3])
-               for p in grid_shifts(oracle.shape[:2]))
-
-
-def view_psnr(scene: Path, record: dict, views_dir: Path, picks: list[tuple[int, int]], timeout: float,
-              stochastic: bool = False) -> tuple[float, float]:
-    """The worst PSNR (dB) of the picked views against oblique orthographic renders placed by the frame, and
-    (``stochastic``) the worst PSNR between the first pick's render and POV-Ray's own renders of the same
-    rays with the image grid shifted (``realizations_psnr``; nan: not measured, as where every view
-    passes)."""
-    from povh3d.image.io import read_png
-    from povh3d.image.metrics import psnr
-
-    worst, first = float("inf"), None
-    for l, k in picks:
-        view = read_png(views_dir / f"v_{l:03d}_{k:03d}.png")
-        oracle = oracle_view(scene, record, (l, k), view.shape[:2], timeout)
-        worst = min(worst, psnr(view[..., :3], oracle[..., :3]))
-        first = oracle if first is None else first
-    if not stochastic or worst >= MIN_DB or first is None:   # the realizations only where they can matter
-        return worst, float("nan")
-    return worst, realizations_psnr(scene, record, picks[0], first, timeout)
-
-
-def view_verdict(worst_db: float, realizations_db: float) -> str:
-    """'ok' for a view within MIN_DB of its oracle; 'stochastic' for one under it but within
-    STOCHASTIC_MARGIN_DB of the gap between two of POV-Ray's own realizations; else 'wrong'."""
-    if worst_db >= MIN_DB:
-        return "ok"
-    if np.isfinite(realizations_db) and worst_db >= realizations_db - STOCHASTIC_MARGIN_DB:
-        return "stochastic"
-    return "wrong"
 
 
 def is_stochastic(scene: Path) -> bool:
@@ -299,10 +198,18 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
         except Exception as error:   # the oracle's own render failed: say so, do not hide the row
             worst, realizations = float("nan"), float("nan")
             problems.append(f"oracle: {str(error).splitlines()[0][:80]}")
-        verdict = view_verdict(worst, realizations)
+        verdict, chaotic = view_verdict(worst, realizations), float("nan")
+        if verdict == "wrong" and np.isfinite(worst):   # a pigment that changes within the render's precision?
+            try:
+                shape = read_png(views_dir / f"v_{picks[0][0]:03d}_{picks[0][1]:03d}.png").shape[:2]
+                chaotic = chaotic_floor(scene, record, picks, shape, timeout)
+            except Exception:   # not measured: the 35 dB rule as is
+                pass
+            verdict = view_verdict(worst, realizations, chaotic)
         if verdict == "wrong" and np.isfinite(worst):
             problems.append(f"view {worst:.1f} dB" + (f" (POV-Ray's own realizations: {realizations:.1f} dB)"
-                                                      if stochastic else "") + _cross_check(
+                                                      if stochastic else "") + (
+                f" (the oracle moved by the precision: {chaotic:.1f} dB)" if chaotic < MIN_DB else "") + _cross_check(
                 scene, [*(display or ("--preset", preset))], picks, timeout, record["method"]))
         warnings = [line.removeprefix("povh3d: warning: ") for line in lines if line.startswith("povh3d: warning")]
         if problems:   # wrong; and whether a warning said so (not silent, though exit 0)
@@ -310,6 +217,9 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
             note = "; ".join(problems) + (f"; warned: {said[0][:100]}" if said else "")
         elif verdict == "stochastic":
             note = f"stochastic: POV-Ray's own renders of the same rays, the image grid shifted, differ by {realizations:.1f} dB"
+        elif verdict == "chaotic":
+            note = (f"chaotic: the oracle moved {chaotic_shift_mm(record):.2g} mm (the {record['method']} camera's "
+                    f"precision) differs from itself by {chaotic:.1f} dB")
         else:
             said = [w for w in warnings if "depth pass" in w] or warnings
             note = said[0][:120] if said else ""
@@ -359,7 +269,7 @@ def _row(o: Outcome) -> tuple[str, ...]:
             f"{o.seconds_2d:.1f}" if np.isfinite(o.seconds_2d) else "timeout", ratio, o.note.replace("|", "/"))
 
 
-KINDS = ("ok", "stochastic", "refused", "timeout", "wrong", "crash")
+KINDS = ("ok", "stochastic", "chaotic", "refused", "timeout", "wrong", "crash")
 HEADER = ["scene", "preset", "outcome", "frame", "depth, mm", "worst view, dB", "s", "2D s", "vs 2D", "note"]
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from benchmarks.gallery import EXAMPLES, MIN_DB, judge
@@ -104,3 +105,95 @@ def test_a_radiosity_view_is_judged_against_povrays_own_noise(cli, tmp_path):
     assert realizations < 40, "radiosity3 no longer differs between realizations: pick another scene"
     assert view_verdict(psnr(view, a), realizations) in ("ok", "stochastic")
     assert psnr(view, neighbour) < realizations - STOCHASTIC_MARGIN_DB
+
+
+# -- chaotic pigments: judged against the oracle moved by the render's own precision ----------------
+
+# fractalzoom.pov at clock 0: a Mandelbrot pigment, 10000 iterations, zoomed 1e4 times, whose colour
+# changes where a ray moves by a millionth of a pixel
+MANDEL = """#version 3.7;
+global_settings { assumed_gamma 1.0 }
+camera { location -z*4 look_at 0 }
+plane { -z, 0 pigment { mandel 10000
+    color_map { [0 rgb 0] [0.25 rgb <0.5, 0, 0.5>] [0.5 rgb <1, 0, 0>] [0.75 rgb <1, 1, 0>] [1 rgb 1] }
+    translate <0.7499738161281454, -0.0086354745579594171> scale 1e4 }
+  finish { ambient 1 diffuse 0 } }
+"""
+# the same camera over a smooth pigment: nothing changes within a pixel's millionth
+SMOOTH = MANDEL.replace("mandel 10000", "bozo").replace("scale 1e4", "scale 0.5")
+
+def _render_views(cli, scene, folder, *options):
+    import json
+
+    out = folder / "h3d.png"
+    result = cli("render", str(scene), "-o", str(out), *SQUARE, "--method", "multi-ortho", "--quality", "draft", "-q",
+                 "--views-dir", str(folder / "views"), *options, cwd=scene.parent)
+    assert result.code == 0, result.err
+    return json.loads(out.with_suffix(".json").read_text())
+
+
+@pytest.mark.parametrize("worst_db, chaotic_db, verdict", [
+    (33.0, 28.0, "chaotic"),     # as close as the oracle moved by the precision comes to itself
+    (20.0, 28.0, "wrong"),       # further off than that: a wrong view in a chaotic scene
+    (30.0, math.inf, "wrong"),   # the moved oracle equals itself: the 35 dB rule as is
+    (30.0, 36.0, "wrong"),       # the moved oracle holds the bar: the scene is not chaotic
+    (30.0, math.nan, "wrong"),   # not measured
+])
+def test_the_chaotic_verdict(worst_db, chaotic_db, verdict):
+    from benchmarks.gallery import view_verdict
+
+    assert view_verdict(worst_db, math.nan, chaotic_db) == verdict
+
+
+def test_the_mesh_cameras_rays_hit_within_the_chaotic_bound(cli, tmp_path):
+    """The bound the chaotic verdict moves the oracle by holds the mesh camera's rays: every view pixel's
+    hit on a plane at the screen, encoded modulo 1e-4 scene units at 16 bits, lies within
+    ``chaotic_shift_mm`` of the conventions' ray (its lens centre) along x and y.  Negative control: the
+    pigment moved by three times the bound reads that far off."""
+    from benchmarks.bench_ray_precision import encode_scene, hit_miss_mm
+    from benchmarks.gallery import chaotic_shift_mm
+
+    period = 1e-4   # scene units
+
+    def worst_miss_mm(shift_units: float) -> tuple[float, float, float]:
+        folder = tmp_path / f"shift{shift_units:g}"
+        folder.mkdir()
+        record = _render_views(cli, encode_scene(folder, period, shift_units), folder, "--bit-depth", "16")
+        return (max(hit_miss_mm(folder / "views", record, period)), chaotic_shift_mm(record),
+                period / record["display_frame"]["units_per_mm"])
+
+    miss, bound, period_mm = worst_miss_mm(0.0)
+    # 16 bits of the period (sRGB's steepest step 2.3 codes) resolve a tenth of the bound; the control's
+    # offset stays within half a period, unambiguous
+    assert 2.3 * period_mm / 65535 < bound / 10 and 4 * bound < period_mm / 2
+    assert miss <= bound, f"mesh camera's rays {miss:.3g} mm off, over the bound {bound:.3g} mm"
+    moved, _, _ = worst_miss_mm(3 * bound / period_mm * period)
+    assert moved > bound, f"the control's pigment, moved by {3 * bound:.3g} mm, read {moved:.3g} mm off"
+
+
+@pytest.mark.parametrize("pigment, chaotic", [(MANDEL, True), (SMOOTH, False)], ids=["mandel", "smooth"])
+def test_a_chaotic_pigment_is_judged_against_its_oracle_moved_by_the_precision(cli, tmp_path, pigment, chaotic):
+    """fractalzoom's pigment: its oracle moved by the mesh camera's precision bound falls under 35 dB, and
+    the H3D view stays within the chaotic margin of that.  Negative controls: a view one lens pitch off
+    (the oracle moved by it) is still wrong; a smooth pigment's moved oracle equals itself, so the
+    chaotic verdict lets nothing through there."""
+    from benchmarks.gallery import chaotic_floor, oracle_view, view_verdict
+    from povh3d.image.io import read_png
+    from povh3d.image.metrics import psnr
+
+    scene = tmp_path / "plane.pov"
+    scene.write_text(pigment)
+    record = _render_views(cli, scene, tmp_path)
+    picks = [(3, 3), (0, 0)]
+    view = read_png(tmp_path / "views" / "v_003_003.png")[..., :3]
+    floor = chaotic_floor(scene, record, picks, view.shape[:2], 120)
+    oracle = oracle_view(scene, record, (3, 3), view.shape[:2], 120)[..., :3]
+    pitch = record["lens_array"]["lens_pitch_mm"][0]
+    off = psnr(oracle_view(scene, record, (3, 3), view.shape[:2], 120, shift_mm=pitch)[..., :3], oracle)
+    assert view_verdict(off, math.nan, floor) == "wrong", f"one lens off: {off:.1f} dB, floor {floor:.1f} dB"
+    if chaotic:
+        assert floor < MIN_DB, "the pigment no longer changes within the precision bound: pick a deeper zoom"
+        assert view_verdict(psnr(view, oracle), math.nan, floor) in ("ok", "chaotic")
+    else:
+        assert floor == math.inf
+        assert view_verdict(psnr(view, oracle), math.nan, floor) == "ok"
