@@ -184,11 +184,13 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
     beside = SpareRun(method, scene, lens_array, base, options, [view_seeds(spare, seed + 2, views),
                                                                  view_seeds(spare, seed + 3, views)]) if spare > 0 else None
     chosen: tuple[Quality, np.ndarray | None] | None = None
+    spare_taken = False
     try:
         reference = render([*centre, view_seeds(first, seed, views), view_seeds(first, seed + 1, views)])
         chosen = _draft_or_seeds(runs, reference, centre, target, need, rounding, tried)
         if beside is not None and chosen is None:
             runs.add(beside.result(), spare)
+            spare_taken = True
             if progress is not None:
                 progress(len(runs.counts), len(runs.counts) + 1)
             reference = runs.reference()
@@ -235,7 +237,8 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
     if beside is not None:
         beside.join()
     fields = {"tried": tuple(tried), "seconds": time.perf_counter() - start,
-              "reference_samples": runs.counts[0], "reference_floor_db": reference.floor_db}
+              "reference_samples": runs.counts[0], "reference_floor_db": reference.floor_db,
+              "povray_runs": len(runs.counts) + (beside is not None and not spare_taken)}
     return quality, fields, result
 
 
