@@ -171,7 +171,8 @@ def main() -> int:
                     estimates.setdefault((tree, target), record["tried"][-1]["psnr_db"])   # auto's own, of its image
                     runs.setdefault((tree, target), []).append(record.get("povray_runs", 0))
                     got = reference.psnr(read_png(image))
-                    autos.setdefault((tree, target), [got, chosen])[0] = min(got, autos[tree, target][0])
+                    entry = autos.setdefault((tree, target), [got, chosen])
+                    entry[0] = min(entry[0], got)   # the worst round's image
                     autos[tree, target].append(seconds)
                     print(f"{name} auto {tree} {target}: {seconds:.2f} s (CPU {used:.2f} s) {autos[tree, target][0]:.2f} "
                           f"dB {chosen}", flush=True)
