@@ -24,15 +24,13 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-from scipy.stats import qmc
 
 from ..errors import ConfigError
-from ..geometry.footprint import CENTRE, on_grid
+from ..geometry.footprint import CENTRE, scrambled_sobol
 from ..geometry.lens_array import LensArray
 from ..image.colour import encode
 from ..image.metrics import Reference
@@ -58,11 +56,10 @@ STARTUP_SAMPLES, STARTUP_PIXELS, COVER = 18.0, 19_200, 2.2
 DRAFT_UP_TO_DB = 30.0
 #: The most footprint samples auto renders (both seeds); past them the target is refused.
 MAX_SAMPLES = 1024
-#: dB the estimate must clear above the target: the estimate of the image written was up to 0.34 dB over
-#: its score against two seeds of 1024 samples (sample.pov, 64 samples), so the image lands within
-#: 0.2 dB of the target (a view's samples make one error pattern over its lenses, so the seeds'
-#: difference has few independent parts).
-MARGIN_DB = 0.2
+#: dB the estimate (one standard error high, ``SeedRuns.error_bound``) must clear above the target:
+#: the plain estimate was up to 0.34 dB over the image's score against two seeds of 1024 samples
+#: (sample.pov, 64 samples); the bound adds 0.3-0.4 dB on 16 views, less on more.
+MARGIN_DB = 0.1
 #: How the error falls with the samples per seed N, as N ** -ALPHA, to size the next run: the Sobol'
 #: seeds gained 3.0-5.1 dB a doubling (ALPHA 1.0-1.7); the lower end taken, as a run too many
 #: costs a start-up.  A further run adds at least ``LEAST_MORE`` of the samples so far.
@@ -76,6 +73,7 @@ class SeedRuns:
     the centre (``draft``).  A seed's runs continue one Sobol' sequence (``view_seeds``), so its
     samples of all runs weigh the same: their mean is the seed's image."""
 
+    labels: np.ndarray   # (H, W) view of each pixel (``view_labels``), -1 outside the bank
     sums: list[np.ndarray] = field(default_factory=list)
     counts: list[int] = field(default_factory=list)
     draft: np.ndarray | None = None
@@ -104,6 +102,18 @@ class SeedRuns:
     def reference(self) -> Reference:
         return Reference(*(encode(x, np.uint16) for x in self.combined()))
 
+    def error_bound(self) -> float:
+        """The mean squared error of the seeds' mean (sRGB codes, the whole panel), one standard error
+        high: each view has samples of its own, so the views' shares of the seeds' squared difference
+        are independent, and their spread says how far the estimate may be off (with few views, far:
+        4x4 views at 4 samples a seed were 1.1 dB over the image's score)."""
+        a, b = (encode(x, np.uint16).astype(np.float64) / 65535 for x in self.combined())
+        squared = np.mean((a - b) ** 2, axis=-1)
+        inside = self.labels >= 0
+        per_view = np.bincount(self.labels[inside], weights=squared[inside])
+        spread = math.sqrt(len(per_view)) * float(np.std(per_view, ddof=1)) if len(per_view) > 1 else 0.0
+        return (float(squared.sum()) + spread) / squared.size / 4
+
     def image(self, dtype: type) -> np.ndarray:
         a, b = self.combined()
         return encode((a + b) / 2, dtype)
@@ -122,15 +132,8 @@ def view_seeds(count: int, seed: int, views: tuple[int, int], start: int = 0) ->
     view reach 39.9 dB, 48.1 dB from 192 against 44.6 dB), and a later run that continues them
     makes one sequence with the first (independent sets of a quarter each reached 44.4 dB)."""
     ny, nx = views
-    sets = []
-    with warnings.catch_warnings():   # counts other than powers of two: still unbiased
-        warnings.filterwarnings("ignore", message=".*balance properties.*")
-        for v in range(ny * nx):
-            engine = qmc.Sobol(4, scramble=True, seed=seed * 1_000_003 + v)
-            if start:
-                engine.fast_forward(start)
-            sets.append(on_grid(engine.random(count) - 0.5))
-    return np.stack(sets, axis=1).reshape(count, ny, nx, 4)
+    return np.stack([scrambled_sobol(count, seed * 1_000_003 + v, start) for v in range(ny * nx)],
+                    axis=1).reshape(count, ny, nx, 4)
 
 
 def quantisation_mse(bit_depth: int) -> float:
@@ -138,10 +141,18 @@ def quantisation_mse(bit_depth: int) -> float:
     return 1.0 / (12.0 * (2 ** bit_depth - 1) ** 2)
 
 
-def mean_psnr(reference: Reference, quantisation: float) -> float:
-    """PSNR of the two seeds' mean as written: a quarter of their squared difference, plus rounding."""
-    mse = 10 ** (-reference.floor_db / 10) / 4 + quantisation
-    return -10 * math.log10(mse)
+def mean_psnr(runs: SeedRuns, quantisation: float) -> float:
+    """PSNR of the two seeds' mean as written (``SeedRuns.error_bound``), plus rounding."""
+    return -10 * math.log10(runs.error_bound() + quantisation)
+
+
+def view_labels(lens_array: LensArray) -> np.ndarray:
+    """``(H, W)``: the view of each pixel of the camera bank (a cell's pixel offset), -1 elsewhere."""
+    ny, nx = lens_array.require_views()
+    rows, cols = lens_array.bank_region
+    labels = np.full((lens_array.panel.height, lens_array.panel.width), -1, np.int64)
+    labels[rows, cols] = (np.arange(rows.stop - rows.start) % ny)[:, None] * nx + np.arange(cols.stop - cols.start) % nx
+    return labels
 
 
 def with_rounding(psnr_db: float, quantisation: float) -> float:
@@ -169,7 +180,7 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
                           f"codes themselves ({-10 * math.log10(rounding):.1f} dB); use --max-error "
                           f"{math.floor(-10 * math.log10(rounding) - 3):g} or less")
     base = replace(settings, quality=Quality(footprint=1), max_error_db=None)
-    runs = SeedRuns()
+    runs = SeedRuns(view_labels(lens_array))
     tried: list[tuple[str, float]] = []
     views = lens_array.require_views()
 
@@ -191,14 +202,14 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
     for _ in range(MAX_RUNS):
         if chosen is not None:
             break
-        got = mean_psnr(reference, rounding)
+        got = mean_psnr(runs, rounding)
         if not tried or tried[-1][0] != f"{runs.total} footprint samples":
             tried.append((f"{runs.total} footprint samples", got))
         if got >= need:
             chosen = (Quality(footprint=runs.total), None)
             break
         # The samples per seed that bring the error of the seeds' mean down to ``allowed``.
-        error, n = 10 ** (-reference.floor_db / 10) / 4, runs.per_seed
+        error, n = runs.error_bound(), runs.per_seed
         more = max(math.ceil(n * (error / allowed) ** (1 / ALPHA)) - n, math.ceil(LEAST_MORE * n))
         more += -more % 4 if more > 8 else 0   # frames of a few banks each (``view_bank.bank_groups``)
         if runs.total + 2 * more > MAX_SAMPLES:
@@ -229,6 +240,6 @@ def _draft_or_seeds(runs: SeedRuns, reference: Reference, centre: tuple, target:
         tried.append(("draft", draft_db))
         if draft_db >= need and reference.floor_db >= target - 3:
             return Quality(), runs.draft
-    got = mean_psnr(reference, rounding)
+    got = mean_psnr(runs, rounding)
     tried.append((f"{runs.total} footprint samples", got))
     return (Quality(footprint=runs.total), None) if got >= need else None

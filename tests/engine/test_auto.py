@@ -129,8 +129,10 @@ def test_the_probe_is_a_window_of_the_full_render(grid):
 
 @pytest.fixture(scope="module")
 def full_reference(textured):
-    """A converged reference of the full 20 x 16-lens image: two seeds of 512 footprint samples."""
-    la = square_array(lx=20, ly=16, nx=4, ny=4)
+    """A converged reference of the full 10 x 8-lens, 8 x 8-view image: two seeds of 512 footprint samples.
+    (auto's estimate is as good as its views are many: each has samples of its own, and on 4 x 4 views
+    it scattered by 0.65 dB about the image's score at 4 samples a seed, over six seed pairs.)"""
+    la = square_array(lx=10, ly=8, nx=8, ny=8)
     return la, Reference(*(run_method("multi-ortho", textured, la, RenderSettings(
         quality=Quality(footprint=512, seed=seed), bit_depth=16)).h3d for seed in (1, 2)))
 
