@@ -48,9 +48,12 @@ PRIOR_SAMPLES_40, PRIOR_SLOPE, FIRST_SHARE = 55.0, 0.085, 0.8
 #: A POV-Ray run's start-up (about 0.5 s of wall, most of it idle: POV-Ray 3.7's threads hand messages
 #: over at 50 ms waits) costs as much as ``STARTUP_SAMPLES`` footprint samples of a panel of
 #: ``STARTUP_PIXELS`` (27 ms of wall a sample on benchmarks/bench_auto.py's 160x120 panel), fewer on a
-#: larger one.  The first run adds up to that many samples over ``FIRST_SHARE`` of the prior, and up to
-#: ``COVER`` times the prior in all: extra samples that cost no more than the second run they may save.
-STARTUP_SAMPLES, STARTUP_PIXELS, COVER = 18.0, 19_200, 2.2
+#: larger one.  The first run adds ``STARTUP_SHARE`` of that many samples over ``FIRST_SHARE`` of the
+#: prior, up to ``COVER`` times the prior in all.  What the scenes need spans 0.36 to 1.4 times the
+#: prior (the unseen scene the least): covering the top would cost the easy scene more than the
+#: start-up it saves the hard one (a whole start-up's worth: 7 of 10 cases in a model of the
+#: benchmark's times, half of one: 8; docs/benchmarks.md).
+STARTUP_SAMPLES, STARTUP_PIXELS, STARTUP_SHARE, COVER = 18.0, 19_200, 0.5, 1.6
 #: Targets up to this also try ``draft`` (the point-sampled centre, in the first run): it reaches
 #: 20-25 dB on textured scenes.
 DRAFT_UP_TO_DB = 30.0
@@ -163,7 +166,7 @@ def with_rounding(psnr_db: float, quantisation: float) -> float:
 def first_samples(prior: float, lens_array: LensArray) -> float:
     """The footprint samples (both seeds) of auto's first run, for a prior guess of ``prior``."""
     startup = STARTUP_SAMPLES * STARTUP_PIXELS / (lens_array.panel.width * lens_array.panel.height)
-    return max(FIRST_SHARE * prior, min(COVER * prior, FIRST_SHARE * prior + startup))
+    return max(FIRST_SHARE * prior, min(COVER * prior, FIRST_SHARE * prior + STARTUP_SHARE * startup))
 
 
 def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: RenderSettings,
