@@ -5,14 +5,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from povh3d.image.colour import decode
+from povh3d.image.colour import decode, linear_to_srgb
 from povh3d.errors import ConfigError
 from povh3d.geometry.footprint import latin_hypercube
 from povh3d.geometry.rays import pixel_rays
 from povh3d.engine.methods import run_method
 from povh3d.engine.auto import (AUTO_LADDER, FULL_IMAGE_PIXELS, full_image_auto, probe_window, resolve_auto,
                                 window_offset)
-from povh3d.engine.auto_seeds import view_seeds
+from povh3d.engine.auto_seeds import SeedRuns, view_labels, view_seeds
 from povh3d.errors import RenderInterrupted
 from povh3d.geometry.view_bank import view_bank_frames
 from povh3d.geometry.lens_array import LensArray, Panel
@@ -208,3 +208,40 @@ def test_auto_needs_a_target_and_a_target_needs_auto():
         RenderSettings(quality="auto")
     with pytest.raises(ConfigError, match="--quality auto"):
         RenderSettings(quality="normal", max_error_db=30)
+
+
+def test_view_labels_give_each_pixel_of_a_lens_cell_its_own_view():
+    la = square_array(lx=5, ly=3, nx=3, ny=2)
+    labels = view_labels(la)
+    rows, cols = la.bank_region
+    bank = labels[rows, cols]
+    cells = bank.reshape(3, 2, 5, 3).transpose(0, 2, 1, 3).reshape(15, 6)   # (lens, pixel of its cell)
+    assert all(sorted(cell) == list(range(6)) for cell in cells)
+    assert np.all(cells == cells[0])   # the same pixel of every cell: the same view
+    assert np.all(labels[:, :cols.start] == -1) and np.all(labels[:, cols.stop:] == -1)
+
+
+def test_the_error_bound_is_the_seeds_error_one_standard_error_high():
+    """``SeedRuns.error_bound``: a quarter of the seeds' mean squared difference (sRGB codes), plus one
+    standard error from the views' independent shares; views that differ alike add nothing (the
+    control), one view that differs alone adds its spread."""
+    la = square_array(lx=4, ly=4, nx=2, ny=2)
+    labels = view_labels(la)
+    h, w = labels.shape
+    a = np.full((h, w, 3), 0.2)
+    runs = SeedRuns(labels, sums=[a, a + 0.0], counts=[1])
+    assert runs.error_bound() == 0.0
+    coded = np.rint(linear_to_srgb(np.array([0.2, 0.3])) * 65535) / 65535
+    d2 = (coded[1] - coded[0]) ** 2
+    even = a.copy()
+    even[labels >= 0] = 0.3   # every view's pixels differ alike
+    runs = SeedRuns(labels, sums=[a, even], counts=[1])
+    plain = d2 * (labels >= 0).sum() / labels.size / 4
+    assert runs.error_bound() == pytest.approx(plain, rel=1e-6)
+    one = a.copy()
+    one[labels == 0] = 0.3   # one view of four differs
+    runs = SeedRuns(labels, sums=[a, one], counts=[1])
+    per_view = np.array([d2 * (labels == 0).sum(), 0, 0, 0])
+    expected = (per_view.sum() + 2 * np.std(per_view, ddof=1)) / labels.size / 4
+    # one view's share of four, alone: its standard error is as large as the estimate itself
+    assert runs.error_bound() == pytest.approx(expected, rel=1e-6) == 2 * per_view.sum() / labels.size / 4
