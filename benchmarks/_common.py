@@ -59,22 +59,12 @@ def whole_process_seconds(command: list[str], cwd: Path, env: dict[str, str]) ->
 def whole_process_times(command: list[str], cwd: Path, env: dict[str, str]) -> tuple[float, float]:
     """Wall and CPU seconds (user + system, of ``command`` and the processes it waited for: POV-Ray's)
     from start to exit, its output discarded.  On a shared machine the CPU time is the steadier."""
-    import resource
-
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(command, cwd=cwd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-
-
-def whole_process_times(command: list[str], cwd: Path, env: dict[str, str]) -> tuple[float, float]:
-    """Wall and CPU seconds (user + system, the command and every process it waited for) of ``command``."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    wall = whole_process_seconds(command, cwd, env)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
 
 
 def summary(times: list[float]) -> str:

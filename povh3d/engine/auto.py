@@ -57,6 +57,7 @@ class AutoChoice:
     seconds: float
     reference_samples: int = 256
     reference_floor_db: float = math.inf   # PSNR between the reference's two seeds
+    povray_runs: int = 0   # POV-Ray processes started while choosing (``auto_seeds``: a stopped spare run too)
     # The full image already rendered at the choice (``auto_seeds``): written as it is, not rendered again.
     image: MethodResult | None = field(default=None, compare=False, repr=False)
 
@@ -65,7 +66,7 @@ class AutoChoice:
                 "probe_lenses": list(self.probe_lenses), "probe_seconds": round(self.seconds, 3),
                 "probe_reference_samples": self.reference_samples,
                 "probe_reference_floor_db": round(self.reference_floor_db, 2),
-                "full_image": self.image is not None,
+                "full_image": self.image is not None, "povray_runs": self.povray_runs,
                 "tried": [{"setting": s, "psnr_db": round(p, 2)} for s, p in self.tried]}
 
 

@@ -172,7 +172,7 @@ class RenderSettings:
     depth_scale : float             compress depth along the display normal by this factor (1: none); a
                                 distortion, traced as every ray's slope times it (``depth_scaled_rays``)
     should_stop : callable or None  polled while local POV-Ray runs; True stops them (``RenderInterrupted``):
-                                --quality auto's spare run, cancelled when the first run reaches the target
+                                a caller's way to cancel a render (the command itself sets none)
     """
 
     quality: str | Quality = "normal"
