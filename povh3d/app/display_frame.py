@@ -22,7 +22,7 @@ from ..errors import ConfigError, PovrayError, PovrayTimeout
 from ..geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame, up_warning
 from ..geometry.lens_array import LensArray
 from ..scene.camera import CameraError
-from ..scene.camera_script import camera_script
+from ..scene.camera_script import camera_script, written_camera_type
 from ..scene.scene import Scene
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -110,7 +110,11 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
-    script = camera_script(scene.path.read_bytes().decode("latin-1"), scene.include_text)
+    text = scene.path.read_bytes().decode("latin-1")
+    script = camera_script(text, scene.include_text)
+    written = written_camera_type(text, scene.include_text) if script is not None else None
+    if written is not None:   # refused from the text: its parse may take minutes at the panel's size
+        raise CameraError(_unusable_type(written))
     if script is None:
         if options.mode == "camera":
             raise ConfigError(f"--display-frame camera: the scene {scene.path.name} has no camera; "
@@ -134,8 +138,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
                           f"place the display where it looks: {_orthographic_options(camera)}")
     if camera["type"] != "perspective":
-        raise CameraError(f"cannot use the scene's {camera['type']} camera (only a perspective one defines "
-                          f"a frame); place the display with {EXPLICIT_OPTIONS}, or --display-frame native")
+        raise CameraError(_unusable_type(camera["type"]))
     frame = camera_frame(camera["location"], camera["direction"], camera["right"], camera["up"],
                          camera["look_at"], width_mm,
                          note="look_at" if camera["look_at"] is not None else "no look_at: the point of the "
@@ -157,6 +160,11 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
               "evaluation_from_cache": cached, "warnings": warnings}
     return frame, record, distances
+
+
+def _unusable_type(kind: str) -> str:
+    return (f"cannot use the scene's {kind} camera (only a perspective one defines a frame); place the display "
+            f"with {EXPLICIT_OPTIONS}, or --display-frame native")
 
 
 def _orthographic_options(camera: dict[str, Any]) -> str:

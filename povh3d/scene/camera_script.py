@@ -96,6 +96,33 @@ def camera_script(main: str, read: Callable[[str], str | None]) -> CameraScript 
     return CameraScript("".join(p for p, _ in pieces), 0, lines=tuple(lines))
 
 
+#: Camera types whose refusal needs none of the camera's values (only a perspective camera defines a
+#: frame; an orthographic one's refusal quotes its place): told from the text, before POV-Ray parses a
+#: scene that may take minutes at the panel's size (the mesh-camera demos build their mesh from image_width).
+REFUSED_TYPES = ("mesh_camera", "fisheye", "ultra_wide_angle", "omnimax", "panoramic", "cylinder", "spherical")
+
+
+def written_camera_type(main: str, read: Callable[[str], str | None]) -> str | None:
+    """The type every camera statement of the scene ``main`` and of the files it includes by a literal
+    name opens with, where it is one of ``REFUSED_TYPES``; None otherwise (a perspective or orthographic
+    camera, a camera copied from an identifier, a name computed at parse time, no camera)."""
+    scene = _Scene(read)
+    scene.texts[""] = main
+    found: set[str] = set()
+    todo, seen = [""], set()
+    while todo:
+        name = todo.pop()
+        if name in seen or len(seen) > 4 * MAX_DEPTH or not scene.holds_camera(name):
+            continue
+        seen.add(name)
+        toks = tokens(scene.text(name) or "")
+        todo.extend(_literal_includes(toks))
+        for i in range(len(toks)):
+            if _camera_at(toks, i):
+                found.add(toks[i + 2].text if i + 2 < len(toks) else "")
+    return found.pop() if len(found) == 1 and next(iter(found)) in REFUSED_TYPES else None
+
+
 def _camera_at(toks: list[Token], i: int) -> bool:
     return toks[i].text == "camera" and i + 1 < len(toks) and toks[i + 1].text == "{"
 

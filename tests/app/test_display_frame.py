@@ -295,3 +295,20 @@ def test_the_render_warns_a_scene_built_from_the_image_size(cli, tmp_path):
         chosen = cli("render", str(scene), "-o", str(folder / "v.png"), *display, "-q", "--method", "multi-ortho-views")
         assert chosen.code == 0, chosen.err
         assert ("image_width or image_height other than as their ratio" in chosen.err) == told, chosen.err
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize(("camera", "refused_before_parse"), [
+    ("camera { mesh_camera { 1 3 mesh { M } } }", True),
+    ("camera { location <0, 0, -5> look_at 0 }", False),   # the control: the parse runs and stops
+])
+def test_a_mesh_camera_scene_is_refused_before_its_parse(cli, tmp_path, camera, refused_before_parse):
+    """The mesh-camera demos build their mesh from image_width: at a large panel's size their parse
+    takes minutes, only for a refusal that needs none of the camera's values."""
+    scene = tmp_path / "s.pov"
+    scene.write_text(f'#version 3.7;\n{camera}\n#error "the scene was parsed"\n')
+    result = cli("render", str(scene), "--preset", "demo", "--quality", "draft", "-o", str(tmp_path / "h.png"))
+    lines = [line for line in result.err.splitlines() if line.strip()]
+    assert result.code != 0 and len(lines) == 1, result.err
+    assert ("mesh_camera camera" in lines[0]) is refused_before_parse
+    assert ("the scene was parsed" in lines[0]) is not refused_before_parse

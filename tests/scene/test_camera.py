@@ -86,3 +86,23 @@ def test_sky_along_the_view_keeps_the_supplied_right_as_povray_does():
     np.testing.assert_allclose(cam.direction, [0, -1, 0])
     np.testing.assert_allclose(cam.right, [1.5, 0, 0])
     np.testing.assert_allclose(cam.up, [0, 0, 1])   # direction x right
+
+
+def test_a_camera_type_no_frame_can_come_from_is_told_from_the_text():
+    """Only a perspective camera defines a frame; a mesh_camera's or fisheye's refusal needs no parse."""
+    from povh3d.scene.camera_script import written_camera_type
+
+    mesh = "camera { mesh_camera { 1 3 mesh { M } } }\n"
+    includes = {"cam.inc": mesh, "persp.inc": "camera { location -5*z look_at 0 }\n"}
+    read = includes.get
+    assert written_camera_type(mesh, read) == "mesh_camera"
+    assert written_camera_type('#include "cam.inc"\nsphere { 0, 1 }\n', read) == "mesh_camera"
+    assert written_camera_type("camera { fisheye angle 180 location -z }\n#declare C = camera { fisheye }\n",
+                               read) == "fisheye"
+    # Controls: anything that may be or become a perspective camera goes to POV-Ray's parse
+    assert written_camera_type(mesh + '#include "persp.inc"\n', read) is None   # which one runs: the parse says
+    assert written_camera_type("camera { location -5*z look_at 0 }\n", read) is None
+    assert written_camera_type("camera { orthographic location -5*z }\n", read) is None   # refused with its place
+    assert written_camera_type("#declare C = camera { mesh_camera { 1 3 mesh { M } } }\ncamera { C }\n",
+                               read) is None
+    assert written_camera_type("sphere { 0, 1 }\n", read) is None
