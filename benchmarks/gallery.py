@@ -218,8 +218,8 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
         elif verdict == "stochastic":
             note = f"stochastic: POV-Ray's own renders of the same rays, the image grid shifted, differ by {realizations:.1f} dB"
         elif verdict == "chaotic":
-            note = (f"chaotic: the oracle moved {chaotic_shift_mm(record):.2g} mm (the {record['method']} camera's "
-                    f"precision) differs from itself by {chaotic:.1f} dB")
+            note = (f"chaotic: the oracle moved {chaotic_shift_mm(record):.2g} mm or tilted as much (the "
+                    f"{record['method']} camera's precision) differs from itself by {chaotic:.1f} dB")
         else:
             said = [w for w in warnings if "depth pass" in w] or warnings
             note = said[0][:120] if said else ""
