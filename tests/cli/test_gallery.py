@@ -121,6 +121,16 @@ plane { -z, 0 pigment { mandel 10000
 """
 # the same camera over a smooth pigment: nothing changes within a pixel's millionth
 SMOOTH = MANDEL.replace("mandel 10000", "bozo").replace("scale 1e4", "scale 0.5")
+# textures/pigments/cantelop's rind: a sphere of radius 1 on an onion pattern's jump at 1, whose colour
+# the last bits of each hit's radius decide; its control a sphere of radius 0.9, clear of the jump
+RIND = """#version 3.7;
+global_settings { assumed_gamma 1.0 }
+camera { location <-2, 3, -4> look_at 0 }
+sphere { 0, 1 pigment { onion color_map { [0 rgb <1, 0.5, 0>] [0.95 rgb <1, 0.5, 0>]
+                                          [0.95 rgb <0.4, 0.3, 0.2>] [1 rgb <0.4, 0.3, 0.2>] } }
+  finish { ambient 1 diffuse 0 } }
+"""
+INNER = RIND.replace("sphere { 0, 1 ", "sphere { 0, 0.9 ")
 
 def _render_views(cli, scene, folder, *options):
     import json
@@ -171,7 +181,8 @@ def test_the_mesh_cameras_rays_hit_within_the_chaotic_bound(cli, tmp_path):
     assert moved > bound, f"the control's pigment, moved by {3 * bound:.3g} mm, read {moved:.3g} mm off"
 
 
-@pytest.mark.parametrize("pigment, chaotic", [(MANDEL, True), (SMOOTH, False)], ids=["mandel", "smooth"])
+@pytest.mark.parametrize("pigment, chaotic", [(MANDEL, True), (SMOOTH, False), (RIND, True), (INNER, False)],
+                         ids=["mandel", "smooth", "rind", "inner"])
 def test_a_chaotic_pigment_is_judged_against_its_oracle_moved_by_the_precision(cli, tmp_path, pigment, chaotic):
     """fractalzoom's pigment: its oracle moved by the mesh camera's precision bound falls under 35 dB, and
     the H3D view stays within the chaotic margin of that.  Negative controls: a view one lens pitch off
