@@ -218,7 +218,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     sources: list[frozenset[str]] = []   # the words of POV-Ray source texts, the scene's and the system's
     pending = [(scene, True)]
     sets_gamma = computed = False
-    legacy = _legacy_version(_read_text(scene) or "") if scene.suffix.lower() in _SOURCE_SUFFIXES else False
+    legacy = False
     named: dict[str, Path] = {}       # non-ASCII file names in the scene's text, and their files
     volatile: set[str] = set()
     while pending:
@@ -237,6 +237,8 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         words = words_of(text) if suffix in _SOURCE_SUFFIXES else frozenset()
         if suffix in _SOURCE_SUFFIXES:
             sources.append(words)
+        if current == scene and suffix in _SOURCE_SUFFIXES:
+            legacy = _legacy_version(text)
         if is_own:
             sets_gamma = sets_gamma or "assumed_gamma" in words
             computed = computed or (suffix in _SOURCE_SUFFIXES and _computed_name(text, words))
