@@ -148,7 +148,7 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
         out, views_dir = Path(folder) / "h3d.png", Path(folder) / "views"
         command = [sys.executable, "-m", "povh3d.cli", "render", str(scene), *(display or ("--preset", preset)),
                    "--quality", "draft", "-q", "-o", str(out), "--views-dir", str(views_dir), "--jobs", "1",
-                   "--timeout", str(timeout)]
+                   "--threads", "1", "--timeout", str(timeout)]   # one thread, as the 2D render it is set against
         start = time.perf_counter()
         try:
             done = subprocess.run(command, env=_env(str(Path(folder) / "cache")), cwd=scene.parent,
@@ -251,14 +251,17 @@ def _cross_check(scene: Path, display: list[str], picks: list[tuple[int, int]], 
     return f"; multi-ortho-views {db:.1f} dB"
 
 
-def run_scene(scene: Path, timeout: float) -> list[Outcome]:
-    """Both presets on one scene (one worker of the pool)."""
+def run_scene(scene: Path, timeout: float, presets: tuple[str, ...] = PRESETS,
+              two_d_timeout: float | None = None) -> list[Outcome]:
+    """The presets on one scene (one worker of the pool); the 2D render capped at ``two_d_timeout``
+    (default ``timeout``): it times the command, it does not judge it."""
     from povh3d.geometry.presets import lens_array
 
     out = []
-    for preset in PRESETS:
+    for preset in presets:
         panel = lens_array(preset).panel
-        out.append(judge(scene, preset, timeout, _two_d_seconds(scene, panel.width, panel.height, timeout)))
+        two_d = _two_d_seconds(scene, panel.width, panel.height, two_d_timeout or timeout)
+        out.append(judge(scene, preset, timeout, two_d))
     return out
 
 
@@ -295,6 +298,10 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=1,
                         help="scenes rendered at once (default 1: one POV-Ray at a time on a shared machine)")
     parser.add_argument("--resume", action="store_true", help="skip the scenes the table already holds")
+    parser.add_argument("--presets", nargs="+", choices=PRESETS, default=list(PRESETS),
+                        help="the displays to render on (default: all of them)")
+    parser.add_argument("--two-d-timeout", type=float,
+                        help="seconds allowed to the plain 2D render that times a command (default --timeout)")
     args = parser.parse_args()
     if not EXAMPLES.is_dir():
         raise SystemExit(f"no {EXAMPLES}: install POV-Ray's sample scenes (make gallery runs "
@@ -307,10 +314,12 @@ def main() -> int:
     total = len(gallery_scenes())
     print(f"{len(scenes)} of {total} scenes with a camera", flush=True)
     load = os.getloadavg()
-    kept = _kept_rows({(str(p.relative_to(EXAMPLES)), preset) for p in scenes for preset in PRESETS})
+    presets = tuple(args.presets)
+    kept = _kept_rows({(str(p.relative_to(EXAMPLES)), preset) for p in scenes for preset in presets})
     outcomes: list[Outcome] = []
     with ProcessPoolExecutor(args.workers) as pool:
-        for result in pool.map(run_scene, scenes, [args.timeout] * len(scenes)):
+        for result in pool.map(run_scene, scenes, [args.timeout] * len(scenes), [presets] * len(scenes),
+                               [args.two_d_timeout] * len(scenes)):
             for o in result:
                 outcomes.append(o)
                 print(" | ".join(_row(o)), flush=True)

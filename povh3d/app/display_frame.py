@@ -97,10 +97,11 @@ def resolve_frame(options: DisplayFrameOptions, scene: Scene, lens_array: LensAr
 
 
 def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_array: LensArray, *, cache_dir: Any = None,
-                            use_cache: bool = True, front_clearance: float | None = None
-                            ) -> tuple[DisplayFrame, dict[str, Any], Seen | None]:
+                            use_cache: bool = True, front_clearance: float | None = None,
+                            timeout: float | None = None) -> tuple[DisplayFrame, dict[str, Any], Seen | None]:
     """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
-    made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise."""
+    made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
+    allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
     from ..engine.scene_camera import evaluate_and_measure, evaluate_camera
 
     width_mm = lens_array.panel.size_mm[0]
@@ -122,7 +123,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         note = "the scene has no camera: mm around the screen z = 0"
         return NATIVE, {**NATIVE.as_record(), "note": note, "warnings": []}, None
     try:
-        found = (evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache)
+        found = (evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache, timeout)
                  if front_clearance is not None else None)
     except PovrayError as exc:
         if isinstance(exc, PovrayTimeout):
@@ -130,7 +131,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         found = None   # the camera alone, then a pass of its own, say what failed: the camera or the scene
     if found is None:
         camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
-                                                  use_cache, script.lines)
+                                                  use_cache, script.lines, timeout)
         distances = None
     else:
         camera, distances, seconds, cached = found

@@ -45,7 +45,8 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
     default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
     # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
     placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
-                                                   use_cache=s.use_cache, front_clearance=s.front_clearance or default)
+                                                   use_cache=s.use_cache, front_clearance=s.front_clearance or default,
+                                                   timeout=s.timeout)
     front_clearance = s.front_clearance or _front_clearance(placed, default)
     scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
     if not placed.is_native or options.fit_depth is not None or scale != 1:

@@ -86,9 +86,10 @@ def physical_size(lens_array: LensArray) -> tuple[int, int]:
 
 
 def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: int, cache_dir: Any,
-                    use_cache: bool, lines: tuple[tuple[int, str, int], ...] = ()
+                    use_cache: bool, lines: tuple[tuple[int, str, int], ...] = (), timeout: float | None = None
                     ) -> tuple[dict[str, Any], float, bool]:
-    """The camera's vectors from one POV-Ray run of ``script``, cached by the scene's digest.
+    """The camera's vectors from one POV-Ray run of ``script``, cached by the scene's digest; ``timeout``:
+    the render's own limit on each POV-Ray run (a parse may take minutes: the user decides, not us).
 
     The run has the physical panel's aspect (``physical_size``), so ``image_width / image_height``
     in the camera is the panel's shape; it traces one row.
@@ -104,7 +105,7 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
     if stored is not None:
         return stored, time.perf_counter() - start, True
     job = PovrayJob(name="scene camera", script=script, width=w, height=h, start_row=0, end_row=1,
-                    options=("-A",), threads=1, timeout=120, **scene_inputs(scene))
+                    options=("-A",), threads=1, timeout=timeout, **scene_inputs(scene))
     logs: list[str] = []
     _run(job, lambda result: logs.append(result.log), lines, scene)
     camera = camera_from_log(logs[0] if logs else "", cameras).as_record()
@@ -172,7 +173,8 @@ _RATIO = re.compile(r"\bimage_width\s*/\s*image_height\b|\bimage_height\s*/\s*im
 
 
 def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArray, front_clearance: float,
-                         cache_dir: Any, use_cache: bool) -> tuple[dict[str, Any], Seen, float, bool] | None:
+                         cache_dir: Any, use_cache: bool, timeout: float | None = None
+                         ) -> tuple[dict[str, Any], Seen, float, bool] | None:
     """The camera's vectors and a depth pass along the normal of the frame it defines, from one
     POV-Ray run: the evaluation script, the rest of the scene and ``templates/camera_depth.pov.j2``,
     which works out the frame and the clearance from the declared values, prints them and renders
@@ -202,7 +204,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
         add_assumed_gamma=not scene.sets_assumed_gamma)
     job = PovrayJob(name="scene camera and depth", script=text, width=size[0], height=size[1], frames=2,
                     include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), bit_depth=16,
-                    read_files=files_within(scene.files, scene.include_dirs), timeout=600)
+                    read_files=files_within(scene.files, scene.include_dirs), timeout=timeout)
     found: list[tuple[str, list[np.ndarray]]] = []
     _run(job, lambda r: found.append((r.log, [read_png(i) for i in r.images])), script.lines, scene)
     log, images = found[0] if found else ("", [])

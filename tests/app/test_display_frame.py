@@ -312,3 +312,27 @@ def test_a_mesh_camera_scene_is_refused_before_its_parse(cli, tmp_path, camera, 
     assert result.code != 0 and len(lines) == 1, result.err
     assert ("mesh_camera camera" in lines[0]) is refused_before_parse
     assert ("the scene was parsed" in lines[0]) is not refused_before_parse
+
+
+@pytest.mark.povray
+def test_the_renders_timeout_governs_the_camera_run(tmp_path):
+    """The run that evaluates the scene's camera (and measures depth through it) is limited by the
+    render's own ``timeout``, not a fixed one: a scene whose parse takes minutes renders when the user
+    allows it, and a short limit stops the camera run itself."""
+    import time
+
+    from povh3d.app.display_frame import resolve_frame_and_depth
+    from povh3d.errors import PovrayTimeout
+
+    path = tmp_path / "slow.pov"   # about 2 s of parse before the camera
+    path.write_text("#version 3.7;\n#declare T = 0; #while (T < 3000000) #declare T = T + 1; #end\n"
+                    "camera { location <0, 0, -5> look_at 0 }\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    scene, array = load_scene(path), small_array()
+    start = time.perf_counter()
+    with pytest.raises(PovrayTimeout):
+        resolve_frame_and_depth(DisplayFrameOptions(), scene, array, use_cache=False, front_clearance=2.0,
+                                timeout=0.3)
+    assert time.perf_counter() - start < 1.5   # stopped at the limit, not after the parse
+    frame, record, seen = resolve_frame_and_depth(DisplayFrameOptions(), scene, array, use_cache=False,
+                                                  front_clearance=2.0, timeout=60)   # the control
+    assert record["source"] == "camera" and seen is not None
