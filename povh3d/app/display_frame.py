@@ -22,7 +22,7 @@ from ..errors import ConfigError, PovrayError, PovrayTimeout
 from ..geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame, up_warning
 from ..geometry.lens_array import LensArray
 from ..scene.camera import CameraError
-from ..scene.camera_script import camera_script, written_camera_type
+from ..scene.camera_script import REFUSED_TYPES, camera_script, refused_type, written_camera_types
 from ..scene.scene import Scene
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -102,7 +102,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
     allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
-    from ..engine.scene_camera import evaluate_and_measure, evaluate_camera
+    from ..engine.scene_camera import evaluate_and_measure, evaluate_camera, probe_size, uses_image_size
 
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
@@ -113,9 +113,9 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
     text = scene.path.read_bytes().decode("latin-1")
     script = camera_script(text, scene.include_text)
-    written = written_camera_type(text, scene.include_text) if script is not None else None
-    if written is not None:   # refused from the text: its parse may take minutes at the panel's size
-        raise CameraError(_unusable_type(written))
+    written = written_camera_types(text, scene.include_text) if script is not None else set()
+    if refused_type(written):   # refused from the text: its parse may take minutes at the panel's size
+        raise CameraError(_unusable_type(refused_type(written)))
     if script is None:
         if options.mode == "camera":
             raise ConfigError(f"--display-frame camera: the scene {scene.path.name} has no camera; "
@@ -129,6 +129,14 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         if isinstance(exc, PovrayTimeout):
             raise
         found = None   # the camera alone, then a pass of its own, say what failed: the camera or the scene
+    if found is None and written & set(REFUSED_TYPES) and uses_image_size(scene):
+        # Types mixed in a scene that builds from image_width (a mesh camera a pixel): its parse may take
+        # many minutes at the panel's size, so which camera it ends with is told at a few rows first.
+        w, h = probe_size(lens_array)
+        probe, _, _ = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir, use_cache,
+                                      script.lines, timeout, (w, h))
+        if probe["type"] in REFUSED_TYPES:
+            raise CameraError(_unusable_type(probe["type"]) + f" (its type told by a parse at {w}x{h} pixels)")
     if found is None:
         camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
                                                   use_cache, script.lines, timeout)

@@ -72,6 +72,13 @@ def _keep(path: Any, key: str, meta: dict[str, Any], data: bytes = b"") -> None:
         pass
 
 
+def probe_size(lens_array: LensArray, rows: int = 48) -> tuple[int, int]:
+    """``physical_size``'s aspect at about ``rows`` rows: a run that tells the camera's type quickly."""
+    w, h = physical_size(lens_array)
+    k = max(1, h // rows)
+    return max(1, round(w / k)), max(1, round(h / k))
+
+
 def physical_size(lens_array: LensArray) -> tuple[int, int]:
     """``(width, height)`` pixels with the physical panel's aspect (its size in mm), about as many rows
     as the panel: the size the scene's camera is evaluated at.  A lenticular panel's 5760 x 1080
@@ -86,10 +93,11 @@ def physical_size(lens_array: LensArray) -> tuple[int, int]:
 
 
 def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: int, cache_dir: Any,
-                    use_cache: bool, lines: tuple[tuple[int, str, int], ...] = (), timeout: float | None = None
-                    ) -> tuple[dict[str, Any], float, bool]:
+                    use_cache: bool, lines: tuple[tuple[int, str, int], ...] = (), timeout: float | None = None,
+                    size: tuple[int, int] | None = None) -> tuple[dict[str, Any], float, bool]:
     """The camera's vectors from one POV-Ray run of ``script``, cached by the scene's digest; ``timeout``:
-    the render's own limit on each POV-Ray run (a parse may take minutes: the user decides, not us).
+    the render's own limit on each POV-Ray run (a parse may take minutes: the user decides, not us);
+    ``size``: the run's pixels (default ``physical_size``).
 
     The run has the physical panel's aspect (``physical_size``), so ``image_width / image_height``
     in the camera is the panel's shape; it traces one row.
@@ -98,7 +106,7 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
     from ..povray.sandbox import scene_inputs
 
     start = time.perf_counter()
-    w, h = physical_size(lens_array)
+    w, h = size or physical_size(lens_array)
     key = content_key("scene-camera-2", __version__, cache.code_stamp(), scene.digest, w, h)
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera)

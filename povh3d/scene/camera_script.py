@@ -102,10 +102,10 @@ def camera_script(main: str, read: Callable[[str], str | None]) -> CameraScript 
 REFUSED_TYPES = ("mesh_camera", "fisheye", "ultra_wide_angle", "omnimax", "panoramic", "cylinder", "spherical")
 
 
-def written_camera_type(main: str, read: Callable[[str], str | None]) -> str | None:
-    """The type every camera statement of the scene ``main`` and of the files it includes by a literal
-    name opens with, where it is one of ``REFUSED_TYPES``; None otherwise (a perspective or orthographic
-    camera, a camera copied from an identifier, a name computed at parse time, no camera)."""
+def written_camera_types(main: str, read: Callable[[str], str | None]) -> set[str]:
+    """The words every camera statement of the scene ``main`` and of the files it includes by a literal
+    name opens with (``perspective``, ``mesh_camera``, ``location`` for a camera of the default type, an
+    identifier for one copied from it)."""
     scene = _Scene(read)
     scene.texts[""] = main
     found: set[str] = set()
@@ -120,7 +120,19 @@ def written_camera_type(main: str, read: Callable[[str], str | None]) -> str | N
         for i in range(len(toks)):
             if _camera_at(toks, i):
                 found.add(toks[i + 2].text if i + 2 < len(toks) else "")
-    return found.pop() if len(found) == 1 and next(iter(found)) in REFUSED_TYPES else None
+    return found
+
+
+def refused_type(types: set[str]) -> str | None:
+    """The one type ``types`` (``written_camera_types``) all open with, where it is in ``REFUSED_TYPES``;
+    None otherwise (a perspective or orthographic camera, a camera copied from an identifier, a name
+    computed at parse time, no camera, types mixed: the parse says which one runs)."""
+    return next(iter(types)) if len(types) == 1 and types <= set(REFUSED_TYPES) else None
+
+
+def written_camera_type(main: str, read: Callable[[str], str | None]) -> str | None:
+    """``refused_type`` of the scene's written camera types."""
+    return refused_type(written_camera_types(main, read))
 
 
 def _camera_at(toks: list[Token], i: int) -> bool:

@@ -336,3 +336,32 @@ def test_the_renders_timeout_governs_the_camera_run(tmp_path):
     frame, record, seen = resolve_frame_and_depth(DisplayFrameOptions(), scene, array, use_cache=False,
                                                   front_clearance=2.0, timeout=60)   # the control
     assert record["source"] == "camera" and seen is not None
+
+
+@pytest.mark.povray
+def test_a_mesh_camera_built_from_image_width_is_told_at_a_few_rows(tmp_path):
+    """A scene whose mesh camera (a triangle a pixel, from image_width) sits beside a perspective camera in
+    an ``#if`` parses for minutes at a 2048 x 1536 panel only to be refused: which camera the parse ends
+    with is told at a few rows first.  The control, the same scene with its perspective camera on, is
+    framed by it."""
+    import time
+
+    from povh3d.geometry.presets import lens_array
+
+    def scene(use_mesh: int) -> Path:
+        path = tmp_path / f"meshcam{use_mesh}.pov"
+        path.write_text(
+            f"#version 3.7;\n#declare use_mesh = {use_mesh};\n#declare N = image_width * image_height;\n"
+            "#if (use_mesh)\n  #declare M = mesh { #local i = 0; #while (i < N)\n"
+            "    triangle { <i, 0, 0>, <i + 1, 0, 0>, <i, 1, 0> } #local i = i + 1; #end }\n"
+            "  camera { mesh_camera { 1 0 mesh { M } } location <0, 0, -1> }\n"
+            "#else\n  camera { location <0, 0, -5> look_at 0 }\n#end\nsphere { 0, 1 pigment { rgb 1 } }\n")
+        return path
+
+    array = lens_array("ipad-retina")   # 3.1 million triangles at the panel's size: minutes of parse
+    start = time.perf_counter()
+    with pytest.raises(CameraError, match=r"mesh_camera camera .* told by a parse at \d+x\d+ pixels"):
+        resolve_frame(DisplayFrameOptions(), load_scene(scene(1)), array, use_cache=False)
+    assert time.perf_counter() - start < 10
+    frame, record = resolve_frame(DisplayFrameOptions(), load_scene(scene(0)), array, use_cache=False)
+    assert record["source"] == "camera"
