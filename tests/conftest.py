@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import tempfile
 from pathlib import Path
 
@@ -14,6 +15,14 @@ import pytest
 
 from tests.support import processes, scheduling
 from tests.support.cli import Result, run_in_process
+
+# A test run started in the background of a non-interactive shell (nohup, `cmd &` in a CI script)
+# inherits SIGINT ignored, and povh3d rightly keeps an inherited ignore, so the tests that interrupt
+# a povh3d process would see it run on.  Catching SIGINT here makes every child start with the
+# default action again (exec resets a caught signal, not an ignored one): the tests that want an
+# ignored SIGINT set it themselves.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLES = REPO / "sample_models"
