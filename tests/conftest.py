@@ -20,7 +20,7 @@ from tests.support.cli import Result, run_in_process
 # inherits SIGINT ignored, and povh3d rightly keeps an inherited ignore, so the tests that interrupt
 # a povh3d process would see it run on.  Catching SIGINT here makes every child start with the
 # default action again (exec resets a caught signal, not an ignored one): the tests that want an
-# ignored SIGINT set it themselves.
+# ignored SIGINT set it themselves (test_reliability's ``_sigint_in_child``).
 if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
