@@ -19,6 +19,10 @@ every surface.  No POV-Ray 3.7 construct measures depth there without the user's
 being ``hollow``; those pixels are counted (``unmeasured``) and a pass whose middle is
 all unmeasured is reported as blind, with the cause and the fix, never as an empty scene.
 
+The pass needs POV-Ray's quality 9 (no fog below it), which turns the scene's radiosity and photons
+on as well; the pass turns them down (``LIGHTING_OFF``): they cost time, and radiosity's sample rays
+cross the fog, which would leave ``c`` different in the two renders.
+
 The pass is cached like any frame (the scene's digest, the frame, the size).
 """
 
@@ -32,6 +36,7 @@ import numpy as np
 from ..geometry.lens_array import LensArray
 from ..geometry.rays import depth_scaled_rays
 from ..image.colour import decode
+from ..scene.features import needed_settings
 from ..scene.scene import Scene
 from .batch import ShotBatch
 from .frames import render_frames
@@ -46,6 +51,16 @@ BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (
 SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
                     "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
                     "or place the display with --display-center/--display-normal/--display-width")
+#: The scene's radiosity and photons cut to almost nothing for the pass (a later ``global_settings``
+#: overrides the scene's values; written only where the scene has them: a radiosity block would turn
+#: radiosity on).  Fog needs POV-Ray's quality 9, which turns them on too.  Photons light a surface the
+#: same in both frames of the fog pair, so they cost only time (100,000 a frame in
+#: advanced/diffuse_back.pov).  Radiosity does not: its sample rays cross the fog, so a surface lit by
+#: them is brighter in the fog-1 frame and ``c`` no longer cancels (3 mm wrong on a sky-lit sphere,
+#: tests/engine/test_depth.py); ``brightness`` (which must be positive) all but removes their light.
+LIGHTING_OFF = {"radiosity": "{ pretrace_start 1 pretrace_end 1 count 1 nearest_count 1 error_bound 100 "
+                             "recursion_limit 1 always_sample off brightness 1e-6 }",
+                "photons": "{ count 1 max_trace_level 1 }"}
 
 
 @dataclass(frozen=True)
@@ -94,6 +109,11 @@ class DepthMap:
         return {"empty": True}
 
 
+def pass_lighting(scene: Scene) -> dict[str, str]:
+    """``LIGHTING_OFF``'s settings for what this scene uses (for a later ``global_settings``)."""
+    return needed_settings(scene.features, LIGHTING_OFF)
+
+
 def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
                fog: float, width: int, height: int, field: tuple[float, float] | None = None) -> ShotBatch:
     """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames.
@@ -114,6 +134,9 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
                               "focal": lens_array.focal}   # as methods.display_header
     if settings.frame is not None:
         header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
+    lighting = pass_lighting(scene)
+    if lighting:
+        header["global_settings"] = lighting
     pass_settings = replace(settings, quality="draft", bit_depth=16)
     images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
     return fog_distances(images[0::2], images[1::2], fog)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+import subprocess
+
 import numpy as np
 import pytest
 
@@ -186,3 +189,111 @@ def test_nothing_there_is_still_empty(tmp_path):
     """Negative control of the blind rule: a scene with nothing in the field is empty, not blind."""
     s = measure(tmp_path, "sphere { <0, 0, 100>, 1 pigment { rgb 1 } translate <500, 0, 0> }\n").summary(12.0)
     assert s["empty"] is True and "blind" not in s and "reason" not in s
+
+
+# The depth passes need POV-Ray's quality 9 for fog, which turns on the scene's radiosity and photons
+# too; the passes turn them down (LIGHTING_OFF).  Before, advanced/diffuse_back.pov's camera-and-depth
+# run took minutes (its pretrace goes down to 0.005), and a surface lit by radiosity read wrong: its
+# sample rays cross the fog, so its colour differs between the two fog frames.
+LIT = """global_settings {{ radiosity {{ pretrace_start 0.08 pretrace_end 0.02 count 60 nearest_count 5
+  error_bound 0.5 recursion_limit 1 }} photons {{ count 20000 }} }}
+sky_sphere {{ pigment {{ rgb <0.6, 0.7, 1> }} }}
+sphere {{ <0, 0, 0>, 6 pigment {{ rgb <0.9, 0.4, 0.1> }} finish {{ reflection 0.3 }} photons {{ target reflection on }} }}
+plane {{ -z, -{far} pigment {{ checker rgb 0.9 rgb 0.1 scale 3 }} }}
+camera {{ location <0, 0, -60> look_at 0 angle 40 }}
+"""
+_SAMPLES = re.compile(r"Radiosity samples calculated:\s+(\d+)")
+_RAYS = re.compile(r"Radiosity sample rays shot:\s+(\d+)")
+_PHOTONS = re.compile(r"Number of photons shot:\s+(\d+)")
+
+
+def _lighting_work(log: str) -> tuple[float, int]:
+    """From a run's statistics: radiosity rays a sample (its ``count``; 0 without radiosity) and photons shot."""
+    samples, rays, photons = (sum(map(int, r.findall(log))) for r in (_SAMPLES, _RAYS, _PHOTONS))
+    return (rays / samples if samples else 0.0, photons)
+
+
+def _turned_down(work: tuple[float, int]) -> bool:
+    """LIGHTING_OFF's work: POV-Ray's least rays a sample (5), a photon a frame (a run has a few)."""
+    return work[0] <= 5 and work[1] <= 10
+
+
+@pytest.fixture
+def povray_logs(monkeypatch):
+    """Every POV-Ray run's (job name, log) while the test runs."""
+    import povh3d.engine.frames as frames
+    import povh3d.povray.process as process
+
+    logs: list[tuple[str, str]] = []
+    original = process.run_jobs
+
+    def run_jobs(jobs, *, on_result=None, **kwargs):
+        def keep(result):
+            logs.append((result.job.name, result.log))
+            if on_result is not None:
+                on_result(result)
+        return original(jobs, on_result=keep, **kwargs)
+
+    monkeypatch.setattr(process, "run_jobs", run_jobs)
+    monkeypatch.setattr(frames, "run_jobs", run_jobs)
+    return logs
+
+
+def test_povray_honours_the_later_lighting_settings(tmp_path):
+    """The oracle: POV-Ray itself, on the scene alone and with LIGHTING_OFF's block after it (how the
+    passes write it); the statistics count the radiosity samples and photons it traced."""
+    from povh3d.engine.depth import LIGHTING_OFF
+
+    scene = tmp_path / "lit.pov"
+    scene.write_text(BASE + LIT.format(far=5.0))
+    later = tmp_path / "later.pov"
+    later.write_text(f'#include "{scene.name}"\nglobal_settings {{ '
+                     + " ".join(f"{k} {v}" for k, v in LIGHTING_OFF.items()) + " }\n")
+
+    def work(path):
+        done = subprocess.run(["povray", f"+I{path.name}", "-D", "+Q9", "-A", "+W48", "+H36", "+WT1", "+Oout.png"],
+                              cwd=tmp_path, capture_output=True, text=True, errors="replace",
+                              check=True)
+        return _lighting_work(done.stdout + done.stderr)
+
+    rays, photons = work(scene)
+    assert rays > 30 and photons > 5000       # the scene's own (count 60): the negative control
+    rays, photons = work(later)
+    assert _turned_down((rays, photons)) and photons == 1
+
+
+def _lit_scene(tmp_path, lit_by: str, far: float):
+    """LIT lit by the light of BASE, or by radiosity alone: no light source, a sky of 2."""
+    base, text = BASE, LIT.format(far=far)
+    if lit_by == "the sky alone":
+        base, text = base.replace("light_source { <-40, 60, -80> rgb 1 }", ""), text.replace("rgb <0.6, 0.7, 1>", "rgb 2")
+    scene = tmp_path / "lit.pov"
+    scene.write_text(base + text)
+    return scene
+
+
+@pytest.mark.parametrize("lit_by", ["a light", "the sky alone"])
+def test_the_depth_pass_turns_the_lighting_down_and_measures_the_analytic_depth(tmp_path, povray_logs, lit_by):
+    """A few radiosity samples and photons, and the analytic depth of a sphere before a plane.  Lit by
+    the sky alone, the scene's own radiosity (or any radiosity of full brightness) read the sphere and
+    the plane up to 3 mm off, on 55 % of the field: its sample rays cross the fog."""
+    far = 5.0
+    scene = _lit_scene(tmp_path, lit_by, far)
+    depth = depth_pass(load_scene(scene), array(), RenderSettings(use_cache=False), 128.0, 1.0)
+    z, clean = expected(depth.z.shape, depth.width_mm, depth.height_mm, far)
+    ok = clean & np.isfinite(depth.z)
+    assert ok.mean() > 0.9 and np.abs(depth.z - z)[ok].max() < 0.02      # mm
+    assert povray_logs and all(_turned_down(_lighting_work(log)) for _, log in povray_logs)
+
+
+def test_the_scene_cameras_depth_run_turns_the_lighting_down(tmp_path, povray_logs, cli):
+    """The render's camera-and-depth run (templates/camera_depth.pov.j2) writes the same settings."""
+    scene = _lit_scene(tmp_path, "a light", 5.0)
+    result = cli("render", scene, "--preset", "demo", "--quality", "draft", "--no-cache", "-q",
+                 "-o", tmp_path / "h3d.png")
+    assert result.code == 0, result.err
+    runs = dict((name, _lighting_work(log)) for name, log in povray_logs)
+    assert _turned_down(runs["scene camera and depth"])
+    # negative control: the view renders keep the scene's own lighting
+    assert any(rays > 30 and photons > 5000 for name, (rays, photons) in runs.items()
+               if name != "scene camera and depth"), runs
