@@ -19,9 +19,10 @@ every surface.  No POV-Ray 3.7 construct measures depth there without the user's
 being ``hollow``; those pixels are counted (``unmeasured``) and a pass whose middle is
 all unmeasured is reported as blind, with the cause and the fix, never as an empty scene.
 
-The pass needs POV-Ray's quality 9 (no fog below it), which turns the scene's radiosity and photons
-on as well; the pass turns them down (``LIGHTING_OFF``): they cost time, and radiosity's sample rays
-cross the fog, which would leave ``c`` different in the two renders.
+The pass needs POV-Ray's quality 9 (no fog below it), which turns the scene's radiosity, photons and
+subsurface scattering on as well; the pass turns them down (``LIGHTING_OFF``): they cost time, and
+radiosity's sample rays cross the fog and subsurface scattering samples at random, either of which
+leaves ``c`` different in the two renders.
 
 The pass is cached like any frame (the scene's digest, the frame, the size).
 """
@@ -51,16 +52,19 @@ BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (
 SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
                     "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
                     "or place the display with --display-center/--display-normal/--display-width")
-#: The scene's radiosity and photons cut to almost nothing for the pass (a later ``global_settings``
-#: overrides the scene's values; written only where the scene has them: a radiosity block would turn
-#: radiosity on).  Fog needs POV-Ray's quality 9, which turns them on too.  Photons light a surface the
-#: same in both frames of the fog pair, so they cost only time (100,000 a frame in
-#: advanced/diffuse_back.pov).  Radiosity does not: its sample rays cross the fog, so a surface lit by
-#: them is brighter in the fog-1 frame and ``c`` no longer cancels (3 mm wrong on a sky-lit sphere,
-#: tests/engine/test_depth.py); ``brightness`` (which must be positive) all but removes their light.
+#: The scene's radiosity, photons and subsurface scattering cut to almost nothing for the pass (a later
+#: ``global_settings`` overrides the scene's values; written only where the scene has them: a radiosity
+#: block would turn radiosity on).  Fog needs POV-Ray's quality 9, which turns them on too.  Photons
+#: light a surface the same in both frames of the fog pair, so they cost only time (shot anew for each
+#: frame).  Radiosity and subsurface scattering do not: radiosity's sample rays cross
+#: the fog, and subsurface scattering samples at random, anew in each frame, so ``c`` differs between the
+#: two frames and does not cancel (a sky-lit sphere 3 mm off; a translucent one up to 4 mm off with the
+#: scene's 400 samples, 280 mm with 1: tests/engine/test_depth.py).  Radiosity's ``brightness`` (which
+#: must be positive) all but removes its light; ``samples 0, 0`` turns subsurface scattering off.
 LIGHTING_OFF = {"radiosity": "{ pretrace_start 1 pretrace_end 1 count 1 nearest_count 1 error_bound 100 "
                              "recursion_limit 1 always_sample off brightness 1e-6 }",
-                "photons": "{ count 1 max_trace_level 1 }"}
+                "photons": "{ count 1 max_trace_level 1 }",
+                "subsurface": "{ samples 0, 0 }"}
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,7 @@ FEATURE_WORDS: dict[str, frozenset[str]] = {name: frozenset(words) for name, wor
     "ior": ("ior",),
     "sky_sphere": ("sky_sphere",),
     "rainbow": ("rainbow",),
+    "subsurface": ("subsurface",),
 }.items()}
 # Words, not regexes over the text: a scene's text is read once into its set of words, so a
 # 100 MB mesh include costs one pass, not one per keyword (numbers hold no words).
@@ -47,6 +48,7 @@ SETTING_NEEDS: dict[str, tuple[str, ...]] = {
     "adc_bailout": ("reflection", "refraction", "media"),
     "radiosity": ("radiosity",),
     "photons": ("photons",),
+    "subsurface": ("subsurface",),
 }
 
 

@@ -38,6 +38,7 @@ USES = {
     "sky_sphere": "sky_sphere { pigment { gradient y color_map { [0 rgb 0] [1 rgb 1] } } }",
     "rainbow": "rainbow { angle 42 width 5 distance 100 direction <0, 0, 1> jitter 0.01 "
                "color_map { [0 rgbt 1] [1 rgbt 1] } }",
+    "subsurface": "sphere { 0, 1 pigment { rgb 1 } finish { subsurface { translucency 0.5 } } }",
 }
 
 
@@ -77,7 +78,7 @@ def test_background_constant_only_without_fog_media_sky_rainbow():
 
 def test_settings_only_for_features_in_use():
     wanted = {"max_trace_level": "10", "radiosity": "{ count 200 }", "photons": "{ spacing 0.01 }",
-              "adc_bailout": "0.001", "noise_generator": "2"}
+              "adc_bailout": "0.001", "subsurface": "{ samples 0, 0 }", "noise_generator": "2"}
     assert needed_settings(features_of_text([PLAIN]), wanted) == {"noise_generator": "2"}
     for setting, needs in SETTING_NEEDS.items():
         for feature in needs:
