@@ -21,8 +21,9 @@ all unmeasured is reported as blind, with the cause and the fix, never as an emp
 
 The pass needs POV-Ray's quality 9 (no fog below it), which turns the scene's radiosity, photons and
 subsurface scattering on as well; the pass turns them down (``LIGHTING_OFF``): they cost time, and
-radiosity's sample rays cross the fog and subsurface scattering samples at random, either of which
-leaves ``c`` different in the two renders.
+radiosity's sample rays cross the fog, which leaves ``c`` different in the two renders.  The pass runs
+at one thread (``PASS_THREADS``): what POV-Ray samples at random per thread (a jittered area light)
+is then the same in both renders.
 
 The pass is cached like any frame (the scene's digest, the frame, the size).
 """
@@ -52,15 +53,20 @@ BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (
 SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
                     "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
                     "or place the display with --display-center/--display-normal/--display-width")
+#: POV-Ray threads of a pass.  A jittered area light (and subsurface scattering) samples at random per
+#: render thread, so at two threads, which take the pixels in another order in each frame, a surface's
+#: colour differs between the two fog frames (a sphere before a plane: its shadow's edge 7-10 mm off in
+#: every pass); one thread gives both frames the same samples.  (``crand`` still differs: its sequence
+#: runs on from one frame to the next.)
+PASS_THREADS = 1
 #: The scene's radiosity, photons and subsurface scattering cut to almost nothing for the pass (a later
 #: ``global_settings`` overrides the scene's values; written only where the scene has them: a radiosity
-#: block would turn radiosity on).  Fog needs POV-Ray's quality 9, which turns them on too.  Photons
-#: light a surface the same in both frames of the fog pair, so they cost only time (shot anew for each
-#: frame).  Radiosity and subsurface scattering do not: radiosity's sample rays cross
-#: the fog, and subsurface scattering samples at random, anew in each frame, so ``c`` differs between the
-#: two frames and does not cancel (a sky-lit sphere 3 mm off; a translucent one up to 4 mm off with the
-#: scene's 400 samples, 280 mm with 1: tests/engine/test_depth.py).  Radiosity's ``brightness`` (which
-#: must be positive) all but removes its light; ``samples 0, 0`` turns subsurface scattering off.
+#: block would turn radiosity on).  Fog needs POV-Ray's quality 9, which turns them on too.  Photons and
+#: subsurface scattering (at one thread) light a surface the same in both frames of the fog pair, so
+#: they cost only time (photons are shot anew for each frame; `povh3d info` on subsurface.pov: 15 s, now 2.4 s).
+#: Radiosity does not: its sample rays cross the fog, so a surface it lights is brighter in the fog-1
+#: frame and ``c`` does not cancel (a sky-lit sphere 3 mm off: tests/engine/test_depth.py); its
+#: ``brightness`` (which must be positive) all but removes its light.
 LIGHTING_OFF = {"radiosity": "{ pretrace_start 1 pretrace_end 1 count 1 nearest_count 1 error_bound 100 "
                              "recursion_limit 1 always_sample off brightness 1e-6 }",
                 "photons": "{ count 1 max_trace_level 1 }",
@@ -141,7 +147,7 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
     lighting = pass_lighting(scene)
     if lighting:
         header["global_settings"] = lighting
-    pass_settings = replace(settings, quality="draft", bit_depth=16)
+    pass_settings = replace(settings, quality="draft", bit_depth=16, threads=PASS_THREADS)
     images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
     return fog_distances(images[0::2], images[1::2], fog)
 

@@ -188,7 +188,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     which works out the frame and the clearance from the declared values, prints them and renders
     the two fog frames (``engine.depth``).  Cached by the scene's digest, the panel and ``front_clearance``.
     None when the camera needs a run at the panel's own size (``measured_size``)."""
-    from .depth import fog_distances, pass_lighting, pass_size
+    from .depth import PASS_THREADS, fog_distances, pass_lighting, pass_size
     from ..image.io import read_png
     from ..povray.process import PovrayJob
     from ..povray.sandbox import files_within
@@ -211,6 +211,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
         "camera_depth.pov.j2", panel_width=lens_array.panel.size_mm[0], front_clearance=front_clearance, right=right, up=up,
         add_assumed_gamma=not scene.sets_assumed_gamma, lighting=pass_lighting(scene))
     job = PovrayJob(name="scene camera and depth", script=text, width=size[0], height=size[1], frames=2,
+                    threads=PASS_THREADS,
                     include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), bit_depth=16,
                     read_files=files_within(scene.files, scene.include_dirs), timeout=timeout)
     found: list[tuple[str, list[np.ndarray]]] = []

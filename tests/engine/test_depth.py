@@ -299,21 +299,29 @@ def test_the_scene_cameras_depth_run_turns_the_lighting_down(tmp_path, povray_lo
                if name != "scene camera and depth"), runs
 
 
-TRANSLUCENT = """global_settings { mm_per_unit 40 subsurface { samples 40, 4 } }
-sphere { <0, 0, 0>, 6 pigment { rgb <0.9, 0.4, 0.1> } finish { subsurface { translucency <0.46, 0.38, 0.33> } } }
-plane { -z, -5 pigment { checker rgb 0.9 rgb 0 scale 3 } finish { subsurface { translucency 0.5 } } }
-"""
+# Lighting POV-Ray samples at random per render thread: at two threads, which take the pixels in another
+# order in each frame, a surface's colour differs between the two fog frames.
+RANDOM_PER_THREAD = {
+    # its shadow's edge on the plane read 7-10 mm off in every pass at two threads
+    "jittered area light": ("light_source { <-40, 60, -80> rgb 1 area_light 20*x, 20*y, 5, 5 jitter }\n"
+                            + SPHERE),
+    # the sphere and plane read 20-24 mm off in about half the passes at two threads
+    "subsurface scattering": (
+        "global_settings { mm_per_unit 40 subsurface { samples 40, 4 } }\n"
+        "sphere { <0, 0, 0>, 6 pigment { rgb <0.9, 0.4, 0.1> } finish { subsurface { translucency <0.46, 0.38, 0.33> } } }\n"
+        "plane { -z, -5 pigment { checker rgb 0.9 rgb 0 scale 3 } finish { subsurface { translucency 0.5 } } }\n"),
+}
 
 
-def test_the_depth_pass_turns_subsurface_scattering_off(tmp_path):
-    """Subsurface scattering samples at random per render thread, so where POV-Ray's threads take the
-    pixels in another order a translucent surface's colour differs between the two fog frames: with the
-    scene's own scattering about half the passes read the sphere and plane up to 20-24 mm off.  Off in the
-    pass, every pass gives the analytic depth (four passes at two threads: a pass that is right only by
-    the threads' luck fails one of them)."""
+@pytest.mark.parametrize("kind", sorted(RANDOM_PER_THREAD))
+def test_lighting_sampled_at_random_is_measured_exactly(tmp_path, kind):
+    """The pass runs at one thread (``PASS_THREADS``), so both fog frames draw the same samples, and turns
+    subsurface scattering off (``LIGHTING_OFF``).  Four passes, each asked for two threads: a pass that
+    is right only by the threads' luck fails one of them."""
     far = 5.0
     scene = tmp_path / "s.pov"
-    scene.write_text(BASE + TRANSLUCENT)
+    text = RANDOM_PER_THREAD[kind]
+    scene.write_text(BASE + text + ("" if "plane" in text else f"plane {{ -z, -{far} pigment {{ checker rgb 0.9 rgb 0 scale 3 }} }}\n"))
     for _ in range(4):
         depth = depth_pass(load_scene(scene), array(), RenderSettings(use_cache=False, threads=2), 128.0, 1.0)
         z, clean = expected(depth.z.shape, depth.width_mm, depth.height_mm, far)
