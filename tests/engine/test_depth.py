@@ -300,11 +300,12 @@ def test_the_scene_cameras_depth_run_turns_the_lighting_down(tmp_path, povray_lo
 
 
 # Lighting POV-Ray samples at random per render thread: at two threads, which take the pixels in another
-# order in each frame, a surface's colour differs between the two fog frames.
+# order in each frame, a surface's colour differs between the two fog frames.  Each: a sphere of 6 before
+# a plane at z = 5 (``expected``).
 RANDOM_PER_THREAD = {
     # its shadow's edge on the plane read 7-10 mm off in every pass at two threads
     "jittered area light": ("light_source { <-40, 60, -80> rgb 1 area_light 20*x, 20*y, 5, 5 jitter }\n"
-                            + SPHERE),
+                            + SPHERE + "plane { -z, -5 pigment { checker rgb 0.9 rgb 0 scale 3 } }\n"),
     # the sphere and plane read 20-24 mm off in about half the passes at two threads
     "subsurface scattering": (
         "global_settings { mm_per_unit 40 subsurface { samples 40, 4 } }\n"
@@ -320,8 +321,7 @@ def test_lighting_sampled_at_random_is_measured_exactly(tmp_path, kind):
     is right only by the threads' luck fails one of them."""
     far = 5.0
     scene = tmp_path / "s.pov"
-    text = RANDOM_PER_THREAD[kind]
-    scene.write_text(BASE + text + ("" if "plane" in text else f"plane {{ -z, -{far} pigment {{ checker rgb 0.9 rgb 0 scale 3 }} }}\n"))
+    scene.write_text(BASE + RANDOM_PER_THREAD[kind])
     for _ in range(4):
         depth = depth_pass(load_scene(scene), array(), RenderSettings(use_cache=False, threads=2), 128.0, 1.0)
         z, clean = expected(depth.z.shape, depth.width_mm, depth.height_mm, far)
