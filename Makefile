@@ -64,7 +64,7 @@ test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in
 	$(BIN)/python -m pytest -q -n $(CORES) --dist loadgroup --fast
 
 soak: povray venv ## 200 random kills over renders, view writes and cache writes, each output checked (minutes)
-	$(BIN)/python -m pytest -q -s -m soak tests/app/test_soak.py
+	$(BIN)/python -m pytest -q -s -m soak tests/renderer/test_soak.py
 
 # make test runs 100 + 100 + 6 of these cases; the counts below make the 2,000 (docs/reliability.md).
 fuzz: povray venv ## 2,000 hostile cases: 1,200 command lines, 700 damaged sidecars, views folders and calibrations, 100 command lines as processes (minutes)

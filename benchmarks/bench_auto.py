@@ -35,9 +35,9 @@ from pathlib import Path
 import numpy as np
 
 from _common import publish, summary, table, whole_process_times
-from povh3d.engine.auto import AUTO_LADDER
-from povh3d.engine.methods import run_method
-from povh3d.engine.quality import QUALITY_LEVELS, Quality, RenderSettings
+from povh3d.renderer.methods.auto import AUTO_LADDER
+from povh3d.renderer.methods.registry import run_method
+from povh3d.renderer.methods.quality import QUALITY_LEVELS, Quality, RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.io import read_png
 from povh3d.image.metrics import Reference

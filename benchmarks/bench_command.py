@@ -38,8 +38,8 @@ def povh3d(*args: str) -> list[str]:
 
 def plain_2d_command(case_args: list[str], folder: Path) -> list[str]:
     """The ``povray`` command of a 2D render of the panel (script written into `folder`)."""
-    from povh3d.engine.quality import QUALITY_OPTIONS
-    from povh3d.geometry.presets import get_preset, lens_array_from_fields, merge_overrides
+    from povh3d.renderer.methods.quality import QUALITY_OPTIONS
+    from povh3d.display.presets import get_preset, lens_array_from_fields, merge_overrides
     from povh3d.povray.job import SCENE_FILE, PovrayJob, build_command
     from povh3d.povray.process import find_povray
     from povh3d.system import cpu_count

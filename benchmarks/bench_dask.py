@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 from distributed import LocalCluster
 
-from povh3d.app.render import render
-from povh3d.app.request import RenderRequest
+from povh3d.renderer.render import render
+from povh3d.renderer.request import RenderRequest
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.io import read_png
 from povh3d.system import cpu_count
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.quality import RenderSettings
 
 REPO = Path(__file__).resolve().parents[1]
 SCENE = REPO / "sample_models" / "sample.pov"

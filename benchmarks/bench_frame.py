@@ -33,13 +33,13 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from povh3d.engine.quality import RenderSettings  # noqa: E402
+from povh3d.renderer.methods.quality import RenderSettings  # noqa: E402
 from povh3d.geometry.frame import DisplayFrame  # noqa: E402
-from povh3d.geometry.presets import lens_array  # noqa: E402
+from povh3d.display.presets import lens_array  # noqa: E402
 from povh3d.image.interleave import extract  # noqa: E402
 from povh3d.image.io import read_png  # noqa: E402
 from povh3d.image.metrics import psnr  # noqa: E402
-from povh3d.povray.format import pov_vector  # noqa: E402
+from povh3d.scene.format import pov_vector  # noqa: E402
 from povh3d.povray.process import PovrayJob, run_jobs  # noqa: E402
 from tests.support.render import render  # noqa: E402
 
@@ -132,8 +132,8 @@ def main() -> int:
                       f"{statistics.median(diffs):+.3f} |")
         print(timing[-1], flush=True)
     # The frame's own cost on a re-run, in process: camera evaluation and depth pass from the cache.
-    from povh3d.app.placement import place_display
-    from povh3d.app.request import RenderRequest
+    from povh3d.renderer.placement.place import place_display
+    from povh3d.renderer.request import RenderRequest
     from povh3d.scene.scene import load_scene
 
     os.environ["POVH3D_CACHE"] = env["POVH3D_CACHE"]
@@ -151,7 +151,7 @@ def main() -> int:
         inproc.append(f"| {scene.name} | {statistics.median(times):.1f} | {max(times):.1f} |")
         print(inproc[-1], flush=True)
     # The frame's cost on a first render, in process: POV-Ray runs and seconds, fresh cache each time.
-    import povh3d.engine.frames as engine_frames
+    import povh3d.renderer.shots.shots as engine_frames
     import povh3d.povray.process as process
 
     runs = [0]

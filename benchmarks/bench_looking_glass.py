@@ -30,8 +30,8 @@ VIEW_PIXELS = 48 * 420 * 560
 
 def plain_2d_command(folder: Path) -> list[str]:
     """``povray`` rendering the Portrait's screen at the quilt's number of view pixels, its aspect."""
-    from povh3d.devices.looking_glass import DEVICES
-    from povh3d.engine.quality import QUALITY_OPTIONS
+    from povh3d.display.looking_glass import DEVICES
+    from povh3d.renderer.methods.quality import QUALITY_OPTIONS
     from povh3d.povray.job import SCENE_FILE, PovrayJob, build_command
     from povh3d.povray.process import find_povray
     from povh3d.system import cpu_count

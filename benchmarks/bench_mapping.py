@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from povh3d.mappings import MAPPINGS, MappingOptions
+from povh3d.display.mappings import MAPPINGS, MappingOptions
 
 PANEL = (3840, 2160)
 OPTIONS = {"slanted": MappingOptions(per_lens=5.5, views=11, slope=0.75, blend=False),

@@ -33,7 +33,7 @@ import trimesh
 
 CHILD = """
 import json, resource, sys
-from povh3d.app.convert_mesh import convert_mesh
+from povh3d.renderer.content.convert_mesh import convert_mesh
 r = convert_mesh(sys.argv[1], sys.argv[2])
 print(json.dumps({"triangles": r.triangles, "vertices": r.vertices,
                   "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))

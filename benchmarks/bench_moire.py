@@ -59,8 +59,8 @@ def main() -> None:
     print(f"measured against predicted moire period (8 cases, 160x160 lenses): worst {100 * max(errors):.2f} %")
     print(f"one slant (three measures of {LENSES[0]}x{LENSES[1]} lenses): {seconds * 1000:.0f} ms")
     if args.figures:
-        from povh3d.app.moire import moire_sweep_file, parse_range
-        from povh3d.geometry.presets import lens_array
+        from povh3d.commands.moire import moire_sweep_file, parse_range
+        from povh3d.display.presets import lens_array
 
         la = lens_array("cross-lenticular-ipad")
         for name, turn in (("moire-cross-lenticular.png", False), ("moire-cross-lenticular-turned.png", True)):

@@ -7,7 +7,7 @@ Writes bench-out/quality/bench.{csv,md,png} and bench-out/quality.json.
 ``--default-cost``: the default quality's cost instead: whole ``povh3d render`` commands of the
 bundled sample at ``draft`` and ``normal`` on ``demo`` and ``alioscopy-42``, interleaved, median
 and spread, with each level's PSNR against the converged footprint reference on a probe of the
-central lenses (``engine.auto``); ``--tree`` times another checkout's code (before/after).
+central lenses (``renderer.methods.auto``); ``--tree`` times another checkout's code (before/after).
 ``--frontier``: the same for candidate settings of ``normal`` (antialiasing threshold, method,
 depth, jitter; footprint samples), each timed as a whole command with that setting in place of
 ``normal``, interleaved with draft (wall and CPU seconds: the CPU time of the command and its
@@ -23,11 +23,11 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from povh3d.app.render import render
-from povh3d.app.request import RenderRequest
+from povh3d.renderer.render import render
+from povh3d.renderer.request import RenderRequest
 from povh3d.geometry.lens_array import LensArray, Panel
-from povh3d.app.bench import default_trials, format_table, run_bench, write_report
-from povh3d.engine.quality import RenderSettings
+from povh3d.commands.bench import default_trials, format_table, run_bench, write_report
+from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.scene.scene import load_scene
 
 REPO = Path(__file__).resolve().parents[1]
@@ -42,8 +42,8 @@ def probe_errors(scene, sidecar: Path, qualities: list) -> list[float]:
     """PSNR of each quality (a name or a ``Quality``) against the converged footprint reference (512
     samples, two seeds), on the central lenses of the array the render's ``sidecar`` names (a slanted
     preset's view space)."""
-    from povh3d.engine.auto import probe_window, reference_quality
-    from povh3d.engine.methods import run_method
+    from povh3d.renderer.methods.auto import probe_window, reference_quality
+    from povh3d.renderer.methods.registry import run_method
     from povh3d.image.metrics import Reference
 
     a = json.loads(sidecar.read_text())["lens_array"]
@@ -101,7 +101,7 @@ CANDIDATES = {
     "4 footprint samples": "Quality(footprint=4)",
 }
 #: A whole ``povh3d render --quality normal`` with ``normal`` replaced by the candidate (argv: the rest).
-WRAPPER = ("import sys; from povh3d.engine import quality as q; q.QUALITY_LEVELS['normal'] = q.{}; "
+WRAPPER = ("import sys; from povh3d.renderer.methods import quality as q; q.QUALITY_LEVELS['normal'] = q.{}; "
            "from povh3d.cli.main import main; sys.exit(main(sys.argv[1:]))")
 
 
@@ -114,7 +114,7 @@ def frontier(tree: Path, repeats: int, presets: list[str]) -> list[tuple[str, ..
     import subprocess
     import tempfile
 
-    from povh3d.engine import quality as q
+    from povh3d.renderer.methods import quality as q
 
     env = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(tree)}
     scene = load_scene(SAMPLE)

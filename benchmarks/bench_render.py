@@ -22,10 +22,10 @@ import numpy as np
 
 from povh3d.geometry.lens_array import LensArray
 from povh3d.image.interleave import interleave
-from povh3d.engine.methods import run_method
+from povh3d.renderer.methods.registry import run_method
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs
-from povh3d.geometry.presets import get_preset, lens_array_from_fields, merge_overrides
-from povh3d.engine.quality import QUALITY_OPTIONS, RenderSettings
+from povh3d.display.presets import get_preset, lens_array_from_fields, merge_overrides
+from povh3d.renderer.methods.quality import QUALITY_OPTIONS, RenderSettings
 from povh3d.system import cpu_count
 from povh3d.scene.scene import load_scene
 

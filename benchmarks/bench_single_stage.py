@@ -20,10 +20,10 @@ import time
 from pathlib import Path
 
 from povh3d.geometry.lens_array import LensArray, Panel
-from povh3d.engine.methods import run_method
+from povh3d.renderer.methods.registry import run_method
 from povh3d.image.metrics import psnr
-from povh3d.geometry.presets import get_preset, lens_array_from_fields, merge_overrides
-from povh3d.engine.quality import RenderSettings
+from povh3d.display.presets import get_preset, lens_array_from_fields, merge_overrides
+from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.system import cpu_count
 from povh3d.scene.scene import load_scene
 

@@ -29,9 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from povh3d.geometry.crop import CropSettings
-from povh3d.engine.methods import run_method
-from povh3d.geometry.presets import get_preset, lens_array_from_fields, merge_overrides
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.registry import run_method
+from povh3d.display.presets import get_preset, lens_array_from_fields, merge_overrides
+from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.system import cpu_count
 from povh3d.scene.scene import load_scene
 

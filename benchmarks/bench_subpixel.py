@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from povh3d.engine.subpixel import subpixel_array
+from povh3d.display.subpixel import subpixel_array
 from povh3d.geometry.footprint import latin_hypercube
-from povh3d.geometry.presets import lens_array_from_record
+from povh3d.display.presets import lens_array_from_record
 from povh3d.geometry.rays import pixel_rays
 from povh3d.image.colour import encode
 from povh3d.image.io import read_png, write_png

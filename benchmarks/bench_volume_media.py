@@ -3,7 +3,7 @@
 The volume (500 x 470 x 136 voxels, spacing 1 x 1 x 1.5 mm, 30 tissue labels)
 is read with PyVista, seen along its z axis (the ``axial`` preset: the file has
 no patient frame, so its axes are taken as LPS) and fitted to the display, then written
-as a df3 file and a media stage (``povh3d.app.volume_media.media_stage``) with
+as a df3 file and a media stage (``povh3d.renderer.content.volume_media.media_stage``) with
 the ``labels`` transfer, and rendered as an H3D image by ``multi-ortho``.
 Reported: the df3 encode and write times and size, POV-Ray's parse time for the
 stage (reading the df3), and the whole render, for the media step given.
@@ -26,11 +26,11 @@ import pyvista as pv
 from pyvista import examples
 
 from povh3d.geometry.fit import fit_to_display
-from povh3d.app.volume_media import media_stage
-from povh3d.engine.methods import run_method
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.content.volume_media import media_stage
+from povh3d.renderer.methods.registry import run_method
+from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
-from povh3d.geometry.presets import lens_array
+from povh3d.display.presets import lens_array
 from povh3d.scene.scene import load_scene
 from povh3d.volume.grid import Volume
 from povh3d.volume.orient import display_box, volume_to_display, world_to_display

@@ -36,7 +36,7 @@ import sys
 import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -255,7 +255,7 @@ def run_scene(scene: Path, timeout: float, presets: tuple[str, ...] = PRESETS,
               two_d_timeout: float | None = None) -> list[Outcome]:
     """The presets on one scene (one worker of the pool); the 2D render capped at ``two_d_timeout``
     (default ``timeout``): it times the command, it does not judge it."""
-    from povh3d.geometry.presets import lens_array
+    from povh3d.display.presets import lens_array
 
     out = []
     for preset in presets:

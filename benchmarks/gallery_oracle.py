@@ -56,7 +56,7 @@ def oracle_view(scene: Path, record: dict, view: tuple[int, int], shape: tuple[i
     direction's own rounding (``chaotic_floor``).
     """
     from povh3d.image.io import read_png
-    from povh3d.povray.format import pov_vector
+    from povh3d.scene.format import pov_vector
     from povh3d.povray.process import PovrayJob, run_jobs
 
     if supersample < 1 or supersample % 2 == 0:

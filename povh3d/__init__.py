@@ -22,15 +22,15 @@ from ._version import __version__
 # read a constant named TYPE_CHECKING as theirs.
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # what type checkers and editors see
-    from .api import (borders, calibrate, convert_mesh, equalise, extract, info, interleave, layout, map, moire,
+    from .api import (borders, calibrate, convert_mesh, equalise, extract, info, interleave, layout, map, moire,  # noqa: F401 (map: not in __all__, it would hide the builtin)
                       preview, read_h3d, refocus, resample, quilt, stitch, undistort, unquilt, viewpoints)
-    from .app.api import render
-    from .app.display_setup import Display, build_display
-    from .app.request import ModelOptions, RenderRequest, VolumeOptions
-    from .app.animation import FrameRange
-    from .engine.quality import Quality, RenderSettings
+    from .renderer.api import render
+    from .display.display import Display, build_display
+    from .renderer.request import ModelOptions, RenderRequest, VolumeOptions
+    from .renderer.animation import FrameRange
+    from .renderer.methods.quality import Quality, RenderSettings
     from .errors import ConfigError, InputError, OutputError, Povh3dError, PovrayError
-    from .geometry import presets
+    from .display import presets
     from .geometry.crop import CropSettings
     from .geometry.lens_array import LensArray, Panel
 
@@ -40,18 +40,18 @@ _COMMANDS = ("read_h3d", "interleave", "extract", "map", "resample", "quilt", "u
              "convert_mesh", "layout")
 _PUBLIC = {
     **dict.fromkeys(_COMMANDS, "povh3d.api"),
-    "render": "povh3d.app.api",
-    "RenderRequest": "povh3d.app.request", "ModelOptions": "povh3d.app.request",
-    "VolumeOptions": "povh3d.app.request",
-    "Display": "povh3d.app.display_setup", "build_display": "povh3d.app.display_setup",
-    "FrameRange": "povh3d.app.animation",
-    "Quality": "povh3d.engine.quality", "RenderSettings": "povh3d.engine.quality",
+    "render": "povh3d.renderer.api",
+    "RenderRequest": "povh3d.renderer.request", "ModelOptions": "povh3d.renderer.request",
+    "VolumeOptions": "povh3d.renderer.request",
+    "Display": "povh3d.display.display", "build_display": "povh3d.display.display",
+    "FrameRange": "povh3d.renderer.animation",
+    "Quality": "povh3d.renderer.methods.quality", "RenderSettings": "povh3d.renderer.methods.quality",
     "CropSettings": "povh3d.geometry.crop",
     "LensArray": "povh3d.geometry.lens_array", "Panel": "povh3d.geometry.lens_array",
     "Povh3dError": "povh3d.errors", "ConfigError": "povh3d.errors", "InputError": "povh3d.errors",
     "OutputError": "povh3d.errors", "PovrayError": "povh3d.errors",
 }
-_MODULES = {"presets": "povh3d.geometry.presets"}
+_MODULES = {"presets": "povh3d.display.presets"}
 
 __all__ = ["__version__", "render", "Display", "build_display", "RenderRequest", "ModelOptions", "VolumeOptions", "FrameRange", "Quality", "RenderSettings",
            "CropSettings", "LensArray", "Panel", "presets", "Povh3dError", "ConfigError", "InputError",

@@ -19,13 +19,13 @@ import numpy as np
 from .errors import ConfigError
 
 if TYPE_CHECKING:
-    from .app.convert_mesh import ConversionResult
+    from .renderer.content.convert_mesh import ConversionResult
     from .calibration.gridfile import Grid
     from .calibration.lenticular import LenticularFit
-    from .app.display_setup import Display
+    from .display.display import Display
     from .geometry.lens_array import LensArray
     from .geometry.moire import SlantSweep
-    from .mappings import Mapping
+    from .display.mappings import Mapping
 
 Ppl = tuple[int, int]
 
@@ -39,7 +39,7 @@ def _ppl(lens: LensArray | Ppl) -> Ppl:
 
 def _display(preset: str, lens_array: LensArray | None) -> Display:
     """The display of ``lens_array``, or of the preset (the command line's builder)."""
-    from .app.display_setup import build_display
+    from .display.display import build_display
 
     return build_display(preset, lens_array=lens_array)
 
@@ -53,7 +53,7 @@ def read_h3d(path: str | Path) -> tuple[np.ndarray, LensArray | None]:
     image : (H, W, C) uint8 or uint16
     lens_array : LensArray or None
     """
-    from .app.display_setup import Display
+    from .display.display import Display
     from .image.io import read_png, read_sidecar
 
     side = read_sidecar(path) or {}
@@ -93,7 +93,7 @@ def extract(h3d: np.ndarray, lens: LensArray | Ppl) -> np.ndarray:
     from .image.interleave import extract as _extract
 
     if not isinstance(lens, tuple):
-        from .app.views import image_views
+        from .renderer.outputs.views import image_views
 
         return image_views(np.asarray(h3d), lens)
     try:
@@ -122,14 +122,14 @@ def map(image: np.ndarray, mapping: str | Mapping, *, preset: str = "demo",  # n
     (panel H, panel W, C) array
     """
     if isinstance(mapping, str):
-        from .app.display_setup import mapping_for_display
+        from .display.display import mapping_for_display
 
         mapping, _ = mapping_for_display(mapping, _display(preset, lens_array), **options)
     elif options:
         raise ConfigError(f"map() takes mapping options only with a mapping name, got {sorted(options)}")
     image = np.asarray(image)
     if panel is None:
-        from .app.display import infer_panel
+        from .commands.images import infer_panel
 
         panel = infer_panel(mapping, image.shape[:2])
         if panel is None:
@@ -383,8 +383,8 @@ def stitch(a: np.ndarray, b: np.ndarray, grid: Grid | str | Path) -> np.ndarray:
 
 # -- file level --------------------------------------------------------------------------------------
 def convert_mesh(model: str | Path, output: str | Path | None = None, **options: Any) -> ConversionResult:
-    """``povh3d convert-mesh``: a mesh model to a POV-Ray ``mesh2`` include; see ``app.convert_mesh``."""
-    from .app.convert_mesh import convert_mesh as _convert
+    """``povh3d convert-mesh``: a mesh model to a POV-Ray ``mesh2`` include; see ``renderer.content.convert_mesh``."""
+    from .renderer.content.convert_mesh import convert_mesh as _convert
 
     return _convert(model, output, **options)
 
@@ -393,7 +393,7 @@ def layout(source: str | Path, output: str | Path, *, preset: str = "demo", lens
            **options: Any) -> dict[str, Any]:
     """``povh3d layout``: the set-up picture (content, screen, depth budget, lens array, viewing cone)
     and its record."""
-    from .app.layout import layout as _layout
+    from .commands.layout import layout as _layout
 
     display = _display(preset, lens_array)
     return _layout(source, output, display.lens_array, display=display, **options)

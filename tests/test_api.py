@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 import povh3d
-from povh3d.app.records import base_record, write_image
-from povh3d.app.views import read_views
+from povh3d.renderer.records import base_record, write_image
+from povh3d.renderer.outputs.views import read_views
 from povh3d.calibration.gridfile import read_grid, write_grid
 from povh3d.errors import ConfigError
 from povh3d.image.io import read_png, write_png
 from povh3d.image.refocus import contact_sheet
-from povh3d.mappings import build_mapping
+from povh3d.display.mappings import build_mapping
 from tests.conftest import SAMPLES
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.oracles import grid_for_lens_array

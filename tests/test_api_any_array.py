@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import povh3d
-from povh3d.app.records import base_record, write_image
-from povh3d.app.views import read_views
+from povh3d.renderer.records import base_record, write_image
+from povh3d.renderer.outputs.views import read_views
 from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.io import read_png

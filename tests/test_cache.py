@@ -30,7 +30,7 @@ def _array():
 
 # -- one reader per kind: make or read the entry, return whether it came from the cache ---------------
 def _frame(root: Path) -> bool:
-    from povh3d.engine.cache import ImageCache
+    from povh3d.renderer.shots.cache import ImageCache
     from povh3d.image.io import write_png
 
     images = ImageCache(root)
@@ -43,7 +43,7 @@ def _frame(root: Path) -> bool:
 
 
 def _output(root: Path) -> bool:
-    from povh3d.app import output_cache
+    from povh3d.renderer import output_cache
     from povh3d.image.io import write_image_pair
 
     out = root.parent / "o.png"
@@ -55,7 +55,7 @@ def _output(root: Path) -> bool:
 
 
 def _camera(root: Path) -> bool:
-    from povh3d.app.display_frame import DisplayFrameOptions, resolve_frame
+    from povh3d.renderer.placement.pose import DisplayFrameOptions, resolve_frame
     from povh3d.scene.scene import load_scene
 
     _, record = resolve_frame(DisplayFrameOptions(mode="camera"), load_scene(GALLERY / "inches.pov"), _array(),
@@ -64,7 +64,7 @@ def _camera(root: Path) -> bool:
 
 
 def _camera_depth(root: Path) -> bool:
-    from povh3d.app.display_frame import DisplayFrameOptions, resolve_frame_and_depth
+    from povh3d.renderer.placement.pose import DisplayFrameOptions, resolve_frame_and_depth
     from povh3d.scene.scene import load_scene
 
     _, record, seen = resolve_frame_and_depth(DisplayFrameOptions(), load_scene(GALLERY / "tilted.pov"), _array(),
@@ -74,7 +74,7 @@ def _camera_depth(root: Path) -> bool:
 
 
 def _mesh(root: Path) -> bool:
-    from povh3d.app.stage import cached_include
+    from povh3d.renderer.content.model import cached_include
 
     folder = root.parent / "model"
     folder.mkdir(exist_ok=True)
@@ -83,8 +83,8 @@ def _mesh(root: Path) -> bool:
 
 
 def _volume(root: Path) -> bool:
-    from povh3d.app.request import VolumeOptions
-    from povh3d.app.volume import cached_surfaces, volume_digest
+    from povh3d.renderer.request import VolumeOptions
+    from povh3d.renderer.content.volume import cached_surfaces, volume_digest
     from tests.support.volumes import asymmetric_phantom
 
     volume = asymmetric_phantom()
@@ -145,7 +145,7 @@ def test_content_key_is_canonical():
 def test_a_damaged_media_file_is_written_again(tmp_path):
     """The df3 of a volume medium is named by its content and reused: a same-size damaged one is
     found by its hash and written again, never handed to POV-Ray."""
-    from povh3d.app.volume_media import media_stage
+    from povh3d.renderer.content.volume_media import media_stage
     from tests.support.volumes import asymmetric_phantom
 
     volume = asymmetric_phantom()
@@ -174,7 +174,7 @@ def test_a_damaged_camera_entry_is_a_warning_not_an_internal_error(tmp_path, cli
 def test_volume_digest_sees_every_voxel_and_the_geometry(order):
     # The volume cache's data key, hashed in the voxels' own memory order (no C-ordered copy of a
     # Fortran-ordered volume): equal volumes agree, a change of one voxel or of the spacing does not.
-    from povh3d.app.volume import volume_digest
+    from povh3d.renderer.content.volume import volume_digest
     from povh3d.volume.grid import Volume
     from tests.support.volumes import asymmetric_phantom
 
@@ -220,8 +220,8 @@ def test_a_scene_cameras_evaluation_made_by_other_code_is_not_read(tmp_path: Pat
     """The camera evaluation's entry is keyed by the code too: a depth pass whose POV-Ray options
     changed (a still's clock) must not come back from an older povh3d's cache."""
     from povh3d import cache
-    from povh3d.engine.scene_camera import evaluate_camera
-    from povh3d.geometry.presets import lens_array
+    from povh3d.renderer.passes.scene_camera import evaluate_camera
+    from povh3d.display.presets import lens_array
     from povh3d.scene.camera_script import camera_script
     from povh3d.scene.scene import load_scene
 

@@ -57,12 +57,12 @@ def without(monkeypatch):
     installed (``None`` in ``sys.modules``); povh3d's modules are imported afresh, as by a new process."""
     def hide(*tops: str) -> None:
         for module in list(sys.modules):
-            if module.split(".")[0] in tops or module.startswith(("povh3d.calibration", "povh3d.app.calibration")):
+            if module.split(".")[0] in tops or module.startswith(("povh3d.calibration", "povh3d.commands.calibration")):
                 monkeypatch.delitem(sys.modules, module)
         for top in tops:
             monkeypatch.setitem(sys.modules, top, None)
-        # a package keeps its imported submodules as attributes: 'from ..app import calibration' reads them
-        for package, name in (("povh3d", "calibration"), ("povh3d.app", "calibration")):
+        # a package keeps its imported submodules as attributes: 'from ..commands import calibration' reads them
+        for package, name in (("povh3d", "calibration"), ("povh3d.commands", "calibration")):
             if package in sys.modules:
                 monkeypatch.delattr(sys.modules[package], name, raising=False)
     return hide

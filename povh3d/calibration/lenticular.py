@@ -57,14 +57,14 @@ class LenticularFit:
     tiles: int
 
     def looking_glass(self, dpi: float) -> dict[str, Any]:
-        """The Looking Glass fields of this sheet over a panel imaged 1:1 (``mappings.slanted.looking_glass``).
+        """The Looking Glass fields of this sheet over a panel imaged 1:1 (``display.mappings.slanted.looking_glass``).
 
         Their lenticule coordinate ``a = (x cos t + y sin t) / pitch - center`` (``x``
         from the left, ``y`` up, in pixels) has ``slope = 1 / tan t`` and ``pitch`` in
         lenticules per inch across them.  Their shader reads ``a`` of subpixel ``c`` at
         ``x = col + 1/2 + c/3``, half a pixel right of the subpixel's left edge, and the
         slanted mapping takes that value as the phase of the left edge (van Berkel's
-        ``floor``: ``mappings.slanted``); so ``center`` is set for ``a`` to be ``0.5``
+        ``floor``: ``display.mappings.slanted``); so ``center`` is set for ``a`` to be ``0.5``
         modulo 1 half a pixel right of every lenticule axis.  Then ``map --calibration``
         and ``render --method subpixel --calibration`` both address the measured sheet.
         """

@@ -1,4 +1,4 @@
-"""The ``povh3d`` command line (argument parsing only; the work is ``povh3d.app``'s)."""
+"""The ``povh3d`` command line (argument parsing only; the work is ``povh3d.renderer``'s and ``povh3d.commands``'s)."""
 
 import _signal  # the C module: ready at once, where ``signal`` first builds its enums
 import os

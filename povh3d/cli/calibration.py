@@ -13,7 +13,7 @@ def add_parsers(sub: Any) -> None:
     """Capture-side processing (thesis chapter 4): calibrate, undistort, borders, equalise, viewpoints, stitch."""
     def run(fn, show):
         def command(args):
-            from ..app import calibration  # scipy: imported by the command that runs, not the parser
+            from ..commands import calibration  # scipy: imported by the command that runs, not the parser
 
             print(show(args, fn(calibration, args)))
             return 0

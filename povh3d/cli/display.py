@@ -14,7 +14,7 @@ from .options import (add_array_options, add_image_lens_options, add_mapping_opt
 
 
 def cmd_interleave(args: argparse.Namespace) -> int:
-    from ..app.views import interleave_dir
+    from ..renderer.outputs.views import interleave_dir
 
     record = interleave_dir(args.views_dir, args.output)
     print(f"{args.output}  {record['size_px'][0]}x{record['size_px'][1]}  from {record['views'][0]}x{record['views'][1]} views")
@@ -22,13 +22,13 @@ def cmd_interleave(args: argparse.Namespace) -> int:
 
 
 def cmd_extract(args: argparse.Namespace) -> int:
-    from ..app.views import extract_file
+    from ..renderer.outputs.views import extract_file
 
     if args.ppl is None:  # the lens array from the sidecar; hex / fractional PPL resampled
         record = extract_file(args.h3d, None, args.output)
         nx, ny = record["views"]
     else:
-        from ..app.display import is_lenticular
+        from ..commands.images import is_lenticular
 
         ny, nx = ppl_arg(args.ppl, lenticular=is_lenticular(args.h3d))
         record = extract_file(args.h3d, (ny, nx), args.output)
@@ -37,13 +37,13 @@ def cmd_extract(args: argparse.Namespace) -> int:
 
 
 def _lenticular(path: str) -> bool:
-    from ..app.display import is_lenticular
+    from ..commands.images import is_lenticular
 
     return is_lenticular(path)
 
 
 def cmd_presets(args: argparse.Namespace) -> int:
-    from ..geometry.presets import load_presets
+    from ..display.presets import load_presets
 
     for name, fields in load_presets().items():
         print(f"{name:22s} {fields.get('description', '')}")
@@ -60,11 +60,11 @@ def cmd_info(args: argparse.Namespace) -> int:
     from ..volume.sources import is_volume_source
 
     if args.scene and (is_mesh_file(args.scene) or is_volume_source(args.scene)):  # as the stage places it
-        from ..app.layout import content_report
+        from ..commands.layout import content_report
 
         info["content"] = content_report(args.scene, lens_array)
     elif args.scene:  # where the display sits in this scene, its depth against the budget
-        from ..app.placement import scene_report
+        from ..renderer.placement.place import scene_report
 
         info["scene"] = scene_report(args.scene, lens_array)
     if args.json:
@@ -116,9 +116,9 @@ def _print_scene(report: dict) -> None:
 
 
 def cmd_map(args: argparse.Namespace) -> int:
-    from ..app.display import map_file
+    from ..commands.images import map_file
 
-    from ..app.display_setup import is_visual, read_calibration
+    from ..display.display import is_visual, read_calibration
 
     display = display_from_args(args, mapped=True)
     mapping = display.mapping
@@ -135,8 +135,8 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 
 def cmd_resample(args: argparse.Namespace) -> int:
-    from ..app.display import is_lenticular, lens_info, lens_record
-    from ..app.resample_files import needs_panel_resample, resample_file, resample_panel_file
+    from ..commands.images import is_lenticular, lens_info, lens_record
+    from ..commands.resample import needs_panel_resample, resample_file, resample_panel_file
     from ..geometry.axes import from_edge
 
     lenticular = is_lenticular(args.input)
@@ -158,7 +158,7 @@ def cmd_resample(args: argparse.Namespace) -> int:
 
 
 def cmd_quilt(args: argparse.Namespace) -> int:
-    from ..app.quilt_files import export_quilt, import_quilt
+    from ..commands.quilt import export_quilt, import_quilt
 
     auto = args.quilt == "auto"
     grid = parse_size(args.quilt, "--quilt", "COLSxROWS like 8x6, or auto") if args.quilt and not auto else None
@@ -175,7 +175,7 @@ def cmd_quilt(args: argparse.Namespace) -> int:
 
 
 def cmd_refocus(args: argparse.Namespace) -> int:
-    from ..app.display import lens_info, refocus_file
+    from ..commands.images import lens_info, refocus_file
 
     info = lens_info(args.input, ppl_arg(args.ppl, lenticular=_lenticular(args.input)), args.focal,
                      args.pixel_pitch, resampled=True)
@@ -193,7 +193,7 @@ def cmd_refocus(args: argparse.Namespace) -> int:
 
 
 def cmd_preview(args: argparse.Namespace) -> int:
-    from ..app.display import lens_info, preview_file
+    from ..commands.images import lens_info, preview_file
 
     info = lens_info(args.input, ppl_arg(args.ppl, lenticular=_lenticular(args.input)), args.focal,
                      args.pixel_pitch, resampled=True)
@@ -203,7 +203,7 @@ def cmd_preview(args: argparse.Namespace) -> int:
 
 
 def cmd_dataset(args: argparse.Namespace) -> int:
-    from ..app.dataset import dataset_from_render
+    from ..renderer.outputs.dataset import dataset_from_render
 
     written = dataset_from_render(args.h3d, args.output, all_views=args.all_views)
     cams = sum(1 for p in written if p.name.startswith("input_Cam"))
@@ -212,7 +212,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
 
 
 def cmd_moire(args: argparse.Namespace) -> int:
-    from ..app.moire import moire_sweep_file, parse_range
+    from ..commands.moire import moire_sweep_file, parse_range
 
     slants = parse_range(args.slant_range)
     lens_array = lens_array_from_args(args)

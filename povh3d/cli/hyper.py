@@ -1,5 +1,5 @@
-"""``povh3d viewer`` and ``povh3d annotate``: parsing only, the work is ``app.viewer``'s and
-``app.annotate``'s."""
+"""``povh3d viewer`` and ``povh3d annotate``: parsing only, the work is ``commands.viewer``'s and
+``commands.annotate``'s."""
 
 from __future__ import annotations
 
@@ -11,11 +11,11 @@ _RENDER_HELP = ("an H3D image with its sidecar (.json), a views folder (render -
 
 
 def cmd_viewer(args: argparse.Namespace) -> int:
-    from ..app.viewer import write_viewer
+    from ..commands.viewer import write_viewer
 
     cdp = None
     if args.cdp:
-        from ..app.annotate import read_cdp_text
+        from ..commands.annotate import read_cdp_text
 
         cdp = read_cdp_text(args.cdp)
     record = write_viewer(args.render, args.output, fps=args.fps, cdp=cdp, title=args.title, objects=args.objects)
@@ -25,7 +25,7 @@ def cmd_viewer(args: argparse.Namespace) -> int:
 
 
 def cmd_annotate(args: argparse.Namespace) -> int:
-    from ..app.annotate import annotate
+    from ..commands.annotate import annotate
 
     record = annotate(args.render, args.objects, args.output, links=args.links)
     print(f"{record['output']}  {record['objects']} object(s)  {record['annotations']} annotation(s)  "

@@ -1,5 +1,5 @@
 """``povh3d layout``: a picture of the set-up (content, screen, depth budget, lens array,
-viewing cone) to check before a long render; parsing only, the work is ``app.layout``'s."""
+viewing cone) to check before a long render; parsing only, the work is ``commands.layout``'s."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from .volume import add_volume_source_options
 
 
 def cmd_layout(args: argparse.Namespace) -> int:
-    from ..app.layout import layout
+    from ..commands.layout import layout
 
     display = display_from_args(args)
     size = parse_size(args.size, "--size", "WxH pixels like 1200x900")

@@ -188,12 +188,12 @@ def _signals_as_interrupt(*, then_ignore: bool = False):
 
 @contextlib.contextmanager
 def _memory_limit(size: str | None):
-    """``--max-memory``: kept in ``POVH3D_MAX_MEMORY`` for the run (``app.budget``, the POV-Ray
+    """``--max-memory``: kept in ``POVH3D_MAX_MEMORY`` for the run (``renderer.budget``, the POV-Ray
     processes' own limit) and put back after it (``main`` also runs in-process, in tests)."""
     if size is None:
         yield
         return
-    from ..app.budget import LIMIT_ENV, parse_size
+    from ..renderer.budget import LIMIT_ENV, parse_size
 
     parse_size(size)  # a bad size is one line before any work
     previous = os.environ.get(LIMIT_ENV)

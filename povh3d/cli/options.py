@@ -1,7 +1,7 @@
 """Options shared by several commands, and turning them into povh3d's own values.
 
 Parsing only: numbers and pairs are checked here, everything they mean is
-decided by ``povh3d.app`` and below.
+decided by ``povh3d.renderer`` and below.
 """
 
 from __future__ import annotations
@@ -96,9 +96,9 @@ def array_overrides(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def display_from_args(args: argparse.Namespace, *, method: str = "multi-ortho", mapped: bool = False) -> Any:
-    """The ``Display`` of the display options (``app.display_setup.build_display``); ``mapped``:
+    """The ``Display`` of the display options (``display.display.build_display``); ``mapped``:
     with the pixel mapping options (``--mapping``, ``--calibration`` ...) too."""
-    from ..app.display_setup import build_display
+    from ..display.display import build_display
 
     mapping = {"mapping": args.mapping, "mapping_options": mapping_options(args),
                "calibration": args.calibration} if mapped else {}
@@ -163,8 +163,8 @@ def add_mapping_options(p: argparse.ArgumentParser, required: bool = False) -> N
 
 
 def mapping_options(args: argparse.Namespace) -> dict[str, Any]:
-    """The pixel mapping options (``mappings.options_from_display``) given on the command line."""
-    from ..mappings import slope_from_degrees
+    """The pixel mapping options (``display.mappings.options_from_display``) given on the command line."""
+    from ..display.mappings import slope_from_degrees
 
     slope = 3 * args.slant_tan if args.slant_tan is not None else (
         slope_from_degrees(args.slant_deg) if args.slant_deg is not None else None)

@@ -1,5 +1,5 @@
 """``povh3d render``, ``convert-mesh`` and ``bench``: parse the options, build the
-request, hand it to ``povh3d.app``, print one summary line."""
+request, hand it to ``povh3d.renderer``, print one summary line."""
 
 from __future__ import annotations
 
@@ -27,12 +27,12 @@ ARRAY_OPTIONS = ("--preset", "--grid", "--lenses", "--ppl", "--pixel-pitch", "--
 
 def request_from_args(args: argparse.Namespace) -> Any:
     """The ``RenderRequest`` the options of ``povh3d render`` describe."""
-    from ..app.animation import FrameRange, parse_clock, parse_frames
-    from ..app.request import ModelOptions, RenderRequest
-    from ..app.request import RenderSettings
+    from ..renderer.animation import FrameRange, parse_clock, parse_frames
+    from ..renderer.request import ModelOptions, RenderRequest
+    from ..renderer.request import RenderSettings
     from ..geometry.crop import CropSettings, parse_bbox
 
-    method = args.method or "multi-ortho"   # None: not chosen, the render may trade it (app/ray_state.py)
+    method = args.method or "multi-ortho"   # None: not chosen, the render may trade it (renderer/placement/ray_state.py)
     display = display_from_args(args, method=method, mapped=True)
     settings = RenderSettings(quality=args.quality, jobs=args.jobs, threads=args.threads,
                               timeout=args.timeout, use_cache=not args.no_cache,
@@ -61,7 +61,7 @@ def request_from_args(args: argparse.Namespace) -> Any:
 
 def display_frame_options_from_args(args: argparse.Namespace) -> Any:
     """``DisplayFrameOptions`` from --display-frame and the explicit --display-* options."""
-    from ..app.display_frame import DisplayFrameOptions
+    from ..renderer.placement.pose import DisplayFrameOptions
 
     fit = args.fit_depth
     if fit is not None and fit != "auto":
@@ -98,7 +98,7 @@ def output_path(args: argparse.Namespace) -> Path:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from ..app import output_cache
+    from ..renderer import output_cache
 
     output = output_path(args)
     options = {k: v for k, v in vars(args).items() if k not in ("scene", "include", "output")}
@@ -122,11 +122,11 @@ def cmd_render(args: argparse.Namespace) -> int:
 def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     """Render; print the warnings of the sidecar and the summary line.  For a still, return
     what follows the output name in that line and those warnings."""
-    from ..app.render import render
+    from ..renderer.render import render
 
     request = request_from_args(args)
     if args.objects:
-        from ..app.object_masks import check_objects_request
+        from ..renderer.passes.object_masks import check_objects_request
 
         check_objects_request(request)
     update, close = progress_bar(not args.quiet and sys.stderr.isatty())
@@ -135,7 +135,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     finally:
         close()
     if args.objects:
-        from ..app.object_masks import render_objects
+        from ..renderer.passes.object_masks import render_objects
 
         masks = render_objects(request, args.objects, result)
         print(f"{masks['folder']}  {masks['objects']} objects  {100 * masks['unresolved']:.2f} % of pixels "
@@ -226,7 +226,7 @@ def frame_phrase(record: dict[str, Any]) -> str:
 
 
 def cmd_convert_mesh(args: argparse.Namespace) -> int:
-    from ..app.convert_mesh import convert_mesh
+    from ..renderer.content.convert_mesh import convert_mesh
 
     budget = max_triangles(args.max_triangles)
     if budget == "auto":
@@ -251,7 +251,7 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from ..app.bench import default_trials, format_table, run_bench, write_report
+    from ..commands.bench import default_trials, format_table, run_bench, write_report
     from ..scene.scene import load_scene
 
     lens_array = lens_array_from_args(args)

@@ -34,7 +34,7 @@ def add_volume_source_options(g: Any) -> None:
 
 
 def volume_options_from_args(args: argparse.Namespace, rotate: Any) -> Any:
-    from ..app.request import VolumeOptions
+    from ..renderer.request import VolumeOptions
 
     labels = args.labels if args.labels in (None, "all") else parse_numbers(args.labels, "--labels", int)
     return VolumeOptions(spacing=parse_numbers(args.spacing, "--spacing"), series=args.series, labels=labels,

@@ -18,7 +18,7 @@ lenslet's shape, index or distortion.  A pixel whose backward ray would leave it
 lenslet through a side wall, or meet total internal reflection, cannot be traced
 through the array: ``served`` is False there.
 
-Single-stage rendering (``engine.single_stage``, point 6) builds on this: the capture
+Single-stage rendering (``renderer.methods.single_stage``, point 6) builds on this: the capture
 camera is a ``mesh_camera`` with one face per (sub-)pixel (``chief_mesh``), the
 lenslets sit off the display's lattice by an irrational fraction of a pitch
 (``lenslet_offset``), and the index is a real one (``PHYSICAL_IOR``); the pixels whose

@@ -15,7 +15,7 @@ Nyquist limit ``1 / p`` there).  Lenticular sheets use the horizontal ``N``;
 square arrays the smaller of the two.
 
 ``fit_to_display`` places a model's or a volume's box (the default stage of
-``app/stage.py`` and ``app/volume.py``, the set-up picture of ``app/layout.py``);
+``renderer/content/model.py`` and ``renderer/content/volume.py``, the set-up picture of ``commands/layout.py``);
 ``depth_warning`` is what they say when the placed content is deeper than the budget.
 """
 

@@ -77,7 +77,7 @@ def _phase_gradient(la: LensArray, shift: float = 0.0) -> tuple[float, float, fl
     sheet (lens ``floor`` of it); the steps worked out, not differenced, to keep them exact.
 
     ``shift`` (mm): the lenticules' axes lie this far further across (the lattice's ``x``)
-    than the centred sheet's (a calibrated sheet's phase, ``engine.subpixel``)."""
+    than the centred sheet's (a calibrated sheet's phase, ``display.subpixel``)."""
     X, Y = la.panel.pixel_centres()
     x0, _ = la.to_lattice(np.array(X[0]), np.array(Y[0]))
     turn = math.radians(la.rotation)

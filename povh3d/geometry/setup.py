@@ -126,7 +126,7 @@ def depth_points(z: np.ndarray, width_mm: float, height_mm: float) -> np.ndarray
     """The hit points of a depth map: ``(n, 3)`` mm at each finite pixel's centre.
 
     ``z`` is ``(H, W)`` mm over a ``width_mm x height_mm`` field centred on the
-    screen (``engine.depth.DepthMap``), row 0 at the top; NaN where nothing was hit.
+    screen (``renderer.passes.depth.DepthMap``), row 0 at the top; NaN where nothing was hit.
     """
     rows, cols = z.shape
     x = (np.arange(cols) + 0.5 - cols / 2) * (width_mm / cols)

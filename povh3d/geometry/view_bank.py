@@ -45,7 +45,7 @@ def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) ->
 
 def _per_bank(samples: np.ndarray) -> np.ndarray:
     """Footprint samples ``(K, 4)``, one per bank, or ``(K, Ny, Nx, 4)``, one per bank and view
-    (views whose samples are independent: --quality auto's seeds, ``engine.auto_seeds``)."""
+    (views whose samples are independent: --quality auto's seeds, ``renderer.methods.auto_seeds``)."""
     samples = np.asarray(samples, dtype=np.float64)
     return samples if samples.ndim == 4 else samples.reshape(-1, 4)
 

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import InputError, OutputError
 
 if TYPE_CHECKING:  # NumPy, Pillow and pypng are imported where images are coded: a cached
-    import numpy as np  # output is copied as bytes without them (app/output_cache.py)
+    import numpy as np  # output is copied as bytes without them (renderer/output_cache.py)
 
 
 @contextlib.contextmanager

@@ -14,7 +14,7 @@ import numpy as np
 
 from .._version import __version__
 from ..image.colour import srgb_to_linear
-from ..povray.format import pov_string, pov_vector
+from ..scene.format import pov_string, pov_vector
 from .load import Part
 from .numbers import format_rows, format_vectors, vector_item
 from .text32 import format_vectors32

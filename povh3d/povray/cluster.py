@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError, InputError, PovrayError, PovrayNotFound, Povh3dError, RenderInterrupted
-from .format import pov_string
+from ..scene.format import pov_string
 from .job import JobResult, PovrayJob
 from .process import find_povray, povray_version, run_jobs
 from ..system import owned_prefix, sweep_orphans

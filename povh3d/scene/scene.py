@@ -20,7 +20,7 @@ renders:
 - whether it reads a file whose name is computed while POV-Ray parses
   (``#include concat(...)``): such a file cannot be found by this walk, so it
   is not in the digest; confined by the sandbox POV-Ray cannot read it, but
-  unconfined it can, and the cache must not be used (``engine.frames``);
+  unconfined it can, and the cache must not be used (``renderer.shots.shots``);
 - the names POV-Ray 3.7 will ask for where the scene names a file with
   non-ASCII characters: it reads strings as ASCII and turns each non-ASCII
   byte into a space (``#include "pièce.inc"`` opens ``"pi  ce.inc"``), so the

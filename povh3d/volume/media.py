@@ -4,7 +4,7 @@ Pure functions of a ``Volume`` and a ``Transfer``: ``classify`` quantises the
 values through the transfer's window into df3 samples and colour maps,
 ``sampling_for`` chooses POV-Ray's ``intervals`` and ``samples``, and
 ``uniform_scale`` / ``pov_matrix`` check and format the placement.  The files and
-the stage scene are written by ``app/volume_media.py``; what POV-Ray integrates is
+the stage scene are written by ``renderer/content/volume_media.py``; what POV-Ray integrates is
 in docs/volume-rendering.md.
 """
 

@@ -20,7 +20,7 @@ from povh3d.calibration.lenticular import calibrate_lenticular
 from povh3d.errors import ConfigError, InputError
 from povh3d.image.colour import encode
 from povh3d.image.io import read_png, write_png
-from povh3d.mappings.slanted import looking_glass
+from povh3d.display.mappings.slanted import looking_glass
 
 from tests.support.cli import one_error_line
 from tests.support.synth import render_lenticular_white
@@ -58,7 +58,7 @@ def test_looking_glass_fields_put_the_central_view_on_every_axis():
     n, along = np.array([math.cos(t), -math.sin(t)]), np.array([math.sin(t), math.cos(t)])
     centre = np.array([(w - 1) / 2, (h - 1) / 2])
     pts = centre + np.array([(phase + m * pitch) * n + s * along for m in range(-5, 6) for s in (-50.0, 0.0, 70.0)])
-    # The Looking Glass shader's lenticule coordinate (mappings.slanted.looking_glass doc), x from the
+    # The Looking Glass shader's lenticule coordinate (display.mappings.slanted.looking_glass doc), x from the
     # left edge, y up: a = (x + y / slope) * pitch' / W - center, pitch' = pitch W / DPI cos(atan(1/slope)).
     # Half a pixel right of the axis (LenticularFit.looking_glass: the shader reads a subpixel's phase there).
     x, y = pts[:, 0] + 0.5 + 0.5, h - pts[:, 1] - 0.5

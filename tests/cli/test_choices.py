@@ -1,8 +1,8 @@
 """The CLI names its choices without importing the engine; they must be the registries'."""
 
 from povh3d.cli.render import METHOD_NAMES, QUALITY_NAMES
-from povh3d.engine.methods import METHODS
-from povh3d.engine.quality import AUTO, QUALITY_LEVELS
+from povh3d.renderer.methods.registry import METHODS
+from povh3d.renderer.methods.quality import AUTO, QUALITY_LEVELS
 
 
 def test_method_choices_are_the_registry():

@@ -26,8 +26,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from povh3d.app.records import base_record, write_image
-from povh3d.app.views import write_views
+from povh3d.renderer.records import base_record, write_image
+from povh3d.renderer.outputs.views import write_views
 from povh3d.cli.main import build_parser
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.interleave import extract

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from benchmarks.gallery import EXAMPLES, MIN_DB, judge
@@ -21,7 +20,7 @@ LENTICULAR = ("--grid", "lenticular", "--lenses", "32", "--rows", "96", "--ppl",
 # screen.inc's scene has fog over a ground plane the display's lower rays start below: POV-Ray's mesh
 # camera (multi-ortho) would give them the outside state of its first ray and fog them, where each
 # view's own orthographic render does not (15 dB); povh3d refuses it in one line where multi-ortho is
-# chosen (app/ray_state.py), and by default renders it with an orthographic camera a view, right.
+# chosen (renderer/placement/ray_state.py), and by default renders it with an orthographic camera a view, right.
 VIEWS = ("--grid", "square", "--lenses", "24x18", "--ppl", "3x3", "--pixel-pitch", "0.2", "--focal", "2")
 CHOSEN = (*SQUARE, "--method", "multi-ortho")
 
@@ -84,7 +83,7 @@ def test_the_stochastic_verdict(worst_db, realizations_db, verdict):
 def test_a_radiosity_view_is_judged_against_povrays_own_noise(cli, tmp_path):
     """Radiosity samples its lighting on each render's image grid: the views of radiosity3.pov fall under
     35 dB against their oblique orthographic renders, but no further than POV-Ray's own renders of the
-    same rays with the grid shifted differ (tests/engine/test_radiosity_grid.py; 33 dB here).  Negative
+    same rays with the grid shifted differ (tests/renderer/test_radiosity_grid.py; 33 dB here).  Negative
     control: the view set against its neighbour's render (one view, 0.1 of a lens pitch off) falls well
     below the tolerance."""
     import json

@@ -10,9 +10,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from povh3d.devices.looking_glass import DEVICES, visual_json
+from povh3d.display.looking_glass import DEVICES, visual_json
 from povh3d.image.io import read_png, write_png
-from povh3d.mappings.looking_glass_shader import view_fractions
+from povh3d.display.mappings.looking_glass_shader import view_fractions
 from tests.support.cli import one_error_line
 
 PORTRAIT = DEVICES["looking-glass-portrait"].calibration
@@ -62,9 +62,9 @@ def test_map_refuses_a_calibration_that_contradicts_the_display(tmp_path, cli, a
 def test_subpixel_render_refuses_a_cone_the_sheet_does_not_span(tmp_path):
     """alioscopy-42's sheet spans 35.8 deg: a file of its sheet that says 40 is of another display.
     The same file without viewCone, or with the sheet's own cone, is taken."""
-    from povh3d.app.display_setup import build_display
-    from povh3d.devices.looking_glass import Calibration
-    from povh3d.engine.calibrated_sheet import view_cone_deg
+    from povh3d.display.display import build_display
+    from povh3d.display.looking_glass import Calibration
+    from povh3d.display.calibrated_sheet import view_cone_deg
     from povh3d.errors import ConfigError
 
     nominal = build_display("alioscopy-42", method="subpixel").lens_array
@@ -85,8 +85,8 @@ def test_subpixel_render_refuses_a_cone_the_sheet_does_not_span(tmp_path):
 
 
 def test_subpixel_render_on_the_portrait_uses_its_cone_and_screen(tmp_path):
-    from povh3d.app.display_setup import build_display
-    from povh3d.engine.calibrated_sheet import view_cone_deg
+    from povh3d.display.display import build_display
+    from povh3d.display.calibrated_sheet import view_cone_deg
     from povh3d.errors import ConfigError
 
     display = build_display("looking-glass-portrait", method="subpixel", calibration=_visual(tmp_path / "v.json"))
@@ -99,7 +99,7 @@ def test_subpixel_render_on_the_portrait_uses_its_cone_and_screen(tmp_path):
 
 def test_a_cone_decides_the_focal_length_where_the_display_names_no_sheet(tmp_path):
     """A square preset has no sheet of its own: the file gives it, and its viewCone the focal length."""
-    from povh3d.engine.calibrated_sheet import calibrated_sheet, view_cone_deg
+    from povh3d.display.calibrated_sheet import calibrated_sheet, view_cone_deg
     from povh3d.geometry.lens_array import Panel
 
     data = json.loads(visual_json(replace(PORTRAIT, view_cone=30.0)))
@@ -111,8 +111,8 @@ def test_a_cone_decides_the_focal_length_where_the_display_names_no_sheet(tmp_pa
 
 
 def test_calibrate_dpi_writes_the_vendors_value_objects(tmp_path):
-    from povh3d.app.calibration import calibrate_lenticular_file
-    from povh3d.devices.looking_glass import read_visual
+    from povh3d.commands.calibration import calibrate_lenticular_file
+    from povh3d.display.looking_glass import read_visual
     from povh3d.image.colour import encode
     from tests.support.synth import render_lenticular_white
 

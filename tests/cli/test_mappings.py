@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from povh3d.app.views import read_views
+from povh3d.renderer.outputs.views import read_views
 from povh3d.image.io import read_png, write_png
 from povh3d.image.interleave import interleave
-from povh3d.mappings import MappingOptions, build_mapping
+from povh3d.display.mappings import MappingOptions, build_mapping
 from tests.conftest import SAMPLE
 from tests.support.cli import one_error_line
 

@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 
-from povh3d.app.records import base_record, write_image
+from povh3d.renderer.records import base_record, write_image
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.io import write_png
 from tests.conftest import SAMPLE

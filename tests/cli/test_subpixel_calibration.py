@@ -7,7 +7,7 @@ Oracles:
 - the truth of a synthetic white image (known pitch, slant and phase) comes back through
   ``calibrate`` -> file -> the render's sheet within the issue's calibration tolerances;
 - the rays POV-Ray traced hit an emissive plane coding x and y where the Looking Glass
-  shader's own lenticule coordinate (``mappings.slanted.looking_glass``) says they should;
+  shader's own lenticule coordinate (``display.mappings.slanted.looking_glass``) says they should;
 - bad calibrations: one line, non-zero exit, nothing written.
 """
 
@@ -19,14 +19,14 @@ import math
 import numpy as np
 import pytest
 
-from povh3d.app.calibration import calibrate_lenticular_file
-from povh3d.app.display_setup import mapping_for_display
+from povh3d.commands.calibration import calibrate_lenticular_file
+from povh3d.display.display import mapping_for_display
 from povh3d.cli.main import build_parser
 from povh3d.cli.options import display_from_args
 from povh3d.cli.render import request_from_args
-from povh3d.engine.calibrated_sheet import calibrated_sheet
-from povh3d.engine.methods import METHODS
-from povh3d.engine.subpixel import sheet_phase, subpixel_array, subpixel_image
+from povh3d.display.calibrated_sheet import calibrated_sheet
+from povh3d.renderer.methods.registry import METHODS
+from povh3d.display.subpixel import sheet_phase, subpixel_array, subpixel_image
 from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import Panel
 from povh3d.geometry.phase_tiles import phase_tiles

@@ -3,7 +3,7 @@ preset's mapping, traced subpixel by subpixel straight to the panel image.
 
 Oracles:
 - the sheet is the mapping's own: with the offset the sidecar records, the mapping's phase
-  formula (``mappings.slanted``) puts every subpixel where the sheet does (to 1e-9);
+  formula (``display.mappings.slanted``) puts every subpixel where the sheet does (to 1e-9);
 - every subpixel's ray (docs/geometry.md) through POV-Ray's lookup simulated in NumPy (to 1e-9);
 - the rendered panel of an emissive plane coding x (red) and y (green): each red subpixel shows
   the x, each green one the y, where its own ray hits the plane; one ray per pixel (the
@@ -17,9 +17,9 @@ import json
 import numpy as np
 import pytest
 
-from povh3d.app.display_setup import build_display, mapping_for_display
-from povh3d.engine.methods import METHODS
-from povh3d.engine.subpixel import slanted_sheet, subpixel_array
+from povh3d.display.display import build_display, mapping_for_display
+from povh3d.renderer.methods.registry import METHODS
+from povh3d.display.subpixel import slanted_sheet, subpixel_array
 from povh3d.geometry.phase_tiles import phase_tiles
 from povh3d.geometry.rays import pixel_rays
 from povh3d.image.colour import decode

@@ -18,8 +18,8 @@ from povh3d.errors import ConfigError
 from povh3d.geometry.lattice import cross_lenticular_basis
 from povh3d.geometry.lattice_mesh import lens_mesh
 from povh3d.geometry.lens_array import LensArray, Panel, lattice_array
-from povh3d.geometry.presets import lens_array as preset_array
-from povh3d.geometry.presets import parse_lattice
+from povh3d.display.presets import lens_array as preset_array
+from povh3d.display.presets import parse_lattice
 from povh3d.geometry.rays import pixel_rays
 
 from tests.geometry.test_rotated_lattice import simulate_lookup

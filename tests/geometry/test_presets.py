@@ -3,7 +3,7 @@ import math
 import pytest
 
 from povh3d.errors import ConfigError
-from povh3d.geometry.presets import get_preset, lens_array_from_fields, load_presets, merge_overrides
+from povh3d.display.presets import get_preset, lens_array_from_fields, load_presets, merge_overrides
 
 THESIS_DISPLAYS = ["alioscopy-42", "philips-20", "ipad-retina", "hex-5.6", "parallax-barrier-22", "demo"]
 

@@ -9,7 +9,7 @@ import pytest
 
 from povh3d.geometry.fit import depth_budget_mm
 from povh3d.geometry.lens_array import LensArray, Panel
-from povh3d.geometry.presets import lens_array, names
+from povh3d.display.presets import lens_array, names
 from povh3d.geometry.setup import (
     BEHIND,
     FRONT,

@@ -8,7 +8,7 @@ import pytest
 from povh3d.image.elemental import extract_views, lens_index_map
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.interleave import extract
-from povh3d.geometry.presets import get_preset, lens_array_from_fields
+from povh3d.display.presets import get_preset, lens_array_from_fields
 
 from tests.support.arrays import lenticular_array, square_array
 from tests.support.oracles import turn_elemental_images

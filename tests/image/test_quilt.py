@@ -53,7 +53,7 @@ def _extent(a):
 
 
 def test_aspect_is_physical_not_the_tiles_pixel_shape():
-    from povh3d.geometry.presets import lens_array, lens_array_from_fields
+    from povh3d.display.presets import lens_array, lens_array_from_fields
 
     # 32 x 30 mm lenticular panel: 40 lenses of 8 views, 300 rows -> views of 40 x 300 pixels
     a = lens_array_from_fields({"grid": "lenticular", "lenses": 40, "ppl": 8, "rows": 300,

@@ -4,10 +4,10 @@ import pytest
 import numpy as np
 
 from tests.support.render import render
-from povh3d.app.display import lens_info, refocus_file
+from povh3d.commands.images import lens_info, refocus_file
 from povh3d.image.io import read_png, read_sidecar
 from povh3d.image.refocus import gradient_energy, refocus_linear
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.quality import RenderSettings
 
 from tests.support.arrays import square_array
 from tests.support.scenes import write_checker_plane

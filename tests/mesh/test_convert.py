@@ -12,7 +12,7 @@ import pytest
 import trimesh
 from PIL import Image
 
-from povh3d.app.convert_mesh import convert_mesh
+from povh3d.renderer.content.convert_mesh import convert_mesh
 from povh3d.errors import Povh3dWarning
 from povh3d.mesh import FORMATS
 from povh3d.image.colour import linear_to_srgb, srgb_to_linear

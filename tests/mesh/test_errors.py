@@ -9,7 +9,7 @@ import trimesh
 
 from povh3d.errors import ConfigError, InputError, OutputError
 from povh3d.image.colour import srgb_to_linear
-from povh3d.app.convert_mesh import convert_mesh
+from povh3d.renderer.content.convert_mesh import convert_mesh
 from povh3d.mesh.identifiers import check_identifier, identifier_from_path, pov_keywords
 from tests.conftest import SAMPLES
 
@@ -122,7 +122,7 @@ def test_unwritable_output_folder(tmp_path, cli):
 
 def test_failure_after_textures_removes_them(tmp_path, monkeypatch):
     """The include is written last; if that fails, the texture written before it goes too."""
-    import povh3d.app.convert_mesh as convert
+    import povh3d.renderer.content.convert_mesh as convert
 
     for name in ("letter_f.obj", "letter_f.mtl", "letter_f.png"):
         (tmp_path / name).write_bytes((SAMPLES / name).read_bytes())

@@ -10,7 +10,7 @@ from hypothesis.extra.numpy import arrays
 
 from povh3d.errors import ConfigError
 from povh3d.mesh.numbers import format_rows, format_vectors
-from povh3d.povray.format import pov_vector_list
+from povh3d.scene.format import pov_vector_list
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 

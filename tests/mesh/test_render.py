@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from povh3d.app.convert_mesh import convert_mesh
+from povh3d.renderer.content.convert_mesh import convert_mesh
 from povh3d.mesh.raster import Window, iou, silhouette
 from tests.conftest import SAMPLES
 from tests.support.mesh_oracles import pov_silhouette

@@ -25,7 +25,7 @@ from povh3d.povray.cluster import DaskRunner
 from povh3d.errors import ConfigError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
 from povh3d.image.io import read_png, write_png
 from povh3d.povray.process import JobResult, PovrayJob
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.quality import RenderSettings
 from tests.support.arrays import square_array
 from tests.support.scenes import write_textured_scene
 
@@ -188,7 +188,7 @@ def test_unreachable_scheduler(tmp_path: Path, cli) -> None:
 
 
 def test_animation_on_the_cluster(tmp_path: Path, address: str) -> None:
-    from povh3d.app.animation import FrameRange, frame_path
+    from povh3d.renderer.animation import FrameRange, frame_path
     from tests.support.render import render_animation
 
     scene = tmp_path / "fade.pov"

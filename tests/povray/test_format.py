@@ -4,7 +4,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from povh3d.errors import ConfigError
-from povh3d.povray.format import pov_number, pov_vector, pov_vector_list
+from povh3d.scene.format import pov_number, pov_vector, pov_vector_list
 
 
 @given(st.floats(allow_nan=False, allow_infinity=False))

@@ -18,7 +18,7 @@ from povh3d.povray import sandbox
 from povh3d.errors import ConfigError, PovrayError
 from povh3d.image.io import read_png
 from povh3d.povray.process import JobResult, PovrayJob, run_jobs, shared_libraries
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.quality import RenderSettings
 from tests.support.arrays import square_array
 
 HEAD = """#version 3.7;

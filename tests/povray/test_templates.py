@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from povh3d.geometry.footprint import CENTRE
-from povh3d.engine.methods import METHODS, display_header
-from povh3d.engine.frames import build_script
+from povh3d.renderer.methods.registry import METHODS, display_header
+from povh3d.renderer.shots.shots import build_script
 
 from povh3d.geometry.lens_array import LensArray, Panel
 

@@ -6,7 +6,7 @@ import pytest
 import json
 import os
 
-from povh3d.engine.frames import LocalRunner
+from povh3d.renderer.shots.shots import LocalRunner
 from povh3d.povray import process
 from povh3d.povray.version_memo import FILE_NAME, remembered_version
 

@@ -6,12 +6,12 @@ import re
 
 import pytest
 
-from povh3d.engine.quality import QUALITY_LEVELS, Quality
+from povh3d.renderer.methods.quality import QUALITY_LEVELS, Quality
 
 from povh3d.scene.features import FEATURE_WORDS, SETTING_NEEDS, features_of_text, needed_settings
-from povh3d.engine.quality import quality_settings
-from povh3d.engine.methods import display_header
-from povh3d.engine.frames import build_script, ShotBatch
+from povh3d.renderer.methods.quality import quality_settings
+from povh3d.renderer.methods.registry import display_header
+from povh3d.renderer.shots.shots import build_script, ShotBatch
 from povh3d.scene.scene import load_scene
 
 from tests.support.arrays import square_array

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from povh3d.engine.methods import run_method
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.registry import run_method
+from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.hyper.ids import decode_ids
 from povh3d.scene.object_ids import MAX_OBJECTS, UNRESOLVED, ObjectsError, id_code, id_colour, mask_scene

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from povh3d.engine.methods import run_method
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.registry import run_method
+from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.geometry.capture_bank import border_margin
 from povh3d.geometry.lens_array import LensArray
 from povh3d.geometry.rays import pixel_rays

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from povh3d.mappings import MAPPINGS
+from povh3d.display.mappings import MAPPINGS
 
 
 def example(name):

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from povh3d.app.objects import ObjectTable, write_masks
-from povh3d.app.records import base_record
+from povh3d.renderer.outputs.objects import ObjectTable, write_masks
+from povh3d.renderer.records import base_record
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.interleave import interleave
 from povh3d.image.io import write_image_pair

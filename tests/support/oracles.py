@@ -17,7 +17,7 @@ from povh3d.geometry.lens_array import LensArray
 from povh3d.geometry.rays import pixel_rays
 from povh3d.geometry.optics import Lenslet, sag
 from povh3d.image.elemental import lens_index_map, sample_in_lens
-from povh3d.mappings.plan import Plan
+from povh3d.display.mappings.plan import Plan
 
 # -- image/interleave: the NumPy references of the compiled row gather ------------------------------
 

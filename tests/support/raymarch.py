@@ -14,7 +14,7 @@ nearest voxel centre.  The march takes steps of ``h`` mm and
 treats ``e`` and ``sigma`` as constant within a step (their values at its
 middle), integrating that step exactly: ``T e (1 - exp(-sigma h)) / sigma``.
 The error is second order in ``h``.  Written from the definition, sharing no
-code with ``povh3d.app.volume_media``.
+code with ``povh3d.renderer.content.volume_media``.
 """
 
 from __future__ import annotations

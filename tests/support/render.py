@@ -6,10 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from povh3d.app.display_setup import Display
-from povh3d.app.render import render as render_request
-from povh3d.app.request import RenderRequest
-from povh3d.engine.quality import RenderSettings
+from povh3d.display.display import Display
+from povh3d.renderer.render import render as render_request
+from povh3d.renderer.request import RenderRequest
+from povh3d.renderer.methods.quality import RenderSettings
 
 # Draft quality for the oracles, rendered afresh: the test checks what POV-Ray makes, never a cache hit.
 DRAFT = RenderSettings(quality="draft", use_cache=False)

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from povh3d.app.volume_media import media_stage
+from povh3d.renderer.content.volume_media import media_stage
 from povh3d.volume.media import sampling_for, sub_intervals, uniform_scale
-from povh3d.engine.methods import run_method
-from povh3d.engine.quality import RenderSettings
+from povh3d.renderer.methods.registry import run_method
+from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.errors import ConfigError, InputError
 from povh3d.image.colour import to_linear
 from povh3d.scene.features import strip_comments

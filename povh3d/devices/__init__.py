@@ -1,1 +1,0 @@
-"""Commercial light-field displays: their calibration files and device tables."""

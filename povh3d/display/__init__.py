@@ -1,0 +1,1 @@
+"""The display: what the panel and its lens sheet are (presets, mappings, devices, sheets)."""

@@ -1,0 +1,1 @@
+"""The render pipeline: request -> placement -> passes -> methods -> shots -> outputs."""

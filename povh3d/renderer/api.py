@@ -1,0 +1,68 @@
+"""``povh3d.render``: a render from Python in one call, through the same request and
+path as ``povh3d render`` on the command line.
+
+    import povh3d
+    record = povh3d.render("scene.pov", "out.png", preset="demo", quality="draft")
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+from .methods.quality import Progress, RenderSettings
+from ..errors import ConfigError
+from ..geometry.lens_array import LensArray
+from ..display.display import build_display
+from .render import render as render_request
+from .request import RenderRequest
+
+_REQUEST = tuple(f.name for f in fields(RenderRequest) if f.name not in ("source", "output", "display", "settings"))
+_SETTINGS = tuple(f.name for f in fields(RenderSettings))
+
+
+def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens_array: LensArray | None = None,
+           mapping: str | None = None, mapping_options: dict[str, Any] | None = None,
+           calibration: str | Path | None = None, progress: Progress | None = None,
+           objects: str | Path | None = None, **options: Any) -> dict[str, Any]:
+    """Render a scene or a mesh model into ``output`` (PNG + JSON sidecar); return the sidecar record.
+
+    Parameters
+    ----------
+    source : path             a POV-Ray scene (.pov) or a mesh model (.obj .stl .ply .glb ...)
+    output : path             the .png to write
+    preset : str              a display preset (``povh3d.presets.names()``)
+    lens_array : LensArray    a lens array of your own, instead of the preset's
+    mapping : str             a pixel mapping name (``alioscopy``, ``slanted``, ``smart:4`` ...)
+    mapping_options : dict    its options (``per_lens``, ``views``, ``slope``, ``offset``, ``rows_per_view``,
+                              ``reverse``, ``blend``), as ``povh3d map`` takes them
+    calibration : path        a calibration file: the sheet of ``mapping='slanted'``, or of
+                              ``method='subpixel'`` (a calibrated subpixel render)
+    objects : path            also write the object masks into this folder, as ``render --objects DIR``
+                              (docs/viewer.md); the record gets ``object_masks`` (the folder, the number
+                              of objects and frames, the share of pixels no id) and the sidecar ``objects``
+    **options
+        Any field of ``RenderRequest`` (``method``, ``method_options``, ``views_dir``,
+        ``frames`` ...) or of ``RenderSettings`` (``quality``, ``jobs``, ``bit_depth`` ...).
+        An unknown name is refused with the list of names.
+    """
+    unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
+    if unknown:
+        raise ConfigError(f"render() takes no option {', '.join(map(repr, unknown))}; it takes: "
+                          f"preset, lens_array, mapping, mapping_options, calibration, objects, "
+                          f"{', '.join(_REQUEST + _SETTINGS)}")
+    display = build_display(preset, lens_array=lens_array, method=options.get("method", "multi-ortho"),
+                            mapping=mapping, mapping_options=mapping_options, calibration=calibration)
+    settings = RenderSettings(**{k: v for k, v in options.items() if k in _SETTINGS})
+    # No method given: the default, which the render may trade for one that renders the scene right.
+    options.setdefault("method_chosen", "method" in options)
+    request = RenderRequest(source=Path(source), display=display, output=Path(output), settings=settings,
+                            **{k: v for k, v in options.items() if k in _REQUEST})
+    if objects is None:
+        return render_request(request, progress)
+    from .passes.object_masks import check_objects_request, render_objects
+
+    check_objects_request(request)          # before any work, as the command does
+    record = render_request(request, progress)
+    return {**record, "object_masks": render_objects(request, objects, record)}

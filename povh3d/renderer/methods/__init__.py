@@ -1,0 +1,1 @@
+"""The rendering methods, their registry and the quality model."""

@@ -1,0 +1,1 @@
+"""What a render writes besides its image: views, depth maps, datasets, quilts, masks."""

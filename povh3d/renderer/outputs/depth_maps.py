@@ -1,0 +1,85 @@
+"""``--depth-maps DIR``: per view, the distance along each ray to the first surface, and its disparity.
+
+For view ``(l, k)`` (docs/geometry.md: direction ``(u_k, v_l, f)``), pixel
+``(i, j)`` is the ray through lens ``(j, i)``.  ``d_LLL_KKK.npy`` holds, as
+float32 millimetres of the display frame, the distance along that ray from the
+screen (where the ray crosses ``z = 0``) to the first surface: negative in
+front of the screen, NaN where nothing is hit.  ``p_LLL_KKK.npy`` holds the
+matching disparity in view pixels (lenses) per view step, ``z s / (f p)`` with
+``z`` the hit's depth ``d / |(u/f, v/f, 1)|``: a point at depth ``z`` moves by
+that many lenses from one view to the next (``geometry.rays.disparity``).
+``depth_maps.json`` says all this and records the frame.  Every file is written
+atomically.
+
+With ``--depth-format png`` the maps are 16-bit greyscale PNGs instead
+(``d_LLL_KKK.png``, ``p_LLL_KKK.png``): code 0 is "nothing hit" (NaN), codes
+1..65535 are ``offset + (code - 1) * scale``, one scale and offset for all the
+views of a kind, recorded in ``depth_maps.json``; the rounding is at most half
+a ``scale`` (``image.depth_codes``).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...errors import OutputError
+from ...geometry.lens_array import LensArray
+from ...geometry.rays import disparity
+from ...image.depth_codes import quantise
+from ...image.io import atomic_path
+
+
+def check_depth_dir(folder: Path) -> None:
+    """Before any work: the folder exists or can be made, and is a folder."""
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"--depth-maps {str(folder)!r} is a file; give a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create --depth-maps folder {str(folder)!r}: {exc.strerror}") from None
+
+
+DEPTH_FORMATS = ("npy", "png")
+
+
+def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, record: dict[str, Any],
+                     fmt: str = "npy") -> None:
+    """Write ``d_*.npy``, ``p_*.npy`` (``fmt`` 'png': 16-bit PNGs) and ``depth_maps.json`` into ``folder``."""
+    from ...image.io import write_png
+
+    par = disparity(depth, lens_array)
+    ny, nx = depth.shape[:2]
+    codes = {"d": quantise(depth), "p": quantise(par)} if fmt == "png" else {}
+    for l in range(ny):
+        for k in range(nx):
+            for prefix, data in (("d", depth[l, k]), ("p", par[l, k])):
+                if fmt == "png":
+                    write_png(folder / f"{prefix}_{l:03d}_{k:03d}.png", codes[prefix][0][l, k])
+                    continue
+                buffer = io.BytesIO()
+                np.save(buffer, data)
+                with atomic_path(folder / f"{prefix}_{l:03d}_{k:03d}.npy") as tmp:
+                    tmp.write_bytes(buffer.getvalue())
+    info: dict[str, Any] = {
+            "views": [ny, nx], "size_px": [depth.shape[3], depth.shape[2]], "format": fmt,
+            "depth": "d_LLL_KKK: mm of the display frame along each ray, from the screen "
+                     "(z = 0, at the lens centre) to the first surface; negative in front; NaN: nothing hit",
+            "disparity": "p_LLL_KKK: lenses per view step, z s / (f p), z = d / |(u/f, v/f, 1)|",
+            "pixel_pitch_mm": lens_array.panel.pitch_x, "focal_mm": lens_array.focal,
+            "lens_pitch_mm": lens_array.pitch_x, "display_frame": record.get("display_frame"),
+            "method": "two renders per view with a constant fog of colour 0 and 1 (renderer/passes/depth.py)",
+            "nan_fraction": float(np.isnan(depth).mean())}
+    if fmt == "png":
+        info["png"] = {name: {"scale": codes[p][1], "offset": codes[p][2]} for name, p in (("depth", "d"),
+                                                                                         ("disparity", "p"))}
+        info["png"]["decode"] = ("16-bit greyscale: code 0 = nothing hit (NaN); else value = offset + "
+                                 "(code - 1) * scale (mm for d_, lenses per view step for p_), within scale / 2")
+    else:
+        info["npy"] = "float32 arrays (numpy.load), NaN where nothing is hit"
+    with atomic_path(folder / "depth_maps.json") as tmp:
+        tmp.write_text(json.dumps(info, indent=2) + "\n", encoding="utf-8")

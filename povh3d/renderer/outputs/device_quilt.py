@@ -1,0 +1,74 @@
+"""A Looking Glass render: the device's views at its tile size, its quilt, and its native panel image.
+
+``povh3d render SCENE --preset looking-glass-portrait`` renders the camera bank of
+``display.quilt.quilt_array`` (the device's quilt as a lens array).
+The views are the oblique orthographic views of the ray definition (docs/geometry.md);
+the vendor's tools render off-axis perspective cameras instead (docs/displays.md
+measures the difference on the device).  ``write_device_outputs`` tiles them into the
+vendor's quilt (``stem_qs8x6a0.75.png`` at the device's quilt size, padded at the right
+and top as the vendor's ``viewPortion`` expects) and, given the unit's ``visual.json``,
+the panel image its shader would show (``display.mappings.looking_glass_shader.quilt_to_native``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...display.looking_glass import Device
+from ...display.quilt import device_calibration, device_quilt
+from ...errors import ConfigError
+from ...geometry.lens_array import LensArray
+from ...image.io import check_writable
+from ...image.quilt import quilt_name
+from ..records import base_record, write_image
+
+
+def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Path | None]:
+    """The quilt's path beside ``output`` (named the vendor's way) and the native image's; both
+    checked writable before any work."""
+    quilt = output.with_name(quilt_name(output.stem, *device.grid, device.aspect))
+    panel = output.with_name(f"{output.stem}_native.png") if native else None
+    for path in (quilt, panel):
+        if path is not None:
+            check_writable(path)
+    return quilt, panel
+
+
+def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: dict[str, Any]) -> dict[str, Any]:
+    """Write the quilt (and with a calibration the native panel image) of a device render beside
+    ``output``; return the sidecar's ``quilt`` entry."""
+    from ...display.looking_glass import device
+    from ...display.mappings.looking_glass_shader import quilt_to_native
+
+    dev = device(spec["device"])
+    cal = device_calibration(dev, spec.get("calibration"))
+    quilt_path, native_path = quilt_outputs(output, dev, spec.get("calibration") is not None)
+    quilt = device_quilt(h3d, array, dev)
+    entry: dict[str, Any] = {"device": dev.name, "file": quilt_path.name, "grid": list(dev.grid),
+                             "quilt_size": list(dev.quilt_size), "tile_size": list(dev.tile_size),
+                             "aspect": dev.aspect, "view_cone_deg": cal.view_cone}
+    source = {"source": str(output.resolve())}
+    write_image(quilt_path, quilt, base_record("quilt", grid=list(dev.grid), aspect=dev.aspect, views=dev.views,
+                                               **source))
+    if native_path is not None:
+        native = quilt_to_native(quilt, dev.grid, cal, views=dev.views)
+        write_image(native_path, native, base_record("panel", mapping="looking-glass-shader",
+                                                     calibration=str(Path(spec["calibration"]).resolve()),
+                                                     size_px=[cal.screen_w, cal.screen_h], **source))
+        entry["native"] = native_path.name
+    return entry
+
+
+def check_device_render(spec: dict[str, Any], output: Path, animated: bool) -> None:
+    """Before any work: a still, the quilt (and native image) writable, the calibration the model's."""
+    from ...display.looking_glass import device
+
+    if animated:
+        raise ConfigError("a Looking Glass preset writes the quilt of a still; drop --frames, or render the "
+                          "view-space image with --mapping slanted")
+    dev = device(spec["device"])
+    device_calibration(dev, spec.get("calibration"))
+    quilt_outputs(output, dev, spec.get("calibration") is not None)

@@ -1,0 +1,275 @@
+"""The scene's depth along the display normal, measured by POV-Ray: a low-resolution depth pass.
+
+An orthographic camera looks along the display normal from ``front_clearance`` mm in
+front of the screen, over the lens array's field.  It renders the scene twice
+with a constant ``fog`` (``fog_type 1``) of colour 0 and of colour 1: POV-Ray
+blends a pixel of surface colour ``c`` as ``c t + fog (1 - t)`` with
+``t = exp(-d / D)`` for a ray of length ``d`` (scene units) and fog distance
+``D``, so the difference of the two renders is ``1 - t``, independent of ``c``,
+and ``d = -D ln t``.  In linear light at 16 bits the depth resolution is about
+``D / 65535 / t``.  Each colour channel gives ``t`` on its own: a channel that clips
+in the fog-1 render (the surface brighter than 1 there, e.g. the red of an emissive red
+object) is left out, so only a surface brighter than 1 in every channel goes unmeasured
+(``saturated``).  Pixels where nothing is hit (``t`` about 0) are left out too.
+
+POV-Ray applies no fog (nor any media) along a ray segment inside a non-hollow object,
+whatever the fog or media: a pass whose rays start inside a solid (a plane whose inside
+holds the viewer, a room box or a sky sphere around the camera) sees ``t = 1`` exactly at
+every surface.  No POV-Ray 3.7 construct measures depth there without the user's object
+being ``hollow``; those pixels are counted (``unmeasured``) and a pass whose middle is
+all unmeasured is reported as blind, with the cause and the fix, never as an empty scene.
+
+The pass needs POV-Ray's quality 9 (no fog below it), which turns the scene's radiosity, photons and
+subsurface scattering on as well; the pass turns them down (``LIGHTING_OFF``): they cost time, and
+radiosity's sample rays cross the fog, which leaves ``c`` different in the two renders.  The pass runs
+at one thread (``PASS_THREADS``): what POV-Ray samples at random per thread (a jittered area light)
+is then the same in both renders.
+
+The pass is cached like any frame (the scene's digest, the frame, the size).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ...geometry.lens_array import LensArray
+from ...geometry.rays import depth_scaled_rays
+from ...image.colour import decode
+from ...scene.features import needed_settings
+from ...scene.scene import Scene
+from ..shots.batch import ShotBatch
+from ..shots.shots import render_frames
+from ..methods.quality import RenderSettings
+
+MAX_WIDTH = 160     # pixels across the depth pass
+T_MIN = 1e-3        # below this transmittance a pixel counts as "nothing hit"
+CLIP = 0.9999       # a channel at or above this in the fog-1 render is clipped
+BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (a 'plane' whose inside holds "
+                "the viewer, or a closed 'box' or 'sphere' around the camera such as a room or a sky), and "
+                "POV-Ray applies no fog inside a non-hollow object; add 'hollow' to that object")
+SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
+                    "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
+                    "or place the display with --display-center/--display-normal/--display-width")
+#: POV-Ray threads of a pass.  A jittered area light (and subsurface scattering) samples at random per
+#: render thread, so at two threads, which take the pixels in another order in each frame, a surface's
+#: colour differs between the two fog frames (a sphere before a plane: its shadow's edge 7-10 mm off in
+#: every pass); one thread gives both frames the same samples.  (``crand`` still differs: its sequence
+#: runs on from one frame to the next.)
+PASS_THREADS = 1
+#: The scene's radiosity, photons and subsurface scattering cut to almost nothing for the pass (a later
+#: ``global_settings`` overrides the scene's values; written only where the scene has them: a radiosity
+#: block would turn radiosity on).  Fog needs POV-Ray's quality 9, which turns them on too.  Photons and
+#: subsurface scattering (at one thread) light a surface the same in both frames of the fog pair, so
+#: they cost only time (photons are shot anew for each frame; `povh3d info` on subsurface.pov: 15 s, now 2.4 s).
+#: Radiosity does not: its sample rays cross the fog, so a surface it lights is brighter in the fog-1
+#: frame and ``c`` does not cancel (a sky-lit sphere 3 mm off: tests/renderer/test_depth.py); its
+#: ``brightness`` (which must be positive) all but removes its light.
+LIGHTING_OFF = {"radiosity": "{ pretrace_start 1 pretrace_end 1 count 1 nearest_count 1 error_bound 100 "
+                             "recursion_limit 1 always_sample off brightness 1e-6 }",
+                "photons": "{ count 1 max_trace_level 1 }",
+                "subsurface": "{ samples 0, 0 }"}
+
+
+@dataclass(frozen=True)
+class DepthMap:
+    """Display-frame depth ``z`` (mm, screen 0, viewer at -z) of each pixel; NaN where nothing is hit."""
+
+    z: np.ndarray          # (H, W) float, mm
+    width_mm: float
+    height_mm: float
+    unmeasured: float = 0.0   # fraction of pixels the fog did not reach (the viewpoint inside a solid)
+    saturated: np.ndarray | None = None   # (H, W) bool: a surface brighter than 1 in every channel
+
+    def summary(self, budget_mm: float) -> dict[str, Any]:
+        """The framed subject's near and far z against the budget (``2 N f``, centred on the screen).
+
+        The subject is what the middle half of the field (in width and height) shows,
+        between its 5th and 95th percentiles: a ground plane or a backdrop that runs
+        out of the field does not count there, but its reach over the whole field
+        (``field_near_mm``, ``field_far_mm``: 1st and 99th percentiles) is reported.
+        """
+        h, w = self.z.shape
+        hit = self.z[np.isfinite(self.z)]
+        middle = self.z[h // 4:h - h // 4, w // 4:w - w // 4]
+        middle = middle[np.isfinite(middle)]
+        saturated = self.saturated if self.saturated is not None else np.zeros(self.z.shape, bool)
+        record: dict[str, Any] = {"depth_budget_mm": budget_mm, "hit_fraction": float(hit.size / self.z.size),
+                                  "unmeasured_fraction": self.unmeasured,
+                                  "saturated_fraction": float(saturated.mean()), "pixels": [w, h]}
+        if middle.size == 0:
+            return {**record, **self._why_unmeasured(), "within_budget": True, "field_within_budget": True}
+        near, far = (float(v) for v in np.percentile(middle, [5, 95]))
+        field_near, field_far = (float(v) for v in np.percentile(hit, [1, 99]))
+        half = budget_mm / 2
+        return {**record, "empty": False, "near_mm": near, "far_mm": far, "depth_mm": far - near,
+                "field_near_mm": field_near, "field_far_mm": field_far,
+                "within_budget": bool(-half <= near and far <= half),
+                "field_within_budget": bool(-half <= field_near and field_far <= half)}
+
+    def _why_unmeasured(self) -> dict[str, Any]:
+        """Why the middle of the field has no depth: blind (inside a solid), too bright, or nothing there."""
+        h, w = self.z.shape
+        if self.unmeasured > 0.5:
+            return {"empty": False, "blind": True, "reason": BLIND_REASON}
+        if self.saturated is not None and self.saturated[h // 4:h - h // 4, w // 4:w - w // 4].mean() > 0.5:
+            return {"empty": False, "saturated": True, "reason": SATURATED_REASON}
+        return {"empty": True}
+
+
+def pass_lighting(scene: Scene) -> dict[str, str]:
+    """``LIGHTING_OFF``'s settings for what this scene uses (for a later ``global_settings``)."""
+    return needed_settings(scene.features, LIGHTING_OFF)
+
+
+def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
+               fog: float, width: int, height: int, field: tuple[float, float] | None = None) -> ShotBatch:
+    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames.
+    ``field`` (mm, centred on the origin) defaults to the lens array's."""
+    width_mm, height_mm = field or (lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y)
+    right, up = (width_mm, 0.0, 0.0), (0.0, height_mm, 0.0)
+    frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
+    return ShotBatch("depth.pov.j2", {"fog_distance": fog, "front_clearance": front_clearance, "right": right, "up": up},
+                      frames, width, height, shots_per_job=max(2, min(400, len(frames))), processes=1,
+                      options=("-A",))
+
+
+def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch,
+                 fog: float) -> tuple[np.ndarray, np.ndarray]:
+    """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, unmeasured; -inf: too bright)
+    and the fraction of unmeasured pixels per direction."""
+    header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
+                              "focal": lens_array.focal}   # as methods.display_header
+    if settings.frame is not None:
+        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
+    lighting = pass_lighting(scene)
+    if lighting:
+        header["global_settings"] = lighting
+    pass_settings = replace(settings, quality="draft", bit_depth=16, threads=PASS_THREADS)
+    images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
+    return fog_distances(images[0::2], images[1::2], fog)
+
+
+def fog_distances(dark_images: list[np.ndarray], light_images: list[np.ndarray],
+                  fog: float) -> tuple[np.ndarray, np.ndarray]:
+    """(n, H, W) ray lengths (scene units) from renders with fog colour 0 and 1 (sRGB-encoded PNG
+    pixels): NaN where nothing is hit or unmeasured, -inf on a surface brighter than 1 in every
+    channel (saturated); and the unmeasured fraction per render."""
+    dark = np.stack([decode(img[..., :3]) for img in dark_images])
+    light = np.stack([decode(img[..., :3]) for img in light_images])
+    clipped = light >= CLIP   # per channel: c t + (1 - t) clips where the surface's c >= 1
+    every = clipped.all(axis=-1)
+    # t from each channel that does not clip; the median of those.
+    channel_t = np.where(clipped, np.nan, 1.0 - (light - dark))
+    channel_t[every] = 0.0   # no channel left: set below
+    t = np.clip(np.nanmedian(channel_t, axis=-1), 0.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):   # t = 0: nothing hit; fog 0: no pass
+        d = -fog * np.log(t)
+    # t = 1 at a surface: no fog there.  POV-Ray applies no fog to a ray that starts inside a
+    # solid (non-hollow) object, e.g. behind a plane whose inside faces the viewer: the two
+    # renders are then the same in every channel.
+    unmeasured = np.abs(light - dark).max(axis=-1) < 1e-6
+    # Clipped in every channel: nothing hit (t about 0: the fog-0 render black there) or a
+    # surface brighter than 1 in every channel (seen in the fog-0 render).
+    saturated = every & ~unmeasured & (dark.max(axis=-1) >= T_MIN)
+    d[every | (t < T_MIN) | unmeasured] = np.nan
+    d[saturated] = -np.inf
+    return d, unmeasured.mean(axis=(1, 2))
+
+
+def pass_size(lens_array: LensArray) -> tuple[int, int]:
+    """The depth pass's image size: at most ``MAX_WIDTH`` wide, two pixels a lens, the field's aspect."""
+    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
+    w = min(MAX_WIDTH, lens_array.lenses_x * 2)
+    return w, max(1, round(w * height_mm / width_mm))
+
+
+def depth_map(distances: np.ndarray, lens_array: LensArray, front_clearance: float, units_per_mm: float,
+              unmeasured: float = 0.0) -> DepthMap:
+    """The depth map of ray lengths (scene units) of a pass along the normal from ``front_clearance`` mm."""
+    width_mm, height_mm = lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y
+    saturated = np.isneginf(distances)   # fog_distances' mark
+    z = np.where(saturated, np.nan, distances / units_per_mm - front_clearance)
+    return DepthMap(z, width_mm, height_mm, unmeasured, saturated)
+
+
+def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
+               units_per_mm: float) -> DepthMap:
+    """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
+    w, h = pass_size(lens_array)
+    fog = front_clearance * units_per_mm   # scene units: t = 1/e at the screen
+    d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
+                                                                          front_clearance, fog, w, h), fog)
+    return depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
+
+
+def origin_field(lens_array: LensArray, front_clearance: float) -> tuple[float, float]:
+    """Width and height (mm) of the plane ``z = -front_clearance`` that holds every pixel ray's origin: the
+    lens array's field, widened on each side by the clearance times the most oblique ray's slope (the
+    largest pixel offset from a lens centre over ``f``; a lenticular sheet's rays keep their row)."""
+    f = lens_array.focal
+    if lens_array.grid == "hex":
+        hx = hy = lens_array.pitch_x / np.sqrt(3)   # the cell's circumradius
+    elif lens_array.grid == "lattice":
+        a1, a2 = np.abs(np.array(lens_array.basis, dtype=np.float64))
+        hx, hy = (a1 + a2) / 2
+    else:
+        hx = lens_array.pitch_x / 2
+        hy = 0.0 if lens_array.grid == "lenticular" else lens_array.pitch_y / 2
+    return (lens_array.lenses_x * lens_array.pitch_x + 2 * front_clearance * hx / f,
+            lens_array.lenses_y * lens_array.pitch_y + 2 * front_clearance * hy / f)
+
+
+def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
+                   units_per_mm: float) -> float:
+    """The share of the plane of every view's ray origins (``origin_field``, ``front_clearance`` mm out)
+    that lies inside a solid: a fog pass along the normal over that plane (the pixels the fog does not
+    reach).  ``lens_array``: the rays as traced (``depth_scaled_rays``)."""
+    field = origin_field(lens_array, front_clearance)
+    w = MAX_WIDTH
+    h = max(1, min(4 * MAX_WIDTH, round(w * field[1] / field[0])))
+    fog = front_clearance * units_per_mm
+    batch = _fog_batch([(0.0, 0.0, 1.0)], lens_array, front_clearance, fog, w, h, field)
+    _, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog)
+    return float(unmeasured[0])
+
+
+def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
+                    units_per_mm: float, *, views: tuple[int, int] | None = None,
+                    grid: tuple[int, int, float, float] | None = None) -> np.ndarray:
+    """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
+    (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
+
+    With ``settings.depth_scale`` k the maps are the compressed scene's, as the display
+    shows it: the rays traced have slopes ``k (u, v) / f`` (``depth_scaled_rays``), a hit at
+    depth ``z`` of the scene shows at ``k z``.
+
+    ``views`` (Ny, Nx) default the camera bank's; a resampled array passes its own
+    (``elemental.view_grid``).  ``grid`` ``(cols, rows, pitch_x, pitch_y)`` puts the rays'
+    screen crossings on that rectangular grid centred on the origin (a hex array's views
+    resampled onto lens columns) instead of the lens centres of a rectangular array.
+
+    Returns
+    -------
+    (Ny, Nx, Ly, Lx) float32, mm (``grid``: rows x cols); NaN where nothing is hit (or it
+    cannot be measured).
+    """
+    ny, nx = views or lens_array.require_views()
+    cols, rows, gx, gy = grid or (lens_array.lenses_x, lens_array.lenses_y, lens_array.pitch_x, lens_array.pitch_y)
+    s, sy = lens_array.panel.pitch_x, lens_array.panel.pitch_y
+    k = settings.depth_scale
+    f = depth_scaled_rays(lens_array, k).focal
+    slopes = np.array([((j + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f)
+                       for l in range(ny) for j in range(nx)])
+    directions = [(a, b, 1.0) for a, b in slopes.tolist()]
+    fog = front_clearance * units_per_mm
+    batch = _fog_batch(directions, lens_array, front_clearance, fog, cols, rows, (cols * gx, rows * gy))
+    d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
+    # The ray starts front_clearance * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
+    lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
+    z = np.where(np.isneginf(d), np.nan, d) / units_per_mm / lengths - front_clearance
+    shown = np.sqrt(((slopes / k) ** 2).sum(axis=1) + 1.0)   # the display's own ray, slope (u, v) / f
+    out = k * z * shown[:, None, None]
+    return out.reshape(ny, nx, *out.shape[1:]).astype(np.float32)

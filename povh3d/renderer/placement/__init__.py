@@ -1,0 +1,1 @@
+"""Where the display sits in the scene, and which rays a method may start where."""

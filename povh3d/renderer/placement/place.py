@@ -1,0 +1,192 @@
+"""Place the display in the scene for a request: the frame, the front clearance, the depth.
+
+``place_display`` resolves the frame (``renderer.placement.pose``), keeps the rays' start in
+front of the scene's camera, measures the scene's depth in the frame
+(``renderer.passes.depth``: only for a frame other than native, or with ``--fit-depth``),
+scales the frame when ``--fit-depth`` asks, and returns the request with the
+frame in its settings and the record for the sidecar.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..passes.depth import DepthMap, depth_pass
+from ..methods.registry import get_method
+from ...geometry.camera_mesh import default_front_clearance
+from ..methods.quality import DEPTH_SCALE_RANGE
+from ...errors import ConfigError
+from ...geometry.frame import NATIVE, DisplayFrame
+from ...scene.scene import Scene
+from .pose import resolve_frame_and_depth
+from ...geometry.fit import depth_budget_mm
+
+if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from ..request import RenderRequest
+
+
+def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any]]:
+    """The request with its display frame (and clearance) resolved into the settings, and the record."""
+    array = request.render_array
+    budget = depth_budget_mm(array)
+    if request.is_model:  # the stage is built in display mm
+        return request, {**NATIVE.as_record(), "note": "a mesh model staged in display mm",
+                         "depth_budget_mm": budget, "warnings": []}
+    s = request.settings
+    if s.frame is not None:  # the Python API gave the matrix itself: use it, and say so
+        _check_similarity(s.frame)
+        return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
+    options = request.display_frame
+    # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
+    # what a method starting nearer (single-stage) would cut.
+    default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
+    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
+    placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
+                                                   use_cache=s.use_cache, front_clearance=s.front_clearance or default,
+                                                   timeout=s.timeout)
+    front_clearance = s.front_clearance or _front_clearance(placed, default)
+    scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
+    if not placed.is_native or options.fit_depth is not None or scale != 1:
+        placed, depth, scale = _measure(request, scene, placed, front_clearance, budget, options.fit_depth,
+                                        scale, options.depth_scale == "fit",
+                                        seen.depth(placed, front_clearance, array) if seen else None)
+        record = {**record, **placed.as_record(), "depth": depth}
+        if not depth.get("empty") and not depth.get("within_budget", True):
+            record["warnings"].append(
+                f"the framed scene spans z = {depth['near_mm']:.3g} .. {depth['far_mm']:.3g} mm, beyond the "
+                f"depth budget of +-{budget / 2:.3g} mm (2 N f): it looks blurred there; "
+                f"--fit-depth auto scales the frame to fit")
+        elif not depth.get("empty") and not depth["field_within_budget"]:
+            record["warnings"].append(
+                f"something beyond the framed subject (a ground plane or a backdrop?) reaches z = "
+                f"{depth['field_near_mm']:.3g} .. {depth['field_far_mm']:.3g} mm, past the depth budget of "
+                f"+-{budget / 2:.3g} mm: it looks blurred there")
+        if depth.get("empty"):
+            record["warnings"].append("the depth pass hit nothing in the middle of the framed field: "
+                                      "check the frame")
+        elif "reason" in depth:   # blind (inside a solid) or too bright: not an empty scene
+            record["warnings"].append(depth["reason"])
+    record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
+    matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
+    limit = camera_front_clearance_limit(placed) if s.front_clearance is None else None
+    settings = replace(s, frame=matrix, front_clearance_limit=limit, depth_scale=scale,
+                       front_clearance_reason="" if limit is None else CAMERA_LIMIT_REASON)
+    if scale != 1:
+        record["depth_scale"] = scale
+        record["depth_scale_note"] = (f"a distortion: depth along the display normal shown {scale:.4g} times as "
+                                      "deep, lateral sizes kept (traced as every ray's slope times the factor)")
+    if limit is not None:
+        record["front_clearance_limit_mm"] = limit
+        record["front_clearance_note"] = CAMERA_LIMIT_REASON
+    return replace(request, settings=settings), record
+
+
+def _check_similarity(matrix: tuple[float, ...]) -> None:
+    """A frame matrix must be a rotation (or mirror) times one scale: POV-Ray's mesh camera turns its
+    normals as surface normals (inverse transpose), so a shear or a depth-only scale would bend its rays."""
+    m = np.asarray(matrix, dtype=np.float64).reshape(4, 3)[:3]
+    gram = m @ m.T
+    scale = float(np.trace(gram)) / 3
+    if not (scale > 0 and np.allclose(gram, scale * np.eye(3), rtol=0, atol=1e-9 * scale)):
+        raise ConfigError("the display frame matrix must be a rotation times one uniform scale (no shear, "
+                          "no depth-only scale); build it with povh3d.geometry.frame.DisplayFrame")
+
+
+#: Why a camera frame's rays start no farther out than ``camera_front_clearance_limit``.
+CAMERA_LIMIT_REASON = "within 0.9 of the scene camera's distance: nothing behind the camera enters the image"
+
+
+def camera_front_clearance_limit(frame: DisplayFrame) -> float | None:
+    """How far out (mm) rays may start in a camera frame: 0.9 of the scene camera's distance, since
+    what lies behind the camera (walls) is no part of its view; None for other frames.  The methods
+    round their clearance down to it (``renderer.methods.registry``), whatever their default or step."""
+    if frame.source != "camera" or frame.camera_distance is None:
+        return None
+    return 0.9 * frame.camera_distance / frame.units_per_mm
+
+
+def _front_clearance(frame: DisplayFrame, default: float) -> float:
+    """The front clearance (mm) of the depth pass: the method's default, within the camera's limit."""
+    limit = camera_front_clearance_limit(frame)
+    return default if limit is None else min(default, limit)
+
+
+def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_clearance: float, budget: float,
+             fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
+             seen: DepthMap | None = None
+             ) -> tuple[DisplayFrame, dict[str, Any], float]:
+    """The depth summary in ``frame`` as the display shows it (depth times ``scale``); with ``fit``, the
+    frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
+    ``seen``: the depth map of ``frame`` made in the run that evaluated the scene's camera; else a depth
+    pass of its own."""
+    array, s = request.render_array, request.settings
+    keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
+
+    def measure(f: DisplayFrame) -> dict[str, Any]:
+        if seen is not None and f is frame:
+            return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
+        matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
+        return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm).summary(budget)
+
+    def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
+        # The display shows the measured z times ``factor`` (a depth scale, or 1 / a frame's scale).
+        if "near_mm" not in depth or factor == 1:
+            return depth
+        after = {**depth, **{k: depth[k] * factor for k in keys}}
+        # A thousandth of the budget: what --fit-depth fitted exactly may come back a rounding over.
+        half, slack = budget / 2, budget * 1e-3
+        after["within_budget"] = bool(-half <= after["near_mm"] + slack and after["far_mm"] - slack <= half)
+        after["field_within_budget"] = bool(-half <= after["field_near_mm"] + slack
+                                            and after["field_far_mm"] - slack <= half)
+        return after
+
+    depth = measure(frame)
+    if fit is None:
+        return frame, ({**shown(depth, scale), "measured": depth} if scale != 1 else depth), scale
+    target = budget if fit == "auto" else float(fit)
+    if "reason" in depth:
+        raise ConfigError(f"--fit-depth cannot fit: {depth['reason']}")
+    if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
+        raise ConfigError("--fit-depth cannot fit: the depth pass measured nothing in the framed field "
+                          "(nothing hit, or the viewpoint inside a solid object); place the display with "
+                          "--display-center/--display-normal/--display-width instead")
+    reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
+    if not reach > 0:
+        return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}, scale
+    factor = max(1.0, reach / (target / 2))   # only ever shrink the scene onto the display
+    if fit_scale:  # compress depth alone: the frame (lateral sizes) stays
+        scale = 1 / factor
+        if scale < DEPTH_SCALE_RANGE[0]:
+            raise ConfigError(f"--fit-depth cannot fit by --depth-scale: the scene reaches {reach:.4g} mm, "
+                              f"a compression of {scale:.3g} is under {DEPTH_SCALE_RANGE[0]:g}; drop --depth-scale "
+                              "to shrink the whole scene, or place the display with --display-*")
+        return frame, {**shown(depth, scale), "before_fit": depth,
+                       "fit": {"target_mm": target, "factor": factor, "by": "depth_scale"}}, scale
+    # Display z scales as 1 / factor for the same scene points (the frame scales about its centre):
+    # the subject measured before fits exactly; a re-measure would see a wider field, not the same subject.
+    fitted = frame.scaled(factor) if factor > 1 else frame
+    return fitted, {**shown(depth, 1 / factor), "before_fit": depth,
+                    "fit": {"target_mm": target, "factor": factor, "by": "units_per_mm"}}, scale
+
+
+def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: tuple = ()) -> dict[str, Any]:
+    """``povh3d info SCENE``: the frame the scene would render with and its depth against the budget."""
+    from ..methods.quality import RenderSettings
+    from ...scene.scene import load_scene
+    from .pose import DisplayFrameOptions
+
+    scene = load_scene(path, include_dirs)
+    options = options or DisplayFrameOptions()
+    default = get_method("multi-ortho").default_front_clearance(lens_array)
+    placed, record, seen = resolve_frame_and_depth(options, scene, lens_array, front_clearance=default)
+    budget = depth_budget_mm(lens_array)
+    front_clearance = _front_clearance(placed, default)
+    matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
+    depth = (seen.depth(placed, front_clearance, lens_array) if seen else None) or depth_pass(
+        scene, lens_array, RenderSettings(frame=matrix), front_clearance, placed.units_per_mm)
+    return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
+            "depth": depth.summary(budget), "depth_budget_mm": budget,
+            "depth_budget_scene_units": budget * placed.units_per_mm}

@@ -1,0 +1,204 @@
+"""Where the display sits in the user's scene: the frame a render uses, and why.
+
+``resolve_frame`` turns the request's ``DisplayFrameOptions`` into a ``DisplayFrame``:
+
+- explicit ``--display-center/normal/up/width``: that frame;
+- ``native``: the display's own frame (mm, screen ``z = 0``);
+- ``camera``, or ``auto`` when the scene has a camera: the frame the scene's
+  last camera defines, evaluated by POV-Ray in one small run
+  (``renderer.passes.scene_camera``, cached by the scene's digest and the panel's size);
+- ``auto`` without a camera: native.
+
+The scene's camera never silently wins or loses: the record says which frame
+was used, from where, and warns about several cameras.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ...errors import ConfigError, PovrayError, PovrayTimeout
+from ...geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame, up_warning
+from ...geometry.lens_array import LensArray
+from ...scene.camera import CameraError
+from ...scene.camera_script import REFUSED_TYPES, camera_script, refused_type, written_camera_types
+from ...scene.scene import Scene
+
+if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from ..passes.scene_camera import Seen
+
+FRAME_MODES = ("auto", "camera", "native")
+
+
+@dataclass(frozen=True)
+class DisplayFrameOptions:
+    """How the display is placed in the scene (``--display-*``).
+
+    Attributes
+    ----------
+    mode : {'auto', 'camera', 'native'}   ignored when ``center`` is given (explicit)
+    center, normal, up : (3,) floats or None, scene units
+    width : float or None, scene units    the panel's width in the scene
+    fit_depth : 'auto', float (mm) or None  scale the frame so the measured depth fits
+    depth_scale : float, 'fit' or None   compress depth alone along the normal by this factor (a
+                                         distortion); 'fit': the factor --fit-depth chooses
+    """
+
+    mode: str = "auto"
+    center: tuple[float, float, float] | None = None
+    normal: tuple[float, float, float] | None = None
+    up: tuple[float, float, float] | None = None
+    width: float | None = None
+    fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the frame to fit
+    depth_scale: str | float | None = None  # a factor, or 'fit' (with fit_depth: compress depth to fit)
+
+    def __post_init__(self) -> None:
+        k = self.depth_scale
+        if k == "fit" and self.fit_depth is None:
+            raise ConfigError("--depth-scale without a factor needs --fit-depth auto|MM (which then chooses "
+                              "it); or give the factor, e.g. --depth-scale 0.5")
+        if k not in (None, "fit") and self.fit_depth is not None:
+            raise ConfigError(f"--depth-scale {k} and --fit-depth both set the depth; give --fit-depth with a "
+                              "bare --depth-scale to compress depth until it fits, or the factor alone")
+        if k not in (None, "fit"):
+            from ..methods.quality import DEPTH_SCALE_RANGE
+
+            low, high = DEPTH_SCALE_RANGE
+            if isinstance(k, bool) or not isinstance(k, (int, float)) or not low <= k <= high:
+                raise ConfigError(f"--depth-scale must be a number within {low:g}..{high:g} (or nothing, with "
+                                  f"--fit-depth), got {k!r}")
+        f = self.fit_depth
+        if f is not None and f != "auto" and (isinstance(f, bool) or not isinstance(f, (int, float))
+                                              or not (f > 0 and f < float("inf"))):
+            raise ConfigError(f"--fit-depth takes 'auto' or a positive number of mm, got {f!r}")
+        if self.mode not in FRAME_MODES:
+            raise ConfigError(f"--display-frame must be one of {', '.join(FRAME_MODES)}, got {self.mode!r}")
+        given = [n for n in ("center", "normal", "width") if getattr(self, n) is not None]
+        if given and len(given) < 3:
+            raise ConfigError(f"an explicit display frame needs all of {EXPLICIT_OPTIONS}")
+        if self.up is not None and not given:
+            raise ConfigError(f"--display-up needs the rest of {EXPLICIT_OPTIONS}")
+        if given and self.mode != "auto":
+            raise ConfigError("--display-frame cannot be combined with --display-center and the other "
+                              "explicit options; give one or the other")
+
+    @property
+    def explicit(self) -> bool:
+        return self.center is not None
+
+
+def resolve_frame(options: DisplayFrameOptions, scene: Scene, lens_array: LensArray, *,
+                  cache_dir: Any = None, use_cache: bool = True) -> tuple[DisplayFrame, dict[str, Any]]:
+    """The frame to render with and its sidecar record (``warnings`` listed there)."""
+    frame, record, _ = resolve_frame_and_depth(options, scene, lens_array, cache_dir=cache_dir,
+                                               use_cache=use_cache)
+    return frame, record
+
+
+def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_array: LensArray, *, cache_dir: Any = None,
+                            use_cache: bool = True, front_clearance: float | None = None,
+                            timeout: float | None = None) -> tuple[DisplayFrame, dict[str, Any], Seen | None]:
+    """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
+    made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
+    allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
+    from ..passes.scene_camera import evaluate_and_measure, evaluate_camera, probe_size, uses_image_size
+
+    width_mm = lens_array.panel.size_mm[0]
+    if options.explicit:
+        frame = explicit_frame(options.center, options.normal, float(options.width), width_mm, options.up)
+        warning = up_warning(options.normal, options.up)  # an up chosen for the user near the y axis
+        return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
+    if options.mode == "native":
+        return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
+    text = scene.path.read_bytes().decode("latin-1")
+    script = camera_script(text, scene.include_text)
+    written = written_camera_types(text, scene.include_text) if script is not None else set()
+    if refused_type(written):   # refused from the text: its parse may take minutes at the panel's size
+        raise CameraError(_unusable_type(refused_type(written)))
+    if script is None:
+        if options.mode == "camera":
+            raise ConfigError(f"--display-frame camera: the scene {scene.path.name} has no camera; "
+                              f"place the display with {EXPLICIT_OPTIONS}")
+        note = "the scene has no camera: mm around the screen z = 0"
+        return NATIVE, {**NATIVE.as_record(), "note": note, "warnings": []}, None
+    try:
+        found = (evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache, timeout)
+                 if front_clearance is not None else None)
+    except PovrayError as exc:
+        if isinstance(exc, PovrayTimeout):
+            raise
+        found = None   # the camera alone, then a pass of its own, say what failed: the camera or the scene
+    if found is None and written & set(REFUSED_TYPES) and uses_image_size(scene):
+        # Types mixed in a scene that builds from image_width (a mesh camera a pixel): its parse may take
+        # many minutes at the panel's size, so which camera it ends with is told at a few rows first.
+        w, h = probe_size(lens_array)
+        probe, _, _ = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir, use_cache,
+                                      script.lines, timeout, (w, h))
+        if probe["type"] in REFUSED_TYPES:
+            raise CameraError(_unusable_type(probe["type"]) + f" (its type told by a parse at {w}x{h} pixels)")
+    if found is None:
+        camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
+                                                  use_cache, script.lines, timeout)
+        distances = None
+    else:
+        camera, distances, seconds, cached = found
+    if camera["type"] == "orthographic":
+        raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
+                          f"place the display where it looks: {_orthographic_options(camera)}")
+    if camera["type"] != "perspective":
+        raise CameraError(_unusable_type(camera["type"]))
+    frame = camera_frame(camera["location"], camera["direction"], camera["right"], camera["up"],
+                         camera["look_at"], width_mm,
+                         note="look_at" if camera["look_at"] is not None else "no look_at: the point of the "
+                         "view axis nearest the scene origin")
+    warnings = []
+    if camera.get("cameras", 1) > 1:
+        warnings.append(f"the scene's parse ran {camera['cameras']} camera statements; the last one counts "
+                        f"(POV-Ray's rule) and places the display")
+    if camera.get("dropped"):
+        warnings.append(f"the scene camera's {', '.join(camera['dropped'])} (focal blur, a normal pattern) "
+                        f"are not reproduced: every view is a sharp, undistorted render")
+    # A mirrored frame (a right-handed camera: a negative right) is no warning: the display's x follows
+    # the camera's right as POV-Ray's 2D render does, so the views show what that render shows, the
+    # right way round; the record says ``mirrored`` and why.
+    if frame.mirrored:
+        frame = DisplayFrame(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
+                             frame.note + "; right-handed (a negative right): x follows it, as in the 2D render",
+                             frame.camera_distance)
+    record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
+              "evaluation_from_cache": cached, "warnings": warnings}
+    return frame, record, distances
+
+
+def _unusable_type(kind: str) -> str:
+    return (f"cannot use the scene's {kind} camera (only a perspective one defines a frame); place the display "
+            f"with {EXPLICIT_OPTIONS}, or --display-frame native")
+
+
+def _orthographic_options(camera: dict[str, Any]) -> str:
+    """The ``--display-*`` options that put the display across an orthographic camera's view: centred
+    on its look_at (or its location), facing along its direction, as wide as its ``right``."""
+    import numpy as np
+
+    centre = camera["look_at"] if camera["look_at"] is not None else camera["location"]
+    width = float(np.linalg.norm(camera["right"]))
+
+    def triple(v: Any) -> str:
+        return ",".join(f"{float(x):.6g}" for x in v)
+
+    return (f"--display-center={triple(centre)} --display-normal={triple(camera['direction'])} "
+            f"--display-up={triple(camera['up'])} --display-width {width:.6g}")
+
+
+def recorded_frame(record: dict[str, Any]) -> tuple[float, ...] | None:
+    """The POV-Ray matrix of a sidecar's ``display_frame`` entry (None: native): what a later pass
+    over the same rays takes as ``RenderSettings.frame`` instead of evaluating the scene again."""
+    if "matrix" in record:
+        return tuple(float(v) for v in record["matrix"])
+    if not record or record.get("source") == "native":
+        return None
+    frame = DisplayFrame(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
+                         tuple(record["normal"]), float(record["units_per_mm"]))
+    return None if frame.is_native else tuple(frame.matrix().ravel().tolist())
+

@@ -1,0 +1,257 @@
+"""The one render path: a ``RenderRequest`` in, the H3D (or panel) image and its
+sidecar out, for a still or every frame of an animation.
+
+``render`` prepares once what every frame shares (the scene, or a mesh model
+put on the default stage; the quality, when it is ``auto``), then hands
+``render_image`` to the still or to the animation loop.  ``render_image`` runs
+the method, applies the mapping and builds the sidecar record: a frame of an
+animation and a still go through exactly the same steps.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from functools import partial
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .methods.registry import run_method
+from .shots.clock_runs import ClockSequence
+from .methods.quality import Progress, Quality, RenderSettings
+from ..errors import warn
+from pathlib import Path
+from .budget import check_disk, check_memory as check_memory_budget
+from ..image.interleave import extract
+from .content.model import prepare_stage
+from .placement.place import place_display
+from .placement.ray_state import settle_method
+from .outputs.depth_maps import check_depth_dir, write_depth_maps
+from .outputs.dataset import check_dataset_dir, dataset_depth, write_dataset
+from .outputs.device_quilt import check_device_render, write_device_outputs
+from .passes.depth import view_depth_maps
+from ..povray.sandbox import describe as describe_sandbox
+from ..scene.scene import Scene, load_scene
+from .animation import RenderedImage, render_sequence
+from .records import base_record, png_output, write_image
+from .request import RenderRequest
+from .outputs.views import check_views_dir, write_views
+
+if TYPE_CHECKING:
+    from .methods.auto import AutoChoice
+
+
+def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
+    """Carry out ``request``; return the sidecar record of the still, or the animation's report.
+
+    Every output is checked before any work and written atomically.
+    """
+    started = time.perf_counter()   # the whole time: the camera and depth runs too
+    check_memory(request)
+    output = png_output(request.output)
+    if request.views_dir is not None:
+        check_views_dir(request.views_dir)
+    if request.depth_maps is not None:
+        check_depth_dir(request.depth_maps)
+    if request.display.quilt is not None:  # a Looking Glass preset: its quilt beside the output
+        check_device_render(request.display.quilt, output, request.frames is not None)
+    if request.dataset is not None:
+        check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
+    scene, model_record = load_content(request)
+    request, frame_record = place_display(request, scene)
+    request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
+    if ray_state is not None:
+        frame_record = {**frame_record, "ray_state": ray_state}
+    settings, auto = _resolve_quality(request, scene, progress)
+    frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
+                    display_frame=frame_record)
+    if request.frames is None:
+        still = frame(None, progress)
+        _warn_unlit(scene, still.image)
+        if still.views is not None:
+            write_views(request.views_dir, still.views, request.render_array, still.record)
+        depth = None
+        units, clearance = frame_record.get("units_per_mm", 1.0), still.record["quality"]["front_clearance_mm"]
+        if request.depth_maps is not None:
+            depth = view_depth_maps(scene, request.render_array, settings, clearance, units)
+        if request.dataset is not None:   # the exported pixels' rays (a hex array's: the grid of lens columns)
+            # a camera bank exports its own lens centres: the depth maps' pass, when it was made, is the same
+            same = depth is not None and request.render_array.views is not None
+            write_dataset(request.dataset, still.image, request.render_array,
+                          depth if same else dataset_depth(scene, request.render_array, settings, clearance, units),
+                          all_views=request.dataset_all_views, scene=scene.path.stem)
+            still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
+        if request.depth_maps is not None:
+            write_depth_maps(request.depth_maps, depth, request.render_array, still.record, request.depth_format)
+            still.record["depth_maps"] = {"folder": str(request.depth_maps),
+                                          "nan_fraction": float(np.isnan(depth).mean())}
+        if request.display.quilt is not None:
+            still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
+                                                         request.display.quilt)
+        still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
+        write_image(output, still.image, still.record)
+        return still.record
+    report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
+                             video=request.video, fps=request.fps)
+    _warn_unlit(scene)
+    return report
+
+
+#: An image whose 99th percentile is under this share of full scale (sRGB: linear 0.21) looks dark: POV-Ray's
+#: default ambient 0.1 shows at 0.35.
+_DARK = 0.5
+
+
+def _warn_unlit(scene: Scene, image: np.ndarray | None = None) -> None:
+    # After the render: a scene that fails says only why it failed.  Objects that light themselves
+    # (finish { ambient 1 }, emission) render bright without a light_source: the image decides.
+    if image is not None and image.size:
+        full = np.iinfo(image.dtype).max if np.issubdtype(image.dtype, np.integer) else 1.0
+        if float(np.quantile(image, 0.99)) >= _DARK * full:
+            return
+    if not scene.lit:
+        warn(f"{scene.path.name} has no light_source (and no emission): its objects show only their "
+             "ambient colour, nearly black; add a light_source")
+
+
+# Bytes a render holds per panel pixel at least: a ray (centre, direction: 5 float64), the
+# image in linear light (3 float64) and its encoded copies; measured peaks are higher.
+BYTES_PER_PIXEL = 96
+
+
+def check_memory(request: RenderRequest) -> None:
+    """Refuse, before any allocation, a panel whose arrays cannot fit in the memory available."""
+    w, h = request.image_size
+    rw, rh = request.render_array.panel.width, request.render_array.panel.height
+    need = max(w * h, rw * rh) * BYTES_PER_PIXEL
+    check_memory_budget(f"a {rw}x{rh} pixel render", need, "use fewer lenses (--lenses) or pixels per lens (--ppl)")
+    if request.frames is not None:  # every frame is a PNG of at most 3 (8-bit) or 6 bytes a pixel, staged
+        count = request.frames.last - request.frames.first + 1
+        check_disk(Path(request.output).parent, f"{count} frames of {w}x{h} pixels", count * w * h * 3,
+                   "render fewer frames (--frames FIRST:LAST) or free some space")
+
+
+def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
+    """The scene to render: the request's own, or a mesh model staged for the display (converted
+    once, cached by content) or a volume's surfaces or medium (``renderer.content.volume``); and the model's or
+    volume's record for the sidecar (None for a scene)."""
+    if request.is_volume:
+        from .content.volume import prepare_volume_stage
+
+        stage, volume_record = prepare_volume_stage(
+            request.source, request.render_array, request.volume, depth=request.model.depth,
+            max_triangles=request.model.max_triangles, cache_dir=request.settings.cache_dir)
+        return load_scene(stage, request.include_dirs), volume_record
+    if not request.is_model:
+        return load_scene(request.source, request.include_dirs), None
+    m = request.model
+    stage, model_record = prepare_stage(request.source, request.render_array, depth=m.depth, shading=m.shading,
+                                        max_triangles=m.max_triangles, cache_dir=request.settings.cache_dir,
+                                        up=m.up, rotate=m.rotate, unit=m.unit)
+    return load_scene(stage, request.include_dirs), model_record
+
+
+def _resolve_quality(request: RenderRequest, scene: Scene,
+                     progress: Progress | None = None) -> tuple[RenderSettings, AutoChoice | None]:
+    """``--quality auto`` chosen once for the whole request (on the first frame's clock)."""
+    from .methods.auto import resolve_auto  # here: it keeps the module-level import chain within 8 levels
+
+    first_clock = None
+    if request.frames is not None and scene.uses_clock:
+        first_clock = request.frames.clock(request.frames.first)
+    probe = replace(request.settings, clock=first_clock)
+    chosen, auto = resolve_auto(scene, request.render_array, request.method, probe, progress,
+                                **request.method_options)
+    return replace(chosen, clock=None), auto
+
+
+def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
+                 progress: Progress | None = None, *, sequence: ClockSequence | None = None, auto: AutoChoice | None = None,
+                 model: dict[str, Any] | None = None, display_frame: dict[str, Any] | None = None) -> RenderedImage:
+    """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default); ``sequence``:
+    the animation frames from this one to the last, which the engine may render alongside it."""
+    array = request.render_array
+    start = time.perf_counter()
+    if auto is not None and auto.image is not None and request.frames is None:
+        result = auto.image   # --quality auto rendered the full image while choosing it
+    else:
+        result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
+                            progress, crop=request.crop, **request.method_options)
+    seconds = auto.seconds if result is getattr(auto, "image", None) else time.perf_counter() - start
+    h3d = result.h3d
+    expected = (array.panel.height, array.panel.width)
+    if h3d.shape[:2] != expected:  # a bug, never the user's doing
+        raise RuntimeError(f"{request.method} produced {h3d.shape[:2]}, expected {expected}")
+
+    timings = {"render_seconds": round(seconds, 4), **result.stats.as_record()}
+    record = base_record(
+        "h3d", method=request.method, scene=str(scene.path),
+        scene_sha256=scene.digest,
+        quality={**quality_record(settings, result.quality), "bit_depth": settings.bit_depth,
+                 "front_clearance_mm": result.front_clearance,
+                 "front_clearance_reason": result.front_clearance_reason},
+        output_gamma="sRGB", povray_version=result.stats.povray_version,
+        sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
+    )
+    record.update(request.display.as_record())  # the sidecar's lens_array and display entries
+    record["method_chosen"] = request.method_chosen
+    note = ((display_frame or {}).get("ray_state") or {}).get("method_note")
+    if note:
+        record.update(method_note=note, method_fallback=display_frame["ray_state"]["method_fallback"])
+    if auto is not None:
+        record["quality"].update(level="auto", auto=auto.as_record())
+    if result.record is not None:
+        record[request.method.replace("-", "_")] = result.record
+    if result.crop is not None:
+        record["crop"] = result.crop
+    if model is not None:
+        record[request.content_kind] = model
+    if display_frame is not None:
+        cut = foreground_cut(display_frame, result.front_clearance, request.method)
+        record["display_frame"] = {**display_frame, "warnings": [*display_frame.get("warnings", []), *cut]}
+    bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
+    first = request.frames is None or clock is None or clock == request.frames.clock(request.frames.first)
+    if first and bank.size and int(bank.max()) == int(bank.min()):
+        # One flat colour: most likely no ray hit anything (a frame that misses the scene, a model in odd
+        # units); said once per request, not per animation frame.
+        w, h = array.panel.size_mm
+        warn(f"every pixel of {request.output.name} is the same colour, as if no ray hit anything; check the display "
+             "frame (--display-*) or the model's units and orientation (--unit, --up); a scene without a "
+             f"camera is modelled in mm around z = 0, viewer on -z, the display spanning {w:.4g} x {h:.4g} mm")
+    views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
+    mapping = request.display.mapping
+    if mapping is not None:
+        h3d = mapping.apply(h3d, request.image_size)
+        record.update(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
+    return RenderedImage(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
+
+
+def foreground_cut(display_frame: dict[str, Any], front_clearance: float, method: str) -> list[str]:
+    """A warning when the measured scene reaches out past where the rays start (mm): that part of the
+    foreground is not in the image."""
+    depth = display_frame.get("depth") or {}
+    near = depth.get("near_mm")
+    if depth.get("empty") or near is None or near >= -front_clearance * (1 - 1e-9):
+        return []
+    start = -front_clearance or 0.0
+    limit = display_frame.get("front_clearance_limit_mm")
+    if limit is not None:
+        why = (f"the scene's camera stands {limit / 0.9:.3g} mm out and nothing behind it may enter the image"
+               f"{'; single-stage moves its lenses in steps' if method == 'single-stage' else ''}")
+        fix = ("--fit-depth auto shrinks the scene onto the display" if not depth.get("fit") else
+               "a smaller --fit-depth MM shrinks it further")
+        fix += ", --method multi-ortho starts rays at any distance" if method == "single-stage" else ""
+    else:
+        why = f"--method {method} starts them there"
+        fix = f"--front-clearance {-near:.3g} starts them farther out"
+    return [f"the scene reaches z = {near:.3g} mm, but rays start at z = {start:.3g} mm ({why}): the foreground "
+            f"nearer than that is cut; {fix}"]
+
+
+def quality_record(settings: RenderSettings, rendered: Quality) -> dict[str, Any]:
+    """The quality asked for and as rendered (a method without sub-views antialiases instead)."""
+    level = settings.quality if isinstance(settings.quality, str) else "custom"
+    return {"level": level, "setting": rendered.label, "povray_options": list(rendered.options),
+            "subviews": rendered.subviews, "footprint_samples": rendered.footprint,
+            "max_trace_level": rendered.max_trace_level}

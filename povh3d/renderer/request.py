@@ -1,0 +1,246 @@
+"""One render, described whole: the ``RenderRequest`` that the CLI and the Python
+API both build, and that ``renderer.render.render`` carries out.
+
+A request names the content (a POV-Ray scene or a mesh model), the display
+(``display.display.Display``: lens array, and the pixel mapping of a slanted panel), the method and its
+options, the quality, and every output (image, views, animation frames, video).
+It is frozen and checked on construction: a request that exists can be rendered.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping as MappingABC
+from dataclasses import dataclass, field
+from dataclasses import replace as _replace
+from pathlib import Path
+from typing import Any
+
+from .methods.registry import get_method
+from .methods.quality import RenderSettings
+from ..errors import ConfigError
+from ..geometry.crop import CropSettings
+from ..geometry.lens_array import LensArray
+from ..image.video import check_video_path
+from ..mesh.formats import is_mesh_file
+from .animation import FrameRange
+from ..display.display import Display
+from .placement.pose import DisplayFrameOptions
+
+SHADINGS = ("auto", "smooth", "flat")
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """How a mesh model is put on the default stage (``renderer.content.model``).
+
+    Attributes
+    ----------
+    depth : float or None, mm      the model's depth (None: the display's depth budget)
+    shading : {'auto', 'smooth', 'flat'}
+    max_triangles : int, 'auto' or None   simplify to this many triangles
+    up : {'x', 'y', 'z', '-x', '-y', '-z'} or None   the model's up axis (None: the format's, or detected)
+    rotate : (3,) degrees or None  turn the model (POV-Ray's ``rotate``) after ``up``
+    unit : {'mm', 'cm', 'm', 'in'} or None   the model's unit (None: the file's); only the record
+                                   shows it, since the stage scales the model to the panel
+    """
+
+    depth: float | None = None
+    shading: str = "auto"
+    max_triangles: int | str | None = None
+    up: str | None = None
+    rotate: tuple[float, float, float] | None = None
+    unit: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.depth is not None and not (math.isfinite(self.depth) and self.depth > 0):
+            raise ConfigError(f"--depth must be a positive number of mm, got {self.depth!r}")
+        if self.shading not in SHADINGS:
+            raise ConfigError(f"shading must be one of {', '.join(SHADINGS)}, got {self.shading!r}")
+        m = self.max_triangles
+        if m is not None and m != "auto" and (isinstance(m, bool) or not isinstance(m, int) or m < 4):
+            raise ConfigError(f"--max-triangles takes a whole number >= 4 or 'auto', got {m!r}")
+        if self.up is not None and self.up not in ("x", "y", "z", "-x", "-y", "-z"):
+            raise ConfigError(f"--up must be one of x, y, z, -x, -y, -z, got {self.up!r}")
+        if self.rotate is not None and (len(self.rotate) != 3 or not all(math.isfinite(a) for a in self.rotate)):
+            raise ConfigError(f"--rotate takes three angles X,Y,Z in degrees, got {self.rotate!r}")
+
+
+@dataclass(frozen=True)
+class VolumeOptions:
+    """How a volume is drawn and placed (``renderer.content.volume``).
+
+    Attributes
+    ----------
+    spacing : (3,) mm or None       voxel size (needed by ``.npy``; replaces a file's own)
+    series : str or None            the DICOM series UID, when a folder holds several
+    labels : tuple of int, 'all' or None   one surface per label (a segmentation)
+    iso : tuple of float or None    one surface per iso value (scalar data: CT in HU)
+    opacity : tuple of float or None   one for every surface, or one per surface in order
+    smoothing : int or None         smoothing iterations (None: 16 for labels, none for iso)
+    orientation : {'coronal', 'axial', 'sagittal'}   the radiological view (``volume.orient``)
+    rotate : (3,) degrees or None   then turned as POV-Ray's ``rotate``
+    volume : bool                   direct volume rendering (participating media) instead of surfaces
+    transfer : str                  its transfer function: a preset name, a file, or auto (chosen from the values)
+    df3_bits : {8, 16}              its density file's bits per voxel
+    """
+
+    spacing: tuple[float, float, float] | None = None
+    series: str | None = None
+    labels: tuple[int, ...] | str | None = None
+    iso: tuple[float, ...] | None = None
+    opacity: tuple[float, ...] | None = None
+    smoothing: int | None = None
+    orientation: str = "coronal"
+    rotate: tuple[float, float, float] | None = None
+    volume: bool = False
+    transfer: str = "auto"
+    df3_bits: int = 16
+
+    def __post_init__(self) -> None:
+        from ..volume.orient import ORIENTATIONS
+
+        if self.orientation not in ORIENTATIONS:
+            raise ConfigError(f"--orientation must be one of {', '.join(ORIENTATIONS)}, got {self.orientation!r}")
+        chosen = [name for name, on in (("--labels", self.labels is not None), ("--iso", self.iso is not None),
+                                        ("--volume", self.volume)) if on]
+        if len(chosen) > 1:
+            raise ConfigError(f"{' and '.join(chosen)} exclude each other; choose one way to draw the volume")
+        if self.iso is not None and not (self.iso and all(math.isfinite(v) for v in self.iso)):
+            raise ConfigError(f"--iso takes numbers VALUE[,VALUE...], got {self.iso!r}")
+        if self.smoothing is not None and (isinstance(self.smoothing, bool) or self.smoothing < 0):
+            raise ConfigError(f"--smoothing takes a whole number of iterations >= 0, got {self.smoothing!r}")
+        if self.df3_bits not in (8, 16):
+            raise ConfigError(f"--df3-bits must be 8 or 16, got {self.df3_bits!r}")
+
+
+@dataclass(frozen=True)
+class RenderRequest:
+    """Everything one render needs.
+
+    Attributes
+    ----------
+    source : Path                  a POV-Ray scene (.pov) or a mesh model (.obj .stl .ply ...)
+    display : Display              the display: its lens array, preset and mapping (``build_display``)
+    output : Path                  the PNG to write (frames: ``OUT_nnnn.png``)
+    method : str                   a name in ``renderer.methods.registry.METHODS``
+    method_chosen : bool           False: ``method`` is the default, which the render may trade for one
+                                   that renders the scene right (``renderer.placement.ray_state``; the sidecar says so)
+    method_options : mapping       the method's own options (single-stage: lenslet, ior);
+                                   defaults filled in from the method, unknown names refused;
+                                   subpixel's ``sheet_shift_mm`` comes from the display's sheet
+    settings : RenderSettings      quality and how POV-Ray runs
+    crop : CropSettings or None    trace only where objects can be (methods that crop)
+    include_dirs : tuple of Path   extra folders POV-Ray searches for includes
+    views_dir : Path or None       also write the view stack here (stills only)
+    model : ModelOptions           how a mesh model is staged (models only)
+    frames : FrameRange or None    render an animation: one image per clock value
+    video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
+    fps : float                    video frames per second
+    display_frame : DisplayFrameOptions   where the display sits in the scene (scenes only; ``renderer.placement.pose``)
+    depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
+    depth_format : {'npy', 'png'}  float32 arrays, or 16-bit PNGs with the scale in depth_maps.json
+    volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)
+    dataset : Path or None         also write the HCI 4D light-field layout here (stills; ``renderer.outputs.dataset``)
+    dataset_all_views : bool       with ``dataset``: disparity and depth for every view, not only the centre
+    """
+
+    source: Path
+    display: Display
+    output: Path
+    method: str = "multi-ortho"
+    method_chosen: bool = True
+    method_options: MappingABC[str, Any] = field(default_factory=dict)
+    settings: RenderSettings = field(default_factory=RenderSettings)
+    crop: CropSettings | None = None
+    include_dirs: tuple[Path, ...] = ()
+    views_dir: Path | None = None
+    model: ModelOptions = field(default_factory=ModelOptions)
+    frames: FrameRange | None = None
+    video: Path | None = None
+    fps: float = 24.0
+    display_frame: DisplayFrameOptions = field(default_factory=DisplayFrameOptions)
+    depth_maps: Path | None = None
+    depth_format: str = "npy"
+    volume: VolumeOptions = field(default_factory=VolumeOptions)
+    dataset: Path | None = None
+    dataset_all_views: bool = False
+
+    def __post_init__(self) -> None:
+        set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
+        set_("source", Path(self.source))
+        set_("output", Path(self.output))
+        set_("include_dirs", tuple(Path(d) for d in self.include_dirs))
+        if self.views_dir is not None:
+            set_("views_dir", Path(self.views_dir))
+        if not isinstance(self.display, Display):
+            raise ConfigError(f"display must be a Display (display.display.build_display), got "
+                              f"{type(self.display).__name__}")
+        if not isinstance(self.settings, RenderSettings):
+            raise ConfigError(f"settings must be a RenderSettings, got {type(self.settings).__name__}")
+        if self.output.suffix.lower() != ".png":
+            raise ConfigError(f"the output {str(self.output)!r} must be a .png file")
+        options = dict(self.method_options)
+        if self.display.sheet_shift_mm is not None and self.method == "subpixel":
+            options.setdefault("sheet_shift_mm", self.display.sheet_shift_mm)
+        set_("method_options", get_method(self.method).resolve_options(self.method, options))
+        if self.frames is None:
+            for name in ("video",):
+                if getattr(self, name) is not None:
+                    raise ConfigError(f"--{name} needs --frames FIRST:LAST")
+        elif self.views_dir is not None:
+            raise ConfigError("--views-dir cannot be combined with --frames; render one frame for its views")
+        if self.video is not None:
+            set_("video", check_video_path(self.video))
+        if not (isinstance(self.fps, (int, float)) and math.isfinite(self.fps) and self.fps > 0):
+            raise ConfigError(f"--fps must be a positive number, got {self.fps}")
+        if self.views_dir is not None:
+            self.render_array.require_views()
+        if self.depth_format not in ("npy", "png"):
+            raise ConfigError(f"--depth-format must be npy or png, got {self.depth_format!r}")
+        if self.depth_maps is not None:
+            set_("depth_maps", Path(self.depth_maps))
+            if self.frames is not None:
+                raise ConfigError("--depth-maps cannot be combined with --frames; render one frame for them")
+            self.render_array.require_views()
+        if self.dataset is not None:
+            set_("dataset", Path(self.dataset))
+            if self.frames is not None:
+                raise ConfigError("--dataset cannot be combined with --frames; render one frame for it")
+        elif self.dataset_all_views:
+            raise ConfigError("--dataset-all-views needs --dataset DIR")
+        if not self.is_volume and _replace(self.volume, rotate=None) != VolumeOptions():
+            raise ConfigError(f"{self.source.name!r} is not a volume; the volume options (--labels, --iso, --volume, "
+                              "--orientation, --spacing, --series ...) apply to volume files and DICOM folders")
+
+    @property
+    def is_model(self) -> bool:
+        """Whether ``source`` is put on the default stage (a mesh model, or a volume) rather than a scene."""
+        return is_mesh_file(str(self.source)) or self.is_volume
+
+    @property
+    def is_volume(self) -> bool:
+        """Whether ``source`` is a volume (a volume file or a DICOM folder), put on the volume stage."""
+        from ..volume.sources import is_volume_source
+
+        return is_volume_source(self.source)
+
+    @property
+    def content_kind(self) -> str:
+        """``'scene'``, ``'model'`` (a mesh model, or a VTK polygon mesh) or ``'volume'``: the sidecar
+        entry that describes the content."""
+        from ..volume.sources import is_polydata_vtk
+
+        if not self.is_model:
+            return "scene"
+        return "volume" if self.is_volume and not is_polydata_vtk(self.source) else "model"
+
+    @property
+    def render_array(self) -> LensArray:
+        """The array the method renders (``Display.render_array``)."""
+        return self.display.render_array
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """``(W, H)`` of the image written (``Display.image_size``)."""
+        return self.display.image_size

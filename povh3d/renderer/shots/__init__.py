@@ -1,0 +1,1 @@
+"""POV-Ray shots: a method's batches turned into images (cache, jobs, clock runs)."""

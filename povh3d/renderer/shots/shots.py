@@ -1,0 +1,311 @@
+"""Turn a list of camera frames into images: cache lookups, POV-Ray jobs, reads.
+
+A rendering method describes what it needs as a ``ShotBatch``: one template,
+values common to every frame, and the per-frame values (a view's direction, a
+lens's centre).  Each frame has its own content key, so an unchanged view comes
+from the cache however the missing ones are batched into POV-Ray runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections import Counter
+from dataclasses import replace
+from collections.abc import Callable
+from pathlib import Path
+
+from typing import Any
+
+import numpy as np
+
+from ..._version import __version__
+from ...cache import cache_root, code_stamp, content_key
+from .cache import ImageCache
+from ...image.io import read_png
+from ...povray.job import SCENE_FILE
+from ...povray.log import past_scene_end
+from ...povray.job import ClockRun
+from ...povray.process import JobResult, PovrayJob, povray_version, run_jobs
+from ...povray.sandbox import confines, scene_inputs
+from ...povray.version_memo import remembered_version
+from ...errors import PovrayError, PovrayTimeout, warn
+from ...scene.scene import Scene
+from ...system import cpu_count, find_povray
+from .batch import ShotBatch, RenderStats
+from .clock_runs import SEQUENCE_SAFE_WORDS, plan_runs
+from ..methods.quality import Progress, RenderSettings
+from ...scene.templates import render_template, templates_dir
+
+
+class LocalRunner:
+    """Runs jobs as POV-Ray processes on this machine (``dask_backend.DaskRunner``: on a cluster)."""
+
+    def __init__(self, binary: str) -> None:
+        self.binary = binary
+        # Remembered across runs: a `povray --version` costs about 0.2 s a render.
+        self.version = remembered_version(binary, cache_root(), povray_version)
+
+    def run(self, jobs: list[PovrayJob], *, processes: int, on_result: Callable[[JobResult], None],
+            on_running: Callable[[dict[int, float]], None] | None = None,
+            on_frame: Callable[[PovrayJob, int, Path], None] | None = None,
+            should_stop: Callable[[], bool] | None = None) -> list[float]:
+        return run_jobs(jobs, processes=processes, on_result=on_result, binary=self.binary,
+                        on_running=on_running, on_frame=on_frame, should_stop=should_stop)
+
+
+def _canonical(value: Any) -> Any:
+    """JSON-able stand-in for key computation: arrays become their hash."""
+    if isinstance(value, np.ndarray):
+        return {"sha256": hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest(),
+                "shape": value.shape, "dtype": str(value.dtype)}
+    if isinstance(value, dict):
+        return {k: _canonical(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_canonical(v) for v in value]
+    if hasattr(value, "__dataclass_fields__"):
+        return {k: _canonical(getattr(value, k)) for k in value.__dataclass_fields__}
+    return value
+
+
+def _template_digest(name: str) -> str:
+    """Hash of the template and the base it extends: a template edit invalidates the cache."""
+    h = hashlib.sha256()
+    for n in (name, "scene.pov.j2"):
+        h.update((templates_dir() / n).read_bytes())
+    return h.hexdigest()
+
+
+def build_script(batch: ShotBatch, frames: list[dict[str, Any]], *, method: str, scene_path: str,
+                 add_assumed_gamma: bool, header: dict[str, Any]) -> str:
+    """The POV-Ray script that renders ``frames`` of ``batch`` as animation frames 1..n."""
+    return render_template(batch.template, version=__version__, method=method, scene_path=scene_path,
+                           add_assumed_gamma=add_assumed_gamma, frames=frames, **header, **batch.context)
+
+
+def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
+                  method: str, header: dict[str, Any], progress: Progress | None = None,
+                  ) -> tuple[list[np.ndarray], RenderStats]:
+    """Render every frame of ``batch`` (or take it from the cache), in order.
+
+    Parameters
+    ----------
+    scene : Scene
+    batch : ShotBatch
+    settings : RenderSettings
+    method : str                 the method's name, written into the script header
+    header : dict                display constants for the scene header template
+    progress : callable(done, total), optional
+
+    Returns
+    -------
+    images : list of (height, width, C) uint8 or uint16 arrays, one per frame
+    stats : RenderStats
+    """
+    start = time.perf_counter()
+    if settings.scheduler:
+        from ...povray.cluster import DaskRunner
+        runner: Any = DaskRunner(settings.scheduler)
+    else:
+        runner = LocalRunner(find_povray())
+    stats = RenderStats(frames=len(batch.shots), povray_version=runner.version)
+    cache = ImageCache(cache_root(settings.cache_dir)) if settings.use_cache else None
+    if cache is not None and scene.computed_names and not confines():
+        # Unconfined, POV-Ray may read files whose names povh3d cannot know: no key covers them.
+        warn(f"{scene.path.name} reads a file whose name is computed while POV-Ray parses, and POV-Ray "
+             "runs unconfined here (POVH3D_SANDBOX=off or no Landlock), so povh3d cannot know every file "
+             "it reads: not using the image cache for it")
+        cache = None
+    if cache is not None and not scene.reproducible:
+        # Two parses differ (the time, the file system): a cached image would be stale.
+        stats.uncached = f"the scene reads {', '.join(scene.volatile)}, so its image is not reproducible"
+        warn(f"{scene.path.name}: {stats.uncached}: not using the image cache for it")
+        cache = None
+
+    keys = shot_keys(stats.povray_version, scene, batch, header, settings)
+    images: list[np.ndarray | None] = [None] * len(keys)
+    missing: list[int] = []
+    held = settings.sequence.stored if settings.sequence is not None else {}
+    for index, key in enumerate(keys):
+        hit = cache.load(key) if cache else None
+        if hit is None and held.get(key) is not None:  # rendered by an earlier frame's sequence, no cache
+            hit, held[key] = held[key], None  # taken: memory for one frame at a time
+        if hit is not None:
+            images[index] = hit
+        else:
+            missing.append(index)
+    stats.cached = len(keys) - len(missing)
+    if settings.sequence is not None:  # shots an earlier frame's clock sequence rendered in this request
+        stats.cached -= sum(key in settings.sequence.stored for key in keys)
+    # Identical frames (same content key) in one batch are traced once.
+    first_of: dict[str, int] = {}
+    copies = {i: first_of.setdefault(keys[i], i) for i in missing}
+    missing = [i for i in missing if copies[i] == i]
+    n_copies = Counter(copies.values())
+
+    # Frames reach the cache one by one as POV-Ray writes them (``take``), so the method's
+    # batching into runs costs nothing when a run is stopped (Ctrl-C, timeout, crash).
+    per_job = batch.shots_per_job
+    if scene.animation_words - SEQUENCE_SAFE_WORDS:
+        # A run of several shots is a POV-Ray animation, whose frame_number (clock_delta, ...) would
+        # differ from shot to shot: a scene reading them gets each shot in a still's run of its own.
+        per_job = 1
+    chunks = [missing[i:i + per_job] for i in range(0, len(missing), per_job)]
+    cores = cpu_count()
+    later = _later_frames(stats.povray_version, scene, batch, header, settings, cache, keys, missing)
+    runs = plan_runs(_lanes(settings.sequence, missing, later), cores) if later else []
+    units = len(runs) if later else len(chunks)
+    # A clock sequence's runs are independent: one per core (the method's own preference is per frame).
+    processes = max(1, min(units or 1, settings.jobs or (cores if later else batch.processes) or cores))
+    threads = settings.threads or max(1, cores // processes)
+    stats.jobs, stats.processes, stats.threads = units, processes, threads
+
+    common = dict(width=batch.width, height=batch.height, threads=threads, bit_depth=settings.bit_depth,
+                  file_gamma="sRGB", timeout=settings.timeout, **scene_inputs(scene))
+    add_gamma = scene.adds_assumed_gamma
+    jobs, targets_of_job = [], {}
+    if later:
+        # Shot j of consecutive animation frames: one POV-Ray run of the request's clock sequence.
+        sequence = settings.sequence
+        plain = replace(settings, clock=None, sequence=None).options + batch.options
+        for shot, numbers in runs:
+            script = build_script(batch, [batch.shots[shot]] * sequence.total, method=method,
+                                  scene_path=str(scene.path), add_assumed_gamma=add_gamma, header=header)
+            name = f"{method} camera {shot + 1}, frames {numbers[0]}" + (f"-{numbers[-1]}" if len(numbers) > 1 else "")
+            run = ClockRun(sequence.position(numbers[0]), sequence.total, sequence.clock_start, sequence.clock_end)
+            # --timeout is each frame's: a run of several frames gets theirs together.
+            timeout = None if settings.timeout is None else settings.timeout * len(numbers)
+            job = PovrayJob(name=name, script=script, frames=len(numbers), options=plain, clock_run=run,
+                            **{**common, "timeout": timeout})
+            jobs.append(job)
+            targets_of_job[id(job)] = [(shot, None) if n == sequence.frame else (None, later[n][shot])
+                                       for n in numbers]
+    else:
+        for chunk in chunks:
+            script = build_script(batch, [batch.shots[i] for i in chunk], method=method,
+                                  scene_path=str(scene.path), add_assumed_gamma=add_gamma, header=header)
+            name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
+            job = PovrayJob(name=name, script=script, frames=len(chunk), options=settings.options + batch.options,
+                            **common)
+            jobs.append(job)
+            targets_of_job[id(job)] = [(i, None) for i in chunk]
+
+    done = stats.cached
+    if progress:
+        progress(done, len(keys))
+
+    def take(target: tuple[int | None, str | None], image_path: Path) -> None:
+        # (shot of this frame, None) or (None, key of a later frame's shot, for the cache only)
+        nonlocal done
+        index, key = target
+        if index is None:
+            if key not in settings.sequence.stored:
+                if cache is not None:
+                    cache.store(key, image_path)
+                # In the cache the later frame finds it; without one it is held here for it.
+                settings.sequence.stored[key] = None if cache is not None else read_png(image_path)
+            done += 1
+            return
+        images[index] = read_png(image_path)  # decoded whole: a complete PNG
+        if cache is not None:
+            cache.store(keys[index], image_path)
+        done += n_copies.get(index, 1)
+
+    taken: set[tuple[int, int]] = set()
+
+    def frame_done(job: PovrayJob, frame: int, image_path: Path) -> None:
+        # A frame of a running job, as soon as POV-Ray has written it.
+        taken.add((id(job), frame))
+        take(targets_of_job[id(job)][frame], image_path)
+        if progress:
+            progress(done, len(keys))
+
+    def collect(result: JobResult) -> None:
+        # Jobs finish in any order; take the frames not taken while the job ran.
+        for frame, (target, image_path) in enumerate(zip(targets_of_job[id(result.job)], result.images)):
+            if (id(result.job), frame) not in taken:
+                take(target, image_path)
+        if progress:
+            progress(done, len(keys))
+
+    def running(rendered: dict[int, float]) -> None:
+        # Frames of the running jobs as POV-Ray reports them (share of pixels).
+        progress(done + sum(rendered.values()), len(keys))
+
+    if jobs:
+        extra: dict[str, Any] = ({"on_frame": frame_done, "should_stop": settings.should_stop}
+                                 if isinstance(runner, LocalRunner) else {})
+        if progress and isinstance(runner, LocalRunner):
+            extra["on_running"] = running
+        try:
+            stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
+        except PovrayError as exc:
+            if later and not isinstance(exc, PovrayTimeout):
+                # A frame of the sequence failed, maybe a later one: the rest of the request goes frame
+                # by frame (what finished is in the cache), so the error names the frame that fails.
+                settings.sequence.ledger.failed = True
+                return render_frames(scene, batch, replace(settings, sequence=None), method=method, header=header,
+                                     progress=progress)
+            if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
+                raise
+            raise PovrayError(past_scene_end(str(exc), scene.path.name, SCENE_FILE), command=exc.command,
+                              returncode=exc.returncode, log_tail=exc.log_tail) from None
+    for index, source in copies.items():
+        if images[index] is None:
+            images[index] = images[source]
+    stats.wall_seconds = time.perf_counter() - start
+    return [img for img in images if img is not None], stats
+
+
+#: Raised when what a shot's image depends on changes without a change the key sees: 2, a still's
+#: runs of several shots keep POV-Ray's clock at 0 (povray.job), where shots before saw it run 0..1.
+KEY_REVISION = 2
+
+
+def shot_keys(version: str, scene: Scene, batch: ShotBatch, header: dict[str, Any],
+              settings: RenderSettings) -> list[str]:
+    """The cache key of every shot of ``batch``: what the image depends on, nothing else."""
+    common_key = content_key(__version__, code_stamp(), KEY_REVISION, version, scene.digest, batch.template,
+                             _template_digest(batch.template), _canonical(batch.context),
+                             _canonical(header), batch.width, batch.height, settings.options,
+                             settings.bit_depth, scene.adds_assumed_gamma, batch.options)
+    return [content_key(common_key, _canonical(frame)) for frame in batch.shots]
+
+
+def _later_frames(version: str, scene: Scene, batch: ShotBatch, header: dict[str, Any], settings: RenderSettings,
+                  cache: ImageCache | None, keys: list[str], missing: list[int]) -> dict[int, dict[int, str]]:
+    """The later animation frames of ``settings.sequence`` to render with this one: frame -> {shot: key}
+    of the shots it misses; empty when the batch, the scene or the cache rules sequences out
+    (``renderer.shots.clock_runs``).  The keys are this frame's with the other frame's clock, so a later
+    frame whose batch turns out different finds nothing and renders its own."""
+    sequence = settings.sequence
+    if (sequence is None or sequence.ledger.failed or not sequence.later or settings.clock is None
+            or (batch.shots_per_job > 1 and len(batch.shots) > 1)
+            or not scene.animation_words <= SEQUENCE_SAFE_WORDS):
+        return {}
+    if sequence.stored and not any(key in sequence.stored for key in keys):
+        # An earlier frame's sequence planned other shots than this frame asks for: the batch changes
+        # with the clock (a scene camera that moves), so planning ahead only wastes runs.
+        sequence.ledger.failed = True
+        return {}
+    seen = set(keys)
+    out: dict[int, dict[int, str]] = {}
+    for n in sequence.later:
+        clocked = replace(settings, clock=sequence.clock(n), sequence=None)
+        frame_keys = shot_keys(version, scene, batch, header, clocked)
+        out[n] = {}
+        for shot, key in enumerate(frame_keys):
+            # (a damaged cache entry is rendered again by its own frame)
+            if key not in seen and key not in sequence.stored and not (cache and cache.path(key).is_file()):
+                out[n][shot] = key
+            seen.add(key)
+    return out if any(out.values()) else {}
+
+
+def _lanes(sequence: Any, missing: list[int], later: dict[int, dict[int, str]]) -> dict[int, list[int]]:
+    """Shot -> the animation frames (ascending, this one first) that miss it."""
+    lanes: dict[int, list[int]] = {shot: [sequence.frame] for shot in missing}
+    for n, shots in later.items():
+        for shot in shots:
+            lanes.setdefault(shot, []).append(n)
+    return lanes
