@@ -171,3 +171,23 @@ def test_only_the_povray_runner_starts_processes():
 
 def test_the_package_is_typed():
     assert (PACKAGE / "py.typed").is_file()
+
+
+def _long_functions(parts: tuple[str, ...], most: int) -> list[str]:
+    """Functions of those parts with more than ``most`` lines of code (the docstring left out)."""
+    found = []
+    for part in parts:
+        for path in sorted((PACKAGE / part).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+                if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    continue
+                body = node.body[1:] if ast.get_docstring(node) is not None else node.body
+                lines = node.end_lineno - (body[0].lineno if body else node.lineno) + 1
+                if lines > most:
+                    found.append(f"{path.relative_to(PACKAGE)}:{node.name} ({lines} lines)")
+    return found
+
+
+def test_the_render_path_holds_no_function_over_80_lines():
+    assert _long_functions(("renderer", "povray"), 80) == []
+    assert _long_functions(("renderer",), 40)   # negative control: the finder finds long ones

@@ -103,142 +103,23 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     stats : RenderStats
     """
     start = time.perf_counter()
-    if settings.scheduler:
-        from ...povray.cluster import DaskRunner
-        runner: Any = DaskRunner(settings.scheduler)
-    else:
-        runner = LocalRunner(find_povray())
+    runner = _runner(settings)
     stats = RenderStats(frames=len(batch.shots), povray_version=runner.version)
-    cache = ImageCache(cache_root(settings.cache_dir)) if settings.use_cache else None
-    if cache is not None and scene.computed_names and not confines():
-        # Unconfined, POV-Ray may read files whose names povh3d cannot know: no key covers them.
-        warn(f"{scene.path.name} reads a file whose name is computed while POV-Ray parses, and POV-Ray "
-             "runs unconfined here (POVH3D_SANDBOX=off or no Landlock), so povh3d cannot know every file "
-             "it reads: not using the image cache for it")
-        cache = None
-    if cache is not None and not scene.reproducible:
-        # Two parses differ (the time, the file system): a cached image would be stale.
-        stats.uncached = f"the scene reads {', '.join(scene.volatile)}, so its image is not reproducible"
-        warn(f"{scene.path.name}: {stats.uncached}: not using the image cache for it")
-        cache = None
-
+    cache = _usable_cache(scene, settings, stats)
     keys = shot_keys(stats.povray_version, scene, batch, header, settings)
-    images: list[np.ndarray | None] = [None] * len(keys)
-    missing: list[int] = []
-    held = settings.sequence.stored if settings.sequence is not None else {}
-    for index, key in enumerate(keys):
-        hit = cache.load(key) if cache else None
-        if hit is None and held.get(key) is not None:  # rendered by an earlier frame's sequence, no cache
-            hit, held[key] = held[key], None  # taken: memory for one frame at a time
-        if hit is not None:
-            images[index] = hit
-        else:
-            missing.append(index)
-    stats.cached = len(keys) - len(missing)
-    if settings.sequence is not None:  # shots an earlier frame's clock sequence rendered in this request
-        stats.cached -= sum(key in settings.sequence.stored for key in keys)
+    images, missing = _looked_up(keys, cache, settings, stats)
     # Identical frames (same content key) in one batch are traced once.
     first_of: dict[str, int] = {}
     copies = {i: first_of.setdefault(keys[i], i) for i in missing}
     missing = [i for i in missing if copies[i] == i]
-    n_copies = Counter(copies.values())
-
-    # Frames reach the cache one by one as POV-Ray writes them (``take``), so the method's
-    # batching into runs costs nothing when a run is stopped (Ctrl-C, timeout, crash).
-    per_job = batch.shots_per_job
-    if scene.animation_words - SEQUENCE_SAFE_WORDS:
-        # A run of several shots is a POV-Ray animation, whose frame_number (clock_delta, ...) would
-        # differ from shot to shot: a scene reading them gets each shot in a still's run of its own.
-        per_job = 1
-    chunks = [missing[i:i + per_job] for i in range(0, len(missing), per_job)]
-    cores = cpu_count()
     later = _later_frames(stats.povray_version, scene, batch, header, settings, cache, keys, missing)
-    runs = plan_runs(_lanes(settings.sequence, missing, later), cores) if later else []
-    units = len(runs) if later else len(chunks)
-    # A clock sequence's runs are independent: one per core (the method's own preference is per frame).
-    processes = max(1, min(units or 1, settings.jobs or (cores if later else batch.processes) or cores))
-    threads = settings.threads or max(1, cores // processes)
-    stats.jobs, stats.processes, stats.threads = units, processes, threads
-
-    common = dict(width=batch.width, height=batch.height, threads=threads, bit_depth=settings.bit_depth,
-                  file_gamma="sRGB", timeout=settings.timeout, **scene_inputs(scene))
-    add_gamma = scene.adds_assumed_gamma
-    jobs, targets_of_job = [], {}
-    if later:
-        # Shot j of consecutive animation frames: one POV-Ray run of the request's clock sequence.
-        sequence = settings.sequence
-        plain = replace(settings, clock=None, sequence=None).options + batch.options
-        for shot, numbers in runs:
-            script = build_script(batch, [batch.shots[shot]] * sequence.total, method=method,
-                                  scene_path=str(scene.path), add_assumed_gamma=add_gamma, header=header)
-            name = f"{method} camera {shot + 1}, frames {numbers[0]}" + (f"-{numbers[-1]}" if len(numbers) > 1 else "")
-            run = ClockRun(sequence.position(numbers[0]), sequence.total, sequence.clock_start, sequence.clock_end)
-            # --timeout is each frame's: a run of several frames gets theirs together.
-            timeout = None if settings.timeout is None else settings.timeout * len(numbers)
-            job = PovrayJob(name=name, script=script, frames=len(numbers), options=plain, clock_run=run,
-                            **{**common, "timeout": timeout})
-            jobs.append(job)
-            targets_of_job[id(job)] = [(shot, None) if n == sequence.frame else (None, later[n][shot])
-                                       for n in numbers]
-    else:
-        for chunk in chunks:
-            script = build_script(batch, [batch.shots[i] for i in chunk], method=method,
-                                  scene_path=str(scene.path), add_assumed_gamma=add_gamma, header=header)
-            name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
-            job = PovrayJob(name=name, script=script, frames=len(chunk), options=settings.options + batch.options,
-                            **common)
-            jobs.append(job)
-            targets_of_job[id(job)] = [(i, None) for i in chunk]
-
-    done = stats.cached
+    jobs, targets = _planned_jobs(scene, batch, settings, stats, method, header, missing, later)
+    taker = _Taker(images, keys, cache, settings, targets, Counter(copies.values()), stats.cached, progress)
     if progress:
-        progress(done, len(keys))
-
-    def take(target: tuple[int | None, str | None], image_path: Path) -> None:
-        # (shot of this frame, None) or (None, key of a later frame's shot, for the cache only)
-        nonlocal done
-        index, key = target
-        if index is None:
-            if key not in settings.sequence.stored:
-                if cache is not None:
-                    cache.store(key, image_path)
-                # In the cache the later frame finds it; without one it is held here for it.
-                settings.sequence.stored[key] = None if cache is not None else read_png(image_path)
-            done += 1
-            return
-        images[index] = read_png(image_path)  # decoded whole: a complete PNG
-        if cache is not None:
-            cache.store(keys[index], image_path)
-        done += n_copies.get(index, 1)
-
-    taken: set[tuple[int, int]] = set()
-
-    def frame_done(job: PovrayJob, frame: int, image_path: Path) -> None:
-        # A frame of a running job, as soon as POV-Ray has written it.
-        taken.add((id(job), frame))
-        take(targets_of_job[id(job)][frame], image_path)
-        if progress:
-            progress(done, len(keys))
-
-    def collect(result: JobResult) -> None:
-        # Jobs finish in any order; take the frames not taken while the job ran.
-        for frame, (target, image_path) in enumerate(zip(targets_of_job[id(result.job)], result.images)):
-            if (id(result.job), frame) not in taken:
-                take(target, image_path)
-        if progress:
-            progress(done, len(keys))
-
-    def running(rendered: dict[int, float]) -> None:
-        # Frames of the running jobs as POV-Ray reports them (share of pixels).
-        progress(done + sum(rendered.values()), len(keys))
-
+        progress(taker.done, len(keys))
     if jobs:
-        extra: dict[str, Any] = ({"on_frame": frame_done, "should_stop": settings.should_stop}
-                                 if isinstance(runner, LocalRunner) else {})
-        if progress and isinstance(runner, LocalRunner):
-            extra["on_running"] = running
         try:
-            stats.povray_seconds = runner.run(jobs, processes=processes, on_result=collect, **extra)
+            _run(runner, jobs, taker, settings, progress, stats)
         except PovrayError as exc:
             if later and not isinstance(exc, PovrayTimeout):
                 # A frame of the sequence failed, maybe a later one: the rest of the request goes frame
@@ -255,6 +136,166 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
             images[index] = images[source]
     stats.wall_seconds = time.perf_counter() - start
     return [img for img in images if img is not None], stats
+
+
+def _runner(settings: RenderSettings) -> Any:
+    """This machine's POV-Ray, or the Dask cluster ``settings.scheduler`` names."""
+    if settings.scheduler:
+        from ...povray.cluster import DaskRunner
+        return DaskRunner(settings.scheduler)
+    return LocalRunner(find_povray())
+
+
+def _usable_cache(scene: Scene, settings: RenderSettings, stats: RenderStats) -> ImageCache | None:
+    """The image cache, unless the settings turn it off or no key can cover what the scene reads."""
+    cache = ImageCache(cache_root(settings.cache_dir)) if settings.use_cache else None
+    if cache is not None and scene.computed_names and not confines():
+        # Unconfined, POV-Ray may read files whose names povh3d cannot know: no key covers them.
+        warn(f"{scene.path.name} reads a file whose name is computed while POV-Ray parses, and POV-Ray "
+             "runs unconfined here (POVH3D_SANDBOX=off or no Landlock), so povh3d cannot know every file "
+             "it reads: not using the image cache for it")
+        cache = None
+    if cache is not None and not scene.reproducible:
+        # Two parses differ (the time, the file system): a cached image would be stale.
+        stats.uncached = f"the scene reads {', '.join(scene.volatile)}, so its image is not reproducible"
+        warn(f"{scene.path.name}: {stats.uncached}: not using the image cache for it")
+        cache = None
+    return cache
+
+
+def _looked_up(keys: list[str], cache: ImageCache | None, settings: RenderSettings,
+               stats: RenderStats) -> tuple[list[np.ndarray | None], list[int]]:
+    """The shots found (in the cache, or held by an earlier frame's clock sequence) and the indices missing."""
+    images: list[np.ndarray | None] = [None] * len(keys)
+    missing: list[int] = []
+    held = settings.sequence.stored if settings.sequence is not None else {}
+    for index, key in enumerate(keys):
+        hit = cache.load(key) if cache else None
+        if hit is None and held.get(key) is not None:  # rendered by an earlier frame's sequence, no cache
+            hit, held[key] = held[key], None  # taken: memory for one frame at a time
+        if hit is not None:
+            images[index] = hit
+        else:
+            missing.append(index)
+    stats.cached = len(keys) - len(missing)
+    if settings.sequence is not None:  # shots an earlier frame's clock sequence rendered in this request
+        stats.cached -= sum(key in settings.sequence.stored for key in keys)
+    return images, missing
+
+
+#: Where a POV-Ray run's frame goes: (shot of this frame, None), or (None, key of a later animation
+#: frame's shot, for the cache only).
+Target = tuple[int | None, str | None]
+
+
+def _planned_jobs(scene: Scene, batch: ShotBatch, settings: RenderSettings, stats: RenderStats, method: str,
+                  header: dict[str, Any], missing: list[int], later: dict[int, dict[int, str]],
+                  ) -> tuple[list[PovrayJob], dict[int, list[Target]]]:
+    """The POV-Ray runs of the missing shots (and of the later frames' shots of a clock sequence),
+    each with the targets of its frames; ``stats`` gets the jobs, processes and threads."""
+    # Frames reach the cache one by one as POV-Ray writes them (``_Taker.take``), so the method's
+    # batching into runs costs nothing when a run is stopped (Ctrl-C, timeout, crash).
+    per_job = batch.shots_per_job
+    if scene.animation_words - SEQUENCE_SAFE_WORDS:
+        # A run of several shots is a POV-Ray animation, whose frame_number (clock_delta, ...) would
+        # differ from shot to shot: a scene reading them gets each shot in a still's run of its own.
+        per_job = 1
+    chunks = [missing[i:i + per_job] for i in range(0, len(missing), per_job)]
+    cores = cpu_count()
+    runs = plan_runs(_lanes(settings.sequence, missing, later), cores) if later else []
+    units = len(runs) if later else len(chunks)
+    # A clock sequence's runs are independent: one per core (the method's own preference is per frame).
+    processes = max(1, min(units or 1, settings.jobs or (cores if later else batch.processes) or cores))
+    threads = settings.threads or max(1, cores // processes)
+    stats.jobs, stats.processes, stats.threads = units, processes, threads
+
+    common = dict(width=batch.width, height=batch.height, threads=threads, bit_depth=settings.bit_depth,
+                  file_gamma="sRGB", timeout=settings.timeout, **scene_inputs(scene))
+    script_of = lambda shots: build_script(batch, shots, method=method, scene_path=str(scene.path),  # noqa: E731
+                                           add_assumed_gamma=scene.adds_assumed_gamma, header=header)
+    jobs: list[PovrayJob] = []
+    targets: dict[int, list[Target]] = {}
+    if later:
+        # Shot j of consecutive animation frames: one POV-Ray run of the request's clock sequence.
+        sequence = settings.sequence
+        plain = replace(settings, clock=None, sequence=None).options + batch.options
+        for shot, numbers in runs:
+            name = f"{method} camera {shot + 1}, frames {numbers[0]}" + (f"-{numbers[-1]}" if len(numbers) > 1 else "")
+            run = ClockRun(sequence.position(numbers[0]), sequence.total, sequence.clock_start, sequence.clock_end)
+            # --timeout is each frame's: a run of several frames gets theirs together.
+            timeout = None if settings.timeout is None else settings.timeout * len(numbers)
+            job = PovrayJob(name=name, script=script_of([batch.shots[shot]] * sequence.total), frames=len(numbers),
+                            options=plain, clock_run=run, **{**common, "timeout": timeout})
+            jobs.append(job)
+            targets[id(job)] = [(shot, None) if n == sequence.frame else (None, later[n][shot]) for n in numbers]
+    else:
+        for chunk in chunks:
+            name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
+            job = PovrayJob(name=name, script=script_of([batch.shots[i] for i in chunk]), frames=len(chunk),
+                            options=settings.options + batch.options, **common)
+            jobs.append(job)
+            targets[id(job)] = [(i, None) for i in chunk]
+    return jobs, targets
+
+
+class _Taker:
+    """Takes each frame POV-Ray writes to its place (the shot's image, the cache, a later frame's
+    hold) as soon as it is written, and counts what is done for the progress."""
+
+    def __init__(self, images: list[np.ndarray | None], keys: list[str], cache: ImageCache | None,
+                 settings: RenderSettings, targets: dict[int, list[Target]], copies: Counter[int], done: int,
+                 progress: Progress | None) -> None:
+        self.images, self.keys, self.cache, self.settings = images, keys, cache, settings
+        self.targets, self.copies, self.done, self.progress = targets, copies, done, progress
+        self.taken: set[tuple[int, int]] = set()
+
+    def take(self, target: Target, image_path: Path) -> None:
+        index, key = target
+        if index is None:
+            stored = self.settings.sequence.stored
+            if key not in stored:
+                if self.cache is not None:
+                    self.cache.store(key, image_path)
+                # In the cache the later frame finds it; without one it is held here for it.
+                stored[key] = None if self.cache is not None else read_png(image_path)
+            self.done += 1
+            return
+        self.images[index] = read_png(image_path)  # decoded whole: a complete PNG
+        if self.cache is not None:
+            self.cache.store(self.keys[index], image_path)
+        self.done += self.copies.get(index, 1)
+
+    def frame_done(self, job: PovrayJob, frame: int, image_path: Path) -> None:
+        """A frame of a running job, as soon as POV-Ray has written it."""
+        self.taken.add((id(job), frame))
+        self.take(self.targets[id(job)][frame], image_path)
+        self._report()
+
+    def collect(self, result: JobResult) -> None:
+        """A finished job (jobs finish in any order): the frames not taken while it ran."""
+        for frame, (target, image_path) in enumerate(zip(self.targets[id(result.job)], result.images)):
+            if (id(result.job), frame) not in self.taken:
+                self.take(target, image_path)
+        self._report()
+
+    def running(self, rendered: dict[int, float]) -> None:
+        """Frames of the running jobs as POV-Ray reports them (share of pixels)."""
+        if self.progress:
+            self.progress(self.done + sum(rendered.values()), len(self.keys))
+
+    def _report(self) -> None:
+        if self.progress:
+            self.progress(self.done, len(self.keys))
+
+
+def _run(runner: Any, jobs: list[PovrayJob], taker: _Taker, settings: RenderSettings, progress: Progress | None,
+         stats: RenderStats) -> None:
+    """Run the jobs on ``runner``, every frame to ``taker``; ``stats`` gets POV-Ray's seconds."""
+    extra: dict[str, Any] = ({"on_frame": taker.frame_done, "should_stop": settings.should_stop}
+                             if isinstance(runner, LocalRunner) else {})
+    if progress and isinstance(runner, LocalRunner):
+        extra["on_running"] = taker.running
+    stats.povray_seconds = runner.run(jobs, processes=stats.processes, on_result=taker.collect, **extra)
 
 
 #: Raised when what a shot's image depends on changes without a change the key sees: 2, a still's
