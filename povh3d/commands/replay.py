@@ -1,0 +1,135 @@
+"""``povh3d replay``: an H3D image on its display, seen from an eye (``display/replay.py``), on files.
+
+Reads the image and the lens array its sidecar describes, checks every input, then writes the
+replay (or a sweep's frames and GIF) and its sidecar atomically.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..display.display import Display
+from ..display.replay import OPTICS, Replay, default_eye, replay, report, sweep_eyes
+from ..errors import ConfigError, InputError
+from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from ..renderer.records import base_record, png_output, write_image
+from .images import check_against_sidecar
+
+MAX_SWEEP = 240
+
+
+def read_display(h3d_path: str | Path) -> tuple[np.ndarray, Display]:
+    """The H3D image and the display its sidecar describes; one error line when there is none."""
+    record = read_sidecar(h3d_path)
+    if not Path(h3d_path).is_file():
+        raise InputError(f"image {str(h3d_path)!r} does not exist; check the path")
+    if not record or not record.get("lens_array"):
+        raise InputError(f"{str(h3d_path)!r} has no sidecar with its lens array ({Path(h3d_path).stem}.json); "
+                         "replay an image povh3d rendered, with its sidecar beside it")
+    display = Display.from_record(record)
+    check_against_sidecar(h3d_path, record["lens_array"])
+    if display.mapping_name is not None or display.physical_panel is not None:
+        raise ConfigError(f"{str(h3d_path)!r} is a mapped panel ({display.mapping_name}); replaying a mapped "
+                          "panel through its slanted sheet is not built yet: replay the unmapped render")
+    return read_png(h3d_path), display
+
+
+def parse_eye(text: str | None) -> tuple[float, float, float] | None:
+    if text is None:
+        return None
+    try:
+        x, y, z = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ConfigError(f"--eye must be X,Y,Z in mm, got {text!r}; e.g. --eye 0,0,-300") from None
+    return (x, y, z)
+
+
+def parse_sweep(text: str | None) -> tuple[str, float, float, int] | None:
+    """``X0:X1:N`` (eye x) or ``y:Y0:Y1:N`` (eye y)."""
+    if text is None:
+        return None
+    parts = text.split(":")
+    axis = "x"
+    if parts and parts[0] in ("x", "y"):
+        axis, parts = parts[0], parts[1:]
+    try:
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+        if len(parts) != 3:
+            raise ValueError
+    except (ValueError, IndexError):
+        raise ConfigError(f"--sweep must be X0:X1:N (or y:Y0:Y1:N), got {text!r}; e.g. --sweep -60:60:9") from None
+    if not 2 <= count <= MAX_SWEEP:
+        raise ConfigError(f"--sweep needs 2 to {MAX_SWEEP} eye positions, got {count}; e.g. --sweep -60:60:9")
+    return axis, start, stop, count
+
+
+def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, float, float] | None = None,
+                optics: str = "pinhole", size: str | tuple[int, int] = "lenses",
+                sweep: tuple[str, float, float, int] | None = None, json_path: str | Path | None = None,
+                quality: str = "draft") -> dict[str, Any]:
+    """Replay ``h3d_path`` from ``eye`` (or a sweep of eyes) and write ``output`` with its sidecar.
+
+    With ``sweep``, ``output`` is a ``.gif`` and the frames go beside it as ``stem_NNN.png``."""
+    if optics not in OPTICS:
+        raise ConfigError(f"--optics must be one of {', '.join(OPTICS)}, got {optics!r}")
+    output = Path(output)
+    if sweep is None:
+        out = png_output(output)
+    else:
+        if output.suffix.lower() != ".gif":
+            raise ConfigError(f"a sweep's output {str(output)!r} must be a .gif (its frames go beside it as PNGs)")
+        check_writable(output)
+        out = output
+    if json_path is not None:
+        check_writable(json_path)
+    image, display = read_display(h3d_path)
+    la = display.lens_array
+    eye = eye if eye is not None else default_eye(la)
+    eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
+    results: list[Replay] = []
+    frames: list[np.ndarray] = []
+    timings: dict[str, Any] = {}
+    if optics == "lens":
+        from ..renderer.replay import render_replay  # only the renderer starts POV-Ray
+
+        frames, timings = render_replay(image, la, eyes, size=size, quality=quality)
+    else:
+        for e in eyes:  # every eye checked before anything is written
+            results.append(replay(image, la, e, optics=optics, size=size))
+        frames = [r.image for r in results]
+    reports = [report(r, la, e) for r, e in zip(results, eyes)] if results and optics != "none" else []
+    record = base_record("replay", la, source=str(Path(h3d_path).resolve()), optics=optics,
+                         size=size if isinstance(size, str) else list(size),
+                         eyes_mm=eyes.tolist(), output_gamma=(read_sidecar(h3d_path) or {}).get("output_gamma", "sRGB"),
+                         **({"timings_s": timings} if timings else {}),
+                         **({"reports": reports} if reports else {}))
+    if sweep is None:
+        write_image(out, frames[0], record)
+    else:
+        _write_sweep(out, frames, record)
+    if json_path is not None:
+        with atomic_path(json_path) as tmp:
+            tmp.write_text(json.dumps({"eyes": reports, **({"timings_s": timings} if timings else {})}, indent=2)
+                           + "\n", encoding="utf-8")
+    return record
+
+
+def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any]) -> None:
+    from PIL import Image
+
+    from ..image.preview import enlarge
+
+    for n, frame in enumerate(frames):
+        write_png(output.with_name(f"{output.stem}_{n:03d}.png"), frame)
+    small = [(f >> 8).astype(np.uint8) if f.dtype == np.uint16 else f for f in frames]
+    scale = max(1, 480 // max(small[0].shape[1], 1))
+    big = [enlarge(f[..., :3], (scale, scale)) for f in small]
+    with atomic_path(output) as tmp:
+        Image.fromarray(big[0]).save(tmp, format="GIF", save_all=True,
+                                     append_images=[Image.fromarray(b) for b in big[1:]], duration=120, loop=0)
+    with atomic_path(output.with_suffix(".json")) as tmp:
+        tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")

@@ -1,0 +1,222 @@
+"""Replay (display/replay.py): the H3D image on its display, seen from an eye.
+
+Oracles from docs/geometry.md written out here (lens centres from their indices, the pixel of a
+point), never from the module's own helpers; each figure with a negative control that fails it.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import povh3d
+from povh3d.display import presets
+from povh3d.display.replay import replay
+from povh3d.errors import ConfigError
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.rays import pixel_rays
+from povh3d.image.io import read_png
+from povh3d.renderer.records import base_record, write_image
+
+EYE = (13.7, -6.2, -250.0)
+
+
+def coded(lens_array: LensArray) -> np.ndarray:
+    """An H3D image whose pixel ``(col, row)`` holds ``(col + 1, row + 1, 7)`` (16 bit): 0 is black."""
+    p = lens_array.panel
+    rows, cols = np.mgrid[0:p.height, 0:p.width]
+    return np.stack([cols + 1, rows + 1, np.full_like(cols, 7)], axis=-1).astype(np.uint16)
+
+
+def oracle_centres(la: LensArray) -> np.ndarray:
+    """docs/geometry.md's lens centres, from the indices: (Ly, Lx, 2) mm."""
+    i, j = np.mgrid[0:la.lenses_y, 0:la.lenses_x].astype(float)
+    cx = (j + 0.5 - la.lenses_x / 2) * la.pitch_x
+    if la.grid == "hex":
+        cx = cx + (i % 2) * la.pitch_x / 2
+    cy = (la.lenses_y / 2 - i - 0.5) * la.pitch_y
+    t = math.radians(la.rotation)
+    return np.stack([math.cos(t) * cx - math.sin(t) * cy, math.sin(t) * cx + math.cos(t) * cy], axis=-1)
+
+
+def oracle_pixels(la: LensArray, eye, sign: float = 1.0) -> np.ndarray:
+    """The coded value ``(col + 1, row + 1)`` of the pixel holding ``c + (c - E_xy) f / |E_z|`` (0 off the panel)."""
+    c = oracle_centres(la)
+    land = c + sign * (c - np.array(eye[:2])) * la.focal / abs(eye[2])
+    p = la.panel
+    col = np.floor(land[..., 0] / p.pitch_x + p.width / 2)
+    row = np.floor(p.height / 2 - land[..., 1] / p.pitch_y)
+    on = (col >= 0) & (col < p.width) & (row >= 0) & (row < p.height)
+    return np.stack([np.where(on, col + 1, 0), np.where(on, row + 1, 0)], axis=-1).astype(np.uint16)
+
+
+ARRAYS = {
+    "square": lambda: presets.lens_array("demo"),
+    "hex": lambda: LensArray("hex", 22, 21, 0.85, 0.85 * math.sqrt(3) / 2, 1.0, Panel(200, 160, 0.1, 0.1)),
+    "lenticular": lambda: LensArray("lenticular", 40, 120, 0.6, 0.1, 1.25, Panel(240, 120, 0.1, 0.1)),
+    "slanted": lambda: LensArray("lenticular", 48, 120, 0.6, 0.1, 1.25, Panel(240, 120, 0.1, 0.1), 9.46),
+    "rotated-square": lambda: LensArray("square", 44, 34, 0.8, 0.8, 1.5, Panel(320, 240, 0.1, 0.1), 6.34),
+}
+
+
+@pytest.mark.parametrize("name", sorted(ARRAYS))
+def test_pinhole_lens_shows_the_pixel_its_ray_lands_on(name: str) -> None:
+    la = ARRAYS[name]()
+    got = replay(coded(la), la, EYE, size="lenses").image[..., :2]
+    want = oracle_pixels(la, EYE)
+    assert got.shape == want.shape
+    assert np.array_equal(got, want)  # byte for byte, every lens
+    assert (want > 0).all(axis=-1).mean() > 0.5  # most lenses land on the panel: the figure is not all black
+    # negative control: the offset's sign turned fails on most lenses
+    wrong = oracle_pixels(la, EYE, sign=-1.0)
+    assert (got != wrong).any(axis=-1).mean() > 0.5
+
+
+def test_chain_identity_no_sheet_at_the_panel_size() -> None:
+    la = ARRAYS["hex"]()
+    h3d = np.random.default_rng(3).integers(0, 256, (160, 200, 3), dtype=np.uint8)
+    out = replay(h3d, la, EYE, optics="none", size=(200, 160)).image
+    assert out.tobytes() == h3d.tobytes()
+    # negative control: a picture one pixel wider is not the image
+    wider = replay(h3d, la, EYE, optics="none", size=(201, 160)).image
+    assert not np.array_equal(wider[:, :200], h3d)
+
+
+def test_picture_pixels_inside_a_lens_cell_show_that_lens() -> None:
+    la = presets.lens_array("demo")  # 40 x 30 lenses of 0.8 mm: 4 x 4 picture pixels a lens at 160 x 120
+    h3d = coded(la)
+    lenses = replay(h3d, la, EYE, size="lenses").image
+    picture = replay(h3d, la, EYE, size=(160, 120)).image
+    assert np.array_equal(picture, np.repeat(np.repeat(lenses, 4, axis=0), 4, axis=1))
+    # negative control: from another eye the picture differs
+    other = replay(h3d, la, (EYE[0] + 20, EYE[1], EYE[2]), size=(160, 120)).image
+    assert not np.array_equal(other, picture)
+
+
+def surface(la: LensArray, depth: float, *, pseudoscopic: bool = False) -> np.ndarray:
+    """The H3D image of a plane at ``depth`` mm whose red channel codes ``x`` of the point each pixel's ray
+    hits (the ray of a pixel, docs/geometry.md): 1000 codes a mm about 30000."""
+    c, d, inside = pixel_rays(la)
+    x = c[..., 0] + d[..., 0] / d[..., 2] * depth
+    code = np.where(inside, np.rint(30000 + 1000 * x), 0).astype(np.uint16)
+    img = np.stack([code, code, code], axis=-1)
+    if pseudoscopic:  # each elemental image turned 180 degrees
+        ny, nx = la.views
+        img = img.reshape(la.lenses_y, ny, la.lenses_x, nx, 3)[:, ::-1, :, ::-1].reshape(img.shape)
+    return img
+
+
+def screen_position(la: LensArray, image: np.ndarray, eye, x0: np.ndarray) -> np.ndarray:
+    """Where on the screen (mm) the eye sees the surface points ``x0``: along the middle lens row."""
+    seen = replay(image, la, eye, size="lenses").image[la.lenses_y // 2, :, 0].astype(float)
+    x = (seen - 30000) / 1000
+    cx = oracle_centres(la)[la.lenses_y // 2, :, 0]
+    a, b = np.polyfit(cx, x, 1)  # a line through the pixel-quantised staircase of x along the row
+    return (x0 - b) / a
+
+
+@pytest.mark.parametrize("depth", [10.0, -10.0])
+def test_parallax_of_a_surface_at_depth(depth: float) -> None:
+    la = presets.lens_array("demo")
+    e1, e2 = (-40.0, 0.0, -300.0), (40.0, 0.0, -300.0)
+    x0 = np.linspace(-8, 8, 9)
+    want = (e2[0] - e1[0]) * depth / (abs(e1[2]) + depth)
+    tolerance = la.pitch_x + abs(depth) * la.panel.pitch_x / (2 * la.focal)
+    img = surface(la, depth)
+    got = screen_position(la, img, e2, x0) - screen_position(la, img, e1, x0)
+    assert np.abs(got - want).max() <= tolerance, (got, want)
+    assert np.abs(got - want).max() <= 0.05  # measured: 0.01-0.02 mm
+    # negative control: the pseudoscopic image moves the wrong way
+    pseudo = surface(la, depth, pseudoscopic=True)
+    bad = screen_position(la, pseudo, e2, x0) - screen_position(la, pseudo, e1, x0)
+    assert np.sign(bad).tolist() == [-np.sign(want)] * len(x0)
+    assert np.abs(bad - want).min() > tolerance
+
+
+def test_beyond_the_zone_the_next_lens_shows_the_view() -> None:
+    la = presets.lens_array("demo")
+    eye = np.array([10.0, 0.0, -300.0])
+    beyond = eye + [abs(eye[2]) * la.pitch_x / la.focal, 0, 0]  # 160 mm on: every lens shows its neighbour's image
+    h3d = coded(la)
+    near = replay(h3d, la, eye).image.astype(int)
+    far = replay(h3d, la, beyond).image.astype(int)
+    # lens j from `beyond` shows the pixel lens j-1 shows from `eye` (the replay shifted by one lens), within
+    # one pixel: the landing points differ by p f / |E_z| = 0.004 mm
+    shifted = far[:, 1:, :2] - near[:, :-1, :2]
+    assert np.abs(shifted).max() <= 1 and (shifted == 0).all(axis=-1).mean() > 0.9
+    # negative control: unshifted, the two replays differ by a lens's worth of pixels everywhere
+    assert (far[..., 0] - near[..., 0] == -round(la.ppl_x)).mean() > 0.9
+
+
+@pytest.mark.parametrize("eye, words", [((0, 0, 10), "panel's side"), ((0, 0, 0), "panel's side"),
+                                         ((0, 0, -1), "inside the lens sheet"), ((0, float("nan"), -300), "finite")])
+def test_eye_refused(eye, words: str) -> None:
+    la = presets.lens_array("demo")
+    with pytest.raises(ConfigError, match=words):
+        replay(coded(la), la, eye)
+
+
+def test_api_matches_the_module() -> None:
+    la = presets.lens_array("demo")
+    h3d = coded(la)
+    assert np.array_equal(povh3d.replay(h3d, la), replay(h3d, la, (0, 0, -300)).image)
+    assert np.array_equal(povh3d.replay(h3d, la, EYE, size=(80, 60)), replay(h3d, la, EYE, size=(80, 60)).image)
+
+
+# -- the command ---------------------------------------------------------------------------------------
+def write_h3d(path: Path, la: LensArray, image: np.ndarray) -> Path:
+    write_image(path, image, base_record("h3d", la))
+    return path
+
+
+def test_command_writes_the_replay_and_report(tmp_path: Path, cli) -> None:
+    la = presets.lens_array("demo")
+    h3d = write_h3d(tmp_path / "h.png", la, coded(la))
+    out = tmp_path / "eye.png"
+    r = cli("replay", str(h3d), "--eye", "13.7,-6.2,-250", "-o", str(out), "--json", str(tmp_path / "r.json"))
+    assert r.code == 0, r.err
+    assert np.array_equal(read_png(out)[..., :2], oracle_pixels(la, EYE))
+    import json
+
+    rep = json.loads((tmp_path / "r.json").read_text())["eyes"][0]
+    assert rep["own_lens_share"] == 1.0 and rep["view_zone"]["lens_zone_width_mm"] == pytest.approx(0.8 * 250 / 1.5)
+    assert sum(rep["view_counts"].values()) == 1200
+
+
+def test_command_sweep_writes_frames_and_gif(tmp_path: Path, cli) -> None:
+    la = presets.lens_array("demo")
+    h3d = write_h3d(tmp_path / "h.png", la, (coded(la) >> 1).astype(np.uint8))
+    r = cli("replay", str(h3d), "--sweep", "-60:60:5", "-o", str(tmp_path / "s.gif"))
+    assert r.code == 0, r.err
+    frames = sorted(tmp_path.glob("s_*.png"))
+    assert len(frames) == 5 and (tmp_path / "s.gif").is_file()
+    assert not np.array_equal(read_png(frames[0]), read_png(frames[-1]))
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--eye", "0,0,20"], "panel's side"),
+    (["--eye", "0,0,-0.5"], "inside the lens sheet"),
+    (["--eye", "0,0"], "X,Y,Z"),
+    (["--optics", "barrier"], "lenticular"),
+    (["--sweep", "1:2"], "X0:X1:N"),
+])
+def test_command_bad_input_is_one_line_and_writes_nothing(tmp_path: Path, cli, args, words) -> None:
+    la = presets.lens_array("demo")
+    h3d = write_h3d(tmp_path / "h.png", la, coded(la))
+    out = tmp_path / "eye.png"
+    r = cli("replay", str(h3d), "-o", str(out), *args)
+    assert r.code != 0 and words in r.err and len(r.err.strip().splitlines()) == 1, r.err
+    assert not out.exists()
+
+
+def test_command_refuses_an_image_without_sidecar(tmp_path: Path, cli) -> None:
+    from povh3d.image.io import write_png
+
+    la = presets.lens_array("demo")
+    write_png(tmp_path / "bare.png", coded(la))
+    r = cli("replay", str(tmp_path / "bare.png"), "-o", str(tmp_path / "eye.png"))
+    assert r.code != 0 and "no sidecar" in r.err and len(r.err.strip().splitlines()) == 1
+    assert not (tmp_path / "eye.png").exists()
