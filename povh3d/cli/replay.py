@@ -14,7 +14,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     size: Any = "lenses" if args.size == "lenses" else parse_size(args.size, "--size", "WxH like 800x600 or 'lenses'")
     sweep = parse_sweep(args.sweep)
     record = replay_file(args.h3d, args.output, eye=parse_eye(args.eye), optics=args.optics, size=size,
-                         sweep=sweep, json_path=args.json, quality=args.quality)
+                         sweep=sweep, json_path=args.json, quality=args.quality, ior=args.ior, lenslet=args.lenslet)
     eyes = record["eyes_mm"]
     first = ",".join(f"{v:g}" for v in eyes[0])
     what = f"{len(eyes)} eyes from ({first})" if len(eyes) > 1 else f"eye ({first}) mm"
@@ -24,6 +24,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
         extra = f", own lens {100 * r['own_lens_share']:.1f} %"
         zone = r["view_zone"]["every_lens_zone_mm"]
         extra += f", every lens in zone for x in [{zone[0]:.1f}, {zone[1]:.1f}] mm" if zone else ", no eye x sees every lens in zone"
+        if "light_shares" in r:
+            extra += f", chief pixel {100 * r['light_shares']['chief_pixel']:.0f} % of the aperture"
+    if record.get("timings_s"):
+        extra += f", {record['timings_s']['total_s']:.2f} s"
     print(f"{args.output}  {args.optics}, {what}{extra}")
     return 0
 
@@ -43,4 +47,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--json", metavar="REPORT", help="write the report (per eye: the views shown, view zone) here")
     p.add_argument("--quality", default="draft", choices=("draft", "high"),
                    help="--optics lens: draft (one ray a pixel) or high (antialiased)")
+    p.add_argument("--ior", type=float, help="--optics lens: the lenslets' index of refraction (default 1.49)")
+    p.add_argument("--lenslet", default="spherical", choices=("spherical", "conic"),
+                   help="--optics lens: the curved face, a sphere (default) or the aberration-free conic")
     p.set_defaults(func=cmd_replay)

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..display.display import Display
-from ..display.replay import OPTICS, Replay, default_eye, replay, report, sweep_eyes
+from ..display.replay import OPTICS, Replay, default_eye, light_shares, psnr, replay, report, sweep_eyes
 from ..errors import ConfigError, InputError
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
 from ..renderer.records import base_record, png_output, write_image
@@ -70,7 +70,7 @@ def parse_sweep(text: str | None) -> tuple[str, float, float, int] | None:
 def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, float, float] | None = None,
                 optics: str = "pinhole", size: str | tuple[int, int] = "lenses",
                 sweep: tuple[str, float, float, int] | None = None, json_path: str | Path | None = None,
-                quality: str = "draft") -> dict[str, Any]:
+                quality: str = "draft", ior: float | None = None, lenslet: str = "spherical") -> dict[str, Any]:
     """Replay ``h3d_path`` from ``eye`` (or a sweep of eyes) and write ``output`` with its sidecar.
 
     With ``sweep``, ``output`` is a ``.gif`` and the frames go beside it as ``stem_NNN.png``."""
@@ -96,12 +96,22 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     if optics == "lens":
         from ..renderer.replay import render_replay  # only the renderer starts POV-Ray
 
-        frames, timings = render_replay(image, la, eyes, size=size, quality=quality)
+        from ..renderer.replay import REPLAY_IOR
+
+        frames, timings = render_replay(image, la, eyes, size=size, quality=quality, coded=json_path is not None,
+                                        ior=REPLAY_IOR if ior is None else ior, shape=lenslet)
+        if json_path is not None:  # the chief rays' report, and where each aperture's light comes from
+            codes, frames = frames[len(eyes):], frames[:len(eyes)]
+            results = [replay(image, la, e, optics="pinhole", size=size) for e in eyes]
     else:
         for e in eyes:  # every eye checked before anything is written
             results.append(replay(image, la, e, optics=optics, size=size))
         frames = [r.image for r in results]
     reports = [report(r, la, e) for r, e in zip(results, eyes)] if results and optics != "none" else []
+    if optics == "lens" and reports:
+        for rep, e, code, frame, chief in zip(reports, eyes, codes, frames, results):
+            rep["light_shares"] = light_shares(code, la, e, size)
+            rep["psnr_to_pinhole_db"] = psnr(frame, chief.image[..., :3])
     record = base_record("replay", la, source=str(Path(h3d_path).resolve()), optics=optics,
                          size=size if isinstance(size, str) else list(size),
                          eyes_mm=eyes.tolist(), output_gamma=(read_sidecar(h3d_path) or {}).get("output_gamma", "sRGB"),

@@ -222,6 +222,14 @@ def pixel_lens(lens_array: LensArray, pix: np.ndarray) -> tuple[np.ndarray, np.n
     return lens, offset
 
 
+def same_lens(a: np.ndarray, b: np.ndarray, lens_array: LensArray) -> np.ndarray:
+    """Whether lens indices ``(j, i)`` (..., 2) name the same lens: on a lenticular sheet the column alone
+    (a lenticule runs across every row; the ray may land a row up or down)."""
+    if lens_array.grid == "lenticular":
+        return a[..., 0] == b[..., 0]
+    return np.all(a == b, axis=-1)
+
+
 def view_zone(lens_array: LensArray, distance: float) -> dict:
     """The eye's ``x`` range (mm, at ``distance``) over which lens ``c`` shows its own elemental image,
     ``c_x +- p D / 2f``; the central zone is where every lens does (empty when the array is wider than
@@ -241,7 +249,7 @@ def report(result: Replay, lens_array: LensArray, eye) -> dict:
     own_lens, offset = pixel_lens(lens_array, result.pixel)
     sampled = result.lens[..., 0] >= 0
     shown = result.pixel[..., 0] >= 0
-    own = shown & sampled & np.all(own_lens == result.lens, axis=-1)
+    own = shown & sampled & same_lens(own_lens, result.lens, lens_array)
     flipped = shown & sampled & ~own
     s = lens_array.panel
     off = offset[shown]
@@ -284,3 +292,39 @@ def views_shown(result: Replay, lens_array: LensArray) -> np.ndarray | None:
     col, row = pix[..., 0] - cols.start, pix[..., 1] - rows.start
     ok = (pix[..., 0] >= 0) & (col >= 0) & (col < cols.stop - cols.start) & (row >= 0) & (row < rows.stop - rows.start)
     return np.stack([np.where(ok, row % ny, -1), np.where(ok, col % nx, -1)], axis=-1)
+
+
+def coded_panel(lens_array: LensArray) -> np.ndarray:
+    """A 16-bit panel whose pixel ``(col, row)`` holds ``(col + 1, row + 1, 0)``: replayed through any
+    optics, each picture pixel names the panel pixel it shows (0: none)."""
+    p = lens_array.panel
+    if max(p.width, p.height) >= 65535:
+        raise ConfigError(f"a {p.width}x{p.height} panel is too large to code its pixels in 16 bits")
+    rows, cols = np.mgrid[0:p.height, 0:p.width]
+    return np.stack([cols + 1, rows + 1, np.zeros_like(cols)], axis=-1).astype(np.uint16)
+
+
+def light_shares(seen: np.ndarray, lens_array: LensArray, eye, size: tuple[int, int]) -> dict:
+    """Where the light of each lens's aperture comes from, from a picture ``seen`` (H, W, >=2) of
+    ``coded_panel`` replayed at ``size`` from ``eye``: the share of picture pixels (inside a lens whose
+    chief ray lands on the panel) showing the chief pixel, another pixel of the same lens's elemental
+    image (a neighbouring view), a pixel of another lens's image (crosstalk), or nothing."""
+    chief = replay(coded_panel(lens_array), lens_array, eye, size=size)
+    counted = (chief.lens[..., 0] >= 0) & (chief.pixel[..., 0] >= 0)
+    pix = seen[..., :2].astype(np.int64) - 1
+    dark = (pix < 0).any(axis=-1)
+    same = np.all(pix == chief.pixel, axis=-1)
+    owner, _ = pixel_lens(lens_array, np.where(dark[..., None], -1, pix))
+    own = same_lens(owner, chief.lens, lens_array) & ~dark
+    n = max(1, int(counted.sum()))
+    return {"chief_pixel": float((same & counted).sum() / n),
+            "neighbouring_views": float((own & ~same & counted).sum() / n),
+            "neighbouring_lenses": float((~own & ~dark & counted).sum() / n),
+            "dark": float((dark & counted).sum() / n), "samples": int(counted.sum())}
+
+
+def psnr(a: np.ndarray, b: np.ndarray) -> float:
+    """PSNR in dB of two pictures of one dtype (inf when equal)."""
+    peak = float(np.iinfo(a.dtype).max) if np.issubdtype(a.dtype, np.integer) else 1.0
+    mse = float(np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2))
+    return math.inf if mse == 0 else 10 * math.log10(peak * peak / mse)

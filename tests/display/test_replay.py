@@ -14,7 +14,7 @@ import pytest
 
 import povh3d
 from povh3d.display import presets
-from povh3d.display.replay import replay
+from povh3d.display.replay import coded_panel, light_shares, replay
 from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
@@ -220,3 +220,14 @@ def test_command_refuses_an_image_without_sidecar(tmp_path: Path, cli) -> None:
     r = cli("replay", str(tmp_path / "bare.png"), "-o", str(tmp_path / "eye.png"))
     assert r.code != 0 and "no sidecar" in r.err and len(r.err.strip().splitlines()) == 1
     assert not (tmp_path / "eye.png").exists()
+
+
+def test_light_shares_of_the_pinhole_picture_are_all_chief() -> None:
+    """The coded pinhole picture itself: every aperture pixel its chief pixel (the shares' own oracle)."""
+    la = presets.lens_array("demo")
+    eye = (60.0, 0.0, -300.0)
+    seen = replay(coded_panel(la), la, eye, size=(160, 120)).image
+    shares = light_shares(seen, la, eye, (160, 120))
+    assert shares["chief_pixel"] == 1.0
+    other = replay(coded_panel(la), la, (0.0, 0.0, -300.0), size=(160, 120)).image
+    assert light_shares(other, la, eye, (160, 120))["chief_pixel"] < 0.5
