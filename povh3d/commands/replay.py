@@ -16,6 +16,7 @@ from ..display.display import Display
 from ..display.replay import OPTICS, Replay, default_eye, light_shares, psnr, replay, report, sweep_eyes
 from ..errors import ConfigError, InputError
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from ..renderer.budget import check_memory
 from ..renderer.records import base_record, png_output, write_image
 from .images import check_against_sidecar
 
@@ -88,6 +89,9 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
         check_writable(json_path)
     image, display = read_display(h3d_path)
     la = display.lens_array
+    if not isinstance(size, str):  # the picture's float geometry, a few arrays of it
+        check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1] * (1 if sweep is None else 2),
+                     "give a smaller --size, e.g. --size 800x600")
     eye = eye if eye is not None else default_eye(la)
     eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
     results: list[Replay] = []

@@ -66,7 +66,7 @@ def check_eye(eye, lens_array: LensArray) -> np.ndarray:
     except (TypeError, ValueError):
         raise ConfigError(f"the eye must be three numbers X,Y,Z in mm, got {eye!r}; e.g. --eye 0,0,-300") from None
     if not np.all(np.isfinite(e)):
-        raise ConfigError(f"the eye {tuple(e)} is not finite; give it in mm, e.g. --eye 0,0,-300")
+        raise ConfigError(f"the eye ({', '.join(f'{v:g}' for v in e)}) is not finite; give it in mm, e.g. --eye 0,0,-300")
     if e[2] >= 0:
         raise ConfigError(f"the eye at z = {e[2]:g} mm is on the panel's side (the viewer is at z < 0); "
                           "give a negative z, e.g. --eye 0,0,-300")

@@ -23,6 +23,7 @@ from .._version import __version__
 from ..display.replay import check_eye, coded_panel
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
+from ..geometry.chief_rays import check_ior
 from ..geometry.optics import Lenslet
 from ..image.io import read_png, write_png
 from ..scene.templates import render_template
@@ -38,7 +39,20 @@ def replay_lenslet(lens_array: LensArray, ior: float = REPLAY_IOR, shape: str = 
     if lens_array.grid == "lattice":
         raise ConfigError("a lattice given by two vectors has no lenslet shape to replay; use --optics pinhole")
     aperture = {"square": "square", "hex": "hex", "lenticular": "lenticular"}[lens_array.grid]
+    check_ior(ior)
+    if not ior > 1:  # NaN too
+        raise ConfigError(f"--ior {ior!r} does not make a converging lens; give an index above 1, e.g. --ior 1.49")
     return Lenslet(shape, aperture, lens_array.pitch_x, lens_array.pitch_y, lens_array.focal, ior)
+
+
+def lenslet_centres(lens_array: LensArray) -> np.ndarray:
+    """Where the lenslets sit, (n, 2) mm: the lens centres; on a lenticular sheet one lenticule a column,
+    its axis through the origin's row (turned with the sheet), long enough to cross the whole panel."""
+    la = lens_array
+    if la.grid == "lenticular":
+        cx = la.lattice_centres()[0, :, 0]
+        return np.stack(la.from_lattice(cx, np.zeros_like(cx)), axis=-1)
+    return la.lens_centres().reshape(-1, 2)
 
 
 def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, sheet: bool = True) -> str:
@@ -49,11 +63,7 @@ def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, s
     half_x = la.pitch_x / 2
     half_y = math.hypot(width_mm, height_mm) / 2 + la.pitch_x if la.grid == "lenticular" else la.pitch_y / 2
     hex_half_y = la.pitch_x / math.sqrt(3)
-    centres = la.lens_centres()
-    if la.grid == "lenticular":  # one lenticule a column, across every row
-        centres = centres[:1] * [1, 0] if not la.rotation else \
-            np.stack(la.from_lattice(la.lattice_centres()[:1, :, 0], np.zeros((1, la.lenses_x))), axis=-1)
-    centres = centres.reshape(-1, 2)
+    centres = lenslet_centres(la)
     if len(centres) > MAX_LENSLETS:
         raise ConfigError(f"{len(centres)} lenslets are more than the replay builds ({MAX_LENSLETS}); "
                           "use --optics pinhole")
@@ -111,5 +121,5 @@ def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *,
 
         seconds = run_jobs(jobs, processes=min(processes, len(jobs)), on_result=keep)
     timings = {"povray_s": [float(s) for s in seconds], "total_s": time.perf_counter() - start,
-               "lenslets": int(len(lens_array.lens_centres().reshape(-1, 2))), "lenslet": lenslet.as_record()}
+               "lenslets": int(len(lenslet_centres(lens_array))), "lenslet": lenslet.as_record()}
     return [pictures[n] for n in range(len(jobs))], timings
