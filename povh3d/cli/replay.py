@@ -21,7 +21,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
     extra = ""
     if record.get("reports"):
         r = record["reports"][0]
-        extra = f", own lens {100 * r['own_lens_share']:.1f} %"
+        if "geometric_view_share" in r:  # a mapped panel
+            extra = (f", the view pointing at the eye on {100 * r['geometric_view_share']:.1f} % of lens samples "
+                     f"({100 * r['within_one_view_share']:.1f} % within one view)")
+        else:
+            extra = f", own lens {100 * r['own_lens_share']:.1f} %"
         zone = r["view_zone"]["every_lens_zone_mm"]
         extra += f", every lens in zone for x in [{zone[0]:.1f}, {zone[1]:.1f}] mm" if zone else ", no eye x sees every lens in zone"
         if "light_shares" in r:

@@ -13,7 +13,8 @@ from typing import Any
 import numpy as np
 
 from ..display.display import Display
-from ..display.replay import OPTICS, Replay, default_eye, light_shares, psnr, replay, report, sweep_eyes
+from ..display.replay import (OPTICS, Replay, default_eye, light_shares, mapped_report, mapped_sheet, psnr, replay, report,
+                              sweep_eyes)
 from ..errors import ConfigError, InputError
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
 from ..renderer.budget import check_memory
@@ -32,11 +33,35 @@ def read_display(h3d_path: str | Path) -> tuple[np.ndarray, Display]:
         raise InputError(f"{str(h3d_path)!r} has no sidecar with its lens array ({Path(h3d_path).stem}.json); "
                          "replay an image povh3d rendered, with its sidecar beside it")
     display = Display.from_record(record)
-    check_against_sidecar(h3d_path, record["lens_array"])
-    if display.mapping_name is not None or display.physical_panel is not None:
-        raise ConfigError(f"{str(h3d_path)!r} is a mapped panel ({display.mapping_name}); replaying a mapped "
-                          "panel through its slanted sheet is not built yet: replay the unmapped render")
+    if display.physical_panel is None:
+        check_against_sidecar(h3d_path, record["lens_array"])
     return read_png(h3d_path), display
+
+
+def mapped(display: Display, image: np.ndarray, h3d_path: str | Path) -> tuple[Any, Any, float, np.ndarray] | None:
+    """A mapped panel's sheet: ``(mapping, sheet, shift, views)`` (``display/replay.mapped_sheet``), or None for
+    an H3D image; one error line for a mapping whose sheet povh3d cannot rebuild."""
+    if display.physical_panel is None:
+        return None
+    from ..display.display import build_display
+
+    panel = display.physical_panel
+    if image.shape[:2] != (panel.height, panel.width):
+        raise InputError(f"{str(h3d_path)!r} is {image.shape[1]}x{image.shape[0]} but its sidecar describes a "
+                         f"{panel.width}x{panel.height} panel; render it again or delete the sidecar")
+    if display.preset is None or display.mapping_name is None:
+        raise ConfigError(f"{str(h3d_path)!r} is a mapped panel without a preset; replay needs the preset's "
+                          "mapping to rebuild its sheet: render it with --preset")
+    built = build_display(display.preset, mapping=display.mapping_name)
+    if built.mapping is None or built.mapped_panel != panel:
+        raise ConfigError(f"the sidecar's panel is not preset {display.preset!r}'s with mapping "
+                          f"{display.mapping_name!r}; replay needs that preset's own mapping")
+    try:
+        sheet, shift, views = mapped_sheet(built.mapping, panel, built.lens_array.focal)
+    except ConfigError:
+        raise ConfigError(f"mapping {display.mapping_name!r} is not a slanted subpixel sheet; replay rebuilds "
+                          "those only (alioscopy, philips)") from None
+    return built.mapping, sheet, shift, views
 
 
 def parse_eye(text: str | None) -> tuple[float, float, float] | None:
@@ -97,25 +122,34 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     results: list[Replay] = []
     frames: list[np.ndarray] = []
     timings: dict[str, Any] = {}
-    if optics == "lens":
-        from ..renderer.replay import render_replay  # only the renderer starts POV-Ray
-
-        from ..renderer.replay import REPLAY_IOR
+    reports: list[dict[str, Any]] = []
+    sheet = mapped(display, image, h3d_path)
+    if sheet is not None:  # a mapped panel, subpixel by subpixel through the sheet its mapping addresses
+        if optics not in ("pinhole", "barrier"):
+            raise ConfigError(f"a mapped panel is replayed through its sheet's slits (--optics pinhole or barrier), "
+                              f"not --optics {optics} (not built yet)")
+        _, la, shift, views = sheet
+        for e in eyes:
+            results.append(replay(image, la, e, optics="barrier", size=size, shift=shift, subpixels=True))
+        reports = [mapped_report(r, la, shift, views, e) for r, e in zip(results, eyes)]
+        frames = [r.image for r in results]
+    elif optics == "lens":
+        from ..renderer.replay import REPLAY_IOR, render_replay  # only the renderer starts POV-Ray
 
         frames, timings = render_replay(image, la, eyes, size=size, quality=quality, coded=json_path is not None,
                                         ior=REPLAY_IOR if ior is None else ior, shape=lenslet)
         if json_path is not None:  # the chief rays' report, and where each aperture's light comes from
             codes, frames = frames[len(eyes):], frames[:len(eyes)]
-            results = [replay(image, la, e, optics="pinhole", size=size) for e in eyes]
+            reports = [report(replay(image, la, e, size=size), la, e) for e in eyes]
+            for rep, e, code, frame in zip(reports, eyes, codes, frames):
+                rep["light_shares"] = light_shares(code, la, e, size)
+                rep["psnr_to_pinhole_db"] = psnr(frame, replay(image, la, e, size=size).image[..., :3])
     else:
         for e in eyes:  # every eye checked before anything is written
             results.append(replay(image, la, e, optics=optics, size=size))
         frames = [r.image for r in results]
-    reports = [report(r, la, e) for r, e in zip(results, eyes)] if results and optics != "none" else []
-    if optics == "lens" and reports:
-        for rep, e, code, frame, chief in zip(reports, eyes, codes, frames, results):
-            rep["light_shares"] = light_shares(code, la, e, size)
-            rep["psnr_to_pinhole_db"] = psnr(frame, chief.image[..., :3])
+        if optics != "none":
+            reports = [report(r, la, e) for r, e in zip(results, eyes)]
     record = base_record("replay", la, source=str(Path(h3d_path).resolve()), optics=optics,
                          size=size if isinstance(size, str) else list(size),
                          eyes_mm=eyes.tolist(), output_gamma=(read_sidecar(h3d_path) or {}).get("output_gamma", "sRGB"),

@@ -76,7 +76,8 @@ def check_eye(eye, lens_array: LensArray) -> np.ndarray:
     return e
 
 
-def lens_cells(lens_array: LensArray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def lens_cells(lens_array: LensArray, x: np.ndarray, y: np.ndarray, shift: float = 0.0
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The lens whose cell holds each lens-plane point ``(x, y)`` mm (docs/geometry.md's rule for
     pixel centres, applied to any point).
 
@@ -85,6 +86,7 @@ def lens_cells(lens_array: LensArray, x: np.ndarray, y: np.ndarray) -> tuple[np.
     lenticular sheet the point of the lenticule's axis beside the point.
     """
     X, Y = lens_array.to_lattice(np.asarray(x, np.float64), np.asarray(y, np.float64))
+    X = X - shift  # a sheet moved ``shift`` mm across (a mapped panel's, ``subpixel.placed_sheet``)
     centres = lens_array.lattice_centres()
     Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
     px, py = lens_array.pitch_x, lens_array.pitch_y
@@ -111,8 +113,14 @@ def lens_cells(lens_array: LensArray, x: np.ndarray, y: np.ndarray) -> tuple[np.
     c = centres[i, j].copy()
     if lens_array.grid == "lenticular":
         c[..., 1] = Y  # a slit: the ray crosses the lenticule's axis beside the point
-    c = np.stack(lens_array.from_lattice(c[..., 0], c[..., 1]), axis=-1)
+    c = np.stack(lens_array.from_lattice(c[..., 0] + shift, c[..., 1]), axis=-1)
     return j, i, inside, c
+
+
+def sheet_centres(lens_array: LensArray, shift: float = 0.0) -> np.ndarray:
+    """Every lens centre (Ly, Lx, 2) mm, the sheet moved ``shift`` mm across its lenticules (or columns)."""
+    c = lens_array.lattice_centres()
+    return np.stack(lens_array.from_lattice(c[..., 0] + shift, c[..., 1]), axis=-1)
 
 
 def landing(centres: np.ndarray, eye: np.ndarray, focal: float) -> np.ndarray:
@@ -144,8 +152,13 @@ def window_points(lens_array: LensArray, size: tuple[int, int]) -> tuple[np.ndar
 
 
 def replay(h3d: np.ndarray, lens_array: LensArray, eye, *, optics: str = "pinhole",
-           size: str | tuple[int, int] = "lenses") -> Replay:
-    """What an eye at ``eye`` (mm, display frame) sees of ``h3d`` on its display (module docstring)."""
+           size: str | tuple[int, int] = "lenses", shift: float = 0.0, subpixels: bool = False) -> Replay:
+    """What an eye at ``eye`` (mm, display frame) sees of ``h3d`` on its display (module docstring).
+
+    ``shift``: the sheet lies that many mm across from ``lens_array``'s.  ``subpixels``: the panel is
+    seen subpixel by subpixel (a mapped slanted panel, whose sheet addresses R, G and B apart): the ray
+    lands on one subpixel ``3 col + c`` (``s/3`` wide) and the eye sees channel ``c`` of pixel ``col``
+    alone; ``pixel`` then holds ``(3 col + c, row)``."""
     if optics not in NUMPY_OPTICS:
         raise ConfigError(f"optics {optics!r} is not one NumPy replays ({', '.join(NUMPY_OPTICS)}); "
                           "'lens' runs POV-Ray (povh3d replay --optics lens)")
@@ -161,7 +174,7 @@ def replay(h3d: np.ndarray, lens_array: LensArray, eye, *, optics: str = "pinhol
     if size == "lenses":
         if optics == "none":
             raise ConfigError("without a sheet (--optics none) there are no lenses to sample; give --size WxH")
-        c = lens_array.lens_centres()
+        c = sheet_centres(lens_array, shift)
         rows, cols = c.shape[:2]
         jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
         inside = np.ones((rows, cols), bool)
@@ -172,12 +185,21 @@ def replay(h3d: np.ndarray, lens_array: LensArray, eye, *, optics: str = "pinhol
             c = np.stack([x, y], axis=-1)
             jj, ii, inside = np.full(x.shape, -1), np.full(x.shape, -1), np.ones(x.shape, bool)
         else:
-            jj, ii, inside, c = lens_cells(lens_array, x, y)
+            jj, ii, inside, c = lens_cells(lens_array, x, y, shift)
     land = c if optics == "none" else landing(c, e, lens_array.focal)
     land = np.where(inside[..., None], land, np.nan)
-    pix, on = panel_pixel(lens_array, land)
-    image = np.zeros(on.shape + h3d.shape[2:], h3d.dtype)
-    image[on] = h3d[pix[on][:, 1], pix[on][:, 0]]
+    image = np.zeros(land.shape[:-1] + h3d.shape[2:], h3d.dtype)
+    if subpixels:
+        from .subpixel import subpixel_array
+
+        pix, on = panel_pixel(subpixel_array(lens_array), land)
+        col, row = pix[on][:, 0], pix[on][:, 1]
+        seen = np.zeros((col.size, h3d.shape[2]), h3d.dtype)
+        seen[np.arange(col.size), col % 3] = h3d[row, col // 3, col % 3]
+        image[on] = seen
+    else:
+        pix, on = panel_pixel(lens_array, land)
+        image[on] = h3d[pix[on][:, 1], pix[on][:, 0]]
     lens = np.stack([np.where(inside, jj, -1), np.where(inside, ii, -1)], axis=-1).astype(np.int64)
     return Replay(image, land, pix, lens)
 
@@ -328,3 +350,37 @@ def psnr(a: np.ndarray, b: np.ndarray) -> float:
     peak = float(np.iinfo(a.dtype).max) if np.issubdtype(a.dtype, np.integer) else 1.0
     mse = float(np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2))
     return math.inf if mse == 0 else 10 * math.log10(peak * peak / mse)
+
+
+# -- mapped slanted panels -----------------------------------------------------------------------------
+def mapped_sheet(mapping, panel, focal: float) -> tuple[LensArray, float, np.ndarray]:
+    """The sheet a slanted subpixel ``mapping`` addresses on its physical ``panel`` (``subpixel.placed_sheet``:
+    the turned lenticular array and how far across it lies, mm) and the view ``(H, W, 3)`` every subpixel
+    shows under the mapping."""
+    from .subpixel import placed_sheet
+
+    sheet, shift = placed_sheet(mapping, panel, focal)
+    index = mapping.sample((panel.width, panel.height)).index
+    return sheet, shift, ((index // 3) % mapping.views).astype(np.int16)
+
+
+def mapped_report(result: Replay, sheet: LensArray, shift: float, views: np.ndarray, eye) -> dict:
+    """Per eye on a mapped panel: how many lens samples show each view (the view the mapping gives the
+    subpixel the ray lands on), and how many show the view whose direction, by the sheet's geometry, points
+    at the eye (the landing point's place across its lenticule), exactly and within one view."""
+    e = np.asarray(eye, np.float64)
+    pix = result.pixel
+    ok = pix[..., 0] >= 0
+    col3, row = pix[..., 0][ok], pix[..., 1][ok]
+    shown = views[row, col3 // 3, col3 % 3].astype(np.int64)
+    n = int(views.max()) + 1
+    x, _ = sheet.to_lattice(result.landing[..., 0][ok], result.landing[..., 1][ok])
+    t = (x - shift) / sheet.pitch_x + sheet.lenses_x / 2
+    geometric = np.minimum(np.floor((t - np.floor(t)) * n), n - 1).astype(np.int64)
+    keys, counts = np.unique(shown, return_counts=True)
+    m = max(1, int(ok.sum()))
+    return {"eye_mm": e.tolist(), "samples": int(ok.size), "off_panel": int((~ok).sum()),
+            "view_counts": {str(k): int(c) for k, c in zip(keys.tolist(), counts.tolist())},
+            "geometric_view_share": float((shown == geometric).sum() / m),
+            "within_one_view_share": float((np.minimum(np.abs(shown - geometric), n - np.abs(shown - geometric)) <= 1).sum() / m),
+            "view_zone": view_zone(sheet, abs(float(e[2])))}
