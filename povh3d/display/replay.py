@@ -254,14 +254,28 @@ def same_lens(a: np.ndarray, b: np.ndarray, lens_array: LensArray) -> np.ndarray
 
 def view_zone(lens_array: LensArray, distance: float) -> dict:
     """The eye's ``x`` range (mm, at ``distance``) over which lens ``c`` shows its own elemental image,
-    ``c_x +- p D / 2f``; the central zone is where every lens does (empty when the array is wider than
-    ``p D / f``)."""
+    ``c_x +- p D / 2f`` (for the lens nearest the origin); the central zone is where every lens does (empty
+    when the array is wider than ``p D / f``); upright arrays: the eye ``x`` where that lens's view flips."""
     half = lens_array.pitch_x * distance / (2 * lens_array.focal)
-    cx = lens_array.lens_centres()[..., 0]
+    centres = lens_array.lens_centres()
+    cx = centres[..., 0]
     low, high = float(cx.max() - half), float(cx.min() + half)
-    return {"distance_mm": float(distance), "lens_zone_width_mm": 2 * half,
-            "centre_lens_zone_mm": [-half, half],
-            "every_lens_zone_mm": [low, high] if low <= high else None}
+    flat = centres.reshape(-1, 2)
+    c0 = flat[np.argmin(np.hypot(flat[:, 0], flat[:, 1]))]  # the lens nearest the origin
+    out = {"distance_mm": float(distance), "lens_zone_width_mm": 2 * half,
+           "centre_lens_mm": [float(c0[0]), float(c0[1])],
+           "centre_lens_zone_mm": [float(c0[0] - half), float(c0[0] + half)],
+           "every_lens_zone_mm": [low, high] if low <= high else None}
+    if not lens_array.rotation and lens_array.grid != "lattice":
+        # the lens nearest the origin: the eye x where its chief ray crosses a pixel column's edge,
+        # E = c - (X_edge - c) D / f, i.e. where the view it shows flips
+        c = c0
+        p = lens_array.panel
+        edges = (np.arange(p.width + 1) - p.width / 2) * p.pitch_x
+        edges = edges[np.abs(edges - c[0]) <= lens_array.pitch_x / 2 + 1e-9]
+        flips = np.sort(c[0] - (edges - c[0]) * distance / lens_array.focal)
+        out["view_flips_x_mm"] = [round(float(v), 6) for v in flips]
+    return out
 
 
 def report(result: Replay, lens_array: LensArray, eye) -> dict:

@@ -282,3 +282,22 @@ def test_command_replays_a_mapped_panel(tmp_path: Path, cli) -> None:
     assert rep["geometric_view_share"] > 0.74 and set(rep["view_counts"]) <= {str(v) for v in range(8)}
     r = cli("replay", str(path), "--optics", "lens", "--size", "80x60", "-o", str(tmp_path / "lens.png"))
     assert r.code != 0 and "mapped panel" in r.err and not (tmp_path / "lens.png").exists()
+
+
+def test_view_flips_are_where_the_centre_lens_changes_pixel() -> None:
+    from povh3d.display.replay import view_zone
+
+    la = presets.lens_array("demo")
+    zone = view_zone(la, 300.0)
+    flips = zone["view_flips_x_mm"]
+    assert len(flips) == 9 and flips[0] == pytest.approx(zone["centre_lens_zone_mm"][0])  # 8 pixels, 9 edges
+    i, j = 14, 19  # the lens at (-0.4, 0.4): row 14, column 19 of 30 x 40
+    assert np.allclose(oracle_centres(la)[i, j], zone["centre_lens_mm"])
+    h3d = coded(la)
+
+    def col(x: float) -> int:
+        return int(replay(h3d, la, (x, 0.0, -300.0)).image[i, j, 0])
+
+    for edge in flips[1:-1]:
+        assert col(edge - 0.3) == col(edge + 0.3) + 1  # the eye moves right: the pixel one column left
+        assert col(edge + 0.3) == col(edge + 19.0)    # negative control: between two flips, no change
