@@ -14,7 +14,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
     size: Any = "lenses" if args.size == "lenses" else parse_size(args.size, "--size", "WxH like 800x600 or 'lenses'")
     sweep = parse_sweep(args.sweep)
     record = replay_file(args.h3d, args.output, eye=parse_eye(args.eye), optics=args.optics, size=size,
-                         sweep=sweep, json_path=args.json, quality=args.quality, ior=args.ior, lenslet=args.lenslet)
+                         sweep=sweep, json_path=args.json, quality=args.quality, ior=args.ior, lenslet=args.lenslet,
+                         pupil=args.pupil)
     eyes = record["eyes_mm"]
     first = ",".join(f"{v:g}" for v in eyes[0])
     what = f"{len(eyes)} eyes from ({first})" if len(eyes) > 1 else f"eye ({first}) mm"
@@ -54,4 +55,6 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--ior", type=float, help="--optics lens: the lenslets' index of refraction (default 1.49)")
     p.add_argument("--lenslet", default="spherical", choices=("spherical", "conic"),
                    help="--optics lens: the curved face, a sphere (default) or the aberration-free conic")
+    p.add_argument("--pupil", type=float, metavar="MM", help="--optics lens: the eye's pupil diameter, as focal "
+                   "blur focused on the lens plane (default: a pinhole eye)")
     p.set_defaults(func=cmd_replay)

@@ -96,12 +96,15 @@ def parse_sweep(text: str | None) -> tuple[str, float, float, int] | None:
 def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, float, float] | None = None,
                 optics: str = "pinhole", size: str | tuple[int, int] = "lenses",
                 sweep: tuple[str, float, float, int] | None = None, json_path: str | Path | None = None,
-                quality: str = "draft", ior: float | None = None, lenslet: str = "spherical") -> dict[str, Any]:
+                quality: str = "draft", ior: float | None = None, lenslet: str = "spherical",
+                pupil: float | None = None) -> dict[str, Any]:
     """Replay ``h3d_path`` from ``eye`` (or a sweep of eyes) and write ``output`` with its sidecar.
 
     With ``sweep``, ``output`` is a ``.gif`` and the frames go beside it as ``stem_NNN.png``."""
     if optics not in OPTICS:
         raise ConfigError(f"--optics must be one of {', '.join(OPTICS)}, got {optics!r}")
+    if pupil is not None and optics != "lens":
+        raise ConfigError("--pupil blurs the real lenslets' picture (a POV-Ray focal blur); add --optics lens")
     output = Path(output)
     if sweep is None:
         out = png_output(output)
@@ -137,7 +140,7 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
         from ..renderer.replay import REPLAY_IOR, render_replay  # only the renderer starts POV-Ray
 
         frames, timings = render_replay(image, la, eyes, size=size, quality=quality, coded=json_path is not None,
-                                        ior=REPLAY_IOR if ior is None else ior, shape=lenslet)
+                                        ior=REPLAY_IOR if ior is None else ior, shape=lenslet, pupil=pupil)
         if json_path is not None:  # the chief rays' report, and where each aperture's light comes from
             codes, frames = frames[len(eyes):], frames[:len(eyes)]
             reports = [report(replay(image, la, e, size=size), la, e) for e in eyes]

@@ -31,6 +31,7 @@ from ..scene.templates import render_template
 # The index of the lenslets of the thesis's lab displays' acrylic sheets (and the prototype's).
 REPLAY_IOR = 1.49
 MAX_LENSLETS = 250_000
+BLUR_SAMPLES = 24  # rays a pixel through the pupil (--pupil)
 
 
 def replay_lenslet(lens_array: LensArray, ior: float = REPLAY_IOR, shape: str = "spherical") -> Lenslet:
@@ -55,7 +56,8 @@ def lenslet_centres(lens_array: LensArray) -> np.ndarray:
     return la.lens_centres().reshape(-1, 2)
 
 
-def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, sheet: bool = True) -> str:
+def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, sheet: bool = True,
+                  pupil: float | None = None) -> str:
     """The POV-Ray scene of the display seen from ``eye`` (module docstring); the panel is ``panel.png``.
     ``sheet`` False: no lenslets and the panel in the lens plane."""
     la = lens_array
@@ -74,13 +76,14 @@ def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, s
         bound_half_y=hex_half_y if la.grid == "hex" else half_y, sqrt3_2=math.sqrt(3) / 2, thickness=t,
         centres=centres.tolist(), rotation=la.rotation, sheet=sheet,
         z_panel=t * (1 - 1 / lenslet.ior) + la.focal if sheet else 0.0,
-        panel_size=(width_mm, height_mm), eye=tuple(map(float, eye)),
+        panel_size=(width_mm, height_mm), eye=tuple(map(float, eye)), pupil=pupil, blur_samples=BLUR_SAMPLES,
         direction=(-float(eye[0]), -float(eye[1]), -float(eye[2])))
 
 
 def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *, size: Any,
                   quality: str = "draft", ior: float = REPLAY_IOR, shape: str = "spherical", processes: int = 2,
-                  sheet: bool = True, coded: bool = False) -> tuple[list[np.ndarray], dict[str, Any]]:
+                  sheet: bool = True, coded: bool = False, pupil: float | None = None
+                  ) -> tuple[list[np.ndarray], dict[str, Any]]:
     """One picture per eye through the lenslets (``sheet`` False: none, the panel in the lens plane);
     ``(pictures, timings)``.  ``size`` is ``(W, H)``.  ``coded``: each eye also sees ``coded_panel`` (point
     sampled, 16 bit), whose pictures follow the others: the report's light shares."""
@@ -94,6 +97,9 @@ def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *,
     for e in eyes:
         check_eye(e, lens_array)
     lenslet = replay_lenslet(lens_array, ior, shape)
+    if pupil is not None and not (isinstance(pupil, (int, float)) and 0 < pupil <= 20):
+        raise ConfigError(f"--pupil must be the eye's pupil diameter in mm, above 0 and at most 20, got {pupil!r}; "
+                          "e.g. --pupil 4")
     if quality not in ("draft", "high"):
         raise ConfigError(f"--quality must be draft or high, got {quality!r}")
     options = ("-A",) if quality == "draft" else ("+A0.05", "+AM2", "+R3")
@@ -103,7 +109,7 @@ def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *,
     with tempfile.TemporaryDirectory(prefix="povh3d-replay-") as folder:
         panel = Path(folder) / "panel.png"
         write_png(panel, image[..., :3])
-        jobs = [PovrayJob(name=f"replay eye {n}", script=replay_script(lens_array, e, lenslet, sheet=sheet), width=width,
+        jobs = [PovrayJob(name=f"replay eye {n}", script=replay_script(lens_array, e, lenslet, sheet=sheet, pupil=pupil), width=width,
                           height=height, options=options, bit_depth=bit_depth, file_gamma="1.0",
                           read_files=(str(panel),), include_dirs=(folder,), links=(("panel.png", str(panel)),))
                 for n, e in enumerate(eyes)]
