@@ -40,7 +40,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("replay", help="an H3D image on its display, seen from an eye (the virtual display)")
     p.add_argument("h3d", help="H3D PNG with its sidecar")
-    p.add_argument("-o", "--output", required=True, help="replay .png (with --sweep: a .gif, frames beside it)")
+    p.add_argument("-o", "--output", required=True, help="replay .png (with --sweep: a .gif or .mp4, frames beside it)")
     p.add_argument("--eye", metavar="X,Y,Z", help="eye in mm, display frame, viewer at z < 0 (default 0,0,-300)")
     p.add_argument("--optics", default="pinhole", choices=("pinhole", "barrier", "lens", "none"),
                    help="pinhole mask at the lens centres (exact; default), barrier (slits, lenticular), lens "

@@ -109,8 +109,12 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     if sweep is None:
         out = png_output(output)
     else:
-        if output.suffix.lower() != ".gif":
-            raise ConfigError(f"a sweep's output {str(output)!r} must be a .gif (its frames go beside it as PNGs)")
+        if output.suffix.lower() not in (".gif", ".mp4"):
+            raise ConfigError(f"a sweep's output {str(output)!r} must be a .gif or .mp4 (its frames go beside it "
+                              "as PNGs)")
+        from ..image.video import check_video_path
+
+        check_video_path(output)
         check_writable(output)
         out = output
     if json_path is not None:
@@ -157,7 +161,8 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
                          size=size if isinstance(size, str) else list(size),
                          eyes_mm=eyes.tolist(), output_gamma=(read_sidecar(h3d_path) or {}).get("output_gamma", "sRGB"),
                          **({"timings_s": timings} if timings else {}),
-                         **({"reports": reports} if reports else {}))
+                         **({"reports": [{k: v for k, v in r.items() if k != "view_of_lens"} for r in reports]}
+                            if reports else {}))  # the per-lens views: in --json's report only
     if sweep is None:
         write_image(out, frames[0], record)
     else:
@@ -170,17 +175,13 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
 
 
 def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any]) -> None:
-    from PIL import Image
-
     from ..image.preview import enlarge
+    from ..image.video import to_rgb8, write_video
 
     for n, frame in enumerate(frames):
         write_png(output.with_name(f"{output.stem}_{n:03d}.png"), frame)
-    small = [(f >> 8).astype(np.uint8) if f.dtype == np.uint16 else f for f in frames]
-    scale = max(1, 480 // max(small[0].shape[1], 1))
-    big = [enlarge(f[..., :3], (scale, scale)) for f in small]
-    with atomic_path(output) as tmp:
-        Image.fromarray(big[0]).save(tmp, format="GIF", save_all=True,
-                                     append_images=[Image.fromarray(b) for b in big[1:]], duration=120, loop=0)
+    small = [to_rgb8(f) for f in frames]
+    scale = max(1, 480 // max(small[0].shape[1], 1))  # lens-sized pixels, about 480 across
+    write_video([enlarge(f, (scale, scale)) for f in small], output, fps=8.0)
     with atomic_path(output.with_suffix(".json")) as tmp:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")

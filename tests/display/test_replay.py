@@ -194,6 +194,10 @@ def test_command_sweep_writes_frames_and_gif(tmp_path: Path, cli) -> None:
     frames = sorted(tmp_path.glob("s_*.png"))
     assert len(frames) == 5 and (tmp_path / "s.gif").is_file()
     assert not np.array_equal(read_png(frames[0]), read_png(frames[-1]))
+    pytest.importorskip("imageio_ffmpeg")
+    r = cli("replay", str(h3d), "--sweep", "y:-30:30:3", "-o", str(tmp_path / "v.mp4"))
+    assert r.code == 0, r.err
+    assert (tmp_path / "v.mp4").stat().st_size > 0 and len(list(tmp_path.glob("v_*.png"))) == 3
 
 
 @pytest.mark.parametrize("args, words", [
