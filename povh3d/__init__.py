@@ -23,7 +23,7 @@ from ._version import __version__
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # what type checkers and editors see
     from .api import (borders, calibrate, convert_mesh, equalise, extract, info, interleave, layout, map, moire,  # noqa: F401 (map: not in __all__, it would hide the builtin)
-                      preview, read_h3d, refocus, resample, quilt, stitch, undistort, unquilt, viewpoints)
+                      preview, read_h3d, refocus, replay, resample, quilt, stitch, undistort, unquilt, viewpoints)
     from .renderer.api import render
     from .display.display import Display, build_display
     from .renderer.request import ModelOptions, RenderRequest, VolumeOptions
@@ -36,7 +36,7 @@ if TYPE_CHECKING:  # what type checkers and editors see
 
 # the commands as functions on arrays (povh3d/api.py, docs/api.md)
 _COMMANDS = ("read_h3d", "interleave", "extract", "map", "resample", "quilt", "unquilt", "refocus", "preview",
-             "info", "moire", "calibrate", "undistort", "borders", "equalise", "viewpoints", "stitch",
+             "replay", "info", "moire", "calibrate", "undistort", "borders", "equalise", "viewpoints", "stitch",
              "convert_mesh", "layout")
 _PUBLIC = {
     **dict.fromkeys(_COMMANDS, "povh3d.api"),
@@ -57,7 +57,7 @@ __all__ = ["__version__", "render", "Display", "build_display", "RenderRequest",
            "CropSettings", "LensArray", "Panel", "presets", "Povh3dError", "ConfigError", "InputError",
            "OutputError", "PovrayError",
            # _COMMANDS but map: a star import must not hide the builtin
-           "read_h3d", "interleave", "extract", "resample", "quilt", "unquilt", "refocus", "preview", "info", "moire",
+           "read_h3d", "interleave", "extract", "resample", "quilt", "unquilt", "refocus", "preview", "replay", "info", "moire",
            "calibrate", "undistort", "borders", "equalise", "viewpoints", "stitch", "convert_mesh", "layout"]
 
 

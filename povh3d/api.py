@@ -293,6 +293,28 @@ def preview(h3d: np.ndarray, lens_array: LensArray, *, frames: int = 12, scale: 
     return np.stack([enlarge(f, (scale, scale * aspect)) for f in shots])
 
 
+def replay(h3d: np.ndarray, lens_array: LensArray, eye: tuple[float, float, float] | None = None, *,
+           optics: str = "pinhole", size: str | tuple[int, int] = "lenses") -> np.ndarray:
+    """``povh3d replay``: what an eye sees of ``h3d`` on its display (docs/replay.md).
+
+    Parameters
+    ----------
+    h3d : (H, W, C) array      an image of ``lens_array``'s panel
+    lens_array : LensArray
+    eye : (x, y, z) mm         display frame, the viewer at ``z < 0`` (default ``(0, 0, -300)``)
+    optics : str               ``pinhole`` (a pinhole mask at the lens centres), ``barrier`` (slits, lenticular),
+                               ``none`` (no sheet: the panel in the lens plane)
+    size : 'lenses' or (W, H)  one pixel a lens, or a perspective picture of the display's area
+
+    Returns
+    -------
+    (Ly, Lx, C) or (H, W, C) array of ``h3d``'s dtype (black where the ray misses the panel)
+    """
+    from .display.replay import default_eye, replay as _replay
+
+    return _replay(h3d, lens_array, default_eye(lens_array) if eye is None else eye, optics=optics, size=size).image
+
+
 # -- the display -------------------------------------------------------------------------------------
 def info(preset: str = "demo", *, lens_array: LensArray | None = None) -> dict[str, Any]:
     """``povh3d info --json``: the derived values of a display (viewing angle, 3D resolution ...)."""

@@ -20,7 +20,7 @@ from typing import NoReturn
 
 from .._version import __version__
 from ..errors import Povh3dError, Povh3dWarning, RenderInterrupted
-from . import calibration, display, hyper, layout, render
+from . import calibration, display, hyper, layout, render, replay
 from .options import warn
 
 
@@ -69,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     calibration.add_parsers(sub)
     layout.add_parsers(sub)
     hyper.add_parsers(sub)
+    replay.add_parsers(sub)
     for command in sub.choices.values():
         command.add_argument("--max-memory", metavar="SIZE", default=None,
                              help="most memory the command and each POV-Ray it starts may use, e.g. 4G "

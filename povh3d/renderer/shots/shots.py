@@ -69,9 +69,10 @@ def _canonical(value: Any) -> Any:
 
 
 def _template_digest(name: str) -> str:
-    """Hash of the template and the base it extends: a template edit invalidates the cache."""
+    """Hash of the template, the base it extends and the parts it includes: a template edit invalidates
+    the cache."""
     h = hashlib.sha256()
-    for n in (name, "scene.pov.j2"):
+    for n in (name, "scene.pov.j2", *(("lenslet.pov.j2",) if name == "single_stage.pov.j2" else ())):
         h.update((templates_dir() / n).read_bytes())
     return h.hexdigest()
 

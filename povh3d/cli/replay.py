@@ -1,0 +1,60 @@
+"""``povh3d replay``: an H3D image on its display, seen from an eye (commands/replay.py)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from .options import parse_size
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    from ..commands.replay import parse_eye, parse_sweep, replay_file
+
+    size: Any = "lenses" if args.size == "lenses" else parse_size(args.size, "--size", "WxH like 800x600 or 'lenses'")
+    sweep = parse_sweep(args.sweep)
+    record = replay_file(args.h3d, args.output, eye=parse_eye(args.eye), optics=args.optics, size=size,
+                         sweep=sweep, json_path=args.json, quality=args.quality, ior=args.ior, lenslet=args.lenslet,
+                         pupil=args.pupil)
+    eyes = record["eyes_mm"]
+    first = ",".join(f"{v:g}" for v in eyes[0])
+    what = f"{len(eyes)} eyes from ({first})" if len(eyes) > 1 else f"eye ({first}) mm"
+    extra = ""
+    if record.get("reports"):
+        r = record["reports"][0]
+        if "geometric_view_share" in r:  # a mapped panel
+            extra = (f", the view pointing at the eye on {100 * r['geometric_view_share']:.1f} % of lens samples "
+                     f"({100 * r['within_one_view_share']:.1f} % within one view)")
+        else:
+            extra = f", own lens {100 * r['own_lens_share']:.1f} %"
+        zone = r["view_zone"]["every_lens_zone_mm"]
+        extra += f", every lens in zone for x in [{zone[0]:.1f}, {zone[1]:.1f}] mm" if zone else ", no eye x sees every lens in zone"
+        if "light_shares" in r:
+            extra += f", chief pixel {100 * r['light_shares']['chief_pixel']:.0f} % of the aperture"
+    if record.get("timings_s"):
+        extra += f", {record['timings_s']['total_s']:.2f} s"
+    print(f"{args.output}  {args.optics}, {what}{extra}")
+    return 0
+
+
+def add_parsers(sub: Any) -> None:
+    p = sub.add_parser("replay", help="an H3D image on its display, seen from an eye (the virtual display)")
+    p.add_argument("h3d", help="H3D PNG with its sidecar")
+    p.add_argument("-o", "--output", required=True, help="replay .png (with --sweep: a .gif or .mp4, frames beside it)")
+    p.add_argument("--eye", metavar="X,Y,Z", help="eye in mm, display frame, viewer at z < 0 (default 0,0,-300)")
+    p.add_argument("--optics", default="pinhole", choices=("pinhole", "barrier", "lens", "none"),
+                   help="pinhole mask at the lens centres (exact; default), barrier (slits, lenticular), lens "
+                        "(the real lenslets, through POV-Ray), none (no sheet: the panel alone)")
+    p.add_argument("--size", default="lenses", metavar="lenses|WxH",
+                   help="one pixel a lens (default), or a WxH perspective picture of the display's area")
+    p.add_argument("--sweep", metavar="X0:X1:N", help="N eyes from x = X0 to X1 mm (y:Y0:Y1:N along y): "
+                   "frames and a GIF")
+    p.add_argument("--json", metavar="REPORT", help="write the report (per eye: the views shown, view zone) here")
+    p.add_argument("--quality", default="draft", choices=("draft", "high"),
+                   help="--optics lens: draft (one ray a pixel) or high (antialiased)")
+    p.add_argument("--ior", type=float, help="--optics lens: the lenslets' index of refraction (default 1.49)")
+    p.add_argument("--lenslet", default="spherical", choices=("spherical", "conic"),
+                   help="--optics lens: the curved face, a sphere (default) or the aberration-free conic")
+    p.add_argument("--pupil", type=float, metavar="MM", help="--optics lens: the eye's pupil diameter, as focal "
+                   "blur focused on the lens plane (default: a pinhole eye)")
+    p.set_defaults(func=cmd_replay)
