@@ -118,7 +118,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
         cache = None
     if cache is not None and not scene.reproducible:
         # Two parses differ (the time, the file system): a cached image would be stale.
-        stats.uncached = f"the scene reads {', '.join(scene.volatile)}, so its image is not reproducible"
+        stats.uncached = f"the scene uses {', '.join(scene.volatile)}, so its image is not reproducible"
         warn(f"{scene.path.name}: {stats.uncached}: not using the image cache for it")
         cache = None
 
