@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ...dataset.hci import BankGeometry, centre_camera, write_hci
-from ...errors import ConfigError, InputError, OutputError
+from ...errors import ConfigError, InputError, OutputError, warn
 from ...geometry.lens_array import LensArray
 from ...image.colour import decode, encode
 from ...geometry.rays import cell_contains
@@ -156,6 +156,10 @@ def write_dataset(folder: Path, h3d: np.ndarray, lens_array: LensArray, ray_dept
                   all_views: bool = False, scene: str = "povh3d") -> list[Path]:
     """The HCI folder of an H3D image of ``lens_array`` and its per-view ray depth (mm)."""
     geometry = bank_geometry(lens_array)
+    if not np.isfinite(ray_depth).any():   # never a silent all-NaN ground truth
+        warn(f"the ground truth in {str(folder)!r} (gt_disp_lowres.pfm, gt_depth_lowres.pfm) is all NaN: the depth "
+             "pass measured no pixel (nothing in the field, or every ray starts inside a solid); check the scene "
+             "and the display frame")
     bank = export_views(h3d, lens_array)
     meta = {}
     if lens_array.views is None:

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import OutputError
+from ...errors import OutputError, warn
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import disparity
 from ...image.depth_codes import quantise
@@ -52,6 +52,9 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
     """Write ``d_*.npy``, ``p_*.npy`` (``fmt`` 'png': 16-bit PNGs) and ``depth_maps.json`` into ``folder``."""
     from ...image.io import write_png
 
+    if not np.isfinite(depth).any():   # never a silent all-NaN folder
+        warn(f"the depth maps in {str(folder)!r} are all NaN: the depth pass measured no pixel (nothing in the "
+             "field, or every ray starts inside a solid); check the scene and the display frame")
     par = disparity(depth, lens_array)
     ny, nx = depth.shape[:2]
     codes = {"d": quantise(depth), "p": quantise(par)} if fmt == "png" else {}
