@@ -50,6 +50,10 @@ def test_two_planes_disparity_with_the_viewer_inside_the_backdrop(tmp_path, cli,
     assert np.abs(disp[:, :9] - near).max() < 0.01      # lenses 0-8: x < 0, the box's face
     assert np.abs(disp[:, 11:] - far).max() < 0.01      # lenses 11-19: the backdrop
     assert json.loads((maps / "depth_maps.json").read_text())["nan_fraction"] == 0.0
+    # and from the render and its sidecar afterwards (povh3d dataset): the same ground truth
+    result = cli("dataset", tmp_path / "h3d.png", "-o", tmp_path / "again")
+    assert result.code == 0 and "cannot measure" not in result.err, result.err
+    assert np.array_equal(toolkit_read_pfm(tmp_path / "again" / "gt_disp_lowres.pfm"), disp)
 
 
 def test_all_hollow_reaches_top_level_objects_only():
