@@ -11,52 +11,32 @@ reaches every part of it.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from pathlib import Path
 
+from .camera import CameraError, _closing_brace, _depths, tokens
+from .object_ids import OBJECTS
 from .scene import Scene, load_scene
 
 _SOURCES = (".pov", ".inc", ".mcr")
 
-#: The keywords that create an object (POV-Ray 3.7's finite, infinite and CSG objects).
-OBJECT_WORDS = frozenset((
-    "bicubic_patch", "blob", "box", "cone", "cubic", "cylinder", "difference", "disc", "height_field",
-    "intersection", "isosurface", "julia_fractal", "lathe", "lemon", "merge", "mesh", "mesh2", "object",
-    "ovus", "parametric", "plane", "poly", "polygon", "polynomial", "prism", "quadric", "quartic",
-    "smooth_triangle", "sor", "sphere", "sphere_sweep", "superellipsoid", "text", "torus", "triangle",
-    "union"))
-_TOKEN = re.compile(r'"(?:\\.|[^"\\\n])*"|//[^\n]*|/\*.*?\*/|[{}=]|#?[A-Za-z_]\w*|\S', re.S)
-
 
 def all_hollow(text: str) -> str:
-    """``text`` with `` hollow`` before the closing brace of every object created at the top level
-    (brace depth 0, not the value of a ``#declare``/``#local``); unchanged where its braces do not
-    balance (an object opened in one file and closed in another is left as it is)."""
-    depth, inserts = 0, []
-    previous = ""
-    opening: int | None = None   # depth-0 object whose brace is next
-    closing = False
-    for m in _TOKEN.finditer(text):
-        tok = m.group()
-        if tok.startswith(('"', "//", "/*")):
-            continue
-        if tok == "{":
-            if depth == 0:
-                closing = opening is not None
-            depth += 1
-        elif tok == "}":
-            depth -= 1
-            if depth < 0:
+    """``text`` with `` hollow`` before the closing brace of every object statement at brace depth 0
+    that is not a ``#declare``/``#local`` value (``object_ids.OBJECTS``, found as the object masks
+    find them; a macro body's too, which is made where it is called); unchanged where a block has no
+    closing brace (an object opened in one file and closed in another is left as it is)."""
+    toks = tokens(text)
+    depth_of = {i: b for i, b, _ in _depths(toks)}
+    ends = []
+    for i, tok in enumerate(toks[:-1]):
+        if depth_of[i] == 0 and tok.text in OBJECTS and toks[i + 1].text == "{" \
+                and not (i > 0 and toks[i - 1].text == "="):
+            try:
+                ends.append(toks[_closing_brace(toks, i + 1)].start)
+            except CameraError:
                 return text
-            if depth == 0 and closing:
-                inserts.append(m.start())
-                closing = False
-        opening = m.start() if depth == 0 and tok in OBJECT_WORDS and previous != "=" else None
-        previous = tok
-    if depth != 0:
-        return text
-    for at in reversed(inserts):
+    for at in reversed(ends):
         text = text[:at] + " hollow " + text[at:]
     return text
 
