@@ -10,6 +10,7 @@ animation and a still go through exactly the same steps.
 
 from __future__ import annotations
 
+import glob
 import re
 import time
 from dataclasses import replace
@@ -109,13 +110,14 @@ def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Pa
 
     if request.frames is None:
         check_output(output, inputs)
-    else:   # OUT_nnnn.png and .json: an input of that form, numbered within the frames
+    else:   # OUT_nnnn.png and .json: an input, or a JSON already there, of a frame's name
         named = re.compile(re.escape(output.stem) + r"_(\d+)\.(?:png|json)", re.IGNORECASE)
-        for source in inputs:
-            found = named.fullmatch(source.name)
-            if found and len(found[1]) == max(4, len(str(request.frames.last))) \
-                    and int(found[1]) in request.frames.numbers:   # render_sequence's digits
-                check_output(frame_path(output, int(found[1]), len(found[1])), inputs)
+        digits = max(4, len(str(request.frames.last)))   # render_sequence's
+        there = (output.parent if str(output.parent) else Path(".")).glob(f"{glob.escape(output.stem)}_*.json")
+        for name in {p.name for p in inputs} | {p.name for p in there}:
+            found = named.fullmatch(name)
+            if found and len(found[1]) == digits and int(found[1]) in request.frames.numbers:
+                check_output(frame_path(output, int(found[1]), digits), inputs)
     if request.display.quilt is not None:
         from ..display.looking_glass import device
         from .outputs.device_quilt import quilt_outputs

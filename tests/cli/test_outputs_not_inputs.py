@@ -191,3 +191,22 @@ def test_a_folder_povh3d_did_not_write_is_refused_not_deleted(tmp_path, cli, fla
     assert (folder / "thesis.tex").read_text() == "years of work" and not (tmp_path / "a.png").exists()
     (folder / "thesis.tex").unlink()                                   # control: empty, it is written
     assert cli("render", scene, "-o", tmp_path / "a.png", flag, folder, *TINY).code == 0
+
+
+@pytest.mark.povray
+def test_an_animation_frame_over_what_the_scene_reads_or_a_users_json_is_refused(tmp_path, cli):
+    """Frames are OUT_NNNN.png: the scene's texture under a frame's name, or a frame's NAME.json the user's."""
+    scene = _scene(tmp_path)
+    write_image(tmp_path / "anim_0002.png", np.full((4, 4, 3), 9, np.uint8), base_record("texture"))
+    scene.write_text(SCENE.replace('"tex.png"', '"anim_0002.png"'))
+    before = (tmp_path / "anim_0002.png").read_bytes()
+    line = one_error_line(cli("render", scene, "--frames", "1:2", "-o", tmp_path / "anim.png", *TINY))
+    assert "anim_0002.png" in line and (tmp_path / "anim_0002.png").read_bytes() == before
+    scene.write_text(SCENE)
+    (tmp_path / "anim_0001.json").write_text(json.dumps(GRID_JSON))
+    line = one_error_line(cli("render", scene, "--frames", "1:2", "-o", tmp_path / "anim.png", *TINY))
+    assert "anim_0001.json" in line and "not a povh3d sidecar" in line
+    assert not (tmp_path / "anim_0001.png").exists()
+    (tmp_path / "anim_0001.json").unlink()                              # control: the frames are written
+    assert cli("render", scene, "--frames", "1:2", "-o", tmp_path / "anim.png", *TINY).code == 0
+    assert read_sidecar(tmp_path / "anim_0001.png")["animation"]
