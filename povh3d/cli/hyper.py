@@ -18,7 +18,8 @@ def cmd_viewer(args: argparse.Namespace) -> int:
         from ..commands.annotate import read_cdp_text
 
         cdp = read_cdp_text(args.cdp)
-    record = write_viewer(args.render, args.output, fps=args.fps, cdp=cdp, title=args.title, objects=args.objects)
+    record = write_viewer(args.render, args.output, fps=args.fps, cdp=cdp, title=args.title, objects=args.objects,
+                          reads=(args.cdp,) if args.cdp else ())
     print(f"{record['output']}  {record['frames']} frame(s)  {record['views'][0]}x{record['views'][1]} views of "
           f"{record['view_size_px'][0]}x{record['view_size_px'][1]}  {record['bytes'] / 1e6:.2f} MB")
     return 0

@@ -101,6 +101,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     options = {k: v for k, v in vars(args).items() if k not in ("scene", "include", "output")}
     key = output_cache.request_key(args.scene, output, options, args.include)
     if key is not None:
+        from ..image.io import check_output
+
+        check_output(output, (args.scene,))   # a hit writes too: never over the scene or the user's NAME.json
         start = time.perf_counter()
         hit = output_cache.answer(key, output)
         if hit is not None:
@@ -125,7 +128,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     if args.objects:
         from ..renderer.passes.object_masks import check_objects_request
 
-        check_objects_request(request)
+        check_objects_request(request, args.objects)
     update, close = progress_bar(not args.quiet and sys.stderr.isatty())
     try:
         result = render(request, update)

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..image.io import atomic_path, check_writable, read_sidecar
+from ..image.io import atomic_path, check_output, read_sidecar, with_sidecar
 from ..renderer.outputs.objects import ObjectTable, read_mask, read_table
 from .viewer import frame_files
 
@@ -133,7 +133,8 @@ def annotate(render: str | Path, masks: str | Path, output: str | Path, *,
     output = Path(output)
     if output.suffix.lower() != ".xml":
         raise InputError(f"the 3DCDP header is XML: name it .xml, got {str(output)!r}")
-    check_writable(output)
+    check_output(output, (*with_sidecar(render), *([links] if links is not None else [])), what="3DCDP header",
+                 sidecar=False)
     header = build_header(render, masks, links)
     data = to_xml(header)
     with atomic_path(output) as tmp:

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
-from ..image.io import atomic_path, check_writable, read_png
+from ..image.io import atomic_path, check_output, check_output_folder, read_png, with_sidecar
 from ..renderer.records import base_record, png_output, write_image
 from ..calibration.borders import correct_borders
 from ..calibration.distortion import undistort_image
@@ -38,8 +38,8 @@ def _json_path(path: str | Path) -> None:
 def calibrate_file(white: str | Path, output: str | Path, *, lattice: str | None = None,
                    distortion: bool = True) -> Grid:
     _json_path(output)
+    check_output(output, with_sidecar(white), what="grid file", sidecar=False)
     image = read_png(white)
-    check_writable(output)
     t = time.perf_counter()
     grid = calibrate(image, lattice=lattice, distortion=distortion, name=repr(str(white)))
     grid.extra["seconds"] = round(time.perf_counter() - t, 3)
@@ -55,8 +55,8 @@ def calibrate_lenticular_file(white: str | Path, output: str | Path, *, dpi: flo
     _json_path(output)
     if dpi is not None and not (np.isfinite(dpi) and dpi > 0):
         raise ConfigError(f"--dpi must be a positive number of pixels per inch, got {dpi!r}")
+    check_output(output, with_sidecar(white), what="grid file", sidecar=False)
     image = read_png(white)
-    check_writable(output)
     t = time.perf_counter()
     fit = calibrate_lenticular(image, distortion=distortion, name=repr(str(white)))
     record = {**fit.as_record(), **_looking_glass_fields(fit, dpi), "seconds": round(time.perf_counter() - t, 3),
@@ -88,8 +88,8 @@ def _load(image_path: str | Path, grid_path: str | Path) -> tuple[np.ndarray, Gr
 
 
 def undistort_file(image_path, grid_path, output) -> dict[str, Any]:
+    output = png_output(output, inputs=(*with_sidecar(image_path), grid_path))
     image, grid = _load(image_path, grid_path)
-    output = png_output(output)
     record = _record("undistorted", grid_path, source=str(Path(image_path).resolve()),
                      distortion=grid.distortion.as_record(), output_gamma="sRGB")
     write_image(output, undistort_image(image, grid.distortion), record)
@@ -97,8 +97,8 @@ def undistort_file(image_path, grid_path, output) -> dict[str, Any]:
 
 
 def borders_file(image_path, grid_path, output, *, threshold: float = 0.5, fill: str = "black") -> dict[str, Any]:
+    output = png_output(output, inputs=(*with_sidecar(image_path), grid_path))
     image, grid = _load(image_path, grid_path)
-    output = png_output(output)
     out, border = correct_borders(image, grid, threshold=threshold, fill=fill)
     record = _record("border-corrected", grid_path, source=str(Path(image_path).resolve()), threshold=threshold,
                      fill=fill, border_fraction=round(float(border.mean()), 6), output_gamma="sRGB")
@@ -107,8 +107,8 @@ def borders_file(image_path, grid_path, output, *, threshold: float = 0.5, fill:
 
 
 def equalise_file(image_path, grid_path, output, *, size: int | None = None) -> dict[str, Any]:
+    output = png_output(output, inputs=(*with_sidecar(image_path), grid_path))
     image, grid = _load(image_path, grid_path)
-    output = png_output(output)
     out, used = equalise(image, grid, size)
     record = _record("equalised", grid_path, source=str(Path(image_path).resolve()), ppl=[used, used],
                      lenses=[grid.table[1], grid.table[0]], output_gamma="sRGB")
@@ -119,18 +119,21 @@ def equalise_file(image_path, grid_path, output, *, size: int | None = None) -> 
 def viewpoints_file(image_path, grid_path, views_dir, *, ppl: int) -> dict[str, Any]:
     from ..renderer.outputs.views import write_views
 
+    from ..renderer.outputs.views import check_views_dir
+
+    check_output_folder(views_dir, (*with_sidecar(image_path), grid_path), what="views folder")
+    check_views_dir(views_dir)
     image, grid = _load(image_path, grid_path)
     views = viewpoints(image, grid, ppl)
-    Path(views_dir).mkdir(parents=True, exist_ok=True)
     write_views(views_dir, views, None, _record("capture", grid_path, source=str(Path(image_path).resolve())))
     return {"views": [ppl, ppl], "view_size_px": [views.shape[3], views.shape[2]]}
 
 
 def stitch_files(a_path, b_path, grid_path, output) -> dict[str, Any]:
+    output = png_output(output, inputs=(*with_sidecar(a_path), *with_sidecar(b_path), grid_path))
     a, grid = _load(a_path, grid_path)
     b = read_png(b_path)
     grid.check_image(b.shape, repr(str(b_path)))
-    output = png_output(output)
     out, shift, mode = stitch(a, b, grid)
     record = _record("stitched", grid_path, sources=[str(Path(a_path).resolve()), str(Path(b_path).resolve())],
                      shift_lenses={"rows": shift.di, "cols": shift.dj}, mismatch=round(shift.mismatch, 6),

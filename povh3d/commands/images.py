@@ -9,7 +9,6 @@ anything is written.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +20,8 @@ from ..errors import ConfigError, InputError, Povh3dError
 from ..renderer.budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_memory
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import _positive as positive_length  # the lens array's own rule
-from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from ..image.io import (atomic_path, check_output, read_png, read_sidecar, with_sidecar, write_png,
+                        write_sidecar)
 from ..renderer.records import base_record, png_output, write_image
 from ..image.interleave import extract
 from ..display.mappings import Mapping
@@ -170,6 +170,7 @@ def infer_panel(mapping: Mapping, shape: tuple[int, int]) -> tuple[int, int] | N
 def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
              panel: tuple[int, int] | None = None) -> dict[str, Any]:
     """Map an unmapped view-space H3D PNG onto a panel and write ``output`` with its sidecar."""
+    out = png_output(output, inputs=with_sidecar(input_path))
     image = read_png(input_path)
     side = lens_record(input_path)
     if side.get("grid") not in (None, "lenticular"):
@@ -186,7 +187,6 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
     if side.get("views") and side["views"][0] != src.views:
         raise ConfigError(f"{str(input_path)!r} has {side['views'][0]} views per lens but mapping {mapping.name!r} "
                           f"reads {src.views}; check --mapping and its options")
-    out = png_output(output)
     mapped = mapping.apply(image, panel)  # raises before anything is written
     record = base_record("panel", mapping=mapping.name, mapping_parameters=_params(mapping),
                      source=str(Path(input_path).resolve()), size_px=list(panel), output_gamma="sRGB")
@@ -231,10 +231,13 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     """
     if sweep is not None:
         check_count("--sweep (planes)", int(sweep[2]), MAX_PLANES, "a sweep finds the sharpest depth in far fewer")
+    reads = with_sidecar(h3d_path)
+    out = png_output(output, inputs=reads)
+    count = 1 if sweep is None else int(sweep[2])
+    for n in range(count if sweep is not None else 0):   # the planes beside the sheet
+        check_output(out.with_name(f"{out.stem}_{n:03d}.png"), reads, sidecar=False)
     image = read_whole_lenses(h3d_path)
     views, steps, used, row_shift = _refocus_views(image, info)
-    out = png_output(output)
-    count = 1 if sweep is None else int(sweep[2])
     plane = views.shape[2] * views.shape[3] * views.shape[4]
     check_memory(f"{count} refocused plane(s)", (count * 3 * 4 + 4 * views.shape[0] * views.shape[1]) * plane,
                  "give fewer planes (--sweep)")
@@ -268,6 +271,10 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     output = Path(output)
     if output.suffix.lower() != ".gif":
         raise ConfigError(f"the preview {str(output)!r} must be a .gif file")
+    sheet_path = output.with_suffix(".png")
+    reads = with_sidecar(h3d_path)
+    check_output(output, reads, what="preview", sidecar=False)
+    check_output(sheet_path, reads, what="contact sheet")   # and the sidecar both share
     image = read_whole_lenses(h3d_path)
     ny, nx = info["ppl"]
     focal = _need(info["focal"], "focal length", "--focal")
@@ -282,9 +289,6 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     side = 480 if scale is None else scale * max(image.shape[1] // nx, image.shape[0] // ny)
     check_memory(f"a preview of {frames} frames", frames * (2 * side * side * 3 + image.size // (nx * ny) * 8)
                  + image.size * 8, "give fewer --frames or a smaller --scale")
-    sheet_path = output.with_suffix(".png")
-    check_writable(output)
-    check_writable(sheet_path)
     angles = viewer_angles(nx * sx, focal, frames)
     if info.get("lens_array") is not None:  # hex, fractional PPL: the views extract writes
         from ..renderer.outputs.views import sidecar_bank
@@ -304,6 +308,5 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     write_png(sheet_path, contact_sheet(big))
     record = base_record("preview", source=str(Path(h3d_path).resolve()), angles_deg=list(map(float, angles)),
                      frames=frames)
-    with atomic_path(output.with_suffix(".json")) as tmp:
-        tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+    write_sidecar(sheet_path, record)   # the sheet's sidecar (its SHA-256), which the .gif shares
     return record

@@ -305,8 +305,11 @@ def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, dis
     ``rotate``, ``depth``, ``spacing``, ``series``.  The output is checked before any work.
     """
     start = time.perf_counter()
+    from ..scene.scene import load_scene
+
     source = Path(source)
-    png_output(output)
+    reads = (source, *(load_scene(source, include_dirs).files if source_kind(source) == "scene" else ()))
+    png_output(output, inputs=reads)
     picture_size(size)
     content = find_content(source, lens_array, frame_options=frame_options, include_dirs=include_dirs,
                            model=model, volume=volume, use_cache=use_cache)

@@ -13,7 +13,7 @@ from typing import Any
 from ..errors import ConfigError
 from ..geometry.axes import to_edge
 from ..image.interleave import extract, interleave
-from ..image.io import check_writable, read_png, read_sidecar
+from ..image.io import check_output, read_png, read_sidecar, with_sidecar
 from ..image.quilt import (auto_grid, bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
                            quilt_to_views, view_aspect, views_to_quilt)
 from .images import lens_record
@@ -62,7 +62,7 @@ def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, 
     folder = Path(output_dir)
     out = folder / quilt_name(Path(h3d_path).stem, grid[0], grid[1], aspect)
     folder.mkdir(parents=True, exist_ok=True)
-    check_writable(out)
+    check_output(out, with_sidecar(h3d_path))
     out_record = base_record("quilt", grid=list(grid), aspect=aspect, views=int(n), rows=rows or "centre",
                              source=str(Path(h3d_path).resolve()))
     if record.get("lens_array"):  # so that importing the quilt gives back the H3D image with its lens array
@@ -99,7 +99,7 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
         if parsed is None:
             raise ConfigError(f"{Path(quilt_path).name!r} does not name its grid (_qs8x6a0.75); give --quilt 8x6")
         grid = parsed[:2]
-    out = png_output(output)
+    out = png_output(output, inputs=with_sidecar(quilt_path))
     views = quilt_to_views(read_png(quilt_path), grid[0], grid[1], count)
     h3d = interleave(quilt_to_bank_order(views))
     record = base_record("h3d", method="quilt-import", views=[int(views.shape[0]), 1], grid=list(grid),

@@ -14,7 +14,7 @@ from typing import Any
 from ..errors import ConfigError
 from ..geometry.axes import to_edge
 from ..geometry.lens_array import LensArray, Panel
-from ..image.io import read_png, read_sidecar
+from ..image.io import read_png, read_sidecar, with_sidecar
 from ..image.resample import resample_micro_images, resample_panel, resampled_array, trade_views_for_lenses
 from ..renderer.budget import check_disk, check_memory
 from .images import read_whole_lenses
@@ -34,8 +34,8 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
                   ppl_out: tuple[int, int], mode: str = "micro") -> dict[str, Any]:
     """Whole pixels per lens on a camera bank's region: each micro-image resized (``micro``), or
     views traded for lenses (``lenses``)."""
+    out = png_output(output, inputs=with_sidecar(input_path))
     image = read_whole_lenses(input_path)
-    out = png_output(output)
     ny_in, nx_in = ppl_in
     scale = (ppl_out[0] / max(ny_in, 1)) * (ppl_out[1] / max(nx_in, 1))
     _check_budget(out, image.shape[0] * image.shape[1] * scale, image.size, image.shape[2], image.itemsize,
@@ -103,6 +103,7 @@ def resample_panel_file(input_path: str | Path, output: str | Path, ppl_out: tup
     (``image.resample.resampled_array``, ``resample_panel``)."""
     from ..renderer.outputs.views import sidecar_array
 
+    out = png_output(output, inputs=with_sidecar(input_path))
     image = read_png(input_path)
     lens_in = sidecar_array(image, input_path)
     if mode == "lenses":
@@ -120,7 +121,6 @@ def resample_panel_file(input_path: str | Path, output: str | Path, ppl_out: tup
     if lens_in.grid == "lenticular" and my != 1:
         raise ConfigError(f"a lenticular sheet keeps its rows (1 pixel per lens vertically), got --ppl-out "
                           f"{mx:g}x{my:g}; give one number, e.g. --ppl-out {mx:g}")
-    out = png_output(output)
     # the budget first, from the scale alone (a huge --ppl-out is no panel to build)
     scale_x = mx * lens_in.panel.pitch_x / lens_in.pitch_x
     scale_y = {"lenticular": 1.0, "hex": scale_x}.get(lens_in.grid, my * lens_in.panel.pitch_y / lens_in.pitch_y)

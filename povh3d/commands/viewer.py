@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..image.io import atomic_path, read_png, read_sidecar
+from ..image.io import atomic_path, check_output, read_png, read_sidecar, with_sidecar
 from ..renderer.outputs.views import h3d_views, read_views
 
 _FRAME_RE = re.compile(r"^(?P<stem>.+)_(?P<n>\d{4,})$")
@@ -76,14 +76,17 @@ def read_render_views(render: str | Path) -> RenderViews:
 
 
 def write_viewer(render: str | Path, output: str | Path, *, fps: float = 12.0, cdp: str | None = None,
-                 title: str | None = None, objects: str | Path | None = None) -> dict[str, Any]:
+                 title: str | None = None, objects: str | Path | None = None,
+                 reads: tuple[str | Path, ...] = ()) -> dict[str, Any]:
     """Write the viewer page of ``render`` to ``output`` (atomically); ``cdp`` is a 3DCDP header's text,
-    ``objects`` the object masks folder that gives every view its own boxes."""
+    ``objects`` the object masks folder that gives every view its own boxes; ``reads``: other files the
+    command read (the header's), which ``output`` must not be."""
     from ..hyper.page import ViewerContent, viewer_html
 
     output = Path(output)
     if output.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"the viewer is an HTML page: name it .html, got {str(output)!r}")
+    check_output(output, (*with_sidecar(render), *reads), what="viewer page", sidecar=False)
     rendered = read_render_views(render)
     if cdp is not None:
         _check_header(cdp, rendered)

@@ -25,7 +25,7 @@ import io
 import json
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -101,6 +101,73 @@ def check_writable(path: str | Path) -> None:
     if path.is_dir():
         raise OutputError(f"the output {str(path)!r} is a folder; give a file name inside it")
     os.unlink(_temp_beside(path))
+
+
+#: The keys every sidecar povh3d writes holds (``write_image_pair``, ``write_sidecar``): a ``NAME.json``
+#: without them is the user's own file (a calibration, notes), never replaced by a sidecar.
+SIDECAR_KEYS = ("povh3d_version", "image_sha256")
+
+
+def is_povh3d_record(path: str | Path, keys: tuple[str, ...] = SIDECAR_KEYS) -> bool:
+    """Whether ``path`` is a JSON object holding every one of ``keys`` (a file povh3d wrote)."""
+    try:
+        with open(path, "rb") as fh:
+            record = json.loads(fh.read(1 << 24))
+    except (OSError, ValueError, RecursionError):
+        return False
+    return isinstance(record, dict) and all(k in record for k in keys)
+
+
+def _same(a: Path, b: Path) -> bool:
+    """Whether two names reach one file (links followed; a name not there yet by its resolved path)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    return Path(os.path.realpath(path)).is_relative_to(os.path.realpath(folder))
+
+
+def check_output(path: str | Path, inputs: Iterable[str | Path] = (), *, what: str = "output",
+                 sidecar: bool = True) -> Path:
+    """Refuse, before any work, an output that would write over a file the command did not make or
+    reads: ``path`` (and with ``sidecar`` its ``NAME.json``) being one of ``inputs``, or a ``NAME.json``
+    there that is not a povh3d sidecar (``SIDECAR_KEYS``: a calibration, the user's notes).  Then
+    ``check_writable``.  Returns ``path``."""
+    path = Path(path)
+    sources = [Path(p) for p in inputs]
+    side = sidecar_path(path) if sidecar else None
+    for target in (path, side):
+        if target is None:
+            continue
+        for source in sources:
+            if _same(target, source):
+                also = "" if target == path else f" (its sidecar {str(target)!r})"
+                raise OutputError(f"the {what} {str(path)!r}{also} would write over {str(source)!r}, which this "
+                                  "command reads; choose another output name")
+    if side is not None and side != path and side.exists() and not is_povh3d_record(side):
+        raise OutputError(f"{str(side)!r} is not a povh3d sidecar, and the {what} {str(path)!r} would replace it "
+                          "with one; move it or choose another output name")
+    check_writable(path)
+    return path
+
+
+def with_sidecar(path: str | Path) -> tuple[Path, Path]:
+    """An image a command reads and its sidecar: what its outputs must not be (``check_output``)."""
+    return Path(path), sidecar_path(path)
+
+
+def check_output_folder(folder: str | Path, inputs: Iterable[str | Path] = (), *, what: str = "output folder") -> Path:
+    """Refuse, before any work, an output folder that is one of ``inputs`` or holds one (it is replaced whole)."""
+    folder = Path(folder)
+    for source in inputs:
+        source = Path(source)
+        if _same(folder, source) or _inside(source, folder):
+            raise OutputError(f"the {what} {str(folder)!r} holds {str(source)!r}, which this command reads, and "
+                              "is replaced whole; choose another folder")
+    return folder
 
 
 def _temp_beside(path: Path) -> Path:

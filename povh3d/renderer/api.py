@@ -91,6 +91,6 @@ def _render(source: str | Path, output: str | Path, preset: str, lens_array: Len
         return render_request(request, progress)
     from .passes.object_masks import check_objects_request, render_objects
 
-    check_objects_request(request)          # before any work, as the command does
+    check_objects_request(request, objects)   # before any work, as the command does
     record = render_request(request, progress)
     return {**record, "object_masks": render_objects(request, objects, record)}

@@ -2,11 +2,13 @@
 
 Every image povh3d writes has a JSON sidecar (``name.json`` beside
 ``name.png``); its base record is built here and only here, and every output
-path is checked here before any work starts.
+path is checked here before any work starts: never one of the command's inputs, nor over a
+``NAME.json`` that povh3d did not write (``image.io.check_output``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +17,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
-from ..image.io import check_writable, write_image_pair
+from ..image.io import check_output, write_image_pair
 
 
 def base_record(kind: str, lens_array: LensArray | None = None, **extra: Any) -> dict[str, Any]:
@@ -27,13 +29,15 @@ def base_record(kind: str, lens_array: LensArray | None = None, **extra: Any) ->
     return record
 
 
-def png_output(path: str | Path, what: str = "output") -> Path:
-    """``path`` as a PNG output: a ``.png`` name in a writable folder (checked before any work)."""
+def png_output(path: str | Path, what: str = "output", inputs: Iterable[str | Path] = (), *,
+               sidecar: bool = True) -> Path:
+    """``path`` as a PNG output: a ``.png`` name in a writable folder, neither it nor its sidecar one of
+    ``inputs`` (what the command reads), its ``NAME.json`` absent or a povh3d sidecar
+    (``image.io.check_output``); checked before any work."""
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise ConfigError(f"the {what} {str(path)!r} must be a .png file")
-    check_writable(path)
-    return path
+    return check_output(path, inputs, what=what, sidecar=sidecar)
 
 
 def write_image(path: str | Path, image: np.ndarray, record: dict[str, Any]) -> None:

@@ -10,6 +10,8 @@ animation and a still go through exactly the same steps.
 
 from __future__ import annotations
 
+import glob
+import re
 import time
 from dataclasses import replace
 from functools import partial
@@ -49,7 +51,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     """
     started = time.perf_counter()   # the whole time: the camera and depth runs too
     check_memory(request)
-    output = png_output(request.output)
+    output = png_output(request.output, inputs=(request.source,), sidecar=request.frames is None)
     if request.views_dir is not None:
         check_views_dir(request.views_dir)
     if request.depth_maps is not None:
@@ -59,6 +61,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.dataset is not None:
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
+    check_outputs_against(request, output, (request.source, *scene.files))
     request, frame_record = place_display(request, scene)
     request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
     if ray_state is not None:
@@ -96,6 +99,37 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
                              video=request.video, fps=request.fps)
     _warn_unlit(scene)
     return report
+
+
+def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Path, ...]) -> None:
+    """Refuse, before any POV-Ray run, an output that is one of ``inputs`` (the scene and every file it
+    reads: an include, an ``image_map``) or holds one: the image, its sidecar, an animation's
+    frames, a Looking Glass quilt, the views, depth-maps and dataset folders (``image.io.check_output``)."""
+    from ..image.io import check_output, check_output_folder
+    from .animation import frame_path
+
+    if request.frames is None:
+        check_output(output, inputs)
+    else:   # OUT_nnnn.png and .json: an input, or a JSON already there, of a frame's name
+        named = re.compile(re.escape(output.stem) + r"_(\d+)\.(?:png|json)", re.IGNORECASE)
+        digits = max(4, len(str(request.frames.last)))   # render_sequence's
+        there = (output.parent if str(output.parent) else Path(".")).glob(f"{glob.escape(output.stem)}_*.json")
+        for name in {p.name for p in inputs} | {p.name for p in there}:
+            found = named.fullmatch(name)
+            if found and len(found[1]) == digits and int(found[1]) in request.frames.numbers:
+                check_output(frame_path(output, int(found[1]), digits), inputs)
+    if request.display.quilt is not None:
+        from ..display.looking_glass import device
+        from .outputs.device_quilt import quilt_outputs
+
+        dev = device(request.display.quilt["device"])
+        for path in quilt_outputs(output, dev, request.display.quilt.get("calibration") is not None):
+            if path is not None:
+                check_output(path, inputs)
+    for folder, what in ((request.views_dir, "--views-dir"), (request.depth_maps, "--depth-maps"),
+                         (request.dataset, "--dataset")):
+        if folder is not None:
+            check_output_folder(folder, inputs, what=f"{what} folder")
 
 
 #: An image whose 99th percentile is under this share of full scale (sRGB: linear 0.21) looks dark: POV-Ray's

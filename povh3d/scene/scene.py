@@ -12,6 +12,10 @@ renders:
   version is in the key) but read for what follows;
 - the features it uses (``features.FEATURE_WORDS``), and so which global
   settings a quality level may add;
+- what makes two parses of the same files differ, or what no key can name (``volatile``): the
+  machine's clock (``now``, ``datetime``), the file system (``file_exists``), text run as code
+  (``Parse_String``), a file the scene writes while it parses (``#fopen ... write``): such a scene is
+  never cached, neither its frames nor its whole output;
 - whether it reads the animation clock: a scene that never mentions ``clock``
   or the other animation identifiers looks the same at every clock value;
 - whether it sets ``assumed_gamma``, and whether its own text asks for a POV-Ray
@@ -49,6 +53,11 @@ _STRING = re.compile(r'"((?:\\.|[^"\\\n]){1,400})"')
 # which formats it) and the file system at parse time (``file_exists``).  POV-Ray 3.7 reads no
 # environment variable.  An image from such a scene is never cached.
 _VOLATILE_WORDS = frozenset(("now", "datetime", "file_exists"))
+# What the key cannot name: ``Parse_String`` runs text built at parse time (``concat("n","ow")`` reads the
+# clock, a computed ``#include`` any file), and a file the scene writes (``#fopen F "x.inc" write``, then
+# ``#include "x.inc"``) is read as the last parse left it, not as the key saw it.
+_PARSE_STRING = "Parse_String"
+_WRITES_FILE = re.compile(r"#\s*fopen\b[^;#]*?\b(?:write|append)\b|#\s*write\b")
 # Files that are not the same twice: devices, the kernel's views of processes and hardware.
 _VOLATILE_FOLDERS = ("/dev/", "/proc/", "/sys/")
 # A directive or file keyword followed by anything but a string literal: a name computed at parse time.
@@ -84,8 +93,9 @@ class Scene:
     lit : bool                whether its sources mention a light_source, emission or radiosity
     ascii_names : tuple[tuple[str, Path], ...]   (the name POV-Ray 3.7 asks for, the file) for each
                               file the scene names with non-ASCII characters (``pov_ascii_names``)
-    volatile : tuple[str, ...]  what makes its image differ from one parse to the next: the words
-                              ``now``, ``datetime``, ``file_exists`` or a device file it names
+    volatile : tuple[str, ...]  what makes its image differ from one parse to the next, or what the
+                              cache key cannot name: the words ``now``, ``datetime``, ``file_exists``,
+                              ``Parse_String``, a ``#fopen`` for writing, or a device file it names
     legacy_version : bool     its own text's first ``#version`` is before 3.7 (``#version 3.6;``)
     """
 
@@ -242,8 +252,11 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
         if is_own:
             sets_gamma = sets_gamma or "assumed_gamma" in words
             computed = computed or (suffix in _SOURCE_SUFFIXES and _computed_name(text, words))
-            if words & _VOLATILE_WORDS:  # a second look, without strings: "now" in a string reads no clock
-                volatile.update(words_of(_STRING.sub(" ", text)) & _VOLATILE_WORDS)
+            if words & (_VOLATILE_WORDS | {_PARSE_STRING}):  # a second look, without strings: "now" in a
+                # string reads no clock
+                volatile.update(words_of(_STRING.sub(" ", text)) & (_VOLATILE_WORDS | {_PARSE_STRING}))
+            if suffix in _SOURCE_SUFFIXES and _WRITES_FILE.search(_STRING.sub('""', text)):
+                volatile.add("#fopen ... write")
         for name in _STRING.findall(text):
             if name.startswith(_VOLATILE_FOLDERS):
                 volatile.add(name)  # never hashed: reading /dev/zero would not end

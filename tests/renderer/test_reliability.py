@@ -429,8 +429,40 @@ def test_a_scene_that_reads_the_clock_or_the_disk_is_never_cached(tmp_path, cli,
     assert second.code == 0 and json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] == 0
 
 
+# issue 38: what the key cannot name: text run as code, a file the scene writes and reads back
+WRITES_AND_READS = '#fopen F "made.inc" write #write (F, "#declare T = 1;") #fclose F #include "made.inc"'
+
+
 @pytest.mark.povray
-def test_a_constant_scene_is_still_cached(tmp_path, cli):  # negative control of the test above
+@pytest.mark.parametrize("line", ['#include "strings.inc" #declare T = Parse_String(concat("n", "ow"));', WRITES_AND_READS,
+                                  WRITES_AND_READS.replace(" write ", " append ")])
+def test_a_scene_the_key_cannot_name_is_never_cached(tmp_path, cli, line):
+    scene = tmp_path / "s.pov"
+    scene.write_text(f"#version 3.7;\nglobal_settings {{ assumed_gamma 1.0 }}\n{line}\n" + LIT_SPHERE.format(1))
+    env = {"POVH3D_CACHE": str(tmp_path / "cache")}
+    first = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert first.code == 0 and "not reproducible" in first.err, first.err
+    assert not _entries(tmp_path / "cache"), "nothing stored: a second run must render again"
+    second = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
+    assert second.code == 0 and "1/1 frames from cache" not in second.out + second.err
+    assert json.loads((tmp_path / "a.json").read_text())["timings"]["frames_from_cache"] == 0
+
+
+def test_what_the_key_cannot_name_is_found_and_strings_do_not_count(tmp_path):
+    from povh3d.scene.scene import load_scene
+
+    def volatile(text):
+        (tmp_path / "s.pov").write_text(text)
+        return load_scene(tmp_path / "s.pov").volatile
+
+    assert volatile('#declare T = Parse_String("1");') == ("Parse_String",)
+    assert volatile(WRITES_AND_READS) == ("#fopen ... write",)
+    assert volatile('#fopen F "in.txt" read #read (F, X) #fclose F') == ()   # read: the file is hashed
+    assert volatile('#declare S = "Parse_String #fopen F write"; // Parse_String') == ()
+
+
+@pytest.mark.povray
+def test_a_constant_scene_is_still_cached(tmp_path, cli):  # negative control of the tests above
     scene = tmp_path / "s.pov"
     scene.write_text('#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n#declare T = "now";// now\n'
                      + LIT_SPHERE.format(1))

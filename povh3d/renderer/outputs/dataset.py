@@ -20,12 +20,12 @@ from typing import Any
 import numpy as np
 
 from ...dataset.hci import BankGeometry, centre_camera, write_hci
-from ...errors import ConfigError, InputError, OutputError
+from ...errors import ConfigError, InputError, OutputError, warn
 from ...geometry.lens_array import LensArray
 from ...image.colour import decode, encode
 from ...geometry.rays import cell_contains
 from ...image.elemental import view_grid, view_offsets
-from ...image.io import read_png, read_sidecar
+from ...image.io import check_output_folder, read_png, read_sidecar, with_sidecar
 
 
 @dataclass(frozen=True)
@@ -156,6 +156,10 @@ def write_dataset(folder: Path, h3d: np.ndarray, lens_array: LensArray, ray_dept
                   all_views: bool = False, scene: str = "povh3d") -> list[Path]:
     """The HCI folder of an H3D image of ``lens_array`` and its per-view ray depth (mm)."""
     geometry = bank_geometry(lens_array)
+    if not np.isfinite(ray_depth).any():   # never a silent all-NaN ground truth
+        warn(f"the ground truth in {str(folder)!r} (gt_disp_lowres.pfm, gt_depth_lowres.pfm) is all NaN: the depth "
+             "pass measured no pixel (nothing in the field, or every ray starts inside a solid); check the scene "
+             "and the display frame")
     bank = export_views(h3d, lens_array)
     meta = {}
     if lens_array.views is None:
@@ -186,11 +190,13 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
     lens_array = Display.from_record(record).lens_array
     folder = Path(folder)
     check_dataset_dir(folder, lens_array)
+    scene_path = Path(record.get("scene", ""))
+    reads = (*with_sidecar(h3d_path), *(load_scene(scene_path).files if scene_path.is_file() else ()))
+    check_output_folder(folder, reads, what="dataset folder")
     h3d = read_png(h3d_path)
     if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
         raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
                          f"{lens_array.panel.width}x{lens_array.panel.height} panel; render it again")
-    scene_path = Path(record.get("scene", ""))
     if not scene_path.is_file():
         raise InputError(f"the scene {str(scene_path)!r} the sidecar names is gone; the depth pass needs it: "
                          "render again with --dataset")

@@ -8,8 +8,9 @@ front of the screen, NaN where nothing is hit.  ``p_LLL_KKK.npy`` holds the
 matching disparity in view pixels (lenses) per view step, ``z s / (f p)`` with
 ``z`` the hit's depth ``d / |(u/f, v/f, 1)|``: a point at depth ``z`` moves by
 that many lenses from one view to the next (``geometry.rays.disparity``).
-``depth_maps.json`` says all this and records the frame.  Every file is written
-atomically.
+``depth_maps.json`` says all this and records the frame.  The folder is replaced whole
+(``views.replaced_whole``): the maps of an older render never stay beside the new manifest, and a
+non-empty folder without povh3d's ``depth_maps.json`` is refused, never deleted.
 
 With ``--depth-format png`` the maps are 16-bit greyscale PNGs instead
 (``d_LLL_KKK.png``, ``p_LLL_KKK.png``): code 0 is "nothing hit" (NaN), codes
@@ -20,28 +21,31 @@ a ``scale`` (``image.depth_codes``).
 
 from __future__ import annotations
 
-import io
 import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ...errors import OutputError
+from ...errors import OutputError, warn
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import disparity
 from ...image.depth_codes import quantise
-from ...image.io import atomic_path
+from ..._version import __version__
+from .views import check_replaced_dir, replaced_whole
 
 
 def check_depth_dir(folder: Path) -> None:
-    """Before any work: the folder exists or can be made, and is a folder."""
-    if folder.exists() and not folder.is_dir():
-        raise OutputError(f"--depth-maps {str(folder)!r} is a file; give a folder")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create --depth-maps folder {str(folder)!r}: {exc.strerror}") from None
+    """Before any work: the folder new, empty or a depth-maps folder povh3d wrote (it is replaced whole)."""
+    check_replaced_dir(folder, MANIFEST, _ours, "--depth-maps")
+
+
+MANIFEST = "depth_maps.json"
+
+
+def _ours(record: dict[str, Any]) -> bool:
+    # povh3d_version since issue 38; before, the fields only depth_maps.json has
+    return record.get("kind") == "depth_maps" or {"depth", "disparity", "views", "method"} <= record.keys()
 
 
 DEPTH_FORMATS = ("npy", "png")
@@ -52,20 +56,14 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
     """Write ``d_*.npy``, ``p_*.npy`` (``fmt`` 'png': 16-bit PNGs) and ``depth_maps.json`` into ``folder``."""
     from ...image.io import write_png
 
+    if not np.isfinite(depth).any():   # never a silent all-NaN folder
+        warn(f"the depth maps in {str(folder)!r} are all NaN: the depth pass measured no pixel (nothing in the "
+             "field, or every ray starts inside a solid); check the scene and the display frame")
     par = disparity(depth, lens_array)
     ny, nx = depth.shape[:2]
     codes = {"d": quantise(depth), "p": quantise(par)} if fmt == "png" else {}
-    for l in range(ny):
-        for k in range(nx):
-            for prefix, data in (("d", depth[l, k]), ("p", par[l, k])):
-                if fmt == "png":
-                    write_png(folder / f"{prefix}_{l:03d}_{k:03d}.png", codes[prefix][0][l, k])
-                    continue
-                buffer = io.BytesIO()
-                np.save(buffer, data)
-                with atomic_path(folder / f"{prefix}_{l:03d}_{k:03d}.npy") as tmp:
-                    tmp.write_bytes(buffer.getvalue())
     info: dict[str, Any] = {
+            "povh3d_version": __version__, "kind": "depth_maps",
             "views": [ny, nx], "size_px": [depth.shape[3], depth.shape[2]], "format": fmt,
             "depth": "d_LLL_KKK: mm of the display frame along each ray, from the screen "
                      "(z = 0, at the lens centre) to the first surface; negative in front; NaN: nothing hit",
@@ -81,5 +79,16 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
                                  "(code - 1) * scale (mm for d_, lenses per view step for p_), within scale / 2")
     else:
         info["npy"] = "float32 arrays (numpy.load), NaN where nothing is hit"
-    with atomic_path(folder / "depth_maps.json") as tmp:
-        tmp.write_text(json.dumps(info, indent=2) + "\n", encoding="utf-8")
+    try:
+        with replaced_whole(folder, "depth-maps") as tmp:   # never old maps beside the new manifest
+            for l in range(ny):
+                for k in range(nx):
+                    for prefix, data in (("d", depth[l, k]), ("p", par[l, k])):
+                        if fmt == "png":
+                            write_png(tmp / f"{prefix}_{l:03d}_{k:03d}.png", codes[prefix][0][l, k])
+                            continue
+                        np.save(tmp / f"{prefix}_{l:03d}_{k:03d}.npy", data)
+            (tmp / MANIFEST).write_text(json.dumps(info, indent=2) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise OutputError(f"cannot write the depth maps in {str(folder)!r}: {exc.strerror or exc}; the previous "
+                          "maps, if any, are unchanged") from None

@@ -21,7 +21,7 @@ from ...display.looking_glass import Device
 from ...display.quilt import device_calibration, device_quilt
 from ...errors import ConfigError
 from ...geometry.lens_array import LensArray
-from ...image.io import check_writable
+from ...image.io import check_output
 from ...image.quilt import quilt_name
 from ..records import base_record, write_image
 
@@ -33,7 +33,7 @@ def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Pat
     panel = output.with_name(f"{output.stem}_native.png") if native else None
     for path in (quilt, panel):
         if path is not None:
-            check_writable(path)
+            check_output(path)
     return quilt, panel
 
 

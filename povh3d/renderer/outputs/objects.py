@@ -13,8 +13,9 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError, OutputError
-from ...image.io import atomic_path, read_png, read_sidecar, write_png
-from .views import VIEW_NAME
+from ..._version import __version__
+from ...image.io import read_png, read_sidecar, write_png
+from .views import VIEW_NAME, check_replaced_dir, replaced_whole
 
 MANIFEST = "objects.json"
 FRAME_DIR = "f_{n:04d}"
@@ -63,27 +64,37 @@ class ObjectTable:
             raise InputError(f"the object table is incomplete or damaged ({exc}); render --objects again") from None
 
 
+def check_objects_dir(folder: str | Path, inputs: tuple[Path, ...] = ()) -> Path:
+    """Before any work: ``--objects`` new, empty or a masks folder povh3d wrote (it is replaced whole),
+    holding none of ``inputs`` (the scene and the files it reads)."""
+    from ...image.io import check_output_folder
+
+    check_output_folder(folder, inputs, what="--objects folder")
+    return check_replaced_dir(folder, MANIFEST, lambda record: record.get("kind") == "objects", "--objects")
+
+
 def write_masks(folder: str | Path, table: ObjectTable, masks: dict[int, np.ndarray],
                 panels: dict[int, np.ndarray] | None = None) -> None:
     """Write ``{frame: (Ny, Nx, Ly, Lx) ids}``, with ``table.panel`` also ``{frame: (H, W) ids}``, and
-    the table (the manifest last, as views folders)."""
+    the table, into a folder that replaces ``folder`` whole (``views.replaced_whole``): the masks of
+    an older render never stay beside the new table."""
     folder = Path(folder)
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        (folder / MANIFEST).unlink(missing_ok=True)
+        with replaced_whole(folder, "objects") as tmp:
+            for n in table.frames:
+                frame_dir = tmp / FRAME_DIR.format(n=n)
+                frame_dir.mkdir()
+                ids = masks[n]
+                for l in range(ids.shape[0]):
+                    for k in range(ids.shape[1]):
+                        write_png(frame_dir / VIEW_NAME.format(l=l, k=k), ids[l, k].astype(np.uint16))
+                if table.panel is not None:
+                    write_png(frame_dir / PANEL_NAME, panels[n].astype(np.uint16))
+            record = {"povh3d_version": __version__, **table.as_record()}
+            (tmp / MANIFEST).write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
     except OSError as exc:
-        raise OutputError(f"cannot write the object masks into {str(folder)!r}: {exc.strerror}") from None
-    for n in table.frames:
-        frame_dir = folder / FRAME_DIR.format(n=n)
-        frame_dir.mkdir(exist_ok=True)
-        ids = masks[n]
-        for l in range(ids.shape[0]):
-            for k in range(ids.shape[1]):
-                write_png(frame_dir / VIEW_NAME.format(l=l, k=k), ids[l, k].astype(np.uint16))
-        if table.panel is not None:
-            write_png(frame_dir / PANEL_NAME, panels[n].astype(np.uint16))
-    with atomic_path(folder / MANIFEST) as tmp:
-        tmp.write_text(json.dumps(table.as_record(), indent=2) + "\n", encoding="utf-8")
+        raise OutputError(f"cannot write the object masks into {str(folder)!r}: {exc.strerror or exc}; the previous "
+                          "masks, if any, are unchanged") from None
 
 
 def read_table(folder: str | Path) -> ObjectTable:

@@ -12,7 +12,7 @@ import os
 import re
 import shutil
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +23,8 @@ from ...geometry.axes import to_edge
 from ...geometry.lens_array import LensArray
 from ...image.elemental import extract_views, view_grid
 from ...image.interleave import extract, interleave
-from ...image.io import check_writable, file_mode, file_sha256, read_png, read_sidecar, write_png
+from ...image.io import (check_output_folder, check_writable, file_mode, file_sha256, read_png, read_sidecar,
+                         with_sidecar, write_png)
 from ...system import sweep_orphans
 from ...display.display import Display
 from ..records import base_record, png_output, write_image
@@ -32,8 +33,7 @@ VIEW_NAME = "v_{l:03d}_{k:03d}.png"
 _VIEW_RE = re.compile(r"^v_(\d{3,})_(\d{3,})\.png$")
 
 
-# The views are written into a hidden sibling folder and swapped in whole (``_swap_in``).
-_PART = ".{name}.views-{pid}-"
+# The views are written into a hidden sibling folder and swapped in whole (``replaced_whole``).
 _VIEWS_FILES = ("views.json",)
 
 
@@ -58,6 +58,30 @@ def check_views_dir(views_dir: str | Path) -> Path:
     return folder
 
 
+def check_replaced_dir(folder: str | Path, manifest: str, is_ours: Callable[[dict[str, Any]], bool],
+                       what: str) -> Path:
+    """Check, before any work, a folder that is replaced whole (``replaced_whole``): its parent can be
+    written, and it is new, empty or one povh3d wrote (its ``manifest`` a JSON object ``is_ours``
+    accepts), so that nothing povh3d did not make is deleted."""
+    folder = Path(folder)
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create {str(folder.parent)!r}: {exc.strerror}") from None
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"{what} {str(folder)!r} is a file; give a folder")
+    if folder.is_dir() and any(folder.iterdir()):
+        try:
+            record = json.loads((folder / manifest).read_text(encoding="utf-8"))
+        except (OSError, ValueError, RecursionError):
+            record = None
+        if not (isinstance(record, dict) and is_ours(record)):
+            raise OutputError(f"{what} {str(folder)!r} holds files but no povh3d {manifest}, and it is replaced "
+                              "whole; give a new or empty folder")
+    check_writable(folder.parent / f".{folder.name}.write-test")
+    return folder
+
+
 def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray | None,
                 source: dict[str, Any] | None = None) -> None:
     """Write a ``(Ny, Nx, Ly, Lx, C)`` view stack as ``v_{l:03d}_{k:03d}.png`` plus ``views.json``.
@@ -72,10 +96,8 @@ def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray 
 
     folder = check_views_dir(views_dir)
     ny, nx = views.shape[:2]
-    with _parent_lock(folder.parent):
-        sweep_orphans(folder.parent, f".{folder.name}.views-")
-        tmp = Path(tempfile.mkdtemp(prefix=_PART.format(name=folder.name, pid=os.getpid()), dir=folder.parent))
-        try:
+    try:
+        with replaced_whole(folder, "views") as tmp:
             hashes = {}
             for l in range(ny):
                 for k in range(nx):
@@ -85,14 +107,30 @@ def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray 
             record = base_record("views", lens_array, views=[nx, ny], view_size_px=[views.shape[3], views.shape[2]],
                                  source=source or {}, render_id=secrets.token_hex(8), view_sha256=hashes)
             (tmp / "views.json").write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
-            for p in (tmp, *tmp.iterdir()):
-                os.chmod(p, 0o777 & ~_umask() if p == tmp else file_mode())
-            _swap_in(tmp, folder)
-        except OSError as exc:
-            raise OutputError(f"cannot write the views in {str(folder)!r}: {exc.strerror or exc}; "
-                              "the previous views, if any, are unchanged") from None
+    except OSError as exc:
+        raise OutputError(f"cannot write the views in {str(folder)!r}: {exc.strerror or exc}; "
+                          "the previous views, if any, are unchanged") from None
+
+
+@contextlib.contextmanager
+def replaced_whole(folder: Path, kind: str) -> Iterator[Path]:
+    """A new hidden sibling of ``folder`` to fill; when the block ends without an error it takes
+    ``folder``'s place in one rename (an exchange) and the previous folder is removed, so the
+    folder holds one output, complete, or the previous one untouched: never old files beside new
+    ones.  A lock on the parent keeps two writers from swapping at once; a kill leaves only the
+    sibling (``.NAME.KIND-PID-...``), which the next write removes.  ``kind``: ``views``, ``objects``,
+    ``depth-maps``."""
+    with _parent_lock(folder.parent):
+        prefix = f".{folder.name}.{kind}-"
+        sweep_orphans(folder.parent, prefix)
+        tmp = Path(tempfile.mkdtemp(prefix=f"{prefix}{os.getpid()}-", dir=folder.parent))
+        try:
+            yield tmp
+            for p in (tmp, *tmp.rglob("*")):
+                os.chmod(p, 0o777 & ~_umask() if p.is_dir() else file_mode())
+            _swap_in(tmp, folder, prefix)
         finally:
-            shutil.rmtree(tmp, ignore_errors=True)  # after the swap: the previous views
+            shutil.rmtree(tmp, ignore_errors=True)  # after the swap: the previous folder
 
 
 def _umask() -> int:
@@ -110,7 +148,7 @@ def _parent_lock(parent: Path) -> Iterator[None]:
         os.close(fd)  # closing releases the lock
 
 
-def _swap_in(new: Path, folder: Path) -> None:
+def _swap_in(new: Path, folder: Path, prefix: str) -> None:
     """Put ``new`` where ``folder`` is, in one step; ``new`` then holds the previous folder."""
     if not folder.exists():
         os.rename(new, folder)
@@ -118,7 +156,7 @@ def _swap_in(new: Path, folder: Path) -> None:
     if _exchange(new, folder):
         return
     # No RENAME_EXCHANGE (an old kernel, a file system without it): two renames, the old kept aside.
-    aside = Path(tempfile.mkdtemp(prefix=_PART.format(name=folder.name, pid=os.getpid()), dir=folder.parent))
+    aside = Path(tempfile.mkdtemp(prefix=f"{prefix}{os.getpid()}-", dir=folder.parent))
     os.rmdir(aside)
     os.rename(folder, aside)
     os.rename(new, folder)
@@ -224,8 +262,9 @@ def _check_one_render(folder: Path, found: dict[tuple[int, int], Path], hashes: 
 
 def interleave_dir(views_dir: str | Path, output: str | Path) -> dict[str, Any]:
     """Interleave a folder of views into an H3D PNG with its sidecar."""
+    folder = Path(views_dir)
+    output = png_output(output, inputs=[*folder.iterdir()] if folder.is_dir() else ())
     views = read_views(views_dir)
-    output = png_output(output)
     h3d = interleave(views)
     source = _manifest(Path(views_dir))
     record = base_record("h3d", None, method="interleave", views=to_edge(views.shape[:2]),
@@ -245,6 +284,8 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: s
     fractional-PPL array is resampled lens by lens (``elemental.extract_views``)
     and ``views.json`` records the lens centres used.
     """
+    check_output_folder(views_dir, with_sidecar(h3d_path), what="views folder")
+    check_views_dir(views_dir)
     h3d = read_png(h3d_path)
     if ppl is None:
         return _extract_resampled(h3d, h3d_path, views_dir)

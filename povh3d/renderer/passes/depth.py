@@ -18,6 +18,9 @@ holds the viewer, a room box or a sky sphere around the camera) sees ``t = 1`` e
 every surface.  No POV-Ray 3.7 construct measures depth there without the user's object
 being ``hollow``; those pixels are counted (``unmeasured``) and a pass whose middle is
 all unmeasured is reported as blind, with the cause and the fix, never as an empty scene.
+The per-view depth maps (``--depth-maps``, ``--dataset``, ``povh3d dataset``) are made again then
+on a copy of the scene whose top-level objects are all ``hollow`` (``scene.rewrite.all_hollow``),
+which measures them exactly; what is still unmeasured is a warning.
 
 The pass needs POV-Ray's quality 9 (no fog below it), which turns the scene's radiosity, photons and
 subsurface scattering on as well; the pass turns them down (``LIGHTING_OFF``): they cost time, and
@@ -30,11 +33,14 @@ The pass is cached like any frame (the scene's digest, the frame, the size).
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ...errors import Povh3dError, warn
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import depth_scaled_rays
 from ...image.colour import decode
@@ -236,6 +242,29 @@ def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings
     return float(unmeasured[0])
 
 
+def _inside_solid(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch, fog: float,
+                  d: np.ndarray, unmeasured: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pass again on a copy of the scene whose top-level objects are all ``hollow``
+    (``scene.rewrite.all_hollow``), where rays started inside a solid; a warning naming the share
+    still unmeasured (a solid the copy cannot reach: one a macro or another folder's include makes).
+    At ``max_trace_level 1`` only the way to the first surface counts, and there the copy's fog is the
+    scene's wherever a ray starts outside every solid: its lengths replace the first pass's whole."""
+    from ...scene.rewrite import all_hollow, copy_rewritten
+
+    with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
+        try:
+            copy = copy_rewritten(scene, Path(folder), all_hollow)
+            if copy is not None:
+                d, unmeasured = _ray_lengths(copy, lens_array, settings, batch, fog)
+        except Povh3dError as exc:   # the copy does not parse: say so, keep the first pass
+            warn(f"the depth pass could not make {scene.path.name}'s objects hollow ({exc}); the rays that "
+                 "start inside a solid stay unmeasured")
+    if unmeasured.max() > 0:
+        warn(f"the depth pass cannot measure {100 * float(unmeasured.mean()):.3g} % of the depth maps' pixels "
+             f"(NaN there): {BLIND_REASON}")
+    return d, unmeasured
+
+
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
                     units_per_mm: float, *, views: tuple[int, int] | None = None,
                     grid: tuple[int, int, float, float] | None = None) -> np.ndarray:
@@ -266,7 +295,9 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     directions = [(a, b, 1.0) for a, b in slopes.tolist()]
     fog = front_clearance * units_per_mm
     batch = _fog_batch(directions, lens_array, front_clearance, fog, cols, rows, (cols * gx, rows * gy))
-    d, _ = _ray_lengths(scene, lens_array, settings, batch, fog)
+    d, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog)
+    if unmeasured.max() > 0:
+        d, unmeasured = _inside_solid(scene, lens_array, settings, batch, fog, d, unmeasured)
     # The ray starts front_clearance * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
     lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
     z = np.where(np.isneginf(d), np.nan, d) / units_per_mm / lengths - front_clearance

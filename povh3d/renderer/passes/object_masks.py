@@ -28,9 +28,16 @@ from ..placement.pose import DisplayFrameOptions, recorded_frame
 from ..request import ModelOptions, RenderRequest, VolumeOptions
 
 
-def check_objects_request(request: RenderRequest) -> MaskScene | None:
-    """Refuse, before any work, what the masks cannot be made for; return the mask copy of a scene
-    (None for a model or a volume: its parts are known once it is converted)."""
+def check_objects_request(request: RenderRequest, folder: str | Path | None = None) -> MaskScene | None:
+    """Refuse, before any work, what the masks cannot be made for, and a ``folder`` (``--objects``) that is
+    not new, empty or povh3d's masks, or holds what the render reads (``outputs.objects.check_objects_dir``);
+    return the mask copy of a scene (None for a model or a volume: its parts are known once it is converted)."""
+    if folder is not None:
+        from ...scene.scene import load_scene
+        from ..outputs.objects import check_objects_dir
+
+        reads = (request.source,) if request.is_model else load_scene(request.source, request.include_dirs).files
+        check_objects_dir(folder, (request.source, *reads))
     if request.is_model:
         if request.volume.volume:
             raise ConfigError("a volume drawn as a medium (--volume) has no surfaces to tell apart; render the "

@@ -158,7 +158,7 @@ def _usable_cache(scene: Scene, settings: RenderSettings, stats: RenderStats) ->
         cache = None
     if cache is not None and not scene.reproducible:
         # Two parses differ (the time, the file system): a cached image would be stale.
-        stats.uncached = f"the scene reads {', '.join(scene.volatile)}, so its image is not reproducible"
+        stats.uncached = f"the scene uses {', '.join(scene.volatile)}, so its image is not reproducible"
         warn(f"{scene.path.name}: {stats.uncached}: not using the image cache for it")
         cache = None
     return cache
