@@ -1,4 +1,4 @@
-"""The compiled row gather (povh3d._kernels) against the NumPy reference paths."""
+"""The row gather (povh3d.image.kernels) against the NumPy reference paths."""
 
 import numpy as np
 import pytest
@@ -30,26 +30,26 @@ def test_interleave_and_extract_match_reference(ny, nx, ly, lx, channels, dtype,
 def test_fast_path_is_taken_and_exact_at_full_hd():
     views = np.random.default_rng(0).integers(0, 256, (1, 8, 1080, 240, 3), dtype=np.uint8)
     calls = []
-    original = _kernels.gather_rgb8
+    original = _kernels.gather
 
     def spy(*args):
         calls.append(1)
         return original(*args)
 
-    _kernels.gather_rgb8 = spy
+    _kernels.gather = spy
     try:
         h3d = interleave(views)
         back = extract(h3d, (1, 8))
     finally:
-        _kernels.gather_rgb8 = original
-    assert len(calls) == 2  # neither fell back to NumPy
+        _kernels.gather = original
+    assert len(calls) == 2  # neither fell back to the plane-by-plane copy
     assert np.array_equal(h3d, views.transpose(2, 0, 3, 1, 4).reshape(1080, 1920, 3))
     assert np.array_equal(back, views)
 
 
 def test_last_pixel_of_the_buffer_is_not_over_read():
-    # The 32-bit loads read one byte past a pixel: a view stack ending at a page boundary must not fault and
-    # the last pixel must still be right (the row is copied byte by byte).
+    # A view stack ending at a page boundary: no read past its last byte (that would fault), and the
+    # last pixel still right.
     import mmap
 
     page = mmap.PAGESIZE
@@ -83,7 +83,7 @@ def test_row_gather_negative_control_wrong_table_is_detected():
 @pytest.mark.parametrize("pixel_bytes", [1, 2, 3])
 @pytest.mark.parametrize("offset", [-1, "past the end"])
 def test_row_gather_refuses_offsets_outside_the_source(pixel_bytes, offset):
-    # The kernels load without bounds or negative-index checks (that doubled their speed), so
+    # NumPy wraps negative indices and take(mode="clip") clamps the rest, so
     # row_gather itself must refuse a table that reaches outside the source, before any load.
     src = np.arange(4 * 8 * pixel_bytes, dtype=np.uint8)
     table = (np.arange(8) * pixel_bytes).reshape(1, -1).astype(np.int32)
