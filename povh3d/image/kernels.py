@@ -69,7 +69,10 @@ def gather(dst8: np.ndarray, s8: np.ndarray, pixel_bytes: int, base: np.ndarray,
         # Pixels at any byte: a b-byte item at every byte of the source (overlapping, stride 1).
         src = np.ndarray((s8.size - b + 1,), dtype=f"V{b}", buffer=s8, strides=(1,))
         step, contiguous = 1, False
-    dst = dst8.view(_UNITS[b]) if b in _UNITS else (dst8.reshape(-1, b) if contiguous else dst8.view(f"V{b}"))
+    if contiguous:
+        dst = dst8.view(_UNITS[b]) if b in _UNITS else dst8.reshape(-1, b)
+    else:
+        dst = dst8.view(f"V{b}")
     block = max(1, _BLOCK_ITEMS // q_count)
 
     def part(start: int, stop: int) -> None:
