@@ -2,7 +2,7 @@
 
 The index map and its compressed plan are built once per mapping and panel
 (timed separately: they are cached); what is timed is ``Mapping.apply``, the
-compiled row gather into a fresh array, against ``numpy.copy`` (also a fresh
+row gather into a fresh array, against ``numpy.copy`` (also a fresh
 array) in the same run.  Hot: the same source again and again (the minimum and
 the median: the machine is shared, and a two-thread gather suffers more from a
 busy neighbour than a copy does).  Cold: a 64 MB buffer is written between

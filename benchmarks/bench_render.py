@@ -69,7 +69,7 @@ def interleave_ratios(repeats: int = 25) -> dict:
     sides allocate their output, as the library does.
     """
     views = np.random.default_rng(0).integers(0, 255, (1, 8, 1080, 240, 3), dtype=np.uint8)
-    interleave(views)  # compile (or load the cached kernel) outside the timing
+    interleave(views)  # first call (thread pool, page faults) outside the timing
     flush = np.zeros(64 << 20, np.uint8)
 
     def runs(fn, cold):

@@ -1,7 +1,7 @@
 """The optional dependency groups, and the one check that names the group to install.
 
 A plain ``pip install povh3d`` brings what every render needs (NumPy, Jinja2,
-Pillow, trimesh, PyVista, numba, pypng, and Matplotlib, which PyVista
+Pillow, imagecodecs, trimesh, PyVista, pypng, and Matplotlib, which PyVista
 needs anyway).  The packages below serve only some
 commands, so they live in extras (``pyproject.toml``); a command that reaches one
 that is missing stops with one line saying which extra to install.
@@ -21,12 +21,19 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "calibration": ("scipy",),
     "analysis": ("scipy", "scikit-image"),
     "video": ("imageio-ffmpeg",),
-    "mesh": ("fast-simplification", "lxml", "networkx"),
+    "mesh": ("fast-simplification", "lxml", "networkx", "numba"),
 }
 
 #: the import name of a distribution whose two names differ
 _DISTRIBUTION = {"nrrd": "pynrrd", "skimage": "scikit-image", "imageio_ffmpeg": "imageio-ffmpeg",
                  "fast_simplification": "fast-simplification"}
+
+
+def installed(module: str) -> bool:
+    """``module`` can be imported (an optional package is there), found without importing it."""
+    import importlib.util
+
+    return importlib.util.find_spec(module) is not None
 
 
 def require(module: str, extra: str, purpose: str) -> ModuleType:

@@ -41,7 +41,7 @@ def installed(tmp_path_factory) -> tuple[Path, Path]:
     wheel, = (root / "dist").glob("povh3d-*.whl")
     venv.EnvBuilder(with_pip=True, clear=True).create(root / "env")
     python = root / "env" / "bin" / "python"
-    # --no-compile: byte-compiling VTK, numba and matplotlib at install is most of the install's CPU;
+    # --no-compile: byte-compiling VTK and matplotlib at install is most of the install's CPU;
     # what the test imports compiles as it is imported.
     _run([str(python), "-m", "pip", "install", "-q", "--no-compile", "--disable-pip-version-check", str(wheel)],
          cwd=root)

@@ -1,7 +1,7 @@
 """Views <-> H3D image, and elemental images -> H3D image.
 
 docs/geometry.md: ``H3D[i*Ny + l, j*Nx + k] = view[l, k][i, j]``.  ``interleave``
-and ``extract`` run the compiled row gather of ``kernels`` (one table row: the
+and ``extract`` run the row gather of ``kernels`` (one table row: the
 layout of one lens row; one source offset per output row); arrays it does not
 take (non-contiguous, object dtypes) are copied plane by plane in NumPy.  The
 tests compare both with a plain NumPy transpose (``tests/support/oracles.py``).
@@ -104,7 +104,7 @@ def _interleave_fast(v: np.ndarray, out: np.ndarray) -> bool:
     base = ((l * nx * ly + i) * lx * b).reshape(-1)  # r = i*Ny + l
     j, k = np.arange(lx, dtype=np.int64)[:, None], np.arange(nx, dtype=np.int64)[None, :]
     table = _offsets((k * ly * lx * b + j * b).reshape(1, -1))  # q = j*Nx + k
-    from .kernels import row_gather  # numba loads on first use, not with the CLI
+    from .kernels import row_gather
 
     return row_gather(v, b, base, np.zeros(base.size, np.intp), table, out)
 

@@ -1,7 +1,7 @@
 """PNG images and JSON sidecars, written atomically.
 
-8-bit PNGs are read by Pillow (fast); 16-bit ones by ``png_codec`` (zlib and
-NumPy), because Pillow opens 16-bit RGB PNGs as 8-bit without a word
+8-bit PNGs are read by Pillow (fast); 16-bit ones by ``png_codec`` (libpng
+through imagecodecs), because Pillow opens 16-bit RGB PNGs as 8-bit without a word
 (docs/geometry.md, "Files"), and pypng, which reads them right, took seconds per
 megapixel.  ``png_codec`` writes both.  Every write
 goes to a temporary file in the destination folder and is renamed into place,
@@ -219,7 +219,7 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
 
 
 def _decode_png16(data: bytes) -> np.ndarray:
-    """16 bits per channel: ``png_codec`` (zlib and NumPy), pypng for the layouts it leaves (interlaced, palette)."""
+    """16 bits per channel: ``png_codec`` (libpng), pypng for the layouts it leaves (interlaced, palette)."""
     import numpy as np
     import png
 

@@ -1,4 +1,4 @@
-"""Mesh arrays as POV-Ray text at the precision POV-Ray keeps, in compiled code.
+"""Mesh arrays as POV-Ray text at the precision POV-Ray keeps, in NumPy or compiled code.
 
 POV-Ray 3.7 stores a ``mesh2``'s vertices and normals as single-precision
 floats: it parses each number to a double and rounds that to a float.  So the
@@ -20,6 +20,7 @@ volume's decimated surfaces, a small model) the same search runs in NumPy and
 the text is joined in Python: the same text, without the 0.3-0.5 s it takes to
 import numba and load the compiled kernel.  Past ``SMALL`` numbers the kernel
 is loaded: a process never spends more than about that start-up in Python.
+numba is optional (``povh3d[mesh]``): without it every number takes this path.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import sys
 import numpy as np
 
 from ..errors import ConfigError
+from ..extras import installed
 from .numbers import format_rows
 
 #: Magnitudes the kernel writes; the others (non-zero) are written one by one.
@@ -72,7 +74,8 @@ def format_vectors32(array: np.ndarray, per_line: int = 4) -> str:
         if not np.isfinite(array).all():
             raise ConfigError("cannot write non-finite numbers into a POV-Ray script")
         values = np.ascontiguousarray(array, dtype=np.float32).astype(np.float64)
-    if "povh3d.mesh.kernels" not in sys.modules and _written_in_python[0] + values.size <= SMALL:
+    if "povh3d.mesh.kernels" not in sys.modules and (_written_in_python[0] + values.size <= SMALL
+                                                     or not installed("numba")):
         _written_in_python[0] += values.size
         text = _small_rows(values, per_line, as_int)
         if text is None:

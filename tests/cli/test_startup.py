@@ -13,6 +13,10 @@ from tests.conftest import REPO, SAMPLE
 from tests.support.cli import one_error_line
 
 HEAVY = ("scipy", "numba", "matplotlib", "trimesh", "dask", "skimage", "pyvista", "vtkmodules")
+#: Never imported by a render of a scene file, on any path (issue 37): a JIT compiler (numba and its
+#: llvmlite: 0.3-6 s to import and load) or what only other commands use.
+NOT_BY_RENDER = {"numba", "llvmlite", "scipy", "matplotlib", "trimesh", "dask", "distributed", "skimage", "pyvista",
+                 "vtkmodules", "cv2"}
 
 # Runs the command line in a fresh interpreter, then reports which heavy packages it imported.
 _WRAPPER = """
@@ -50,18 +54,44 @@ def test_help_and_presets_do_not_even_import_numpy():
 
 
 @pytest.mark.povray
-def test_the_probe_sees_a_heavy_import():
-    # negative control: the same probe reports scipy when something does import it
-    assert "scipy" in imported_by("--help", prelude="import scipy.ndimage")
+@pytest.mark.parametrize("module", ["scipy.ndimage", "numba"])
+def test_the_probe_sees_a_heavy_import(module):
+    # negative control: the same probe reports scipy or numba when something does import it
+    assert module.split(".")[0] in imported_by("--help", prelude=f"import {module}")
 
 
 @pytest.mark.povray
-def test_render_imports_no_plotting_or_cluster_package(tmp_path):
-    # a whole draft render: NumPy, PIL and Jinja, but no SciPy, Matplotlib, trimesh or Dask
+def test_render_imports_no_jit_plotting_or_cluster_package(tmp_path):
+    # a whole draft render: NumPy, PIL and Jinja, but no numba, SciPy, Matplotlib, trimesh or Dask
     used = imported_by("render", str(SAMPLE), "--lenses", "12x8", "--ppl", "4x4", "--quality", "draft",
                        "-q", "-o", str(tmp_path / "o.png"))
     assert (tmp_path / "o.png").is_file()
-    assert used & {"scipy", "matplotlib", "trimesh", "dask", "skimage"} == set()
+    assert used & NOT_BY_RENDER == set()
+
+
+CAMERA_SCENE = """#version 3.7;
+camera { location <0, 1, -6> look_at <0, 0, 0> }
+light_source { <4, 6, -8> rgb 1 }
+sphere { <0, 0, 0>, 1 pigment { rgb <1, 0.4, 0.2> } }
+plane { y, -1 pigment { checker rgb 1 rgb 0.3 } }
+"""
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("extra", [[], ["--depth-maps", "maps", "--depth-format", "png"], ["--dataset", "hci"],
+                                   ["--preset", "ipad-retina"]],
+                         ids=["camera", "depth-maps-png", "dataset", "slanted-mapping"])
+def test_render_paths_that_read_16_bit_passes_or_gather_pixels_import_no_jit(tmp_path, extra):
+    # A scene camera (its depth pass is a 16-bit PNG), 16-bit depth maps, a panel mapping's gather:
+    # the paths that imported numba before (image/png_codec.py, image/kernels.py).
+    scene = tmp_path / "cam.pov"
+    scene.write_text(CAMERA_SCENE)
+    size = [] if extra[:1] == ["--preset"] else ["--lenses", "12x8", "--ppl", "5x5"]  # odd: a dataset's centre
+    used = imported_by("render", str(scene), *size, *extra, "--quality", "draft", "-q", "--no-cache",
+                       "-o", str(tmp_path / "o.png"), prelude="import os; os.chdir(%r)" % str(tmp_path))
+    assert (tmp_path / "o.png").is_file()
+    assert used & NOT_BY_RENDER == set()
+    assert "imagecodecs" in used or extra[:1] == ["--preset"]  # the 16-bit pass was read
 
 
 @pytest.mark.parametrize("args, fragment", [

@@ -1,4 +1,4 @@
-"""The compiled row gather (povh3d._kernels) against the NumPy reference paths."""
+"""The row gather (povh3d.image.kernels) against the NumPy reference paths."""
 
 import numpy as np
 import pytest
@@ -30,26 +30,26 @@ def test_interleave_and_extract_match_reference(ny, nx, ly, lx, channels, dtype,
 def test_fast_path_is_taken_and_exact_at_full_hd():
     views = np.random.default_rng(0).integers(0, 256, (1, 8, 1080, 240, 3), dtype=np.uint8)
     calls = []
-    original = _kernels.gather_rgb8
+    original = _kernels.gather
 
     def spy(*args):
         calls.append(1)
         return original(*args)
 
-    _kernels.gather_rgb8 = spy
+    _kernels.gather = spy
     try:
         h3d = interleave(views)
         back = extract(h3d, (1, 8))
     finally:
-        _kernels.gather_rgb8 = original
-    assert len(calls) == 2  # neither fell back to NumPy
+        _kernels.gather = original
+    assert len(calls) == 2  # neither fell back to the plane-by-plane copy
     assert np.array_equal(h3d, views.transpose(2, 0, 3, 1, 4).reshape(1080, 1920, 3))
     assert np.array_equal(back, views)
 
 
 def test_last_pixel_of_the_buffer_is_not_over_read():
-    # The 32-bit loads read one byte past a pixel: a view stack ending at a page boundary must not fault and
-    # the last pixel must still be right (the row is copied byte by byte).
+    # A view stack ending at a page boundary: no read past its last byte (that would fault), and the
+    # last pixel still right.
     import mmap
 
     page = mmap.PAGESIZE
@@ -83,7 +83,7 @@ def test_row_gather_negative_control_wrong_table_is_detected():
 @pytest.mark.parametrize("pixel_bytes", [1, 2, 3])
 @pytest.mark.parametrize("offset", [-1, "past the end"])
 def test_row_gather_refuses_offsets_outside_the_source(pixel_bytes, offset):
-    # The kernels load without bounds or negative-index checks (that doubled their speed), so
+    # NumPy wraps negative indices and take(mode="clip") clamps the rest, so
     # row_gather itself must refuse a table that reaches outside the source, before any load.
     src = np.arange(4 * 8 * pixel_bytes, dtype=np.uint8)
     table = (np.arange(8) * pixel_bytes).reshape(1, -1).astype(np.int32)
@@ -100,3 +100,22 @@ def test_row_gather_refuses_offsets_outside_the_source(pixel_bytes, offset):
     table[0, 3] = 3 * pixel_bytes
     assert _kernels.row_gather(src, pixel_bytes, base, np.zeros(4, np.intp), table, out)
     assert np.array_equal(out[-8 * pixel_bytes:], src[-8 * pixel_bytes:])
+
+
+@pytest.mark.parametrize("pixel_bytes", [1, 2, 3, 4, 6, 8])
+def test_row_gather_at_any_byte_offset(pixel_bytes):
+    # Pixels that start off their size's grid (an odd byte for 2-byte pixels) take the overlapping
+    # view's path: checked against a byte-by-byte gather written out here.
+    rng = np.random.default_rng(pixel_bytes)
+    src = rng.integers(0, 256, 400, dtype=np.uint8)
+    table = rng.integers(0, 40, (3, 7)) * pixel_bytes + 1   # +1: off the grid
+    tid = rng.integers(0, 3, 5).astype(np.intp)
+    base = rng.integers(0, 100, 5).astype(np.int64)
+    out = np.zeros(5 * 7 * pixel_bytes, np.uint8)
+    assert _kernels.row_gather(src, pixel_bytes, base, tid, table, out)
+    expected = np.array([src[base[r] + table[tid[r], q] + c] for r in range(5) for q in range(7)
+                         for c in range(pixel_bytes)], np.uint8)
+    assert np.array_equal(out, expected)
+    # Negative control: the same gather on the grid (without the +1) reads other bytes.
+    assert _kernels.row_gather(src, pixel_bytes, base, tid, table - 1, out)
+    assert not np.array_equal(out, expected)

@@ -37,3 +37,30 @@ def test_only_bit_identical_points_merge():
     merged, refaced = merge_equal_vertices(soup, np.arange(9).reshape(3, 3))
     assert refaced.tolist() == [[0, 1, 0], [2, 2, 3], [3, 4, 4]]
     assert len(merged) == 5
+
+
+def test_the_sort_and_the_compiled_hash_table_give_the_same_groups(monkeypatch):
+    # merge_equal_vertices sorts below MERGE_SMALL corners and uses numba's hash table above it (when
+    # numba is installed): the same first rows and groups, with -0.0 and NaN bit patterns among them.
+    from povh3d.mesh import clean
+    from povh3d.mesh.kernels import first_of_equal_rows
+
+    rng = np.random.default_rng(5)
+    points = rng.integers(-5, 6, (300, 3)).astype(np.float64) / 8
+    points[::11] = np.nan
+    soup = points[rng.integers(0, 300, 5000)] + 0.0
+    bits = soup.view(np.uint64)
+    sorted_first, sorted_inverse = clean.first_of_equal_rows_sorted(bits)
+    hashed_first, hashed_inverse = first_of_equal_rows(bits)
+    np.testing.assert_array_equal(sorted_first, hashed_first)
+    np.testing.assert_array_equal(sorted_inverse, hashed_inverse)
+    # Negative control: groups numbered in sorted order instead of first appearance differ.
+    _, sorted_order_inverse = np.unique(bits.view("V24").ravel(), return_inverse=True)
+    assert not np.array_equal(sorted_order_inverse.ravel(), hashed_inverse)
+    # Both paths through merge_equal_vertices: the sort, then the kernel past a lowered threshold.
+    faces = np.arange(5000 - 5000 % 3).reshape(-1, 3)
+    by_sort = merge_equal_vertices(soup, faces)
+    monkeypatch.setattr(clean, "MERGE_SMALL", 10)
+    by_kernel = merge_equal_vertices(soup, faces)
+    np.testing.assert_array_equal(by_sort[0], by_kernel[0])
+    np.testing.assert_array_equal(by_sort[1], by_kernel[1])

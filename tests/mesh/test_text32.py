@@ -137,3 +137,21 @@ def test_the_python_path_stops_at_small_numbers(monkeypatch):
     for _ in range(3):
         format_vectors32(np.ones((2, 3)))
     assert calls == [6, -6, -6]
+
+
+def test_without_numba_every_number_takes_the_python_path(monkeypatch):
+    # numba is optional (povh3d[mesh]): past SMALL numbers a process without it keeps writing in Python.
+    import sys
+
+    from povh3d.mesh import text32
+
+    monkeypatch.delitem(sys.modules, "povh3d.mesh.kernels", raising=False)
+    monkeypatch.setattr(text32, "_written_in_python", [0])
+    monkeypatch.setattr(text32, "SMALL", 10)
+    monkeypatch.setattr(text32, "installed", lambda module: module != "numba")
+    calls = []
+    monkeypatch.setattr(text32, "_small_rows", lambda *a: calls.append(a[0].size) or "")
+    monkeypatch.setattr(text32, "_write_rows", lambda: lambda *a: calls.append(-a[0].size) or np.zeros(0, np.uint8))
+    for _ in range(3):
+        format_vectors32(np.ones((2, 3)))
+    assert calls == [6, 6, 6]

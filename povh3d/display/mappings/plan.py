@@ -1,4 +1,4 @@
-"""A mapping's index map compressed for the compiled row gather (``povh3d.image.kernels``).
+"""A mapping's index map compressed for the row gather (``povh3d.image.kernels``).
 
 The reference ``Sampling`` is an ``(H, W, 3)`` int64 map: at 4K that is 200 MB
 read on every apply, the reason a plain fancy-indexing gather costs 8-14 copies.
@@ -48,7 +48,7 @@ class Plan:
 
     def apply(self, flat: np.ndarray, out: np.ndarray) -> None:
         """Gather ``flat`` (the source, 1-D contiguous) into ``out`` ``(H, W, 3)`` in place."""
-        from ...image.kernels import row_gather  # numba loads on first use
+        from ...image.kernels import row_gather
 
         size = flat.dtype.itemsize
         table = self.table if size == 1 else (self.table.astype(np.int64) * size)

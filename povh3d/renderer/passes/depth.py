@@ -158,6 +158,17 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
     return fog_distances(images[0::2], images[1::2], fog)
 
 
+def nan_median_last(values: np.ndarray) -> np.ndarray:
+    """``np.nanmedian(values, axis=-1)`` (the same numbers) without the 10-40 ms import of
+    ``numpy.ma`` that NumPy's small-axis path makes; NaN where a row has no number."""
+    ordered = np.sort(values, axis=-1)  # NaN last
+    count = (~np.isnan(values)).sum(axis=-1, keepdims=True)
+    low = np.take_along_axis(ordered, np.maximum(count - 1, 0) // 2, axis=-1)[..., 0]
+    high = np.take_along_axis(ordered, count // 2 - (count == 0), axis=-1)[..., 0]
+    with np.errstate(invalid="ignore"):
+        return np.where(count[..., 0] > 0, (low + high) / 2, np.nan)
+
+
 def fog_distances(dark_images: list[np.ndarray], light_images: list[np.ndarray],
                   fog: float) -> tuple[np.ndarray, np.ndarray]:
     """(n, H, W) ray lengths (scene units) from renders with fog colour 0 and 1 (sRGB-encoded PNG
@@ -170,7 +181,7 @@ def fog_distances(dark_images: list[np.ndarray], light_images: list[np.ndarray],
     # t from each channel that does not clip; the median of those.
     channel_t = np.where(clipped, np.nan, 1.0 - (light - dark))
     channel_t[every] = 0.0   # no channel left: set below
-    t = np.clip(np.nanmedian(channel_t, axis=-1), 0.0, 1.0)
+    t = np.clip(nan_median_last(channel_t), 0.0, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):   # t = 0: nothing hit; fog 0: no pass
         d = -fog * np.log(t)
     # t = 1 at a surface: no fog there.  POV-Ray applies no fog to a ray that starts inside a
