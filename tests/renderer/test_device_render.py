@@ -16,7 +16,7 @@ from povh3d.image.interleave import extract
 from povh3d.image.io import read_png, read_sidecar
 from povh3d.image.quilt import quilt_to_views
 from tests.conftest import SAMPLES
-from tests.mappings.test_looking_glass_shader import agreement
+from tests.display.mappings.test_looking_glass_shader import agreement
 from tests.support.cli import one_error_line
 
 PORTRAIT = DEVICES["looking-glass-portrait"]

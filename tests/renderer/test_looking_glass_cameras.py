@@ -18,7 +18,7 @@ import pytest
 
 from povh3d.display.looking_glass import DEVICES
 from povh3d.display.quilt import default_viewing_distance, vendor_cameras, view_offsets
-from povh3d.image.io import read_png, read_sidecar
+from povh3d.image.io import read_png
 from povh3d.image.metrics import psnr
 from povh3d.image.quilt import quilt_to_views
 
