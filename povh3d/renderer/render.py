@@ -94,8 +94,13 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
         write_image(output, still.image, still.record)
         return still.record
+    companions = None
+    if request.display.quilt is not None:   # a Looking Glass preset: each frame's quilt (and native image)
+        def companions(staged: Path, image: RenderedImage) -> tuple[dict[str, Any], list[Path]]:
+            entry = write_device_outputs(staged, image.image, request.render_array, request.display.quilt)
+            return {"quilt": entry}, [staged.with_name(entry[k]) for k in ("file", "native") if k in entry]
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
-                             video=request.video, fps=request.fps)
+                             video=request.video, fps=request.fps, companions=companions)
     _warn_unlit(scene)
     return report
 

@@ -18,7 +18,7 @@ import pytest
 
 from povh3d.display.looking_glass import DEVICES
 from povh3d.display.quilt import default_viewing_distance, vendor_cameras, view_offsets
-from povh3d.image.io import read_png
+from povh3d.image.io import read_png, read_sidecar
 from povh3d.image.metrics import psnr
 from povh3d.image.quilt import quilt_to_views
 
@@ -132,3 +132,43 @@ def test_a_floor_stays_a_floor_in_every_tile(quilts, tmp_path):
 
     assert sky_in_floor_rows(rendered["perspective"][0]) == 0
     assert sky_in_floor_rows(rendered["orthographic"][0]) > 0      # control: rays parallel to the normal
+
+
+ORBIT = """#version 3.7;
+global_settings { assumed_gamma 1.0 }
+background { rgb <0.1, 0.1, 0.2> }
+light_source { <-8, 12, -10> rgb 1 }
+camera { location <0, 1, -7> look_at <0, 0.6, 0> angle 36 }
+sphere { <1.5 * cos(2 * pi * clock), 0.6, 1.5 * sin(2 * pi * clock)>, 0.6 pigment { rgb <0.9, 0.7, 0.2> } }
+"""
+
+
+@pytest.mark.povray
+def test_frames_write_a_quilt_and_a_native_image_per_frame_and_a_quilt_video(tmp_path, cli):
+    from povh3d.display.looking_glass import visual_json
+    from povh3d.image.interleave import extract
+
+    scene, cal = tmp_path / "orbit.pov", tmp_path / "visual.json"
+    scene.write_text(ORBIT)
+    cal.write_text(visual_json(PORTRAIT.calibration))
+    result = cli("render", scene, "--preset", "looking-glass-portrait", "--quality", "draft", "--frames", "0:2",
+                 "--clock", "0:0.5", "--calibration", cal, "--video", tmp_path / "orbit.mp4", "-o", tmp_path / "orbit.png")
+    assert result.code == 0, result.err
+    quilts = []
+    for n in range(3):
+        quilt = read_png(tmp_path / f"orbit_{n:04d}_qs8x6a0.75.png")
+        tiles = quilt_to_views(quilt, *PORTRAIT.grid)
+        assert np.array_equal(tiles, extract(read_png(tmp_path / f"orbit_{n:04d}.png"), (1, 48))[0][::-1])
+        assert read_png(tmp_path / f"orbit_{n:04d}_native.png").shape == (2048, 1536, 3)
+        record = read_sidecar(tmp_path / f"orbit_{n:04d}.png")
+        assert record["quilt"]["file"] == f"orbit_{n:04d}_qs8x6a0.75.png" and record["animation"]["frame"] == n
+        quilts.append(quilt)
+    assert not np.array_equal(quilts[0], quilts[1])          # the clock moved the sphere
+    import imageio_ffmpeg
+
+    reader = imageio_ffmpeg.read_frames(str(tmp_path / "orbit.mp4"))
+    meta = next(reader)
+    assert tuple(meta["size"]) == (3360, 3360)
+    decoded = [np.frombuffer(f, np.uint8).reshape(3360, 3360, 3) for f in reader]
+    assert len(decoded) == 3 and all(np.array_equal(a, b) for a, b in zip(decoded, quilts))  # lossless
+    assert not list(tmp_path.glob(".orbit*"))                 # no staging left
