@@ -172,3 +172,18 @@ def test_frames_write_a_quilt_and_a_native_image_per_frame_and_a_quilt_video(tmp
     decoded = [np.frombuffer(f, np.uint8).reshape(3360, 3360, 3) for f in reader]
     assert len(decoded) == 3 and all(np.array_equal(a, b) for a, b in zip(decoded, quilts))  # lossless
     assert not list(tmp_path.glob(".orbit*"))                 # no staging left
+
+
+def test_camera_model_is_refused_where_it_chooses_nothing(tmp_path, cli):
+    from povh3d.display.display import build_display
+    from povh3d.errors import ConfigError
+    from tests.conftest import SAMPLE
+    from tests.support.cli import one_error_line
+
+    line = one_error_line(cli("render", SAMPLE, "--preset", "demo", "--camera-model", "perspective",
+                              "-o", tmp_path / "x.png"))
+    assert "--camera-model" in line and not list(tmp_path.glob("*.png"))
+    with pytest.raises(ConfigError, match="unknown camera model 'fisheye'"):
+        build_display("looking-glass-portrait", camera_model="fisheye")
+    assert build_display("looking-glass-portrait").quilt["camera_model"] == "perspective"    # the default
+    assert build_display("looking-glass-portrait", camera_model="orthographic").quilt["camera_model"] == "orthographic"

@@ -1,10 +1,10 @@
 """A Looking Glass render: the device's views at its tile size, its quilt, and its native panel image.
 
-``povh3d render SCENE --preset looking-glass-portrait`` renders the camera bank of
-``display.quilt.quilt_array`` (the device's quilt as a lens array).
-The views are the oblique orthographic views of the ray definition (docs/geometry.md);
-the vendor's tools render off-axis perspective cameras instead (docs/displays.md
-measures the difference on the device).  ``write_device_outputs`` tiles them into the
+``povh3d render SCENE --preset looking-glass-portrait`` renders the device's views as the
+camera bank of ``display.quilt.quilt_array`` (the device's quilt as a lens array): by default
+through the vendor's sheared perspective cameras (``renderer.methods.vendor_views``), with
+``--camera-model orthographic`` the oblique orthographic views of the ray definition
+(docs/geometry.md; docs/displays.md measures the two).  ``write_device_outputs`` tiles them into the
 vendor's quilt (``stem_qs8x6a0.75.png`` at the device's quilt size, padded at the right
 and top as the vendor's ``viewPortion`` expects) and, given the unit's ``visual.json``,
 the panel image its shader would show (``display.mappings.looking_glass_shader.quilt_to_native``).
