@@ -187,3 +187,15 @@ def test_camera_model_is_refused_where_it_chooses_nothing(tmp_path, cli):
         build_display("looking-glass-portrait", camera_model="fisheye")
     assert build_display("looking-glass-portrait").quilt["camera_model"] == "perspective"    # the default
     assert build_display("looking-glass-portrait", camera_model="orthographic").quilt["camera_model"] == "orthographic"
+
+
+def test_what_traces_the_lens_array_is_refused_with_the_vendor_cameras(tmp_path, cli):
+    from tests.conftest import SAMPLE
+    from tests.support.cli import one_error_line
+
+    base = ("render", SAMPLE, "--preset", "looking-glass-portrait", "-o", tmp_path / "x.png")
+    for extra, words in ((("--depth-maps", tmp_path / "d"), "--depth-maps"), (("--objects", tmp_path / "m"), "masks"),
+                         (("--fit-depth", "auto"), "--fit-depth")):
+        line = one_error_line(cli(*base, *extra))
+        assert words in line and "--camera-model orthographic" in line, line
+    assert not list(tmp_path.rglob("*.png"))

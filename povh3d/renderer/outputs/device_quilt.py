@@ -19,6 +19,7 @@ import numpy as np
 
 from ...display.looking_glass import Device
 from ...display.quilt import device_calibration, device_quilt
+from ...errors import ConfigError
 from ...geometry.lens_array import LensArray
 from ...image.io import check_writable
 from ...image.quilt import quilt_name
@@ -61,11 +62,14 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     return entry
 
 
-def check_device_render(spec: dict[str, Any], output: Path, animated: bool) -> None:
+def check_device_render(spec: dict[str, Any], output: Path, animated: bool, depth_maps: bool = False) -> None:
     """Before any work: the quilt (and native image) writable, the calibration the model's.  An
     animation writes them per frame beside each (``stem_0001_qs8x6a0.75.png``, ``stem_0001_native.png``)."""
     from ...display.looking_glass import device
 
+    if depth_maps and spec.get("camera_model") == "perspective":
+        raise ConfigError("--depth-maps traces the lens array's rays, not the vendor's perspective cameras; add "
+                          "--camera-model orthographic for a Looking Glass render with depth maps")
     dev = device(spec["device"])
     device_calibration(dev, spec.get("calibration"))
     quilt_outputs(output, dev, spec.get("calibration") is not None)
