@@ -55,7 +55,8 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.depth_maps is not None:
         check_depth_dir(request.depth_maps)
     if request.display.quilt is not None:  # a Looking Glass preset: its quilt beside the output
-        check_device_render(request.display.quilt, output, request.frames is not None, request.depth_maps is not None)
+        check_device_render(request.display.quilt, output, request.frames is not None, request.depth_maps is not None,
+                            request.settings.quality == "auto")
     if request.dataset is not None:
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)

@@ -195,7 +195,8 @@ def test_what_traces_the_lens_array_is_refused_with_the_vendor_cameras(tmp_path,
 
     base = ("render", SAMPLE, "--preset", "looking-glass-portrait", "-o", tmp_path / "x.png")
     for extra, words in ((("--depth-maps", tmp_path / "d"), "--depth-maps"), (("--objects", tmp_path / "m"), "masks"),
-                         (("--fit-depth", "auto"), "--fit-depth")):
+                         (("--fit-depth", "auto"), "--fit-depth"),
+                         (("--quality", "auto", "--max-error", "30"), "--quality auto")):
         line = one_error_line(cli(*base, *extra))
         assert words in line and "--camera-model orthographic" in line, line
     assert not list(tmp_path.rglob("*.png"))

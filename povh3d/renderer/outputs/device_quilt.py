@@ -62,11 +62,15 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     return entry
 
 
-def check_device_render(spec: dict[str, Any], output: Path, animated: bool, depth_maps: bool = False) -> None:
+def check_device_render(spec: dict[str, Any], output: Path, animated: bool, depth_maps: bool = False,
+                        auto_quality: bool = False) -> None:
     """Before any work: the quilt (and native image) writable, the calibration the model's.  An
     animation writes them per frame beside each (``stem_0001_qs8x6a0.75.png``, ``stem_0001_native.png``)."""
     from ...display.looking_glass import device
 
+    if auto_quality and spec.get("camera_model") == "perspective":
+        raise ConfigError("--quality auto scores renders of the lens array's rays, not the vendor's perspective "
+                          "cameras; give --quality draft, normal or high, or add --camera-model orthographic")
     if depth_maps and spec.get("camera_model") == "perspective":
         raise ConfigError("--depth-maps traces the lens array's rays, not the vendor's perspective cameras; add "
                           "--camera-model orthographic for a Looking Glass render with depth maps")
