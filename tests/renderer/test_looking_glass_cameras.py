@@ -200,3 +200,42 @@ def test_what_traces_the_lens_array_is_refused_with_the_vendor_cameras(tmp_path,
         line = one_error_line(cli(*base, *extra))
         assert words in line and "--camera-model orthographic" in line, line
     assert not list(tmp_path.rglob("*.png"))
+
+
+NO_CAMERA = """#version 3.7;
+global_settings { assumed_gamma 1.0 }
+background { rgb <0.2, 0.3, 0.4> }
+light_source { <-300, 400, -600> rgb 1 }
+plane { z, 40 pigment { checker rgb 0.9 rgb <0.1, 0.2, 0.6> scale 12 } }
+sphere { <-20, 10, -15>, 18 pigment { rgb <0.9, 0.7, 0.2> } }
+box { <10, -50, -5>, <40, -10, 25> pigment { rgb <0.2, 0.8, 0.3> } }
+"""
+
+
+@pytest.mark.povray
+def test_a_scene_without_a_camera_is_seen_from_the_vendors_default_viewer(tmp_path):
+    """In display mm (screen z = 0, viewer on -z): the eye at (D tan t_i, 0, -D), D = (H / 2) / tan(7 deg)."""
+    import povh3d
+
+    scene = tmp_path / "nocam.pov"
+    scene.write_text(NO_CAMERA)
+    record = povh3d.render(scene, tmp_path / "n.png", preset="looking-glass-portrait", quality="draft", use_cache=False)
+    views = quilt_to_views(read_png(tmp_path / "n_qs8x6a0.75.png")[..., :3], *PORTRAIT.grid)
+    w, h = PORTRAIT.calibration.size_mm
+    d = 0.5 * h / math.tan(math.radians(7))
+    assert record["camera_model"]["viewer_distance_mm"] == pytest.approx(d, abs=1e-3)
+
+    def camera(i):
+        s = d * math.tan((i / 47 - 0.5) * math.radians(40))
+        return (f"camera {{ perspective location <{s!r}, 0, {-d!r}> direction <{-s!r}, 0, {d!r}> "
+                f"right <{w!r}, 0, 0> up <0, {h!r}, 0> }}\n")
+
+    for tile in (0, 47):
+        script = tmp_path / f"plain{tile}.pov"
+        script.write_text(NO_CAMERA + camera(tile))
+        out = tmp_path / f"plain{tile}.png"
+        subprocess.run(["povray", f"+I{script}", f"+O{out}", "+W420", "+H560", "-A", "-D", "+FN8", "File_Gamma=sRGB"],
+                       check=True, capture_output=True)
+        reference = read_png(out)[..., :3]
+        assert psnr(views[tile], reference) >= 35.0
+        assert psnr(views[47 - tile], reference) < 35.0          # control: the mirrored view order fails
