@@ -138,51 +138,80 @@ def map(image: np.ndarray, mapping: str | Mapping, *, preset: str = "demo",  # n
     return mapping.apply(image, tuple(panel))
 
 
-def resample(h3d: np.ndarray, ppl_in: Ppl, ppl_out: Ppl, *, mode: str = "micro") -> np.ndarray:
+def resample(h3d: np.ndarray, ppl_in: LensArray | Ppl, ppl_out: tuple[float, float], *,
+             mode: str = "micro") -> np.ndarray:
     """``povh3d resample``: every micro-image resampled (``micro``), or views traded for lenses (``lenses``).
 
     Parameters
     ----------
-    h3d : (Ly*Ny, Lx*Nx, C) array
-    ppl_in, ppl_out : (Ny, Nx) int    pixels per lens before and after
+    h3d : (H, W, C) array             an H3D image
+    ppl_in : LensArray or (Ny, Nx)    its lens array (``read_h3d``'s), or whole pixels per lens
+    ppl_out : (My, Mx)                pixels per lens after; with a lens array any grid (hex, turned,
+                                      fractional) and fractional counts, as the command takes them
     mode : {"micro", "lenses"}
 
     Returns
     -------
-    (Ly*Ny', Lx*Nx', C) array for ``micro``; the same lenses cut into ``ppl_out`` for ``lenses``
+    The resampled image. Whole pixels per lens in and out: ``(Ly*My, Lx*Mx, C)`` for ``micro``, the
+    same lenses cut into ``ppl_out`` for ``lenses``. Otherwise the same lenses on the same physical
+    panel, each new pixel the light along its own ray; its lens array is
+    ``povh3d.image.resample.resampled_array(ppl_in, ppl_out)``.
     """
-    from .image.resample import resample_micro_images, trade_views_for_lenses
+    from .image.resample import resample_micro_images, resample_panel, resampled_array, trade_views_for_lenses
 
     functions = {"micro": resample_micro_images, "lenses": trade_views_for_lenses}
     if mode not in functions:
         raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
-    try:
-        return functions[mode](np.asarray(h3d), tuple(ppl_in), tuple(ppl_out))
-    except ValueError as exc:
-        raise ConfigError(f"{exc}; check ppl_in and ppl_out") from None
+    whole_out = all(float(m).is_integer() for m in ppl_out)
+    if isinstance(ppl_in, tuple) or (ppl_in.views is not None and whole_out and ppl_in.grid != "hex"):
+        try:
+            out = tuple(int(m) for m in ppl_out)
+            return functions[mode](np.asarray(h3d), _ppl(ppl_in), (out[0], out[1]))
+        except ValueError as exc:
+            raise ConfigError(f"{exc}; check ppl_in and ppl_out") from None
+    if mode != "micro":
+        raise ConfigError("mode 'lenses' cuts whole-pixel micro-images; this lens array's are not whole "
+                          "pixels: use mode 'micro'")
+    panel = ppl_in.panel
+    if h3d.shape[:2] != (panel.height, panel.width):
+        raise ConfigError(f"the image is {h3d.shape[1]}x{h3d.shape[0]} but its lens array's panel is "
+                          f"{panel.width}x{panel.height}; pass the image and lens array read_h3d gives")
+    my, mx = (float(m) for m in ppl_out)
+    return resample_panel(np.asarray(h3d), ppl_in, resampled_array(ppl_in, (my, mx)))
 
 
-def quilt(h3d: np.ndarray, lens: LensArray | int, grid: tuple[int, int]) -> np.ndarray:
-    """``povh3d quilt``: the views of a lenticular H3D image tiled as a quilt (Looking Glass order).
+def quilt(h3d: np.ndarray, lens: LensArray | int, grid: tuple[int, int] | str = "auto", *,
+          rows: str | None = None) -> np.ndarray:
+    """``povh3d quilt``: the views of an H3D image tiled as a quilt (Looking Glass order).
 
     Parameters
     ----------
-    h3d : (H, Lx*Nx, C) array    one row of views
-    lens : LensArray or int      Nx, the views per lens
-    grid : (cols, rows) int      cols * rows = Nx
+    h3d : (H, W, C) array        an H3D image: one row of views with ``lens`` an int, or any render
+                                 with its lens array (square, hex, fractional: views as ``extract``)
+    lens : LensArray or int      its lens array, or Nx, the views per lens of a lenticular image
+    grid : (cols, rows) or "auto"  cols * rows = the views; ``auto`` as ``--quilt auto``
+    rows : {"centre", "all"}     which rows of views of a square or hex array (default: the centre row)
 
     Returns
     -------
-    (rows*H, cols*Lx, C) array, the leftmost camera bottom left
+    (rows*h, cols*w, C) array, the leftmost camera bottom left
     """
-    from .image.quilt import bank_to_quilt_order, views_to_quilt
+    from .image.quilt import auto_grid, bank_to_quilt_order, views_to_quilt
 
-    ppl = (1, lens) if isinstance(lens, int) else _ppl(lens)
-    if ppl[0] != 1:
-        raise ConfigError("a quilt holds one row of views: use a lenticular (horizontal-only) H3D image")
-    views = bank_to_quilt_order(extract(h3d, ppl))
-    if views.shape[0] != grid[0] * grid[1]:
-        raise ConfigError(f"{views.shape[0]} views do not fill a {grid[0]}x{grid[1]} quilt exactly")
+    if isinstance(lens, int):
+        views = bank_to_quilt_order(extract(h3d, (1, lens)), rows)
+    else:
+        from .renderer.outputs.views import image_views
+
+        views = bank_to_quilt_order(image_views(np.asarray(h3d), lens), rows)
+    n, h, w = views.shape[:3]
+    if isinstance(grid, str):
+        if grid != "auto":
+            raise ConfigError(f"grid must be (cols, rows) or 'auto', got {grid!r}")
+        grid = auto_grid(n, (h, w))
+    if n != grid[0] * grid[1]:
+        raise ConfigError(f"{n} views do not fill a {grid[0]}x{grid[1]} quilt exactly; give a grid with "
+                          f"cols x rows = {n}, or 'auto'")
     return views_to_quilt(views, *grid)
 
 

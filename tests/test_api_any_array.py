@@ -77,3 +77,22 @@ def test_resample_through_the_library_is_the_commands(image, tmp_path, cli):
     assert array == resampled_array(la, ppl)
     assert np.array_equal(resample_panel(h3d, la, array), out)
     assert not np.array_equal(resample_panel(h3d[:, ::-1], la, array), out)   # negative control
+
+
+def test_povh3d_resample_takes_any_array_as_the_command_does(image, tmp_path, cli):
+    """``povh3d.resample`` itself on a hex, fractional or ipad-like array (its lens array in)."""
+    path, h3d, la = image
+    _ok(cli("resample", path, "--ppl-out", "3.5", "-o", tmp_path / "r.png"))
+    ppl = (1, 3.5) if la.grid == "lenticular" else (3.5, 3.5)
+    assert np.array_equal(povh3d.resample(h3d, la, ppl), read_png(tmp_path / "r.png"))
+    assert not np.array_equal(povh3d.resample(h3d[:, ::-1], la, ppl), read_png(tmp_path / "r.png"))  # control
+
+
+def test_povh3d_quilt_takes_any_render_as_the_command_does(image, tmp_path, cli):
+    """``povh3d.quilt`` on any array with its lens array: the views ``extract`` gives, tiled."""
+    path, h3d, la = image
+    rows = None if la.grid == "lenticular" else "centre"
+    _ok(cli("quilt", path, "--quilt", "auto", *(["--rows", rows] if rows else []), "-o", tmp_path / "q"))
+    (quilt_path,) = (tmp_path / "q").glob("*.png")
+    assert np.array_equal(povh3d.quilt(h3d, la, "auto", rows=rows), read_png(quilt_path))
+    assert not np.array_equal(povh3d.quilt(h3d[:, ::-1], la, "auto", rows=rows), read_png(quilt_path))

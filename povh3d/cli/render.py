@@ -4,16 +4,13 @@ request, hand it to ``povh3d.renderer``, print one summary line."""
 from __future__ import annotations
 
 import argparse
-import contextlib
 import re
 import sys
 import time
-import warnings
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError, Povh3dWarning
+from ..errors import ConfigError
 from .volume import add_volume_options, volume_options_from_args
 from .options import (add_array_options, add_mapping_options, add_mesh_options, display_from_args,
                       lens_array_from_args, max_triangles, parse_triple, positive_int, progress_bar, warn)
@@ -110,7 +107,7 @@ def cmd_render(args: argparse.Namespace) -> int:
             warn(list(hit.warnings))
             print(f"{output}  {hit.summary}  {time.perf_counter() - start:.2f} s (output from cache)")
             return 0
-    with _warnings_kept() as given:
+    with output_cache.warnings_kept() as given:
         summary = _render(args)
     # A scene edited while it rendered: the image is of neither version's key.
     if key is not None and summary is not None and \
@@ -172,25 +169,6 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     print(f"{request.output}  {summary}  "
           f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
     return summary, noted
-
-
-@contextlib.contextmanager
-def _warnings_kept() -> Iterator[list[str]]:
-    """The lines of the warnings a render gives (still shown as they come), for the output cache
-    to give again; with the sidecar's own warnings, which the summary prints."""
-    given: list[str] = []
-    shown = warnings.showwarning
-
-    def keep(message, category, filename, lineno, file=None, line=None):
-        if issubclass(category, Povh3dWarning):
-            given.append(str(message))
-        shown(message, category, filename, lineno, file, line)
-
-    warnings.showwarning = keep
-    try:
-        yield given
-    finally:
-        warnings.showwarning = shown
 
 
 _REASON_END = re.compile(r" \(|;|:")

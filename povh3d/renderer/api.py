@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from .methods.quality import Progress, RenderSettings
-from ..errors import ConfigError
+from ..errors import ConfigError, warn
 from ..geometry.lens_array import LensArray
 from ..display.display import build_display
 from .render import render as render_request
@@ -48,7 +48,35 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
         Any field of ``RenderRequest`` (``method``, ``method_options``, ``views_dir``,
         ``frames`` ...) or of ``RenderSettings`` (``quality``, ``jobs``, ``bit_depth`` ...).
         An unknown name is refused with the list of names.
+
+    Calling it again with nothing changed (the arguments, the scene and every file it reads,
+    POV-Ray, povh3d) writes the stored image and sidecar and returns the stored record, whose
+    ``timings`` say ``output_from_cache`` (``use_cache=False`` skips it, as it skips the image cache).
     """
+    from . import output_cache
+
+    cache_dir = options.get("cache_dir")
+    inputs = dict(preset=preset, lens_array=lens_array, mapping=mapping, mapping_options=mapping_options,
+                  calibration=calibration, objects=objects, **options)
+    key = output_cache.api_key(source, output, inputs) if options.get("use_cache", True) else None
+    if key is not None:
+        hit = output_cache.answer(key, Path(output), cache_dir)
+        if hit is not None:
+            for line in hit.warnings:
+                warn(line)
+            return hit.record
+    with output_cache.warnings_kept() as given:
+        record = _render(source, output, preset, lens_array, mapping, mapping_options, calibration, progress,
+                         objects, options)
+    if key is not None and output_cache.api_key(source, output, inputs) == key:
+        output_cache.keep(key, Path(output), "", given, cache_dir)
+    return record
+
+
+def _render(source: str | Path, output: str | Path, preset: str, lens_array: LensArray | None,
+            mapping: str | None, mapping_options: dict[str, Any] | None, calibration: str | Path | None,
+            progress: Progress | None, objects: str | Path | None, options: dict[str, Any]) -> dict[str, Any]:
+    """The render itself (``render`` above, past its cache)."""
     unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
     if unknown:
         raise ConfigError(f"render() takes no option {', '.join(map(repr, unknown))}; it takes: "

@@ -20,7 +20,8 @@ line (the sidecar record, the command's summary line and the warnings the render
 gave, which a hit gives again) and the PNG bytes.  A damaged entry is reported,
 removed and the request rendered, never answered from it.
 
-Only stills of a ``.pov`` scene use it: an animation, a mesh model or a
+``povh3d render`` and ``povh3d.render`` both use it (their entries apart: the command keys its
+options, the function its arguments).  Only stills of a ``.pov`` scene use it: an animation, a mesh model or a
 volume (their conversions have their own caches), extra outputs (``--views-dir``,
 ``--depth-maps``, ``--video``), a Dask scheduler, a calibration file or a
 scene that computes file names while it parses (they cannot be hashed) take
@@ -32,14 +33,16 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
-from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from .. import cache
 from .._version import __version__
-from ..errors import Povh3dError
+from ..errors import Povh3dError, Povh3dWarning
 from ..image.io import sidecar_path, write_png_bytes_pair
 from ..mesh.formats import is_mesh_file
 from ..scene.scene import load_scene
@@ -58,6 +61,7 @@ class Hit:
 
     summary: str
     warnings: tuple[str, ...]
+    record: dict[str, Any]
 
 
 def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
@@ -88,6 +92,39 @@ def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
     return cache.content_key(parts)
 
 
+def api_key(source: str | Path, output: str | Path, inputs: Mapping[str, Any]) -> str | None:
+    """The key of ``povh3d.render(source, output, **inputs)``; None when it cannot use this cache.
+
+    ``inputs`` are the call's own arguments (a lens array by its value); the same rules as the
+    command line's (``request_key``), kept apart from its entries by an ``api`` mark.
+    """
+    if inputs.get("progress") is not None and not callable(inputs["progress"]):
+        return None
+    kept = {k: (repr(v) if k == "lens_array" else v) for k, v in inputs.items() if k != "progress"}
+    include = kept.pop("include_dirs", ()) or ()
+    return request_key(source, Path(output), {"api": True, **kept}, tuple(include))
+
+
+@contextmanager
+def warnings_kept() -> Iterator[list[str]]:
+    """The lines of the ``Povh3dWarning``s given inside the block (still shown as they come), for
+    this cache to give again on a hit."""
+    given: list[str] = []
+    shown = warnings.showwarning
+
+    def keep(message: Any, category: type[Warning], filename: str, lineno: int, file: Any = None,
+             line: str | None = None) -> None:
+        if issubclass(category, Povh3dWarning):
+            given.append(str(message))
+        shown(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = keep
+    try:
+        yield given
+    finally:
+        warnings.showwarning = shown
+
+
 def _entry_path(key: str, cache_dir: Path | None = None) -> Path:
     return cache.entry_path(cache.cache_root(cache_dir), "outputs", key, ".output")
 
@@ -107,7 +144,7 @@ def answer(key: str, output: Path, cache_dir: Path | None = None) -> Hit | None:
     record = meta["record"]
     record["timings"] = {**record.get("timings", {}), "output_from_cache": True}
     write_png_bytes_pair(output, image, record)
-    return Hit(str(meta["summary"]), tuple(str(w) for w in meta["warnings"]))
+    return Hit(str(meta["summary"]), tuple(str(w) for w in meta["warnings"]), record)
 
 
 def _parse(body: bytes) -> tuple[dict[str, Any], bytes]:

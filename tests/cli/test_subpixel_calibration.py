@@ -32,7 +32,7 @@ from povh3d.geometry.lens_array import Panel
 from povh3d.geometry.phase_tiles import phase_tiles
 from povh3d.image.colour import decode, encode
 from povh3d.image.io import read_png, write_png
-from tests.engine.test_single_stage import write_position_plane
+from tests.renderer.test_single_stage import write_position_plane
 from tests.geometry.test_rotated_lattice import simulate_lookup
 from tests.support.cli import one_error_line
 from tests.support.synth import render_lenticular_white

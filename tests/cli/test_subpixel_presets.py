@@ -25,7 +25,7 @@ from povh3d.geometry.rays import pixel_rays
 from povh3d.image.colour import decode
 from povh3d.image.io import read_png
 
-from tests.engine.test_single_stage import write_position_plane
+from tests.renderer.test_single_stage import write_position_plane
 from tests.geometry.test_rotated_lattice import simulate_lookup
 
 PRESETS = pytest.mark.parametrize("preset", ["alioscopy-42", "philips-20"])

@@ -22,7 +22,7 @@ from povh3d.display.presets import lens_array_from_fields
 from povh3d.geometry.rays import pixel_rays
 from povh3d.scene.scene import load_scene
 
-from tests.engine.test_single_stage import decode_positions, render_linear16, write_position_plane
+from tests.renderer.test_single_stage import decode_positions, render_linear16, write_position_plane
 from tests.support.scenes import checker_oracle, classify, match, write_checker_plane
 from tests.support.render import DRAFT
 

@@ -131,3 +131,26 @@ def test_a_hit_into_a_removed_folder_is_one_error(tmp_path, cli):
     folder.rmdir()
     result = cli("render", scene, "-o", folder / "o.png", *TINY)
     assert "does not exist" in one_error_line(result) and not folder.exists()
+
+
+def test_the_python_api_is_answered_from_the_stored_output(tmp_path):
+    import povh3d
+    from povh3d.geometry.lens_array import LensArray, Panel
+
+    scene, out = _scene(tmp_path, "1, 0, 0"), tmp_path / "o.png"
+    array = LensArray("square", 6, 4, 1.0, 1.0, 3.0, Panel(24, 16, 0.25, 0.25))
+    call = dict(lens_array=array, quality="draft", cache_dir=tmp_path / "cache")
+    first = povh3d.render(scene, out, **call)
+    rendered = out.read_bytes()
+    assert "output_from_cache" not in first["timings"]
+    again = povh3d.render(scene, out, **call)
+    assert again["timings"]["output_from_cache"] is True
+    assert out.read_bytes() == rendered
+    strip = lambda record: {k: v for k, v in record.items() if k not in ("timings", "image_sha256")}  # noqa: E731
+    assert strip(again) == strip(first)
+    assert json.loads(out.with_suffix(".json").read_text())["image_sha256"] == file_sha256(out)
+    # negative controls: another lens array, or use_cache=False, renders again
+    other = povh3d.render(scene, out, **{**call, "lens_array": LensArray("square", 6, 4, 1.0, 1.0, 2.5,
+                                                                           Panel(24, 16, 0.25, 0.25))})
+    assert "output_from_cache" not in other["timings"]
+    assert "output_from_cache" not in povh3d.render(scene, out, **{**call, "use_cache": False})["timings"]

@@ -469,7 +469,7 @@ def test_a_binary_file_named_pov_is_not_a_text_scene(tmp_path, cli):
 _VIEW_WRITER = """
 import sys, numpy as np
 from povh3d.renderer.outputs.views import write_views
-from tests.app.test_reliability import _stack
+from tests.renderer.test_reliability import _stack
 seed, folder, rounds = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
 for r in range(rounds):
     write_views(folder, _stack(seed, r), None, {"seed": seed, "round": r})

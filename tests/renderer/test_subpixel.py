@@ -31,7 +31,7 @@ from povh3d.image.colour import decode
 from povh3d.scene.scene import load_scene
 
 from tests.geometry.test_rotated_lattice import simulate_lookup
-from tests.engine.test_single_stage import decode_positions, render_linear16, write_position_plane
+from tests.renderer.test_single_stage import decode_positions, render_linear16, write_position_plane
 from tests.support.scenes import write_checker_plane
 
 # A slanted sheet: 4.5 px (13.5 subpixels) per lenticule at 9.46 deg, like the Philips panel.

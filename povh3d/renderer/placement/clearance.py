@@ -5,16 +5,30 @@ call ``front_clearance``."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import depth_scaled_rays
 from ..methods.quality import AUTO, RenderSettings
 
-if TYPE_CHECKING:  # only for annotations: methods imports this module
-    from ..methods.registry import Method
+
+
+class Method(Protocol):
+    """What this module reads of a rendering method (``methods.registry.Method``): a protocol, so the
+    registry, which imports this module, is not imported back (no cycle, typing imports included)."""
+
+    @property
+    def crops(self) -> bool: ...
+    @property
+    def supersamples(self) -> Callable[[Any], int] | None: ...
+    @property
+    def default_front_clearance(self) -> Callable[[LensArray], float]: ...
+    @property
+    def round_front_clearance(self) -> Callable[[LensArray, float], float]: ...
+    @property
+    def front_clearance_step(self) -> Callable[[LensArray, Mapping[str, Any]], float]: ...
 
 
 def limited_front_clearance(method: Method, lens_array: LensArray, settings: RenderSettings, asked: float,
