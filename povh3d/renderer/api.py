@@ -57,7 +57,7 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
 
     cache_dir = options.get("cache_dir")
     inputs = dict(preset=preset, lens_array=lens_array, mapping=mapping, mapping_options=mapping_options,
-                  calibration=calibration, objects=objects, **options)
+                  calibration=calibration, objects=objects, camera_model=camera_model, **options)
     key = output_cache.api_key(source, output, inputs) if options.get("use_cache", True) else None
     if key is not None:
         hit = output_cache.answer(key, Path(output), cache_dir)
@@ -67,7 +67,7 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
             return hit.record
     with output_cache.warnings_kept() as given:
         record = _render(source, output, preset, lens_array, mapping, mapping_options, calibration, progress,
-                         objects, options)
+                         objects, options, camera_model)
     if key is not None and output_cache.api_key(source, output, inputs) == key:
         output_cache.keep(key, Path(output), "", given, cache_dir)
     return record
@@ -75,7 +75,8 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
 
 def _render(source: str | Path, output: str | Path, preset: str, lens_array: LensArray | None,
             mapping: str | None, mapping_options: dict[str, Any] | None, calibration: str | Path | None,
-            progress: Progress | None, objects: str | Path | None, options: dict[str, Any]) -> dict[str, Any]:
+            progress: Progress | None, objects: str | Path | None, options: dict[str, Any],
+            camera_model: str | None = None) -> dict[str, Any]:
     """The render itself (``render`` above, past its cache)."""
     unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
     if unknown:

@@ -239,3 +239,21 @@ def test_a_scene_without_a_camera_is_seen_from_the_vendors_default_viewer(tmp_pa
         reference = read_png(out)[..., :3]
         assert psnr(views[tile], reference) >= 35.0
         assert psnr(views[47 - tile], reference) < 35.0          # control: the mirrored view order fails
+
+
+@pytest.mark.povray
+def test_a_second_render_writes_the_quilt_again(tmp_path):
+    """The whole-output cache holds the image alone: a Looking Glass render takes the normal path (its
+    frames from the image cache), so a deleted quilt is written again."""
+    import povh3d
+
+    scene = tmp_path / "nocam.pov"
+    scene.write_text(NO_CAMERA)
+    kw = dict(preset="looking-glass-portrait", quality="draft", cache_dir=tmp_path / "cache")
+    povh3d.render(scene, tmp_path / "n.png", **kw)
+    quilt = tmp_path / "n_qs8x6a0.75.png"
+    first = read_png(quilt)
+    quilt.unlink()
+    record = povh3d.render(scene, tmp_path / "n.png", **kw)
+    assert np.array_equal(read_png(quilt), first)
+    assert record["timings"]["frames_from_cache"] == 48 and "output_from_cache" not in record["timings"]
