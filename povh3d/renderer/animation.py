@@ -40,7 +40,7 @@ import re
 import shutil
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -231,12 +231,27 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
             if all(made.values()):
                 shown_frames = [final.with_name(made[n][0].name) for n, final in zip(frames.numbers, finals)]
         if video is not None:
-            write_video([read_png(p) for p in shown_frames], video, fps=fps)
+            write_video(_Frames(shown_frames), video, fps=fps)
             report["video"] = str(video)
         report["seconds"] = round(time.perf_counter() - start, 4)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return report
+
+
+class _Frames(Sequence):
+    """The frames' files as images, read one at a time as the video writer takes them."""
+
+    def __init__(self, paths: list[Path]) -> None:
+        self.paths = paths
+
+    def __len__(self) -> int:
+        return len(self.paths)
+
+    def __getitem__(self, index):  # type: ignore[override]
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        return read_png(self.paths[index])
 
 
 def _frame_progress(progress: Progress | None, index: int, total: int, scale: list[int],
