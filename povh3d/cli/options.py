@@ -101,7 +101,8 @@ def display_from_args(args: argparse.Namespace, *, method: str = "multi-ortho", 
     from ..display.display import build_display
 
     mapping = {"mapping": args.mapping, "mapping_options": mapping_options(args),
-               "calibration": args.calibration} if mapped else {}
+               "calibration": args.calibration,
+               "camera_model": getattr(args, "camera_model", None)} if mapped else {}
     return build_display(args.preset, array_overrides(args), method=method, **mapping)
 
 

@@ -163,6 +163,8 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
         drawn = f"{len(v['surfaces'])} surfaces, {v['triangles']} triangles" if "surfaces" in v else "media"
         mapping += f"  {v['orientation']}, {drawn}"
     method = result.get("method", request.method)
+    if (result.get("camera_model") or {}).get("camera_model") == "perspective":
+        method = "the vendor's perspective cameras"
     if result.get("method_note"):   # the default traded for one that renders the scene right
         method += f" (not the default {request.method}: {result.get('method_fallback', 'see the sidecar')})"
     summary = f"{w}x{h}  {method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}"
@@ -326,6 +328,9 @@ def add_parsers(sub: Any) -> None:
     add_mesh_options(p)
     add_array_options(p)
     add_mapping_options(p)
+    p.add_argument("--camera-model", choices=("perspective", "orthographic"), default=None,
+                   help="a Looking Glass preset's views: the vendor's sheared perspective cameras (default) or "
+                        "the lens array's oblique orthographic views (docs/displays.md)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("convert-mesh", help="convert a mesh model to a POV-Ray mesh2 include")

@@ -175,7 +175,7 @@ def _panel(record: MappingABC[str, Any]) -> Panel:
 def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] | None = None, *,
                   lens_array: LensArray | None = None, method: str = "multi-ortho", mapping: str | None = None,
                   mapping_options: MappingABC[str, Any] | None = None,
-                  calibration: str | Path | None = None) -> Display:
+                  calibration: str | Path | None = None, camera_model: str | None = None) -> Display:
     """The display a render is for: the command line's and ``povh3d.render``'s one builder.
 
     Parameters
@@ -188,6 +188,9 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
     mapping_options : mapping  its options (``per_lens``, ``views``, ``slope``, ``offset``,
                                ``rows_per_view``, ``reverse``, ``blend``)
     calibration : path         a calibration file: the sheet of ``mapping='slanted'`` or of ``method='subpixel'``
+                               (a Looking Glass preset: the unit's ``visual.json``)
+    camera_model : str         a Looking Glass preset's views: ``perspective`` (the vendor's sheared
+                               cameras, the default) or ``orthographic`` (``display.quilt``)
     """
     from .presets import get_preset, lens_array_from_fields, merge_overrides, physical_panel
 
@@ -206,7 +209,10 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
         from .looking_glass import DEVICES
 
         if preset in DEVICES:  # the device's views at its tile size, for its quilt
-            return _device_display(display, DEVICES[preset], calibration)
+            return _device_display(display, DEVICES[preset], calibration, camera_model or "perspective")
+    if camera_model is not None:
+        raise ConfigError(f"--camera-model chooses a Looking Glass preset's views; {preset or 'this display'} "
+                          "with these options renders its lens array's own: drop --camera-model")
     if calibration is not None and not mapping and method != "subpixel":
         raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
                           "add one of them, or drop --calibration")
@@ -220,13 +226,15 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
     return display
 
 
-def _device_display(display: Display, device: Any, calibration: str | Path | None) -> Display:
+def _device_display(display: Display, device: Any, calibration: str | Path | None, camera_model: str) -> Display:
     """A Looking Glass preset rendered for its quilt (``display.quilt``): the camera bank of
-    one lens per tile pixel over the panel, spanning the unit's view cone."""
-    from .quilt import device_calibration, quilt_array
+    one lens per tile pixel over the panel, spanning the unit's view cone (its views the
+    vendor's perspective cameras, or that bank's oblique orthographic views)."""
+    from .quilt import check_camera_model, device_calibration, quilt_array
 
     cal = device_calibration(device, calibration)
-    spec = {"device": device.name, "calibration": None if calibration is None else str(Path(calibration).resolve())}
+    spec = {"device": device.name, "calibration": None if calibration is None else str(Path(calibration).resolve()),
+            "camera_model": check_camera_model(camera_model)}
     return replace(display, lens_array=quilt_array(device, cal), views=device.views, mapping_name=None, quilt=spec)
 
 

@@ -5,6 +5,13 @@ views as the device's quilt holds, and a focal length that makes those views spa
 device's view cone (``2 atan(pitch / 2 f)``, the cone the preset's focal length spans).
 ``device_quilt`` tiles a render of it the vendor's way (from the bottom left, padded at the
 right and top as the vendor's ``viewPortion`` expects).
+
+``vendor_cameras`` is the vendor's camera model instead (HoloPlay Core's
+``setupVirtualCameraForView``, docs/displays.md): view ``i`` of ``N`` from the viewer moved
+along its right vector by ``D tan((i / (N - 1) - 0.5) cone)``, the frustum sheared so the
+plane at ``D`` (the screen) keeps its frame.  Looking Glass presets render it by default
+(``camera_model="perspective"``); ``"orthographic"`` keeps the oblique orthographic views
+of the lens array above.
 """
 
 from __future__ import annotations
@@ -16,7 +23,51 @@ import numpy as np
 
 from ..geometry.lens_array import LensArray, Panel
 from ..image.quilt import bank_to_quilt_order, views_to_quilt
+from ..errors import ConfigError
 from .looking_glass import Calibration, Device, read_visual
+
+#: The camera models of a Looking Glass render: the vendor's sheared perspective cameras (the
+#: default), or the oblique orthographic views of ``quilt_array``.
+CAMERA_MODELS = ("perspective", "orthographic")
+#: The vendor's vertical field of view for a scene without a camera of its own (HoloPlay Core:
+#: "our field of view should be about 14 deg"): the viewer at ``(H / 2) / tan(7 deg)`` from the screen.
+VENDOR_FOV_DEG = 14.0
+
+
+def check_camera_model(model: str) -> str:
+    if model not in CAMERA_MODELS:
+        raise ConfigError(f"unknown camera model {model!r}; choose one of: {', '.join(CAMERA_MODELS)}")
+    return model
+
+
+def default_viewing_distance(height_mm: float) -> float:
+    """The vendor's default viewer distance (mm) for a screen ``height_mm`` tall: its 14 deg vertical field."""
+    return 0.5 * height_mm / math.tan(math.radians(VENDOR_FOV_DEG) / 2)
+
+
+def view_offsets(views: int, cone_deg: float, distance: float) -> np.ndarray:
+    """How far along its right vector the camera of each view moves, ``D tan((i / (N - 1) - 0.5) cone)``
+    (same unit as ``distance``), view 0 the leftmost; one view stays put."""
+    if views < 1 or not distance > 0:
+        raise ConfigError(f"vendor cameras need at least one view and a positive distance, got {views}, {distance!r}")
+    t = np.arange(views) / (views - 1) - 0.5 if views > 1 else np.zeros(1)
+    return distance * np.tan(t * math.radians(cone_deg))
+
+
+def vendor_cameras(views: int, cone_deg: float, distance_mm: float, size_mm: tuple[float, float]) -> list[dict]:
+    """The POV-Ray perspective camera of each view in display mm (screen ``z = 0``, viewer on
+    ``-z``, ``x`` right, ``y`` up): ``location``, ``direction``, ``right``, ``up``.
+
+    POV-Ray traces pixel ``(x, y)`` (each in -0.5..0.5) along ``direction + x right + y up``, and
+    never makes ``direction`` perpendicular to ``right`` without a ``look_at``; so the eye at
+    ``(s, 0, -D)`` with ``direction = (-s, 0, D)``, ``right = (W, 0, 0)``, ``up = (0, H, 0)``
+    sends pixel ``(x, y)`` through the screen point ``(x W, y H, 0)`` whatever ``s``: the
+    frustum sheared so the screen keeps its frame, as the vendor's projection shift does.
+    """
+    width, height = size_mm
+    return [{"location": (float(s), 0.0, -distance_mm), "direction": (float(-s), 0.0, distance_mm),
+             "right": (width, 0.0, 0.0), "up": (0.0, height, 0.0)}
+            for s in view_offsets(views, cone_deg, distance_mm)]
 
 
 def device_calibration(device: Device, path: str | Path | None) -> Calibration:

@@ -54,6 +54,29 @@ def _write_mp4(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
         writer.close()
 
 
+class _Rgb8(Sequence):
+    """``frames`` as ``to_rgb8`` images, one at a time (a sequence of files is read frame by frame, so an
+    MP4 of many large frames, a Looking Glass quilt video, holds one in memory), each checked to have
+    the first frame's size."""
+
+    def __init__(self, frames: Sequence[np.ndarray]) -> None:
+        self.frames = frames
+        self.shape: tuple[int, ...] | None = None
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def __getitem__(self, index):  # type: ignore[override]
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        frame = to_rgb8(self.frames[index])
+        if self.shape is None:
+            self.shape = frame.shape
+        elif frame.shape != self.shape:
+            raise InputError("the frames of a video must all have one size")
+        return frame
+
+
 def _write_gif(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
     from PIL import Image
 
@@ -96,9 +119,7 @@ def write_video(frames: Sequence[np.ndarray], path: str | Path, *, fps: float = 
         raise ConfigError(f"--fps must be a positive number, got {fps}")
     if not frames:
         raise ConfigError("a video needs at least one frame")
-    rgb = [to_rgb8(frame) for frame in frames]
-    if len({frame.shape for frame in rgb}) != 1:
-        raise InputError("the frames of a video must all have one size")
+    rgb = _Rgb8(frames)   # each frame converted as the writer takes it: a lazy sequence stays lazy
     with atomic_path(path) as tmp:
         VIDEO_WRITERS[path.suffix.lower()](rgb, tmp, fps)
     return path

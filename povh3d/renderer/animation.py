@@ -40,7 +40,7 @@ import re
 import shutil
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -144,17 +144,22 @@ class RenderedImage:
 
 
 ImageRenderer = Callable[..., RenderedImage]  # (clock, progress, sequence=ClockSequence or None)
+#: Files made from a frame beside it (a Looking Glass quilt, its native image): ``(staged frame path,
+#: frame) -> (the frame record's additions, the files written beside it)``.
+Companions = Callable[[Path, RenderedImage], tuple[dict[str, Any], list[Path]]]
 
 
 def render_sequence(frames: FrameRange, output: Path, render_image: ImageRenderer, *, uses_clock: bool,
                     progress: Progress | None = None, video: Path | None = None,
-                    fps: float = 24.0) -> dict[str, Any]:
+                    fps: float = 24.0, companions: Companions | None = None) -> dict[str, Any]:
     """Render frames ``frames.first..last`` as ``OUT_nnnn.png``, each by ``render_image(clock, progress)``.
 
     The frames are made in a hidden folder beside `output` and moved into
     place only when every one is done, so a failure leaves no partial
     sequence (and no video).  A scene that does not read the clock is rendered
-    once (clock None) and copied.
+    once (clock None) and copied.  ``companions`` writes files made from each
+    frame beside it (a Looking Glass preset: its quilt and native image), moved
+    into place with it; the video then shows each frame's first companion (the quilt).
 
     Returns
     -------
@@ -181,6 +186,7 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
     ledger = SequenceLedger()  # what the clock sequences of this request share
     shown = [0.0]  # the furthest progress reported: a clock sequence reports later frames early
     first: tuple[RenderedImage, Path] | None = None
+    made: dict[int, list[Path]] = {}   # each frame's companions, staged
     try:
         for index, n in enumerate(frames.numbers):
             staged = frame_path(staging / output.name, n, digits)
@@ -195,12 +201,14 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
                     raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {exc}", command=exc.command,
                                     returncode=exc.returncode, log_tail=exc.log_tail) from None
                 report["from_cache" if frame.from_cache else "rendered"] += 1
-                write_image(staged, frame.image, {**frame.record, "animation": info})
+                extra, made[n] = companions(staged, frame) if companions else ({}, [])
+                write_image(staged, frame.image, {**frame.record, **extra, "animation": info})
                 first = first or (frame, staged)
             else:
                 # The scene cannot tell this clock from the first: same pixels.
+                extra, made[n] = companions(staged, first[0]) if companions else ({}, [])
                 shutil.copyfile(first[1], staged)
-                write_sidecar(staged, {**first[0].record, "animation": info})
+                write_sidecar(staged, {**first[0].record, **extra, "animation": info})
                 report["copied"] += 1
             if progress is not None:
                 shown[0] = max(shown[0], (index + 1) * scale[0])
@@ -211,14 +219,39 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
             # image first, sidecar last (image.io: a new sidecar never describes an old image)
             staged.replace(final)
             staged.with_suffix(".json").replace(final.with_suffix(".json"))
+            for extra in made.get(n, []):
+                extra.replace(final.with_name(extra.name))
+                if extra.with_suffix(".json").exists():
+                    extra.with_suffix(".json").replace(final.with_name(extra.with_suffix(".json").name))
         report["frames"] = [str(p) for p in finals]
+        shown_frames = finals
+        if made:
+            report["companions"] = [[str(final.with_name(p.name)) for p in made[n]]
+                                    for n, final in zip(frames.numbers, finals)]
+            if all(made.values()):
+                shown_frames = [final.with_name(made[n][0].name) for n, final in zip(frames.numbers, finals)]
         if video is not None:
-            write_video([read_png(p) for p in finals], video, fps=fps)
+            write_video(_Frames(shown_frames), video, fps=fps)
             report["video"] = str(video)
         report["seconds"] = round(time.perf_counter() - start, 4)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return report
+
+
+class _Frames(Sequence):
+    """The frames' files as images, read one at a time as the video writer takes them."""
+
+    def __init__(self, paths: list[Path]) -> None:
+        self.paths = paths
+
+    def __len__(self) -> int:
+        return len(self.paths)
+
+    def __getitem__(self, index):  # type: ignore[override]
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        return read_png(self.paths[index])
 
 
 def _frame_progress(progress: Progress | None, index: int, total: int, scale: list[int],

@@ -25,7 +25,7 @@ _SETTINGS = tuple(f.name for f in fields(RenderSettings))
 def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens_array: LensArray | None = None,
            mapping: str | None = None, mapping_options: dict[str, Any] | None = None,
            calibration: str | Path | None = None, progress: Progress | None = None,
-           objects: str | Path | None = None, **options: Any) -> dict[str, Any]:
+           objects: str | Path | None = None, camera_model: str | None = None, **options: Any) -> dict[str, Any]:
     """Render a scene or a mesh model into ``output`` (PNG + JSON sidecar); return the sidecar record.
 
     Parameters
@@ -39,6 +39,8 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
                               ``reverse``, ``blend``), as ``povh3d map`` takes them
     calibration : path        a calibration file: the sheet of ``mapping='slanted'``, or of
                               ``method='subpixel'`` (a calibrated subpixel render)
+    camera_model : str        a Looking Glass preset's views: ``perspective`` (the vendor's sheared cameras,
+                              the default) or ``orthographic`` (the lens array's oblique views)
     objects : path            also write the object masks into this folder, as ``render --objects DIR``
                               (docs/viewer.md); the record gets ``object_masks`` (the folder, the number
                               of objects and frames, the share of pixels no id) and the sidecar ``objects``
@@ -55,7 +57,7 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
 
     cache_dir = options.get("cache_dir")
     inputs = dict(preset=preset, lens_array=lens_array, mapping=mapping, mapping_options=mapping_options,
-                  calibration=calibration, objects=objects, **options)
+                  calibration=calibration, objects=objects, camera_model=camera_model, **options)
     key = output_cache.api_key(source, output, inputs) if options.get("use_cache", True) else None
     if key is not None:
         hit = output_cache.answer(key, Path(output), cache_dir)
@@ -65,7 +67,7 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
             return hit.record
     with output_cache.warnings_kept() as given:
         record = _render(source, output, preset, lens_array, mapping, mapping_options, calibration, progress,
-                         objects, options)
+                         objects, options, camera_model)
     if key is not None and output_cache.api_key(source, output, inputs) == key:
         output_cache.keep(key, Path(output), "", given, cache_dir)
     return record
@@ -73,15 +75,17 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
 
 def _render(source: str | Path, output: str | Path, preset: str, lens_array: LensArray | None,
             mapping: str | None, mapping_options: dict[str, Any] | None, calibration: str | Path | None,
-            progress: Progress | None, objects: str | Path | None, options: dict[str, Any]) -> dict[str, Any]:
+            progress: Progress | None, objects: str | Path | None, options: dict[str, Any],
+            camera_model: str | None = None) -> dict[str, Any]:
     """The render itself (``render`` above, past its cache)."""
     unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
     if unknown:
         raise ConfigError(f"render() takes no option {', '.join(map(repr, unknown))}; it takes: "
-                          f"preset, lens_array, mapping, mapping_options, calibration, objects, "
+                          f"preset, lens_array, mapping, mapping_options, calibration, objects, camera_model, "
                           f"{', '.join(_REQUEST + _SETTINGS)}")
     display = build_display(preset, lens_array=lens_array, method=options.get("method", "multi-ortho"),
-                            mapping=mapping, mapping_options=mapping_options, calibration=calibration)
+                            mapping=mapping, mapping_options=mapping_options, calibration=calibration,
+                            camera_model=camera_model)
     settings = RenderSettings(**{k: v for k, v in options.items() if k in _SETTINGS})
     # No method given: the default, which the render may trade for one that renders the scene right.
     options.setdefault("method_chosen", "method" in options)

@@ -23,7 +23,8 @@ removed and the request rendered, never answered from it.
 ``povh3d render`` and ``povh3d.render`` both use it (their entries apart: the command keys its
 options, the function its arguments).  Only stills of a ``.pov`` scene use it: an animation, a mesh model or a
 volume (their conversions have their own caches), extra outputs (``--views-dir``,
-``--depth-maps``, ``--video``), a Dask scheduler, a calibration file or a
+``--depth-maps``, ``--video``), a Looking Glass preset (its quilt beside the image), a Dask
+scheduler, a calibration file or a
 scene that computes file names while it parses (they cannot be hashed) take
 the normal path every time, as does ``--no-cache``.
 """
@@ -42,6 +43,7 @@ from typing import Any
 
 from .. import cache
 from .._version import __version__
+from ..display.looking_glass import DEVICES
 from ..errors import Povh3dError, Povh3dWarning
 from ..image.io import sidecar_path, write_png_bytes_pair
 from ..mesh.formats import is_mesh_file
@@ -73,8 +75,8 @@ def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
     the normal path.  Nothing heavy is imported: a hit is answered before NumPy loads.
     """
     if options.get("no_cache") or any(options.get(name) for name in _UNCACHED) or is_mesh_file(str(scene)) \
-            or is_volume_source(scene):
-        return None
+            or is_volume_source(scene) or options.get("preset") in DEVICES:
+        return None   # (a Looking Glass preset also writes its quilt, which no entry holds)
     try:
         povray = binary_key(find_povray())
     except Povh3dError:

@@ -57,13 +57,16 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.depth_maps is not None:
         check_depth_dir(request.depth_maps)
     if request.display.quilt is not None:  # a Looking Glass preset: its quilt beside the output
-        check_device_render(request.display.quilt, output, request.frames is not None)
+        check_device_render(request.display.quilt, output, request.frames is not None, request.depth_maps is not None,
+                            request.settings.quality == "auto")
     if request.dataset is not None:
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
     check_outputs_against(request, output, (request.source, *scene.files))
     request, frame_record = place_display(request, scene)
-    request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
+    ray_state = None
+    if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
+        request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
     if ray_state is not None:
         frame_record = {**frame_record, "ray_state": ray_state}
     settings, auto = _resolve_quality(request, scene, progress)
@@ -95,8 +98,13 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
         write_image(output, still.image, still.record)
         return still.record
+    companions = None
+    if request.display.quilt is not None:   # a Looking Glass preset: each frame's quilt (and native image)
+        def companions(staged: Path, image: RenderedImage) -> tuple[dict[str, Any], list[Path]]:
+            entry = write_device_outputs(staged, image.image, request.render_array, request.display.quilt)
+            return {"quilt": entry}, [staged.with_name(entry[k]) for k in ("file", "native") if k in entry]
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
-                             video=request.video, fps=request.fps)
+                             video=request.video, fps=request.fps, companions=companions)
     _warn_unlit(scene)
     return report
 
@@ -130,6 +138,11 @@ def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Pa
                          (request.dataset, "--dataset")):
         if folder is not None:
             check_output_folder(folder, inputs, what=f"{what} folder")
+
+
+def vendor_cameras(request: RenderRequest) -> bool:
+    """A Looking Glass preset rendered through the vendor's perspective cameras (``renderer.methods.vendor_views``)."""
+    return (request.display.quilt or {}).get("camera_model") == "perspective"
 
 
 #: An image whose 99th percentile is under this share of full scale (sRGB: linear 0.21) looks dark: POV-Ray's
@@ -209,6 +222,11 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     start = time.perf_counter()
     if auto is not None and auto.image is not None and request.frames is None:
         result = auto.image   # --quality auto rendered the full image while choosing it
+    elif vendor_cameras(request):   # a Looking Glass preset's views through the vendor's cameras
+        from .methods.vendor_views import run_vendor_views
+
+        result = run_vendor_views(scene, array, replace(settings, clock=clock, sequence=sequence),
+                                  dict(request.display.quilt), display_frame, progress)
     else:
         result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
                             progress, crop=request.crop, **request.method_options)
@@ -235,7 +253,9 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         record.update(method_note=note, method_fallback=display_frame["ray_state"]["method_fallback"])
     if auto is not None:
         record["quality"].update(level="auto", auto=auto.as_record())
-    if result.record is not None:
+    if vendor_cameras(request):   # the method named no part of it: the record says the cameras
+        record["camera_model"] = result.record
+    elif result.record is not None:
         record[request.method.replace("-", "_")] = result.record
     if result.crop is not None:
         record["crop"] = result.crop

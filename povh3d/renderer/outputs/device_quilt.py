@@ -1,10 +1,10 @@
 """A Looking Glass render: the device's views at its tile size, its quilt, and its native panel image.
 
-``povh3d render SCENE --preset looking-glass-portrait`` renders the camera bank of
-``display.quilt.quilt_array`` (the device's quilt as a lens array).
-The views are the oblique orthographic views of the ray definition (docs/geometry.md);
-the vendor's tools render off-axis perspective cameras instead (docs/displays.md
-measures the difference on the device).  ``write_device_outputs`` tiles them into the
+``povh3d render SCENE --preset looking-glass-portrait`` renders the device's views as the
+camera bank of ``display.quilt.quilt_array`` (the device's quilt as a lens array): by default
+through the vendor's sheared perspective cameras (``renderer.methods.vendor_views``), with
+``--camera-model orthographic`` the oblique orthographic views of the ray definition
+(docs/geometry.md; docs/displays.md measures the two).  ``write_device_outputs`` tiles them into the
 vendor's quilt (``stem_qs8x6a0.75.png`` at the device's quilt size, padded at the right
 and top as the vendor's ``viewPortion`` expects) and, given the unit's ``visual.json``,
 the panel image its shader would show (``display.mappings.looking_glass_shader.quilt_to_native``).
@@ -62,13 +62,18 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     return entry
 
 
-def check_device_render(spec: dict[str, Any], output: Path, animated: bool) -> None:
-    """Before any work: a still, the quilt (and native image) writable, the calibration the model's."""
+def check_device_render(spec: dict[str, Any], output: Path, animated: bool, depth_maps: bool = False,
+                        auto_quality: bool = False) -> None:
+    """Before any work: the quilt (and native image) writable, the calibration the model's.  An
+    animation writes them per frame beside each (``stem_0001_qs8x6a0.75.png``, ``stem_0001_native.png``)."""
     from ...display.looking_glass import device
 
-    if animated:
-        raise ConfigError("a Looking Glass preset writes the quilt of a still; drop --frames, or render the "
-                          "view-space image with --mapping slanted")
+    if auto_quality and spec.get("camera_model") == "perspective":
+        raise ConfigError("--quality auto scores renders of the lens array's rays, not the vendor's perspective "
+                          "cameras; give --quality draft, normal or high, or add --camera-model orthographic")
+    if depth_maps and spec.get("camera_model") == "perspective":
+        raise ConfigError("--depth-maps traces the lens array's rays, not the vendor's perspective cameras; add "
+                          "--camera-model orthographic for a Looking Glass render with depth maps")
     dev = device(spec["device"])
     device_calibration(dev, spec.get("calibration"))
     quilt_outputs(output, dev, spec.get("calibration") is not None)

@@ -45,6 +45,9 @@ def check_objects_request(request: RenderRequest, folder: str | Path | None = No
     elif request.source.suffix.lower() != ".pov":
         raise ConfigError(f"render --objects takes a POV-Ray scene (.pov), a model or a volume, not "
                           f"{request.source.name!r}")
+    if (request.display.quilt or {}).get("camera_model") == "perspective":
+        raise ConfigError("the object masks trace the lens array's rays, not the vendor's perspective cameras; "
+                          "add --camera-model orthographic for a Looking Glass render with masks")
     if request.method == "subpixel":
         raise ConfigError("--method subpixel traces each colour channel of a pixel along its own ray, so a pixel "
                           "has no one object id; render the masks with --method multi-ortho")

@@ -40,6 +40,16 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
     options = request.display_frame
+    if (request.display.quilt or {}).get("camera_model") == "perspective":
+        if options.fit_depth is not None or options.depth_scale is not None:
+            raise ConfigError("--fit-depth and --depth-scale shape the rays of a lens array; the vendor's "
+                              "perspective cameras take the scene as its camera sees it: drop them, or add "
+                              "--camera-model orthographic")
+        # The vendor's cameras start at the viewer's eye, wherever the scene is: the frame alone, no depth pass.
+        placed, record, _ = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
+                                                    use_cache=s.use_cache, timeout=s.timeout)
+        matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
+        return replace(request, settings=replace(s, frame=matrix)), {**record, "depth_budget_mm": budget}
     # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
     # what a method starting nearer (single-stage) would cut.
     default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
