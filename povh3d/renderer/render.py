@@ -31,6 +31,7 @@ from .outputs.depth_maps import check_depth_dir, write_depth_maps
 from .outputs.dataset import check_dataset_dir, dataset_depth, write_dataset
 from .outputs.device_quilt import check_device_render, write_device_outputs
 from .passes.depth import view_depth_maps
+from .passes.record import PassCost, recording
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import RenderedImage, render_sequence
@@ -45,8 +46,14 @@ if TYPE_CHECKING:
 def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
     """Carry out ``request``; return the sidecar record of the still, or the animation's report.
 
-    Every output is checked before any work and written atomically.
+    Every output is checked before any work and written atomically.  The record's ``passes`` lists
+    the POV-Ray passes run besides the render and what each cost (``passes.record.PassCost``).
     """
+    with recording() as passes:
+        return _render(request, progress, passes)
+
+
+def _render(request: RenderRequest, progress: Progress | None, passes: list[PassCost]) -> dict[str, Any]:
     started = time.perf_counter()   # the whole time: the camera and depth runs too
     check_memory(request)
     output = png_output(request.output)
@@ -74,12 +81,13 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         depth = None
         units, clearance = frame_record.get("units_per_mm", 1.0), still.record["quality"]["front_clearance_mm"]
         if request.depth_maps is not None:
-            depth = view_depth_maps(scene, request.render_array, settings, clearance, units)
+            depth = view_depth_maps(scene, request.render_array, settings, clearance, units, progress=progress)
         if request.dataset is not None:   # the exported pixels' rays (a hex array's: the grid of lens columns)
             # a camera bank exports its own lens centres: the depth maps' pass, when it was made, is the same
             same = depth is not None and request.render_array.views is not None
             write_dataset(request.dataset, still.image, request.render_array,
-                          depth if same else dataset_depth(scene, request.render_array, settings, clearance, units),
+                          depth if same else dataset_depth(scene, request.render_array, settings, clearance, units,
+                                                           progress=progress),
                           all_views=request.dataset_all_views, scene=scene.path.stem)
             still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
         if request.depth_maps is not None:
@@ -90,12 +98,13 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
             still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
                                                          request.display.quilt)
         still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
+        still.record["passes"] = [p.to_json() for p in passes]
         write_image(output, still.image, still.record)
         return still.record
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
                              video=request.video, fps=request.fps)
     _warn_unlit(scene)
-    return report
+    return {**report, "passes": [p.to_json() for p in passes]}
 
 
 #: An image whose 99th percentile is under this share of full scale (sRGB: linear 0.21) looks dark: POV-Ray's

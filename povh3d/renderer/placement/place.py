@@ -2,7 +2,8 @@
 
 ``place_display`` resolves the frame (``renderer.placement.pose``), keeps the rays' start in
 front of the scene's camera, measures the scene's depth in the frame
-(``renderer.passes.depth``: only for a frame other than native, or with ``--fit-depth``),
+(``renderer.passes.depth``: only where something reads it, ``depth_wanted``, and for a frame other
+than native or with ``--fit-depth``),
 scales the frame when ``--fit-depth`` asks, and returns the request with the
 frame in its settings and the record for the sidecar.
 """
@@ -43,13 +44,15 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
     # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
     # what a method starting nearer (single-stage) would cut.
     default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
-    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
+    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be, and only
+    # where something reads it (``depth_wanted``); else that run evaluates the camera alone.
+    wanted = depth_wanted(request, default)
     placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
-                                                   use_cache=s.use_cache, front_clearance=s.front_clearance or default,
-                                                   timeout=s.timeout)
+                                                   use_cache=s.use_cache, timeout=s.timeout,
+                                                   front_clearance=(s.front_clearance or default) if wanted else None)
     front_clearance = s.front_clearance or _front_clearance(placed, default)
     scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
-    if not placed.is_native or options.fit_depth is not None or scale != 1:
+    if wanted and (not placed.is_native or options.fit_depth is not None or scale != 1 or options.depth_report):
         placed, depth, scale = _measure(request, scene, placed, front_clearance, budget, options.fit_depth,
                                         scale, options.depth_scale == "fit",
                                         seen.depth(placed, front_clearance, array) if seen else None)
@@ -82,6 +85,19 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         record["front_clearance_limit_mm"] = limit
         record["front_clearance_note"] = CAMERA_LIMIT_REASON
     return replace(request, settings=settings), record
+
+
+def depth_wanted(request: RenderRequest, default: float) -> bool:
+    """Whether anything reads the framed scene's depth: ``--fit-depth``, ``--depth-report``, depth maps or a
+    dataset (whose users want its budget warnings), or a method that may start its rays nearer than the
+    depth pass looks from (``default`` mm), so that the foreground it cuts must be measured to be said.
+    Otherwise no depth pass runs: a scene camera is evaluated alone (docs/display-frame.md)."""
+    options, s = request.display_frame, request.settings
+    if options.fit_depth is not None or options.depth_report or request.depth_maps is not None \
+            or request.dataset is not None:
+        return True
+    own = get_method(request.method).default_front_clearance(request.render_array)
+    return s.front_clearance is None and (own < default * (1 - 1e-9) or request.method == "single-stage")
 
 
 def _check_similarity(matrix: tuple[float, ...]) -> None:

@@ -43,6 +43,8 @@ class DisplayFrameOptions:
     fit_depth : 'auto', float (mm) or None  scale the frame so the measured depth fits
     depth_scale : float, 'fit' or None   compress depth alone along the normal by this factor (a
                                          distortion); 'fit': the factor --fit-depth chooses
+    depth_report : bool                  measure the framed scene's depth (and warn past the budget)
+                                         without fitting it (``place.depth_wanted``)
     """
 
     mode: str = "auto"
@@ -52,6 +54,7 @@ class DisplayFrameOptions:
     width: float | None = None
     fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the frame to fit
     depth_scale: str | float | None = None  # a factor, or 'fit' (with fit_depth: compress depth to fit)
+    depth_report: bool = False
 
     def __post_init__(self) -> None:
         k = self.depth_scale

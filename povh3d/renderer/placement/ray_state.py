@@ -201,7 +201,8 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         if problem is None and hollow_used:
             with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
                 solid = without_hollow(scene, Path(folder))
-                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, frame_units(s.frame))
+                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, frame_units(s.frame),
+                                                                        "origins-inside-hollow")
             if anywhere is not None:
                 record["origins_inside_hollow_or_solid_fraction"] = anywhere
                 problem = hollow_problem(request.method, hollow_used, anywhere)
