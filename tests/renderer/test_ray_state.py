@@ -137,7 +137,7 @@ def test_a_fogged_ground_below_the_rays_is_refused_or_rendered(cli, tmp_path, fo
     scene = tmp_path / "ground.pov"
     scene.write_text(GROUND.format(fog=fog, hollow=hollow))
     out = tmp_path / "g.png"
-    result = cli("render", str(scene), "-o", str(out), *SMALL, "--method", method)
+    result = cli("render", str(scene), "-o", str(out), *SMALL, "--method", method, "--depth-report")
     if refused:
         assert result.code != 0 and not out.exists()
         lines = [line for line in result.err.splitlines() if line.strip()]

@@ -1,0 +1,161 @@
+"""Only the POV-Ray passes something reads (``renderer.placement.place.depth_wanted``), each one in the
+sidecar's ``passes`` with its cost; the scene camera alone at its smallest exact size; the depth maps'
+fog pairs spread over several runs with the same values as one run, and their progress said."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.renderer.methods.quality import RenderSettings
+from povh3d.scene.scene import load_scene
+
+ARRAY = ("--grid", "square", "--lenses", "16x12", "--ppl", "4x4", "--pixel-pitch", "0.25", "--focal", "2",
+         "--quality", "draft", "-q")
+#: A camera on the axis: the frame's centre is its look_at (0, 2, 0) and its normal +z (docs/display-frame.md).
+CAMERA = """#version 3.7;
+global_settings { assumed_gamma 1 }
+camera { location <0, 2, -10> angle 40 right x * image_width / image_height look_at <0, 2, 0> }
+light_source { <5, 10, -20> rgb 1 }
+plane { y, 0 pigment { checker rgb 1 rgb 0.2 } hollow }
+sphere { <0, 2, 0>, 1.5 pigment { rgb <1, 0.2, 0.1> } }
+"""
+
+
+def _fresh(tmp_path) -> dict[str, str]:
+    """A cache of the test's own: what ran is not what an earlier test left."""
+    return {"POVH3D_CACHE": str(tmp_path / "cache")}
+
+
+def _passes(path) -> tuple[list[dict], dict]:
+    record = json.loads(path.with_suffix(".json").read_text())
+    return record["passes"], record["display_frame"]
+
+
+@pytest.mark.povray
+def test_a_plain_render_runs_no_depth_pass_and_fit_depth_does(cli, tmp_path):
+    scene = tmp_path / "cam.pov"
+    scene.write_text(CAMERA)
+    plain, fitted = tmp_path / "p.png", tmp_path / "f.png"
+    assert cli("render", str(scene), "-o", str(plain), *ARRAY, env=_fresh(tmp_path)).code == 0
+    passes, frame = _passes(plain)
+    assert [p["name"] for p in passes] == ["scene-camera"], passes
+    assert passes[0]["shots"] == 1 and passes[0]["runs"] == 1 and passes[0]["seconds"] > 0
+    assert "depth" not in frame
+    assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and frame["normal"] == pytest.approx([0, 0, 1])
+    # --fit-depth reads the depth: the camera's run measures it (two fog frames), the same frame found
+    result = cli("render", str(scene), "-o", str(fitted), "--fit-depth", "auto", *ARRAY, env=_fresh(tmp_path))
+    assert result.code == 0, result.err
+    passes, frame = _passes(fitted)
+    assert [p["name"] for p in passes] == ["scene-camera-depth"], passes
+    assert passes[0]["shots"] == 2 and passes[0]["runs"] == 1
+    assert frame["depth"]["pass"] == "in the camera's evaluation run" and "fit" in frame["depth"]
+    assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and frame["normal"] == pytest.approx([0, 0, 1])
+    # The sphere's front (1.5 units before the centre) in mm: the measured subject reaches it.
+    before = frame["depth"]["before_fit"]
+    units = json.loads(plain.with_suffix(".json").read_text())["display_frame"]["units_per_mm"]
+    assert before["near_mm"] == pytest.approx(-1.5 / units, rel=0.05)
+    # Again from the cache: no POV-Ray run, said so.
+    assert cli("render", str(scene), "-o", str(tmp_path / "g.png"), *ARRAY, env=_fresh(tmp_path)).code == 0
+    again, _ = _passes(tmp_path / "g.png")
+    assert again[0]["from_cache"] and again[0]["runs"] == 0 and again[0]["shots"] == 0
+
+
+@pytest.mark.povray
+def test_depth_report_measures_without_fitting(cli, tmp_path):
+    scene = tmp_path / "cam.pov"
+    scene.write_text(CAMERA)
+    out = tmp_path / "r.png"
+    result = cli("render", str(scene), "-o", str(out), "--depth-report", *ARRAY, env=_fresh(tmp_path))
+    assert result.code == 0, result.err
+    passes, frame = _passes(out)
+    assert [p["name"] for p in passes] == ["scene-camera-depth"]
+    assert "fit" not in frame["depth"] and frame["depth"]["near_mm"] < 0
+
+
+@pytest.mark.parametrize("camera, expected", [
+    ("camera { location -5*z look_at 0 }", (1, 1)),                                     # names no size
+    ("camera { location -5*z right x*image_width/image_height look_at 0 }", (16, 9)),   # the aspect, exactly
+    ("#declare IW = image_width;\ncamera { location -5*z right x*IW/100 look_at 0 }", "physical"),
+])
+def test_the_camera_alone_is_evaluated_at_its_smallest_exact_size(tmp_path, camera, expected):
+    from povh3d.display.display import build_display
+    from povh3d.renderer.passes.scene_camera import camera_size, physical_size
+
+    path = tmp_path / "c.pov"
+    path.write_text(camera + "\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    array = build_display("alioscopy-42").render_array    # 16:9 in mm, 5760 x 1080 subpixels
+    size = camera_size(load_scene(path), array)
+    assert size == (physical_size(array) if expected == "physical" else expected)
+
+
+@pytest.mark.povray
+def test_the_smallest_size_gives_the_panels_camera(tmp_path):
+    """The ratio camera at camera_size equals its evaluation at physical_size (the panel's rows);
+    negative control: at a square 1x1 run its right vector is another."""
+    from povh3d.display.display import build_display
+    from povh3d.renderer.passes.scene_camera import camera_size, evaluate_camera, physical_size
+    from povh3d.scene.camera_script import camera_script
+
+    path = tmp_path / "c.pov"
+    path.write_text("camera { location -5*z right x*image_width/image_height look_at 0 }\n"
+                    "sphere { 0, 1 pigment { rgb 1 } }\n")
+    scene, array = load_scene(path), build_display("alioscopy-42").render_array
+    script = camera_script(path.read_text(), scene.include_text)
+
+    def camera(size):
+        return evaluate_camera(scene, script.script, array, script.cameras, tmp_path, False, script.lines,
+                               size=size)[0]
+
+    small, panel, square = camera(camera_size(scene, array)), camera(physical_size(array)), camera((1, 1))
+    assert small["right"] == pytest.approx(panel["right"], rel=1e-12)
+    assert small["right"][0] == pytest.approx(16 / 9, rel=1e-12)
+    assert square["right"][0] != pytest.approx(panel["right"][0], rel=1e-3)
+
+
+def _plane_array() -> LensArray:
+    return LensArray(grid="square", lenses_x=16, lenses_y=12, pitch_x=0.6, pitch_y=0.6, focal=2.0,
+                     panel=Panel(48, 36, 0.2, 0.2))   # 3x3 views
+
+
+@pytest.mark.povray
+def test_depth_maps_over_several_runs_equal_one_run_and_say_their_progress(tmp_path, monkeypatch):
+    """The fog pairs spread over runs give the very values of one run (the code before), and those are
+    the plane's: at z = 5 mm, a view's ray of slopes (a, b) meets it 5 |(a, b, 1)| mm from the screen."""
+    import povh3d.renderer.passes.depth as depth
+    from povh3d.renderer.passes.record import recording
+
+    path = tmp_path / "plane.pov"
+    path.write_text("light_source { <0, 0, -100> rgb 1 }\nplane { -z, -5 pigment { rgb 0.5 } }\n")
+    scene, array = load_scene(path), _plane_array()
+    settings = RenderSettings(quality="draft", use_cache=False)
+    calls: list[tuple[float, float]] = []
+    with recording() as notes:
+        spread = depth.view_depth_maps(scene, array, settings, 10.0, 1.0, progress=lambda d, t: calls.append((d, t)))
+        monkeypatch.setattr(depth, "FOG_RUNS", 1)
+        one = depth.view_depth_maps(scene, array, settings, 10.0, 1.0)
+    assert [(n.name, n.shots) for n in notes] == [("depth-maps", 18), ("depth-maps", 18)]
+    assert notes[0].runs == 3 and notes[1].runs == 1     # 9 views: at most 4 runs, 3 pairs each: 3 runs
+    assert np.array_equal(spread, one, equal_nan=True)
+    assert calls[-1] == (18, 18) and calls[0][0] == 0
+    f, s = array.focal, array.panel.pitch_x
+    slopes = (np.arange(3) + 0.5 - 1.5) * s / f
+    expected = 5 * np.sqrt(slopes[::-1, None] ** 2 + slopes[None, :] ** 2 + 1)   # (l, k): v runs downwards
+    assert np.abs(spread - expected[:, :, None, None]).max() < 0.01
+    assert not np.abs(spread - 1.01 * expected[:, :, None, None]).max() < 0.01   # negative control
+
+
+@pytest.mark.povray
+def test_depth_maps_are_a_pass_of_the_sidecar(cli, tmp_path):
+    path = tmp_path / "plane.pov"
+    path.write_text("light_source { <0, 0, -100> rgb 1 }\nplane { -z, -5 pigment { rgb 0.5 } }\n")
+    out = tmp_path / "d.png"
+    result = cli("render", str(path), "-o", str(out), "--depth-maps", str(tmp_path / "maps"), *ARRAY,
+                 env=_fresh(tmp_path))
+    assert result.code == 0, result.err
+    passes, _ = _passes(out)
+    assert [p["name"] for p in passes] == ["depth-maps"]      # native frame: no camera, no summary pass
+    assert passes[0]["shots"] == 2 * 16 and passes[0]["runs"] == 8
