@@ -15,7 +15,7 @@ from povh3d.scene.scene import load_scene
 
 ARRAY = ("--grid", "square", "--lenses", "16x12", "--ppl", "4x4", "--pixel-pitch", "0.25", "--focal", "2",
          "--quality", "draft", "-q")
-#: A camera on the axis: the frame's centre is its look_at (0, 2, 0) and its normal +z (docs/display-frame.md).
+#: A camera on the axis: the frame's centre is its look_at (0, 2, 0) and its normal +z (docs/geometry.md).
 CAMERA = """#version 3.7;
 global_settings { assumed_gamma 1 }
 camera { location <0, 2, -10> angle 40 right x * image_width / image_height look_at <0, 2, 0> }

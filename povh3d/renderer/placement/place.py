@@ -91,7 +91,7 @@ def depth_wanted(request: RenderRequest, default: float) -> bool:
     """Whether anything reads the framed scene's depth: ``--fit-depth``, ``--depth-report``, depth maps or a
     dataset (whose users want its budget warnings), or a method that may start its rays nearer than the
     depth pass looks from (``default`` mm), so that the foreground it cuts must be measured to be said.
-    Otherwise no depth pass runs: a scene camera is evaluated alone (docs/display-frame.md)."""
+    Otherwise no depth pass runs: a scene camera is evaluated alone (docs/geometry.md)."""
     options, s = request.display_frame, request.settings
     if options.fit_depth is not None or options.depth_report or request.depth_maps is not None \
             or request.dataset is not None:
