@@ -42,8 +42,8 @@ def test_a_plain_render_runs_no_depth_pass_and_fit_depth_does(cli, tmp_path):
     plain, fitted = tmp_path / "p.png", tmp_path / "f.png"
     assert cli("render", str(scene), "-o", str(plain), *ARRAY, env=_fresh(tmp_path)).code == 0
     passes, frame = _passes(plain)
-    assert [p["name"] for p in passes] == ["scene-camera"], passes
-    assert passes[0]["shots"] == 1 and passes[0]["runs"] == 1 and passes[0]["seconds"] > 0
+    assert [p["name"] for p in passes] == ["scene-camera-text"], passes   # literal values: no POV-Ray run
+    assert passes[0]["shots"] == 0 and passes[0]["runs"] == 0
     assert "depth" not in frame
     assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and frame["normal"] == pytest.approx([0, 0, 1])
     # --fit-depth reads the depth: the camera's run measures it (two fog frames), the same frame found
@@ -58,10 +58,15 @@ def test_a_plain_render_runs_no_depth_pass_and_fit_depth_does(cli, tmp_path):
     before = frame["depth"]["before_fit"]
     units = json.loads(plain.with_suffix(".json").read_text())["display_frame"]["units_per_mm"]
     assert before["near_mm"] == pytest.approx(-1.5 / units, rel=0.05)
-    # Again from the cache: no POV-Ray run, said so.
-    assert cli("render", str(scene), "-o", str(tmp_path / "g.png"), *ARRAY, env=_fresh(tmp_path)).code == 0
-    again, _ = _passes(tmp_path / "g.png")
-    assert again[0]["from_cache"] and again[0]["runs"] == 0 and again[0]["shots"] == 0
+    # A camera of declared values is evaluated by POV-Ray, alone: one run of one row; again from the cache.
+    declared = tmp_path / "declared.pov"
+    declared.write_text(CAMERA.replace("camera { location <0, 2, -10>", "#declare L = <0, 2, -10>;\ncamera { location L"))
+    for name, cached in (("d1.png", False), ("d2.png", True)):
+        assert cli("render", str(declared), "-o", str(tmp_path / name), *ARRAY, env=_fresh(tmp_path)).code == 0
+        passes, frame = _passes(tmp_path / name)
+        assert [p["name"] for p in passes] == ["scene-camera"], passes
+        assert (passes[0]["shots"], passes[0]["runs"], passes[0]["from_cache"]) == ((0, 0, True) if cached else (1, 1, False))
+        assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and "depth" not in frame
 
 
 @pytest.mark.povray
@@ -159,3 +164,69 @@ def test_depth_maps_are_a_pass_of_the_sidecar(cli, tmp_path):
     passes, _ = _passes(out)
     assert [p["name"] for p in passes] == ["depth-maps"]      # native frame: no camera, no summary pass
     assert passes[0]["shots"] == 2 * 16 and passes[0]["runs"] == 8
+
+
+#: Cameras the text alone decides, with POV-Ray's own evaluation as the oracle.
+LITERAL = [
+    "camera { location <-8.0, 4.0, -14.0> angle 40 up <0.0, 1.0, 0.0> right x*image_width/image_height "
+    "look_at <-2.0, 0.0, -4.0> }",                                                      # advanced/pawns.pov
+    "camera { location <7, 20, 20> direction y sky z up z right x*image_width/image_height look_at <0.0, 0, 1.2> }",
+    "camera { perspective location -(2 + 3) * z + <1, .5e1, 0> / 2 right -1.5*x direction 2*z }",   # right-handed
+    "camera { location <0, 0, -5> /* a comment */ angle 65 // another\n look_at 0 }",   # a float promoted
+]
+#: Cameras it does not decide (POV-Ray does): identifiers, transforms, two cameras, a directive around it.
+NOT_LITERAL = [
+    "#declare L = <0, 0, -5>;\ncamera { location L look_at 0 }",
+    "camera { location <0, 0, -5> look_at 0 rotate 30*y }",
+    "camera { location <0, 0, -5> look_at 0 }\ncamera { location <0, 0, -6> look_at 0 }",
+    "#if (1)\ncamera { location <0, 0, -5> look_at 0 }\n#end",
+    "#declare C = camera { location <0, 0, -5> }\ncamera { C }",
+    "camera { orthographic location <0, 0, -5> look_at 0 }",
+    "camera { location <0, 0, -5> look_at 0 aperture 0.1 focal_point 0 }",
+    "camera { location <0, 0, -5, 1> look_at 0 }",
+    "#version 3.1;\ncamera { location <0, 0, -5> look_at 0 }",
+    '#include concat("a", ".inc")\ncamera { location <0, 0, -5> look_at 0 }',
+]
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("camera", LITERAL)
+def test_a_literal_camera_from_the_text_equals_povrays(tmp_path, camera):
+    from povh3d.display.display import build_display
+    from povh3d.renderer.passes.scene_camera import evaluate_camera, physical_size
+    from povh3d.scene.camera import camera_from_items
+    from povh3d.scene.camera_script import camera_script
+    from povh3d.scene.camera_text import literal_camera
+
+    path = tmp_path / "c.pov"
+    path.write_text("#version 3.7;\n" + camera + "\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    scene, array = load_scene(path), build_display("alioscopy-42").render_array
+    items = literal_camera(path.read_text(), scene.include_text, physical_size(array))
+    assert items is not None
+    mine = camera_from_items(items).as_record()
+    script = camera_script(path.read_text(), scene.include_text)
+    theirs = evaluate_camera(scene, script.script, array, script.cameras, tmp_path, False, script.lines)[0]
+    for key in ("location", "direction", "right", "up"):
+        assert mine[key] == pytest.approx(theirs[key], rel=1e-12, abs=1e-12), key
+    assert (mine["look_at"] is None) == (theirs["look_at"] is None) and mine["type"] == theirs["type"]
+
+
+@pytest.mark.parametrize("camera", NOT_LITERAL)
+def test_a_camera_the_text_does_not_decide_is_left_to_povray(tmp_path, camera):
+    from povh3d.scene.camera_text import literal_camera
+
+    path = tmp_path / "c.pov"
+    path.write_text(camera + "\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    assert literal_camera(path.read_text(), load_scene(path).include_text, (16, 9)) is None
+
+
+def test_a_camera_in_an_include_is_left_to_povray(tmp_path):
+    """Negative control of the include check: the same literal camera in the main file is read."""
+    from povh3d.scene.camera_text import literal_camera
+
+    (tmp_path / "cam.inc").write_text("camera { location <0, 0, -5> look_at 0 }\n")
+    main = tmp_path / "c.pov"
+    main.write_text('#include "cam.inc"\ncamera { location <0, 0, -6> look_at 0 }\n')
+    assert literal_camera(main.read_text(), load_scene(main).include_text, (4, 3)) is None
+    (tmp_path / "cam.inc").write_text("#declare R = 1;\n")
+    assert literal_camera(main.read_text(), load_scene(main).include_text, (4, 3)) is not None

@@ -5,7 +5,8 @@
 - explicit ``--display-center/normal/up/width``: that frame;
 - ``native``: the display's own frame (mm, screen ``z = 0``);
 - ``camera``, or ``auto`` when the scene has a camera: the frame the scene's
-  last camera defines, evaluated by POV-Ray in one small run
+  last camera defines, read from the text where it is one statement of literal values
+  (``scene.camera_text``), else evaluated by POV-Ray in one small run
   (``renderer.passes.scene_camera``, cached by the scene's digest and the panel's size);
 - ``auto`` without a camera: native.
 
@@ -105,7 +106,13 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
     allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
-    from ..passes.scene_camera import evaluate_and_measure, evaluate_camera, probe_size, uses_image_size
+    import time
+
+    from ..passes.record import note
+    from ..passes.scene_camera import (evaluate_and_measure, evaluate_camera, physical_size, probe_size,
+                                       uses_image_size)
+    from ...scene.camera import camera_from_items
+    from ...scene.camera_text import literal_camera
 
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
@@ -140,7 +147,14 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
                                       script.lines, timeout, (w, h))
         if probe["type"] in REFUSED_TYPES:
             raise CameraError(_unusable_type(probe["type"]) + f" (its type told by a parse at {w}x{h} pixels)")
-    if found is None:
+    literal = (literal_camera(text, scene.include_text, physical_size(lens_array))
+               if found is None and front_clearance is None and not uses_image_size(scene) else None)
+    if literal is not None:   # the text alone tells it: no POV-Ray run (scene/camera_text.py)
+        start = time.perf_counter()
+        camera, distances, cached = camera_from_items(literal).as_record(), None, False
+        seconds = time.perf_counter() - start
+        note("scene-camera-text", seconds, 0, 0)
+    elif found is None:
         camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
                                                   use_cache, script.lines, timeout)
         distances = None
