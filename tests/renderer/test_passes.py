@@ -82,7 +82,7 @@ def test_depth_report_measures_without_fitting(cli, tmp_path):
 
 
 @pytest.mark.parametrize("camera, expected", [
-    ("camera { location -5*z look_at 0 }", (1, 1)),                                     # names no size
+    ("camera { location -5*z look_at 0 }", (16, 9)),   # names no size (an include it reads may: screen.inc)
     ("camera { location -5*z right x*image_width/image_height look_at 0 }", (16, 9)),   # the aspect, exactly
     ("#declare IW = image_width;\ncamera { location -5*z right x*IW/100 look_at 0 }", "physical"),
 ])

@@ -3,7 +3,7 @@
 ``evaluate_camera`` runs the scene's camera statements alone (one row of the smallest image
 that tells them exactly, ``camera_size``: ``image_width / image_height`` in a scene means the
 panel's physical shape in mm, ``physical_size``, not the pixel grid of a lenticular or mapped
-view space, whose pixels are not square; a scene that never names them, one pixel);
+view space, whose pixels are not square: 16 x 9 pixels for a 16:9 panel);
 ``evaluate_and_measure``, where a depth pass is wanted (``renderer.placement.place``), runs them
 with the rest of the scene and
 ``templates/camera_depth.pov.j2``, which works out the display frame from the
@@ -128,16 +128,14 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
 
 
 def camera_size(scene: Scene, lens_array: LensArray) -> tuple[int, int]:
-    """The smallest run that evaluates the camera exactly: what the camera reads of the run's size is
-    ``image_width / image_height`` (the panel's physical aspect, ``physical_size``) or nothing; a scene
-    that builds from the sizes themselves gets ``physical_size`` (its values then follow the panel's)."""
+    """The smallest run that evaluates the camera exactly: the panel's physical aspect (``physical_size``)
+    in lowest terms, which is what ``image_width / image_height`` reads (also in a library include such
+    as screen.inc, whose text ``scene.files`` does not hold); a scene that builds from the sizes themselves
+    gets ``physical_size`` (its values then follow the panel's)."""
     from fractions import Fraction
 
-    text = _scene_text(scene)
-    if uses_image_size(scene, text):
+    if uses_image_size(scene):
         return physical_size(lens_array)
-    if not re.search(r"\bimage_(width|height)\b", text):
-        return 1, 1
     w, h = physical_size(lens_array)
     ratio = Fraction(w, h)
     return ratio.numerator, ratio.denominator
