@@ -66,8 +66,8 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
     if request.dataset is not None:
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
-    request, frame_record = place_display(request, scene)
-    request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
+    request, frame_record = place_display(request, scene, progress)
+    request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
     if ray_state is not None:
         frame_record = {**frame_record, "ray_state": ray_state}
     settings, auto = _resolve_quality(request, scene, progress)

@@ -156,7 +156,7 @@ def test_the_refused_frame_would_be_wrong(cli, tmp_path, monkeypatch, hollow, wr
     from benchmarks.gallery import oracle_view
     from povh3d.image.metrics import psnr
 
-    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene: (request, None))
+    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene, *_: (request, None))
     scene = tmp_path / "ground.pov"
     scene.write_text(GROUND.format(fog="fog { rgb 0.8 distance 20 }", hollow=hollow))
     out, views = tmp_path / "g.png", tmp_path / "views"

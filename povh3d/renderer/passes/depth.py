@@ -212,12 +212,14 @@ def depth_map(distances: np.ndarray, lens_array: LensArray, front_clearance: flo
 
 
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
-               units_per_mm: float) -> DepthMap:
-    """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
+               units_per_mm: float, progress: Progress | None = None) -> DepthMap:
+    """Measure the scene's depth in the display frame of ``settings.frame`` (None: native); ``progress(done,
+    total)``: its two frames."""
     w, h = pass_size(lens_array)
     fog = front_clearance * units_per_mm   # scene units: t = 1/e at the screen
     d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
-                                                                          front_clearance, fog, w, h), fog, "depth")
+                                                                          front_clearance, fog, w, h), fog, "depth",
+                                 progress)
     return depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
 
 
@@ -239,7 +241,7 @@ def origin_field(lens_array: LensArray, front_clearance: float) -> tuple[float, 
 
 
 def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
-                   units_per_mm: float, name: str = "origins-inside") -> float:
+                   units_per_mm: float, name: str = "origins-inside", progress: Progress | None = None) -> float:
     """The share of the plane of every view's ray origins (``origin_field``, ``front_clearance`` mm out)
     that lies inside a solid: a fog pass along the normal over that plane (the pixels the fog does not
     reach).  ``lens_array``: the rays as traced (``depth_scaled_rays``)."""
@@ -248,7 +250,7 @@ def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings
     h = max(1, min(4 * MAX_WIDTH, round(w * field[1] / field[0])))
     fog = front_clearance * units_per_mm
     batch = _fog_batch([(0.0, 0.0, 1.0)], lens_array, front_clearance, fog, w, h, field)
-    _, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog, name)
+    _, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog, name, progress)
     return float(unmeasured[0])
 
 

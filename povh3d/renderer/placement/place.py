@@ -18,7 +18,7 @@ import numpy as np
 from ..passes.depth import DepthMap, depth_pass
 from ..methods.registry import get_method
 from ...geometry.camera_mesh import default_front_clearance
-from ..methods.quality import DEPTH_SCALE_RANGE
+from ..methods.quality import DEPTH_SCALE_RANGE, Progress
 from ...errors import ConfigError
 from ...geometry.frame import NATIVE, DisplayFrame
 from ...scene.scene import Scene
@@ -29,8 +29,10 @@ if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..request import RenderRequest
 
 
-def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any]]:
-    """The request with its display frame (and clearance) resolved into the settings, and the record."""
+def place_display(request: RenderRequest, scene: Scene,
+                  progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any]]:
+    """The request with its display frame (and clearance) resolved into the settings, and the record;
+    ``progress(done, total)``: a depth pass's frames."""
     array = request.render_array
     budget = depth_budget_mm(array)
     if request.is_model:  # the stage is built in display mm
@@ -55,7 +57,7 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
     if wanted and (not placed.is_native or options.fit_depth is not None or scale != 1 or options.depth_report):
         placed, depth, scale = _measure(request, scene, placed, front_clearance, budget, options.fit_depth,
                                         scale, options.depth_scale == "fit",
-                                        seen.depth(placed, front_clearance, array) if seen else None)
+                                        seen.depth(placed, front_clearance, array) if seen else None, progress)
         record = {**record, **placed.as_record(), "depth": depth}
         if not depth.get("empty") and not depth.get("within_budget", True):
             record["warnings"].append(
@@ -132,7 +134,7 @@ def _front_clearance(frame: DisplayFrame, default: float) -> float:
 
 def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_clearance: float, budget: float,
              fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
-             seen: DepthMap | None = None
+             seen: DepthMap | None = None, progress: Progress | None = None
              ) -> tuple[DisplayFrame, dict[str, Any], float]:
     """The depth summary in ``frame`` as the display shows it (depth times ``scale``); with ``fit``, the
     frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
@@ -145,7 +147,8 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
         if seen is not None and f is frame:
             return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
-        return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm).summary(budget)
+        return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm,
+                          progress).summary(budget)
 
     def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
         # The display shows the measured z times ``factor`` (a depth scale, or 1 / a frame's scale).
