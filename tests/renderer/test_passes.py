@@ -230,3 +230,26 @@ def test_a_camera_in_an_include_is_left_to_povray(tmp_path):
     assert literal_camera(main.read_text(), load_scene(main).include_text, (4, 3)) is None
     (tmp_path / "cam.inc").write_text("#declare R = 1;\n")
     assert literal_camera(main.read_text(), load_scene(main).include_text, (4, 3)) is not None
+
+
+@pytest.mark.povray
+def test_the_inside_solid_check_says_its_progress_and_its_cost(tmp_path):
+    """A fogged scene: the inside-solid pass (two frames) shows on the render's progress before the render,
+    and in the sidecar; the same scene without fog runs no such pass (the negative control)."""
+    from povh3d.display.display import Display
+    from povh3d.renderer.render import render
+    from povh3d.renderer.request import RenderRequest
+
+    fogged = CAMERA + "fog { rgb 0.8 distance 40 }\n"
+    names = {}
+    for name, text in (("fog", fogged), ("clear", CAMERA)):
+        scene = tmp_path / f"{name}.pov"
+        scene.write_text(text)
+        calls: list[tuple[float, float]] = []
+        request = RenderRequest(source=scene, display=Display(_plane_array()), output=tmp_path / f"{name}.png",
+                                settings=RenderSettings(quality="draft", cache_dir=tmp_path / "cache"))
+        record = render(request, lambda d, t: calls.append((d, t)))
+        names[name] = [p["name"] for p in record["passes"]]
+        if name == "fog":
+            assert (2, 2) in calls and calls.index((2, 2)) < len(calls) - 1, calls
+    assert names == {"fog": ["scene-camera-text", "origins-inside"], "clear": ["scene-camera-text"]}
