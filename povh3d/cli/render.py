@@ -75,7 +75,7 @@ def display_frame_options_from_args(args: argparse.Namespace) -> Any:
     return DisplayFrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
                         parse_triple(args.display_normal, "--display-normal"),
                         parse_triple(args.display_up, "--display-up"),
-                        args.display_width, fit, scale)
+                        args.display_width, fit, scale, bool(getattr(args, "depth_report", False)))
 
 
 def _method_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -379,6 +379,10 @@ def add_frame_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--fit-depth", metavar="auto|MM",
                    help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
                    "display's depth budget (auto: 2 N f) or MM")
+    g.add_argument("--depth-report", action="store_true",
+                   help="measure the framed scene's depth (a small POV-Ray pass) for the summary and the sidecar, "
+                   "and warn past the depth budget, without fitting it (--fit-depth, --depth-maps and --dataset "
+                   "measure it too; povh3d info SCENE reports it)")
     g.add_argument("--depth-scale", nargs="?", const="fit", metavar="K",
                    help="compress depth alone along the display normal by K, keeping lateral sizes (a distortion); "
                    "bare, with --fit-depth: the K that makes the depth fit, instead of shrinking the whole scene")

@@ -33,6 +33,7 @@ from .outputs.depth_maps import check_depth_dir, write_depth_maps
 from .outputs.dataset import check_dataset_dir, dataset_depth, write_dataset
 from .outputs.device_quilt import check_device_render, write_device_outputs
 from .passes.depth import view_depth_maps
+from .passes.record import PassCost, recording
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import RenderedImage, render_sequence
@@ -47,8 +48,14 @@ if TYPE_CHECKING:
 def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
     """Carry out ``request``; return the sidecar record of the still, or the animation's report.
 
-    Every output is checked before any work and written atomically.
+    Every output is checked before any work and written atomically.  The record's ``passes`` lists
+    the POV-Ray passes run besides the render and what each cost (``passes.record.PassCost``).
     """
+    with recording() as passes:
+        return _render(request, progress, passes)
+
+
+def _render(request: RenderRequest, progress: Progress | None, passes: list[PassCost]) -> dict[str, Any]:
     started = time.perf_counter()   # the whole time: the camera and depth runs too
     check_memory(request)
     output = png_output(request.output, inputs=(request.source,), sidecar=request.frames is None)
@@ -63,10 +70,10 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
     scene, model_record = load_content(request)
     check_outputs_against(request, output, (request.source, *scene.files))
-    request, frame_record = place_display(request, scene)
+    request, frame_record = place_display(request, scene, progress)
     ray_state = None
     if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
-        request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
+        request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
     if ray_state is not None:
         frame_record = {**frame_record, "ray_state": ray_state}
     settings, auto = _resolve_quality(request, scene, progress)
@@ -80,12 +87,13 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         depth = None
         units, clearance = frame_record.get("units_per_mm", 1.0), still.record["quality"]["front_clearance_mm"]
         if request.depth_maps is not None:
-            depth = view_depth_maps(scene, request.render_array, settings, clearance, units)
+            depth = view_depth_maps(scene, request.render_array, settings, clearance, units, progress=progress)
         if request.dataset is not None:   # the exported pixels' rays (a hex array's: the grid of lens columns)
             # a camera bank exports its own lens centres: the depth maps' pass, when it was made, is the same
             same = depth is not None and request.render_array.views is not None
             write_dataset(request.dataset, still.image, request.render_array,
-                          depth if same else dataset_depth(scene, request.render_array, settings, clearance, units),
+                          depth if same else dataset_depth(scene, request.render_array, settings, clearance, units,
+                                                           progress=progress),
                           all_views=request.dataset_all_views, scene=scene.path.stem)
             still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
         if request.depth_maps is not None:
@@ -96,6 +104,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
             still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
                                                          request.display.quilt)
         still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
+        still.record["passes"] = [p.to_json() for p in passes]
         write_image(output, still.image, still.record)
         return still.record
     companions = None
@@ -106,7 +115,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
                              video=request.video, fps=request.fps, companions=companions)
     _warn_unlit(scene)
-    return report
+    return {**report, "passes": [p.to_json() for p in passes]}
 
 
 def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Path, ...]) -> None:

@@ -5,7 +5,8 @@
 - explicit ``--display-center/normal/up/width``: that frame;
 - ``native``: the display's own frame (mm, screen ``z = 0``);
 - ``camera``, or ``auto`` when the scene has a camera: the frame the scene's
-  last camera defines, evaluated by POV-Ray in one small run
+  last camera defines, read from the text where it is one statement of literal values
+  (``scene.camera_text``), else evaluated by POV-Ray in one small run
   (``renderer.passes.scene_camera``, cached by the scene's digest and the panel's size);
 - ``auto`` without a camera: native.
 
@@ -43,6 +44,8 @@ class DisplayFrameOptions:
     fit_depth : 'auto', float (mm) or None  scale the frame so the measured depth fits
     depth_scale : float, 'fit' or None   compress depth alone along the normal by this factor (a
                                          distortion); 'fit': the factor --fit-depth chooses
+    depth_report : bool                  measure the framed scene's depth (and warn past the budget)
+                                         without fitting it (``place.depth_wanted``)
     """
 
     mode: str = "auto"
@@ -52,6 +55,7 @@ class DisplayFrameOptions:
     width: float | None = None
     fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the frame to fit
     depth_scale: str | float | None = None  # a factor, or 'fit' (with fit_depth: compress depth to fit)
+    depth_report: bool = False
 
     def __post_init__(self) -> None:
         k = self.depth_scale
@@ -102,7 +106,13 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
     allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
-    from ..passes.scene_camera import evaluate_and_measure, evaluate_camera, probe_size, uses_image_size
+    import time
+
+    from ..passes.record import note
+    from ..passes.scene_camera import (evaluate_and_measure, evaluate_camera, physical_size, probe_size,
+                                       uses_image_size)
+    from ...scene.camera import camera_from_items
+    from ...scene.camera_text import literal_camera
 
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
@@ -137,7 +147,14 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
                                       script.lines, timeout, (w, h))
         if probe["type"] in REFUSED_TYPES:
             raise CameraError(_unusable_type(probe["type"]) + f" (its type told by a parse at {w}x{h} pixels)")
-    if found is None:
+    literal = (literal_camera(text, scene.include_text, physical_size(lens_array))
+               if found is None and front_clearance is None and not uses_image_size(scene) else None)
+    if literal is not None:   # the text alone tells it: no POV-Ray run (scene/camera_text.py)
+        start = time.perf_counter()
+        camera, distances, cached = camera_from_items(literal).as_record(), None, False
+        seconds = time.perf_counter() - start
+        note("scene-camera-text", seconds, 0, 0)
+    elif found is None:
         camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
                                                   use_cache, script.lines, timeout)
         distances = None

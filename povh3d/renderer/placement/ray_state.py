@@ -34,6 +34,7 @@ from ...scene.features import Features, features_of_text, strip_comments
 from ...scene.scene import Scene, load_scene
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from ..methods.quality import Progress
     from ..request import RenderRequest
 
 #: The method a render falls back to when the default's mesh camera would share one state.
@@ -178,11 +179,13 @@ def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None)
         f"{fix}, or #declare the sizes the scene needs", "the scene reads image_width/image_height")
 
 
-def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any] | None]:
+def settle_method(request: RenderRequest, scene: Scene,
+                  progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any] | None]:
     """``request`` as it may render (its display placed): unchanged, or with the default method replaced by
     ``FALLBACK`` where it would render the scene wrong (its mesh camera's one ray state, or the size of its
     runs seen through ``image_width``); and the sidecar's record of the check (None: nothing to check).
-    A chosen method is refused instead, in one line naming the fix."""
+    A chosen method is refused instead, in one line naming the fix.  ``progress(done, total)``: the
+    inside-solid passes' frames."""
     if request.is_model:
         return request, None
     method, views = get_method(request.method), request.render_array.views
@@ -193,7 +196,7 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         s = request.settings
         clearance = planned_front_clearance(method, request.render_array, s)
         rays = depth_scaled_rays(request.render_array, s.depth_scale)
-        inside = origins_inside(scene, rays, s, clearance, frame_units(s.frame))
+        inside = origins_inside(scene, rays, s, clearance, frame_units(s.frame), progress=progress)
         record = {"origins_inside_fraction": inside, "front_clearance_mm": clearance,
                   "depends_on": sorted(features.used)}
         problem = ray_state_problem(request.method, True, features, inside)
@@ -201,7 +204,8 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         if problem is None and hollow_used:
             with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
                 solid = without_hollow(scene, Path(folder))
-                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, frame_units(s.frame))
+                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, frame_units(s.frame),
+                                                                        "origins-inside-hollow", progress)
             if anywhere is not None:
                 record["origins_inside_hollow_or_solid_fraction"] = anywhere
                 problem = hollow_problem(request.method, hollow_used, anywhere)
