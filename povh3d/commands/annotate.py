@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import json
+from .. import jsontext
 import tomllib
 import uuid
 from pathlib import Path
@@ -26,7 +26,7 @@ def read_links(path: str | Path, names: set[str]) -> dict[str, Any]:
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
-        raw = json.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)
+        raw = jsontext.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)
     except FileNotFoundError:
         raise InputError(f"links file {str(path)!r} does not exist; check the path") from None
     except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError and TOMLDecodeError are ValueErrors

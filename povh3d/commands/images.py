@@ -104,6 +104,7 @@ def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
     if not size:
         return
     try:
+        Image.MAX_IMAGE_PIXELS = None   # the size only: read_png bounds the memory (image.io.check_png_memory)
         with Image.open(path) as im:
             width, height = im.size
     except Exception:  # noqa: BLE001 - not an image: read_png says so, with its own message

@@ -15,6 +15,7 @@ the vendor's public device table (docs/displays.md cites each number).
 
 from __future__ import annotations
 
+from .. import jsontext
 import json
 import math
 from dataclasses import dataclass, field, replace
@@ -187,7 +188,7 @@ def parse_visual(data: Any) -> Calibration:
 def read_visual(path: str | Path) -> Calibration:
     """Read a ``visual.json`` file."""
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = jsontext.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise InputError(f"cannot read the calibration {str(path)!r}: {exc.strerror}") from None
     except ValueError as exc:

@@ -48,7 +48,7 @@ def check_objects_request(request: RenderRequest) -> MaskScene | None:
     if request.is_model:
         return None
     try:
-        text = request.source.read_text(encoding="utf-8")
+        text = request.source.read_text(encoding="utf-8").removeprefix("\ufeff")  # a BOM: POV-Ray skips it
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read the scene {str(request.source)!r} ({exc})") from None
     return mask_scene(text)

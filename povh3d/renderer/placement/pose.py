@@ -23,7 +23,7 @@ from ...geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_fra
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError
 from ...scene.camera_script import REFUSED_TYPES, camera_script, refused_type, written_camera_types
-from ...scene.scene import Scene
+from ...scene.scene import Scene, source_text
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..passes.scene_camera import Seen
@@ -111,7 +111,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
-    text = scene.path.read_bytes().decode("latin-1")
+    text = source_text(scene.path.read_bytes())
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
     if refused_type(written):   # refused from the text: its parse may take minutes at the panel's size

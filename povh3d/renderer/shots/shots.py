@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
+from ... import cache as cache_store
 from ...cache import cache_root, code_stamp, content_key
 from .cache import ImageCache
 from ...image.io import read_png
@@ -30,7 +31,7 @@ from ...povray.process import JobResult, PovrayJob, povray_version, run_jobs
 from ...povray.sandbox import confines, scene_inputs
 from ...povray.version_memo import remembered_version
 from ...errors import PovrayError, PovrayTimeout, warn
-from ...scene.scene import Scene
+from ...scene.scene import BOM, Scene, has_bom
 from ...system import cpu_count, find_povray
 from .batch import ShotBatch, RenderStats
 from .clock_runs import SEQUENCE_SAFE_WORDS, plan_runs
@@ -81,6 +82,38 @@ def build_script(batch: ShotBatch, frames: list[dict[str, Any]], *, method: str,
     """The POV-Ray script that renders ``frames`` of ``batch`` as animation frames 1..n."""
     return render_template(batch.template, version=__version__, method=method, scene_path=scene_path,
                            add_assumed_gamma=add_assumed_gamma, frames=frames, **header, **batch.context)
+
+
+def scene_include(scene: Scene, settings: RenderSettings) -> tuple[str, dict[str, Any]]:
+    """The file povh3d's script includes for ``scene``, and the job's fields to read it.
+
+    POV-Ray 3.7 skips a UTF-8 byte-order mark at the start of the file it is given, not in one it
+    includes: a scene saved with one is included as a copy without it, of the same name (errors name
+    the user's file), in the cache; its includes are still found in the scene's folder (``+L``)."""
+    inputs = scene_inputs(scene)
+    if not has_bom(scene.path):
+        return str(scene.path), inputs
+    folder = cache_store.cache_folder(cache_root(settings.cache_dir) / "bom" / scene.digest[:32], "scene copy")
+    copy = folder / scene.path.name
+    if not copy.is_file():
+        from ...image.io import atomic_path
+        with atomic_path(copy) as tmp:
+            tmp.write_bytes(scene.path.read_bytes().removeprefix(BOM))
+    if inputs.get("read_files") is not None:
+        inputs = {**inputs, "read_files": (*inputs["read_files"], str(copy))}
+    return str(copy), inputs
+
+
+def _read_frame(image_path: Path, name: str) -> np.ndarray:
+    """A frame POV-Ray wrote; a PNG cut short by a full disk is that disk's error, not the PNG's."""
+    from ...errors import InputError
+    from ...povray.process import full_disk
+
+    try:
+        return read_png(image_path)
+    except InputError:
+        raise full_disk(image_path.parent, 0, name) or InputError(
+            f"{name}: POV-Ray wrote a damaged image {image_path.name!r}; render again") from None
 
 
 def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
@@ -160,8 +193,9 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     threads = settings.threads or max(1, cores // processes)
     stats.jobs, stats.processes, stats.threads = units, processes, threads
 
+    scene_file, inputs = scene_include(scene, settings)
     common = dict(width=batch.width, height=batch.height, threads=threads, bit_depth=settings.bit_depth,
-                  file_gamma="sRGB", timeout=settings.timeout, **scene_inputs(scene))
+                  file_gamma="sRGB", timeout=settings.timeout, **inputs)
     add_gamma = scene.adds_assumed_gamma
     jobs, targets_of_job = [], {}
     if later:
@@ -170,7 +204,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
         plain = replace(settings, clock=None, sequence=None).options + batch.options
         for shot, numbers in runs:
             script = build_script(batch, [batch.shots[shot]] * sequence.total, method=method,
-                                  scene_path=str(scene.path), add_assumed_gamma=add_gamma, header=header)
+                                  scene_path=scene_file, add_assumed_gamma=add_gamma, header=header)
             name = f"{method} camera {shot + 1}, frames {numbers[0]}" + (f"-{numbers[-1]}" if len(numbers) > 1 else "")
             run = ClockRun(sequence.position(numbers[0]), sequence.total, sequence.clock_start, sequence.clock_end)
             # --timeout is each frame's: a run of several frames gets theirs together.
@@ -183,7 +217,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     else:
         for chunk in chunks:
             script = build_script(batch, [batch.shots[i] for i in chunk], method=method,
-                                  scene_path=str(scene.path), add_assumed_gamma=add_gamma, header=header)
+                                  scene_path=scene_file, add_assumed_gamma=add_gamma, header=header)
             name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
             job = PovrayJob(name=name, script=script, frames=len(chunk), options=settings.options + batch.options,
                             **common)
@@ -203,10 +237,10 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                 if cache is not None:
                     cache.store(key, image_path)
                 # In the cache the later frame finds it; without one it is held here for it.
-                settings.sequence.stored[key] = None if cache is not None else read_png(image_path)
+                settings.sequence.stored[key] = None if cache is not None else _read_frame(image_path, method)
             done += 1
             return
-        images[index] = read_png(image_path)  # decoded whole: a complete PNG
+        images[index] = _read_frame(image_path, f"{method} camera {index + 1}")  # decoded whole: a complete PNG
         if cache is not None:
             cache.store(keys[index], image_path)
         done += n_copies.get(index, 1)
