@@ -230,3 +230,52 @@ def test_a_render_into_a_full_tmpdir_names_the_disk(tmp_path, cli):
         assert "is full" in line and str(full) in line
     finally:
         subprocess.run(["umount", str(full)], check=False)
+
+
+# -- work bounded before it starts ------------------------------------------------------------------
+def test_threads_are_bounded_by_the_cores(tmp_path, cli):
+    from povh3d.system import cpu_count
+
+    line = one_error_line(cli("render", SAMPLE, *TINY, "--threads", "1000000", "-o", tmp_path / "a.png"), 2)
+    assert f"at most {cpu_count()}" in line and not list(tmp_path.iterdir())
+
+
+def test_threads_within_the_cores_are_taken():   # negative control
+    from povh3d.renderer.methods.quality import RenderSettings
+    from povh3d.system import MAX_REMOTE_THREADS, cpu_count
+
+    assert RenderSettings(threads=cpu_count()).threads == cpu_count()
+    assert RenderSettings(threads=cpu_count() + 1, scheduler="tcp://h:8786").threads == cpu_count() + 1
+    with pytest.raises(Exception, match="at most"):
+        RenderSettings(threads=MAX_REMOTE_THREADS + 1, scheduler="tcp://h:8786")
+
+
+def test_a_frame_count_past_any_animation_is_one_line(tmp_path, cli):
+    import time
+
+    start = time.perf_counter()
+    line = one_error_line(cli("render", SAMPLE, *TINY, "--frames", "0:100000000", "-o", tmp_path / "a.png"), 2)
+    assert "100000001 frames, over 100000" in line and "--frames 0:9999" in line
+    assert time.perf_counter() - start < 5 and not list(tmp_path.iterdir())
+    from povh3d.renderer.animation import parse_frames
+    assert parse_frames("0:99999") == (0, 99999)   # negative control: the limit itself is taken
+
+
+def _one_expression_scene(path: Path, terms: int) -> Path:
+    path.write_text("#declare X = " + "+".join(["1"] * terms) + ";\n" + SAMPLE.read_text())
+    return path
+
+
+def test_the_cameras_reading_is_estimated_before_it_starts(tmp_path, cli):
+    import resource
+
+    scene = _one_expression_scene(tmp_path / "expr.pov", 1_500_000)   # 3 MB of text, 0.6 GB to read
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    line = one_error_line(cli("render", scene, *TINY, "-o", tmp_path / "a.png", "--max-memory", "300M"), 2)
+    assert "reading the camera of expr.pov" in line and "--max-memory" in line
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 200_000   # KiB
+
+
+def test_a_small_scene_is_read_under_a_small_limit(tmp_path, cli):   # negative control
+    result = cli("info", SAMPLE, "--preset", "demo", "--max-memory", "300M")
+    assert result.code == 0, result.err

@@ -112,6 +112,12 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
     text = source_text(scene.path.read_bytes())
+    from ..budget import check_memory
+    # The camera's reading keeps a token of every word and number: about 200 bytes a byte of text
+    # (a 5 MB one-expression scene took 0.96 GB), estimated before it starts.
+    check_memory(f"reading the camera of {scene.path.name} ({len(text) / 2**20:.3g} MB of text)", 200 * len(text),
+                 "give the display's place with --display-frame native or --display-center/--display-normal, "
+                 "or raise --max-memory")
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
     if refused_type(written):   # refused from the text: its parse may take minutes at the panel's size
