@@ -22,6 +22,7 @@ def read_links(path: str | Path, names: set[str]) -> dict[str, Any]:
     """``{object name: Link}`` from a TOML (``[name] url = .. description = ..``) or JSON file; a name
     that is not one of the render's objects, or another key, is an ``InputError``."""
     from ..hyper.boxes import Link
+    from ..hyper.cdp import check_url
 
     path = Path(path)
     try:
@@ -40,6 +41,11 @@ def read_links(path: str | Path, names: set[str]) -> dict[str, Any]:
         if not isinstance(entry, dict) or set(entry) - _LINK_KEYS or \
                 not all(isinstance(v, str) for v in entry.values()):
             raise InputError(f"links file {str(path)!r}: object {name!r} takes only url and description (text)")
+        try:
+            check_url(entry.get("url"))
+        except ValueError as exc:
+            raise InputError(f"links file {str(path)!r}: object {name!r}: {exc}; give an http(s):// or mailto: "
+                             "address") from None
         links[name] = Link(entry.get("url", ""), entry.get("description", ""))
     return links
 
@@ -145,10 +151,14 @@ def annotate(render: str | Path, masks: str | Path, output: str | Path, *,
 
 def read_header(path: str | Path) -> Any:
     """A 3DCDP header file read through the schema."""
-    from ..hyper.cdp import from_xml
+    from ..hyper.cdp import MAX_HEADER_BYTES, from_xml
 
     path = Path(path)
     try:
+        size = path.stat().st_size
+        if size > MAX_HEADER_BYTES:   # refused before it is read
+            raise InputError(f"3DCDP header {str(path)!r} is {size / 2**20:.3g} MB, over the {MAX_HEADER_BYTES >> 20} MB "
+                             "a header may take; write it again with 'povh3d annotate'")
         data = path.read_bytes()
     except FileNotFoundError:
         raise InputError(f"3DCDP header {str(path)!r} does not exist; write it with 'povh3d annotate'") from None
