@@ -17,7 +17,7 @@ from povh3d.hyper.cdp import MAX_HEADER_BYTES, from_xml
 from povh3d.hyper.page import ViewerContent, viewer_html
 from tests.commands.test_hyperlinker import _click_view_pixel, _last_click
 from tests.support.browser import headless_chromium, open_page
-from tests.support.objects_render import LX, LY, moving_objects_render
+from tests.support.objects_render import moving_objects_render
 
 LINKS = '[ball]\nurl = "{ball}"\ndescription = "a ball"\n[box]\nurl = "https://example.org/box"\n'
 
