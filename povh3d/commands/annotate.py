@@ -60,6 +60,13 @@ def _render_frames(render: Path) -> tuple[list[int], dict[str, Any]]:
 
 def _check_against(table: ObjectTable, frames: list[int], record: dict[str, Any], masks: Path) -> None:
     la = record.get("lens_array") or {}
+    note = record.get("objects") if isinstance(record.get("objects"), dict) else {}
+    names = {str(i): n for i, n in sorted(table.names.items())}
+    if note and (note.get("render_id", "") != table.render_id or note.get("names") != names):
+        # the same lens array and frames, another render: its ids name another scene's objects
+        raise InputError(f"the object masks in {str(masks)!r} are of another render than the image (its "
+                         f"objects: {', '.join(sorted(note.get('names', {}).values())) or 'none'}); give the "
+                         f"masks folder it was rendered with ({note.get('folder', '?')}), or render --objects again")
     if list(table.frames) != frames:
         raise InputError(f"the object masks in {str(masks)!r} are of frames {table.frames[0]}..{table.frames[-1]} "
                          f"({len(table.frames)}) but the render has {frames[0]}..{frames[-1]} ({len(frames)}); "

@@ -279,6 +279,11 @@ def read_sidecar(image_path: str | Path) -> dict[str, Any] | None:
         raise InputError(f"the sidecar {str(path)!r} is corrupt (not a JSON object); delete it or write it again")
     digest = record.get("image_sha256")
     image = Path(image_path)
+    if digest is None and image.suffix.lower() != ".json" and image.is_file():
+        from ..errors import warn
+        # every sidecar povh3d writes holds it: this one was written by hand, or for another image
+        warn(f"the sidecar {str(path)!r} has no image_sha256, so nothing says it describes {str(image)!r}; "
+             "if it was written for another image, delete it or render the image again")
     if isinstance(digest, str) and image.suffix.lower() != ".json" and image.is_file() \
             and file_sha256(image) != digest:
         raise InputError(f"the sidecar {str(path)!r} describes another image than {str(image)!r} "
