@@ -32,7 +32,7 @@ from ...geometry.frame import EXPLICIT_OPTIONS, DisplayFrame
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError, CameraScript, camera_from_log, parse_log
 from ...scene.features import strip_comments
-from ...scene.scene import Scene
+from ...scene.scene import Scene, source_text
 from .record import note
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -185,7 +185,7 @@ def measured_size(scene: Scene, width: int, height: int, target: int) -> tuple[i
 
 
 def _scene_text(scene: Scene) -> str:
-    return "\n".join(p.read_bytes().decode("latin-1") for p in scene.files if p.is_file())
+    return "\n".join(source_text(p.read_bytes()) for p in scene.files if p.is_file())
 
 
 def uses_image_size(scene: Scene, text: str | None = None) -> bool:

@@ -24,7 +24,7 @@ from ...geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_fra
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError
 from ...scene.camera_script import REFUSED_TYPES, camera_script, refused_type, written_camera_types
-from ...scene.scene import Scene
+from ...scene.scene import Scene, source_text
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..passes.scene_camera import Seen
@@ -121,7 +121,13 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
-    text = scene.path.read_bytes().decode("latin-1")
+    text = source_text(scene.path.read_bytes())
+    from ..budget import check_memory
+    # The camera's reading keeps a token of every word and number: about 200 bytes a byte of text
+    # (a 5 MB one-expression scene took 0.96 GB), estimated before it starts.
+    check_memory(f"reading the camera of {scene.path.name} ({len(text) / 2**20:.3g} MB of text)", 200 * len(text),
+                 "give the display's place with --display-frame native or --display-center/--display-normal, "
+                 "or raise --max-memory")
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
     if refused_type(written):   # refused from the text: its parse may take minutes at the panel's size

@@ -31,7 +31,7 @@ from ..passes.scene_camera import uses_image_size
 from ...errors import ConfigError, warn
 from ...geometry.rays import depth_scaled_rays
 from ...scene.features import Features, features_of_text, strip_comments
-from ...scene.scene import Scene, load_scene
+from ...scene.scene import Scene, load_scene, source_text
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..methods.quality import Progress
@@ -58,7 +58,7 @@ def state_features(scene: Scene) -> Features:
     written; an ``ior`` in the scene's own files, or in an include whose interior (``I_...``) or material
     (``M_...``) the scene's own text applies.  POV-Ray's textures.inc and glass.inc declare glass
     interiors with an ior that most scenes including them never apply (advanced/sunsethf.pov)."""
-    texts = [p.read_text(encoding="latin-1") for p in _own_sources(scene)]
+    texts = [source_text(p.read_bytes()) for p in _own_sources(scene)]
     own = features_of_text(texts)
     applied = "ior" in scene.features and any(_APPLIED.search(strip_comments(t)) for t in texts)
     return Features(frozenset(f for f in STATE_FEATURES
@@ -75,14 +75,14 @@ def without_hollow(scene: Scene, folder: Path) -> Scene | None:
     """A copy of the scene in ``folder`` with every ``hollow`` of its own files turned off, so that the
     origin pass's fog stops at a hollow object too; None when no own file names ``hollow``."""
     sources = _own_sources(scene)
-    if not any(_HOLLOW.search(strip_comments(p.read_text(encoding="latin-1"))) for p in sources):
+    if not any(_HOLLOW.search(strip_comments(source_text(p.read_bytes()))) for p in sources):
         return None
     root = scene.path.parent
     for p in sources:
         if p.is_relative_to(root):   # an include from elsewhere stays as it is
             target = folder / p.relative_to(root)
             target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(_HOLLOW.sub("hollow off", p.read_text(encoding="latin-1")), encoding="latin-1")
+            target.write_text(_HOLLOW.sub("hollow off", source_text(p.read_bytes())), encoding="latin-1")
     # The original folders after the copy's: images, fonts and data files are read from there.
     return load_scene(folder / scene.path.relative_to(root), (root, *scene.include_dirs))
 
