@@ -53,7 +53,8 @@ def request_from_args(args: argparse.Namespace) -> Any:
         display_frame=display_frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
         volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")),
-        dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views)
+        dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views,
+        objects=Path(args.objects) if args.objects else None)
 
 
 def display_frame_options_from_args(args: argparse.Namespace) -> Any:
@@ -115,29 +116,23 @@ def cmd_render(args: argparse.Namespace) -> int:
     # A scene edited while it rendered: the image is of neither version's key.
     if key is not None and summary is not None and \
             output_cache.request_key(args.scene, output, options, args.include) == key:
-        output_cache.keep(key, output, summary[0], summary[1] + given)
+        output_cache.keep(key, output, summary, given)
     return 0
 
 
-def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
-    """Render; print the warnings of the sidecar and the summary line.  For a still, return
-    what follows the output name in that line and those warnings."""
-    from ..renderer.render import render
+def _render(args: argparse.Namespace) -> str | None:
+    """Render and print the summary line (the warnings came as the render gave them); for a still,
+    return what follows the output name in that line."""
+    from ..renderer.run import run_request as render
 
     request = request_from_args(args)
-    if args.objects:
-        from ..renderer.passes.object_masks import check_objects_request
-
-        check_objects_request(request, args.objects)
     update, close = progress_bar(not args.quiet and sys.stderr.isatty())
     try:
         result = render(request, update)
     finally:
         close()
-    if args.objects:
-        from ..renderer.passes.object_masks import render_objects
-
-        masks = render_objects(request, args.objects, result)
+    if request.objects is not None:   # renderer.render wrote them after the colour pass
+        masks = result["object_masks"]
         print(f"{masks['folder']}  {masks['objects']} objects  {100 * masks['unresolved']:.2f} % of pixels "
               "unresolved")
     if request.frames is not None:
@@ -148,11 +143,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
         if result["video"]:
             print(result["video"])
         return None
-    placed = result.get("display_frame", {})
-    # The model's warnings came through the channel as it was staged; the volume's depth note is said here.
-    noted = [*result.get("volume", {}).get("warnings", []), *placed.get("warnings", []),
-             *result.get("warnings", [])]
-    warn(noted)
+    placed = result.get("display_frame", {})   # its warnings came through the one channel (renderer.render)
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.display.mapping.name}" if request.display.mapping else ""
@@ -171,7 +162,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
           f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
-    return summary, noted
+    return summary
 
 
 _REASON_END = re.compile(r" \(|;|:")

@@ -112,7 +112,7 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
         settings = dataclasses.replace(request.settings, quality="draft", bit_depth=8)
         array = request.render_array
         masked = dataclasses.replace(request, source=scene, output=work / "mask.png", views_dir=None,
-                                     depth_maps=None, dataset=None, video=None, settings=settings,
+                                     depth_maps=None, dataset=None, video=None, objects=None, settings=settings,
                                      model=ModelOptions(), volume=VolumeOptions(),
                                      include_dirs=(request.source.resolve().parent, *request.include_dirs),
                                      # a stage is in display mm, as its colour pass knew (renderer.placement.place): no

@@ -166,6 +166,14 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         distances = None
     else:
         camera, distances, seconds, cached = found
+    frame, warnings = _camera_frame(camera, width_mm)
+    record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
+              "evaluation_from_cache": cached, "warnings": warnings}
+    return frame, record, distances
+
+
+def _camera_frame(camera: dict[str, Any], width_mm: float) -> tuple[DisplayFrame, list[str]]:
+    """The display frame of a perspective scene camera (its evaluated values) and what to say of it."""
     if camera["type"] == "orthographic":
         raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
                           f"place the display where it looks: {_orthographic_options(camera)}")
@@ -189,9 +197,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         frame = DisplayFrame(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
                              frame.note + "; right-handed (a negative right): x follows it, as in the 2D render",
                              frame.camera_distance)
-    record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
-              "evaluation_from_cache": cached, "warnings": warnings}
-    return frame, record, distances
+    return frame, warnings
 
 
 def _unusable_type(kind: str) -> str:
