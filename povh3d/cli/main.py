@@ -45,7 +45,7 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         self.register("type", float, _finite_float)
 
-    def _parse_optional(self, arg_string: str):  # type: ignore[no-untyped-def]
+    def _parse_optional(self, arg_string: str):
         if _NEGATIVE_VALUE.match(arg_string):  # no povh3d option starts with a digit
             return None
         return super()._parse_optional(arg_string)

@@ -60,7 +60,7 @@ def parse_triple(text: str | None, option: str) -> tuple[float, float, float] | 
         values = ()
     if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
         raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
-    return values  # type: ignore[return-value]
+    return values
 
 
 def add_array_options(p: argparse.ArgumentParser) -> None:

@@ -100,7 +100,7 @@ def lens_cells(lens_array: LensArray, x: np.ndarray, y: np.ndarray, shift: float
         if lens_array.grid == "lattice":
             from ..geometry.lattice import lattice_coordinates
 
-            s, t = lattice_coordinates(*np.array(lens_array.basis), X, Y)
+            s, t = lattice_coordinates(*lens_array.basis_vectors(), X, Y)
             fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
         j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
         if lens_array.grid == "lenticular":

@@ -198,7 +198,7 @@ def _reach(c: np.ndarray, slope_lo: np.ndarray, slope_hi: np.ndarray, extent: np
     return (c[None, :] >= lo[:, None]) & (c[None, :] <= hi[:, None])
 
 
-def check_bbox(bbox: np.ndarray | tuple) -> np.ndarray:
+def check_bbox(bbox: np.ndarray | tuple | list[float]) -> np.ndarray:
     """``bbox`` as a (2, 3) float array, or a ConfigError naming what is wrong."""
     try:
         box = np.asarray(bbox, dtype=np.float64).reshape(2, 3)
@@ -227,7 +227,7 @@ def mask_hits(mask: np.ndarray, views: tuple[int, int]) -> tuple[np.ndarray, np.
     if h % ny or w % nx:
         raise ValueError(f"mask of shape {mask.shape} does not tile into {ny}x{nx} views")
     m = np.asarray(mask, dtype=bool).reshape(ny, h // ny, nx, w // nx)
-    return m.any(axis=(0, 1)), m.any(axis=(2, 3))
+    return np.asarray(m.any(axis=(0, 1))), np.asarray(m.any(axis=(2, 3)))
 
 
 # -- the plan -------------------------------------------------------------------------

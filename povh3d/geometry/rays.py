@@ -71,7 +71,7 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
         if lens_array.grid == "lattice":  # the parallelogram cell: lattice coordinates, as square
             from .lattice import lattice_coordinates  # here: keeps the rays' imports shallow
 
-            s, t = lattice_coordinates(*np.array(lens_array.basis), X, Y)
+            s, t = lattice_coordinates(*lens_array.basis_vectors(), X, Y)
             fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
         j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
         inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)

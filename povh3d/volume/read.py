@@ -80,7 +80,7 @@ def _spacing(value: Any) -> tuple[float, float, float]:
         values = ()
     if len(values) != 3 or not all(np.isfinite(v) and v > 0 for v in values):
         raise ConfigError(f"--spacing takes three positive voxel sizes SX,SY,SZ in mm, got {value!r}")
-    return values  # type: ignore[return-value]
+    return values
 
 
 def _scalar(values: np.ndarray, name: str) -> np.ndarray:

@@ -11,7 +11,7 @@ import math
 from fractions import Fraction
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast  # cast: parse_name gives every mapping with an n_range its N
 
 from ...errors import ConfigError
 from .base import Mapping
@@ -71,6 +71,7 @@ def _slanted(_: int | None, o: MappingOptions) -> Mapping:
                                     ("--slant-tan or --slant-deg", o.slope)) if v is None]
     if missing:
         raise ConfigError(f"mapping 'slanted' needs {', '.join(missing)} (or --calibration FILE.json)")
+    assert o.per_lens is not None and o.views is not None and o.slope is not None  # none missing
     rows = o.rows_per_view
     if rows is None:
         rows = round(3 / o.slope) if o.slope and abs(3 / o.slope - round(3 / o.slope)) < 1e-9 and \
@@ -94,10 +95,10 @@ MAPPINGS: dict[str, Entry] = {
     "distributed": Entry(lambda n, o: Distributed(_need_ppl("distributed", o)), None,
                          "R, G, B micro-images from 3 lenses a third as wide (thesis 5.2.3)",
                          MappingOptions(ppl=4)),
-    "smart": Entry(lambda n, o: smart(n, _need_ppl("smart", o)), (2, 7),
+    "smart": Entry(lambda n, o: smart(cast(int, n), _need_ppl("smart", o)), (2, 7),
                    "N x PPL views over N rows, 3D pixel distance 1/N (thesis 5.2.4, Fig. 5.17)",
                    MappingOptions(ppl=5)),
-    "distributed-smart": Entry(lambda n, o: DistributedSmart(n, _need_ppl("distributed-smart", o),
+    "distributed-smart": Entry(lambda n, o: DistributedSmart(cast(int, n), _need_ppl("distributed-smart", o),
                                                              f"distributed-smart:{n}"), (2, 7),
                                "smart:N then distributed (thesis 5.2.5)", MappingOptions(ppl=6)),
 }

@@ -136,7 +136,7 @@ def quality_level(name: str) -> Quality:
                       f"from 1 to {GRID}, got {name!r}")
 
 
-Progress = Callable[[int, int], None]
+Progress = Callable[[float, int], None]  # (done, total) shots; done may be fractional
 #: --depth-scale: a compression beyond 1/1000 leaves nothing of the depth; an expansion past 100
 #: tilts rays further than any lens can.
 DEPTH_SCALE_RANGE = (1e-3, 100.0)
