@@ -73,7 +73,8 @@ class Display:
         """The array the method renders: the display's, or the view-space array a mapping reads."""
         if self.mapping is None:
             return self.lens_array
-        return self.mapping.render_array(self.mapped_panel, self.lens_array.focal)
+        return self.mapping.render_array(self.physical_panel or self.lens_array.panel,  # mapped_panel
+                                         self.lens_array.focal)
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -116,9 +117,11 @@ class Display:
                               "delete the sidecar and give --ppl NxxNy")
         try:
             _check_pairs(side, ("lenses", "lens_pitch_mm"), ("views",))
-            lens_array = LensArray(side["grid"], *side["lenses"], *side["lens_pitch_mm"], side["focal_mm"],
+            (lenses_x, lenses_y), (pitch_x, pitch_y) = side["lenses"], side["lens_pitch_mm"]  # pairs: checked
+            basis: Any = tuple(map(tuple, side["lattice_mm"])) if "lattice_mm" in side else None  # LensArray checks it
+            lens_array = LensArray(side["grid"], lenses_x, lenses_y, pitch_x, pitch_y, side["focal_mm"],
                                    _panel(side["panel"]), side.get("rotation_deg", 0.0),
-                                   tuple(map(tuple, side["lattice_mm"])) if "lattice_mm" in side else None)
+                                   basis)
         except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError, ZeroDivisionError) as exc:
             raise ConfigError(f"the sidecar's lens array is incomplete or damaged ({type(exc).__name__}: {exc}); "
                               "delete the sidecar and give --ppl NxxNy") from None
@@ -262,6 +265,7 @@ def _subpixel_sheet(display: Display, mapping: str | None, options: dict[str, An
     elif la.grid == "lenticular":
         nominal = la
     if calibration is None:
+        assert nominal is not None  # a mapping gave it: no mapping and no calibration returned above
         return replace(display, lens_array=nominal, sheet=record)
     from .calibrated_sheet import calibrated_sheet
 

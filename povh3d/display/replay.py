@@ -340,7 +340,7 @@ def coded_panel(lens_array: LensArray) -> np.ndarray:
     return np.stack([cols + 1, rows + 1, np.zeros_like(cols)], axis=-1).astype(np.uint16)
 
 
-def light_shares(seen: np.ndarray, lens_array: LensArray, eye, size: tuple[int, int]) -> dict:
+def light_shares(seen: np.ndarray, lens_array: LensArray, eye, size: str | tuple[int, int]) -> dict:
     """Where the light of each lens's aperture comes from, from a picture ``seen`` (H, W, >=2) of
     ``coded_panel`` replayed at ``size`` from ``eye``: the share of picture pixels (inside a lens whose
     chief ray lands on the panel) showing the chief pixel, another pixel of the same lens's elemental
@@ -348,7 +348,7 @@ def light_shares(seen: np.ndarray, lens_array: LensArray, eye, size: tuple[int, 
     chief = replay(coded_panel(lens_array), lens_array, eye, size=size)
     counted = (chief.lens[..., 0] >= 0) & (chief.pixel[..., 0] >= 0)
     pix = seen[..., :2].astype(np.int64) - 1
-    dark = (pix < 0).any(axis=-1)
+    dark = np.asarray((pix < 0).any(axis=-1))
     same = np.all(pix == chief.pixel, axis=-1)
     owner, _ = pixel_lens(lens_array, np.where(dark[..., None], -1, pix))
     own = same_lens(owner, chief.lens, lens_array) & ~dark

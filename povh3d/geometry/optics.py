@@ -149,18 +149,18 @@ class Lenslet:
         return hi
 
     @property
-    def _ior(self) -> float:
+    def refractive_index(self) -> float:
         return cast(float, self.ior)  # a float: __post_init__ replaces None by default_ior
 
     @property
     def radius(self) -> float:
         """Vertex radius of the curved face, ``R = (n - 1) f``, mm (lens-maker)."""
-        return (self._ior - 1.0) * self.focal
+        return (self.refractive_index - 1.0) * self.focal
 
     @property
     def conic(self) -> float:
         """Conic constant ``K``: 0 (sphere) or ``-n^2`` (hyperboloid)."""
-        return 0.0 if self.shape == "spherical" else -self._ior ** 2
+        return 0.0 if self.shape == "spherical" else -self.refractive_index ** 2
 
     @property
     def aperture_radius(self) -> float:
@@ -183,7 +183,7 @@ class Lenslet:
         Sphere: incidence ``asin(h/R)`` exceeds ``asin(1/n)`` past ``h = R/n``.
         The hyperboloid approaches the critical angle only at infinity: ``inf``.
         """
-        return self.radius / self._ior if self.shape == "spherical" else math.inf
+        return self.radius / self.refractive_index if self.shape == "spherical" else math.inf
 
     def quadric(self) -> tuple[tuple[float, float, float], tuple[float, float, float],
                                tuple[float, float, float], float]:

@@ -50,14 +50,14 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     entry: dict[str, Any] = {"device": dev.name, "file": quilt_path.name, "grid": list(dev.grid),
                              "quilt_size": list(dev.quilt_size), "tile_size": list(dev.tile_size),
                              "aspect": dev.aspect, "view_cone_deg": cal.view_cone}
-    source = {"source": str(output.resolve())}
+    source = str(output.resolve())
     write_image(quilt_path, quilt, base_record("quilt", grid=list(dev.grid), aspect=dev.aspect, views=dev.views,
-                                               **source))
+                                               source=source))
     if native_path is not None:
         native = quilt_to_native(quilt, dev.grid, cal, views=dev.views)
         write_image(native_path, native, base_record("panel", mapping="looking-glass-shader",
                                                      calibration=str(Path(spec["calibration"]).resolve()),
-                                                     size_px=[cal.screen_w, cal.screen_h], **source))
+                                                     size_px=[cal.screen_w, cal.screen_h], source=source))
         entry["native"] = native_path.name
     return entry
 
