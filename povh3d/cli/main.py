@@ -135,7 +135,8 @@ def _fail_on(exc: Exception) -> NoReturn:
 def _raised_by_a_stop(exc: BaseException) -> bool:
     """Whether a KeyboardInterrupt is ``exc`` or in its chain (``__cause__``, ``__context__``, an
     exception group's members): an error raised while a stop propagated."""
-    pending, seen = [exc], set()
+    pending: list[BaseException | None] = [exc]
+    seen: set[int] = set()
     while pending:
         current = pending.pop()
         if current is None or id(current) in seen:

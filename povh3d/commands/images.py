@@ -242,7 +242,12 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     check_memory(f"{count} refocused plane(s)", (count * 3 * 4 + 4 * views.shape[0] * views.shape[1]) * plane,
                  "give fewer planes (--sweep)")
     lin = to_linear(views, np.float32)
-    depths = [float(depth)] if sweep is None else list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
+    if sweep is not None:
+        depths = list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
+    elif depth is not None:
+        depths = [float(depth)]
+    else:  # (was a TypeError from float(None))
+        raise ConfigError("refocus needs a depth (mm) or a sweep (near, far, count); give one")
     if not depths or (sweep is not None and int(sweep[2]) < 2):
         raise ConfigError("--sweep needs at least 2 planes")
     planes = [shift_and_add(lin, steps * d, row_shift=row_shift, used=used) for d in depths]

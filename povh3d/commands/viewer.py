@@ -67,7 +67,10 @@ def read_render_views(render: str | Path) -> RenderViews:
             raise InputError(f"{str(image_path)!r} has no sidecar with its lens array; give its views folder "
                              "(render --views-dir) instead")
         views, grid = h3d_views(read_png(image_path), record, image_path)
-        frames.append(views), numbers.append(n), images.append(image_path), records.append(record)
+        frames.append(views)
+        numbers.append(n)
+        images.append(image_path)
+        records.append(record)
         grids.add(grid)
     shapes = {f.shape for f in frames}
     if len(shapes) != 1 or len(grids) != 1:

@@ -372,7 +372,7 @@ class CropSettings:
             raise ConfigError(f"the crop margin must be a whole number of lenses >= 2, got {self.margin!r}")
 
 
-def parse_bbox(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def parse_bbox(text: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """``'xmin,ymin,zmin,xmax,ymax,zmax'`` (mm; ``inf`` allowed) -> ((xmin, ymin, zmin), (xmax, ymax, zmax))."""
     parts = [p for p in text.replace(" ", ",").split(",") if p]
     try:
@@ -381,5 +381,5 @@ def parse_bbox(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
         values = []
     if len(values) != 6:
         raise ConfigError(f"--bbox takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {text!r}")
-    box = check_bbox(values)
-    return tuple(box[0].tolist()), tuple(box[1].tolist())
+    (x0, y0, z0), (x1, y1, z1) = check_bbox(values).tolist()
+    return (x0, y0, z0), (x1, y1, z1)

@@ -77,7 +77,7 @@ class Quality:
         samples): sub-views and footprint samples become adaptive antialiasing."""
         if self.subviews == 1 and not self.footprint:
             return self
-        aa = {} if self.antialias is not None else {"antialias": 0.05, "aa_method": 2, "aa_depth": 3}
+        aa: dict[str, Any] = {} if self.antialias is not None else {"antialias": 0.05, "aa_method": 2, "aa_depth": 3}
         return replace(self, subviews=1, footprint=0, **aa)
 
     def footprint_sampled(self) -> Quality:

@@ -12,6 +12,7 @@ the panel image its shader would show (``display.mappings.looking_glass_shader.q
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +38,7 @@ def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Pat
     return quilt, panel
 
 
-def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: dict[str, Any]) -> dict[str, Any]:
+def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: Mapping[str, Any]) -> dict[str, Any]:
     """Write the quilt (and with a calibration the native panel image) of a device render beside
     ``output``; return the sidecar's ``quilt`` entry."""
     from ...display.looking_glass import device
@@ -62,7 +63,7 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     return entry
 
 
-def check_device_render(spec: dict[str, Any], output: Path, animated: bool, depth_maps: bool = False,
+def check_device_render(spec: Mapping[str, Any], output: Path, animated: bool, depth_maps: bool = False,
                         auto_quality: bool = False) -> None:
     """Before any work: the quilt (and native image) writable, the calibration the model's.  An
     animation writes them per frame beside each (``stem_0001_qs8x6a0.75.png``, ``stem_0001_native.png``)."""
