@@ -85,7 +85,8 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
             # a camera bank exports its own lens centres: the depth maps' pass, when it was made, is the same
             same = depth is not None and request.render_array.views is not None
             write_dataset(request.dataset, still.image, request.render_array,
-                          depth if same and depth is not None else dataset_depth(scene, request.render_array, settings, clearance, units),
+                          depth if same and depth is not None  # (same: made, to the type checker)
+                          else dataset_depth(scene, request.render_array, settings, clearance, units),
                           all_views=request.dataset_all_views, scene=scene.path.stem)
             still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
         if request.depth_maps is not None and depth is not None:  # (made above)

@@ -164,7 +164,8 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
     smoothing, opacity = options.smoothing, list(options.opacity) if options.opacity else None
     step = (1, 1, 1)
     if kind == "labels":
-        labels = None if options.labels is None or isinstance(options.labels, str) else list(options.labels)  # str: 'all'
+        # a str is 'all', the one word VolumeOptions takes
+        labels = None if options.labels is None or isinstance(options.labels, str) else list(options.labels)
         step = voxel_step(volume.spacing, LABEL_DETAIL * speck)
         surfaces = label_surfaces(volume, labels, smoothing=smoothing, opacity=opacity, step=step)
     else:
