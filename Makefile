@@ -79,6 +79,8 @@ fuzz: povray venv ## 2,000 hostile cases: 1,200 command lines, 700 damaged sidec
 
 bench: povray venv ## measure whole commands against whole-process 2D POV-Ray renders, then the breakdowns and every other benchmark (docs/benchmarks.md)
 	$(BIN)/python benchmarks/bench_command.py
+	$(BIN)/python benchmarks/bench_scenes.py
+	$(BIN)/python benchmarks/bench_scenes.py --gallery
 	$(BIN)/python benchmarks/bench_startup.py
 	$(BIN)/python benchmarks/bench_speed.py
 	$(BIN)/python benchmarks/bench_render.py

@@ -173,6 +173,8 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
             problems.append(f"frame {frame.get('source')}")
         if "near_mm" in depth and np.isfinite([depth["near_mm"], depth["far_mm"]]).all():
             depth_text = f"{depth['near_mm']:.3g}..{depth['far_mm']:.3g}"
+        elif not depth and not any("depth" in p.get("name", "") for p in record.get("passes", [])):
+            depth_text = "not measured"   # a plain render makes no depth pass (docs/geometry.md); info does
         else:
             depth_text = "blind" if depth.get("blind") else "saturated" if depth.get("saturated") else "none"
             # No depth is a wrong report only where nothing said why (the middle of the field all sky, the

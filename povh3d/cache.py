@@ -27,6 +27,7 @@ and the atomic writers of ``image/io.py`` (which load NumPy only when decoding).
 
 from __future__ import annotations
 
+from . import jsontext
 import functools
 import hashlib
 import json
@@ -112,7 +113,7 @@ def json_and_bytes(meta: dict[str, Any], data: bytes = b"") -> bytes:
 def split_json(body: bytes) -> tuple[dict[str, Any], bytes]:
     """The JSON object and the bytes of a ``json_and_bytes`` body; ``ValueError`` if it is not one."""
     line, newline, data = body.partition(b"\n")
-    meta = json.loads(line)
+    meta = jsontext.loads(line)
     if not newline or not isinstance(meta, dict):
         raise ValueError("no JSON line")
     return meta, data

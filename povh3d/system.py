@@ -19,6 +19,16 @@ def cpu_count() -> int:
         return os.cpu_count() or 1
 
 
+#: POV-Ray threads a process may run on a cluster's worker, whose cores this machine cannot count.
+MAX_REMOTE_THREADS = 512
+
+
+def thread_limit(remote: bool = False) -> int:
+    """The most POV-Ray threads a process may run: this machine's cores (more only share them, each
+    thread with its own buffers), or ``MAX_REMOTE_THREADS`` on a cluster."""
+    return MAX_REMOTE_THREADS if remote else cpu_count()
+
+
 # -- temporary folders that name their owner -------------------------------------------------------
 # A temporary folder povh3d makes (a POV-Ray job's, an animation's staging folder)
 # carries the pid of the process that owns it: ``PREFIX<pid>-<random>``.  The

@@ -17,7 +17,7 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "povh3d"
 
-# Which top-level parts may import which (besides errors, _version, system, cache and extras,
+# Which top-level parts may import which (besides errors, _version, system, cache, extras and jsontext,
 # which everything may use).  cli -> commands -> renderer -> povray, beside the display and the
 # libraries: only the renderer starts POV-Ray (commands/timing.py times a whole povh3d command
 # through the same process owner, for ``bench``).
@@ -38,7 +38,7 @@ ALLOWED = {
     "geometry": set(),
     "cache": {"image"},   # the one cache writes its entries with image/io.py's atomic writer
 }
-BASE = {"errors", "_version", "system", "cache", "extras"}
+BASE = {"errors", "_version", "system", "cache", "extras", "jsontext"}
 
 
 def _modules() -> dict[str, Path]:

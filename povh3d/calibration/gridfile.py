@@ -16,6 +16,7 @@ image pixels, ``0, 0`` the centre of the top-left pixel.
 
 from __future__ import annotations
 
+from .. import jsontext
 import json
 import math
 from dataclasses import dataclass, field
@@ -270,7 +271,7 @@ def read_grid(path: str | Path) -> Grid:
     if not path.is_file():
         raise InputError(f"grid file {str(path)!r} does not exist; make one with 'povh3d calibrate WHITE.png -o grid.json'")
     try:
-        record = json.loads(path.read_text(encoding="utf-8"))
+        record = jsontext.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         raise InputError(f"cannot read grid file {str(path)!r}: {exc}") from None
     return Grid.from_dict(record, repr(str(path)))

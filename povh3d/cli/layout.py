@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .options import add_array_options, display_from_args, parse_numbers, parse_size, parse_triple, warn
+from .options import add_array_options, display_from_args, parse_numbers, parse_size, parse_triple
 from .render import add_frame_options, display_frame_options_from_args
 from .volume import add_volume_source_options
 
@@ -26,7 +26,6 @@ def cmd_layout(args: argparse.Namespace) -> int:
                     frame_options=display_frame_options_from_args(args),
                     include_dirs=tuple(args.include), model=model, volume=volume, size=size,
                     use_cache=not args.no_cache)
-    warn(record["content"].get("warnings", []))
     depth = record["content_depth"]
     reach = (f"content z {depth['near_mm']:+.3g}..{depth['far_mm']:+.3g} mm, {100 * depth['outside']:.0f} % "
              f"outside" if depth.get("points") else "content: nothing seen")

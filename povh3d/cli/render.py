@@ -53,7 +53,8 @@ def request_from_args(args: argparse.Namespace) -> Any:
         display_frame=display_frame_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
         volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")),
-        dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views)
+        dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views,
+        objects=Path(args.objects) if args.objects else None)
 
 
 def display_frame_options_from_args(args: argparse.Namespace) -> Any:
@@ -75,7 +76,7 @@ def display_frame_options_from_args(args: argparse.Namespace) -> Any:
     return DisplayFrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
                         parse_triple(args.display_normal, "--display-normal"),
                         parse_triple(args.display_up, "--display-up"),
-                        args.display_width, fit, scale)
+                        args.display_width, fit, scale, bool(getattr(args, "depth_report", False)))
 
 
 def _method_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -115,29 +116,23 @@ def cmd_render(args: argparse.Namespace) -> int:
     # A scene edited while it rendered: the image is of neither version's key.
     if key is not None and summary is not None and \
             output_cache.request_key(args.scene, output, options, args.include) == key:
-        output_cache.keep(key, output, summary[0], summary[1] + given)
+        output_cache.keep(key, output, summary, given)
     return 0
 
 
-def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
-    """Render; print the warnings of the sidecar and the summary line.  For a still, return
-    what follows the output name in that line and those warnings."""
-    from ..renderer.render import render
+def _render(args: argparse.Namespace) -> str | None:
+    """Render and print the summary line (the warnings came as the render gave them); for a still,
+    return what follows the output name in that line."""
+    from ..renderer.run import run_request as render
 
     request = request_from_args(args)
-    if args.objects:
-        from ..renderer.passes.object_masks import check_objects_request
-
-        check_objects_request(request, args.objects)
     update, close = progress_bar(not args.quiet and sys.stderr.isatty())
     try:
         result = render(request, update)
     finally:
         close()
-    if args.objects:
-        from ..renderer.passes.object_masks import render_objects
-
-        masks = render_objects(request, args.objects, result)
+    if request.objects is not None:   # renderer.render wrote them after the colour pass
+        masks = result["object_masks"]
         print(f"{masks['folder']}  {masks['objects']} objects  {100 * masks['unresolved']:.2f} % of pixels "
               "unresolved")
     if request.frames is not None:
@@ -148,11 +143,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
         if result["video"]:
             print(result["video"])
         return None
-    placed = result.get("display_frame", {})
-    # The model's warnings came through the channel as it was staged; the volume's depth note is said here.
-    noted = [*result.get("volume", {}).get("warnings", []), *placed.get("warnings", []),
-             *result.get("warnings", [])]
-    warn(noted)
+    placed = result.get("display_frame", {})   # its warnings came through the one channel (renderer.render)
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.display.mapping.name}" if request.display.mapping else ""
@@ -171,7 +162,7 @@ def _render(args: argparse.Namespace) -> tuple[str, list[str]] | None:
     seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
           f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
-    return summary, noted
+    return summary
 
 
 _REASON_END = re.compile(r" \(|;|:")
@@ -379,6 +370,10 @@ def add_frame_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--fit-depth", metavar="auto|MM",
                    help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
                    "display's depth budget (auto: 2 N f) or MM")
+    g.add_argument("--depth-report", action="store_true",
+                   help="measure the framed scene's depth (a small POV-Ray pass) for the summary and the sidecar, "
+                   "and warn past the depth budget, without fitting it (--fit-depth, --depth-maps and --dataset "
+                   "measure it too; povh3d info SCENE reports it)")
     g.add_argument("--depth-scale", nargs="?", const="fit", metavar="K",
                    help="compress depth alone along the display normal by K, keeping lateral sizes (a distortion); "
                    "bare, with --fit-depth: the K that makes the depth fit, instead of shrinking the whole scene")

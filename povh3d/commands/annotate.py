@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import json
+from .. import jsontext
 import tomllib
 import uuid
 from pathlib import Path
@@ -22,11 +22,12 @@ def read_links(path: str | Path, names: set[str]) -> dict[str, Any]:
     """``{object name: Link}`` from a TOML (``[name] url = .. description = ..``) or JSON file; a name
     that is not one of the render's objects, or another key, is an ``InputError``."""
     from ..hyper.boxes import Link
+    from ..hyper.cdp import check_url
 
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
-        raw = json.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)
+        raw = jsontext.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)
     except FileNotFoundError:
         raise InputError(f"links file {str(path)!r} does not exist; check the path") from None
     except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError and TOMLDecodeError are ValueErrors
@@ -40,6 +41,11 @@ def read_links(path: str | Path, names: set[str]) -> dict[str, Any]:
         if not isinstance(entry, dict) or set(entry) - _LINK_KEYS or \
                 not all(isinstance(v, str) for v in entry.values()):
             raise InputError(f"links file {str(path)!r}: object {name!r} takes only url and description (text)")
+        try:
+            check_url(entry.get("url"))
+        except ValueError as exc:
+            raise InputError(f"links file {str(path)!r}: object {name!r}: {exc}; give an http(s):// or mailto: "
+                             "address") from None
         links[name] = Link(entry.get("url", ""), entry.get("description", ""))
     return links
 
@@ -54,6 +60,13 @@ def _render_frames(render: Path) -> tuple[list[int], dict[str, Any]]:
 
 def _check_against(table: ObjectTable, frames: list[int], record: dict[str, Any], masks: Path) -> None:
     la = record.get("lens_array") or {}
+    note = record.get("objects") if isinstance(record.get("objects"), dict) else {}
+    names = {str(i): n for i, n in sorted(table.names.items())}
+    if note and (note.get("render_id", "") != table.render_id or note.get("names") != names):
+        # the same lens array and frames, another render: its ids name another scene's objects
+        raise InputError(f"the object masks in {str(masks)!r} are of another render than the image (its "
+                         f"objects: {', '.join(sorted(note.get('names', {}).values())) or 'none'}); give the "
+                         f"masks folder it was rendered with ({note.get('folder', '?')}), or render --objects again")
     if list(table.frames) != frames:
         raise InputError(f"the object masks in {str(masks)!r} are of frames {table.frames[0]}..{table.frames[-1]} "
                          f"({len(table.frames)}) but the render has {frames[0]}..{frames[-1]} ({len(frames)}); "
@@ -149,10 +162,14 @@ def annotate(render: str | Path, masks: str | Path, output: str | Path, *,
 
 def read_header(path: str | Path) -> Any:
     """A 3DCDP header file read through the schema."""
-    from ..hyper.cdp import from_xml
+    from ..hyper.cdp import MAX_HEADER_BYTES, from_xml
 
     path = Path(path)
     try:
+        size = path.stat().st_size
+        if size > MAX_HEADER_BYTES:   # refused before it is read
+            raise InputError(f"3DCDP header {str(path)!r} is {size / 2**20:.3g} MB, over the {MAX_HEADER_BYTES >> 20} MB "
+                             "a header may take; write it again with 'povh3d annotate'")
         data = path.read_bytes()
     except FileNotFoundError:
         raise InputError(f"3DCDP header {str(path)!r} does not exist; write it with 'povh3d annotate'") from None

@@ -10,7 +10,7 @@ anything is written.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -104,6 +104,7 @@ def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
     if not size:
         return
     try:
+        Image.MAX_IMAGE_PIXELS = None   # the size only: read_png bounds the memory (image.io.check_png_memory)
         with Image.open(path) as im:
             width, height = im.size
     except Exception:  # noqa: BLE001 - not an image: read_png says so, with its own message
@@ -178,6 +179,13 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
         raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
                           "unmapped lenticular image (one row of views): render with the display's preset or "
                           "--mapping instead")
+    recorded = ((read_sidecar(input_path) or {}).get("display") or {}).get("physical_panel") or {}
+    if recorded.get("size_px"):   # the render's own panel: a guess from the image's size may be another
+        size = tuple(int(v) for v in recorded["size_px"])
+        if panel is not None and tuple(panel) != size:
+            raise ConfigError(f"--panel-size {panel[0]}x{panel[1]} is not the {size[0]}x{size[1]} panel "
+                              f"{str(input_path)!r} was rendered for (its sidecar); drop --panel-size")
+        panel = cast(tuple[int, int], size)  # the panel's size_px, as povh3d wrote it: W, H
     if panel is None:
         panel = infer_panel(mapping, image.shape[:2])
         if panel is None:

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, warn
 from ..geometry.lens_array import LensArray
 from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
 from ..display.display import Display
@@ -313,5 +313,8 @@ def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, dis
     picture_size(size)
     content = find_content(source, lens_array, frame_options=frame_options, include_dirs=include_dirs,
                            model=model, volume=volume, use_cache=use_cache)
-    return write_layout(content, lens_array, output, display=display, size=size,
-                        content_seconds=time.perf_counter() - start)
+    record = write_layout(content, lens_array, output, display=display, size=size,
+                          content_seconds=time.perf_counter() - start)
+    for message in record["content"].get("warnings", []):   # the one channel: the command line prints them
+        warn(message)
+    return record

@@ -30,6 +30,18 @@ class RenderViews:
     grid: str
     images: tuple[Path, ...]            # the H3D images (empty for a views folder)
     records: tuple[dict[str, Any], ...]  # their sidecars
+    pixel_aspect: float = 1.0           # a view pixel's width over height on the display (view_pixel_aspect)
+
+
+def view_pixel_aspect(lens_array: dict[str, Any] | None) -> float:
+    """Width over height of a view's pixel on the display, from a sidecar's lens array: each view
+    pixel is one lens, ``pixel_distance_3d_mm`` (the lens pitches) apart; 1 when it is not known."""
+    pitch: Any = (lens_array or {}).get("pixel_distance_3d_mm") or (lens_array or {}).get("lens_pitch_mm")
+    try:
+        aspect = float(pitch[0]) / float(pitch[1])
+    except (TypeError, ValueError, IndexError, ZeroDivisionError):
+        return 1.0
+    return aspect if 1e-3 <= aspect <= 1e3 else 1.0
 
 
 def frame_files(render: str | Path) -> list[tuple[int, Path]]:
@@ -59,7 +71,7 @@ def read_render_views(render: str | Path) -> RenderViews:
     if path.is_dir():
         manifest = read_sidecar(path / "views.json") or {}
         grid = (manifest.get("lens_array") or {}).get("grid", "square")
-        return RenderViews((read_views(path),), (0,), grid, (), ())
+        return RenderViews((read_views(path),), (0,), grid, (), (), view_pixel_aspect(manifest.get("lens_array")))
     frames, numbers, images, records, grids = [], [], [], [], set()
     for n, image_path in frame_files(path):
         record = read_sidecar(image_path)
@@ -75,7 +87,8 @@ def read_render_views(render: str | Path) -> RenderViews:
     shapes = {f.shape for f in frames}
     if len(shapes) != 1 or len(grids) != 1:
         raise InputError(f"the frames of {str(path)!r} differ in lens array or size; render the animation again")
-    return RenderViews(tuple(frames), tuple(numbers), grids.pop(), tuple(images), tuple(records))
+    return RenderViews(tuple(frames), tuple(numbers), grids.pop(), tuple(images), tuple(records),
+                       view_pixel_aspect(records[0].get("lens_array")))
 
 
 def write_viewer(render: str | Path, output: str | Path, *, fps: float = 12.0, cdp: str | None = None,
@@ -95,7 +108,8 @@ def write_viewer(render: str | Path, output: str | Path, *, fps: float = 12.0, c
         _check_header(cdp, rendered)
     view_boxes = _view_boxes(objects, rendered) if objects is not None else None
     content = ViewerContent(rendered.frames, grid=rendered.grid, fps=fps, cdp=cdp, numbers=rendered.numbers,
-                            view_boxes=view_boxes, title=title or f"povh3d: {Path(render).name}")
+                            view_boxes=view_boxes, title=title or f"povh3d: {Path(render).name}",
+                            pixel_aspect=rendered.pixel_aspect)
     text = viewer_html(content)
     with atomic_path(output) as tmp:
         tmp.write_text(text, encoding="utf-8")

@@ -11,7 +11,7 @@ layer allowed to know all four and to read a user's file; the engine receives fr
 
 from __future__ import annotations
 
-import json
+from .. import jsontext
 import math
 from collections.abc import Mapping as MappingABC
 from dataclasses import dataclass, replace
@@ -331,7 +331,7 @@ def _visual_mapping(data: dict[str, Any], display: Display, *, views: int | None
 def read_calibration(path: str | Path) -> Any:
     """A calibration file's JSON (``map --calibration``, ``render --method subpixel --calibration``)."""
     try:
-        return json.loads(Path(path).read_text(encoding="utf-8"))
+        return jsontext.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise InputError(f"cannot read the calibration {str(path)!r}: {exc.strerror}") from None
     except ValueError as exc:

@@ -15,6 +15,7 @@ the vendor's public device table (docs/displays.md cites each number).
 
 from __future__ import annotations
 
+from .. import jsontext
 import json
 import math
 from dataclasses import dataclass, field, replace
@@ -129,6 +130,9 @@ def _number(key: str, raw: Any) -> float:
     value = raw.get("value") if isinstance(raw, dict) else raw
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ConfigError(f"calibration field {key!r} must be a number or {{\"value\": number}}, got {raw!r}")
+    if abs(value) > _LARGEST:   # no field of a display is near it: a 1e308 centre makes a degenerate image
+        raise ConfigError(f"calibration field {key!r} is {value:g}, beyond +-{_LARGEST:g}; copy the unit's "
+                          "visual.json again")
     return float(value)
 
 
@@ -141,6 +145,10 @@ def _cells(raw: Any) -> tuple[tuple[float, ...], ...]:
             raise ConfigError(f"each of subpixelCells needs {', '.join(_CELL_KEYS)}, got {cell!r}")
         cells.append(tuple(_number(k, cell[k]) for k in _CELL_KEYS))
     return tuple(cells)
+
+
+#: The largest magnitude of a calibration number (pitch ~50, DPI ~300, screen 1536..7680 pixels).
+_LARGEST = 1e6
 
 
 def parse_visual(data: Any) -> Calibration:
@@ -187,7 +195,7 @@ def parse_visual(data: Any) -> Calibration:
 def read_visual(path: str | Path) -> Calibration:
     """Read a ``visual.json`` file."""
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = jsontext.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise InputError(f"cannot read the calibration {str(path)!r}: {exc.strerror}") from None
     except ValueError as exc:

@@ -58,7 +58,12 @@ def lens_array(name: str, **overrides: Any) -> LensArray:
     return lens_array_from_fields(merge_overrides(get_preset(name), overrides))
 
 
-def _pair(name: str, value: Any, *, integral: bool = False) -> tuple[float, float]:
+#: Pixels per lens: below a millionth, or above a million, the lens count leaves the float range.
+PPL_RANGE = (1e-6, 1e6)
+
+
+def _pair(name: str, value: Any, *, integral: bool = False, bounds: tuple[float, float] | None = None,
+          unit: str = "") -> tuple[float, float]:
     """A scalar or a 2-list as (x, y); a scalar means the same value both ways."""
     if isinstance(value, (list, tuple)):
         if len(value) != 2:
@@ -71,6 +76,8 @@ def _pair(name: str, value: Any, *, integral: bool = False) -> tuple[float, floa
             raise ConfigError(f"{name} must be numbers, got {value!r}")
         if not math.isfinite(float(v)) or v <= 0:
             raise ConfigError(f"{name} must be positive finite numbers, got {value!r}")
+        if bounds is not None and not bounds[0] <= v <= bounds[1]:   # a lens count past the float range
+            raise ConfigError(f"{name} must be between {bounds[0]:g} and {bounds[1]:g} {unit}, got {v:g}")
         if integral and float(v) != int(v):
             raise ConfigError(f"{name} must be whole numbers, got {value!r}")
     return (x, y)
@@ -121,14 +128,14 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     spans a fractional number of pixels; what gets rendered is the unmapped H3D
     image in view space: ``views`` pixels per lens, one pixel row per panel row.
     """
-    from ..geometry.lens_array import MAX_PANEL_PIXELS, LensArray, Panel
+    from ..geometry.lens_array import LENGTH_RANGE_MM, MAX_PANEL_PIXELS, LensArray, Panel
 
     grid = fields.get("grid", "square")
     if "focal" not in fields:
         raise ConfigError("the focal length is missing; give it with --focal (mm)")
     if "pixel_pitch" not in fields:
         raise ConfigError("the pixel pitch is missing; give it with --pixel-pitch (mm)")
-    sx, sy = _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
+    sx, sy = _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"], bounds=LENGTH_RANGE_MM, unit="mm")
     panel_size = _pair("panel size (--panel)", fields["panel"], integral=True) if "panel" in fields else None
 
     if fields.get("views") and fields.get("mapping") and panel_size is not None and "lens_pitch" in fields:
@@ -141,10 +148,10 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     if grid == "lattice" or "lattice" in fields:
         return _lattice_from_fields(fields, sx, sy, panel_size)
     if "ppl" in fields:
-        nx, ny = _pair("pixels per lens (--ppl)", fields["ppl"])
+        nx, ny = _pair("pixels per lens (--ppl)", fields["ppl"], bounds=PPL_RANGE, unit="pixels")
         px, py = nx * sx, ny * sy
     elif "lens_pitch" in fields:
-        px = py = _pair("lens pitch", fields["lens_pitch"])[0]
+        px = py = _pair("lens pitch", fields["lens_pitch"], bounds=LENGTH_RANGE_MM, unit="mm")[0]
     else:
         raise ConfigError("the lens pitch is missing; give pixels per lens with --ppl")
     if grid == "lenticular":
@@ -170,6 +177,8 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
         raise ConfigError("the lens count is missing; give it with --lenses")
     if grid == "lenticular" and rows is not None:
         ly = rows
+    if not (math.isfinite(lx) and math.isfinite(ly)) or max(lx, ly) > MAX_PANEL_PIXELS:
+        raise ConfigError(f"the display has {lx:g} x {ly:g} lenses; check --ppl, --pixel-pitch and --panel")
     lx, ly = int(lx), int(ly)
     rotation = fields.get("lens_rotation", 0.0)
     if rotation and "lenses" not in fields and panel_size is not None:

@@ -206,6 +206,9 @@ def check_bbox(bbox: np.ndarray | tuple | list[float]) -> np.ndarray:
         raise ConfigError(f"--bbox takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {bbox!r}") from None
     if np.isnan(box).any() or np.any(box[0] > box[1]):
         raise ConfigError(f"--bbox needs xmin <= xmax, ymin <= ymax, zmin <= zmax (mm), got {box.reshape(-1).tolist()}")
+    if np.isposinf(box[0]).any() or np.isneginf(box[1]).any():   # a box at infinity holds nothing
+        raise ConfigError(f"--bbox holds nothing: a min of inf or a max of -inf, got {box.reshape(-1).tolist()}; "
+                          "give -inf for a min and inf for a max that is unbounded")
     return box
 
 

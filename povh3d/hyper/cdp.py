@@ -22,6 +22,18 @@ _XSI = "http://www.w3.org/2001/XMLSchema-instance"
 # looks for the word of argparse that it contains)
 _SCHEMA_LOCATION = f"{{{_XSI}}}noName" + "spaceSchemaLocation"
 CONTENT_TYPES = ("image", "video", "file", "link")
+#: The links a header may hold: a page (http, https) or a mail address; anything else (``javascript:``,
+#: ``data:``, ``file:``) would run or open on the viewer's click.
+LINK_SCHEMES = ("http://", "https://", "mailto:")
+#: The largest header read: a render's header is kilobytes (one box a frame and object); past this
+#: it would only slow the page (a 100 MB one took 44 s and 1.75 GB).
+MAX_HEADER_BYTES = 16 << 20
+
+
+def check_url(url: str | None) -> None:
+    """A ``ValueError`` unless ``url`` is empty or an http(s) or mailto link."""
+    if url and not url.strip().lower().startswith(LINK_SCHEMES):
+        raise ValueError(f"link {url[:80]!r} is not an http(s) or mailto address; only those are links")
 SPACES = ("view", "h3d")
 
 
@@ -39,6 +51,7 @@ class SearchResultItem:
             raise ValueError(f"content_type: one of {CONTENT_TYPES}, got {self.content_type!r}")
         if not 0 <= self.relevance <= 100:
             raise ValueError(f"relevance: a percentage 0..100, got {self.relevance}")
+        check_url(self.url)
 
 
 @dataclass(frozen=True)
@@ -61,6 +74,7 @@ class BoundingBox:
             raise ValueError(f"box: (x_min, y_min, x_max, y_max) with min <= max, got {self.box}")
         if self.frame < 0 or self.ident < 1:
             raise ValueError(f"frame >= 0 and ident >= 1, got frame {self.frame}, ident {self.ident}")
+        check_url(self.url)
 
 
 @dataclass(frozen=True)
@@ -83,6 +97,7 @@ class Annotation:
         if outside:
             raise ValueError(f"annotation {self.ident} ({self.object_name}) spans frames {self.start}..{self.end} "
                              f"but has a box in frame {outside[0]}")
+        check_url(self.url)
 
 
 @dataclass(frozen=True)
@@ -171,6 +186,9 @@ def from_xml(data: bytes, name: str = "the header") -> CdpHeader:
     annotation is one ``InputError`` naming it."""
     from lxml import etree
 
+    if len(data) > MAX_HEADER_BYTES:
+        raise InputError(f"{name} is {len(data) / 2**20:.3g} MB, over the {MAX_HEADER_BYTES >> 20} MB a 3DCDP header "
+                         "may take; write it again with 'povh3d annotate'")
     parser = etree.XMLParser(resolve_entities=False, no_network=True, remove_blank_text=True)
     try:
         root = etree.fromstring(data, parser)

@@ -31,6 +31,8 @@ class ViewerContent:
     numbers : the animation frame number of each frame (default 0, 1, ...)
     view_boxes : per frame, per view row, per view column ``{object id: (x_min, y_min, x_max, y_max)}``
         from the object masks; without them every view shows the header's centre-view boxes
+    pixel_aspect : width over height of a view's pixel on the display: a lens pitch wide and a lens
+        pitch high, so a lenticular sheet's (a pitch wide, one panel pixel high) is far from square
     """
 
     frames: tuple[np.ndarray, ...]
@@ -40,6 +42,7 @@ class ViewerContent:
     cdp: str | None = None
     numbers: tuple[int, ...] | None = None
     view_boxes: tuple[Any, ...] | None = None
+    pixel_aspect: float = 1.0
 
     def __post_init__(self) -> None:
         if not self.frames:
@@ -55,6 +58,8 @@ class ViewerContent:
             raise ValueError(f"frames: each is (Ny, Nx, Ly, Lx, C), got {self.frames[0].shape}")
         if not (self.fps > 0):
             raise ValueError(f"fps: must be positive, got {self.fps}")
+        if not 1e-3 <= self.pixel_aspect <= 1e3:
+            raise ValueError(f"pixel_aspect: a view pixel's width over height within 1e-3..1e3, got {self.pixel_aspect}")
 
     @property
     def views(self) -> tuple[int, int]:
@@ -94,6 +99,7 @@ def page_data(content: ViewerContent) -> dict[str, Any]:
     ny, nx = content.views
     ly, lx = content.view_size
     return {"views": [ny, nx], "view_size": [ly, lx], "grid": content.grid, "fps": content.fps,
+            "pixel_aspect": content.pixel_aspect,
             "sprites": [png_data_uri(sprite_sheet(_to_8bit(f))) for f in content.frames],
             "cdp": content.cdp, "numbers": list(content.numbers or range(len(content.frames))),
             "view_boxes": None if content.view_boxes is None else [

@@ -19,6 +19,7 @@ image: it is renamed only after its image is in place.
 
 from __future__ import annotations
 
+from .. import jsontext
 import contextlib
 import hashlib
 import io
@@ -196,12 +197,16 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     import numpy as np
     from PIL import Image
 
+    if isinstance(source, Path):
+        with open(source, "rb") as fh:
+            head = fh.read(26)
+    else:
+        head = source[:26]
+    check_png_memory(head, name)
+    # Pillow's own bound (a two-line DecompressionBombWarning past 89 Mpixels, an error past twice that)
+    # knows nothing of the memory there is: check_png_memory is the bound here, from the header.
+    Image.MAX_IMAGE_PIXELS = None
     try:
-        if isinstance(source, Path):
-            with open(source, "rb") as fh:
-                head = fh.read(25)
-        else:
-            head = source[:25]
         if head[24:25] == b"\x10":  # IHDR's bit depth: 16
             arr = _decode_png16(source.read_bytes() if isinstance(source, Path) else source)
         else:  # Pillow reads a file by parts: no copy of its bytes beside the image
@@ -217,6 +222,32 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
         raise InputError(f"cannot read {name!r} as a PNG image ({type(exc).__name__}: {exc}); "
                          "check that it is a complete PNG file") from None
     return arr[..., None] if arr.ndim == 2 else arr
+
+
+def png_size(head: bytes) -> tuple[int, int, int] | None:
+    """(width, height, bytes per pixel once decoded) from the first 26 bytes of a PNG; None if not a PNG."""
+    if len(head) < 26 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        return None
+    width, height = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+    return width, height, 4 * (2 if head[24] == 16 else 1)   # Pillow keeps RGB in 4 bytes; a palette becomes RGB(A)
+
+
+def check_png_memory(head: bytes, name: str) -> None:
+    """Refuse, from its header, a PNG whose decoding needs more than the memory budget (``--max-memory``
+    or the memory available): a small file may hold a huge image (a PNG bomb), so the size is read first."""
+    from ..system import memory_budget, memory_limit
+
+    size = png_size(head)
+    budget = memory_budget()
+    if size is None or budget is None:
+        return   # not a PNG: the decoder says so
+    width, height, per_pixel = size
+    need = 2 * width * height * per_pixel   # the decoded image and its array
+    if need > budget:
+        whose = "your --max-memory limit" if budget == memory_limit() else "the memory available"
+        raise InputError(f"{name!r} is a {width}x{height} image: reading it needs about {need / 2**30:.3g} GiB "
+                         f"of memory, more than {whose} ({budget / 2**30:.3g} GiB); give a smaller image or "
+                         "raise --max-memory")
 
 
 def _decode_png16(data: bytes) -> np.ndarray:
@@ -307,7 +338,7 @@ def read_sidecar(image_path: str | Path) -> dict[str, Any] | None:
     if not path.is_file():
         return None
     try:
-        record = json.loads(path.read_text(encoding="utf-8"))
+        record = jsontext.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise InputError(f"cannot read the sidecar {str(path)!r}: {exc.strerror}") from None
     except ValueError as exc:
@@ -316,6 +347,11 @@ def read_sidecar(image_path: str | Path) -> dict[str, Any] | None:
         raise InputError(f"the sidecar {str(path)!r} is corrupt (not a JSON object); delete it or write it again")
     digest = record.get("image_sha256")
     image = Path(image_path)
+    if digest is None and image.suffix.lower() != ".json" and image.is_file():
+        from ..errors import warn
+        # every sidecar povh3d writes holds it: this one was written by hand, or for another image
+        warn(f"the sidecar {str(path)!r} has no image_sha256, so nothing says it describes {str(image)!r}; "
+             "if it was written for another image, delete it or render the image again")
     if isinstance(digest, str) and image.suffix.lower() != ".json" and image.is_file() \
             and file_sha256(image) != digest:
         raise InputError(f"the sidecar {str(path)!r} describes another image than {str(image)!r} "

@@ -25,8 +25,10 @@ submitted again, up to `RESUBMITS` times).  A worker stops its POV-Ray as soon
 as it loses its scheduler (it is closing) or the task is cancelled (the client
 went).  Each task's folder (``povh3d-job-PID-*`` in the worker's temporary
 folder) is removed when it ends, and those of a killed worker by the next task
-on that machine.  An address is checked, and its port tried with a short
-timeout, before Dask is asked: no answer is one line within `CONNECT_SECONDS`.
+on that machine.  An address is checked, its port tried with a short timeout,
+and Dask's handshake read with a deadline, before Dask is asked: no answer is one
+line within `CONNECT_SECONDS`, a server that is not Dask's within `HANDSHAKE_SECONDS`
+more.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ import shutil
 import socket
 import tempfile
 import threading
+import time
 import warnings
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
@@ -107,6 +110,40 @@ def _answers(host: str, port: int, seconds: float) -> str | None:
     return outcome[0] if outcome else f"no answer within {seconds:g} s"
 
 
+#: Seconds a server that accepts TCP connections has to send Dask's handshake.
+HANDSHAKE_SECONDS = 5.0
+#: A key of the handshake a Dask server sends first, on every connection (distributed/comm/core.py).
+_HANDSHAKE_KEY = b"pickle-protocol"
+
+
+def _handshake(host: str, port: int, seconds: float) -> str | None:
+    """None when the server at ``host:port`` opens with Dask's handshake within ``seconds``, else what it
+    did instead.  A Dask server writes its handshake (an 8-byte length, then msgpack naming
+    ``pickle-protocol``) as soon as it accepts, before it reads: a mute server or another protocol
+    would leave Dask's own client waiting far past its timeout, where this read has a deadline."""
+    deadline = time.monotonic() + seconds
+    try:
+        with socket.create_connection((host, port), timeout=seconds) as sock:
+            data = b""
+            while len(data) < 8 or len(data) < min(8 + int.from_bytes(data[:8], "little"), 1 << 16):
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise TimeoutError
+                sock.settimeout(left)
+                chunk = sock.recv(1 << 16)
+                if not chunk:
+                    break
+                data += chunk
+                if len(data) >= 8 and int.from_bytes(data[:8], "little") > 1 << 20:
+                    break   # no handshake is a megabyte: another protocol's bytes (HTTP, SSH)
+    except TimeoutError:
+        return f"it accepts connections but says nothing within {seconds:g} s" if not data else \
+            "it answered, but not as a Dask scheduler"
+    except OSError as error:
+        return error.strerror or type(error).__name__
+    return None if _HANDSHAKE_KEY in data else "it answered, but not as a Dask scheduler"
+
+
 def connect(address: str) -> Any:
     """A `distributed.Client` for `address`, made once per process.
 
@@ -131,6 +168,15 @@ def connect(address: str) -> Any:
         why = _answers(host, port, CONNECT_SECONDS)
         if why is not None:
             raise ConfigError(f"cannot reach the Dask scheduler at {address} ({why}); {hint}")
+        if address.startswith("tcp://") and (why := _handshake(host, port, HANDSHAKE_SECONDS)) is not None:
+            raise ConfigError(f"the server at {address} is not a Dask scheduler ({why}); check the address and "
+                              "port, and start one with 'dask scheduler'")
+        if address.startswith("tls://") and not dask.config.get("distributed.comm.tls.ca-file", None):
+            # distributed would fail on its missing SSLContext with a TypeError, and leave a client
+            # whose clean-up prints a traceback at exit
+            raise ConfigError(f"--scheduler {address} needs Dask's TLS settings (distributed.comm.tls: ca-file, "
+                              "client cert and key, in the Dask config or DASK_DISTRIBUTED__COMM__TLS__*); set "
+                              "them, or use tcp://")
         try:
             with dask.config.set({"distributed.comm.timeouts.connect": f"{CONNECT_SECONDS}s"}):
                 client = Client(address, set_as_default=False, timeout=CONNECT_SECONDS)

@@ -266,7 +266,8 @@ def _prepare(folder: Path, job: PovrayJob) -> dict[str, str]:
         conf.parent.mkdir(parents=True)
         conf.write_text(povray_conf(read_dirs, str(folder)))
     except OSError as error:
-        raise OutputError(f"Cannot write the scene into {folder}: {error.strerror}.") from None
+        raise full_disk(folder, 1 << 20, job.name) or \
+            OutputError(f"Cannot write the scene into {folder}: {error.strerror}.") from None
     return dict(os.environ, HOME=str(home))
 
 
@@ -339,13 +340,31 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
         log = child.log
         images = collect_images(child.folder, child.job)
         if (child.process.returncode != 0 and not child.watch.early) or images is None:
-            raise _failure(child, log)
+            raise full_disk(child.folder, _image_bytes(child.job), child.job.name) or _failure(child, log)
         if on_result is not None:
             on_result(JobResult(child.job, images, seconds, log))
         return seconds
     finally:
         child.watch.close()
         shutil.rmtree(child.folder, ignore_errors=True)
+
+
+def _image_bytes(job: PovrayJob) -> int:
+    """What a job's images may take on disk at most (16-bit RGBA, uncompressed)."""
+    return 8 * job.width * job.height * max(1, job.frames)
+
+
+def full_disk(folder: Path, need: int, name: str) -> OutputError | None:
+    """The error to give for a failure in ``folder`` when its disk has less than ``need`` bytes (and 1 MiB)
+    free: POV-Ray says only "Frontend halted render", or a PNG is cut short; None when there is room."""
+    try:
+        free = shutil.disk_usage(folder).free
+    except OSError:
+        return None
+    if free >= max(need, 1 << 20):
+        return None
+    return OutputError(f"{name}: the disk of {str(folder.parent)!r} is full ({free / 2**20:.3g} MiB free); free "
+                       "space there, or set TMPDIR to a folder on a disk with room")
 
 
 def _failure(child: _Child, log: str) -> PovrayError:

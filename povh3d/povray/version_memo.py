@@ -10,6 +10,7 @@ and the version is asked again.
 
 from __future__ import annotations
 
+from .. import jsontext
 import json
 import os
 import tempfile
@@ -43,7 +44,7 @@ def remembered_version(binary: str, folder: str | Path, ask: Callable[[str], str
 
 def _read(path: Path) -> dict[str, object]:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = jsontext.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return {}
     return data if isinstance(data, dict) else {}

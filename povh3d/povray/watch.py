@@ -28,6 +28,9 @@ _IN_NONBLOCK, _IN_CLOEXEC = os.O_NONBLOCK, os.O_CLOEXEC
 _PNG_END = b"IEND\xaeB`\x82"  # the last chunk of every PNG, with its CRC
 
 
+_POLL_MAX_MS = 2**31 - 1
+
+
 def sleep_until_exit(pids: Sequence[int], seconds: float | None, fds: Sequence[int | None] = ()) -> None:
     """Sleep until one of the child processes `pids` exits, one of `fds` is readable, or
     `seconds` pass (None: no limit).
@@ -46,7 +49,8 @@ def sleep_until_exit(pids: Sequence[int], seconds: float | None, fds: Sequence[i
         poller = select.poll()
         for fd in [*pidfds, *(fd for fd in fds if fd is not None)]:
             poller.register(fd, select.POLLIN)  # a pidfd is readable once its process has exited
-        poller.poll(None if seconds is None else max(0, math.ceil(seconds * 1000)))
+        # poll() takes a C int of milliseconds (24.8 days): a longer limit wakes then, and the caller waits again
+        poller.poll(None if seconds is None else min(max(0, math.ceil(seconds * 1000)), _POLL_MAX_MS))
     finally:
         for fd in pidfds:
             os.close(fd)

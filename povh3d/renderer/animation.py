@@ -105,12 +105,20 @@ class FrameRange:
         return ClockSequence(self.first, self.last, float(self.clock_start), float(self.clock_end), n, ledger)
 
 
+#: The most frames one render may hold.
+MAX_FRAMES = 100_000
+
+
 def parse_frames(text: str) -> tuple[int, int]:
     """``'0:47'`` -> ``(0, 47)``; a ConfigError naming the rule otherwise."""
     match = _RANGE.match(text or "")
     if not match:
         raise ConfigError(f"--frames takes FIRST:LAST with whole numbers, e.g. 0:47, got {text!r}")
-    return int(match[1]), int(match[2])
+    first, last = int(match[1]), int(match[2])
+    if last - first + 1 > MAX_FRAMES:   # a range typed wrong runs for days, one frame file each
+        raise ConfigError(f"--frames {text} is {last - first + 1} frames, over {MAX_FRAMES} (an hour at 24 fps is "
+                          f"86400); render the animation in parts, e.g. --frames {first}:{first + 9999}")
+    return first, last
 
 
 def parse_clock(text: str) -> tuple[float, float]:

@@ -15,10 +15,11 @@ from .methods.quality import Progress, RenderSettings
 from ..errors import ConfigError, warn
 from ..geometry.lens_array import LensArray
 from ..display.display import build_display
-from .render import render as render_request
+from .run import run_request as render_request
 from .request import RenderRequest
 
-_REQUEST = tuple(f.name for f in fields(RenderRequest) if f.name not in ("source", "output", "display", "settings"))
+_REQUEST = tuple(f.name for f in fields(RenderRequest)
+                 if f.name not in ("source", "output", "display", "settings", "objects"))
 _SETTINGS = tuple(f.name for f in fields(RenderSettings))
 
 
@@ -90,11 +91,6 @@ def _render(source: str | Path, output: str | Path, preset: str, lens_array: Len
     # No method given: the default, which the render may trade for one that renders the scene right.
     options.setdefault("method_chosen", "method" in options)
     request = RenderRequest(source=Path(source), display=display, output=Path(output), settings=settings,
-                            **{k: v for k, v in options.items() if k in _REQUEST})
-    if objects is None:
-        return render_request(request, progress)
-    from .passes.object_masks import check_objects_request, render_objects
-
-    check_objects_request(request, objects)   # before any work, as the command does
-    record = render_request(request, progress)
-    return {**record, "object_masks": render_objects(request, objects, record)}
+                            objects=None if objects is None else Path(objects),
+                            **{k: v for k, v in options.items() if k in _REQUEST and k != "objects"})
+    return render_request(request, progress)   # the object masks too: renderer.render orchestrates them

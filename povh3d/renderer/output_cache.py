@@ -31,8 +31,8 @@ the normal path every time, as does ``--no-cache``.
 
 from __future__ import annotations
 
+from .. import jsontext
 import hashlib
-import json
 import os
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
@@ -162,7 +162,7 @@ def keep(key: str, output: Path, summary: str, warnings: list[str], cache_dir: P
     cannot be written only costs the next run its speed)."""
     try:
         image = output.read_bytes()
-        record = json.loads(sidecar_path(output).read_text(encoding="utf-8"))
+        record = jsontext.loads(sidecar_path(output).read_text(encoding="utf-8"))
         if record.pop("image_sha256", None) != hashlib.sha256(image).hexdigest():
             return  # replaced meanwhile by another process: nothing trustworthy to keep
         body = cache.json_and_bytes({"record": record, "summary": summary, "warnings": warnings}, image)

@@ -29,16 +29,14 @@ from ..image.interleave import extract
 from .content.model import prepare_stage
 from .placement.place import place_display
 from .placement.ray_state import settle_method
-from .outputs.depth_maps import check_depth_dir, write_depth_maps
-from .outputs.dataset import check_dataset_dir, dataset_depth, write_dataset
-from .outputs.device_quilt import check_device_render, write_device_outputs
-from .passes.depth import view_depth_maps
+from .outputs.device_quilt import write_device_outputs
+from .outputs.steps import Still, check_outputs, write_outputs
+from .passes.record import PassCost, recording
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
 from .animation import RenderedImage, render_sequence
 from .records import base_record, png_output, write_image
 from .request import RenderRequest
-from .outputs.views import check_views_dir, write_views
 
 if TYPE_CHECKING:
     from .methods.auto import AutoChoice
@@ -47,26 +45,26 @@ if TYPE_CHECKING:
 def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
     """Carry out ``request``; return the sidecar record of the still, or the animation's report.
 
-    Every output is checked before any work and written atomically.
+    Every output is checked before any work and written atomically.  The record's ``passes`` lists
+    the POV-Ray passes run besides the render and what each cost (``passes.record.PassCost``).
     """
+    if request.objects is not None:   # a bug: renderer.run runs the mask pass after this colour pass
+        raise RuntimeError("renderer.render.render takes a request without objects; use renderer.run.run_request")
+    with recording() as passes:
+        return _render(request, progress, passes)
+
+
+def _render(request: RenderRequest, progress: Progress | None, passes: list[PassCost]) -> dict[str, Any]:
     started = time.perf_counter()   # the whole time: the camera and depth runs too
     check_memory(request)
     output = png_output(request.output, inputs=(request.source,), sidecar=request.frames is None)
-    if request.views_dir is not None:
-        check_views_dir(request.views_dir)
-    if request.depth_maps is not None:
-        check_depth_dir(request.depth_maps)
-    if request.display.quilt is not None:  # a Looking Glass preset: its quilt beside the output
-        check_device_render(request.display.quilt, output, request.frames is not None, request.depth_maps is not None,
-                            request.settings.quality == "auto")
-    if request.dataset is not None:
-        check_dataset_dir(request.dataset, request.render_array, mapped=request.display.mapping is not None)
+    check_outputs(request, output)   # views, dataset, depth maps, a Looking Glass quilt (outputs.steps)
     scene, model_record = load_content(request)
     check_outputs_against(request, output, (request.source, *scene.files))
-    request, frame_record = place_display(request, scene)
+    request, frame_record = place_display(request, scene, progress)
     ray_state = None
     if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
-        request, ray_state = settle_method(request, scene)   # may trade the default method for one that renders it right
+        request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
     if ray_state is not None:
         frame_record = {**frame_record, "ray_state": ray_state}
     settings, auto = _resolve_quality(request, scene, progress)
@@ -75,29 +73,11 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     if request.frames is None:
         still = frame(None, progress)
         _warn_unlit(scene, still.image)
-        if still.views is not None and request.views_dir is not None:  # views: asked for with views_dir
-            write_views(request.views_dir, still.views, request.render_array, still.record)
-        depth = None
-        units, clearance = frame_record.get("units_per_mm", 1.0), still.record["quality"]["front_clearance_mm"]
-        if request.depth_maps is not None:
-            depth = view_depth_maps(scene, request.render_array, settings, clearance, units)
-        if request.dataset is not None:   # the exported pixels' rays (a hex array's: the grid of lens columns)
-            # a camera bank exports its own lens centres: the depth maps' pass, when it was made, is the same
-            same = depth is not None and request.render_array.views is not None
-            write_dataset(request.dataset, still.image, request.render_array,
-                          depth if same and depth is not None  # (same: made, to the type checker)
-                          else dataset_depth(scene, request.render_array, settings, clearance, units),
-                          all_views=request.dataset_all_views, scene=scene.path.stem)
-            still.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
-        if request.depth_maps is not None and depth is not None:  # (made above)
-            write_depth_maps(request.depth_maps, depth, request.render_array, still.record, request.depth_format)
-            still.record["depth_maps"] = {"folder": str(request.depth_maps),
-                                          "nan_fraction": float(np.isnan(depth).mean())}
-        if request.display.quilt is not None:
-            still.record["quilt"] = write_device_outputs(output, still.image, request.render_array,
-                                                         request.display.quilt)
+        write_outputs(Still(request, scene, settings, still, output, frame_record.get("units_per_mm", 1.0), progress))
         still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
+        still.record["passes"] = [p.to_json() for p in passes]
         write_image(output, still.image, still.record)
+        _warn_record(still.record)
         return still.record
     companions = None
     if (quilt := request.display.quilt) is not None:   # a Looking Glass preset: each frame's quilt (and native image)
@@ -107,7 +87,7 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
                              video=request.video, fps=request.fps, companions=companions)
     _warn_unlit(scene)
-    return report
+    return {**report, "passes": [p.to_json() for p in passes]}
 
 
 def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Path, ...]) -> None:
@@ -149,6 +129,15 @@ def vendor_cameras(request: RenderRequest) -> bool:
 #: An image whose 99th percentile is under this share of full scale (sRGB: linear 0.21) looks dark: POV-Ray's
 #: default ambient 0.1 shows at 0.35.
 _DARK = 0.5
+
+
+def _warn_record(record: dict[str, Any]) -> None:
+    """The warnings a still's record holds (the placement's, the volume's), given through the one
+    channel (``errors.warn``) once the image is written: the command line prints them, a Python caller
+    sees them as ``Povh3dWarning``s, and the sidecar keeps them."""
+    for message in [*record.get("volume", {}).get("warnings", []),
+                    *record.get("display_frame", {}).get("warnings", []), *record.get("warnings", [])]:
+        warn(message)
 
 
 def _warn_unlit(scene: Scene, image: np.ndarray | None = None) -> None:

@@ -143,6 +143,7 @@ class RenderRequest:
     volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)
     dataset : Path or None         also write the HCI 4D light-field layout here (stills; ``renderer.outputs.dataset``)
     dataset_all_views : bool       with ``dataset``: disparity and depth for every view, not only the centre
+    objects : Path or None         also write every view's object masks here (``renderer.passes.object_masks``)
     """
 
     source: Path
@@ -165,6 +166,7 @@ class RenderRequest:
     volume: VolumeOptions = field(default_factory=VolumeOptions)
     dataset: Path | None = None
     dataset_all_views: bool = False
+    objects: Path | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)

@@ -325,6 +325,12 @@ def camera_from_log(log: str, cameras: int = 1) -> SceneCamera:
     items = items[:ends[0] + 1] if ends else items
     if not items or items[-1][0] != "end":
         raise _cannot("POV-Ray did not reach the end of its camera block")
+    return camera_from_items(items, cameras)
+
+
+def camera_from_items(items: list[tuple[str, list[float] | str]], cameras: int = 1) -> SceneCamera:
+    """POV-Ray 3.7's camera from one block's modifiers in order (``parse_log``'s items: ``type``,
+    ``location`` ... as values), from a run's log or from the scene text (``scene.camera_text``)."""
     dropped = tuple(dict.fromkeys(str(v) for k, v in items if k == "dropped"))
     v = {"location": np.zeros(3), "direction": np.array([0.0, 0, 1]), "up": np.array([0.0, 1, 0]),
          "right": np.array([1.33, 0, 0]), "sky": np.array([0.0, 1, 0])}

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .camera import CameraError, _closing_brace, _depths, tokens
 from .object_ids import OBJECTS
-from .scene import Scene, load_scene
+from .scene import Scene, load_scene, source_text
 
 _SOURCES = (".pov", ".inc", ".mcr")
 
@@ -46,7 +46,7 @@ def copy_rewritten(scene: Scene, folder: Path, transform: Callable[[str], str]) 
     None when the transform changes none of them."""
     root = scene.path.parent
     sources = [p for p in scene.files if p.suffix.lower() in _SOURCES and p.is_file() and p.is_relative_to(root)]
-    texts = {p: p.read_text(encoding="latin-1") for p in sources}
+    texts = {p: source_text(p.read_bytes()) for p in sources}   # a byte-order mark dropped, as POV-Ray reads
     changed = {p: transform(t) for p, t in texts.items()}
     if all(changed[p] == texts[p] for p in sources):
         return None

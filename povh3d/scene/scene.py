@@ -48,6 +48,10 @@ from pathlib import Path
 from ..errors import InputError
 from .features import Features, features_of_words, strip_comments, words_of
 
+#: The UTF-8 byte-order mark an editor may write first.  POV-Ray 3.7 skips it at the start of the file it
+#: is given, but not in a file it includes, as povh3d includes the scene (``source_text``, ``has_bom``).
+BOM = b"\xef\xbb\xbf"
+
 _STRING = re.compile(r'"((?:\\.|[^"\\\n]){1,400})"')
 # What makes two parses of the same text differ: the clock of the machine (``now``, and ``datetime``,
 # which formats it) and the file system at parse time (``file_exists``).  POV-Ray 3.7 reads no
@@ -125,7 +129,7 @@ class Scene:
     def include_text(self, name: str) -> str | None:
         """The text of the file ``#include "name"`` reads (the scene's folders, then POV-Ray's), or None."""
         found = _find(name, [*self.include_dirs, *system_include_dirs()])
-        return None if found is None else found.read_bytes().decode("latin-1")
+        return None if found is None else source_text(found.read_bytes())
 
     @property
     def reproducible(self) -> bool:
@@ -150,6 +154,18 @@ def system_include_dirs() -> tuple[Path, ...]:
     return tuple(dict.fromkeys(found))
 
 
+def source_text(data: bytes) -> str:
+    """The latin-1 text of POV-Ray source bytes, without a leading UTF-8 byte-order mark (POV-Ray's own
+    reading of the file it is given; the bytes are the text, so decoding never fails)."""
+    return data.removeprefix(BOM).decode("latin-1")
+
+
+def has_bom(path: Path) -> bool:
+    """Whether the file at ``path`` starts with a UTF-8 byte-order mark."""
+    with open(path, "rb") as f:
+        return f.read(len(BOM)) == BOM
+
+
 def _read_text(path: Path) -> str | None:
     """The text of ``path`` without comments; None for binary data in a file that is not POV-Ray source."""
     try:
@@ -160,7 +176,7 @@ def _read_text(path: Path) -> str | None:
         if path.suffix.lower() not in _SOURCE_SUFFIXES:
             return None  # a data file: hashed, not read for names
         raise InputError(f"{str(path)!r} is not a text scene (it holds binary data); give a POV-Ray source file")
-    return strip_comments(data.decode("latin-1"))  # POV-Ray sources are bytes; never fail on encoding
+    return strip_comments(source_text(data))  # POV-Ray sources are bytes; never fail on encoding
 
 
 def _find(name: str, folders: list[Path]) -> Path | None:

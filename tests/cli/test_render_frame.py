@@ -15,7 +15,8 @@ ARRAY = ("--grid", "square", "--lenses", "24x18", "--ppl", "6x6", "--pixel-pitch
 @pytest.mark.povray
 def test_summary_names_the_camera_frame_and_fit_depth_fits(cli, tmp_path):
     out = tmp_path / "t.png"
-    plain = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", *ARRAY)
+    # --depth-report: a plain render measures no depth (tests/renderer/test_passes.py)
+    plain = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", "--depth-report", *ARRAY)
     assert plain.code == 0, plain.err
     assert "frame camera (centre 0.35,0.42,-0.1" in plain.out and "depth" in plain.out
     record = json.loads(out.with_suffix(".json").read_text())["display_frame"]

@@ -289,8 +289,8 @@ def test_the_depth_pass_turns_the_lighting_down_and_measures_the_analytic_depth(
 def test_the_scene_cameras_depth_run_turns_the_lighting_down(tmp_path, povray_logs, cli):
     """The render's camera-and-depth run (templates/camera_depth.pov.j2) writes the same settings."""
     scene = _lit_scene(tmp_path, "a light", 5.0)
-    result = cli("render", scene, "--preset", "demo", "--quality", "draft", "--no-cache", "-q",
-                 "-o", tmp_path / "h3d.png")
+    result = cli("render", scene, "--preset", "demo", "--quality", "draft", "--no-cache", "-q", "--depth-report",
+                 "-o", tmp_path / "h3d.png")   # --depth-report: a plain render makes no depth pass
     assert result.code == 0, result.err
     runs = dict((name, _lighting_work(log)) for name, log in povray_logs)
     assert _turned_down(runs["scene camera and depth"])

@@ -226,7 +226,9 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
 
     scene, array = load_scene(GALLERY / "tilted.pov"), small_array()
     settings = RenderSettings(quality="draft", cache_dir=tmp_path)
-    request = RenderRequest(source=scene.path, display=Display(array), output=tmp_path / "o.png", settings=settings)
+    # --depth-report: a plain render measures no depth (test_passes.py)
+    request = RenderRequest(source=scene.path, display=Display(array), output=tmp_path / "o.png", settings=settings,
+                            display_frame=DisplayFrameOptions(depth_report=True))
     monkeypatch.setattr(placement, "depth_pass", None)   # a separate pass would fail: none is run
     _, record = placement.place_display(request, scene)
     again = placement.place_display(request, scene)[1]

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -45,7 +47,7 @@ def test_sample_masks_annotate_and_view(tmp_path: Path, monkeypatch) -> None:
     record = povh3d.render(ROOT / "sample_models" / "sample.pov", tmp_path / "api.png", preset="demo",
                            quality="draft", objects=tmp_path / "api_objs")
     assert record["object_masks"]["objects"] == 5 and record["object_masks"]["unresolved"] == 0
-    assert read_table(tmp_path / "api_objs") == table
+    assert replace(read_table(tmp_path / "api_objs"), render_id="") == replace(table, render_id="")  # each render its own id
     ny, nx = table.views
     for l in range(ny):
         for k in range(nx):
@@ -257,7 +259,7 @@ def test_a_camera_scenes_masks_take_the_colour_pass_placement(tmp_path: Path, mo
     again = object_masks.render_objects(request, tmp_path / "again")
     assert placed[0] is not None and placed[1] is None   # the first took the recorded frame as its matrix
     table = read_table(tmp_path / "reused")
-    assert read_table(tmp_path / "again") == table and reused["objects"] == again["objects"] == 3
+    assert replace(read_table(tmp_path / "again"), render_id="") == replace(table, render_id="") and reused["objects"] == again["objects"] == 3
     ny, nx = table.views
     for l in range(ny):
         for k in range(nx):

@@ -108,7 +108,7 @@ def test_a_chosen_mesh_camera_method_is_refused_in_one_line(cli, tmp_path):
 @pytest.mark.povray
 def test_past_the_rule_the_mesh_camera_is_wrong_there(cli, tmp_path, monkeypatch):
     """Negative control of the oracle: multi-ortho's lower views, the rule skipped, miss POV-Ray's own."""
-    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene: (request, None))
+    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene, *_: (request, None))
     scene = _scene(tmp_path)
     result, _, views, record = _render(cli, tmp_path, scene)
     assert result.code == 0 and record["method"] == "multi-ortho", result.err
@@ -205,7 +205,7 @@ def test_origins_partly_inside_a_hollow_room_of_media(cli, tmp_path, top, method
 @pytest.mark.povray
 def test_past_the_rule_the_mesh_camera_misses_the_hollow_rooms_media(cli, tmp_path, monkeypatch):
     """Negative control: the rule skipped, multi-ortho's lower views miss POV-Ray's own renders."""
-    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene: (request, None))
+    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene, *_: (request, None))
     scene = tmp_path / "room.pov"
     scene.write_text(ROOM.format(top=0))
     result, _, views, record = _render(cli, tmp_path, scene)

@@ -137,7 +137,7 @@ def test_a_fogged_ground_below_the_rays_is_refused_or_rendered(cli, tmp_path, fo
     scene = tmp_path / "ground.pov"
     scene.write_text(GROUND.format(fog=fog, hollow=hollow))
     out = tmp_path / "g.png"
-    result = cli("render", str(scene), "-o", str(out), *SMALL, "--method", method)
+    result = cli("render", str(scene), "-o", str(out), *SMALL, "--method", method, "--depth-report")
     if refused:
         assert result.code != 0 and not out.exists()
         lines = [line for line in result.err.splitlines() if line.strip()]
@@ -156,7 +156,7 @@ def test_the_refused_frame_would_be_wrong(cli, tmp_path, monkeypatch, hollow, wr
     from benchmarks.gallery import oracle_view
     from povh3d.image.metrics import psnr
 
-    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene: (request, None))
+    monkeypatch.setattr("povh3d.renderer.render.settle_method", lambda request, scene, *_: (request, None))
     scene = tmp_path / "ground.pov"
     scene.write_text(GROUND.format(fog="fog { rgb 0.8 distance 20 }", hollow=hollow))
     out, views = tmp_path / "g.png", tmp_path / "views"

@@ -9,6 +9,7 @@ writes the stage file beside it (``write_stage``, which ``renderer/content/volum
 
 from __future__ import annotations
 
+from ... import jsontext
 import hashlib
 import json
 from pathlib import Path
@@ -38,7 +39,7 @@ def load_manifest(folder: Path, key: str, required: tuple[str, ...]) -> dict | N
     """The manifest entry of a converted model or volume in ``folder``; None on a miss (a damaged one:
     warned, removed)."""
     def parse(body: bytes) -> dict:
-        manifest = json.loads(body)
+        manifest = jsontext.loads(body)
         if not isinstance(manifest, dict) or not set(required) <= manifest.keys():
             raise ValueError("not a manifest")
         return manifest

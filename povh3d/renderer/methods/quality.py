@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import ConfigError
+from ...system import thread_limit
 from ...geometry.footprint import GRID, angular_grid, latin_hypercube
 from ...scene.features import Features, needed_settings
 
@@ -209,15 +210,19 @@ class RenderSettings:
             raise ConfigError(f"--jobs must be at least 1, got {self.jobs}")
         if self.threads is not None and self.threads < 1:
             raise ConfigError(f"--threads must be at least 1, got {self.threads}")
+        if self.threads is not None and self.threads > (limit := thread_limit(self.scheduler is not None)):
+            where = "a cluster's process" if self.scheduler else f"this machine's {limit} cores"
+            raise ConfigError(f"--threads {self.threads} is more than {where} can run (at most {limit}); "
+                              "give fewer or leave --threads out (the cores / jobs)")
         if self.timeout is not None and not self.timeout > 0:
             raise ConfigError(f"--timeout must be a positive number of seconds, got {self.timeout}")
         if self.bit_depth not in (8, 16):
             raise ConfigError(f"bit depth must be 8 or 16, got {self.bit_depth}")
         if self.front_clearance is not None and not (np.isfinite(self.front_clearance) and self.front_clearance > 0):
             raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.front_clearance}")
-        limit = self.front_clearance_limit
-        if limit is not None and not (np.isfinite(limit) and limit > 0):
-            raise ConfigError(f"the front clearance limit must be a positive number of mm, got {limit}")
+        clearance_limit = self.front_clearance_limit
+        if clearance_limit is not None and not (np.isfinite(clearance_limit) and clearance_limit > 0):
+            raise ConfigError(f"the front clearance limit must be a positive number of mm, got {clearance_limit}")
 
         if self.clock is not None and not np.isfinite(self.clock):
             raise ConfigError(f"the clock must be a finite number, got {self.clock}")

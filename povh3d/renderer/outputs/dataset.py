@@ -142,14 +142,15 @@ def check_dataset_dir(folder: Path, lens_array: LensArray, *, mapped: bool = Fal
 
 
 def dataset_depth(scene: Any, lens_array: LensArray, settings: Any, front_clearance: float,
-                  units_per_mm: float) -> np.ndarray:
+                  units_per_mm: float, progress: Any = None) -> np.ndarray:
     """The depth pass along the rays of the exported pixels (``export_grid``): ``(Ny, Nx, rows, cols)``
-    mm along each ray from the screen (``renderer.passes.depth.view_depth_maps``)."""
+    mm along each ray from the screen (``renderer.passes.depth.view_depth_maps``; ``progress(done, total)``
+    its frames)."""
     from ..passes.depth import view_depth_maps
 
     grid = export_grid(lens_array)
     return view_depth_maps(scene, lens_array, settings, front_clearance, units_per_mm, views=grid.views,
-                           grid=grid.depth_grid)
+                           grid=grid.depth_grid, progress=progress, name="dataset-depth")
 
 
 def write_dataset(folder: Path, h3d: np.ndarray, lens_array: LensArray, ray_depth: np.ndarray, *,

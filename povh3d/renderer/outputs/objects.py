@@ -32,6 +32,7 @@ class ObjectTable:
     views: tuple[int, int]
     view_size: tuple[int, int]
     panel: tuple[int, int] | None = None
+    render_id: str = ""   # the render's, also in its sidecars ("objects"): masks of another render are refused
 
     def __post_init__(self) -> None:
         if any(i < 1 or i > 65535 for i in self.names):
@@ -50,6 +51,8 @@ class ObjectTable:
                   "view_size_px": [self.view_size[1], self.view_size[0]]}
         if self.panel is not None:
             record["panel_size_px"] = [self.panel[1], self.panel[0]]
+        if self.render_id:
+            record["render_id"] = self.render_id
         return record
 
     @classmethod
@@ -59,7 +62,7 @@ class ObjectTable:
             (nx, ny), (w, h) = record["views"], record["view_size_px"]
             panel = record.get("panel_size_px")
             return cls(names, tuple(int(n) for n in record["frames"]), (int(ny), int(nx)), (int(h), int(w)),
-                       None if panel is None else (int(panel[1]), int(panel[0])))
+                       None if panel is None else (int(panel[1]), int(panel[0])), str(record.get("render_id", "")))
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise InputError(f"the object table is incomplete or damaged ({exc}); render --objects again") from None
 

@@ -34,6 +34,7 @@ The pass is cached like any frame (the scene's digest, the frame, the size).
 from __future__ import annotations
 
 import tempfile
+import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -48,7 +49,8 @@ from ...scene.features import needed_settings
 from ...scene.scene import Scene
 from ..shots.batch import ShotBatch
 from ..shots.shots import render_frames
-from ..methods.quality import RenderSettings
+from ..methods.quality import Progress, RenderSettings
+from .record import note
 
 MAX_WIDTH = 160     # pixels across the depth pass
 T_MIN = 1e-3        # below this transmittance a pixel counts as "nothing hit"
@@ -130,22 +132,33 @@ def pass_lighting(scene: Scene) -> dict[str, str]:
     return needed_settings(scene.features, LIGHTING_OFF)
 
 
+#: Most POV-Ray runs of a fog pass at once.  A further frame of a run costs about 0.25 s, nearly all of it
+#: POV-Ray waiting (20 frames of an empty scene: 5 s of wall time, 0.1 s of CPU), so the 64 fog pairs of
+#: demo's depth maps, 30 s in one run, take a few seconds in these; each run holds a parse of the scene.
+FOG_RUNS = 16
+#: Fewest fog pairs a run of a many-direction pass renders: a run costs about 0.65 s to start.
+PAIRS_PER_RUN = 2
+
+
 def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
                fog: float, width: int, height: int, field: tuple[float, float] | None = None) -> ShotBatch:
-    """Two frames (fog 0, fog 1) per direction; all in one POV-Ray run per few hundred frames.
-    ``field`` (mm, centred on the origin) defaults to the lens array's."""
+    """Two frames (fog 0, fog 1) per direction, a pair never split between runs, in up to ``FOG_RUNS``
+    POV-Ray runs at once (one thread each: ``PASS_THREADS``).  ``field`` (mm, centred on the origin)
+    defaults to the lens array's."""
     width_mm, height_mm = field or (lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y)
     right, up = (width_mm, 0.0, 0.0), (0.0, height_mm, 0.0)
     frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
+    runs = max(1, min(FOG_RUNS, len(directions) // PAIRS_PER_RUN))
+    pairs = -(-len(directions) // runs)
     return ShotBatch("depth.pov.j2", {"fog_distance": fog, "front_clearance": front_clearance, "right": right, "up": up},
-                      frames, width, height, shots_per_job=max(2, min(400, len(frames))), processes=1,
-                      options=("-A",))
+                      frames, width, height, shots_per_job=2 * pairs, processes=runs, options=("-A",))
 
 
 def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch,
-                 fog: float) -> tuple[np.ndarray, np.ndarray]:
+                 fog: float, name: str, progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, unmeasured; -inf: too bright)
-    and the fraction of unmeasured pixels per direction."""
+    and the fraction of unmeasured pixels per direction; the pass noted as ``name`` (``passes.record``)."""
+    start = time.perf_counter()
     header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
                               "focal": lens_array.focal}   # as methods.display_header
     if settings.frame is not None:
@@ -154,8 +167,11 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
     if lighting:
         header["global_settings"] = lighting
     pass_settings = replace(settings, quality="draft", bit_depth=16, threads=PASS_THREADS)
-    images, _ = render_frames(scene, batch, pass_settings, method="depth", header=header)
-    return fog_distances(images[0::2], images[1::2], fog)
+    images, stats = render_frames(scene, batch, pass_settings, method="depth", header=header, progress=progress)
+    found = fog_distances(images[0::2], images[1::2], fog)
+    traced = stats.frames - stats.cached
+    note(name, time.perf_counter() - start, traced, stats.jobs if traced else 0, from_cache=not traced)
+    return found
 
 
 def nan_median_last(values: np.ndarray) -> np.ndarray:
@@ -213,12 +229,14 @@ def depth_map(distances: np.ndarray, lens_array: LensArray, front_clearance: flo
 
 
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
-               units_per_mm: float) -> DepthMap:
-    """Measure the scene's depth in the display frame of ``settings.frame`` (None: native)."""
+               units_per_mm: float, progress: Progress | None = None) -> DepthMap:
+    """Measure the scene's depth in the display frame of ``settings.frame`` (None: native); ``progress(done,
+    total)``: its two frames."""
     w, h = pass_size(lens_array)
     fog = front_clearance * units_per_mm   # scene units: t = 1/e at the screen
     d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
-                                                                          front_clearance, fog, w, h), fog)
+                                                                          front_clearance, fog, w, h), fog, "depth",
+                                 progress)
     return depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
 
 
@@ -240,7 +258,7 @@ def origin_field(lens_array: LensArray, front_clearance: float) -> tuple[float, 
 
 
 def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
-                   units_per_mm: float) -> float:
+                   units_per_mm: float, name: str = "origins-inside", progress: Progress | None = None) -> float:
     """The share of the plane of every view's ray origins (``origin_field``, ``front_clearance`` mm out)
     that lies inside a solid: a fog pass along the normal over that plane (the pixels the fog does not
     reach).  ``lens_array``: the rays as traced (``depth_scaled_rays``)."""
@@ -249,12 +267,13 @@ def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings
     h = max(1, min(4 * MAX_WIDTH, round(w * field[1] / field[0])))
     fog = front_clearance * units_per_mm
     batch = _fog_batch([(0.0, 0.0, 1.0)], lens_array, front_clearance, fog, w, h, field)
-    _, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog)
+    _, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog, name, progress)
     return float(unmeasured[0])
 
 
 def _inside_solid(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch, fog: float,
-                  d: np.ndarray, unmeasured: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                  d: np.ndarray, unmeasured: np.ndarray, name: str,
+                  progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The pass again on a copy of the scene whose top-level objects are all ``hollow``
     (``scene.rewrite.all_hollow``), where rays started inside a solid; a warning naming the share
     still unmeasured (a solid the copy cannot reach: one a macro or another folder's include makes).
@@ -266,7 +285,7 @@ def _inside_solid(scene: Scene, lens_array: LensArray, settings: RenderSettings,
         try:
             copy = copy_rewritten(scene, Path(folder), all_hollow)
             if copy is not None:
-                d, unmeasured = _ray_lengths(copy, lens_array, settings, batch, fog)
+                d, unmeasured = _ray_lengths(copy, lens_array, settings, batch, fog, f"{name}-hollow", progress)
         except Povh3dError as exc:   # the copy does not parse: say so, keep the first pass
             warn(f"the depth pass could not make {scene.path.name}'s objects hollow ({exc}); the rays that "
                  "start inside a solid stay unmeasured")
@@ -278,7 +297,8 @@ def _inside_solid(scene: Scene, lens_array: LensArray, settings: RenderSettings,
 
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
                     units_per_mm: float, *, views: tuple[int, int] | None = None,
-                    grid: tuple[int, int, float, float] | None = None) -> np.ndarray:
+                    grid: tuple[int, int, float, float] | None = None, progress: Progress | None = None,
+                    name: str = "depth-maps") -> np.ndarray:
     """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
     (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
 
@@ -290,6 +310,7 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     (``elemental.view_grid``).  ``grid`` ``(cols, rows, pitch_x, pitch_y)`` puts the rays'
     screen crossings on that rectangular grid centred on the origin (a hex array's views
     resampled onto lens columns) instead of the lens centres of a rectangular array.
+    ``progress(done, total)``: the pass's POV-Ray frames (two a view); ``name``: the pass in the sidecar.
 
     Returns
     -------
@@ -306,9 +327,9 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     directions = [(a, b, 1.0) for a, b in slopes.tolist()]
     fog = front_clearance * units_per_mm
     batch = _fog_batch(directions, lens_array, front_clearance, fog, cols, rows, (cols * gx, rows * gy))
-    d, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog)
+    d, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog, name, progress)
     if unmeasured.max() > 0:
-        d, unmeasured = _inside_solid(scene, lens_array, settings, batch, fog, d, unmeasured)
+        d, unmeasured = _inside_solid(scene, lens_array, settings, batch, fog, d, unmeasured, name, progress)
     # The ray starts front_clearance * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
     lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
     z = np.where(np.isneginf(d), np.nan, d) / units_per_mm / lengths - front_clearance

@@ -58,7 +58,7 @@ def check_objects_request(request: RenderRequest, folder: str | Path | None = No
     if request.is_model:
         return None
     try:
-        text = request.source.read_text(encoding="utf-8")
+        text = request.source.read_text(encoding="utf-8").removeprefix("\ufeff")  # a BOM: POV-Ray skips it
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read the scene {str(request.source)!r} ({exc})") from None
     return mask_scene(text)
@@ -112,7 +112,7 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
         settings = dataclasses.replace(request.settings, quality="draft", bit_depth=8)
         array = request.render_array
         masked = dataclasses.replace(request, source=scene, output=work / "mask.png", views_dir=None,
-                                     depth_maps=None, dataset=None, video=None, settings=settings,
+                                     depth_maps=None, dataset=None, video=None, objects=None, settings=settings,
                                      model=ModelOptions(), volume=VolumeOptions(),
                                      include_dirs=(request.source.resolve().parent, *request.include_dirs),
                                      # a stage is in display mm, as its colour pass knew (renderer.placement.place): no
@@ -135,8 +135,9 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
             if array.views is None:
                 panels[n] = ids
         ny, nx, ly, lx = next(iter(masks.values())).shape
+        import secrets
         table = ObjectTable(names, tuple(sorted(masks)), (ny, nx), (ly, lx),
-                            (array.panel.height, array.panel.width) if panels else None)
+                            (array.panel.height, array.panel.width) if panels else None, secrets.token_hex(8))
         write_masks(out, table, masks, panels)
     finally:
         shutil.rmtree(work, ignore_errors=True)
@@ -228,7 +229,8 @@ def _note_in_sidecars(request: RenderRequest, folder: Path, table: ObjectTable) 
     else:
         digits = max(4, len(str(request.frames.last)))
         images = [frame_path(request.output, n, digits) for n in request.frames.numbers]
-    note = {"folder": str(folder.resolve()), "names": {str(i): n for i, n in sorted(table.names.items())}}
+    note = {"folder": str(folder.resolve()), "names": {str(i): n for i, n in sorted(table.names.items())},
+            "render_id": table.render_id}
     for image in images:
         record = read_sidecar(image)
         if record is not None:

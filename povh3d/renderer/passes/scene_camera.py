@@ -1,10 +1,11 @@
 """The scene's camera evaluated by POV-Ray: the runs that turn a scene's last camera into numbers.
 
-``evaluate_camera`` runs the scene's camera statements alone (one row of an image
-with the physical panel's aspect, ``physical_size``: ``image_width / image_height`` in
-a scene means the panel's shape in mm, not the pixel grid of a lenticular or mapped
-view space, whose pixels are not square);
-``evaluate_and_measure`` runs them with the rest of the scene and
+``evaluate_camera`` runs the scene's camera statements alone (one row of the smallest image
+that tells them exactly, ``camera_size``: ``image_width / image_height`` in a scene means the
+panel's physical shape in mm, ``physical_size``, not the pixel grid of a lenticular or mapped
+view space, whose pixels are not square: 16 x 9 pixels for a 16:9 panel);
+``evaluate_and_measure``, where a depth pass is wanted (``renderer.placement.place``), runs them
+with the rest of the scene and
 ``templates/camera_depth.pov.j2``, which works out the display frame from the
 declared values and renders the fog depth pass through it in the same run.
 Both are cached in the one cache (``povh3d.cache``: ``cameras/ab/<key>.camera``),
@@ -31,7 +32,8 @@ from ...geometry.frame import EXPLICIT_OPTIONS, DisplayFrame
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError, CameraScript, camera_from_log, parse_log
 from ...scene.features import strip_comments
-from ...scene.scene import Scene
+from ...scene.scene import Scene, source_text
+from .record import note
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from .depth import DepthMap
@@ -97,29 +99,46 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
                     size: tuple[int, int] | None = None) -> tuple[dict[str, Any], float, bool]:
     """The camera's vectors from one POV-Ray run of ``script``, cached by the scene's digest; ``timeout``:
     the render's own limit on each POV-Ray run (a parse may take minutes: the user decides, not us);
-    ``size``: the run's pixels (default ``physical_size``).
+    ``size``: the run's pixels (default ``camera_size``).
 
-    The run has the physical panel's aspect (``physical_size``), so ``image_width / image_height``
-    in the camera is the panel's shape; it traces one row.
+    The run has the physical panel's aspect (``physical_size``) where the scene names the sizes, so
+    ``image_width / image_height`` in the camera is the panel's shape; it traces one row, at +Q0.
     """
     from ...povray.process import PovrayJob
     from ...povray.sandbox import scene_inputs
 
     start = time.perf_counter()
-    w, h = size or physical_size(lens_array)
-    key = content_key("scene-camera-2", __version__, cache.code_stamp(), scene.digest, w, h)
+    w, h = size or camera_size(scene, lens_array)
+    key = content_key("scene-camera-3", __version__, cache.code_stamp(), scene.digest, w, h)
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera)
     if stored is not None:
+        note("scene-camera", time.perf_counter() - start, 0, 0, True)
         return stored, time.perf_counter() - start, True
+    # +Q0: the parse is what tells the camera; photons and a radiosity pretrace would only cost time.
     job = PovrayJob(name="scene camera", script=script, width=w, height=h, start_row=0, end_row=1,
-                    options=("-A",), threads=1, timeout=timeout, **scene_inputs(scene))
+                    options=("-A", "+Q0"), threads=1, timeout=timeout, **scene_inputs(scene))
     logs: list[str] = []
     _run(job, lambda result: logs.append(result.log), lines, scene)
     camera = camera_from_log(logs[0] if logs else "", cameras).as_record()
     if use_cache:
         _keep(path, key, camera)
+    note("scene-camera", time.perf_counter() - start, 1, 1)
     return camera, time.perf_counter() - start, False
+
+
+def camera_size(scene: Scene, lens_array: LensArray) -> tuple[int, int]:
+    """The smallest run that evaluates the camera exactly: the panel's physical aspect (``physical_size``)
+    in lowest terms, which is what ``image_width / image_height`` reads (also in a library include such
+    as screen.inc, whose text ``scene.files`` does not hold); a scene that builds from the sizes themselves
+    gets ``physical_size`` (its values then follow the panel's)."""
+    from fractions import Fraction
+
+    if uses_image_size(scene):
+        return physical_size(lens_array)
+    w, h = physical_size(lens_array)
+    ratio = Fraction(w, h)
+    return ratio.numerator, ratio.denominator
 
 
 def _run(job: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scene: Scene) -> None:
@@ -166,7 +185,7 @@ def measured_size(scene: Scene, width: int, height: int, target: int) -> tuple[i
 
 
 def _scene_text(scene: Scene) -> str:
-    return "\n".join(p.read_bytes().decode("latin-1") for p in scene.files if p.is_file())
+    return "\n".join(source_text(p.read_bytes()) for p in scene.files if p.is_file())
 
 
 def uses_image_size(scene: Scene, text: str | None = None) -> bool:
@@ -203,6 +222,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     path = cache.entry_path(cache.cache_root(cache_dir), "cameras", key, ".camera")
     stored = _load(path, key, use_cache, _camera_and_pass)
     if stored is not None:
+        note("scene-camera-depth", time.perf_counter() - start, 0, 0, True)
         return *stored, time.perf_counter() - start, True
     size = measured_size(scene, w, h, target)
     if size is None:
@@ -229,6 +249,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
         np.save(buffer, seen.distances)
         _keep(path, key, {"camera": camera, "unmeasured": seen.unmeasured, "printed": list(printed)},
               buffer.getvalue())
+    note("scene-camera-depth", time.perf_counter() - start, 2, 1)
     return camera, seen, time.perf_counter() - start, False
 
 

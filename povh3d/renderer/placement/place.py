@@ -2,7 +2,8 @@
 
 ``place_display`` resolves the frame (``renderer.placement.pose``), keeps the rays' start in
 front of the scene's camera, measures the scene's depth in the frame
-(``renderer.passes.depth``: only for a frame other than native, or with ``--fit-depth``),
+(``renderer.passes.depth``: only where something reads it, ``depth_wanted``, and for a frame other
+than native or with ``--fit-depth``),
 scales the frame when ``--fit-depth`` asks, and returns the request with the
 frame in its settings and the record for the sidecar.
 """
@@ -17,7 +18,7 @@ import numpy as np
 from ..passes.depth import DepthMap, depth_pass
 from ..methods.registry import get_method
 from ...geometry.camera_mesh import default_front_clearance
-from ..methods.quality import DEPTH_SCALE_RANGE
+from ..methods.quality import DEPTH_SCALE_RANGE, Progress
 from ...errors import ConfigError
 from ...geometry.frame import NATIVE, DisplayFrame
 from ...scene.scene import Scene
@@ -28,8 +29,10 @@ if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..request import RenderRequest
 
 
-def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any]]:
-    """The request with its display frame (and clearance) resolved into the settings, and the record."""
+def place_display(request: RenderRequest, scene: Scene,
+                  progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any]]:
+    """The request with its display frame (and clearance) resolved into the settings, and the record;
+    ``progress(done, total)``: a depth pass's frames."""
     array = request.render_array
     budget = depth_budget_mm(array)
     if request.is_model:  # the stage is built in display mm
@@ -53,16 +56,18 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
     # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
     # what a method starting nearer (single-stage) would cut.
     default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
-    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be.
+    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be, and only
+    # where something reads it (``depth_wanted``); else that run evaluates the camera alone.
+    wanted = depth_wanted(request, default)
     placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
-                                                   use_cache=s.use_cache, front_clearance=s.front_clearance or default,
-                                                   timeout=s.timeout)
+                                                   use_cache=s.use_cache, timeout=s.timeout,
+                                                   front_clearance=(s.front_clearance or default) if wanted else None)
     front_clearance = s.front_clearance or _front_clearance(placed, default)
     scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
-    if not placed.is_native or options.fit_depth is not None or scale != 1:
+    if wanted and (not placed.is_native or options.fit_depth is not None or scale != 1 or options.depth_report):
         placed, depth, scale = _measure(request, scene, placed, front_clearance, budget, options.fit_depth,
                                         scale, options.depth_scale == "fit",
-                                        seen.depth(placed, front_clearance, array) if seen else None)
+                                        seen.depth(placed, front_clearance, array) if seen else None, progress)
         record = {**record, **placed.as_record(), "depth": depth}
         if not depth.get("empty") and not depth.get("within_budget", True):
             record["warnings"].append(
@@ -92,6 +97,19 @@ def place_display(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         record["front_clearance_limit_mm"] = limit
         record["front_clearance_note"] = CAMERA_LIMIT_REASON
     return replace(request, settings=settings), record
+
+
+def depth_wanted(request: RenderRequest, default: float) -> bool:
+    """Whether anything reads the framed scene's depth: ``--fit-depth``, ``--depth-report``, depth maps or a
+    dataset (whose users want its budget warnings), or a method that may start its rays nearer than the
+    depth pass looks from (``default`` mm), so that the foreground it cuts must be measured to be said.
+    Otherwise no depth pass runs: a scene camera is evaluated alone (docs/geometry.md)."""
+    options, s = request.display_frame, request.settings
+    if options.fit_depth is not None or options.depth_report or request.depth_maps is not None \
+            or request.dataset is not None:
+        return True
+    own = get_method(request.method).default_front_clearance(request.render_array)
+    return s.front_clearance is None and (own < default * (1 - 1e-9) or request.method == "single-stage")
 
 
 def _check_similarity(matrix: tuple[float, ...]) -> None:
@@ -126,7 +144,7 @@ def _front_clearance(frame: DisplayFrame, default: float) -> float:
 
 def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_clearance: float, budget: float,
              fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
-             seen: DepthMap | None = None
+             seen: DepthMap | None = None, progress: Progress | None = None
              ) -> tuple[DisplayFrame, dict[str, Any], float]:
     """The depth summary in ``frame`` as the display shows it (depth times ``scale``); with ``fit``, the
     frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
@@ -139,7 +157,8 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
         if seen is not None and f is frame:
             return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
-        return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm).summary(budget)
+        return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm,
+                          progress).summary(budget)
 
     def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
         # The display shows the measured z times ``factor`` (a depth scale, or 1 / a frame's scale).

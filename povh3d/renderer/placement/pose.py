@@ -5,7 +5,8 @@
 - explicit ``--display-center/normal/up/width``: that frame;
 - ``native``: the display's own frame (mm, screen ``z = 0``);
 - ``camera``, or ``auto`` when the scene has a camera: the frame the scene's
-  last camera defines, evaluated by POV-Ray in one small run
+  last camera defines, read from the text where it is one statement of literal values
+  (``scene.camera_text``), else evaluated by POV-Ray in one small run
   (``renderer.passes.scene_camera``, cached by the scene's digest and the panel's size);
 - ``auto`` without a camera: native.
 
@@ -23,7 +24,7 @@ from ...geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_fra
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError
 from ...scene.camera_script import REFUSED_TYPES, camera_script, refused_type, written_camera_types
-from ...scene.scene import Scene
+from ...scene.scene import Scene, source_text
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..passes.scene_camera import Seen
@@ -43,6 +44,8 @@ class DisplayFrameOptions:
     fit_depth : 'auto', float (mm) or None  scale the frame so the measured depth fits
     depth_scale : float, 'fit' or None   compress depth alone along the normal by this factor (a
                                          distortion); 'fit': the factor --fit-depth chooses
+    depth_report : bool                  measure the framed scene's depth (and warn past the budget)
+                                         without fitting it (``place.depth_wanted``)
     """
 
     mode: str = "auto"
@@ -52,6 +55,7 @@ class DisplayFrameOptions:
     width: float | None = None
     fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the frame to fit
     depth_scale: str | float | None = None  # a factor, or 'fit' (with fit_depth: compress depth to fit)
+    depth_report: bool = False
 
     def __post_init__(self) -> None:
         k = self.depth_scale
@@ -102,7 +106,13 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
     allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
-    from ..passes.scene_camera import evaluate_and_measure, evaluate_camera, probe_size, uses_image_size
+    import time
+
+    from ..passes.record import note
+    from ..passes.scene_camera import (evaluate_and_measure, evaluate_camera, physical_size, probe_size,
+                                       uses_image_size)
+    from ...scene.camera import camera_from_items
+    from ...scene.camera_text import literal_camera
 
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
@@ -112,7 +122,13 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
-    text = scene.path.read_bytes().decode("latin-1")
+    text = source_text(scene.path.read_bytes())
+    from ..budget import check_memory
+    # The camera's reading keeps a token of every word and number: about 200 bytes a byte of text
+    # (a 5 MB one-expression scene took 0.96 GB), estimated before it starts.
+    check_memory(f"reading the camera of {scene.path.name} ({len(text) / 2**20:.3g} MB of text)", 200 * len(text),
+                 "give the display's place with --display-frame native or --display-center/--display-normal, "
+                 "or raise --max-memory")
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
     refused = refused_type(written)
@@ -122,8 +138,8 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         if options.mode == "camera":
             raise ConfigError(f"--display-frame camera: the scene {scene.path.name} has no camera; "
                               f"place the display with {EXPLICIT_OPTIONS}")
-        note = "the scene has no camera: mm around the screen z = 0"
-        return NATIVE, {**NATIVE.as_record(), "note": note, "warnings": []}, None
+        why = "the scene has no camera: mm around the screen z = 0"
+        return NATIVE, {**NATIVE.as_record(), "note": why, "warnings": []}, None
     try:
         found = (evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache, timeout)
                  if front_clearance is not None else None)
@@ -139,12 +155,27 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
                                       script.lines, timeout, (w, h))
         if probe["type"] in REFUSED_TYPES:
             raise CameraError(_unusable_type(probe["type"]) + f" (its type told by a parse at {w}x{h} pixels)")
-    if found is None:
+    literal = (literal_camera(text, scene.include_text, physical_size(lens_array))
+               if found is None and front_clearance is None and not uses_image_size(scene) else None)
+    if literal is not None:   # the text alone tells it: no POV-Ray run (scene/camera_text.py)
+        start = time.perf_counter()
+        camera, distances, cached = camera_from_items(literal).as_record(), None, False
+        seconds = time.perf_counter() - start
+        note("scene-camera-text", seconds, 0, 0)
+    elif found is None:
         camera, seconds, cached = evaluate_camera(scene, script.script, lens_array, script.cameras, cache_dir,
                                                   use_cache, script.lines, timeout)
         distances = None
     else:
         camera, distances, seconds, cached = found
+    frame, warnings = _camera_frame(camera, width_mm)
+    record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
+              "evaluation_from_cache": cached, "warnings": warnings}
+    return frame, record, distances
+
+
+def _camera_frame(camera: dict[str, Any], width_mm: float) -> tuple[DisplayFrame, list[str]]:
+    """The display frame of a perspective scene camera (its evaluated values) and what to say of it."""
     if camera["type"] == "orthographic":
         raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
                           f"place the display where it looks: {_orthographic_options(camera)}")
@@ -168,9 +199,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         frame = DisplayFrame(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
                              frame.note + "; right-handed (a negative right): x follows it, as in the 2D render",
                              frame.camera_distance)
-    record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
-              "evaluation_from_cache": cached, "warnings": warnings}
-    return frame, record, distances
+    return frame, warnings
 
 
 def _unusable_type(kind: str) -> str:

@@ -31,9 +31,10 @@ from ..passes.scene_camera import uses_image_size
 from ...errors import ConfigError, warn
 from ...geometry.rays import depth_scaled_rays
 from ...scene.features import Features, features_of_text, strip_comments
-from ...scene.scene import Scene, load_scene
+from ...scene.scene import Scene, load_scene, source_text
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from ..methods.quality import Progress
     from ..request import RenderRequest
 
 #: The method a render falls back to when the default's mesh camera would share one state.
@@ -57,7 +58,7 @@ def state_features(scene: Scene) -> Features:
     written; an ``ior`` in the scene's own files, or in an include whose interior (``I_...``) or material
     (``M_...``) the scene's own text applies.  POV-Ray's textures.inc and glass.inc declare glass
     interiors with an ior that most scenes including them never apply (advanced/sunsethf.pov)."""
-    texts = [p.read_text(encoding="latin-1") for p in _own_sources(scene)]
+    texts = [source_text(p.read_bytes()) for p in _own_sources(scene)]
     own = features_of_text(texts)
     applied = "ior" in scene.features and any(_APPLIED.search(strip_comments(t)) for t in texts)
     return Features(frozenset(f for f in STATE_FEATURES
@@ -74,14 +75,14 @@ def without_hollow(scene: Scene, folder: Path) -> Scene | None:
     """A copy of the scene in ``folder`` with every ``hollow`` of its own files turned off, so that the
     origin pass's fog stops at a hollow object too; None when no own file names ``hollow``."""
     sources = _own_sources(scene)
-    if not any(_HOLLOW.search(strip_comments(p.read_text(encoding="latin-1"))) for p in sources):
+    if not any(_HOLLOW.search(strip_comments(source_text(p.read_bytes()))) for p in sources):
         return None
     root = scene.path.parent
     for p in sources:
         if p.is_relative_to(root):   # an include from elsewhere stays as it is
             target = folder / p.relative_to(root)
             target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(_HOLLOW.sub("hollow off", p.read_text(encoding="latin-1")), encoding="latin-1")
+            target.write_text(_HOLLOW.sub("hollow off", source_text(p.read_bytes())), encoding="latin-1")
     # The original folders after the copy's: images, fonts and data files are read from there.
     return load_scene(folder / scene.path.relative_to(root), (root, *scene.include_dirs))
 
@@ -178,11 +179,13 @@ def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None)
         f"{fix}, or #declare the sizes the scene needs", "the scene reads image_width/image_height")
 
 
-def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, dict[str, Any] | None]:
+def settle_method(request: RenderRequest, scene: Scene,
+                  progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any] | None]:
     """``request`` as it may render (its display placed): unchanged, or with the default method replaced by
     ``FALLBACK`` where it would render the scene wrong (its mesh camera's one ray state, or the size of its
     runs seen through ``image_width``); and the sidecar's record of the check (None: nothing to check).
-    A chosen method is refused instead, in one line naming the fix."""
+    A chosen method is refused instead, in one line naming the fix.  ``progress(done, total)``: the
+    inside-solid passes' frames."""
     if request.is_model:
         return request, None
     method, views = get_method(request.method), request.render_array.views
@@ -193,7 +196,7 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         s = request.settings
         clearance = planned_front_clearance(method, request.render_array, s)
         rays = depth_scaled_rays(request.render_array, s.depth_scale)
-        inside = origins_inside(scene, rays, s, clearance, frame_units(s.frame))
+        inside = origins_inside(scene, rays, s, clearance, frame_units(s.frame), progress=progress)
         record = {"origins_inside_fraction": inside, "front_clearance_mm": clearance,
                   "depends_on": sorted(features.used)}
         problem = ray_state_problem(request.method, True, features, inside)
@@ -201,7 +204,8 @@ def settle_method(request: RenderRequest, scene: Scene) -> tuple[RenderRequest, 
         if problem is None and hollow_used:
             with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
                 solid = without_hollow(scene, Path(folder))
-                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, frame_units(s.frame))
+                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, frame_units(s.frame),
+                                                                        "origins-inside-hollow", progress)
             if anywhere is not None:
                 record["origins_inside_hollow_or_solid_fraction"] = anywhere
                 problem = hollow_problem(request.method, hollow_used, anywhere)

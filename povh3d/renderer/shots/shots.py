@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
+from ... import cache as cache_store
 from ...cache import cache_root, code_stamp, content_key
 from .cache import ImageCache
 from ...image.io import read_png
@@ -30,7 +31,7 @@ from ...povray.process import JobResult, PovrayJob, povray_version, run_jobs
 from ...povray.sandbox import confines, scene_inputs
 from ...povray.version_memo import remembered_version
 from ...errors import PovrayError, PovrayTimeout, warn
-from ...scene.scene import Scene
+from ...scene.scene import BOM, Scene, has_bom
 from ...system import cpu_count, find_povray
 from .batch import ShotBatch, RenderStats
 from .clock_runs import SEQUENCE_SAFE_WORDS, plan_runs
@@ -84,6 +85,38 @@ def build_script(batch: ShotBatch, frames: list[dict[str, Any]], *, method: str,
                            add_assumed_gamma=add_assumed_gamma, frames=frames, **header, **batch.context)
 
 
+def scene_include(scene: Scene, settings: RenderSettings) -> tuple[str, dict[str, Any]]:
+    """The file povh3d's script includes for ``scene``, and the job's fields to read it.
+
+    POV-Ray 3.7 skips a UTF-8 byte-order mark at the start of the file it is given, not in one it
+    includes: a scene saved with one is included as a copy without it, of the same name (errors name
+    the user's file), in the cache; its includes are still found in the scene's folder (``+L``)."""
+    inputs = scene_inputs(scene)
+    if not has_bom(scene.path):
+        return str(scene.path), inputs
+    folder = cache_store.cache_folder(cache_root(settings.cache_dir) / "bom" / scene.digest[:32], "scene copy")
+    copy = folder / scene.path.name
+    if not copy.is_file():
+        from ...image.io import atomic_path
+        with atomic_path(copy) as tmp:
+            tmp.write_bytes(scene.path.read_bytes().removeprefix(BOM))
+    if inputs.get("read_files") is not None:
+        inputs = {**inputs, "read_files": (*inputs["read_files"], str(copy))}
+    return str(copy), inputs
+
+
+def _read_frame(image_path: Path, name: str) -> np.ndarray:
+    """A frame POV-Ray wrote; a PNG cut short by a full disk is that disk's error, not the PNG's."""
+    from ...errors import InputError
+    from ...povray.process import full_disk
+
+    try:
+        return read_png(image_path)
+    except InputError:
+        raise full_disk(image_path.parent, 0, name) or InputError(
+            f"{name}: POV-Ray wrote a damaged image {image_path.name!r}; render again") from None
+
+
 def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                   method: str, header: dict[str, Any], progress: Progress | None = None,
                   ) -> tuple[list[np.ndarray], RenderStats]:
@@ -115,7 +148,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     missing = [i for i in missing if copies[i] == i]
     later = _later_frames(stats.povray_version, scene, batch, header, settings, cache, keys, missing)
     jobs, targets = _planned_jobs(scene, batch, settings, stats, method, header, missing, later)
-    taker = _Taker(images, keys, cache, settings, targets, Counter(copies.values()), stats.cached, progress)
+    taker = _Taker(images, keys, cache, settings, targets, Counter(copies.values()), stats.cached, progress, method)
     if progress:
         progress(taker.done, len(keys))
     if jobs:
@@ -210,9 +243,10 @@ def _planned_jobs(scene: Scene, batch: ShotBatch, settings: RenderSettings, stat
     threads = settings.threads or max(1, cores // processes)
     stats.jobs, stats.processes, stats.threads = units, processes, threads
 
+    scene_file, inputs = scene_include(scene, settings)
     common = dict(width=batch.width, height=batch.height, threads=threads, bit_depth=settings.bit_depth,
-                  file_gamma="sRGB", timeout=settings.timeout, **scene_inputs(scene))
-    script_of = lambda shots: build_script(batch, shots, method=method, scene_path=str(scene.path),  # noqa: E731
+                  file_gamma="sRGB", timeout=settings.timeout, **inputs)
+    script_of = lambda shots: build_script(batch, shots, method=method, scene_path=scene_file,  # noqa: E731
                                            add_assumed_gamma=scene.adds_assumed_gamma, header=header)
     jobs: list[PovrayJob] = []
     targets: dict[int, list[Target]] = {}
@@ -245,9 +279,9 @@ class _Taker:
 
     def __init__(self, images: list[np.ndarray | None], keys: list[str], cache: ImageCache | None,
                  settings: RenderSettings, targets: dict[int, list[Target]], copies: Counter[int], done: int,
-                 progress: Progress | None) -> None:
+                 progress: Progress | None, method: str) -> None:
         self.images, self.keys, self.cache, self.settings = images, keys, cache, settings
-        self.targets, self.copies, self.done, self.progress = targets, copies, done, progress
+        self.targets, self.copies, self.done, self.progress, self.method = targets, copies, done, progress, method
         self.taken: set[tuple[int, int]] = set()
 
     def take(self, target: Target, image_path: Path) -> None:
@@ -259,10 +293,10 @@ class _Taker:
                 if self.cache is not None:
                     self.cache.store(key, image_path)
                 # In the cache the later frame finds it; without one it is held here for it.
-                stored[key] = None if self.cache is not None else read_png(image_path)
+                stored[key] = None if self.cache is not None else _read_frame(image_path, self.method)
             self.done += 1
             return
-        self.images[index] = read_png(image_path)  # decoded whole: a complete PNG
+        self.images[index] = _read_frame(image_path, f"{self.method} camera {index + 1}")  # decoded whole
         if self.cache is not None:
             self.cache.store(self.keys[index], image_path)
         self.done += self.copies.get(index, 1)

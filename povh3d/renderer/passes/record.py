@@ -1,0 +1,59 @@
+"""What each POV-Ray pass around a render cost, for the sidecar's ``passes`` list.
+
+A pass (the scene camera's evaluation, a depth pass, the inside-solid check, the depth maps) says
+what it cost with ``note``; ``recording`` collects the notes of one request, in the order the
+passes ran.  Outside ``recording`` a note goes nowhere (``povh3d info``, a test calling a pass).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class PassCost:
+    """One pass of a request.
+
+    Attributes
+    ----------
+    name : str          e.g. ``scene-camera``, ``scene-camera-depth``, ``depth``, ``origins-inside``, ``depth-maps``
+    seconds : float     wall time of the pass, its POV-Ray runs and the reading of their images
+    shots : int         images POV-Ray traced for it (0: all from the cache)
+    runs : int          POV-Ray processes it started
+    from_cache : bool   its result came from the cache, no POV-Ray run
+    """
+
+    name: str
+    seconds: float
+    shots: int
+    runs: int
+    from_cache: bool = False
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, "seconds": round(self.seconds, 4), "shots": self.shots, "runs": self.runs,
+                "from_cache": self.from_cache}
+
+
+_NOTES: ContextVar[list[PassCost] | None] = ContextVar("povh3d_pass_notes", default=None)
+
+
+@contextmanager
+def recording() -> Iterator[list[PassCost]]:
+    """Collect the passes run inside the block (a nested block collects its own)."""
+    notes: list[PassCost] = []
+    token = _NOTES.set(notes)
+    try:
+        yield notes
+    finally:
+        _NOTES.reset(token)
+
+
+def note(name: str, seconds: float, shots: int, runs: int, from_cache: bool = False) -> None:
+    """Record a pass in the request being rendered, if any."""
+    notes = _NOTES.get()
+    if notes is not None:
+        notes.append(PassCost(name, seconds, shots, runs, from_cache))

@@ -1,0 +1,255 @@
+"""Only the POV-Ray passes something reads (``renderer.placement.place.depth_wanted``), each one in the
+sidecar's ``passes`` with its cost; the scene camera alone at its smallest exact size; the depth maps'
+fog pairs spread over several runs with the same values as one run, and their progress said."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.renderer.methods.quality import RenderSettings
+from povh3d.scene.scene import load_scene
+
+ARRAY = ("--grid", "square", "--lenses", "16x12", "--ppl", "4x4", "--pixel-pitch", "0.25", "--focal", "2",
+         "--quality", "draft", "-q")
+#: A camera on the axis: the frame's centre is its look_at (0, 2, 0) and its normal +z (docs/geometry.md).
+CAMERA = """#version 3.7;
+global_settings { assumed_gamma 1 }
+camera { location <0, 2, -10> angle 40 right x * image_width / image_height look_at <0, 2, 0> }
+light_source { <5, 10, -20> rgb 1 }
+plane { y, 0 pigment { checker rgb 1 rgb 0.2 } hollow }
+sphere { <0, 2, 0>, 1.5 pigment { rgb <1, 0.2, 0.1> } }
+"""
+
+
+def _fresh(tmp_path) -> dict[str, str]:
+    """A cache of the test's own: what ran is not what an earlier test left."""
+    return {"POVH3D_CACHE": str(tmp_path / "cache")}
+
+
+def _passes(path) -> tuple[list[dict], dict]:
+    record = json.loads(path.with_suffix(".json").read_text())
+    return record["passes"], record["display_frame"]
+
+
+@pytest.mark.povray
+def test_a_plain_render_runs_no_depth_pass_and_fit_depth_does(cli, tmp_path):
+    scene = tmp_path / "cam.pov"
+    scene.write_text(CAMERA)
+    plain, fitted = tmp_path / "p.png", tmp_path / "f.png"
+    assert cli("render", str(scene), "-o", str(plain), *ARRAY, env=_fresh(tmp_path)).code == 0
+    passes, frame = _passes(plain)
+    assert [p["name"] for p in passes] == ["scene-camera-text"], passes   # literal values: no POV-Ray run
+    assert passes[0]["shots"] == 0 and passes[0]["runs"] == 0
+    assert "depth" not in frame
+    assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and frame["normal"] == pytest.approx([0, 0, 1])
+    # --fit-depth reads the depth: the camera's run measures it (two fog frames), the same frame found
+    result = cli("render", str(scene), "-o", str(fitted), "--fit-depth", "auto", *ARRAY, env=_fresh(tmp_path))
+    assert result.code == 0, result.err
+    passes, frame = _passes(fitted)
+    assert [p["name"] for p in passes] == ["scene-camera-depth"], passes
+    assert passes[0]["shots"] == 2 and passes[0]["runs"] == 1
+    assert frame["depth"]["pass"] == "in the camera's evaluation run" and "fit" in frame["depth"]
+    assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and frame["normal"] == pytest.approx([0, 0, 1])
+    # The sphere's front (1.5 units before the centre) in mm: the measured subject reaches it.
+    before = frame["depth"]["before_fit"]
+    units = json.loads(plain.with_suffix(".json").read_text())["display_frame"]["units_per_mm"]
+    assert before["near_mm"] == pytest.approx(-1.5 / units, rel=0.05)
+    # A camera of declared values is evaluated by POV-Ray, alone: one run of one row; again from the cache.
+    declared = tmp_path / "declared.pov"
+    declared.write_text(CAMERA.replace("camera { location <0, 2, -10>", "#declare L = <0, 2, -10>;\ncamera { location L"))
+    for name, cached in (("d1.png", False), ("d2.png", True)):
+        assert cli("render", str(declared), "-o", str(tmp_path / name), *ARRAY, env=_fresh(tmp_path)).code == 0
+        passes, frame = _passes(tmp_path / name)
+        assert [p["name"] for p in passes] == ["scene-camera"], passes
+        assert (passes[0]["shots"], passes[0]["runs"], passes[0]["from_cache"]) == ((0, 0, True) if cached else (1, 1, False))
+        assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and "depth" not in frame
+
+
+@pytest.mark.povray
+def test_depth_report_measures_without_fitting(cli, tmp_path):
+    scene = tmp_path / "cam.pov"
+    scene.write_text(CAMERA)
+    out = tmp_path / "r.png"
+    result = cli("render", str(scene), "-o", str(out), "--depth-report", *ARRAY, env=_fresh(tmp_path))
+    assert result.code == 0, result.err
+    passes, frame = _passes(out)
+    assert [p["name"] for p in passes] == ["scene-camera-depth"]
+    assert "fit" not in frame["depth"] and frame["depth"]["near_mm"] < 0
+
+
+@pytest.mark.parametrize("camera, expected", [
+    ("camera { location -5*z look_at 0 }", (16, 9)),   # names no size (an include it reads may: screen.inc)
+    ("camera { location -5*z right x*image_width/image_height look_at 0 }", (16, 9)),   # the aspect, exactly
+    ("#declare IW = image_width;\ncamera { location -5*z right x*IW/100 look_at 0 }", "physical"),
+])
+def test_the_camera_alone_is_evaluated_at_its_smallest_exact_size(tmp_path, camera, expected):
+    from povh3d.display.display import build_display
+    from povh3d.renderer.passes.scene_camera import camera_size, physical_size
+
+    path = tmp_path / "c.pov"
+    path.write_text(camera + "\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    array = build_display("alioscopy-42").render_array    # 16:9 in mm, 5760 x 1080 subpixels
+    size = camera_size(load_scene(path), array)
+    assert size == (physical_size(array) if expected == "physical" else expected)
+
+
+@pytest.mark.povray
+def test_the_smallest_size_gives_the_panels_camera(tmp_path):
+    """The ratio camera at camera_size equals its evaluation at physical_size (the panel's rows);
+    negative control: at a square 1x1 run its right vector is another."""
+    from povh3d.display.display import build_display
+    from povh3d.renderer.passes.scene_camera import camera_size, evaluate_camera, physical_size
+    from povh3d.scene.camera_script import camera_script
+
+    path = tmp_path / "c.pov"
+    path.write_text("camera { location -5*z right x*image_width/image_height look_at 0 }\n"
+                    "sphere { 0, 1 pigment { rgb 1 } }\n")
+    scene, array = load_scene(path), build_display("alioscopy-42").render_array
+    script = camera_script(path.read_text(), scene.include_text)
+
+    def camera(size):
+        return evaluate_camera(scene, script.script, array, script.cameras, tmp_path, False, script.lines,
+                               size=size)[0]
+
+    small, panel, square = camera(camera_size(scene, array)), camera(physical_size(array)), camera((1, 1))
+    assert small["right"] == pytest.approx(panel["right"], rel=1e-12)
+    assert small["right"][0] == pytest.approx(16 / 9, rel=1e-12)
+    assert square["right"][0] != pytest.approx(panel["right"][0], rel=1e-3)
+
+
+def _plane_array() -> LensArray:
+    return LensArray(grid="square", lenses_x=16, lenses_y=12, pitch_x=0.6, pitch_y=0.6, focal=2.0,
+                     panel=Panel(48, 36, 0.2, 0.2))   # 3x3 views
+
+
+@pytest.mark.povray
+def test_depth_maps_over_several_runs_equal_one_run_and_say_their_progress(tmp_path, monkeypatch):
+    """The fog pairs spread over runs give the very values of one run (the code before), and those are
+    the plane's: at z = 5 mm, a view's ray of slopes (a, b) meets it 5 |(a, b, 1)| mm from the screen."""
+    import povh3d.renderer.passes.depth as depth
+    from povh3d.renderer.passes.record import recording
+
+    path = tmp_path / "plane.pov"
+    path.write_text("light_source { <0, 0, -100> rgb 1 }\nplane { -z, -5 pigment { rgb 0.5 } }\n")
+    scene, array = load_scene(path), _plane_array()
+    settings = RenderSettings(quality="draft", use_cache=False)
+    calls: list[tuple[float, float]] = []
+    with recording() as notes:
+        spread = depth.view_depth_maps(scene, array, settings, 10.0, 1.0, progress=lambda d, t: calls.append((d, t)))
+        monkeypatch.setattr(depth, "FOG_RUNS", 1)
+        one = depth.view_depth_maps(scene, array, settings, 10.0, 1.0)
+    assert [(n.name, n.shots) for n in notes] == [("depth-maps", 18), ("depth-maps", 18)]
+    assert notes[0].runs == 3 and notes[1].runs == 1     # 9 views: at most 4 runs, 3 pairs each: 3 runs
+    assert np.array_equal(spread, one, equal_nan=True)
+    assert calls[-1] == (18, 18) and calls[0][0] == 0
+    f, s = array.focal, array.panel.pitch_x
+    slopes = (np.arange(3) + 0.5 - 1.5) * s / f
+    expected = 5 * np.sqrt(slopes[::-1, None] ** 2 + slopes[None, :] ** 2 + 1)   # (l, k): v runs downwards
+    assert np.abs(spread - expected[:, :, None, None]).max() < 0.01
+    assert not np.abs(spread - 1.01 * expected[:, :, None, None]).max() < 0.01   # negative control
+
+
+@pytest.mark.povray
+def test_depth_maps_are_a_pass_of_the_sidecar(cli, tmp_path):
+    path = tmp_path / "plane.pov"
+    path.write_text("light_source { <0, 0, -100> rgb 1 }\nplane { -z, -5 pigment { rgb 0.5 } }\n")
+    out = tmp_path / "d.png"
+    result = cli("render", str(path), "-o", str(out), "--depth-maps", str(tmp_path / "maps"), *ARRAY,
+                 env=_fresh(tmp_path))
+    assert result.code == 0, result.err
+    passes, _ = _passes(out)
+    assert [p["name"] for p in passes] == ["depth-maps"]      # native frame: no camera, no summary pass
+    assert passes[0]["shots"] == 2 * 16 and passes[0]["runs"] == 8
+
+
+#: Cameras the text alone decides, with POV-Ray's own evaluation as the oracle.
+LITERAL = [
+    "camera { location <-8.0, 4.0, -14.0> angle 40 up <0.0, 1.0, 0.0> right x*image_width/image_height "
+    "look_at <-2.0, 0.0, -4.0> }",                                                      # advanced/pawns.pov
+    "camera { location <7, 20, 20> direction y sky z up z right x*image_width/image_height look_at <0.0, 0, 1.2> }",
+    "camera { perspective location -(2 + 3) * z + <1, .5e1, 0> / 2 right -1.5*x direction 2*z }",   # right-handed
+    "camera { location <0, 0, -5> /* a comment */ angle 65 // another\n look_at 0 }",   # a float promoted
+]
+#: Cameras it does not decide (POV-Ray does): identifiers, transforms, two cameras, a directive around it.
+NOT_LITERAL = [
+    "#declare L = <0, 0, -5>;\ncamera { location L look_at 0 }",
+    "camera { location <0, 0, -5> look_at 0 rotate 30*y }",
+    "camera { location <0, 0, -5> look_at 0 }\ncamera { location <0, 0, -6> look_at 0 }",
+    "#if (1)\ncamera { location <0, 0, -5> look_at 0 }\n#end",
+    "#declare C = camera { location <0, 0, -5> }\ncamera { C }",
+    "camera { orthographic location <0, 0, -5> look_at 0 }",
+    "camera { location <0, 0, -5> look_at 0 aperture 0.1 focal_point 0 }",
+    "camera { location <0, 0, -5, 1> look_at 0 }",
+    "#version 3.1;\ncamera { location <0, 0, -5> look_at 0 }",
+    '#include concat("a", ".inc")\ncamera { location <0, 0, -5> look_at 0 }',
+]
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("camera", LITERAL)
+def test_a_literal_camera_from_the_text_equals_povrays(tmp_path, camera):
+    from povh3d.display.display import build_display
+    from povh3d.renderer.passes.scene_camera import evaluate_camera, physical_size
+    from povh3d.scene.camera import camera_from_items
+    from povh3d.scene.camera_script import camera_script
+    from povh3d.scene.camera_text import literal_camera
+
+    path = tmp_path / "c.pov"
+    path.write_text("#version 3.7;\n" + camera + "\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    scene, array = load_scene(path), build_display("alioscopy-42").render_array
+    items = literal_camera(path.read_text(), scene.include_text, physical_size(array))
+    assert items is not None
+    mine = camera_from_items(items).as_record()
+    script = camera_script(path.read_text(), scene.include_text)
+    theirs = evaluate_camera(scene, script.script, array, script.cameras, tmp_path, False, script.lines)[0]
+    for key in ("location", "direction", "right", "up"):
+        assert mine[key] == pytest.approx(theirs[key], rel=1e-12, abs=1e-12), key
+    assert (mine["look_at"] is None) == (theirs["look_at"] is None) and mine["type"] == theirs["type"]
+
+
+@pytest.mark.parametrize("camera", NOT_LITERAL)
+def test_a_camera_the_text_does_not_decide_is_left_to_povray(tmp_path, camera):
+    from povh3d.scene.camera_text import literal_camera
+
+    path = tmp_path / "c.pov"
+    path.write_text(camera + "\nsphere { 0, 1 pigment { rgb 1 } }\n")
+    assert literal_camera(path.read_text(), load_scene(path).include_text, (16, 9)) is None
+
+
+def test_a_camera_in_an_include_is_left_to_povray(tmp_path):
+    """Negative control of the include check: the same literal camera in the main file is read."""
+    from povh3d.scene.camera_text import literal_camera
+
+    (tmp_path / "cam.inc").write_text("camera { location <0, 0, -5> look_at 0 }\n")
+    main = tmp_path / "c.pov"
+    main.write_text('#include "cam.inc"\ncamera { location <0, 0, -6> look_at 0 }\n')
+    assert literal_camera(main.read_text(), load_scene(main).include_text, (4, 3)) is None
+    (tmp_path / "cam.inc").write_text("#declare R = 1;\n")
+    assert literal_camera(main.read_text(), load_scene(main).include_text, (4, 3)) is not None
+
+
+@pytest.mark.povray
+def test_the_inside_solid_check_says_its_progress_and_its_cost(tmp_path):
+    """A fogged scene: the inside-solid pass (two frames) shows on the render's progress before the render,
+    and in the sidecar; the same scene without fog runs no such pass (the negative control)."""
+    from povh3d.display.display import Display
+    from povh3d.renderer.render import render
+    from povh3d.renderer.request import RenderRequest
+
+    fogged = CAMERA + "fog { rgb 0.8 distance 40 }\n"
+    names = {}
+    for name, text in (("fog", fogged), ("clear", CAMERA)):
+        scene = tmp_path / f"{name}.pov"
+        scene.write_text(text)
+        calls: list[tuple[float, float]] = []
+        request = RenderRequest(source=scene, display=Display(_plane_array()), output=tmp_path / f"{name}.png",
+                                settings=RenderSettings(quality="draft", cache_dir=tmp_path / "cache"))
+        record = render(request, lambda d, t: calls.append((d, t)))
+        names[name] = [p["name"] for p in record["passes"]]
+        if name == "fog":
+            assert (2, 2) in calls and calls.index((2, 2)) < len(calls) - 1, calls
+    assert names == {"fog": ["scene-camera-text", "origins-inside"], "clear": ["scene-camera-text"]}
