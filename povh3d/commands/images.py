@@ -181,11 +181,12 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
                           "--mapping instead")
     recorded = ((read_sidecar(input_path) or {}).get("display") or {}).get("physical_panel") or {}
     if recorded.get("size_px"):   # the render's own panel: a guess from the image's size may be another
-        size = tuple(int(v) for v in recorded["size_px"])
+        # cast: the panel's size_px, as povh3d wrote it: W, H
+        size = cast(tuple[int, int], tuple(int(v) for v in recorded["size_px"]))
         if panel is not None and tuple(panel) != size:
             raise ConfigError(f"--panel-size {panel[0]}x{panel[1]} is not the {size[0]}x{size[1]} panel "
                               f"{str(input_path)!r} was rendered for (its sidecar); drop --panel-size")
-        panel = cast(tuple[int, int], size)  # the panel's size_px, as povh3d wrote it: W, H
+        panel = size
     if panel is None:
         panel = infer_panel(mapping, image.shape[:2])
         if panel is None:

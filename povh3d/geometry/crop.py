@@ -384,5 +384,6 @@ def parse_bbox(text: str) -> tuple[tuple[float, float, float], tuple[float, floa
         values = []
     if len(values) != 6:
         raise ConfigError(f"--bbox takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {text!r}")
-    (x0, y0, z0), (x1, y1, z1) = check_bbox(values).tolist()
+    box = check_bbox(values)
+    (x0, y0, z0), (x1, y1, z1) = box.tolist()
     return (x0, y0, z0), (x1, y1, z1)

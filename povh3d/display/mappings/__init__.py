@@ -71,11 +71,11 @@ def _slanted(_: int | None, o: MappingOptions) -> Mapping:
                                     ("--slant-tan or --slant-deg", o.slope)) if v is None]
     if missing:
         raise ConfigError(f"mapping 'slanted' needs {', '.join(missing)} (or --calibration FILE.json)")
-    assert o.per_lens is not None and o.views is not None and o.slope is not None  # none missing
     rows = o.rows_per_view
     if rows is None:
         rows = round(3 / o.slope) if o.slope and abs(3 / o.slope - round(3 / o.slope)) < 1e-9 and \
             round(3 / o.slope) > 0 else 1
+    assert o.per_lens is not None and o.views is not None and o.slope is not None  # none missing
     return Slanted("slanted", o.per_lens, o.views, o.slope, o.offset, rows, o.reverse, o.blend)
 
 
