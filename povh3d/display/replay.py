@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
-from ..geometry.rays import nearest_hex_lens
+from ..geometry.rays import lens_of_points
 
 OPTICS = ("pinhole", "barrier", "lens", "none")
 # numpy's optics: "barrier" is the slit mask of a lenticular panel, geometrically its pinholes
@@ -88,28 +88,7 @@ def lens_cells(lens_array: LensArray, x: np.ndarray, y: np.ndarray, shift: float
     X, Y = lens_array.to_lattice(np.asarray(x, np.float64), np.asarray(y, np.float64))
     X = X - shift  # a sheet moved ``shift`` mm across (a mapped panel's, ``subpixel.placed_sheet``)
     centres = lens_array.lattice_centres()
-    Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
-    px, py = lens_array.pitch_x, lens_array.pitch_y
-    if lens_array.grid == "hex":
-        i, j = nearest_hex_lens(centres, X, Y, px, py)
-        dx, dy = np.abs(X - centres[i, j, 0]), np.abs(Y - centres[i, j, 1])
-        half = px / 2 * (1 + 1e-9)
-        inside = (dx <= half) & (dx / 2 + math.sqrt(3) / 2 * dy <= half)
-    else:
-        fj, fi = X / px + Lx / 2 + 1e-9, Ly / 2 - Y / py + 1e-9
-        if lens_array.grid == "lattice":
-            from ..geometry.lattice import lattice_coordinates
-
-            s, t = lattice_coordinates(*lens_array.basis_vectors(), X, Y)
-            fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
-        j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
-        if lens_array.grid == "lenticular":
-            inside = (j >= 0) & (j < Lx)
-            if not lens_array.rotation:  # upright, the sheet ends with the panel's rows
-                inside &= (i >= 0) & (i < Ly)
-        else:
-            inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
-        j, i = np.clip(j, 0, Lx - 1), np.clip(i, 0, Ly - 1)
+    i, j, inside = lens_of_points(lens_array, X, Y)
     c = centres[i, j].copy()
     if lens_array.grid == "lenticular":
         c[..., 1] = Y  # a slit: the ray crosses the lenticule's axis beside the point
