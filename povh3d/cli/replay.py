@@ -22,13 +22,25 @@ def cmd_replay(args: argparse.Namespace) -> int:
     extra = ""
     if record.get("reports"):
         r = record["reports"][0]
-        if "geometric_view_share" in r:  # a mapped panel
+        if "camera_view" in r.get("aperture", {}):  # a Looking Glass
+            a, b = r["aperture"], r["aperture_7_rows"]
+            extra = (f", {record['device']['device']}: camera view {a['camera_view']}, within one view on "
+                     f"{100 * a['dominant_within_one_view_share']:.1f} % of lenses (a row; "
+                     f"{100 * b['dominant_within_one_view_share']:.1f} % over 7 rows), exact on "
+                     f"{100 * a['dominant_view_share']:.1f} %")
+        elif "geometric_view_share" in r:  # a mapped panel
             extra = (f", the view pointing at the eye on {100 * r['geometric_view_share']:.1f} % of lens samples "
                      f"({100 * r['within_one_view_share']:.1f} % within one view)")
+            if "aperture" in r:
+                a, b = r["aperture"], r["aperture_3d_pixel"]
+                extra += (f"; over each lens's aperture the right view on {100 * a['dominant_view_share']:.1f} % "
+                          f"of lenses (a row), {100 * b['dominant_view_share']:.1f} % ({b['aperture_rows']} rows)")
         else:
             extra = f", own lens {100 * r['own_lens_share']:.1f} %"
-        zone = r["view_zone"]["every_lens_zone_mm"]
-        extra += f", every lens in zone for x in [{zone[0]:.1f}, {zone[1]:.1f}] mm" if zone else ", no eye x sees every lens in zone"
+        zone = r["view_zone"]["every_lens_zone_mm"] if "view_zone" in r else False
+        if zone is not False:
+            extra += (f", every lens in zone for x in [{zone[0]:.1f}, {zone[1]:.1f}] mm" if zone
+                      else ", no eye x sees every lens in zone")
         if "light_shares" in r:
             extra += f", chief pixel {100 * r['light_shares']['chief_pixel']:.0f} % of the aperture"
     if record.get("timings_s"):
