@@ -22,7 +22,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
     extra = ""
     if record.get("reports"):
         r = record["reports"][0]
-        if "camera_view" in r.get("aperture", {}):  # a Looking Glass
+        if "camera_view" in r.get("aperture", {}) and not r["aperture"]["measured"]:
+            extra = (f", {record['device']['device']}: every lens's aperture straddles a view boundary "
+                     "(the eye is between two views)")
+        elif "camera_view" in r.get("aperture", {}):  # a Looking Glass
             a, b = r["aperture"], r["aperture_7_rows"]
             extra = (f", {record['device']['device']}: camera view {a['camera_view']}, within one view on "
                      f"{100 * a['dominant_within_one_view_share']:.1f} % of lenses (a row; "
@@ -31,7 +34,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         elif "geometric_view_share" in r:  # a mapped panel
             extra = (f", the view pointing at the eye on {100 * r['geometric_view_share']:.1f} % of lens samples "
                      f"({100 * r['within_one_view_share']:.1f} % within one view)")
-            if "aperture" in r:
+            if r.get("aperture", {}).get("measured") and r["aperture_3d_pixel"]["measured"]:
                 a, b = r["aperture"], r["aperture_3d_pixel"]
                 extra += (f"; over each lens's aperture the right view on {100 * a['dominant_view_share']:.1f} % "
                           f"of lenses (a row), {100 * b['dominant_view_share']:.1f} % ({b['aperture_rows']} rows)")

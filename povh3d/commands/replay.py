@@ -17,7 +17,7 @@ from ..display.display import Display
 from ..display.replay import (OPTICS, Replay, aperture_views, default_eye, label_centre_offset, light_shares,
                               mapped_report, mapped_sheet, psnr, replay, report, sweep_eyes)
 from ..errors import ConfigError, InputError, warn
-from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from ..image.io import atomic_path, check_output, check_writable, read_png, read_sidecar, write_png
 from ..renderer.budget import check_memory
 from ..renderer.records import base_record, png_output, write_image
 from .images import check_against_sidecar
@@ -227,6 +227,7 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
 
         check_video_path(output)
         check_writable(output)
+        check_output(output.with_suffix(".html"), (h3d_path,), what="sweep's viewer page", sidecar=False)
         out = output
     if json_path is not None:
         check_writable(json_path)
@@ -285,7 +286,7 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     if sweep is None:
         write_image(out, frames[0], record)
     else:
-        _write_sweep(out, frames, record)
+        _write_sweep(out, frames, record, sweep[0])
     if json_path is not None:
         with atomic_path(json_path) as tmp:
             tmp.write_text(json.dumps({"eyes": reports, **({"timings_s": timings} if timings else {})}, indent=2)
@@ -308,14 +309,18 @@ def _replay_device_file(dev_image: DeviceImage, h3d_path: str | Path, out: Path,
     if sweep is None:
         write_image(out, frames[0], record)
     else:
-        _write_sweep(out, frames, record)
+        _write_sweep(out, frames, record, sweep[0])
     if json_path is not None:
         with atomic_path(json_path) as tmp:
             tmp.write_text(json.dumps({"eyes": reports, "device": entry}, indent=2) + "\n", encoding="utf-8")
     return record
 
 
-def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any]) -> None:
+def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any], axis: str = "x") -> None:
+    """The sweep's frames (``stem_NNN.png``), its GIF or MP4, its sidecar, and its viewer page
+    (``stem.html``, ``hyper/page.py``'s: frame ``n`` is view column ``n`` of one row for a sweep along
+    x, view row ``n`` of one column along y, so the mouse moves the eye the way it moves)."""
+    from ..hyper.page import ViewerContent, viewer_html
     from ..image.preview import enlarge
     from ..image.video import to_rgb8, write_video
 
@@ -323,6 +328,14 @@ def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any])
         write_png(output.with_name(f"{output.stem}_{n:03d}.png"), frame)
     small = [to_rgb8(f) for f in frames]
     scale = max(1, 480 // max(small[0].shape[1], 1))  # lens-sized pixels, about 480 across
-    write_video([enlarge(f, (scale, scale)) for f in small], output, fps=8.0)
+    big = [enlarge(f, (scale, scale)) for f in small]
+    write_video(big, output, fps=8.0)
+    stack = np.stack(big)[None] if axis == "x" else np.stack(big)[:, None]
+    eyes = record["eyes_mm"]
+    title = (f"povh3d replay: {Path(record['source']).name}, eye {axis} from {eyes[0][0 if axis == 'x' else 1]:g} "
+             f"to {eyes[-1][0 if axis == 'x' else 1]:g} mm at z = {eyes[0][2]:g} mm")
+    with atomic_path(output.with_suffix(".html")) as tmp:
+        tmp.write_text(viewer_html(ViewerContent((stack,), grid="lenticular" if axis == "x" else "square",
+                                                 fps=8.0, title=title)), encoding="utf-8")
     with atomic_path(output.with_suffix(".json")) as tmp:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")

@@ -500,7 +500,12 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     right = geometric[:, 0] % views if expected is None else np.full(flat.size, int(expected))
     d = np.abs(dominant - right)
     d = np.minimum(d, views - d)
-    n = max(1, int(kept.sum()))
+    n = int(kept.sum())
+    if n == 0:  # every lens straddles a boundary: the eye is between two views
+        return {"eye_mm": e.tolist(), "lenses": int(flat.size), "lenses_of_sheet": int(total),
+                "off_panel": int((~whole).sum()), "straddling_a_view_boundary": int((whole & straddles).sum()),
+                "measured": 0, "aperture_samples": [k_n, m_n], "aperture_rows": rows,
+                "dominant_view_share": None, "dominant_within_one_view_share": None}
     return {"eye_mm": e.tolist(), "lenses": int(flat.size), "lenses_of_sheet": int(total),
             "off_panel": int((~whole).sum()), "straddling_a_view_boundary": int((whole & straddles).sum()),
             "measured": int(kept.sum()), "aperture_samples": [k_n, m_n], "aperture_rows": rows, "label_offset_views": centre, "views_reversed": reverse,
