@@ -499,19 +499,20 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     dominant = counts.argmax(axis=1)
     right = geometric[:, 0] % views if expected is None else np.full(flat.size, int(expected))
     d = np.abs(dominant - right)
-    d = np.minimum(d, views - d)
+    if expected is None:  # a mapped panel's views repeat in lobes: view N - 1 borders the next lobe's view 0
+        d = np.minimum(d, views - d)
     n = int(kept.sum())
-    if n == 0:  # every lens straddles a boundary: the eye is between two views
-        return {"eye_mm": e.tolist(), "lenses": int(flat.size), "lenses_of_sheet": int(total),
-                "off_panel": int((~whole).sum()), "straddling_a_view_boundary": int((whole & straddles).sum()),
-                "measured": 0, "aperture_samples": [k_n, m_n], "aperture_rows": rows,
-                "dominant_view_share": None, "dominant_within_one_view_share": None}
-    return {"eye_mm": e.tolist(), "lenses": int(flat.size), "lenses_of_sheet": int(total),
-            "off_panel": int((~whole).sum()), "straddling_a_view_boundary": int((whole & straddles).sum()),
-            "measured": int(kept.sum()), "aperture_samples": [k_n, m_n], "aperture_rows": rows, "label_offset_views": centre, "views_reversed": reverse,
-            **({"expected_view": int(expected)} if expected is not None else {}),
-            "dominant_view_share": float((kept & (d == 0)).sum() / n),
-            "dominant_within_one_view_share": float((kept & (d <= 1)).sum() / n)}
+    out = {"eye_mm": e.tolist(), "lenses": int(flat.size), "lenses_of_sheet": int(total),
+           "off_panel": int((~whole).sum()), "straddling_a_view_boundary": int((whole & straddles).sum()),
+           "measured": n, "aperture_samples": [k_n, m_n], "aperture_rows": rows}
+    if expected is None and view_at is None:
+        out.update(label_offset_views=centre, views_reversed=reverse)
+    if expected is not None:
+        out["expected_view"] = int(expected)
+    # none measured: every lens straddles a boundary, the eye is between two views
+    out["dominant_view_share"] = float((kept & (d == 0)).sum() / n) if n else None
+    out["dominant_within_one_view_share"] = float((kept & (d <= 1)).sum() / n) if n else None
+    return out
 
 
 # -- a Looking Glass: its native image through the device's sheet --------------------------------------
