@@ -499,8 +499,9 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     dominant = counts.argmax(axis=1)
     right = geometric[:, 0] % views if expected is None else np.full(flat.size, int(expected))
     d = np.abs(dominant - right)
-    if expected is None:  # a mapped panel's views repeat in lobes: view N - 1 borders the next lobe's view 0
-        d = np.minimum(d, views - d)
+    lobes = np.minimum(d, views - d)  # the views repeat in lobes: view N - 1 borders the next lobe's view 0
+    if expected is None:
+        d = lobes
     n = int(kept.sum())
     out = {"eye_mm": e.tolist(), "lenses": int(flat.size), "lenses_of_sheet": int(total),
            "off_panel": int((~whole).sum()), "straddling_a_view_boundary": int((whole & straddles).sum()),
@@ -512,6 +513,8 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     # none measured: every lens straddles a boundary, the eye is between two views
     out["dominant_view_share"] = float((kept & (d == 0)).sum() / n) if n else None
     out["dominant_within_one_view_share"] = float((kept & (d <= 1)).sum() / n) if n else None
+    if expected is not None:  # the camera's view counted as the far end of the neighbouring lobe too
+        out["dominant_within_one_view_share_across_lobes"] = float((kept & (lobes <= 1)).sum() / n) if n else None
     return out
 
 

@@ -170,7 +170,8 @@ def test_looking_glass_native_image_shows_each_eye_its_camera_view() -> None:
     """A Portrait native image (the vendor's shader over a view-coded quilt), through the device's sheet
     converging at the vendor's viewer (654 mm): from the middle of every view's zone, the view read from the
     image over each lens's aperture is the view of the vendor camera nearest the eye's direction, within one
-    view, on >= 99 % of lenses away from view boundaries.  Negative controls: a native image written with the
+    view, on >= 99 % of lenses away from view boundaries; at the cone's edges (views 0 and 47) only counting
+    the neighbouring lobe's far view as the next one (on about 30 % of lenses it shows).  Negative controls: a native image written with the
     slope's sign flipped, and the eye of view q judged against camera q + 3."""
     cal = PORTRAIT.calibration
     n = PORTRAIT.views
@@ -180,10 +181,14 @@ def test_looking_glass_native_image_shows_each_eye_its_camera_view() -> None:
     focal = presets.lens_array("looking-glass-portrait").focal
     D = default_viewing_distance(cal.size_mm[1])
     assert D == pytest.approx(653.8, abs=0.1)
-    for q in range(0, n, 5):
+    for q in (*range(1, n - 1, 5), n - 2):
         rep = device_report(cal, labels, lg_eye(cal, q, D), n, focal, D, cal.view_cone, lenses=LENSES)
         assert rep["camera_view"] == q and rep["measured"] > 0.75 * rep["lenses"], rep
         assert rep["dominant_within_one_view_share"] >= 0.99, (q, rep)
+    for q in (0, n - 1):  # the cone's edges: the neighbouring lobe's far view shows on about 30 % of lenses
+        rep = device_report(cal, labels, lg_eye(cal, q, D), n, focal, D, cal.view_cone, lenses=LENSES)
+        assert rep["camera_view"] == q and 0.6 < rep["dominant_within_one_view_share"] < 0.8, (q, rep)
+        assert rep["dominant_within_one_view_share_across_lobes"] >= 0.99, (q, rep)
         three = aperture_views(*device_sheet(cal, focal, D)[:2], labels, lg_eye(cal, q, D), n, expected=(q + 3) % n,
                                panel_sheet=device_sheet(cal, focal, D)[2:], lenses=LENSES,
                                view_at=lambda p: np.zeros(p.shape[:-1], np.int64))
