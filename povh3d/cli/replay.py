@@ -54,16 +54,19 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
 def add_parsers(sub: Any) -> None:
     p = sub.add_parser("replay", help="an H3D image on its display, seen from an eye (the virtual display)")
-    p.add_argument("h3d", help="H3D PNG with its sidecar")
-    p.add_argument("-o", "--output", required=True, help="replay .png (with --sweep: a .gif or .mp4, frames beside it)")
-    p.add_argument("--eye", metavar="X,Y,Z", help="eye in mm, display frame, viewer at z < 0 (default 0,0,-300)")
+    p.add_argument("h3d", help="H3D PNG with its sidecar; or a mapped panel (alioscopy-42, philips-20), a Looking "
+                   "Glass native image or quilt that povh3d render wrote")
+    p.add_argument("-o", "--output", required=True,
+                   help="replay .png (with --sweep: a .gif or .mp4, the frames and a viewer page .html beside it)")
+    p.add_argument("--eye", metavar="X,Y,Z", help="eye in mm, display frame, viewer at z < 0 (default 0,0,-300; a "
+                   "Looking Glass: its viewer distance)")
     p.add_argument("--optics", default="pinhole", choices=("pinhole", "barrier", "lens", "none"),
                    help="pinhole mask at the lens centres (exact; default), barrier (slits, lenticular), lens "
                         "(the real lenslets, through POV-Ray), none (no sheet: the panel alone)")
     p.add_argument("--size", default="lenses", metavar="lenses|WxH",
                    help="one pixel a lens (default), or a WxH perspective picture of the display's area")
     p.add_argument("--sweep", metavar="X0:X1:N", help="N eyes from x = X0 to X1 mm (y:Y0:Y1:N along y): "
-                   "frames and a GIF")
+                   "frames, a GIF and a viewer page")
     p.add_argument("--json", metavar="REPORT", help="write the report (per eye: the views shown, view zone) here")
     p.add_argument("--quality", default="draft", choices=("draft", "high"),
                    help="--optics lens: draft (one ray a pixel) or high (antialiased)")

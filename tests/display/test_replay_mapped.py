@@ -263,3 +263,20 @@ def test_device_sheet_converges_at_the_viewer() -> None:
         v = device_views_at(cal, land, PORTRAIT.views)
         spread = np.ptp(v)
         assert (spread <= 1) if ok else (spread > 5), spread
+
+
+@pytest.mark.povray
+def test_a_render_with_another_offset_is_replayed_through_its_own_sheet(tmp_path: Path, cli) -> None:
+    """`povh3d render --preset alioscopy-42 --mapping alioscopy --offset 3` (a small panel) records the mapping's
+    every parameter; replay rebuilds it (no warning) and its report's apertures show the right view."""
+    root = Path(__file__).resolve().parents[2]
+    out = tmp_path / "ali.png"
+    r = cli("render", str(root / "sample_models" / "sample.pov"), "--preset", "alioscopy-42", "--panel", "240x120",
+            "--mapping", "alioscopy", "--offset", "3", "--quality", "draft", "-o", str(out))
+    assert r.code == 0, r.err
+    side = json.loads(out.with_suffix(".json").read_text())
+    assert side["display"]["mapping_options"]["offset"] == 3.0 and side["display"]["mapping_options"]["kind"] == "Slanted"
+    r = cli("replay", str(out), "--eye", "0,0,-805", "-o", str(tmp_path / "eye.png"), "--json", str(tmp_path / "r.json"))
+    assert r.code == 0 and "warning" not in r.err, r.err
+    rep = json.loads((tmp_path / "r.json").read_text())["eyes"][0]
+    assert rep["aperture"]["dominant_view_share"] >= 0.99 and rep["aperture"]["measured"] > 1000
