@@ -86,6 +86,9 @@ def device_image(h3d_path: str | Path) -> DeviceImage | None:
     from ..display.mappings.looking_glass_shader import quilt_to_native
 
     quilt = read_png(h3d_path)
+    if quilt.shape[:2] != (dev.quilt_size[1], dev.quilt_size[0]):
+        raise InputError(f"{str(h3d_path)!r} is {quilt.shape[1]}x{quilt.shape[0]}, not the {dev.quilt_size[0]}x"
+                         f"{dev.quilt_size[1]} quilt of {dev.name}; replay the quilt its render wrote")
     return DeviceImage(cal, dev, quilt_to_native(quilt, dev.grid, cal, views=dev.views), "quilt")
 
 
