@@ -20,7 +20,8 @@ from .slanted import Slanted, from_calibration, looking_glass
 from .unslanted import Distributed, DistributedSmart, Triangular, smart
 
 __all__ = ["MAPPINGS", "Mapping", "MappingOptions", "Sampling", "Source", "Slanted", "build_mapping",
-           "from_calibration", "looking_glass", "options_from_display", "parse_name", "slope_from_degrees"]
+           "from_calibration", "looking_glass", "mapping_from_record", "mapping_parameters", "options_from_display",
+           "parse_name", "slope_from_degrees"]
 
 
 @dataclass(frozen=True)
@@ -158,3 +159,35 @@ def options_from_display(fields: dict[str, Any], ppl_x: float | None, **given: A
         sx = fields["pixel_pitch"][0] if isinstance(fields["pixel_pitch"], (list, tuple)) else fields["pixel_pitch"]
         opts["per_lens"] = round(float(fields["lens_pitch"]) / (float(sx) / 3), 9)
     return MappingOptions(**opts)
+
+
+# The mapping classes a sidecar may name (``mapping_parameters``'s ``kind``).
+_KINDS: dict[str, type[Mapping]] = {cls.__name__: cls for cls in (Slanted, Triangular, Distributed, DistributedSmart)}
+
+
+def mapping_parameters(mapping: Mapping) -> dict[str, Any]:
+    """Every parameter of ``mapping`` (its class as ``kind``, then its dataclass fields): what a
+    sidecar records so that ``mapping_from_record`` rebuilds the same mapping, options and all."""
+    from dataclasses import fields
+
+    return {"kind": type(mapping).__name__, **{f.name: getattr(mapping, f.name) for f in fields(mapping)}}
+
+
+def mapping_from_record(name: str, parameters: dict[str, Any]) -> Mapping:
+    """The mapping ``mapping_parameters`` recorded (a sidecar's ``display.mapping_options``); a
+    ConfigError naming the fault when the record is not one."""
+    from dataclasses import fields
+
+    params = dict(parameters)
+    cls = _KINDS.get(str(params.pop("kind", "")))
+    if cls is None:
+        raise ConfigError(f"the sidecar's mapping options name no mapping class povh3d knows "
+                          f"({parameters.get('kind')!r}); render the image again")
+    known = {f.name for f in fields(cls)}
+    if set(params) - known or params.get("name") != name:
+        raise ConfigError(f"the sidecar's mapping options do not describe mapping {name!r} "
+                          f"({', '.join(sorted(set(params) - known)) or 'another name'}); render the image again")
+    try:
+        return cls(**params)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"the sidecar's mapping options are damaged ({exc}); render the image again") from None
