@@ -40,8 +40,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
                           f"of lenses (a row), {100 * b['dominant_view_share']:.1f} % ({b['aperture_rows']} rows)")
         else:
             extra = f", own lens {100 * r['own_lens_share']:.1f} %"
-        zone = r["view_zone"]["every_lens_zone_mm"] if "view_zone" in r else False
-        if zone is not False:
+        if "view_zone" in r:
+            zone = r["view_zone"]["every_lens_zone_mm"]
             extra += (f", every lens in zone for x in [{zone[0]:.1f}, {zone[1]:.1f}] mm" if zone
                       else ", no eye x sees every lens in zone")
         if "light_shares" in r:

@@ -153,7 +153,7 @@ def sidecar_mapping(display: Display, h3d_path: str | Path) -> tuple[Any, float]
     from ..display.mappings import mapping_from_record
 
     panel = display.physical_panel
-    if display.mapping_options is not None:
+    if display.mapping_options is not None and display.mapping_name is not None and panel is not None:
         mapping = mapping_from_record(display.mapping_name, dict(display.mapping_options))
         if mapping.render_array(panel, display.lens_array.focal) != display.lens_array:
             raise ConfigError(f"the sidecar's mapping options do not read its lens array ({str(h3d_path)!r}); "

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -403,6 +404,7 @@ def label_centre_offset(sheet: LensArray, shift: float, labels: np.ndarray, view
         spread = float(np.median(np.abs(np.mod(d - med + views / 2, views) - views / 2)))
         if best is None or spread < best[2]:
             best = (med, rev, spread)
+    assert best is not None   # the loop ran: both directions were tried
     return best[0], best[1]
 
 
@@ -569,7 +571,7 @@ def device_report(cal, labels: np.ndarray, eye, views: int, focal: float, distan
     def at(points: np.ndarray) -> np.ndarray:
         return device_views_at(cal, points, views)
 
-    kw = dict(panel_sheet=(sheet, shift), view_at=at, lenses=lenses, rows=rows)
+    kw: dict[str, Any] = dict(panel_sheet=(sheet, shift), view_at=at, lenses=lenses, rows=rows)
     out = aperture_views(lens_sheet, lens_shift, labels, e, views, expected=expected, **kw)
     own = aperture_views(lens_sheet, lens_shift, labels, e, views, **kw)
     out["camera_view"] = expected

@@ -24,13 +24,14 @@ def browser():
         yield b
 
 
-def _drawn(browser) -> tuple[int, int, tuple[int, int, int], int, int, int]:
-    """The view the page shows, the colour at its canvas's centre, the page's scale and the canvas size."""
+def _drawn(browser) -> tuple[int, int, tuple[int, int, int], tuple[float, float], int, int]:
+    """The view the page shows, the colour at its canvas's centre, the page's scale (x, y: a view pixel
+    drawn at its physical aspect, 1 here) and the canvas size."""
     l, k, rgb, scale, w, h = browser.execute_script("""
         const v = window.povh3dViewer, c = v.canvas;
         const px = c.getContext('2d').getImageData(c.width >> 1, c.height >> 1, 1, 1).data;
-        return [v.state.l, v.state.k, [px[0], px[1], px[2]], v.scale, c.width, c.height];""")
-    return l, k, tuple(rgb), scale, w, h
+        return [v.state.l, v.state.k, [px[0], px[1], px[2]], [v.scale.x, v.scale.y], c.width, c.height];""")
+    return l, k, tuple(rgb), (scale[0], scale[1]), w, h
 
 
 @pytest.mark.parametrize("axis, count", [("x", 5), ("y", 4)])
@@ -59,7 +60,8 @@ def test_sweep_page_shows_the_eye_under_the_mouse(tmp_path: Path, cli, browser, 
             canvas, int((fx - 0.5) * width), int((fy - 0.5) * height)).perform()
         l, k, rgb, page_scale, w, h = _drawn(browser)
         assert (k if axis == "x" else l) == n and (l if axis == "x" else k) == 0
-        centre = (h >> 1) // page_scale, (w >> 1) // page_scale
+        assert page_scale[0] == page_scale[1]   # a replay frame's pixels are square
+        centre = int((h >> 1) // page_scale[1]), int((w >> 1) // page_scale[0])
         assert rgb == tuple(int(c) for c in big[n][centre])  # the picture is eye n's frame
         seen.add(rgb)
     # negative control: the frames differ where the page samples them, so a page showing the wrong eye fails

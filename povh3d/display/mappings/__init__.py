@@ -170,7 +170,8 @@ def mapping_parameters(mapping: Mapping) -> dict[str, Any]:
     sidecar records so that ``mapping_from_record`` rebuilds the same mapping, options and all."""
     from dataclasses import fields
 
-    return {"kind": type(mapping).__name__, **{f.name: getattr(mapping, f.name) for f in fields(mapping)}}
+    # every mapping class is a frozen dataclass (base.Mapping's rule); the base class itself is not
+    return {"kind": type(mapping).__name__, **{f.name: getattr(mapping, f.name) for f in fields(cast(Any, mapping))}}
 
 
 def mapping_from_record(name: str, parameters: dict[str, Any]) -> Mapping:
@@ -183,7 +184,7 @@ def mapping_from_record(name: str, parameters: dict[str, Any]) -> Mapping:
     if cls is None:
         raise ConfigError(f"the sidecar's mapping options name no mapping class povh3d knows "
                           f"({parameters.get('kind')!r}); render the image again")
-    known = {f.name for f in fields(cls)}
+    known = {f.name for f in fields(cast(Any, cls))}   # a dataclass, as every mapping class
     if set(params) - known or params.get("name") != name:
         raise ConfigError(f"the sidecar's mapping options do not describe mapping {name!r} "
                           f"({', '.join(sorted(set(params) - known)) or 'another name'}); render the image again")
