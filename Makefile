@@ -19,7 +19,7 @@ CORES := $(shell nproc)
 # and 0.3 s a frame (POV-Ray 3.7's front end polls), so one process a core leaves the cores idle.
 WORKERS ?= $(shell n=$$(( 3 * $$(nproc) )); [ $$n -gt 16 ] && n=16; echo $$n)
 
-.PHONY: help render test test-fast soak fuzz bench gallery povray povray-examples opengl browser venv clean
+.PHONY: help render lint test test-fast soak fuzz bench gallery povray povray-examples opengl browser venv clean
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
@@ -54,10 +54,16 @@ render: povray venv ## render the bundled sample to out/sample-h3d.png (PRESET=d
 	$(BIN)/povh3d render sample_models/sample.pov --preset $(PRESET) --quality $(QUALITY) \
 	  -o out/sample-h3d.png --views-dir out/views
 
+# Ruff (syntax, imports, names: [tool.ruff]) and mypy ([tool.mypy]: the package, default strictness)
+# on the source; make test runs it first, so CI fails on either.
+lint: venv ## ruff and the type checker (mypy), both configured in pyproject.toml
+	$(BIN)/ruff check povh3d tests benchmarks
+	$(BIN)/mypy
+
 # WORKERS pytest processes (pytest-xdist) taking tests one by one, but a module with a module-wide
 # fixture whole (tests/conftest.py groups it, so its fixture renders once); pytest's exit status
 # is make's (5: no test ran).
-test: povray povray-examples opengl browser venv ## run the whole test suite, POV-Ray renders included (WORKERS processes, 3 a core)
+test: lint povray povray-examples opengl browser venv ## ruff and mypy (make lint), then the whole test suite, POV-Ray renders included (WORKERS processes, 3 a core)
 	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadgroup
 
 test-fast: browser venv ## the tests that start no POV-Ray and no slow sweep, in under a minute (pytest --fast)

@@ -135,7 +135,8 @@ def map(image: np.ndarray, mapping: str | Mapping, *, preset: str = "demo",  # n
         if panel is None:
             raise ConfigError(f"no panel size fits a {image.shape[1]}x{image.shape[0]} image under mapping "
                               f"{mapping.name!r}; give it with panel=(W, H)")
-    return mapping.apply(image, tuple(panel))
+    width, height = panel  # a list from a caller, too
+    return mapping.apply(image, (width, height))
 
 
 def resample(h3d: np.ndarray, ppl_in: LensArray | Ppl, ppl_out: tuple[float, float], *,

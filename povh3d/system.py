@@ -65,7 +65,7 @@ def sweep_orphans(folder: str | os.PathLike[str], prefix: str) -> list[str]:
     import time
 
     pattern = re.compile(re.escape(prefix) + r"(\d+)-")
-    removed = []
+    removed: list[str] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:

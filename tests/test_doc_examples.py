@@ -31,7 +31,7 @@ FILES = {"SCENE.pov": "sample.pov", "SCENE": "sample.pov", "MODEL.glb": "still_l
          "MODEL.obj": "letter_f.obj", "MODEL": "letter_f.obj", "VOLUME.nrrd": "phantom.nrrd", "VOLUME": "phantom.nrrd",
          "NAME": "demo", "MM": "20", "IMG.png": "WHITE.png", "UNITS": "200"}
 #: Values of an option whose placeholder is a vector.
-VECTORS = {"--display-center": "0,0,0", "--display-normal": "0,0,1", "--display-up": "0,1,0"}
+VECTORS = {"--display-center": "0,0,0", "--display-normal": "0,0,1", "--display-up": "0,1,0", "--eye": "0,0,-300"}
 #: Small sizes: the docs' counts, shortened where a line would run for minutes.
 SHORTER = {"--frames 0:47": "--frames 0:1", "povh3d moire -o PLOT.png": "povh3d moire -o PLOT.png --slant-range 0:20:4"}
 SMALL = ["--lenses", "6x4"]

@@ -147,3 +147,38 @@ def test_all_is_every_command_but_map():
     import povh3d
 
     assert set(povh3d._COMMANDS) - set(povh3d.__all__) == {"map"}
+
+
+def _recipe(makefile: str, target: str) -> tuple[set[str], list[str]]:
+    """A Makefile target's prerequisites and its recipe lines."""
+    lines = makefile.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith(f"{target}:"))
+    prerequisites = set(lines[head].split(":", 1)[1].split("##")[0].split())
+    recipe = []
+    for line in lines[head + 1:]:
+        if not line.startswith("\t"):
+            break
+        recipe.append(line.strip())
+    return prerequisites, recipe
+
+
+def test_make_test_runs_ruff_and_mypy_first():
+    makefile = (REPO / "Makefile").read_text(encoding="utf-8")
+    needs, _ = _recipe(makefile, "test")
+    _, lint = _recipe(makefile, "lint")
+    assert "lint" in needs  # CI runs make test (.ci/run): a lint or type error fails it
+    assert "$(BIN)/ruff check povh3d tests benchmarks" in lint and "$(BIN)/mypy" in lint
+    # the reader itself: a test target without lint is seen as one
+    assert "lint" not in _recipe("test: venv\n\tpytest\nlint: venv\n\tmypy\n", "test")[0]
+
+
+def test_type_checker_settings_keep_default_strictness():
+    tool = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["tool"]
+    mypy = tool["mypy"]
+    assert mypy["packages"] == ["povh3d"] and mypy["python_version"] == "3.11"
+    # no blanket silence: missing stubs are ignored module by module, errors never
+    assert not mypy.get("ignore_errors") and not mypy.get("ignore_missing_imports")
+    for override in mypy.get("overrides", []):
+        assert set(override) == {"module", "ignore_missing_imports"}, override
+    assert {"ruff", "mypy"} <= _names(PYPROJECT["optional-dependencies"]["test"])
+    assert "ruff" in tool and tool["ruff"]["lint"]["select"]

@@ -39,7 +39,7 @@ def grey(image: np.ndarray) -> np.ndarray:
     return image.astype(np.float32)
 
 
-def _refine_peak(mag: np.ndarray, iy: int, ix: int) -> tuple[float, float]:
+def _refine_peak(mag: np.ndarray, iy: int | np.integer, ix: int | np.integer) -> tuple[float, float]:
     """Sub-bin peak position by a parabola through the log magnitudes (exact for a Gaussian)."""
     def vertex(a: float, b: float, c: float) -> float:
         a, b, c = np.log(max(a, 1e-30)), np.log(max(b, 1e-30)), np.log(max(c, 1e-30))

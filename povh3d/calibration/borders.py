@@ -51,6 +51,7 @@ def correct_borders(image: np.ndarray, grid: Grid, *, threshold: float = 0.5,
         raise ConfigError(f"fill must be one of {', '.join(FILLS)}, got {fill!r}")
     grid.check_image(image.shape)
     response = white_response(grid)
+    assert grid.gain is not None  # white_response raised otherwise
     w, h = grid.image_size
     rows, cols = grid.table
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)

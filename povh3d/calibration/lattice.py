@@ -231,6 +231,7 @@ def calibrate(image: np.ndarray, *, lattice: str | None = None, distortion: bool
             break
         stage *= 1.6
 
+    assert template is not None  # the loop above built it
     residual = float(np.sqrt(np.mean(err[keep] ** 2)))
     inlier = float(keep.sum()) / max(1, int(got.ok.sum()))
     confidence = inlier * min(1.0, math.log10(snr) / 3) / (1 + (residual / (0.02 * pitch)) ** 2)

@@ -45,7 +45,7 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         self.register("type", float, _finite_float)
 
-    def _parse_optional(self, arg_string: str):  # type: ignore[no-untyped-def]
+    def _parse_optional(self, arg_string: str):
         if _NEGATIVE_VALUE.match(arg_string):  # no povh3d option starts with a digit
             return None
         return super()._parse_optional(arg_string)
@@ -135,7 +135,8 @@ def _fail_on(exc: Exception) -> NoReturn:
 def _raised_by_a_stop(exc: BaseException) -> bool:
     """Whether a KeyboardInterrupt is ``exc`` or in its chain (``__cause__``, ``__context__``, an
     exception group's members): an error raised while a stop propagated."""
-    pending, seen = [exc], set()
+    pending: list[BaseException | None] = [exc]
+    seen: set[int] = set()
     while pending:
         current = pending.pop()
         if current is None or id(current) in seen:

@@ -10,7 +10,7 @@ import argparse
 import math
 import re
 import sys
-from typing import Any
+from typing import Any, overload
 
 from ..errors import ConfigError
 
@@ -30,7 +30,7 @@ def parse_pair(text: str, option: str, *, integral: bool) -> tuple[float, float]
         raise ConfigError(f"{option} takes whole numbers like {example}, got {text!r}")
     if integral:
         values = [int(v) for v in values]
-    return tuple(values) if len(values) == 2 else values[0]
+    return (values[0], values[1]) if len(values) == 2 else values[0]
 
 
 def parse_size(text: str, option: str, form: str = "WxH like 1920x1080") -> tuple[int, int]:
@@ -60,7 +60,7 @@ def parse_triple(text: str | None, option: str) -> tuple[float, float, float] | 
         values = ()
     if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
         raise ConfigError(f"{option} takes three numbers X,Y,Z, got {text!r}")
-    return values  # type: ignore[return-value]
+    return values
 
 
 def add_array_options(p: argparse.ArgumentParser) -> None:
@@ -173,6 +173,10 @@ def mapping_options(args: argparse.Namespace) -> dict[str, Any]:
             "rows_per_view": args.rows_per_view, "reverse": args.reverse_views or None, "blend": args.blend or None}
 
 
+@overload
+def ppl_arg(text: str, option: str = ..., *, lenticular: bool = ...) -> tuple[int, int]: ...
+@overload
+def ppl_arg(text: None, option: str = ..., *, lenticular: bool = ...) -> None: ...
 def ppl_arg(text: str | None, option: str = "--ppl", *, lenticular: bool = False) -> tuple[int, int] | None:
     """``(Ny, Nx)`` from ``NxxNy`` or ``N``.  One number means what it means in ``render``:
     N x N pixels per lens, or N x 1 on a lenticular array (which has one row of views)."""
@@ -181,9 +185,9 @@ def ppl_arg(text: str | None, option: str = "--ppl", *, lenticular: bool = False
     if text is None:
         return None
     ppl = parse_pair(text, option, integral=True)
-    if isinstance(ppl, tuple):
-        return from_edge(ppl)
-    return (1, ppl) if lenticular else (ppl, ppl)
+    if isinstance(ppl, tuple):  # whole numbers (integral): int() only tells the type checker
+        return from_edge((int(ppl[0]), int(ppl[1])))
+    return (1, int(ppl)) if lenticular else (int(ppl), int(ppl))
 
 
 def add_image_lens_options(p: argparse.ArgumentParser) -> None:

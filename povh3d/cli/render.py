@@ -203,7 +203,7 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
     from ..renderer.content.convert_mesh import convert_mesh
 
     budget = max_triangles(args.max_triangles)
-    if budget == "auto":
+    if isinstance(budget, str):  # 'auto', the one word max_triangles returns
         from ..mesh.simplify import auto_budget
 
         budget = auto_budget(lens_array_from_args(args))

@@ -75,9 +75,12 @@ def _check_against(table: ObjectTable, frames: list[int], record: dict[str, Any]
     size = la.get("view_size_px") or record.get("view_size_px")
     if views and list(views) != [table.views[1], table.views[0]] or \
             size and list(size) != [table.view_size[1], table.view_size[0]]:
+        # either may be missing from the sidecar (was a TypeError here)
+        has_views = f"{views[0]}x{views[1]}" if views else "unknown"
+        has_size = f"{size[0]}x{size[1]}" if size else "unknown"
         raise InputError(f"the object masks in {str(masks)!r} are {table.views[1]}x{table.views[0]} views of "
-                         f"{table.view_size[1]}x{table.view_size[0]} but the render has {views[0]}x{views[1]} "
-                         f"of {size[0]}x{size[1]}; render --objects with the same lens array")
+                         f"{table.view_size[1]}x{table.view_size[0]} but the render has {has_views} "
+                         f"of {has_size}; render --objects with the same lens array")
 
 
 def _h3d_offset(record: dict[str, Any]) -> tuple[int, int] | None:

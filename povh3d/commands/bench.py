@@ -123,7 +123,8 @@ def run_bench(scene: Scene, lens_array: LensArray, trials: list[Trial], *, scene
         images.append(run_method("multi-ortho", scene, window, replace(base, quality=replace(ref_q, seed=seed),
                                                                           bit_depth=16), declared=lens_array).h3d)
     ref_seconds = (time.perf_counter() - start) / 2
-    reference = Reference(*images, mask)
+    first, second = images
+    reference = Reference(first, second, mask)
     measured = []
     with tempfile.TemporaryDirectory(prefix="povh3d-bench-") as folder:
         for n, trial in enumerate(trials):

@@ -10,7 +10,7 @@ anything is written.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -181,7 +181,8 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
                           "--mapping instead")
     recorded = ((read_sidecar(input_path) or {}).get("display") or {}).get("physical_panel") or {}
     if recorded.get("size_px"):   # the render's own panel: a guess from the image's size may be another
-        size = tuple(int(v) for v in recorded["size_px"])
+        # cast: the panel's size_px, as povh3d wrote it: W, H
+        size = cast(tuple[int, int], tuple(int(v) for v in recorded["size_px"]))
         if panel is not None and tuple(panel) != size:
             raise ConfigError(f"--panel-size {panel[0]}x{panel[1]} is not the {size[0]}x{size[1]} panel "
                               f"{str(input_path)!r} was rendered for (its sidecar); drop --panel-size")
@@ -250,7 +251,12 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     check_memory(f"{count} refocused plane(s)", (count * 3 * 4 + 4 * views.shape[0] * views.shape[1]) * plane,
                  "give fewer planes (--sweep)")
     lin = to_linear(views, np.float32)
-    depths = [float(depth)] if sweep is None else list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
+    if sweep is not None:
+        depths = list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
+    elif depth is not None:
+        depths = [float(depth)]
+    else:  # (was a TypeError from float(None))
+        raise ConfigError("refocus needs a depth (mm) or a sweep (near, far, count); give one")
     if not depths or (sweep is not None and int(sweep[2]) < 2):
         raise ConfigError("--sweep needs at least 2 planes")
     planes = [shift_and_add(lin, steps * d, row_shift=row_shift, used=used) for d in depths]

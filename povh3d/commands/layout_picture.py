@@ -63,16 +63,17 @@ def check_opengl() -> None:
                           "OSMesa); install Mesa's with 'make opengl' or apt-get install libegl1 libegl-mesa0")
 
 
-def _v(points: np.ndarray) -> np.ndarray:
+def _v(points: np.ndarray | tuple[float, float, float]) -> np.ndarray:
     """Display mm -> drawing coordinates (``z`` negated: a right-handed frame, not mirrored)."""
     return np.asarray(points, dtype=np.float64) * (1.0, 1.0, -1.0)
 
 
 def _rgb(colour: tuple[int, int, int]) -> tuple[float, float, float]:
-    return tuple(c / 255 for c in colour)
+    r, g, b = colour
+    return r / 255, g / 255, b / 255
 
 
-def _box(pv: Any, lo: np.ndarray, hi: np.ndarray) -> Any:
+def _box(pv: Any, lo: np.ndarray | tuple[float, float, float], hi: np.ndarray | tuple[float, float, float]) -> Any:
     a, b = _v(lo), _v(hi)
     return pv.Box(bounds=(a[0], b[0], a[1], b[1], min(a[2], b[2]), max(a[2], b[2])))
 

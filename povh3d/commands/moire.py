@@ -88,6 +88,7 @@ def _plot(sweep: SlantSweep, pitch: float, distance: float, turn: bool, blur: fl
     bx.set_xlabel("slant, deg")
     fig.tight_layout()
     fig.canvas.draw()
-    image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    # Agg's canvas (matplotlib.use above) has buffer_rgba; the stubs type the base canvas
+    image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()  # type: ignore[attr-defined]
     plt.close(fig)
     return image

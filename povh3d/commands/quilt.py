@@ -55,6 +55,8 @@ def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, 
     device = _device(display)
     if grid is None or grid == "auto":
         grid = auto_grid(n, (h, w), device.grid if device else None)
+    elif isinstance(grid, str):  # (was a TypeError further on)
+        raise ConfigError(f"grid is (cols, rows) or 'auto', got {grid!r}")
     if n != grid[0] * grid[1]:
         raise ConfigError(f"{n} views do not fill a {grid[0]}x{grid[1]} quilt exactly; "
                           f"give --quilt with cols x rows = {n}, or --quilt auto")

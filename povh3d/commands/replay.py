@@ -7,16 +7,17 @@ replay (or a sweep's frames and GIF) and its sidecar atomically.
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..display.display import Display
-from ..display.replay import (OPTICS, Replay, default_eye, light_shares, mapped_report, mapped_sheet, psnr, replay, report,
-                              sweep_eyes)
-from ..errors import ConfigError, InputError
-from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
+from ..display.replay import (OPTICS, Replay, aperture_views, default_eye, label_centre_offset, light_shares,
+                              mapped_report, mapped_sheet, psnr, replay, report, sweep_eyes)
+from ..errors import ConfigError, InputError, warn
+from ..image.io import atomic_path, check_output, check_writable, read_png, read_sidecar, write_png
 from ..renderer.budget import check_memory
 from ..renderer.records import base_record, png_output, write_image
 from .images import check_against_sidecar
@@ -38,30 +39,143 @@ def read_display(h3d_path: str | Path) -> tuple[np.ndarray, Display]:
     return read_png(h3d_path), display
 
 
+@dataclass(frozen=True)
+class DeviceImage:
+    """A Looking Glass panel image to replay: the unit's calibration, the device, and the native image
+    (given, or made from a quilt with the vendor's shader)."""
+
+    calibration: Any
+    device: Any
+    image: np.ndarray
+    source: str  # "native" or "quilt"
+
+
+def device_image(h3d_path: str | Path) -> DeviceImage | None:
+    """A Looking Glass native image (sidecar ``mapping: looking-glass-shader``) or a device quilt (sidecar
+    ``kind: quilt`` whose source render names the device), else None; one error line for a quilt whose
+    device is unknown."""
+    from ..display.looking_glass import device, device_of, read_visual
+    from ..display.quilt import device_calibration
+
+    record = read_sidecar(h3d_path) or {}
+    if not Path(h3d_path).is_file():
+        raise InputError(f"image {str(h3d_path)!r} does not exist; check the path")
+    if record.get("mapping") == "looking-glass-shader":
+        if not record.get("calibration"):
+            raise InputError(f"{str(h3d_path)!r} is a Looking Glass native image whose sidecar names no calibration; "
+                             "render it again with --calibration visual.json")
+        cal = read_visual(record["calibration"])
+        dev = device_of(cal)
+        if dev is None:
+            raise ConfigError(f"the calibration {record['calibration']!r} is of no Looking Glass model povh3d knows; "
+                              "give the unit's own visual.json")
+        image = read_png(h3d_path)
+        if image.shape[:2] != (cal.screen_h, cal.screen_w):
+            raise InputError(f"{str(h3d_path)!r} is {image.shape[1]}x{image.shape[0]}, not the {cal.screen_w}x"
+                             f"{cal.screen_h} panel of its calibration; render it again")
+        return DeviceImage(cal, dev, image, "native")
+    if record.get("kind") != "quilt":
+        return None
+    source = read_sidecar(record["source"]) if record.get("source") and Path(record["source"]).is_file() else None
+    spec = ((source or {}).get("display") or {}).get("quilt") or {}
+    if not spec.get("device"):
+        raise ConfigError(f"{str(h3d_path)!r} is a quilt without its Looking Glass device (its source render's "
+                          "sidecar names none); replay the quilt povh3d render --preset looking-glass-... wrote")
+    dev = device(spec["device"])
+    cal = device_calibration(dev, spec.get("calibration"))
+    from ..display.mappings.looking_glass_shader import quilt_to_native
+
+    quilt = read_png(h3d_path)
+    if quilt.shape[:2] != (dev.quilt_size[1], dev.quilt_size[0]):
+        raise InputError(f"{str(h3d_path)!r} is {quilt.shape[1]}x{quilt.shape[0]}, not the {dev.quilt_size[0]}x"
+                         f"{dev.quilt_size[1]} quilt of {dev.name}; replay the quilt its render wrote")
+    return DeviceImage(cal, dev, quilt_to_native(quilt, dev.grid, cal, views=dev.views), "quilt")
+
+
+def replay_device(dev_image: DeviceImage, eyes: np.ndarray, optics: str, size: Any,
+                  with_report: bool) -> tuple[list[np.ndarray], list[dict[str, Any]], dict[str, Any]]:
+    """Replay a Looking Glass panel image through the device's sheet (``display/replay.device_sheet``,
+    converging at the vendor's viewer distance): the frames, the per-eye reports and the sidecar's
+    ``device`` entry."""
+    from ..display import presets
+    from ..display.mappings.looking_glass_shader import view_fractions
+    from ..display.quilt import default_viewing_distance
+    from ..display.replay import device_report, device_sheet
+
+    if optics not in ("pinhole", "barrier"):
+        raise ConfigError(f"a Looking Glass panel is replayed through its sheet's slits (--optics pinhole or barrier), "
+                          f"not --optics {optics} (not built yet)")
+    cal, dev = dev_image.calibration, dev_image.device
+    focal = presets.lens_array(dev.name).focal
+    distance = default_viewing_distance(cal.size_mm[1])
+    lens_sheet, lens_shift, _, _ = device_sheet(cal, focal, distance)
+    frames = [replay(dev_image.image, lens_sheet, e, optics="barrier", size=size, shift=lens_shift,
+                     subpixels=True).image for e in eyes]
+    reports: list[dict[str, Any]] = []
+    if with_report:
+        labels = np.minimum((view_fractions(cal) * dev.views).astype(np.int64), dev.views - 1)
+        for e in eyes:
+            rep = {"aperture": device_report(cal, labels, e, dev.views, focal, distance, cal.view_cone),
+                   "aperture_7_rows": device_report(cal, labels, e, dev.views, focal, distance, cal.view_cone,
+                                                    rows=7)}
+            reports.append(rep)
+    entry = {"device": dev.name, "from": dev_image.source, "focal_mm": focal, "sheet_converges_at_mm": distance,
+             "lens_pitch_mm": lens_sheet.pitch_x, "slant_deg": lens_sheet.rotation}
+    return frames, reports, entry
+
+
 def mapped(display: Display, image: np.ndarray, h3d_path: str | Path) -> tuple[Any, Any, float, np.ndarray] | None:
     """A mapped panel's sheet: ``(mapping, sheet, shift, views)`` (``display/replay.mapped_sheet``), or None for
     an H3D image; one error line for a mapping whose sheet povh3d cannot rebuild."""
     if display.physical_panel is None:
         return None
-    from ..display.display import build_display
-
     panel = display.physical_panel
     if image.shape[:2] != (panel.height, panel.width):
         raise InputError(f"{str(h3d_path)!r} is {image.shape[1]}x{image.shape[0]} but its sidecar describes a "
                          f"{panel.width}x{panel.height} panel; render it again or delete the sidecar")
-    if display.preset is None or display.mapping_name is None:
-        raise ConfigError(f"{str(h3d_path)!r} is a mapped panel without a preset; replay needs the preset's "
-                          "mapping to rebuild its sheet: render it with --preset")
+    if display.mapping_name is None:
+        raise ConfigError(f"{str(h3d_path)!r} is a mapped panel whose sidecar names no mapping; replay needs it "
+                          "to rebuild the sheet: render it again")
+    mapping, focal = sidecar_mapping(display, h3d_path)
+    try:
+        sheet, shift, views = mapped_sheet(mapping, panel, focal)
+    except ConfigError:
+        raise ConfigError(f"mapping {display.mapping_name!r} is not a slanted subpixel sheet; replay rebuilds "
+                          "those only (alioscopy, philips)") from None
+    return mapping, sheet, shift, views
+
+
+def sidecar_mapping(display: Display, h3d_path: str | Path) -> tuple[Any, float]:
+    """The mapping the panel was written with and the sheet's focal length: from the sidecar's
+    ``mapping_options`` (every parameter), or, for a sidecar older than those, the preset's default
+    mapping of that name, with a warning naming it."""
+    from ..display.display import build_display
+    from ..display.mappings import mapping_from_record
+
+    panel = display.physical_panel
+    if display.mapping_options is not None and display.mapping_name is not None and panel is not None:
+        mapping = mapping_from_record(display.mapping_name, dict(display.mapping_options))
+        if mapping.render_array(panel, display.lens_array.focal) != display.lens_array:
+            raise ConfigError(f"the sidecar's mapping options do not read its lens array ({str(h3d_path)!r}); "
+                              "render the image again")
+        return mapping, display.lens_array.focal
+    if display.preset is None:
+        raise ConfigError(f"{str(h3d_path)!r} is a mapped panel whose sidecar records neither the mapping's options "
+                          "nor a preset; render it again")
     built = build_display(display.preset, mapping=display.mapping_name)
     if built.mapping is None or built.mapped_panel != panel:
         raise ConfigError(f"the sidecar's panel is not preset {display.preset!r}'s with mapping "
                           f"{display.mapping_name!r}; replay needs that preset's own mapping")
-    try:
-        sheet, shift, views = mapped_sheet(built.mapping, panel, built.lens_array.focal)
-    except ConfigError:
-        raise ConfigError(f"mapping {display.mapping_name!r} is not a slanted subpixel sheet; replay rebuilds "
-                          "those only (alioscopy, philips)") from None
-    return built.mapping, sheet, shift, views
+    warn(f"{str(h3d_path)!r}'s sidecar records mapping {display.mapping_name!r} without its options (an older "
+         f"render): replaying preset {display.preset!r}'s default {built.mapping.name!r} "
+         f"({mapping_summary(built.mapping)}); render it again if it used other options")
+    return built.mapping, built.lens_array.focal
+
+
+def mapping_summary(mapping: Any) -> str:
+    from ..display.mappings import mapping_parameters
+
+    return ", ".join(f"{k} {v}" for k, v in mapping_parameters(mapping).items() if k not in ("kind", "name"))
 
 
 def parse_eye(text: str | None) -> tuple[float, float, float] | None:
@@ -116,9 +230,13 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
 
         check_video_path(output)
         check_writable(output)
+        check_output(output.with_suffix(".html"), (h3d_path,), what="sweep's viewer page", sidecar=False)
         out = output
     if json_path is not None:
         check_writable(json_path)
+    dev_image = device_image(h3d_path)
+    if dev_image is not None:  # a Looking Glass native image or quilt, through the device's sheet
+        return _replay_device_file(dev_image, h3d_path, out, eye, optics, size, sweep, json_path)
     image, display = read_display(h3d_path)
     la = display.lens_array
     if not isinstance(size, str):  # the picture's float geometry, a few arrays of it
@@ -135,10 +253,15 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
         if optics not in ("pinhole", "barrier"):
             raise ConfigError(f"a mapped panel is replayed through its sheet's slits (--optics pinhole or barrier), "
                               f"not --optics {optics} (not built yet)")
-        _, la, shift, views = sheet
+        mapping, la, shift, views = sheet
         for e in eyes:
             results.append(replay(image, la, e, optics="barrier", size=size, shift=shift, subpixels=True))
         reports = [mapped_report(r, la, shift, views, e) for r, e in zip(results, eyes)]
+        n, offset = mapping.views, label_centre_offset(la, shift, views, mapping.views)
+        for rep, e in zip(reports, eyes):  # the view each lens shows over its aperture: a row, a 3D pixel
+            rep["aperture"] = aperture_views(la, shift, views, e, n, offset=offset)
+            rep["aperture_3d_pixel"] = aperture_views(la, shift, views, e, n, offset=offset,
+                                                      rows=mapping.rows_per_view)
         frames = [r.image for r in results]
     elif optics == "lens":
         from ..renderer.replay import REPLAY_IOR, render_replay  # only the renderer starts POV-Ray
@@ -166,7 +289,7 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     if sweep is None:
         write_image(out, frames[0], record)
     else:
-        _write_sweep(out, frames, record)
+        _write_sweep(out, frames, record, sweep[0])
     if json_path is not None:
         with atomic_path(json_path) as tmp:
             tmp.write_text(json.dumps({"eyes": reports, **({"timings_s": timings} if timings else {})}, indent=2)
@@ -174,7 +297,33 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     return record
 
 
-def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any]) -> None:
+def _replay_device_file(dev_image: DeviceImage, h3d_path: str | Path, out: Path, eye: Any, optics: str, size: Any,
+                        sweep: Any, json_path: str | Path | None) -> dict[str, Any]:
+    from ..display.quilt import default_viewing_distance
+
+    if not isinstance(size, str):
+        check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1], "give a smaller --size, e.g. --size 800x600")
+    eye = eye if eye is not None else (0.0, 0.0, -default_viewing_distance(dev_image.calibration.size_mm[1]))
+    eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
+    frames, reports, entry = replay_device(dev_image, eyes, optics, size, with_report=True)
+    record = base_record("replay", source=str(Path(h3d_path).resolve()), optics=optics,
+                         size=size if isinstance(size, str) else list(size), eyes_mm=eyes.tolist(),
+                         device=entry, reports=reports)
+    if sweep is None:
+        write_image(out, frames[0], record)
+    else:
+        _write_sweep(out, frames, record, sweep[0])
+    if json_path is not None:
+        with atomic_path(json_path) as tmp:
+            tmp.write_text(json.dumps({"eyes": reports, "device": entry}, indent=2) + "\n", encoding="utf-8")
+    return record
+
+
+def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any], axis: str = "x") -> None:
+    """The sweep's frames (``stem_NNN.png``), its GIF or MP4, its sidecar, and its viewer page
+    (``stem.html``, ``hyper/page.py``'s: frame ``n`` is view column ``n`` of one row for a sweep along
+    x, view row ``n`` of one column along y, so the mouse moves the eye the way it moves)."""
+    from ..hyper.page import ViewerContent, viewer_html
     from ..image.preview import enlarge
     from ..image.video import to_rgb8, write_video
 
@@ -182,6 +331,14 @@ def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any])
         write_png(output.with_name(f"{output.stem}_{n:03d}.png"), frame)
     small = [to_rgb8(f) for f in frames]
     scale = max(1, 480 // max(small[0].shape[1], 1))  # lens-sized pixels, about 480 across
-    write_video([enlarge(f, (scale, scale)) for f in small], output, fps=8.0)
+    big = [enlarge(f, (scale, scale)) for f in small]
+    write_video(big, output, fps=8.0)
+    stack = np.stack(big)[None] if axis == "x" else np.stack(big)[:, None]
+    eyes = record["eyes_mm"]
+    title = (f"povh3d replay: {Path(record['source']).name}, eye {axis} from {eyes[0][0 if axis == 'x' else 1]:g} "
+             f"to {eyes[-1][0 if axis == 'x' else 1]:g} mm at z = {eyes[0][2]:g} mm")
+    with atomic_path(output.with_suffix(".html")) as tmp:
+        tmp.write_text(viewer_html(ViewerContent((stack,), grid="lenticular" if axis == "x" else "square",
+                                                 fps=8.0, title=title)), encoding="utf-8")
     with atomic_path(output.with_suffix(".json")) as tmp:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")

@@ -36,7 +36,7 @@ class RenderViews:
 def view_pixel_aspect(lens_array: dict[str, Any] | None) -> float:
     """Width over height of a view's pixel on the display, from a sidecar's lens array: each view
     pixel is one lens, ``pixel_distance_3d_mm`` (the lens pitches) apart; 1 when it is not known."""
-    pitch = (lens_array or {}).get("pixel_distance_3d_mm") or (lens_array or {}).get("lens_pitch_mm")
+    pitch: Any = (lens_array or {}).get("pixel_distance_3d_mm") or (lens_array or {}).get("lens_pitch_mm")
     try:
         aspect = float(pitch[0]) / float(pitch[1])
     except (TypeError, ValueError, IndexError, ZeroDivisionError):
@@ -79,7 +79,10 @@ def read_render_views(render: str | Path) -> RenderViews:
             raise InputError(f"{str(image_path)!r} has no sidecar with its lens array; give its views folder "
                              "(render --views-dir) instead")
         views, grid = h3d_views(read_png(image_path), record, image_path)
-        frames.append(views), numbers.append(n), images.append(image_path), records.append(record)
+        frames.append(views)
+        numbers.append(n)
+        images.append(image_path)
+        records.append(record)
         grids.add(grid)
     shapes = {f.shape for f in frames}
     if len(shapes) != 1 or len(grids) != 1:

@@ -29,6 +29,7 @@ in ``z / D`` -- the disparity file is the exact one.
 from __future__ import annotations
 
 import math
+from typing import Any
 from dataclasses import dataclass
 from datetime import date
 from pathlib import Path
@@ -190,7 +191,7 @@ def write_hci(folder: str | Path, bank: np.ndarray, ray_depth: np.ndarray, geome
     disp = disparity(z_centre, geometry)
     finite = disp[np.isfinite(disp)]
     disp_range = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 0.0)
-    files: dict[Path, object] = {}
+    files: dict[Path, tuple[str, Any]] = {}  # (kind, payload): an image, a depth map or text
     for i, view in enumerate(to_hci_order(bank)):
         files[folder / f"input_Cam{i:03d}.png"] = ("png", view)
     files[folder / "parameters.cfg"] = ("text", parameters_cfg(geometry, bank.shape[2:4], disp_range, scene=scene,

@@ -87,6 +87,7 @@ def _field(calibration: dict[str, Any], key: str) -> Any:
 def _check_panel(calibration: dict[str, Any], panel: Panel) -> None:
     """The file's screen (``screenW`` x ``screenH``, else ``image_size``) is the panel, and its DPI
     gives the panel's pixel pitch: the phase is measured from the screen's centre."""
+    size: object
     if "screenW" in calibration:
         size = [_field(calibration, "screenW"), _field(calibration, "screenH")]
     else:

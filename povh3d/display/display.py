@@ -42,6 +42,9 @@ class Display:
                                    preset's mapping and offset, or a calibration and its ``shift_mm``
     quilt : mapping or None        a Looking Glass preset's quilt (``display.quilt``): ``device``
                                    and the unit's ``calibration`` file (None: the factory one)
+    mapping_options : mapping or None  read from a sidecar: the applied mapping's parameters
+                                   (``mappings.mapping_parameters``), which rebuild it exactly
+                                   (``mappings.mapping_from_record``); None in older sidecars
     """
 
     lens_array: LensArray
@@ -54,6 +57,7 @@ class Display:
     mapping: Mapping | None = None
     sheet: MappingABC[str, Any] | None = None
     quilt: MappingABC[str, Any] | None = None
+    mapping_options: MappingABC[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.lens_array, LensArray):
@@ -73,7 +77,8 @@ class Display:
         """The array the method renders: the display's, or the view-space array a mapping reads."""
         if self.mapping is None:
             return self.lens_array
-        return self.mapping.render_array(self.mapped_panel, self.lens_array.focal)
+        return self.mapping.render_array(self.physical_panel or self.lens_array.panel,  # mapped_panel
+                                         self.lens_array.focal)
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -93,6 +98,12 @@ class Display:
                            ("slant_deg", self.slant_deg), ("mapping", self.mapping_name)):
             if value is not None:
                 display[key] = value
+        if self.mapping is not None:  # every parameter, so a replay rebuilds this mapping, not the preset's
+            from .mappings import mapping_parameters
+
+            display["mapping_options"] = mapping_parameters(self.mapping)
+        elif self.mapping_options is not None:
+            display["mapping_options"] = dict(self.mapping_options)
         if self.physical_panel is not None:
             p = self.physical_panel
             display["physical_panel"] = {"size_px": [p.width, p.height], "pixel_pitch_mm": [p.pitch_x, p.pitch_y]}
@@ -116,9 +127,11 @@ class Display:
                               "delete the sidecar and give --ppl NxxNy")
         try:
             _check_pairs(side, ("lenses", "lens_pitch_mm"), ("views",))
-            lens_array = LensArray(side["grid"], *side["lenses"], *side["lens_pitch_mm"], side["focal_mm"],
+            (lenses_x, lenses_y), (pitch_x, pitch_y) = side["lenses"], side["lens_pitch_mm"]  # pairs: checked
+            basis: Any = tuple(map(tuple, side["lattice_mm"])) if "lattice_mm" in side else None  # LensArray checks it
+            lens_array = LensArray(side["grid"], lenses_x, lenses_y, pitch_x, pitch_y, side["focal_mm"],
                                    _panel(side["panel"]), side.get("rotation_deg", 0.0),
-                                   tuple(map(tuple, side["lattice_mm"])) if "lattice_mm" in side else None)
+                                   basis)
         except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError, ZeroDivisionError) as exc:
             raise ConfigError(f"the sidecar's lens array is incomplete or damaged ({type(exc).__name__}: {exc}); "
                               "delete the sidecar and give --ppl NxxNy") from None
@@ -138,10 +151,19 @@ class Display:
             return cls(lens_array, d.get("preset"), d.get("description"), views, slant,
                        d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
                        sheet=d.get("sheet") if isinstance(d.get("sheet"), MappingABC) else None,
-                       quilt=d.get("quilt") if isinstance(d.get("quilt"), MappingABC) else None)
+                       quilt=d.get("quilt") if isinstance(d.get("quilt"), MappingABC) else None,
+                       mapping_options=_options(d.get("mapping_options")))
         except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as exc:
             raise ConfigError(f"the sidecar's display is damaged ({type(exc).__name__}: {exc}); "
                               "delete the sidecar") from None
+
+
+def _options(value: Any) -> dict[str, Any] | None:
+    if value is None:
+        return None
+    if not isinstance(value, MappingABC) or not all(isinstance(v, (int, float, str, bool)) for v in value.values()):
+        raise ValueError(f"mapping_options is {_kind(value)}, not a table of numbers, names and flags")
+    return dict(value)
 
 
 def _kind(value: Any) -> str:
@@ -262,6 +284,7 @@ def _subpixel_sheet(display: Display, mapping: str | None, options: dict[str, An
     elif la.grid == "lenticular":
         nominal = la
     if calibration is None:
+        assert nominal is not None  # a mapping gave it: no mapping and no calibration returned above
         return replace(display, lens_array=nominal, sheet=record)
     from .calibrated_sheet import calibrated_sheet
 

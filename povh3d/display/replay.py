@@ -27,12 +27,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
-from ..geometry.rays import nearest_hex_lens
+from ..geometry.rays import lens_of_points
 
 OPTICS = ("pinhole", "barrier", "lens", "none")
 # numpy's optics: "barrier" is the slit mask of a lenticular panel, geometrically its pinholes
@@ -88,28 +89,7 @@ def lens_cells(lens_array: LensArray, x: np.ndarray, y: np.ndarray, shift: float
     X, Y = lens_array.to_lattice(np.asarray(x, np.float64), np.asarray(y, np.float64))
     X = X - shift  # a sheet moved ``shift`` mm across (a mapped panel's, ``subpixel.placed_sheet``)
     centres = lens_array.lattice_centres()
-    Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
-    px, py = lens_array.pitch_x, lens_array.pitch_y
-    if lens_array.grid == "hex":
-        i, j = nearest_hex_lens(centres, X, Y, px, py)
-        dx, dy = np.abs(X - centres[i, j, 0]), np.abs(Y - centres[i, j, 1])
-        half = px / 2 * (1 + 1e-9)
-        inside = (dx <= half) & (dx / 2 + math.sqrt(3) / 2 * dy <= half)
-    else:
-        fj, fi = X / px + Lx / 2 + 1e-9, Ly / 2 - Y / py + 1e-9
-        if lens_array.grid == "lattice":
-            from ..geometry.lattice import lattice_coordinates
-
-            s, t = lattice_coordinates(*np.array(lens_array.basis), X, Y)
-            fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
-        j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
-        if lens_array.grid == "lenticular":
-            inside = (j >= 0) & (j < Lx)
-            if not lens_array.rotation:  # upright, the sheet ends with the panel's rows
-                inside &= (i >= 0) & (i < Ly)
-        else:
-            inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
-        j, i = np.clip(j, 0, Lx - 1), np.clip(i, 0, Ly - 1)
+    i, j, inside = lens_of_points(lens_array, X, Y)
     c = centres[i, j].copy()
     if lens_array.grid == "lenticular":
         c[..., 1] = Y  # a slit: the ray crosses the lenticule's axis beside the point
@@ -340,7 +320,7 @@ def coded_panel(lens_array: LensArray) -> np.ndarray:
     return np.stack([cols + 1, rows + 1, np.zeros_like(cols)], axis=-1).astype(np.uint16)
 
 
-def light_shares(seen: np.ndarray, lens_array: LensArray, eye, size: tuple[int, int]) -> dict:
+def light_shares(seen: np.ndarray, lens_array: LensArray, eye, size: str | tuple[int, int]) -> dict:
     """Where the light of each lens's aperture comes from, from a picture ``seen`` (H, W, >=2) of
     ``coded_panel`` replayed at ``size`` from ``eye``: the share of picture pixels (inside a lens whose
     chief ray lands on the panel) showing the chief pixel, another pixel of the same lens's elemental
@@ -348,7 +328,7 @@ def light_shares(seen: np.ndarray, lens_array: LensArray, eye, size: tuple[int, 
     chief = replay(coded_panel(lens_array), lens_array, eye, size=size)
     counted = (chief.lens[..., 0] >= 0) & (chief.pixel[..., 0] >= 0)
     pix = seen[..., :2].astype(np.int64) - 1
-    dark = (pix < 0).any(axis=-1)
+    dark = np.asarray((pix < 0).any(axis=-1))
     same = np.all(pix == chief.pixel, axis=-1)
     owner, _ = pixel_lens(lens_array, np.where(dark[..., None], -1, pix))
     own = same_lens(owner, chief.lens, lens_array) & ~dark
@@ -398,3 +378,203 @@ def mapped_report(result: Replay, sheet: LensArray, shift: float, views: np.ndar
             "geometric_view_share": float((shown == geometric).sum() / m),
             "within_one_view_share": float((np.minimum(np.abs(shown - geometric), n - np.abs(shown - geometric)) <= 1).sum() / m),
             "view_zone": view_zone(sheet, abs(float(e[2])))}
+
+
+# -- the view each lens shows, over its aperture ---------------------------------------------------------
+APERTURE_SAMPLES = (8, 32)  # across a lenticule, along its piece of one panel row
+APERTURE_LENSES = 20_000   # lenses measured (a seeded sample when the sheet has more)
+
+
+def label_centre_offset(sheet: LensArray, shift: float, labels: np.ndarray, views: int) -> tuple[float, bool]:
+    """Where a mapping's subpixels of view ``v`` sit across their lenticule: ``(offset, reversed)``, the
+    median of ``g - v`` (mod N, wrapped to -N/2..N/2) with ``g = N t`` (``t`` a subpixel centre's place
+    across its lenticule, ``subpixel.sheet_phase``), or ``g = N (1 - t)`` when the views run the other way
+    (a Looking Glass's ``invView``, a reversed mapping): whichever spreads less.  0.5 when view ``v``'s
+    subpixels are centred in the ``v``-th N-th of the lenticule (alioscopy); 1.0 when they sit on its
+    upper edge (philips: its phase is a subpixel's left edge, and a subpixel spans two views)."""
+    from .subpixel import sheet_phase
+
+    _, t = sheet_phase(sheet, shift)
+    v = labels.reshape(t.shape[0], -1)
+    best = None
+    for rev in (False, True):
+        d = np.mod(views * (1 - t if rev else t) - v, views)
+        d = np.where(d >= views / 2, d - views, d)
+        med = float(np.median(d))
+        spread = float(np.median(np.abs(np.mod(d - med + views / 2, views) - views / 2)))
+        if best is None or spread < best[2]:
+            best = (med, rev, spread)
+    assert best is not None   # the loop ran: both directions were tried
+    return best[0], best[1]
+
+
+def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, views: int, *,
+                   offset: tuple[float, bool] | None = None, expected: int | None = None,
+                   panel_sheet: tuple[LensArray, float] | None = None, view_at=None, lenses: int | None = APERTURE_LENSES,
+                   samples: tuple[int, int] = APERTURE_SAMPLES, rows: int = 1, seed: int = 0) -> dict:
+    """The view each lens (lenticule ``j`` x panel row ``r``) shows an eye at ``eye``, over its aperture.
+
+    The aperture is the piece of lenticule ``j`` (``sheet`` moved ``shift`` mm across) over panel row ``r``
+    (``rows`` rows from ``r`` down: a 3D pixel's height), sampled ``samples = (K, M)``: K points across
+    the lenticule, M along it over the rows' height.  A thin
+    lenticule focused on the panel sends the ray from ``E`` through aperture point ``a`` (axis point ``c``
+    beside it) to ``L = c + (a - E_xy) f / |E_z|``: across it is a lens (``a`` moves ``L`` only
+    ``p f / |E_z|``), along it a flat sheet (``L`` follows ``a``).  ``labels`` (H, W, 3) is the view every
+    subpixel holds (the mapping's, or read from the image); the lens's *dominant* view is the label seen
+    at most of its samples.  The view the lens should show is the one whose subpixels are centred
+    nearest ``L``'s place ``t`` across its lenticule: ``floor(N frac(t) - offset + 1/2)`` mod N, with
+    ``offset`` the mapping's own (``label_centre_offset``, from ``labels`` unless given: give the mapping's
+    when ``labels`` are read from an image, so that a panel written for another sheet cannot set it); a
+    lens whose samples lie in two of those views (its aperture straddles a view boundary) or off the panel
+    is left out.  ``expected``: the view every lens should show instead (a Looking Glass's camera for
+    the eye), within one view; the sheet's views still decide which lenses straddle a boundary.
+    ``panel_sheet``: the sheet and shift whose lenticules' phase on the panel names the views (``labels``,
+    ``offset``), when the lens sheet itself is smaller (a Looking Glass's, converging at the viewer).
+    ``view_at``: a function giving the view (int) of panel points ``(..., 2)`` mm instead (a Looking
+    Glass's shader phase, ``device_views_at``).
+
+    Returns the shares of the lenses left in whose dominant view is the right one, and within one view.
+    """
+    e = np.asarray(eye, np.float64)
+    if offset is None and view_at is None:
+        offset = label_centre_offset(sheet, shift, labels, views)
+    centre, reverse = offset or (None, None)
+    H = sheet.panel.height
+    if not 1 <= rows <= H:
+        raise ConfigError(f"an aperture of {rows} rows does not fit a panel of {H}; give 1 to {H}")
+    total = sheet.lenses_x * (H // rows)
+    rng = np.random.default_rng(seed)
+    flat = np.arange(total) if lenses is None or lenses >= total else np.sort(rng.choice(total, lenses, replace=False))
+    j, r = flat % sheet.lenses_x, (flat // sheet.lenses_x) * rows
+    k_n, m_n = samples
+    across = ((np.arange(k_n) + 0.5) / k_n - 0.5) * sheet.pitch_x
+    along = (np.arange(m_n) + 0.5) / m_n * rows
+    axis = (j + 0.5 - sheet.lenses_x / 2) * sheet.pitch_x + shift            # lattice X of the lenticule's axis
+    X = axis[:, None, None] + across[None, :, None] + 0 * along[None, None, :]
+    y = (H / 2 - r[:, None, None] - along[None, None, :]) * sheet.panel.pitch_y + 0 * X  # within row r's band
+    t = math.radians(sheet.rotation)
+    Y = (y - math.sin(t) * X) / math.cos(t)                                  # the lattice Y with that panel y
+    a = np.stack(sheet.from_lattice(X, Y), axis=-1)
+    c = np.stack(sheet.from_lattice(axis[:, None, None] + 0 * X, Y), axis=-1)
+    land = c + (a - e[:2]) * (sheet.focal / abs(e[2]))
+    if view_at is not None:
+        geometric = view_at(land).astype(np.int64).reshape(flat.size, -1)
+    else:
+        phase, phase_shift = panel_sheet or (sheet, shift)
+        lx, _ = phase.to_lattice(land[..., 0], land[..., 1])
+        u = (lx - phase_shift) / phase.pitch_x + phase.lenses_x / 2
+        frac = u - np.floor(u)
+        g = views * (1 - frac if reverse else frac)
+        geometric = np.floor(g - centre + 0.5).astype(np.int64).reshape(flat.size, -1)
+    from .subpixel import subpixel_array
+
+    pix, on = panel_pixel(subpixel_array(panel_sheet[0] if panel_sheet else sheet), land)
+    on = on.reshape(flat.size, -1)
+    col3, row = pix[..., 0].reshape(flat.size, -1), pix[..., 1].reshape(flat.size, -1)
+    seen = np.where(on, labels[np.maximum(row, 0), np.maximum(col3, 0) // 3, np.maximum(col3, 0) % 3], -1)
+    whole = on.all(axis=1)
+    straddles = geometric.min(axis=1) != geometric.max(axis=1)
+    kept = whole & ~straddles
+    counts = np.zeros((flat.size, views), np.int64)
+    np.add.at(counts, (np.repeat(np.arange(flat.size), seen.shape[1])[on.ravel()], seen[on]), 1)
+    dominant = counts.argmax(axis=1)
+    right = geometric[:, 0] % views if expected is None else np.full(flat.size, int(expected))
+    d = np.abs(dominant - right)
+    lobes = np.minimum(d, views - d)  # the views repeat in lobes: view N - 1 borders the next lobe's view 0
+    if expected is None:
+        d = lobes
+    n = int(kept.sum())
+    out = {"eye_mm": e.tolist(), "lenses": int(flat.size), "lenses_of_sheet": int(total),
+           "off_panel": int((~whole).sum()), "straddling_a_view_boundary": int((whole & straddles).sum()),
+           "measured": n, "aperture_samples": [k_n, m_n], "aperture_rows": rows}
+    if expected is None and view_at is None:
+        out.update(label_offset_views=centre, views_reversed=reverse)
+    if expected is not None:
+        out["expected_view"] = int(expected)
+    # none measured: every lens straddles a boundary, the eye is between two views
+    out["dominant_view_share"] = float((kept & (d == 0)).sum() / n) if n else None
+    out["dominant_within_one_view_share"] = float((kept & (d <= 1)).sum() / n) if n else None
+    if expected is not None:  # the camera's view counted as the far end of the neighbouring lobe too
+        out["dominant_within_one_view_share_across_lobes"] = float((kept & (lobes <= 1)).sum() / n) if n else None
+    return out
+
+
+# -- a Looking Glass: its native image through the device's sheet --------------------------------------
+def device_views_at(cal, points: np.ndarray, views: int) -> np.ndarray:
+    """The view (int) the vendor's shader gives a subpixel centred at each panel point ``(..., 2)`` mm
+    (panel frame: origin at the centre, y up).  The shader reads subpixel ``c`` of pixel ``col`` at
+    ``(col + 1/2 + c/3) / W``, a third of a pixel right of its centre ``(col + c/3 + 1/6) / W``; the
+    calibration was made with it, so that is the view of the light there."""
+    from .mappings.looking_glass_shader import _HIGH, _LOW, shader_uniforms
+
+    u = shader_uniforms(cal)
+    w_mm, h_mm = cal.size_mm
+    x = points[..., 0] / w_mm + 0.5 + u["subp"]
+    y = points[..., 1] / h_mm + 0.5
+    a = (x + y * u["tilt"]) * u["pitch"] - u["center"]
+    frac = a - np.floor(a)
+    if cal.inv_view:
+        frac = 1.0 - frac
+    return np.minimum((np.clip(frac, _LOW, _HIGH) * views).astype(np.int64), views - 1)
+
+
+def device_sheet(cal, focal: float, distance: float) -> tuple[LensArray, float, LensArray, float]:
+    """A Looking Glass's lenticular sheet for an eye at ``distance`` mm: ``(lens sheet, its shift, panel
+    sheet, its shift)``.  The panel sheet is the calibration's lenticules on the panel (pitch and slant
+    from ``pitch``, ``slope`` and ``DPI``), each axis on the line where the shader's view fraction is 1/2
+    (``center`` puts the middle view straight ahead); the lens sheet is that sheet drawn toward the
+    screen's centre by ``D / (D + f)``, so every lenticule shows the eye at ``(0, 0, -D)`` its axis: the
+    views converge at the viewer, as the vendor's cameras assume (each sees the whole screen)."""
+    from ..geometry.lens_array import Panel
+
+    if cal.subpixel_cells:
+        raise ConfigError("replay models a Looking Glass panel of plain R, G, B stripes; this unit's subpixel "
+                          "cells (Gen3 16\" and 32\") are not built yet")
+    pitch_mm = cal.pixel_pitch_mm
+    panel = Panel(cal.screen_w, cal.screen_h, pitch_mm, pitch_mm)
+    turn = math.atan(1.0 / cal.slope)        # the lenticules' lean (counter-clockwise positive)
+    across = cal.lens_pitch_mm * math.cos(turn)
+    w_mm, h_mm = cal.size_mm
+    reach = w_mm * math.cos(turn) + h_mm * abs(math.sin(turn))
+    lenses = math.ceil(reach / across) + 3
+    sheet = LensArray("lenticular", lenses, cal.screen_h, across, pitch_mm, focal, panel, math.degrees(turn))
+    # the phase along the lattice's X at the centre: where the view fraction is 1/2
+    probe = np.stack(sheet.from_lattice(np.array([0.0, 1e-3]), np.zeros(2)), axis=-1)
+    from .mappings.looking_glass_shader import shader_uniforms
+
+    u = shader_uniforms(cal)
+    x = probe[:, 0] / w_mm + 0.5 + u["subp"]
+    y = probe[:, 1] / h_mm + 0.5
+    a = (x + y * u["tilt"]) * u["pitch"] - u["center"]
+    slope = (a[1] - a[0]) / 1e-3                          # lenticules per mm along X
+    if not math.isclose(abs(slope) * across, 1.0, rel_tol=1e-3):
+        raise ConfigError("the calibration's pitch and slope do not make one lenticule a pitch; check visual.json")
+    axis = (0.5 - (a[0] - math.floor(a[0]))) / slope      # X of a lenticule axis (fract(a) = 1/2)
+    centre0 = (0.5 - lenses / 2) * across                  # lattice X of lens 0's axis before the shift
+    shift = ((axis - centre0) / across % 1.0) * across
+    shift = shift - across if shift > across / 2 else shift
+    k = distance / (distance + focal)
+    lens_sheet = LensArray("lenticular", lenses, cal.screen_h, across * k, pitch_mm, focal, panel, sheet.rotation)
+    return lens_sheet, shift * k, sheet, shift
+
+
+def device_report(cal, labels: np.ndarray, eye, views: int, focal: float, distance: float,
+                  cone_deg: float, *, lenses: int | None = APERTURE_LENSES, rows: int = 1) -> dict:
+    """Per eye on a Looking Glass: the view each lens shows over its aperture (``aperture_views``) against
+    the view whose vendor camera is nearest the eye's direction (``quilt.view_offsets``: view ``q`` at the
+    angle ``(q / (N - 1) - 1/2) cone``), and the view the shader puts at the landing points."""
+    lens_sheet, lens_shift, sheet, shift = device_sheet(cal, focal, distance)
+    e = np.asarray(eye, np.float64)
+    angle = math.degrees(math.atan2(e[0], -e[2]))
+    expected = int(np.clip(round((angle / cone_deg + 0.5) * (views - 1)), 0, views - 1))
+
+    def at(points: np.ndarray) -> np.ndarray:
+        return device_views_at(cal, points, views)
+
+    kw: dict[str, Any] = dict(panel_sheet=(sheet, shift), view_at=at, lenses=lenses, rows=rows)
+    out = aperture_views(lens_sheet, lens_shift, labels, e, views, expected=expected, **kw)
+    own = aperture_views(lens_sheet, lens_shift, labels, e, views, **kw)
+    out["camera_view"] = expected
+    out["shader_view_share"] = own["dominant_view_share"]
+    out["shader_within_one_view_share"] = own["dominant_within_one_view_share"]
+    return out

@@ -33,6 +33,7 @@ from ..image.colour import mean_in_linear_light
 if TYPE_CHECKING:  # the method (renderer.methods.registry) builds the camera; this module only reads it
     from ..geometry.phase_tiles import PhaseTiles
     from .mappings import Mapping
+    from .mappings.slanted import Slanted
 
 
 def subpixel_array(lens_array: LensArray) -> LensArray:
@@ -56,7 +57,7 @@ def slanted_sheet(mapping: Mapping, panel: Panel, focal: float) -> tuple[LensArr
     A subpixel whose centre lies ``t`` lens pitches across the centred sheet has the
     mapping's phase ``X t - 1/2`` (the phase is its left edge), hence ``k_off``.
     """
-    _check_subpixel_mapping(mapping)
+    mapping = _check_subpixel_mapping(mapping)
     sheet, t = _centred(mapping, panel, focal, spare=1)
     return sheet, round((mapping.per_lens * t - 0.5) % mapping.per_lens, 9) % mapping.per_lens
 
@@ -70,19 +71,20 @@ def placed_sheet(mapping: Mapping, panel: Panel, focal: float) -> tuple[LensArra
     least such, modulo whole lenses) gives every subpixel the mapping's own phase.  Two spare
     lenses keep the panel covered whichever way it moves.
     """
-    _check_subpixel_mapping(mapping, reverse_ok=True)
+    mapping = _check_subpixel_mapping(mapping, reverse_ok=True)
     sheet, t = _centred(mapping, panel, focal, spare=3)
     x = mapping.per_lens
     s = ((x * t - 0.5 - mapping.offset) / x + 0.5) % 1.0 - 0.5
     return sheet, s * sheet.pitch_x
 
 
-def _check_subpixel_mapping(mapping: Mapping, reverse_ok: bool = False) -> None:
+def _check_subpixel_mapping(mapping: Mapping, reverse_ok: bool = False) -> Slanted:
     from .mappings.slanted import Slanted  # only the CLI asks: keeps the render's import chain short
 
     if not isinstance(mapping, Slanted) or mapping.unit != "subpixel" or (mapping.reverse and not reverse_ok):
         raise ConfigError(f"--method subpixel traces the sheet of a slanted subpixel mapping; {mapping.name!r} "
                           "is not one: give the sheet with --grid lenticular --ppl --lens-rotation instead")
+    return mapping
 
 
 def _centred(mapping: Any, panel: Panel, focal: float, spare: int) -> tuple[LensArray, float]:

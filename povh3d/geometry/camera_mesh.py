@@ -201,4 +201,4 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
     base = n * np.arange(shape[0])[:, None]
     faces = np.concatenate([base + [0, t, t + 1] for t in range(1, n - 1)], axis=1).reshape(-1, 3)
     return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1),
-                      tuple(float(a) for a in scale))
+                      (float(scale[0]), float(scale[1]), float(scale[2])))

@@ -151,4 +151,5 @@ def capture_bank(lens_array: LensArray, density: int = 1) -> CaptureBank:
             cost = (la.lenses_x + 2 * ex) * n * (la.lenses_y + 2 * ey) * m / (2 if ex_x and ex_y else 1)
             if best is None or cost < best[0]:
                 best = (cost, CaptureBank((n, m), (a, b), t, offsets))
+    assert best is not None  # each axis has candidates: four N from the pixels per lens up
     return best[1]

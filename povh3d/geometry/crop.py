@@ -198,7 +198,7 @@ def _reach(c: np.ndarray, slope_lo: np.ndarray, slope_hi: np.ndarray, extent: np
     return (c[None, :] >= lo[:, None]) & (c[None, :] <= hi[:, None])
 
 
-def check_bbox(bbox: np.ndarray | tuple) -> np.ndarray:
+def check_bbox(bbox: np.ndarray | tuple | list[float]) -> np.ndarray:
     """``bbox`` as a (2, 3) float array, or a ConfigError naming what is wrong."""
     try:
         box = np.asarray(bbox, dtype=np.float64).reshape(2, 3)
@@ -230,7 +230,7 @@ def mask_hits(mask: np.ndarray, views: tuple[int, int]) -> tuple[np.ndarray, np.
     if h % ny or w % nx:
         raise ValueError(f"mask of shape {mask.shape} does not tile into {ny}x{nx} views")
     m = np.asarray(mask, dtype=bool).reshape(ny, h // ny, nx, w // nx)
-    return m.any(axis=(0, 1)), m.any(axis=(2, 3))
+    return np.asarray(m.any(axis=(0, 1))), np.asarray(m.any(axis=(2, 3)))
 
 
 # -- the plan -------------------------------------------------------------------------
@@ -375,7 +375,7 @@ class CropSettings:
             raise ConfigError(f"the crop margin must be a whole number of lenses >= 2, got {self.margin!r}")
 
 
-def parse_bbox(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def parse_bbox(text: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """``'xmin,ymin,zmin,xmax,ymax,zmax'`` (mm; ``inf`` allowed) -> ((xmin, ymin, zmin), (xmax, ymax, zmax))."""
     parts = [p for p in text.replace(" ", ",").split(",") if p]
     try:
@@ -385,4 +385,5 @@ def parse_bbox(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     if len(values) != 6:
         raise ConfigError(f"--bbox takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {text!r}")
     box = check_bbox(values)
-    return tuple(box[0].tolist()), tuple(box[1].tolist())
+    (x0, y0, z0), (x1, y1, z1) = box.tolist()
+    return (x0, y0, z0), (x1, y1, z1)

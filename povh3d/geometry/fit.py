@@ -79,7 +79,7 @@ def fit_to_display(lo: np.ndarray, hi: np.ndarray, lens_array: LensArray, *,
     scales = {k: limits[k] / s for k, s in zip(limits, size) if s > 0}
     if not scales:
         raise ConfigError("the model is a single point; it cannot be scaled to the display")
-    limit = min(scales, key=scales.get)
+    limit = min(scales, key=scales.__getitem__)
     scale = scales[limit]
     return Placement(tuple((-(lo + hi) / 2).tolist()), float(scale), tuple((size * scale).tolist()), limit, float(budget))
 

@@ -182,7 +182,7 @@ def explicit_frame(centre: Any, normal: Any, width: float, panel_width_mm: float
         up = default_up(z)
     u = _vec(up, "--display-up")
     x = np.cross(u, z)
-    if not np.linalg.norm(x) > 1e-9 * max(np.linalg.norm(u), 1e-300):
+    if not np.linalg.norm(x) > 1e-9 * max(float(np.linalg.norm(u)), 1e-300):
         raise ConfigError("the display's up is parallel to its normal; give a --display-up across the normal")
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
@@ -220,6 +220,6 @@ def camera_frame(location: Any, direction: Any, right: Any, up: Any, look_at: An
     y = np.cross(z, x)  # POV-Ray's up = direction x right
     if np.dot(y, u) < 0:
         y = -y  # a mirrored camera: the image's up stays up
-    width = distance * np.linalg.norm(r) / np.linalg.norm(d)
+    width = float(distance * np.linalg.norm(r) / np.linalg.norm(d))
     return DisplayFrame(tuple(centre), tuple(x), tuple(y), tuple(z), width / panel_width_mm, "camera", note,
                         float(np.linalg.norm(centre - loc)))

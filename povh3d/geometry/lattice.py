@@ -67,7 +67,8 @@ def cross_lenticular_basis(pitch_v: float, pitch_h: float, slant_deg: float,
     a1, a2 = np.array([pitch_v, pitch_v * math.tan(t)]), np.array([0.0, pitch_h / math.cos(t)])
     c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
     turn = np.array([[c, -s], [s, c]])
-    return tuple(map(float, turn @ a1)), tuple(map(float, turn @ a2))
+    (x1, y1), (x2, y2) = turn @ a1, turn @ a2
+    return (float(x1), float(y1)), (float(x2), float(y2))
 
 
 def lattice_coordinates(a1: np.ndarray, a2: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

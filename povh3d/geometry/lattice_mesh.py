@@ -83,7 +83,7 @@ def lattice_mesh(lens_array: LensArray, front_clearance: float, shift: float = 0
         owner, inside = _pixel_owners(la, X, Y)
         c = la.lattice_centres().reshape(-1, 2)[np.unique(owner[inside])]
         if la.grid == "lattice":  # the parallelogram spanned by the two vectors
-            (a1x, a1y), (a2x, a2y) = la.basis
+            (a1x, a1y), (a2x, a2y) = la.basis_vectors()
             cs, ct = np.array([-0.5, 0.5, 0.5, -0.5]), np.array([-0.5, -0.5, 0.5, 0.5])
             cs, ct = cs - _tie_shift(la, X, Y, 0), ct + _tie_shift(la, X, Y, 1)
             cu, cv = cs * a1x + ct * a2x, cs * a1y + ct * a2y
@@ -116,11 +116,11 @@ def _tie_shift(la: LensArray, X: np.ndarray, Y: np.ndarray, axis: int) -> float:
     """How far (in lattice units along ``a1`` or ``a2``) to move every cell off pixel centres
     that lie on its edges: ``TIE_SHIFT`` of a pixel, so that such a pixel is looked up inside
     the lens ``pixel_rays`` gives it (right, below), as ``camera_mesh`` does; 0 without ties."""
-    st = lattice_coordinates(*np.array(la.basis), X, Y)[axis]
+    st = lattice_coordinates(*la.basis_vectors(), X, Y)[axis]
     edge = st + (la.lenses_x if axis == 0 else la.lenses_y) / 2
     if not np.any(np.abs(edge - np.rint(edge)) < 1e-7):
         return 0.0
-    return TIE_SHIFT * la.panel.pitch_x / float(np.hypot(*la.basis[axis]))
+    return TIE_SHIFT * la.panel.pitch_x / float(np.hypot(*la.basis_vectors()[axis]))
 
 
 def _unshear(la: LensArray, ox: np.ndarray, oy: np.ndarray, u: np.ndarray, v: np.ndarray):
@@ -146,7 +146,7 @@ def _pixel_owners(la: LensArray, X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarr
     """Flat lens index ``i * Lx + j`` of the lens owning each pixel, and whether one does."""
     centres, _, inside = pixel_rays(la)
     if la.grid == "lattice":
-        s, t = lattice_coordinates(*np.array(la.basis), centres[..., 0], centres[..., 1])
+        s, t = lattice_coordinates(*la.basis_vectors(), centres[..., 0], centres[..., 1])
         owner = np.where(inside, np.rint(la.lenses_y / 2 - 0.5 - t) * la.lenses_x + np.rint(s + la.lenses_x / 2 - 0.5), -1)
         return owner.astype(np.int64), inside
     lattice = la.lattice_centres()

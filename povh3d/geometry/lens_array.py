@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TypeVar
 
 import numpy as np
 
@@ -17,6 +18,8 @@ from .axes import to_edge
 from ..errors import ConfigError
 
 GRIDS = ("square", "lenticular", "hex", "lattice")
+
+_Coord = TypeVar("_Coord", np.ndarray, float)  # coordinates: arrays, or one point's numbers
 
 # PPL closer than this to a whole number counts as integral: pitches come from
 # decimal data sheets (0.3825 / 0.0425 is 9 within rounding, not exactly).
@@ -289,19 +292,26 @@ class LensArray:
         return (np.degrees(np.arctan2(u, self.focal)), np.degrees(np.arctan2(v, self.focal)))
 
     # -- lens centres ------------------------------------------------------------
-    def to_lattice(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def to_lattice(self, x: _Coord, y: _Coord) -> tuple[_Coord, _Coord]:
         """Panel coordinates (mm) in the lattice's own frame: turned back by ``-rotation``."""
         if not self.rotation:
             return x, y
         c, s = math.cos(math.radians(self.rotation)), math.sin(math.radians(self.rotation))
         return c * x + s * y, -s * x + c * y
 
-    def from_lattice(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def from_lattice(self, x: _Coord, y: _Coord) -> tuple[_Coord, _Coord]:
         """Lattice-frame coordinates (or offsets) in the panel frame: turned by ``rotation``."""
         if not self.rotation:
             return x, y
         c, s = math.cos(math.radians(self.rotation)), math.sin(math.radians(self.rotation))
         return c * x - s * y, s * x + c * y
+
+    def basis_vectors(self) -> tuple[np.ndarray, np.ndarray]:
+        """``a1, a2`` of a ``grid='lattice'`` array (``basis``) as arrays, mm."""
+        if self.basis is None:
+            raise ConfigError(f"lattice vectors are for grid 'lattice', not {self.grid!r}")
+        a1, a2 = np.array(self.basis)
+        return a1, a2
 
     def lens_centres(self) -> np.ndarray:
         """Centre of every lens on the display plane.
@@ -320,7 +330,7 @@ class LensArray:
         j = np.arange(self.lenses_x, dtype=np.float64)
         i = np.arange(self.lenses_y, dtype=np.float64)
         if self.grid == "lattice":
-            (a1x, a1y), (a2x, a2y) = self.basis
+            (a1x, a1y), (a2x, a2y) = self.basis_vectors()
             s, t = (j + 0.5 - self.lenses_x / 2)[None, :], ((self.lenses_y / 2 - i - 0.5))[:, None]
             return np.stack([s * a1x + t * a2x, s * a1y + t * a2y], axis=-1)
         cx = np.broadcast_to((j + 0.5 - self.lenses_x / 2) * self.pitch_x, (self.lenses_y, self.lenses_x))

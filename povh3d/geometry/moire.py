@@ -92,7 +92,7 @@ def lattice_basis(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray]:
     """The two lattice vectors (mm) of a square grid (turned) or a general lattice."""
     la = lens_array
     if la.grid == "lattice":
-        return np.array(la.basis[0]), np.array(la.basis[1])
+        return la.basis_vectors()
     if la.grid == "square":
         return (np.array(la.from_lattice(np.float64(la.pitch_x), np.float64(0.0))),
                 np.array(la.from_lattice(np.float64(0.0), np.float64(la.pitch_y))))
@@ -192,7 +192,7 @@ def _spectrum_peak(b: np.ndarray, lens_array: LensArray, blur: float) -> tuple[n
     return shortest_alias(a1, a2, _wave_vectors(a1, a2, np.float64(nu_j0), np.float64(nu_i0))), float(weighted[i, j])
 
 
-def _wave_vectors(a1: np.ndarray, a2: np.ndarray, nu_j: np.ndarray, nu_i: np.ndarray) -> np.ndarray:
+def _wave_vectors(a1: np.ndarray, a2: np.ndarray, nu_j: np.ndarray | float, nu_i: np.ndarray | float) -> np.ndarray:
     """Physical wave vectors ``k`` of index frequencies: lens ``(j, i)`` sits at ``j a1 - i a2`` (+ a
     constant), so ``k . a1 = nu_j`` and ``k . a2 = -nu_i``."""
     inv = np.linalg.inv(np.array([a1, a2]))
@@ -211,15 +211,12 @@ def shortest_alias(a1: np.ndarray, a2: np.ndarray, k: np.ndarray) -> np.ndarray:
     g1, g2 = reciprocal(a1, a2)
     gm = np.array([g1, g2]).T
     n = np.rint(np.einsum("ij,...j->...i", np.linalg.inv(gm), k))
-    best = None
-    for d1 in (-1, 0, 1):  # rounding in a skewed basis can miss the nearest by one step
-        for d2 in (-1, 0, 1):
-            cand = k - (n[..., 0:1] + d1) * g1 - (n[..., 1:2] + d2) * g2
-            if best is None:
-                best = cand
-            else:
-                shorter = np.sum(cand ** 2, axis=-1) < np.sum(best ** 2, axis=-1)
-                best = np.where(shorter[..., None], cand, best)
+    # rounding in a skewed basis can miss the nearest by one step
+    cands = [k - (n[..., 0:1] + d1) * g1 - (n[..., 1:2] + d2) * g2 for d1 in (-1, 0, 1) for d2 in (-1, 0, 1)]
+    best = cands[0]
+    for cand in cands[1:]:
+        shorter = np.sum(cand ** 2, axis=-1) < np.sum(best ** 2, axis=-1)
+        best = np.where(shorter[..., None], cand, best)
     return best
 
 

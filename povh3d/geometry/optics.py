@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import cast
 
 import numpy as np
 
@@ -70,7 +71,7 @@ def default_ior(focal: float, rho: float, thinness: float = DEFAULT_THINNESS) ->
     return max(GLASS_IOR, math.ceil(n * 100) / 100)
 
 
-def sag(h: np.ndarray, radius: float, conic: float) -> np.ndarray:
+def sag(h: np.ndarray | float, radius: float, conic: float) -> np.ndarray:
     """Sag ``s(h)`` of the conic surface ``h^2 = 2 R s - (1 + K) s^2``, mm.
 
     Parameters
@@ -148,14 +149,18 @@ class Lenslet:
         return hi
 
     @property
+    def refractive_index(self) -> float:
+        return cast(float, self.ior)  # a float: __post_init__ replaces None by default_ior
+
+    @property
     def radius(self) -> float:
         """Vertex radius of the curved face, ``R = (n - 1) f``, mm (lens-maker)."""
-        return (self.ior - 1.0) * self.focal
+        return (self.refractive_index - 1.0) * self.focal
 
     @property
     def conic(self) -> float:
         """Conic constant ``K``: 0 (sphere) or ``-n^2`` (hyperboloid)."""
-        return 0.0 if self.shape == "spherical" else -self.ior ** 2
+        return 0.0 if self.shape == "spherical" else -self.refractive_index ** 2
 
     @property
     def aperture_radius(self) -> float:
@@ -178,7 +183,7 @@ class Lenslet:
         Sphere: incidence ``asin(h/R)`` exceeds ``asin(1/n)`` past ``h = R/n``.
         The hyperboloid approaches the critical angle only at infinity: ``inf``.
         """
-        return self.radius / self.ior if self.shape == "spherical" else math.inf
+        return self.radius / self.refractive_index if self.shape == "spherical" else math.inf
 
     def quadric(self) -> tuple[tuple[float, float, float], tuple[float, float, float],
                                tuple[float, float, float], float]:

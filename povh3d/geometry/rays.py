@@ -30,6 +30,39 @@ def nearest_hex_lens(centres: np.ndarray, X: np.ndarray, Y: np.ndarray, px: floa
     return best_i, best_j
 
 
+def lens_of_points(lens_array: LensArray, X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Row ``i`` and column ``j`` of the lens whose cell holds each point ``(X, Y)`` of the lattice's own
+    frame (mm; ``LensArray.to_lattice``), and whether any lens holds it (``inside``; ``i``, ``j`` are then
+    clipped into the array).  The rule of a pixel's lens (docs/geometry.md), for any point: square and
+    lenticular, the pitch rectangle, a point on its border going to the lens on the right or below; hex,
+    the true hexagon; lattice, the parallelogram spanned by its vectors."""
+    centres = lens_array.lattice_centres()
+    Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
+    px, py = lens_array.pitch_x, lens_array.pitch_y
+    if lens_array.grid == "hex":
+        i, j = nearest_hex_lens(centres, X, Y, px, py)
+        # Inside the true hexagon (flat sides at |dx| = px/2, slanted sides at
+        # |dx|/2 + sqrt(3)/2 |dy| = px/2), not its circumradius disc: the disc pokes
+        # out past the slanted sides on the outer rows, where no lens lies.
+        dx, dy = np.abs(X - centres[i, j, 0]), np.abs(Y - centres[i, j, 1])
+        half = px / 2 * (1 + 1e-9)
+        return i, j, (dx <= half) & (dx / 2 + np.sqrt(3) / 2 * dy <= half)
+    # A point on a lens border (fractional PPL) belongs to the lens on its right (below); the
+    # tolerance keeps rounding from deciding.
+    fj = X / px + Lx / 2 + 1e-9
+    fi = Ly / 2 - Y / py + 1e-9
+    if lens_array.grid == "lattice":  # the parallelogram cell: lattice coordinates, as square
+        from .lattice import lattice_coordinates  # here: keeps the rays' imports shallow
+
+        s, t = lattice_coordinates(*lens_array.basis_vectors(), X, Y)
+        fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
+    j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
+    inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
+    if lens_array.grid == "lenticular" and lens_array.rotation:
+        inside = (j >= 0) & (j < Lx)  # a slanted lenticule runs across every row
+    return np.clip(i, 0, Ly - 1), np.clip(j, 0, Lx - 1), inside
+
+
 def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The ray of every panel pixel (docs/geometry.md, "The ray of a pixel").
 
@@ -53,31 +86,7 @@ def pixel_rays(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     # A rotated lattice is worked out in its own frame and turned back at the end.
     X, Y = lens_array.to_lattice(*np.meshgrid(X, Y))  # (H, W)
     centres = lens_array.lattice_centres()
-    Lx, Ly = lens_array.lenses_x, lens_array.lenses_y
-    px, py = lens_array.pitch_x, lens_array.pitch_y
-    if lens_array.grid == "hex":
-        i, j = nearest_hex_lens(centres, X, Y, px, py)
-        # Inside the true hexagon (flat sides at |dx| = px/2, slanted sides at
-        # |dx|/2 + sqrt(3)/2 |dy| = px/2), not its circumradius disc: the disc pokes
-        # out past the slanted sides on the outer rows, where no lens lies.
-        dx, dy = np.abs(X - centres[i, j, 0]), np.abs(Y - centres[i, j, 1])
-        half = px / 2 * (1 + 1e-9)
-        inside = (dx <= half) & (dx / 2 + np.sqrt(3) / 2 * dy <= half)
-    else:
-        # A pixel centre on a lens border (fractional PPL) belongs to the lens on
-        # its right (below); the tolerance keeps rounding from deciding.
-        fj = X / px + Lx / 2 + 1e-9
-        fi = Ly / 2 - Y / py + 1e-9
-        if lens_array.grid == "lattice":  # the parallelogram cell: lattice coordinates, as square
-            from .lattice import lattice_coordinates  # here: keeps the rays' imports shallow
-
-            s, t = lattice_coordinates(*np.array(lens_array.basis), X, Y)
-            fj, fi = s + Lx / 2 + 1e-9, Ly / 2 - t + 1e-9
-        j, i = np.floor(fj).astype(np.int64), np.floor(fi).astype(np.int64)
-        inside = (j >= 0) & (j < Lx) & (i >= 0) & (i < Ly)
-        if lens_array.grid == "lenticular" and lens_array.rotation:
-            inside = (j >= 0) & (j < Lx)  # a slanted lenticule runs across every row
-        j, i = np.clip(j, 0, Lx - 1), np.clip(i, 0, Ly - 1)
+    i, j, inside = lens_of_points(lens_array, X, Y)
     c = centres[i, j].copy()
     if lens_array.grid == "lenticular":
         c[..., 1] = Y  # the point of the lenticule's axis beside the pixel (unrotated: its row)

@@ -140,7 +140,7 @@ def _schema():
         return etree.XMLSchema(etree.parse(fh))
 
 
-def _pair(values: tuple[int, int] | None) -> str:
+def _pair(values: tuple[int, int]) -> str:
     return f"{values[0]} {values[1]}"
 
 

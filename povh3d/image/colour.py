@@ -26,7 +26,8 @@ def decode(image: np.ndarray, dtype: np.dtype | type = np.float64) -> np.ndarray
     """An sRGB image to linear light in ``dtype``: 8- or 16-bit, or float already in ``[0, 1]``."""
     image, dtype = np.asarray(image), np.dtype(dtype).type
     if image.dtype in (np.uint8, np.uint16):
-        return _decode_table(image.dtype.type, dtype)[image]
+        # mypy misses that type[Any] is hashable (lru_cache's Hashable arguments)
+        return _decode_table(image.dtype.type, dtype)[image]  # type: ignore[arg-type]
     if np.issubdtype(image.dtype, np.integer):
         image = image.astype(dtype) / dtype(np.iinfo(image.dtype).max)
     return srgb_to_linear(image, dtype)

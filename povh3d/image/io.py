@@ -212,9 +212,10 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
         else:  # Pillow reads a file by parts: no copy of its bytes beside the image
             with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
                 im.load()
+                picture: Image.Image = im
                 if im.mode not in ("RGB", "RGBA", "L", "LA"):
-                    im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
-                arr = np.asarray(im)
+                    picture = im.convert("RGBA" if "A" in im.getbands() else "RGB")
+                arr = np.asarray(picture)
     except MemoryError:
         raise InputError(f"{name!r} is too large to read into memory") from None
     except Exception as exc:  # noqa: BLE001 - zlib, pypng and Pillow raise many kinds on a damaged file

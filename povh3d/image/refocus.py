@@ -124,7 +124,7 @@ def lens_steps(lens_array: LensArray, views: tuple[int, int]) -> tuple[np.ndarra
     if la.grid == "lattice":  # columns along a1, rows against a2
         from ..geometry.lattice import lattice_coordinates
 
-        cols, up = lattice_coordinates(*np.array(la.basis), du, dv)
+        cols, up = lattice_coordinates(*la.basis_vectors(), du, dv)
         steps = np.stack([-up, cols], -1)
     else:
         steps = np.stack([-dv / la.pitch_y, du / la.pitch_x], -1)

@@ -66,7 +66,7 @@ class _Rgb8(Sequence):
     def __len__(self) -> int:
         return len(self.frames)
 
-    def __getitem__(self, index):  # type: ignore[override]
+    def __getitem__(self, index):
         if isinstance(index, slice):
             return [self[i] for i in range(*index.indices(len(self)))]
         frame = to_rgb8(self.frames[index])

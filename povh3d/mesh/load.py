@@ -19,6 +19,7 @@ import logging
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -320,11 +321,12 @@ def load_model(path: str | Path, *, unit: str | None = None) -> LoadedModel:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            scene = trimesh.load(str(path), file_type=fmt.file_type, resolver=resolver,
-                                 force="scene", process=False, **split)
+            # cast: force="scene" makes trimesh.load return a Scene (typed as any Geometry)
+            scene = cast(trimesh.Scene, trimesh.load(str(path), file_type=fmt.file_type, resolver=resolver,
+                                                     force="scene", process=False, **split))
             if split and len(scene.geometry) > MAX_SPLIT_PARTS:   # a group per face: by material as before
-                scene = trimesh.load(str(path), file_type=fmt.file_type, resolver=resolver,
-                                     force="scene", process=False)
+                scene = cast(trimesh.Scene, trimesh.load(str(path), file_type=fmt.file_type, resolver=resolver,
+                                                         force="scene", process=False))
     except Exception as exc:  # trimesh raises anything from ValueError to struct.error on bad bytes
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"cannot read {str(path)!r} as {fmt.name}: {reason}") from None

@@ -75,10 +75,10 @@ def mesh2_text(part: Part, *, smooth: bool, normals: np.ndarray | None, texture_
     # the name is a comment: a line break in it (a glTF node may have one) would end the comment early
     out = [f"mesh2 {{  // {' '.join(part.name.splitlines())}\n",
            _block("vertex_vectors", len(part.vertices), format_vectors32(part.vertices))]
-    if smooth:
+    if smooth and normals is not None:  # given together (normals None: flat)
         out.append(_block("normal_vectors", len(normals), format_vectors32(normals)))
     textured = texture_file is not None and part.uv is not None
-    if textured:
+    if texture_file is not None and part.uv is not None:  # textured
         out.append(_block("uv_vectors", len(part.uv), format_vectors(part.uv)))
 
     faces = part.faces
@@ -95,7 +95,7 @@ def mesh2_text(part: Part, *, smooth: bool, normals: np.ndarray | None, texture_
     else:
         out.append(_block("face_indices", len(faces), format_vectors32(faces)))
 
-    if textured:
+    if texture_file is not None and textured:
         kind = "png"
         out.append(f"  texture {{ uv_mapping pigment {{ image_map {{ {kind} concat({ident}_Dir, "
                    f"{pov_string(texture_file)}) interpolate 2 }} }} finish {{ Povh3d_Mesh_Finish }} }}\n")

@@ -162,7 +162,7 @@ def _cause(before: list[str]) -> str | None:
             break
         run.insert(0, _join(where, _POSSIBLE.sub("", message)))
     named = [cause for cause in run if _NAMES_FILE.search(cause)]
-    return (named or run or [None])[0]
+    return (named or run)[0] if run else None
 
 
 def _plain_error(lines: list[str]) -> str | None:

@@ -293,7 +293,9 @@ def _deferred_interrupt() -> Iterator[None]:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
         if caught:
-            previous[caught[0]](caught[0], None)  # e.g. the default SIGINT handler raises KeyboardInterrupt
+            handler = previous[signal.Signals(caught[0])]
+            if callable(handler):  # always: only signals with a handler function were held
+                handler(caught[0], None)  # e.g. the default SIGINT handler raises KeyboardInterrupt
 
 
 def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | None = None,
@@ -305,8 +307,10 @@ def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | Non
             _signal_groups(running, signal.SIGKILL)  # (POV-Ray takes ~0.6 s to act on SIGTERM)
             raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
         for child in running:
-            for number in child.watch.finished_frames() if on_frame is not None else ():
-                on_frame(child.job, number - 1, child.watch.frame_image(number))
+            frame_image = child.watch.frame_image  # None: a single image, no frames reported
+            if on_frame is not None and frame_image is not None:
+                for number in child.watch.finished_frames():
+                    on_frame(child.job, number - 1, frame_image(number))
             if child.process.poll() is None and child.watch.images_done():
                 _signal_groups([child], signal.SIGKILL)  # only its shutdown is left (JobWatch)
                 child.watch.early = child.process.wait() is not None
@@ -316,10 +320,10 @@ def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | Non
             child.ended = now
         if exited:
             return exited
-        timed = [child for child in running if child.job.timeout is not None]
-        wake = [child.started + child.job.timeout - now for child in timed]
+        timed = [(child, child.job.timeout) for child in running if child.job.timeout is not None]
+        wake = [child.started + timeout - now for child, timeout in timed]
         if any(left < 0 for left in wake):
-            raise _timeout(timed[[left < 0 for left in wake].index(True)])
+            raise _timeout(timed[[left < 0 for left in wake].index(True)][0])
         if should_stop is not None:
             wake.append(STOP_CHECK_SECONDS)
         if on_running is not None:

@@ -76,6 +76,14 @@ _WRITE = (_READ | _WRITE_FILE | _REMOVE_DIR | _REMOVE_FILE | _MAKE_DIR | _MAKE_R
           | _MAKE_SYM | _REFER | _TRUNCATE)
 
 _LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") else None
+
+
+def _libc() -> ctypes.CDLL:
+    """libc where Landlock was found (``landlock_abi() > 0``, so Linux and never None)."""
+    if _LIBC is None:
+        raise OutputError("Landlock needs Linux's C library; this system has none")
+    return _LIBC
+
 _PR_SET_PDEATHSIG = 1
 
 
@@ -264,7 +272,7 @@ def build_ruleset(policy: Policy) -> Ruleset | None:
     handled = _FS_BY_ABI.get(abi, _FS_BY_ABI[5])
     attr = _RulesetAttr(handled, (_NET_BIND_TCP | _NET_CONNECT_TCP) if abi >= 4 else 0)
     size = ctypes.sizeof(attr) if abi >= 4 else ctypes.sizeof(ctypes.c_uint64)
-    fd = _LIBC.syscall(_SYS_CREATE_RULESET, ctypes.byref(attr), ctypes.c_size_t(size),
+    fd = _libc().syscall(_SYS_CREATE_RULESET, ctypes.byref(attr), ctypes.c_size_t(size),
                        ctypes.c_uint32(0))
     if fd < 0:
         raise OutputError(f"the kernel refused a Landlock ruleset: {os.strerror(ctypes.get_errno())}")
@@ -290,7 +298,7 @@ def _add_rules(fd: int, paths: Iterable[str], access: int) -> None:
             # A file takes only the rights that apply to files.
             allowed = access if os.path.isdir(path) else access & _FILE_ONLY
             rule = _PathBeneathAttr(allowed, target)
-            if _LIBC.syscall(_SYS_ADD_RULE, ctypes.c_int(fd), ctypes.c_int(_RULE_PATH_BENEATH),
+            if _libc().syscall(_SYS_ADD_RULE, ctypes.c_int(fd), ctypes.c_int(_RULE_PATH_BENEATH),
                              ctypes.byref(rule), ctypes.c_uint32(0)) != 0:
                 raise OutputError(f"the kernel refused a Landlock rule for {path!r}: "
                                   f"{os.strerror(ctypes.get_errno())}")
@@ -304,7 +312,7 @@ def restrict_self(fd: int) -> None:
     Two system calls and no allocation that could deadlock after a fork; on
     failure the child exits (code 126) rather than run unconfined.
     """
-    if _LIBC.prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 or \
+    if _LIBC is None or _LIBC.prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 or \
             _LIBC.syscall(_SYS_RESTRICT_SELF, fd, 0) != 0:
         os._exit(126)
 

@@ -148,6 +148,8 @@ class JobWatch:
         return self.waiting is not None and time.monotonic() - self.waiting < 0.5
 
     def _drain(self) -> bool:
+        if self.fd is None:  # closed: nothing to read
+            return False
         events = False
         while True:
             try:

@@ -227,10 +227,10 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
             # image first, sidecar last (image.io: a new sidecar never describes an old image)
             staged.replace(final)
             staged.with_suffix(".json").replace(final.with_suffix(".json"))
-            for extra in made.get(n, []):
-                extra.replace(final.with_name(extra.name))
-                if extra.with_suffix(".json").exists():
-                    extra.with_suffix(".json").replace(final.with_name(extra.with_suffix(".json").name))
+            for companion in made.get(n, []):
+                companion.replace(final.with_name(companion.name))
+                if companion.with_suffix(".json").exists():
+                    companion.with_suffix(".json").replace(final.with_name(companion.with_suffix(".json").name))
         report["frames"] = [str(p) for p in finals]
         shown_frames = finals
         if made:
@@ -256,7 +256,7 @@ class _Frames(Sequence):
     def __len__(self) -> int:
         return len(self.paths)
 
-    def __getitem__(self, index):  # type: ignore[override]
+    def __getitem__(self, index):
         if isinstance(index, slice):
             return [self[i] for i in range(*index.indices(len(self)))]
         return read_png(self.paths[index])

@@ -80,9 +80,9 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
         _warn_record(still.record)
         return still.record
     companions = None
-    if request.display.quilt is not None:   # a Looking Glass preset: each frame's quilt (and native image)
+    if (quilt := request.display.quilt) is not None:   # a Looking Glass preset: each frame's quilt (and native image)
         def companions(staged: Path, image: RenderedImage) -> tuple[dict[str, Any], list[Path]]:
-            entry = write_device_outputs(staged, image.image, request.render_array, request.display.quilt)
+            entry = write_device_outputs(staged, image.image, request.render_array, quilt)
             return {"quilt": entry}, [staged.with_name(entry[k]) for k in ("file", "native") if k in entry]
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
                              video=request.video, fps=request.fps, companions=companions)
@@ -216,11 +216,11 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         from .methods.vendor_views import run_vendor_views
 
         result = run_vendor_views(scene, array, replace(settings, clock=clock, sequence=sequence),
-                                  dict(request.display.quilt), display_frame, progress)
+                                  dict(request.display.quilt or {}), display_frame, progress)  # a quilt preset
     else:
         result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
                             progress, crop=request.crop, **request.method_options)
-    seconds = auto.seconds if result is getattr(auto, "image", None) else time.perf_counter() - start
+    seconds = auto.seconds if auto is not None and result is auto.image else time.perf_counter() - start
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)
     if h3d.shape[:2] != expected:  # a bug, never the user's doing
@@ -238,9 +238,10 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     )
     record.update(request.display.as_record())  # the sidecar's lens_array and display entries
     record["method_chosen"] = request.method_chosen
-    note = ((display_frame or {}).get("ray_state") or {}).get("method_note")
+    ray_state = (display_frame or {}).get("ray_state") or {}
+    note = ray_state.get("method_note")
     if note:
-        record.update(method_note=note, method_fallback=display_frame["ray_state"]["method_fallback"])
+        record.update(method_note=note, method_fallback=ray_state["method_fallback"])
     if auto is not None:
         record["quality"].update(level="auto", auto=auto.as_record())
     if vendor_cameras(request):   # the method named no part of it: the record says the cameras

@@ -75,7 +75,7 @@ def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, s
         quadric=lenslet.quadric(), half_x=half_x, half_y=half_y, hex_half_y=hex_half_y,
         bound_half_y=hex_half_y if la.grid == "hex" else half_y, sqrt3_2=math.sqrt(3) / 2, thickness=t,
         centres=centres.tolist(), rotation=la.rotation, sheet=sheet,
-        z_panel=t * (1 - 1 / lenslet.ior) + la.focal if sheet else 0.0,
+        z_panel=t * (1 - 1 / lenslet.refractive_index) + la.focal if sheet else 0.0,
         panel_size=(width_mm, height_mm), eye=tuple(map(float, eye)), pupil=pupil, blur_samples=BLUR_SAMPLES,
         direction=(-float(eye[0]), -float(eye[1]), -float(eye[2])))
 

@@ -109,7 +109,7 @@ def written_camera_types(main: str, read: Callable[[str], str | None]) -> set[st
     scene = _Scene(read)
     scene.texts[""] = main
     found: set[str] = set()
-    todo, seen = [""], set()
+    todo, seen = [""], set[str]()
     while todo:
         name = todo.pop()
         if name in seen or len(seen) > 4 * MAX_DEPTH or not scene.holds_camera(name):

@@ -108,9 +108,12 @@ def _items(body: str, size: tuple[int, int]) -> list[tuple[str, list[float] | st
             while peek() == ",":
                 take()
                 components.append(expression())
-            if take() != ">" or len(components) != 3 or not all(isinstance(c, float) for c in components):
+            if take() != ">" or len(components) != 3:
                 raise _NotLiteral
-            return (components[0], components[1], components[2])
+            x, y, z = components
+            if not (isinstance(x, float) and isinstance(y, float) and isinstance(z, float)):
+                raise _NotLiteral
+            return (x, y, z)
         if t in _AXES:
             return _AXES[t]
         if t in names:

@@ -54,7 +54,8 @@ def quantise(fractions: np.ndarray, bits: int) -> np.ndarray:
 
 def padded_shape(shape: tuple[int, int, int]) -> tuple[int, int, int]:
     """The df3 grid written for a volume of ``shape`` voxels: one edge copy on each side."""
-    return tuple(int(n) + 2 * PAD for n in shape)
+    nx, ny, nz = shape
+    return int(nx) + 2 * PAD, int(ny) + 2 * PAD, int(nz) + 2 * PAD
 
 
 def df3_bytes(samples: np.ndarray, bits: int) -> bytes:

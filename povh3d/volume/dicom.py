@@ -15,6 +15,7 @@ between columns): the column spacing is the ``i`` spacing.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from ..errors import ConfigError, InputError
 from .grid import Volume
 
 
-def _headers(folder: Path) -> list[tuple[Path, object]]:
+def _headers(folder: Path) -> list[tuple[Path, Any]]:  # Any: pydicom's Dataset (an optional extra)
     from ..extras import require
 
     pydicom = require("pydicom", "volume", "a DICOM folder")
@@ -39,9 +40,9 @@ def _headers(folder: Path) -> list[tuple[Path, object]]:
     return found
 
 
-def list_series(folder: Path) -> dict[str, list[tuple[Path, object]]]:
+def list_series(folder: Path) -> dict[str, list[tuple[Path, Any]]]:
     """Image slices of ``folder`` grouped by series UID."""
-    groups: dict[str, list[tuple[Path, object]]] = {}
+    groups: dict[str, list[tuple[Path, Any]]] = {}
     for path, ds in _headers(folder):
         groups.setdefault(str(ds.SeriesInstanceUID), []).append((path, ds))
     return groups

@@ -60,7 +60,8 @@ class Volume:
 
     @property
     def shape(self) -> tuple[int, int, int]:
-        return tuple(int(n) for n in self.values.shape)
+        nx, ny, nz = self.values.shape  # three: __post_init__ checks
+        return int(nx), int(ny), int(nz)
 
     def index_to_world(self) -> np.ndarray:
         """(4, 4) matrix: world (mm, LPS) = M @ (i, j, k, 1)."""

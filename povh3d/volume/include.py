@@ -115,8 +115,8 @@ def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | 
     start = time.perf_counter()
     silhouette, specks = None, 0
     if budget is not None and sum(before) > budget and speck > 0:
-        parts, dropped = zip(*(drop_specks(p, speck) for p in parts))
-        parts, specks = list(parts), sum(dropped)
+        trimmed, dropped = zip(*(drop_specks(p, speck) for p in parts))
+        parts, specks = list(trimmed), sum(dropped)
     if budget is not None and sum(p.triangles for p in parts) > budget:
         from ..mesh.simplify import simplify_parts
 

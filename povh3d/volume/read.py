@@ -80,7 +80,7 @@ def _spacing(value: Any) -> tuple[float, float, float]:
         values = ()
     if len(values) != 3 or not all(np.isfinite(v) and v > 0 for v in values):
         raise ConfigError(f"--spacing takes three positive voxel sizes SX,SY,SZ in mm, got {value!r}")
-    return values  # type: ignore[return-value]
+    return values
 
 
 def _scalar(values: np.ndarray, name: str) -> np.ndarray:
@@ -107,7 +107,8 @@ def _from_image(image: Any, name: str, label_names: dict | None = None) -> Volum
     if array.ndim == 2 and array.shape[1] != 1:
         raise InputError(f"{name} has {array.shape[1]} components per voxel; povh3d reads scalar volumes")
     values = array.reshape(dims, order="F")
-    return Volume(values, tuple(float(s) for s in image.spacing), tuple(origin.tolist()), direction, name,
+    sx, sy, sz = (float(s) for s in image.spacing)
+    return Volume(values, (sx, sy, sz), tuple(origin.tolist()), direction, name,
                   label_names or {})
 
 
@@ -244,7 +245,8 @@ def _slicer_segments(header: dict) -> tuple[dict[int, str], dict[int, tuple[floa
             names[label] = str(header.get(prefix + "Name", label))
             rgb = str(header.get(prefix + "Color", "")).split()
             if len(rgb) == 3:
-                colours[label] = tuple(float(c) for c in rgb)
+                red, green, blue = (float(c) for c in rgb)
+                colours[label] = red, green, blue
     return names, colours
 
 

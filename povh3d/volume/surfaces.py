@@ -72,7 +72,7 @@ def _image(volume: Volume, values: np.ndarray, step: tuple[int, int, int] = (1, 
 
 
 def _to_world(volume: Volume, points: np.ndarray, faces: np.ndarray,
-              start: tuple[float, float, float] = (0, 0, 0)) -> tuple[np.ndarray, np.ndarray]:
+              start: tuple[float, ...] = (0, 0, 0)) -> tuple[np.ndarray, np.ndarray]:
     """Index-frame mm (spacing applied; ``start``: the voxel index of a cropped image's first voxel) -> LPS
     world; a mirroring direction matrix flips the winding back."""
     d = np.asarray(volume.direction, dtype=np.float64)
@@ -91,9 +91,9 @@ def palette(count: int) -> list[tuple[float, float, float]]:
     """``count`` distinct colours: matplotlib's tab20, in a light-then-dark order, repeated."""
     from matplotlib import colormaps
 
-    colours = colormaps["tab20"].colors
+    colours = colormaps["tab20"].colors  # type: ignore[attr-defined]  # tab20 is a ListedColormap: it has them
     order = list(colours[0::2]) + list(colours[1::2])
-    return [tuple(float(c) for c in order[i % len(order)]) for i in range(count)]
+    return [(float(r), float(g), float(b)) for r, g, b in (order[i % len(order)] for i in range(count))]
 
 
 def check_labels(volume: Volume, labels: list[int] | None) -> list[int]:
@@ -141,7 +141,7 @@ def _crop(values: np.ndarray, labels: list[int], every: bool = False) -> tuple[t
     boundaries: every other label is background to it anyway), and the index of its first voxel;
     ``every``: the labels are all the volume holds."""
     inside = _inside(values, labels, every)
-    plane = inside.any(axis=2)   # the rows and columns from this plane, the slices from the volume
+    plane = np.asarray(inside.any(axis=2))   # the rows and columns from this plane, the slices from the volume
     hits = [np.flatnonzero(plane.any(axis=1)), np.flatnonzero(plane.any(axis=0)),
             np.flatnonzero(inside.any(axis=(0, 1)))]
     start = [max(int(hit[0]) - 1, 0) for hit in hits]
@@ -177,7 +177,7 @@ def label_surfaces(volume: Volume, labels: list[int] | None = None, *, smoothing
     labels = check_labels(volume, labels)
     opacity = _per_surface(opacity, len(labels))
     iterations = LABEL_SMOOTHING if smoothing is None else int(smoothing)
-    meshes = _label_meshes(volume, labels, iterations, tuple(step), every)
+    meshes = _label_meshes(volume, labels, iterations, (step[0], step[1], step[2]), every)
     if tuple(step) != (1, 1, 1):
         # A label thinner than a step can fall between the sampled voxels: those few labels are taken
         # again from their own voxels (a small box, a few triangles), never left out.
@@ -200,6 +200,7 @@ def _label_meshes(volume: Volume, labels: list[int], iterations: int, step: tupl
     (``every``: the labels are all the volume holds)."""
     from .read import vtk_quiet
 
+    start: tuple[int, int, int] | np.ndarray  # a voxel index: _sample moves it
     start, values = _crop(volume.values, labels, every)  # a few organs of a whole body: far fewer voxels to visit
     if step != (1, 1, 1):
         values, start = _sample(values, start, step)

@@ -22,6 +22,7 @@ in docs/volume-rendering.md.  Pure NumPy.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -91,7 +92,7 @@ class Transfer:
             [float(v), *map(float, c), float(s)] for v, c, s in zip(self.values, self.colour, self.extinction)]}
 
 
-def _preset(name: str, kind: str, rows: list[tuple[float, float, float, float, float]]) -> Transfer:
+def _preset(name: str, kind: str, rows: Sequence[Sequence[float]]) -> Transfer:
     a = np.array(rows, dtype=np.float64)
     return Transfer(name, kind, a[:, 0], a[:, 1:4], a[:, 4])
 
@@ -155,7 +156,7 @@ def auto_transfer(values: np.ndarray, has_label_table: bool = False) -> str:
 
 def parse_transfer(text: str, name: str) -> Transfer:
     """A transfer function from its text (docs/volume-rendering.md); errors name the line."""
-    kind, rows = "absolute", []
+    kind, rows = "absolute", list[list[float]]()
     for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.split("#", 1)[0].strip()
         if not line:

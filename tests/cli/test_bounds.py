@@ -276,6 +276,7 @@ def test_the_cameras_reading_is_estimated_before_it_starts(tmp_path, cli):
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 200_000   # KiB
 
 
+@pytest.mark.povray
 def test_a_small_scene_is_read_under_a_small_limit(tmp_path, cli):   # negative control
     result = cli("info", SAMPLE, "--preset", "demo", "--max-memory", "300M")
     assert result.code == 0, result.err

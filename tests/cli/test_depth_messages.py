@@ -18,17 +18,30 @@ sphere {{ 0, 3 pigment {{ rgb 0.5 }} }}
 """
 
 
-def test_info_on_a_blind_pass_names_the_cause_and_the_fix(cli, tmp_path):
+def test_info_inside_a_solid_measures_on_the_hollow_copy(cli, tmp_path):
     scene = tmp_path / "backdrop.pov"   # plane { z, 10 }: its inside (z < 10) holds the camera
     scene.write_text(SCENE.format(backdrop="plane { z, 10 pigment { rgb 1 } }"))
-    result = cli("info", str(scene), *ARRAY)
-    assert result.code == 0, result.err
-    assert "inside a solid" in result.out and "'hollow'" in result.out and "nothing hit" not in result.out
     report = json.loads(cli("info", str(scene), "--json", *ARRAY).out)["scene"]["depth"]
-    assert report["blind"] is True and report["empty"] is False
+    assert "blind" not in report and report["empty"] is False and report["unmeasured_fraction"] == 0.0
+    assert "hollow" in report["measured_on"]
+
+
+def test_a_blind_pass_names_the_cause_and_the_fix(cli, tmp_path):
+    """Negative control of the hollow copy: a backdrop from an include in another folder (``--include``;
+    the copy rewrites only the scene's own folder, never the user's files) leaves the pass blind, and
+    the command says why and the fix."""
+    lib, folder = tmp_path / "lib", tmp_path / "scene"
+    lib.mkdir()
+    folder.mkdir()
+    (lib / "backdrop.inc").write_text("plane { z, 10 pigment { rgb 1 } }\n")
+    scene = folder / "backdrop.pov"
+    scene.write_text(SCENE.format(backdrop='#include "backdrop.inc"'))
     rendered = cli("render", str(scene), "-o", str(tmp_path / "b.png"), "--quality", "draft", "--depth-report",
-                   *ARRAY)   # a plain render makes no depth pass, blind or not
-    assert rendered.code == 0 and "inside a solid" in rendered.err and "nothing in the middle" not in rendered.err
+                   "--include", str(lib), *ARRAY)
+    assert rendered.code == 0, rendered.err
+    assert "inside a solid" in rendered.err and "'hollow'" in rendered.err and "nothing in the middle" not in rendered.err
+    depth = json.loads((tmp_path / "b.json").read_text())["display_frame"]["depth"]
+    assert depth["blind"] is True and depth["empty"] is False
 
 
 def test_the_hollow_backdrop_is_measured_and_an_empty_field_is_still_empty(cli, tmp_path):

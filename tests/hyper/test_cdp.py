@@ -12,9 +12,9 @@ from povh3d.hyper.cdp import Annotation, BoundingBox, CdpHeader, Scene, SearchRe
 
 def _header() -> CdpHeader:
     hits = (SearchResultItem("https://example.org/ball", "video", 87.5, "a <red> ball & more"),
-            SearchResultItem("file:///x.png", "image", 0.1 + 0.2, ""))
+            SearchResultItem("https://example.org/x.png", "image", 0.1 + 0.2, ""))   # http(s) and mailto only
     ball = Annotation(1, "ball", 3, 0, 1, "https://example.org/ball", "the ball", (
-        BoundingBox(1, 0, "view", (2, 3, 9, 12), "the ball", "u", hits),
+        BoundingBox(1, 0, "view", (2, 3, 9, 12), "the ball", "https://example.org/u", hits),
         BoundingBox(2, 0, "h3d", (16, 24, 79, 103)),
         BoundingBox(3, 1, "view", (3, 3, 10, 12))))
     box = Annotation(2, "box é", 1, 1, 1, "", "", (BoundingBox(1, 1, "view", (0, 0, 0, 0)),))

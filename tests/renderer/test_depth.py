@@ -72,11 +72,11 @@ def test_depth_of_a_sphere_before_a_plane(tmp_path, moved):
     assert not depth.summary(8.0)["within_budget"]   # negative control: a tighter budget
 
 
-def test_a_viewpoint_inside_a_solid_is_unmeasured(tmp_path):
+def test_a_viewpoint_inside_a_solid_is_measured_on_the_hollow_copy(tmp_path):
     scene = tmp_path / "s.pov"
     scene.write_text(SCENE.format(far=5.0).replace("plane { -z, -5", "plane { z, 5"))
     depth = depth_pass(load_scene(scene), array(), RenderSettings(), 128.0, 1.0)
-    assert depth.unmeasured > 0.9 and not np.isfinite(depth.z).any()
+    assert depth.hollow_copy and depth.unmeasured == 0.0 and np.isfinite(depth.z).mean() > 0.9
 
 
 def test_view_depth_maps_against_ray_sphere_and_plane(tmp_path):
@@ -133,12 +133,33 @@ def measure(tmp_path, text: str):
 
 
 @pytest.mark.parametrize("kind", sorted(INSIDE))
-def test_inside_a_solid_is_blind_and_says_so(tmp_path, kind):
-    solid, _ = INSIDE[kind]
+def test_inside_a_solid_is_measured_on_the_hollow_copy(tmp_path, kind):
+    """The viewer inside a non-hollow solid (issue 38): POV-Ray applies no fog there, so the pass is
+    made again on a copy whose top-level objects are hollow, and reads the analytic depth."""
+    solid, back = INSIDE[kind]
     depth = measure(tmp_path, SPHERE + solid.format(hollow=""))
-    assert depth.unmeasured > 0.9 and not np.isfinite(depth.z).any()
+    z, clean = expected(depth.z.shape, depth.width_mm, depth.height_mm, back)
+    ok = clean & np.isfinite(depth.z)
+    assert depth.hollow_copy and depth.unmeasured == 0.0 and ok.mean() > 0.9
+    assert np.abs(depth.z - z)[ok].max() < 0.02      # mm
+    s = depth.summary(40.0)
+    assert "blind" not in s and s["empty"] is False and "hollow" in s["measured_on"]
+
+
+@pytest.mark.parametrize("kind", sorted(INSIDE))
+def test_a_solid_the_copy_cannot_reach_is_blind_and_says_so(tmp_path, kind):
+    """Negative control: the solid comes from an include in another folder, which the copy does not
+    rewrite (the user's files are never touched): still blind, with the cause and the fix in one line."""
+    solid, _ = INSIDE[kind]
+    other, folder = tmp_path / "lib", tmp_path / "scene"
+    other.mkdir()
+    folder.mkdir()
+    (other / "solid.inc").write_text(solid.format(hollow=""))
+    scene = folder / "s.pov"
+    scene.write_text(BASE + SPHERE + '#include "solid.inc"\n')
+    depth = depth_pass(load_scene(scene, (other,)), array(), RenderSettings(), 128.0, 1.0)
+    assert depth.unmeasured > 0.9 and not np.isfinite(depth.z).any() and not depth.hollow_copy
     s = depth.summary(12.0)
-    # not an empty scene: the cause and the fix, in one line
     assert s["empty"] is False and s["blind"] is True
     assert "inside a solid" in s["reason"] and "'hollow'" in s["reason"] and "\n" not in s["reason"]
 

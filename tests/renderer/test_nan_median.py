@@ -28,6 +28,7 @@ def test_same_numbers_as_nanmedian(channels):
         assert not np.array_equal(np.median(values, axis=-1), expected, equal_nan=True)
 
 
+@pytest.mark.povray   # a process of its own (the --fast guard refuses any)
 def test_three_channels_of_an_image_and_no_masked_arrays():
     import subprocess
     import sys

@@ -11,7 +11,7 @@ import math
 from fractions import Fraction
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast  # cast: parse_name gives every mapping with an n_range its N
 
 from ...errors import ConfigError
 from .base import Mapping
@@ -20,7 +20,8 @@ from .slanted import Slanted, from_calibration, looking_glass
 from .unslanted import Distributed, DistributedSmart, Triangular, smart
 
 __all__ = ["MAPPINGS", "Mapping", "MappingOptions", "Sampling", "Source", "Slanted", "build_mapping",
-           "from_calibration", "looking_glass", "options_from_display", "parse_name", "slope_from_degrees"]
+           "from_calibration", "looking_glass", "mapping_from_record", "mapping_parameters", "options_from_display",
+           "parse_name", "slope_from_degrees"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +76,7 @@ def _slanted(_: int | None, o: MappingOptions) -> Mapping:
     if rows is None:
         rows = round(3 / o.slope) if o.slope and abs(3 / o.slope - round(3 / o.slope)) < 1e-9 and \
             round(3 / o.slope) > 0 else 1
+    assert o.per_lens is not None and o.views is not None and o.slope is not None  # none missing
     return Slanted("slanted", o.per_lens, o.views, o.slope, o.offset, rows, o.reverse, o.blend)
 
 
@@ -94,10 +96,10 @@ MAPPINGS: dict[str, Entry] = {
     "distributed": Entry(lambda n, o: Distributed(_need_ppl("distributed", o)), None,
                          "R, G, B micro-images from 3 lenses a third as wide (thesis 5.2.3)",
                          MappingOptions(ppl=4)),
-    "smart": Entry(lambda n, o: smart(n, _need_ppl("smart", o)), (2, 7),
+    "smart": Entry(lambda n, o: smart(cast(int, n), _need_ppl("smart", o)), (2, 7),
                    "N x PPL views over N rows, 3D pixel distance 1/N (thesis 5.2.4, Fig. 5.17)",
                    MappingOptions(ppl=5)),
-    "distributed-smart": Entry(lambda n, o: DistributedSmart(n, _need_ppl("distributed-smart", o),
+    "distributed-smart": Entry(lambda n, o: DistributedSmart(cast(int, n), _need_ppl("distributed-smart", o),
                                                              f"distributed-smart:{n}"), (2, 7),
                                "smart:N then distributed (thesis 5.2.5)", MappingOptions(ppl=6)),
 }
@@ -157,3 +159,36 @@ def options_from_display(fields: dict[str, Any], ppl_x: float | None, **given: A
         sx = fields["pixel_pitch"][0] if isinstance(fields["pixel_pitch"], (list, tuple)) else fields["pixel_pitch"]
         opts["per_lens"] = round(float(fields["lens_pitch"]) / (float(sx) / 3), 9)
     return MappingOptions(**opts)
+
+
+# The mapping classes a sidecar may name (``mapping_parameters``'s ``kind``).
+_KINDS: dict[str, type[Mapping]] = {cls.__name__: cls for cls in (Slanted, Triangular, Distributed, DistributedSmart)}
+
+
+def mapping_parameters(mapping: Mapping) -> dict[str, Any]:
+    """Every parameter of ``mapping`` (its class as ``kind``, then its dataclass fields): what a
+    sidecar records so that ``mapping_from_record`` rebuilds the same mapping, options and all."""
+    from dataclasses import fields
+
+    # every mapping class is a frozen dataclass (base.Mapping's rule); the base class itself is not
+    return {"kind": type(mapping).__name__, **{f.name: getattr(mapping, f.name) for f in fields(cast(Any, mapping))}}
+
+
+def mapping_from_record(name: str, parameters: dict[str, Any]) -> Mapping:
+    """The mapping ``mapping_parameters`` recorded (a sidecar's ``display.mapping_options``); a
+    ConfigError naming the fault when the record is not one."""
+    from dataclasses import fields
+
+    params = dict(parameters)
+    cls = _KINDS.get(str(params.pop("kind", "")))
+    if cls is None:
+        raise ConfigError(f"the sidecar's mapping options name no mapping class povh3d knows "
+                          f"({parameters.get('kind')!r}); render the image again")
+    known = {f.name for f in fields(cast(Any, cls))}   # a dataclass, as every mapping class
+    if set(params) - known or params.get("name") != name:
+        raise ConfigError(f"the sidecar's mapping options do not describe mapping {name!r} "
+                          f"({', '.join(sorted(set(params) - known)) or 'another name'}); render the image again")
+    try:
+        return cls(**params)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"the sidecar's mapping options are damaged ({exc}); render the image again") from None

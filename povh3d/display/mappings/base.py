@@ -138,7 +138,7 @@ class Mapping(ABC):
             return out
         s = self.sample(panel)
         out = flat[s.index]
-        if s.index2 is not None:
+        if s.index2 is not None and s.weight is not None:  # set together (Sampling)
 
             lin = (1 - s.weight) * to_linear(out, np.float32) + s.weight * to_linear(flat[s.index2], np.float32)
             out = from_linear(lin, h3d.dtype)

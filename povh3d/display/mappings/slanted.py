@@ -277,7 +277,7 @@ def _check_sheet_fields(calibration: dict[str, Any], pitch: float, slope: float,
         if isinstance(phase, bool) or not isinstance(phase, (int, float)) or not math.isfinite(phase):
             raise ConfigError(f"calibration field 'phase_px' must be a number, got {phase!r}")
         centre = calibration["center"]
-        centre = centre.get("value") if isinstance(centre, dict) else centre
+        centre = centre["value"] if isinstance(centre, dict) else centre  # a number: get("center") checked it
         t = math.atan(1.0 / slope)
         derived = (phase + math.cos(t) * (width + 1) / 2 + math.sin(t) * height / 2) * pitch / dpi - 0.5
         if abs((derived - centre + 0.5) % 1.0 - 0.5) > 1e-6:

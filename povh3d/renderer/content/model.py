@@ -117,7 +117,7 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
     """
     from ...mesh.simplify import auto_budget
 
-    if max_triangles == "auto":
+    if isinstance(max_triangles, str):  # 'auto', the one word ModelOptions takes
         max_triangles = auto_budget(lens_array)
     include, manifest = cached_include(model, shading=shading, max_triangles=max_triangles, cache_dir=cache_dir,
                                        up=up, rotate=rotate, unit=unit)

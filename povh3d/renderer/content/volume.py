@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -52,7 +52,8 @@ def volume_digest(volume: Volume) -> str:
     h = hashlib.sha256()
     h.update(str((values.dtype.str, volume.shape, volume.spacing, volume.origin, order)).encode())
     h.update(np.asarray(volume.direction, dtype=np.float64).tobytes())
-    h.update(memoryview(data).cast("B"))
+    # an ndarray is a buffer; NumPy's stubs declare its __buffer__ for Python 3.12+ only
+    h.update(memoryview(data).cast("B"))  # type: ignore[arg-type]
     return h.hexdigest()
 
 
@@ -125,7 +126,8 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
         return stage, record
     from ...mesh.simplify import auto_budget
 
-    budget = auto_budget(lens_array) if max_triangles in (None, "auto") else max_triangles
+    # None or 'auto' (the one word ModelOptions takes)
+    budget = auto_budget(lens_array) if max_triangles is None or isinstance(max_triangles, str) else max_triangles
     speck = min(lens_array.pitch_x, lens_array.pitch_y) / placement.scale   # one lens, in the surfaces' mm
     include, manifest = cached_surfaces(volume, digest, kind, options, matrix, budget, root, speck)
     record["surfaces"] = manifest["surfaces"]
@@ -162,10 +164,12 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
     smoothing, opacity = options.smoothing, list(options.opacity) if options.opacity else None
     step = (1, 1, 1)
     if kind == "labels":
-        labels = None if options.labels in (None, "all") else list(options.labels)
+        # a str is 'all', the one word VolumeOptions takes
+        labels = None if options.labels is None or isinstance(options.labels, str) else list(options.labels)
         step = voxel_step(volume.spacing, LABEL_DETAIL * speck)
         surfaces = label_surfaces(volume, labels, smoothing=smoothing, opacity=opacity, step=step)
     else:
+        assert options.iso is not None  # kind 'iso': what_to_draw found it
         surfaces = iso_surfaces(volume, list(options.iso), smoothing=smoothing, opacity=opacity)
     extracted = time.perf_counter() - start
     from ...volume.include import surfaces_include
@@ -197,7 +201,8 @@ def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max
             raise InputError(f"{str(source)!r} holds no polygons; check the file")
         ply = cache.cache_folder(ply.parent, "volume") / ply.name
         with atomic_path(ply) as tmp:
-            tmp.write_bytes(trimesh.Trimesh(points, faces, process=False).export(file_type="ply"))
+            # cast: a PLY export is bytes (export's type covers every format)
+            tmp.write_bytes(cast(bytes, trimesh.Trimesh(points, faces, process=False).export(file_type="ply")))
     stage, record = prepare_stage(ply, lens_array, depth=depth, max_triangles=max_triangles, cache_dir=cache_dir,
                                   rotate=rotate)
     record["model"] = str(source)

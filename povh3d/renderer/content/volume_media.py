@@ -61,7 +61,8 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
         raise ConfigError(f"--df3-bits must be 8 or 16, got {bits!r}")
     scale = uniform_scale(world_to_display)
     intervals, samples = sampling_for(volume, step)
-    background = tuple(float(c) for c in np.broadcast_to(np.asarray(background, dtype=np.float64), 3))
+    red, green, blue = (float(c) for c in np.broadcast_to(np.asarray(background, dtype=np.float64), 3))
+    background = red, green, blue
     if not all(np.isfinite(background)) or min(background) < 0:
         raise ConfigError(f"the background must be three non-negative numbers, got {background}")
     classified = classify(volume, transfer, bits)

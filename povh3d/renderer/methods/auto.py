@@ -82,6 +82,7 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     """
     if settings.quality != AUTO:
         return settings, None
+    assert settings.max_error_db is not None  # quality 'auto' (RenderSettings: then and only then)
     if full_image_auto(method, lens_array):
         try:
             quality, fields, image = seeded_auto(scene, lens_array, method, settings, progress, **options)

@@ -175,6 +175,7 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
     as ``(quality, record fields, MethodResult of the image written)``; a one-line refusal where
     ``MAX_SAMPLES`` would not reach it."""
     start = time.perf_counter()
+    assert settings.max_error_db is not None  # quality 'auto' (RenderSettings: then and only then)
     target = float(settings.max_error_db)
     need = target + MARGIN_DB
     rounding = quantisation_mse(settings.bit_depth)
@@ -227,6 +228,7 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
     quality, image = chosen
     dtype = np.uint8 if settings.bit_depth == 8 else np.uint16
     h3d = encode(image, dtype) if image is not None else runs.image(dtype)
+    assert runs.result is not None  # render ran at least once
     result = replace(runs.result, h3d=h3d, quality=quality, groups=None)
     fields = {"tried": tuple(tried), "seconds": time.perf_counter() - start,
               "reference_samples": runs.counts[0], "reference_floor_db": reference.floor_db,
@@ -239,6 +241,7 @@ def _draft_or_seeds(runs: SeedRuns, reference: Reference, centre: tuple, target:
     """``draft`` where the seeds score it over ``need`` (and their floor is no more than 3 dB under the
     target: each seed then reaches it itself), else the seeds' mean where it reaches ``need``, else None."""
     if centre:
+        assert runs.draft is not None  # the centre's group, run with the seeds (SeedRuns.add)
         draft_db = with_rounding(reference.psnr(encode(runs.draft, np.uint16)), rounding)
         tried.append(("draft", draft_db))
         if draft_db >= need and reference.floor_db >= target - 3:

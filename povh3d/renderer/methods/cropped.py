@@ -59,7 +59,7 @@ def coverage_mask(trace: Trace, lens_array: LensArray, front_clearance: float,
     batch = mesh_camera_batch("coverage.pov.j2", view_bank_frames(lens_array, front_clearance, samples), COVERAGE_OPTIONS)
     images, stats = trace(batch, "multi-ortho coverage", None)
     alpha = stack_frames(images)[..., -1]
-    return (alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0), stats
+    return np.asarray((alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0)), stats
 
 
 def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, front_clearance: float,
@@ -98,7 +98,7 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
                                          "reason": f"the scene uses {', '.join(used)}: rays that miss every "
                                                    "object are not one colour, so nothing can be filled"})
     start = time.perf_counter()
-    if crop.mode == "auto":
+    if crop.mode == "auto" and crop.bbox is not None:  # (always given under auto: checked above)
         col_hits, row_hits = bbox_hits(lens_array, crop.bbox, angular=bool(np.any(samples[:, 2:])))
         info["source"] = "bbox"
     else:
@@ -118,9 +118,10 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
     tiled = stack_frames(images, meshes)
     banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])
     fills = [fill_colour(bank, plan) for bank in banks]
-    fill = fills[0] if all(f is not None and np.array_equal(f, fills[0]) for f in fills) else None
+    first = fills[0]
+    fill = first if first is not None and all(f is not None and np.array_equal(f, first) for f in fills) else None
     if fill is None:
-        if info["source"] == "bbox":
+        if info["source"] == "bbox" and crop.bbox is not None:
             raise InputError(f"objects reach outside --bbox {list(crop.bbox[0]) + list(crop.bbox[1])} "
                              "(the pixels at the crop edges are not all background); give a box that "
                              "holds every object, or --crop off")

@@ -78,7 +78,7 @@ class Quality:
         samples): sub-views and footprint samples become adaptive antialiasing."""
         if self.subviews == 1 and not self.footprint:
             return self
-        aa = {} if self.antialias is not None else {"antialias": 0.05, "aa_method": 2, "aa_depth": 3}
+        aa: dict[str, Any] = {} if self.antialias is not None else {"antialias": 0.05, "aa_method": 2, "aa_depth": 3}
         return replace(self, subviews=1, footprint=0, **aa)
 
     def footprint_sampled(self) -> Quality:
@@ -137,7 +137,7 @@ def quality_level(name: str) -> Quality:
                       f"from 1 to {GRID}, got {name!r}")
 
 
-Progress = Callable[[int, int], None]
+Progress = Callable[[float, int], None]  # (done, total) shots; done may be fractional
 #: --depth-scale: a compression beyond 1/1000 leaves nothing of the depth; an expansion past 100
 #: tilts rays further than any lens can.
 DEPTH_SCALE_RANGE = (1e-3, 100.0)
@@ -220,9 +220,9 @@ class RenderSettings:
             raise ConfigError(f"bit depth must be 8 or 16, got {self.bit_depth}")
         if self.front_clearance is not None and not (np.isfinite(self.front_clearance) and self.front_clearance > 0):
             raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.front_clearance}")
-        limit = self.front_clearance_limit
-        if limit is not None and not (np.isfinite(limit) and limit > 0):
-            raise ConfigError(f"the front clearance limit must be a positive number of mm, got {limit}")
+        clearance_limit = self.front_clearance_limit
+        if clearance_limit is not None and not (np.isfinite(clearance_limit) and clearance_limit > 0):
+            raise ConfigError(f"the front clearance limit must be a positive number of mm, got {clearance_limit}")
 
         if self.clock is not None and not np.isfinite(self.clock):
             raise ConfigError(f"the clock must be a finite number, got {self.clock}")

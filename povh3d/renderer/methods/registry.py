@@ -356,7 +356,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         tiles = render_cropped_tiles(trace, scene, lens_array, front_clearance, settings, crop, progress, samples,
                                      plan_options.get("gutter", 0))
         crop_info = tiles.info
-        if tiles.tiled is not None:
+        if tiles.tiled is not None and tiles.stats is not None:  # traced: both or neither
             h3d, stats = banks_to_h3d(lens_array, tiles.tiled), tiles.stats
     if h3d is None:
         plan = method.plan(lens_array, front_clearance, samples, **plan_options)
@@ -365,8 +365,9 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
             h3d, record = plan.assemble(images), plan.record
         else:
             counts = [len(g) for g in footprint_groups]
+            assert plan.assemble_groups is not None  # multi-ortho's view bank (GroupsUnsupported above)
             groups = [on_panel(lens_array, g) for g in plan.assemble_groups(images, counts)]
-            h3d = encode(sum(n * g for n, g in zip(counts, groups)) / sum(counts), images[0].dtype)
+            h3d = encode(np.asarray(sum(n * g for n, g in zip(counts, groups)) / sum(counts)), images[0].dtype)
     return MethodResult(on_panel(lens_array, h3d), stats, front_clearance, quality, crop_info, record, reason,
                         groups=groups)
 

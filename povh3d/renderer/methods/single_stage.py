@@ -219,7 +219,7 @@ class SingleStagePlan:
                 tips = 2 * math.ceil(m / 6) if la.grid == "hex" else 0
                 panel = Panel(lx * n + extra + 2, ly * m + tips + 2, la.pitch_x / n, la.pitch_y / m)
             return LensArray(la.grid, lx, ly, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
-        ny, nx = la.views
+        ny, nx = la.require_views()  # whole PPL here: views are known
         ex, ey = self.extension
         lx, ly = la.lenses_x + 2 * ex, la.lenses_y + 2 * ey
         panel = Panel(lx * nx, ly * ny, la.panel.pitch_x, la.panel.pitch_y)
@@ -355,8 +355,8 @@ class SingleStagePlan:
             out[~pixel_rays(la)[2]] = 0
             return out
         if self.bank is not None:
-            cap = self.capture_array.panel
-            return sample_turned_bank(capture, la, (cap.pitch_x, cap.pitch_y), self.bank.phase,
+            grid = self.capture_array.panel
+            return sample_turned_bank(capture, la, (grid.pitch_x, grid.pitch_y), self.bank.phase,
                                       1 + self.depth / la.focal, self.camera_offset, self.supersample)
         k = self.camera_supersample
         if k > 1:
@@ -364,7 +364,7 @@ class SingleStagePlan:
             h, w, c = capture.shape
             blocks = capture.reshape(h // k, k, w // k, k, c).transpose(1, 3, 0, 2, 4)
             capture = mean_in_linear_light(blocks.reshape(k * k, h // k, w // k, c))
-        ny, nx = la.views
+        ny, nx = la.require_views()  # whole PPL here: views are known
         cap = self.capture_array
         c = capture.shape[2]
         # Whole PPL: the turn is a flip of every lens's Ny x Nx block.

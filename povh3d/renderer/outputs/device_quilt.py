@@ -12,6 +12,7 @@ the panel image its shader would show (``display.mappings.looking_glass_shader.q
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +38,7 @@ def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Pat
     return quilt, panel
 
 
-def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: dict[str, Any]) -> dict[str, Any]:
+def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: Mapping[str, Any]) -> dict[str, Any]:
     """Write the quilt (and with a calibration the native panel image) of a device render beside
     ``output``; return the sidecar's ``quilt`` entry."""
     from ...display.looking_glass import device
@@ -50,19 +51,19 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     entry: dict[str, Any] = {"device": dev.name, "file": quilt_path.name, "grid": list(dev.grid),
                              "quilt_size": list(dev.quilt_size), "tile_size": list(dev.tile_size),
                              "aspect": dev.aspect, "view_cone_deg": cal.view_cone}
-    source = {"source": str(output.resolve())}
+    source = str(output.resolve())
     write_image(quilt_path, quilt, base_record("quilt", grid=list(dev.grid), aspect=dev.aspect, views=dev.views,
-                                               **source))
+                                               source=source))
     if native_path is not None:
         native = quilt_to_native(quilt, dev.grid, cal, views=dev.views)
         write_image(native_path, native, base_record("panel", mapping="looking-glass-shader",
                                                      calibration=str(Path(spec["calibration"]).resolve()),
-                                                     size_px=[cal.screen_w, cal.screen_h], **source))
+                                                     size_px=[cal.screen_w, cal.screen_h], source=source))
         entry["native"] = native_path.name
     return entry
 
 
-def check_device_render(spec: dict[str, Any], output: Path, animated: bool, depth_maps: bool = False,
+def check_device_render(spec: Mapping[str, Any], output: Path, animated: bool, depth_maps: bool = False,
                         auto_quality: bool = False) -> None:
     """Before any work: the quilt (and native image) writable, the calibration the model's.  An
     animation writes them per frame beside each (``stem_0001_qs8x6a0.75.png``, ``stem_0001_native.png``)."""

@@ -91,7 +91,7 @@ def write_masks(folder: str | Path, table: ObjectTable, masks: dict[int, np.ndar
                 for l in range(ids.shape[0]):
                     for k in range(ids.shape[1]):
                         write_png(frame_dir / VIEW_NAME.format(l=l, k=k), ids[l, k].astype(np.uint16))
-                if table.panel is not None:
+                if table.panel is not None and panels is not None:  # given together
                     write_png(frame_dir / PANEL_NAME, panels[n].astype(np.uint16))
             record = {"povh3d_version": __version__, **table.as_record()}
             (tmp / MANIFEST).write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -64,13 +64,23 @@ class OutputStep:
 
     name: str
     wanted: Callable[[RenderRequest], bool]
-    check: Callable[[RenderRequest, Path], None]
+    check: Callable[[RenderRequest, Path], object]  # what it returns is not read
     write: Callable[[Still], None]
+
+
+_T = TypeVar("_T")
+
+
+def _wanted(value: _T | None) -> _T:
+    """A step's own field of the request: set, as the step's ``wanted`` found it."""
+    if value is None:  # a bug, never the user's doing
+        raise RuntimeError("an output step ran for a request that does not want it")
+    return value
 
 
 def _write_views(still: Still) -> None:
     if still.image.views is not None:
-        write_views(still.request.views_dir, still.image.views, still.request.render_array, still.image.record)
+        write_views(_wanted(still.request.views_dir), still.image.views, still.request.render_array, still.image.record)
 
 
 def _write_dataset(still: Still) -> None:
@@ -81,14 +91,14 @@ def _write_dataset(still: Still) -> None:
     depth = still.depth_maps() if same else dataset_depth(still.scene, request.render_array, still.settings,
                                                          still.front_clearance, still.units_per_mm,
                                                          progress=still.progress)
-    write_dataset(request.dataset, still.image.image, request.render_array, depth,
+    write_dataset(_wanted(request.dataset), still.image.image, request.render_array, depth,
                   all_views=request.dataset_all_views, scene=still.scene.path.stem)
     still.image.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
 
 
 def _write_depth_maps(still: Still) -> None:
     depth = still.depth_maps()
-    write_depth_maps(still.request.depth_maps, depth, still.request.render_array, still.image.record,
+    write_depth_maps(_wanted(still.request.depth_maps), depth, still.request.render_array, still.image.record,
                      still.request.depth_format)
     still.image.record["depth_maps"] = {"folder": str(still.request.depth_maps),
                                         "nan_fraction": float(np.isnan(depth).mean())}
@@ -101,19 +111,19 @@ def _write_quilt(still: Still) -> None:
 
 
 def _check_quilt(request: RenderRequest, output: Path) -> None:
-    check_device_render(request.display.quilt, output, request.frames is not None, request.depth_maps is not None,
+    check_device_render(_wanted(request.display.quilt), output, request.frames is not None, request.depth_maps is not None,
                         request.settings.quality == "auto")
 
 
 #: The optional outputs, in the order they are checked and written (the dataset reads the depth
 #: maps, made on first use, before they are written).
 OUTPUT_STEPS: tuple[OutputStep, ...] = (
-    OutputStep("views", lambda r: r.views_dir is not None, lambda r, out: check_views_dir(r.views_dir),
+    OutputStep("views", lambda r: r.views_dir is not None, lambda r, out: check_views_dir(_wanted(r.views_dir)),
                _write_views),
     OutputStep("dataset", lambda r: r.dataset is not None,
-               lambda r, out: check_dataset_dir(r.dataset, r.render_array, mapped=r.display.mapping is not None),
+               lambda r, out: check_dataset_dir(_wanted(r.dataset), r.render_array, mapped=r.display.mapping is not None),
                _write_dataset),
-    OutputStep("depth-maps", lambda r: r.depth_maps is not None, lambda r, out: check_depth_dir(r.depth_maps),
+    OutputStep("depth-maps", lambda r: r.depth_maps is not None, lambda r, out: check_depth_dir(_wanted(r.depth_maps)),
                _write_depth_maps),
     OutputStep("quilt", lambda r: r.display.quilt is not None, _check_quilt, _write_quilt),
 )

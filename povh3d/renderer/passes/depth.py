@@ -55,6 +55,8 @@ from .record import note
 MAX_WIDTH = 160     # pixels across the depth pass
 T_MIN = 1e-3        # below this transmittance a pixel counts as "nothing hit"
 CLIP = 0.9999       # a channel at or above this in the fog-1 render is clipped
+HOLLOW_NOTE = ("a copy of the scene with every top-level object hollow: the viewer stands inside a solid, "
+               "where POV-Ray applies no fog")
 BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (a 'plane' whose inside holds "
                 "the viewer, or a closed 'box' or 'sphere' around the camera such as a room or a sky), and "
                 "POV-Ray applies no fog inside a non-hollow object; add 'hollow' to that object")
@@ -90,6 +92,7 @@ class DepthMap:
     height_mm: float
     unmeasured: float = 0.0   # fraction of pixels the fog did not reach (the viewpoint inside a solid)
     saturated: np.ndarray | None = None   # (H, W) bool: a surface brighter than 1 in every channel
+    hollow_copy: bool = False   # measured on a copy of the scene whose top-level objects are hollow
 
     def summary(self, budget_mm: float) -> dict[str, Any]:
         """The framed subject's near and far z against the budget (``2 N f``, centred on the screen).
@@ -107,6 +110,8 @@ class DepthMap:
         record: dict[str, Any] = {"depth_budget_mm": budget_mm, "hit_fraction": float(hit.size / self.z.size),
                                   "unmeasured_fraction": self.unmeasured,
                                   "saturated_fraction": float(saturated.mean()), "pixels": [w, h]}
+        if self.hollow_copy:   # the viewer stood inside a solid: measured where POV-Ray's fog reaches
+            record["measured_on"] = HOLLOW_NOTE
         if middle.size == 0:
             return {**record, **self._why_unmeasured(), "within_budget": True, "field_within_budget": True}
         near, far = (float(v) for v in np.percentile(middle, [5, 95]))
@@ -234,10 +239,15 @@ def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, fr
     total)``: its two frames."""
     w, h = pass_size(lens_array)
     fog = front_clearance * units_per_mm   # scene units: t = 1/e at the screen
-    d, unmeasured = _ray_lengths(scene, lens_array, settings, _fog_batch([(0.0, 0.0, 1.0)], lens_array,
-                                                                          front_clearance, fog, w, h), fog, "depth",
-                                 progress)
-    return depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
+    batch = _fog_batch([(0.0, 0.0, 1.0)], lens_array, front_clearance, fog, w, h)
+    d, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog, "depth", progress)
+    hollow = False
+    if unmeasured[0] > 0:   # rays that start inside a solid: measured again on the hollow copy
+        again = _hollow_lengths(scene, lens_array, settings, batch, fog, "depth", progress)
+        if again is not None and again[1][0] < unmeasured[0]:
+            (d, unmeasured), hollow = again, True
+    found = depth_map(d[0], lens_array, front_clearance, units_per_mm, float(unmeasured[0]))
+    return replace(found, hollow_copy=hollow)
 
 
 def origin_field(lens_array: LensArray, front_clearance: float) -> tuple[float, float]:
@@ -279,20 +289,34 @@ def _inside_solid(scene: Scene, lens_array: LensArray, settings: RenderSettings,
     still unmeasured (a solid the copy cannot reach: one a macro or another folder's include makes).
     At ``max_trace_level 1`` only the way to the first surface counts, and there the copy's fog is the
     scene's wherever a ray starts outside every solid: its lengths replace the first pass's whole."""
+    again = _hollow_lengths(scene, lens_array, settings, batch, fog, name, progress)
+    if again is not None:
+        d, unmeasured = again
+    if unmeasured.max() > 0:
+        warn(f"the depth pass cannot measure {100 * float(unmeasured.mean()):.3g} % of the depth maps' pixels "
+             f"(NaN there): {BLIND_REASON}")
+    return d, unmeasured
+
+
+def _hollow_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch, fog: float,
+                    name: str, progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """``_ray_lengths`` on a copy of the scene whose top-level objects are all ``hollow``
+    (``scene.rewrite.all_hollow``): POV-Ray applies no fog inside a non-hollow solid, so a ray that
+    starts inside one (a backdrop ``plane``, a room, a sky sphere) measures nothing; hollow, the same
+    surfaces are found.  None when no object of the scene's own sources changes, or the copy fails to
+    parse (said in a warning)."""
     from ...scene.rewrite import all_hollow, copy_rewritten
 
     with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
         try:
             copy = copy_rewritten(scene, Path(folder), all_hollow)
-            if copy is not None:
-                d, unmeasured = _ray_lengths(copy, lens_array, settings, batch, fog, f"{name}-hollow", progress)
+            if copy is None:
+                return None
+            return _ray_lengths(copy, lens_array, settings, batch, fog, f"{name}-hollow", progress)
         except Povh3dError as exc:   # the copy does not parse: say so, keep the first pass
             warn(f"the depth pass could not make {scene.path.name}'s objects hollow ({exc}); the rays that "
                  "start inside a solid stay unmeasured")
-    if unmeasured.max() > 0:
-        warn(f"the depth pass cannot measure {100 * float(unmeasured.mean()):.3g} % of the depth maps' pixels "
-             f"(NaN there): {BLIND_REASON}")
-    return d, unmeasured
+            return None
 
 
 def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,

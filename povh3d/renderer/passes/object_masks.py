@@ -126,7 +126,8 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
                 images = {0: _trace_still(_placed_as(masked, traced), settle=traced is None)}
             else:                        # each frame's panel (the lens mesh's rays, point-sampled)
                 report = render(masked)
-                images = {int(read_sidecar(name)["animation"]["frame"]): read_png(name) for name in report["frames"]}
+                images = {int((read_sidecar(name) or {})["animation"]["frame"]): read_png(name)  # sidecars: written
+                          for name in report["frames"]}
         masks, panels = {}, {}
         for n, h3d in images.items():
             ids = decode_ids(h3d, len(names))
@@ -178,7 +179,7 @@ def _placed_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRe
     frame_record = (colour or {}).get("display_frame") or {}
     clearance = ((colour or {}).get("quality") or {}).get("front_clearance_mm")
     frame = recorded_frame(frame_record) if frame_record and clearance is not None else None
-    if frame is None or masked.is_model:   # native or staged in mm: placed without a POV-Ray run
+    if frame is None or clearance is None or masked.is_model:   # native or staged in mm: placed without a POV-Ray run
         return masked
     settings = dataclasses.replace(masked.settings, frame=frame, front_clearance=float(clearance),
                                    depth_scale=float(frame_record.get("depth_scale", 1.0)))

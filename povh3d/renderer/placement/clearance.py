@@ -39,8 +39,8 @@ def limited_front_clearance(method: Method, lens_array: LensArray, settings: Ren
     why = "--front-clearance" if settings.front_clearance else "the method's default"
     limit = settings.front_clearance_limit
     if limit is None or rounded <= limit * (1 + 1e-12):
-        step = "" if rounded == asked else f" {asked:.4g} mm, rounded up (whole view shifts)"
-        return rounded, f"{why}{step}"
+        rounding = "" if rounded == asked else f" {asked:.4g} mm, rounded up (whole view shifts)"
+        return rounded, f"{why}{rounding}"
     step = method.front_clearance_step(lens_array, options)
     used = step * math.floor(limit / step * (1 + 1e-12)) if step > 0 else limit
     return used, f"{settings.front_clearance_reason or 'limited'} ({limit:.4g} mm); {why} was {rounded:.4g} mm"
@@ -82,6 +82,6 @@ def front_clearance(method: Method, rays: LensArray, settings: RenderSettings,
 def planned_front_clearance(method: Method, lens_array: LensArray, settings: RenderSettings) -> float:
     """The clearance (mm) ``run_method`` will trace ``method`` from, for ``settings`` (quality resolved)."""
     # --quality auto is chosen later, with the method: its supersampling (a step under a limit) taken as 1.
-    known = method.supersamples is not None and settings.quality != AUTO
-    options = {"supersample": method.supersamples(settings.spec)} if known else {}
+    supersamples = method.supersamples if settings.quality != AUTO else None
+    options = {"supersample": supersamples(settings.spec)} if supersamples is not None else {}
     return front_clearance(method, depth_scaled_rays(lens_array, settings.depth_scale), settings, options).used

@@ -154,7 +154,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
     keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
 
     def measure(f: DisplayFrame) -> dict[str, Any]:
-        if seen is not None and f is frame:
+        if seen is not None and f is frame and seen.unmeasured == 0:   # else measured on a hollow copy
             return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
         return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm,
@@ -214,8 +214,9 @@ def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: 
     budget = depth_budget_mm(lens_array)
     front_clearance = _front_clearance(placed, default)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-    depth = (seen.depth(placed, front_clearance, lens_array) if seen else None) or depth_pass(
-        scene, lens_array, RenderSettings(frame=matrix), front_clearance, placed.units_per_mm)
+    depth = seen.depth(placed, front_clearance, lens_array) if seen else None
+    if depth is None or depth.unmeasured > 0:   # a viewer inside a solid: a pass of its own, on the hollow copy
+        depth = depth_pass(scene, lens_array, RenderSettings(frame=matrix), front_clearance, placed.units_per_mm)
     return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
             "depth": depth.summary(budget), "depth_budget_mm": budget,
             "depth_budget_scene_units": budget * placed.units_per_mm}

@@ -116,6 +116,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
 
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
+        assert options.width is not None  # explicit: centre, normal and width all given (__post_init__)
         frame = explicit_frame(options.center, options.normal, float(options.width), width_mm, options.up)
         warning = up_warning(options.normal, options.up)  # an up chosen for the user near the y axis
         return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
@@ -130,14 +131,15 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
                  "or raise --max-memory")
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
-    if refused_type(written):   # refused from the text: its parse may take minutes at the panel's size
-        raise CameraError(_unusable_type(refused_type(written)))
+    refused = refused_type(written)
+    if refused:   # refused from the text: its parse may take minutes at the panel's size
+        raise CameraError(_unusable_type(refused))
     if script is None:
         if options.mode == "camera":
             raise ConfigError(f"--display-frame camera: the scene {scene.path.name} has no camera; "
                               f"place the display with {EXPLICIT_OPTIONS}")
-        note = "the scene has no camera: mm around the screen z = 0"
-        return NATIVE, {**NATIVE.as_record(), "note": note, "warnings": []}, None
+        why = "the scene has no camera: mm around the screen z = 0"
+        return NATIVE, {**NATIVE.as_record(), "note": why, "warnings": []}, None
     try:
         found = (evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache, timeout)
                  if front_clearance is not None else None)

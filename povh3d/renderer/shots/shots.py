@@ -287,6 +287,7 @@ class _Taker:
     def take(self, target: Target, image_path: Path) -> None:
         index, key = target
         if index is None:
+            assert key is not None  # (None, key): Target
             stored = self.settings.sequence.stored
             if key not in stored:
                 if self.cache is not None:
