@@ -30,17 +30,17 @@ def render_params(message: str, as_text: Callable[[str], str] = str) -> str:
     return _MARKED.sub(lambda m: as_text(m.group(1)), message)
 
 
-def plain(value: Any) -> Any:
-    """``value`` (a record: dicts, lists, strings) with every marked parameter written as its name,
-    for JSON a user reads."""
+def plain(value: Any, as_text: Callable[[str], str] = str) -> Any:
+    """``value`` (a record: dicts, lists, strings) with every marked parameter written as
+    ``as_text(name)`` (default: the name), for JSON a user reads."""
     if isinstance(value, str):
-        return render_params(value)
+        return render_params(value, as_text)
     if isinstance(value, dict):
-        return {k: plain(v) for k, v in value.items()}
+        return {k: plain(v, as_text) for k, v in value.items()}
     if isinstance(value, list):
-        return [plain(v) for v in value]
+        return [plain(v, as_text) for v in value]
     if isinstance(value, tuple):
-        return tuple(plain(v) for v in value)
+        return tuple(plain(v, as_text) for v in value)
     return value
 
 

@@ -8,6 +8,7 @@ import re
 import shutil
 from pathlib import Path
 from functools import cache
+from .errors import param
 
 
 @cache
@@ -169,7 +170,7 @@ def parse_size(text: str) -> int:
 
     match = _SIZE.match(str(text))
     if not match or float(match[1]) <= 0:
-        raise ConfigError(f"--max-memory takes a size such as 4G or 512M, got {text!r}")
+        raise ConfigError(f"{param('max_memory')} takes a size such as 4G or 512M, got {text!r}")
     return int(float(match[1]) * _UNITS[match[2].lower()])
 
 

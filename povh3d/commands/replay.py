@@ -15,7 +15,7 @@ import numpy as np
 from ..display.display import Display
 from ..display.replay import (OPTICS, Replay, default_eye, light_shares, mapped_report, mapped_sheet, psnr, replay, report,
                               sweep_eyes)
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, param
 from ..image.io import atomic_path, check_writable, read_png, read_sidecar, write_png
 from ..renderer.budget import check_memory
 from ..renderer.records import base_record, png_output, write_image
@@ -51,7 +51,7 @@ def mapped(display: Display, image: np.ndarray, h3d_path: str | Path) -> tuple[A
                          f"{panel.width}x{panel.height} panel; render it again or delete the sidecar")
     if display.preset is None or display.mapping_name is None:
         raise ConfigError(f"{str(h3d_path)!r} is a mapped panel without a preset; replay needs the preset's "
-                          "mapping to rebuild its sheet: render it with --preset")
+                          f"mapping to rebuild its sheet: render it with {param('preset')}")
     built = build_display(display.preset, mapping=display.mapping_name)
     if built.mapping is None or built.mapped_panel != panel:
         raise ConfigError(f"the sidecar's panel is not preset {display.preset!r}'s with mapping "
@@ -70,7 +70,7 @@ def parse_eye(text: str | None) -> tuple[float, float, float] | None:
     try:
         x, y, z = (float(v) for v in text.split(","))
     except ValueError:
-        raise ConfigError(f"--eye must be X,Y,Z in mm, got {text!r}; e.g. --eye 0,0,-300") from None
+        raise ConfigError(f"{param('eye')} must be X,Y,Z in mm, got {text!r}; e.g. {param('eye')} 0,0,-300") from None
     return (x, y, z)
 
 
@@ -87,9 +87,9 @@ def parse_sweep(text: str | None) -> tuple[str, float, float, int] | None:
         if len(parts) != 3:
             raise ValueError
     except (ValueError, IndexError):
-        raise ConfigError(f"--sweep must be X0:X1:N (or y:Y0:Y1:N), got {text!r}; e.g. --sweep -60:60:9") from None
+        raise ConfigError(f"{param('sweep')} must be X0:X1:N (or y:Y0:Y1:N), got {text!r}; e.g. {param('sweep')} -60:60:9") from None
     if not 2 <= count <= MAX_SWEEP:
-        raise ConfigError(f"--sweep needs 2 to {MAX_SWEEP} eye positions, got {count}; e.g. --sweep -60:60:9")
+        raise ConfigError(f"{param('sweep')} needs 2 to {MAX_SWEEP} eye positions, got {count}; e.g. {param('sweep')} -60:60:9")
     return axis, start, stop, count
 
 
@@ -102,9 +102,9 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
 
     With ``sweep``, ``output`` is a ``.gif`` and the frames go beside it as ``stem_NNN.png``."""
     if optics not in OPTICS:
-        raise ConfigError(f"--optics must be one of {', '.join(OPTICS)}, got {optics!r}")
+        raise ConfigError(f"{param('optics')} must be one of {', '.join(OPTICS)}, got {optics!r}")
     if pupil is not None and optics != "lens":
-        raise ConfigError("--pupil blurs the real lenslets' picture (a POV-Ray focal blur); add --optics lens")
+        raise ConfigError(f"{param('pupil')} blurs the real lenslets' picture (a POV-Ray focal blur); add {param('optics')} lens")
     output = Path(output)
     if sweep is None:
         out = png_output(output)
@@ -123,7 +123,7 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     la = display.lens_array
     if not isinstance(size, str):  # the picture's float geometry, a few arrays of it
         check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1] * (1 if sweep is None else 2),
-                     "give a smaller --size, e.g. --size 800x600")
+                     f"give a smaller {param('size')}, e.g. {param('size')} 800x600")
     eye = eye if eye is not None else default_eye(la)
     eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
     results: list[Replay] = []
@@ -133,8 +133,8 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     sheet = mapped(display, image, h3d_path)
     if sheet is not None:  # a mapped panel, subpixel by subpixel through the sheet its mapping addresses
         if optics not in ("pinhole", "barrier"):
-            raise ConfigError(f"a mapped panel is replayed through its sheet's slits (--optics pinhole or barrier), "
-                              f"not --optics {optics} (not built yet)")
+            raise ConfigError(f"a mapped panel is replayed through its sheet's slits ({param('optics')} pinhole or barrier), "
+                              f"not {param('optics')} {optics} (not built yet)")
         _, la, shift, views = sheet
         for e in eyes:
             results.append(replay(image, la, e, optics="barrier", size=size, shift=shift, subpixels=True))

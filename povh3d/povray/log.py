@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import re
+from ..errors import param
 
 __all__ = ["parse_error", "parse_progress", "parse_render_time", "unwrap"]
 
@@ -102,7 +103,7 @@ def parse_error(log: str) -> str | None:
         if message is not None:
             if "bad_alloc" in message or "out of memory" in message.lower():
                 message += (" (POV-Ray ran out of the memory it may use: the memory available, or "
-                            "--max-memory; look for huge arrays or meshes in the scene)")
+                            f"{param('max_memory')}; look for huge arrays or meshes in the scene)")
             return message
     return None
 
@@ -249,14 +250,14 @@ def denied_note(reason: str, include_dirs: tuple[str, ...], log: str = "", confi
     if _replaced_non_ascii(reason, log):
         return (" (POV-Ray 3.7 reads the file names written in a scene as ASCII and turned each non-ASCII "
                 "character into a space; povh3d bridges that for names relative to the scene's folder or an "
-                "--include folder, not for absolute names, names with '..' or names computed while parsing: "
+                f"{param('include')} folder, not for absolute names, names with '..' or names computed while parsing: "
                 "rename the file and its folders with ASCII characters only)")
     match = _INCLUDE_NAME.search(reason)
     if match:
         name = match[1].strip()
         if not any(os.path.exists(os.path.join(d, name)) for d in (*include_dirs, ".")):
-            return (f" ({name} is neither beside the scene nor in an --include folder; check the name, "
-                    "or add its folder with --include)")
+            return (f" ({name} is neither beside the scene nor in an {param('include')} folder; check the name, "
+                    f"or add its folder with {param('include')})")
     if not confined:
         return ""
     return (" (povh3d lets a scene read only its own files and POV-Ray's include files, "

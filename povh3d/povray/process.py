@@ -38,7 +38,9 @@ from pathlib import Path
 from typing import BinaryIO
 
 from . import limits, sandbox
-from ..errors import ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
+from ..errors import (
+    ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted, param,
+)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
 from ..system import INSTALL_HINT, find_povray, owned_prefix, sweep_orphans
@@ -65,12 +67,12 @@ def _version(binary: str) -> str:
         raise PovrayNotFound(f"Cannot run {binary}: {error.strerror}; "
                              f"{INSTALL_HINT}.") from None
     except subprocess.TimeoutExpired:
-        raise PovrayError(f"{binary} --version did not answer within 30 s.",
+        raise PovrayError(f"{binary} {param('version')} did not answer within 30 s.",
                           command=command) from None
     output = done.stdout + done.stderr  # POV-Ray 3.7 prints it on stderr
     match = re.search(r"^POV-Ray (\d+\.\d+\S*)", output, re.MULTILINE)
     if match is None:
-        raise PovrayError(f"{binary} --version did not report a POV-Ray version.",
+        raise PovrayError(f"{binary} {param('version')} did not report a POV-Ray version.",
                           command=command, returncode=done.returncode,
                           log_tail=tail(output))
     return match[1]
