@@ -20,7 +20,8 @@ NAMES = {
     "ppl": "--ppl",
     "pixels_per_lens": "--ppl",
     "depth_maps": "--depth-maps",
-    "panel_size": "--panel-size",
+    "max_error_db": "--max-error",       # RenderSettings.max_error_db
+    "include_dirs": "--include",         # RenderRequest.include_dirs
 }
 
 _options: set[str] = set()

@@ -250,14 +250,14 @@ def denied_note(reason: str, include_dirs: tuple[str, ...], log: str = "", confi
     if _replaced_non_ascii(reason, log):
         return (" (POV-Ray 3.7 reads the file names written in a scene as ASCII and turned each non-ASCII "
                 "character into a space; povh3d bridges that for names relative to the scene's folder or an "
-                f"{param('include')} folder, not for absolute names, names with '..' or names computed while parsing: "
+                f"{param('include_dirs')} folder, not for absolute names, names with '..' or names computed while parsing: "
                 "rename the file and its folders with ASCII characters only)")
     match = _INCLUDE_NAME.search(reason)
     if match:
         name = match[1].strip()
         if not any(os.path.exists(os.path.join(d, name)) for d in (*include_dirs, ".")):
-            return (f" ({name} is neither beside the scene nor in an {param('include')} folder; check the name, "
-                    f"or add its folder with {param('include')})")
+            return (f" ({name} is neither beside the scene nor in an {param('include_dirs')} folder; check the name, "
+                    f"or add its folder with {param('include_dirs')})")
     if not confined:
         return ""
     return (" (povh3d lets a scene read only its own files and POV-Ray's include files, "

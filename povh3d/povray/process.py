@@ -39,7 +39,7 @@ from typing import BinaryIO
 
 from . import limits, sandbox
 from ..errors import (
-    ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted, param,
+    ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted,
 )
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
@@ -67,12 +67,12 @@ def _version(binary: str) -> str:
         raise PovrayNotFound(f"Cannot run {binary}: {error.strerror}; "
                              f"{INSTALL_HINT}.") from None
     except subprocess.TimeoutExpired:
-        raise PovrayError(f"{binary} {param('version')} did not answer within 30 s.",
+        raise PovrayError(f"{' '.join(command)} did not answer within 30 s.",
                           command=command) from None
     output = done.stdout + done.stderr  # POV-Ray 3.7 prints it on stderr
     match = re.search(r"^POV-Ray (\d+\.\d+\S*)", output, re.MULTILINE)
     if match is None:
-        raise PovrayError(f"{binary} {param('version')} did not report a POV-Ray version.",
+        raise PovrayError(f"{' '.join(command)} did not report a POV-Ray version.",
                           command=command, returncode=done.returncode,
                           log_tail=tail(output))
     return match[1]

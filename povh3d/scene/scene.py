@@ -234,7 +234,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     for d in include_dirs:
         d = Path(d).resolve()
         if not d.is_dir():
-            raise InputError(f"include folder {str(d)!r} does not exist; check {param('include')}")
+            raise InputError(f"include folder {str(d)!r} does not exist; check {param('include_dirs')}")
         if d not in dirs:
             dirs.append(d)
     system = list(system_include_dirs() if system_dirs is None else system_dirs)

@@ -204,8 +204,8 @@ class RenderSettings:
         if not isinstance(self.quality, Quality) and self.quality != AUTO:
             quality_level(self.quality)
         if (self.quality == AUTO) != (self.max_error_db is not None):
-            raise ConfigError(f"{param('quality')} auto needs {param('max_error')} DB (the lowest PSNR to accept), "
-                              f"and {param('max_error')} needs {param('quality')} auto")
+            raise ConfigError(f"{param('quality')} auto needs {param('max_error_db')} DB (the lowest PSNR to accept), "
+                              f"and {param('max_error_db')} needs {param('quality')} auto")
         if self.jobs is not None and self.jobs < 1:
             raise ConfigError(f"{param('jobs')} must be at least 1, got {self.jobs}")
         if self.threads is not None and self.threads < 1:
