@@ -38,9 +38,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from . import limits, sandbox
-from ..errors import (
-    ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted,
-)
+from ..errors import ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
 from ..system import INSTALL_HINT, find_povray, owned_prefix, sweep_orphans
