@@ -71,7 +71,7 @@ def without(monkeypatch):
 def test_require_names_the_extra(without):
     assert require("json", "cluster", "x").__name__ == "json"  # negative control: present, imported
     without("distributed")
-    with pytest.raises(MissingExtra, match=r"^--scheduler needs distributed, which is not installed: "
+    with pytest.raises(MissingExtra, match=r"^scheduler needs distributed, which is not installed: "
                                            r"pip install 'povh3d\[cluster\]'$") as caught:
         require("distributed", "cluster", "--scheduler")
     assert isinstance(caught.value, ImportError) and caught.value.name == "distributed"

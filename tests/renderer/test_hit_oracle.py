@@ -91,7 +91,7 @@ def test_impossible_lenslets_are_refused_in_one_line(tmp_path):
     # f = 0.05 mm under a 0.6 mm lenticule: no real index bends the rim pixels' rays
     # (before: index 3601 picked, hits 7-21 mm off, exit 0).
     short = lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=0.05)
-    with pytest.raises(ConfigError, match=r"lengthen --focal to [0-9.]+ mm or more") as err:
+    with pytest.raises(ConfigError, match=r"lengthen focal to [0-9.]+ mm or more") as err:
         run_method("single-stage", scene, short, settings)
     assert "\n" not in str(err.value) and "1.3..2.5" in str(err.value)
     for ior in (1.1, 3.0, 6401.0):
