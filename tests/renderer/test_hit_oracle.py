@@ -98,7 +98,7 @@ def test_impossible_lenslets_are_refused_in_one_line(tmp_path):
         with pytest.raises(ConfigError, match="no lens material"):
             run_method("single-stage", scene, GRIDS["square-8"], settings, ior=ior)
     # The focal length the refusal names is accepted (at the index it names).
-    need = float(str(err.value).split("lengthen --focal to ")[1].split(" mm")[0])
+    need = float(str(err.value).split("lengthen focal to ")[1].split(" mm")[0])
     ok = lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=need)
     got = render_hits("single-stage", ok, tmp_path, 30.0, half_for(ok, 30.0), ior=2.5)
     assert score(ok, got, 30.0).within >= 0.995

@@ -231,7 +231,7 @@ def test_scripts_hold_only_finite_numbers(method, index):
     except ConfigError as err:
         # Single-stage refuses lenslets no real index can make (45-80 degree views):
         # in one line, naming the focal length that works.
-        assert method == "single-stage" and "lengthen --focal to" in str(err), str(err)
+        assert method == "single-stage" and "lengthen focal to" in str(err), str(err)
         return
     script = build_script(batch, batch.shots, method=method, scene_path="/s.pov", add_assumed_gamma=True,
                           header=display_header(la))
@@ -300,7 +300,7 @@ def test_a_large_scale_ratio_is_checked_in_scene_units_and_its_advice_renders(tm
     # multi-ortho's view bank starts whole steps of f x views (9 mm) out, beyond reach here
     with pytest.raises(ConfigError, match="method multi-ortho-views") as refused:
         run_method("multi-ortho", scene, la, settings)
-    advised = float(re.search(r"--front-clearance (\S+) ", str(refused.value)).group(1))
+    advised = float(re.search(r"front_clearance (\S+) ", str(refused.value)).group(1))
     assert_matches(run_method("multi-ortho-views", scene, la, replace(settings, front_clearance=advised)).h3d,
                    expected, clear)
     # Negative control: the check in mm (one unit per mm) lets the default through, and it fails the oracle.
