@@ -8,8 +8,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
-from ..errors import plain
+from ..errors import ConfigError, plain
 from .flags import as_flag, flags
 from .options import (add_array_options, add_image_lens_options, add_mapping_options, display_from_args,
                       lens_array_from_args, parse_pair, parse_size, positive_int, ppl_arg)
