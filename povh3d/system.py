@@ -8,7 +8,6 @@ import re
 import shutil
 from pathlib import Path
 from functools import cache
-from .errors import param
 
 
 @cache
@@ -166,7 +165,7 @@ _UNITS = {"": 1, "k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
 
 def parse_size(text: str) -> int:
     """``"4G"``, ``"512M"``, ``"2.5GiB"``, ``"1000000"`` (bytes) -> bytes; a ConfigError otherwise."""
-    from .errors import ConfigError
+    from .errors import ConfigError, param
 
     match = _SIZE.match(str(text))
     if not match or float(match[1]) <= 0:

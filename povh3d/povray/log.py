@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 import re
-from ..errors import param
 
 __all__ = ["parse_error", "parse_progress", "parse_render_time", "unwrap"]
 
@@ -97,6 +96,8 @@ def parse_error(log: str) -> str | None:
         the log holds no error.  Warnings, including "Possible Parse Error",
         are not errors, though one may explain a fatal error that follows it.
     """
+    from ..errors import param   # here: log.py stays a leaf of the import graph
+
     lines = [line.strip() for line in unwrap(log)]
     for find in (_first_error, _access_error, _fatal_error, _plain_error):
         message = find(lines)
@@ -247,6 +248,8 @@ def denied_note(reason: str, include_dirs: tuple[str, ...], log: str = "", confi
     """What to add to a "cannot open" error: POV-Ray's ASCII file names when it replaced
     non-ASCII characters; that the file is not there; else, when `confined`, the sandbox
     note (the file exists, so the sandbox refused it)."""
+    from ..errors import param   # here: log.py stays a leaf of the import graph
+
     if _replaced_non_ascii(reason, log):
         return (" (POV-Ray 3.7 reads the file names written in a scene as ASCII and turned each non-ASCII "
                 "character into a space; povh3d bridges that for names relative to the scene's folder or an "
