@@ -147,3 +147,14 @@ def test_the_command_line_shows_a_warnings_flag(capsys):
     flags.learn(build_parser(), "render")
     print_warnings([f"the scene moved; give {param('display_up')} 0,1,0"])
     assert capsys.readouterr().err.strip() == "povh3d: warning: the scene moved; give --display-up 0,1,0"
+
+
+def test_a_sidecar_holds_names_not_marks(tmp_path):
+    import json
+
+    from povh3d.image.io import write_sidecar
+
+    record = {"warnings": [f"give {param('ppl')} 8"], "crop": {"reason": f"{param('crop')} off"}}
+    assert param("ppl") in record["warnings"][0]   # negative control: the record itself holds the marks
+    side = write_sidecar(tmp_path / "a.png", record)
+    assert json.loads(side.read_text()) == {"warnings": ["give ppl 8"], "crop": {"reason": "crop off"}}
