@@ -87,12 +87,12 @@ def _closing_brace(toks: list[Token], opening: int) -> int:
 
 
 #: The same words as ``geometry.frame.EXPLICIT_OPTIONS`` (scene/ does not import geometry/).
-EXPLICIT_OPTIONS = f"{param('display_center')} X,Y,Z {param('display_normal')} X,Y,Z [{param('display_up')} X,Y,Z] {param('display_width')} UNITS"
+EXPLICIT_OPTIONS = f"{param('display_frame.center')} X,Y,Z {param('display_frame.normal')} X,Y,Z [{param('display_frame.up')} X,Y,Z] {param('display_frame.width')} UNITS"
 
 
 def _cannot(reason: str) -> CameraError:
     return CameraError(f"cannot use the scene's camera ({reason}); place the display with "
-                       f"{EXPLICIT_OPTIONS}, or {param('display_frame')} native")
+                       f"{EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
 
 
 @dataclass(frozen=True)

@@ -176,7 +176,7 @@ def test_depth_scale_options_are_checked():
         DisplayFrameOptions(depth_scale="fit")
     with pytest.raises(ConfigError, match="both set the depth"):
         DisplayFrameOptions(fit_depth="auto", depth_scale=0.5)
-    with pytest.raises(ConfigError, match="depth-scale"):
+    with pytest.raises(ConfigError, match="depth_scale"):
         RenderSettings(depth_scale=0.0)
 
 

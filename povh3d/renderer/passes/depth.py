@@ -60,7 +60,7 @@ BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (
                 "POV-Ray applies no fog inside a non-hollow object; add 'hollow' to that object")
 SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
                     "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
-                    f"or place the display with {param('display_center')}/{param('display_normal')}/{param('display_width')}")
+                    f"or place the display with {param('display_frame.center')}/{param('display_frame.normal')}/{param('display_frame.width')}")
 #: POV-Ray threads of a pass.  A jittered area light (and subsurface scattering) samples at random per
 #: render thread, so at two threads, which take the pixels in another order in each frame, a surface's
 #: colour differs between the two fog frames (a sphere before a plane: its shadow's edge 7-10 mm off in

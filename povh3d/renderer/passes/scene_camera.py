@@ -242,7 +242,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     printed = next((tuple(v) for k, v in parse_log(log) if k == "depth_frame" and isinstance(v, list)), ())
     if len(printed) != 14 or len(images) != 2:
         raise CameraError(f"cannot use the scene's camera (POV-Ray did not finish the depth pass through its "
-                          f"frame); place the display with {EXPLICIT_OPTIONS}, or {param('display_frame')} native")
+                          f"frame); place the display with {EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
     distances, unmeasured = fog_distances(images[:1], images[1:], printed[12] * printed[13])
     seen = Seen(distances[0].astype(np.float32), float(unmeasured[0]), printed)
     if use_cache:

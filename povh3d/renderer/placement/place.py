@@ -181,7 +181,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
     if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
         raise ConfigError(f"{param('fit_depth')} cannot fit: the depth pass measured nothing in the framed field "
                           "(nothing hit, or the viewpoint inside a solid object); place the display with "
-                          f"{param('display_center')}/{param('display_normal')}/{param('display_width')} instead")
+                          f"{param('display_frame.center')}/{param('display_frame.normal')}/{param('display_frame.width')} instead")
     reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
     if not reach > 0:
         return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}, scale

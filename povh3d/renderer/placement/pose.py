@@ -77,14 +77,14 @@ class DisplayFrameOptions:
                                               or not (f > 0 and f < float("inf"))):
             raise ConfigError(f"{param('fit_depth')} takes 'auto' or a positive number of mm, got {f!r}")
         if self.mode not in FRAME_MODES:
-            raise ConfigError(f"{param('display_frame')} must be one of {', '.join(FRAME_MODES)}, got {self.mode!r}")
+            raise ConfigError(f"{param('display_frame.mode')} must be one of {', '.join(FRAME_MODES)}, got {self.mode!r}")
         given = [n for n in ("center", "normal", "width") if getattr(self, n) is not None]
         if given and len(given) < 3:
             raise ConfigError(f"an explicit display frame needs all of {EXPLICIT_OPTIONS}")
         if self.up is not None and not given:
-            raise ConfigError(f"{param('display_up')} needs the rest of {EXPLICIT_OPTIONS}")
+            raise ConfigError(f"{param('display_frame.up')} needs the rest of {EXPLICIT_OPTIONS}")
         if given and self.mode != "auto":
-            raise ConfigError(f"{param('display_frame')} cannot be combined with {param('display_center')} and the other "
+            raise ConfigError(f"{param('display_frame.mode')} cannot be combined with {param('display_frame.center')} and the other "
                               "explicit options; give one or the other")
 
     @property
@@ -126,7 +126,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     # The camera's reading keeps a token of every word and number: about 200 bytes a byte of text
     # (a 5 MB one-expression scene took 0.96 GB), estimated before it starts.
     check_memory(f"reading the camera of {scene.path.name} ({len(text) / 2**20:.3g} MB of text)", 200 * len(text),
-                 f"give the display's place with {param('display_frame')} native or {param('display_center')}/{param('display_normal')}, "
+                 f"give the display's place with {param('display_frame.mode')} native or {param('display_frame.center')}/{param('display_frame.normal')}, "
                  f"or raise {param('max_memory')}")
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
@@ -134,7 +134,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         raise CameraError(_unusable_type(refused_type(written)))
     if script is None:
         if options.mode == "camera":
-            raise ConfigError(f"{param('display_frame')} camera: the scene {scene.path.name} has no camera; "
+            raise ConfigError(f"{param('display_frame.mode')} camera: the scene {scene.path.name} has no camera; "
                               f"place the display with {EXPLICIT_OPTIONS}")
         note = "the scene has no camera: mm around the screen z = 0"
         return NATIVE, {**NATIVE.as_record(), "note": note, "warnings": []}, None
@@ -196,7 +196,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
 
 def _unusable_type(kind: str) -> str:
     return (f"cannot use the scene's {kind} camera (only a perspective one defines a frame); place the display "
-            f"with {EXPLICIT_OPTIONS}, or {param('display_frame')} native")
+            f"with {EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
 
 
 def _orthographic_options(camera: dict[str, Any]) -> str:
@@ -210,8 +210,8 @@ def _orthographic_options(camera: dict[str, Any]) -> str:
     def triple(v: Any) -> str:
         return ",".join(f"{float(x):.6g}" for x in v)
 
-    return (f"{param('display_center')}={triple(centre)} {param('display_normal')}={triple(camera['direction'])} "
-            f"{param('display_up')}={triple(camera['up'])} {param('display_width')} {width:.6g}")
+    return (f"{param('display_frame.center')}={triple(centre)} {param('display_frame.normal')}={triple(camera['direction'])} "
+            f"{param('display_frame.up')}={triple(camera['up'])} {param('display_frame.width')} {width:.6g}")
 
 
 def recorded_frame(record: dict[str, Any]) -> tuple[float, ...] | None:
