@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import ConfigError
+from .errors import ConfigError, raw_message
 
 if TYPE_CHECKING:
     from .renderer.content.convert_mesh import ConversionResult
@@ -99,7 +99,7 @@ def extract(h3d: np.ndarray, lens: LensArray | Ppl) -> np.ndarray:
     try:
         return _extract(np.asarray(h3d), _ppl(lens))
     except ValueError as exc:
-        raise ConfigError(str(exc)) from None
+        raise ConfigError(raw_message(exc)) from None
 
 
 # -- the panel ---------------------------------------------------------------------------------------
@@ -169,7 +169,7 @@ def resample(h3d: np.ndarray, ppl_in: LensArray | Ppl, ppl_out: tuple[float, flo
             out = tuple(int(m) for m in ppl_out)
             return functions[mode](np.asarray(h3d), _ppl(ppl_in), (out[0], out[1]))
         except ValueError as exc:
-            raise ConfigError(f"{exc}; check ppl_in and ppl_out") from None
+            raise ConfigError(f"{raw_message(exc)}; check ppl_in and ppl_out") from None
     if mode != "micro":
         raise ConfigError("mode 'lenses' cuts whole-pixel micro-images; this lens array's are not whole "
                           "pixels: use mode 'micro'")

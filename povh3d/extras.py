@@ -43,7 +43,7 @@ def require(module: str, extra: str, purpose: str) -> ModuleType:
     ----------
     module : str    the module to import (``"scipy.ndimage"``, ``"distributed"``)
     extra : str     the group of ``EXTRAS`` that installs it
-    purpose : str   what needs it, as the user asked for it (``"--scheduler"``, ``"a DICOM folder"``)
+    purpose : str   what needs it, as the user asked for it (``param("scheduler")``, ``"a DICOM folder"``)
     """
     if extra not in EXTRAS:
         raise ValueError(f"extra {extra!r} is not one of {sorted(EXTRAS)}")

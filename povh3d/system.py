@@ -165,11 +165,11 @@ _UNITS = {"": 1, "k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
 
 def parse_size(text: str) -> int:
     """``"4G"``, ``"512M"``, ``"2.5GiB"``, ``"1000000"`` (bytes) -> bytes; a ConfigError otherwise."""
-    from .errors import ConfigError
+    from .errors import ConfigError, param
 
     match = _SIZE.match(str(text))
     if not match or float(match[1]) <= 0:
-        raise ConfigError(f"--max-memory takes a size such as 4G or 512M, got {text!r}")
+        raise ConfigError(f"{param('max_memory')} takes a size such as 4G or 512M, got {text!r}")
     return int(float(match[1]) * _UNITS[match[2].lower()])
 
 

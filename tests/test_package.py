@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from povh3d._version import __version__
-from povh3d.errors import MissingExtra
+from povh3d.errors import MissingExtra, param
 from povh3d.extras import EXTRAS, require
 from tests.conftest import REPO, SAMPLE
 from tests.support.cli import one_error_line
@@ -71,9 +71,9 @@ def without(monkeypatch):
 def test_require_names_the_extra(without):
     assert require("json", "cluster", "x").__name__ == "json"  # negative control: present, imported
     without("distributed")
-    with pytest.raises(MissingExtra, match=r"^--scheduler needs distributed, which is not installed: "
+    with pytest.raises(MissingExtra, match=r"^scheduler needs distributed, which is not installed: "
                                            r"pip install 'povh3d\[cluster\]'$") as caught:
-        require("distributed", "cluster", "--scheduler")
+        require("distributed", "cluster", param("scheduler"))
     assert isinstance(caught.value, ImportError) and caught.value.name == "distributed"
     with pytest.raises(ValueError, match="not one of"):
         require("json", "nope", "x")

@@ -9,7 +9,7 @@ import math
 import numpy as np
 from scipy import ndimage
 
-from ..errors import InputError
+from ..errors import InputError, param
 
 
 MIN_PITCH_PX = 3.0
@@ -120,7 +120,7 @@ def fft_basis(img: np.ndarray, lattice: str | None, name: str) -> tuple[str, np.
         raise InputError(f"{name}: the lens lattice is neither square nor hexagonal (angle "
                          f"{math.degrees(math.acos(cosang)):.1f} deg, side ratio {ratio:.3f}); check the image")
     if lattice is not None and lattice != found:
-        raise InputError(f"{name} shows a {found} lens lattice, not {lattice}; drop --lattice or check the image")
+        raise InputError(f"{name} shows a {found} lens lattice, not {lattice}; drop {param('lattice')} or check the image")
     pitch = float(np.linalg.norm(b1))
     if pitch < MIN_PITCH_PX:
         raise InputError(f"{name}: the lens pitch looks like {pitch:.2f} px; at least {MIN_PITCH_PX:g} px are needed")

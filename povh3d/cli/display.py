@@ -8,7 +8,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, plain
+from .flags import as_flag, flags
 from .options import (add_array_options, add_image_lens_options, add_mapping_options, display_from_args,
                       lens_array_from_args, parse_pair, parse_size, positive_int, ppl_arg)
 
@@ -68,14 +69,14 @@ def cmd_info(args: argparse.Namespace) -> int:
 
         info["scene"] = scene_report(args.scene, lens_array)
     if args.json:
-        print(json.dumps(info, indent=2))
+        print(json.dumps(plain(info, as_flag), indent=2))
         return 0
     for key, value in info.items():
         if key in ("scene", "content"):
             continue
         if key == "view_angles_deg":
             value = {k: [round(a, 3) for a in v] for k, v in value.items()}
-        print(f"{key:22s} {value}")
+        print(flags(f"{key:22s} {value}"))
     if "scene" in info:
         _print_scene(info["scene"])
     if "content" in info:
@@ -102,13 +103,13 @@ def _print_scene(report: dict) -> None:
     from .render import frame_phrase
 
     print(f"{'scene':22s} {report['scene']}")
-    print(f"{'display frame':22s} {frame_phrase({**report['display_frame'], 'depth': None})}")
+    print(flags(f"{'display frame':22s} {frame_phrase({**report['display_frame'], 'depth': None})}"))
     d, half = report["depth"], report["depth_budget_mm"] / 2
     if d.get("empty"):
         print(f"{'scene depth':22s} nothing hit in the middle of the framed field")
         return
     if "reason" in d:   # blind or too bright: why, and the fix
-        print(f"{'scene depth':22s} {d['reason']}")
+        print(flags(f"{'scene depth':22s} {d['reason']}"))
         return
     verdict = "within" if d["within_budget"] else "BEYOND"
     print(f"{'scene depth':22s} subject z = {d['near_mm']:.3g} .. {d['far_mm']:.3g} mm, whole field "

@@ -19,7 +19,8 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from .._version import __version__
-from ..errors import Povh3dError, Povh3dWarning, RenderInterrupted
+from ..errors import Povh3dError, Povh3dWarning, RenderInterrupted, raw_message
+from .flags import flags, learn
 from . import calibration, display, hyper, layout, render, replay
 from .options import warn
 
@@ -56,7 +57,7 @@ class _Parser(argparse.ArgumentParser):
 
 def fail(message: str, code: int) -> NoReturn:
     red, reset = ("\033[31m", "\033[0m") if sys.stderr.isatty() else ("", "")
-    print(f"{red}povh3d: error: {message}{reset}", file=sys.stderr)
+    print(f"{red}povh3d: error: {flags(message)}{reset}", file=sys.stderr)
     raise SystemExit(code)
 
 
@@ -94,6 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    learn(parser, getattr(args, "command", None))   # a library message's parameters, shown as flags
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
@@ -106,7 +108,7 @@ def _main(argv: Sequence[str] | None) -> int:
             raise _Stopped
         return code
     except RenderInterrupted as exc:
-        fail(str(exc) or "interrupted; every POV-Ray process was stopped", exc.exit_code)
+        fail(raw_message(exc) or "interrupted; every POV-Ray process was stopped", exc.exit_code)
     except Exception as exc:
         if _RECEIVED or _raised_by_a_stop(exc):
             # The stop, whatever became of it on the way: wrapped (3.11's "Error calling
@@ -120,7 +122,7 @@ def _main(argv: Sequence[str] | None) -> int:
 
 def _fail_on(exc: Exception) -> NoReturn:
     if isinstance(exc, Povh3dError):
-        fail(str(exc), exc.exit_code)
+        fail(raw_message(exc), exc.exit_code)
     if isinstance(exc, MemoryError):
         fail("out of memory; use a smaller panel (--lenses, --ppl) or close other programs", 1)
     if isinstance(exc, OSError):  # the environment's fault (a full disk, a permission), not the user's input
@@ -214,7 +216,7 @@ def _warnings_as_lines():
     """Print every ``Povh3dWarning`` as one yellow line (library code never prints)."""
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, Povh3dWarning):
-            warn([str(message)])
+            warn([raw_message(message) if isinstance(message, Warning) else str(message)])
         else:
             original(message, category, filename, lineno, file, line)
 

@@ -13,6 +13,7 @@ import sys
 from typing import Any, overload
 
 from ..errors import ConfigError
+from .flags import flags
 
 _PAIR = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(?:[xX]\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*)?$")
 
@@ -124,7 +125,7 @@ def progress_bar(enabled: bool, unit: str = "frames"):
 def warn(messages: list[str]) -> None:
     yellow, reset = ("\033[33m", "\033[0m") if sys.stderr.isatty() else ("", "")
     for message in messages:
-        print(f"{yellow}povh3d: warning: {message}{reset}", file=sys.stderr)
+        print(f"{yellow}povh3d: warning: {flags(message)}{reset}", file=sys.stderr)
 
 
 def max_triangles(text: str | None) -> int | str | None:

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
+from .flags import flags
 from .volume import add_volume_options, volume_options_from_args
 from .options import (add_array_options, add_mapping_options, add_mesh_options, display_from_args,
                       lens_array_from_args, max_triangles, parse_triple, positive_int, progress_bar, warn)
@@ -158,7 +159,7 @@ def _render(args: argparse.Namespace) -> str | None:
         method = "the vendor's perspective cameras"
     if result.get("method_note"):   # the default traded for one that renders the scene right
         method += f" (not the default {request.method}: {result.get('method_fallback', 'see the sidecar')})"
-    summary = f"{w}x{h}  {method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}"
+    summary = flags(f"{w}x{h}  {method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}")
     seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
           f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
@@ -220,7 +221,7 @@ def cmd_convert_mesh(args: argparse.Namespace) -> int:
         s = result.simplification
         line += (f"  (simplified from {s['triangles_before']} triangles; "
                  f"silhouette error {100 * s['silhouette_error']:.3f} %)")
-    print(line)
+    print(flags(line))
     return 0
 
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, param
 from ..image.io import atomic_path, check_output, read_sidecar, with_sidecar
 from ..renderer.outputs.objects import ObjectTable, read_mask, read_table
 from .viewer import frame_files
@@ -66,11 +66,11 @@ def _check_against(table: ObjectTable, frames: list[int], record: dict[str, Any]
         # the same lens array and frames, another render: its ids name another scene's objects
         raise InputError(f"the object masks in {str(masks)!r} are of another render than the image (its "
                          f"objects: {', '.join(sorted(note.get('names', {}).values())) or 'none'}); give the "
-                         f"masks folder it was rendered with ({note.get('folder', '?')}), or render --objects again")
+                         f"masks folder it was rendered with ({note.get('folder', '?')}), or render {param('objects')} again")
     if list(table.frames) != frames:
         raise InputError(f"the object masks in {str(masks)!r} are of frames {table.frames[0]}..{table.frames[-1]} "
                          f"({len(table.frames)}) but the render has {frames[0]}..{frames[-1]} ({len(frames)}); "
-                         "render --objects with the same frames")
+                         f"render {param('objects')} with the same frames")
     views = la.get("views") or record.get("views")
     size = la.get("view_size_px") or record.get("view_size_px")
     if views and list(views) != [table.views[1], table.views[0]] or \
@@ -80,7 +80,7 @@ def _check_against(table: ObjectTable, frames: list[int], record: dict[str, Any]
         has_size = f"{size[0]}x{size[1]}" if size else "unknown"
         raise InputError(f"the object masks in {str(masks)!r} are {table.views[1]}x{table.views[0]} views of "
                          f"{table.view_size[1]}x{table.view_size[0]} but the render has {has_views} "
-                         f"of {has_size}; render --objects with the same lens array")
+                         f"of {has_size}; render {param('objects')} with the same lens array")
 
 
 def _h3d_offset(record: dict[str, Any]) -> tuple[int, int] | None:

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..image.io import atomic_path, check_output, check_output_folder, read_png, with_sidecar
 from ..renderer.records import base_record, png_output, write_image
 from ..calibration.borders import correct_borders
@@ -54,7 +54,7 @@ def calibrate_lenticular_file(white: str | Path, output: str | Path, *, dpi: flo
     Glass fields when ``dpi`` is given, which ``map --calibration`` reads)."""
     _json_path(output)
     if dpi is not None and not (np.isfinite(dpi) and dpi > 0):
-        raise ConfigError(f"--dpi must be a positive number of pixels per inch, got {dpi!r}")
+        raise ConfigError(f"{param('dpi')} must be a positive number of pixels per inch, got {dpi!r}")
     check_output(output, with_sidecar(white), what="grid file", sidecar=False)
     image = read_png(white)
     t = time.perf_counter()

@@ -16,7 +16,7 @@ import numpy as np
 
 from PIL import Image
 
-from ..errors import ConfigError, InputError, Povh3dError
+from ..errors import ConfigError, InputError, Povh3dError, param, raw_message
 from ..renderer.budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_memory
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import _positive as positive_length  # the lens array's own rule
@@ -41,8 +41,8 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
     side = lens_record(h3d_path)
     check_against_sidecar(h3d_path, side)
     if ppl is not None and side.get("views") and list(side["views"]) != to_edge(ppl):
-        raise ConfigError(f"--ppl {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
-                          f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave --ppl out")
+        raise ConfigError(f"{param('ppl')} {ppl[1]}x{ppl[0]} contradicts the sidecar of {str(h3d_path)!r}, whose lens array "
+                          f"has {side['views'][0]}x{side['views'][1]} pixels per lens; leave {param('ppl')} out")
     if ppl is None and side.get("views"):
         ppl = from_edge([int(v) for v in side["views"]])
     if side and not side.get("views"):  # hex, fractional PPL: each lens resampled, as extract does
@@ -53,8 +53,8 @@ def lens_info(h3d_path: str | Path, ppl: tuple[int, int] | None, focal: float | 
 
             Display.from_record({"lens_array": side}).lens_array.require_views()
     if ppl is None:
-        raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
-    for value, name, flag in ((focal, "focal length", "--focal 1.5"), (pixel_pitch, "pixel pitch", "--pixel-pitch 0.1")):
+        raise ConfigError(f"the pixels per lens are unknown (no sidecar); give them with {param('ppl')}, e.g. {param('ppl')} 8")
+    for value, name, flag in ((focal, "focal length", f"{param('focal')} 1.5"), (pixel_pitch, "pixel pitch", f"{param('pixel_pitch')} 0.1")):
         if value is not None:  # --focal 0 divided by zero in refocus (an internal error)
             positive_length(f"the {name}", value, f"give it in mm, e.g. {flag}")
     focal = focal if focal is not None else side.get("focal_mm")
@@ -76,11 +76,11 @@ def _resampled_info(h3d_path: str | Path, side: dict[str, Any], ppl: tuple[int, 
     la = Display.from_record({"lens_array": side}).lens_array
     what = f"{la.grid} lens array" if la.grid != "square" else f"{la.ppl_x:g} x {la.ppl_y:g} pixels per lens"
     if ppl is not None:
-        raise ConfigError(f"--ppl contradicts the sidecar of {str(h3d_path)!r} ({what}, whose views are resampled "
-                          "lens by lens); leave --ppl out")
+        raise ConfigError(f"{param('ppl')} contradicts the sidecar of {str(h3d_path)!r} ({what}, whose views are resampled "
+                          f"lens by lens); leave {param('ppl')} out")
     if pixel_pitch is not None and not np.isclose(pixel_pitch, la.panel.pitch_x, rtol=1e-9):
-        raise ConfigError(f"--pixel-pitch {pixel_pitch:g} contradicts the sidecar of {str(h3d_path)!r} "
-                          f"({la.panel.pitch_x:g} mm); leave --pixel-pitch out")
+        raise ConfigError(f"{param('pixel_pitch')} {pixel_pitch:g} contradicts the sidecar of {str(h3d_path)!r} "
+                          f"({la.panel.pitch_x:g} mm); leave {param('pixel_pitch')} out")
     la = replace(la, focal=focal) if focal is not None else la
     return {"ppl": view_grid(la), "focal": la.focal, "pixel_pitch": la.panel.pitch_x,
             "pixel_pitch_y": la.panel.pitch_y, "lens_array": la}
@@ -178,24 +178,24 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
         views = "x".join(map(str, side.get("views") or [])) or "its"
         raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
                           "unmapped lenticular image (one row of views): render with the display's preset or "
-                          "--mapping instead")
+                          f"{param('mapping')} instead")
     recorded = ((read_sidecar(input_path) or {}).get("display") or {}).get("physical_panel") or {}
     if recorded.get("size_px"):   # the render's own panel: a guess from the image's size may be another
         # cast: the panel's size_px, as povh3d wrote it: W, H
         size = cast(tuple[int, int], tuple(int(v) for v in recorded["size_px"]))
         if panel is not None and tuple(panel) != size:
-            raise ConfigError(f"--panel-size {panel[0]}x{panel[1]} is not the {size[0]}x{size[1]} panel "
-                              f"{str(input_path)!r} was rendered for (its sidecar); drop --panel-size")
+            raise ConfigError(f"{param('panel_size')} {panel[0]}x{panel[1]} is not the {size[0]}x{size[1]} panel "
+                              f"{str(input_path)!r} was rendered for (its sidecar); drop {param('panel_size')}")
         panel = size
     if panel is None:
         panel = infer_panel(mapping, image.shape[:2])
         if panel is None:
             raise ConfigError(f"no panel size fits a {image.shape[1]}x{image.shape[0]} image under mapping "
-                              f"{mapping.name!r}; give it with --panel-size WxH")
+                              f"{mapping.name!r}; give it with {param('panel_size')} WxH")
     src = mapping.source(panel)
     if side.get("views") and side["views"][0] != src.views:
         raise ConfigError(f"{str(input_path)!r} has {side['views'][0]} views per lens but mapping {mapping.name!r} "
-                          f"reads {src.views}; check --mapping and its options")
+                          f"reads {src.views}; check {param('mapping')} and its options")
     mapped = mapping.apply(image, panel)  # raises before anything is written
     record = base_record("panel", mapping=mapping.name, mapping_parameters=_params(mapping),
                      source=str(Path(input_path).resolve()), size_px=list(panel), output_gamma="sRGB")
@@ -220,13 +220,13 @@ def _refocus_views(h3d: np.ndarray, info: dict[str, Any]) -> tuple[np.ndarray, n
         steps, used, row_shift = lens_steps(la, views.shape[:2])
         return views, steps, used, row_shift
     ny, nx = info["ppl"]
-    focal = _need(info["focal"], "focal length", "--focal")
-    sx = _need(info["pixel_pitch"], "pixel pitch", "--pixel-pitch")
+    focal = _need(info["focal"], "focal length", param("focal"))
+    sx = _need(info["pixel_pitch"], "pixel pitch", param("pixel_pitch"))
     sy = info["pixel_pitch_y"] or sx
     try:
         views = extract(h3d[..., :3], (ny, nx))
     except ValueError as exc:
-        raise ConfigError(str(exc)) from None
+        raise ConfigError(raw_message(exc)) from None
     u = (np.arange(nx) + 0.5 - nx / 2) * sx
     v = (ny / 2 - np.arange(ny) - 0.5) * sy
     return views, bank_steps((u, v), (nx * sx, ny * sy), focal), np.ones((ny, nx), bool), 0.0
@@ -239,7 +239,7 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     A sweep writes ``output`` as the contact sheet and ``stem_NNN.png`` per plane beside it.
     """
     if sweep is not None:
-        check_count("--sweep (planes)", int(sweep[2]), MAX_PLANES, "a sweep finds the sharpest depth in far fewer")
+        check_count(f"{param('sweep')} (planes)", int(sweep[2]), MAX_PLANES, "a sweep finds the sharpest depth in far fewer")
     reads = with_sidecar(h3d_path)
     out = png_output(output, inputs=reads)
     count = 1 if sweep is None else int(sweep[2])
@@ -249,7 +249,7 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     views, steps, used, row_shift = _refocus_views(image, info)
     plane = views.shape[2] * views.shape[3] * views.shape[4]
     check_memory(f"{count} refocused plane(s)", (count * 3 * 4 + 4 * views.shape[0] * views.shape[1]) * plane,
-                 "give fewer planes (--sweep)")
+                 f"give fewer planes ({param('sweep')})")
     lin = to_linear(views, np.float32)
     if sweep is not None:
         depths = list(np.linspace(sweep[0], sweep[1], int(sweep[2])))
@@ -258,7 +258,7 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     else:  # (was a TypeError from float(None))
         raise ConfigError("refocus needs a depth (mm) or a sweep (near, far, count); give one")
     if not depths or (sweep is not None and int(sweep[2]) < 2):
-        raise ConfigError("--sweep needs at least 2 planes")
+        raise ConfigError(f"{param('sweep')} needs at least 2 planes")
     planes = [shift_and_add(lin, steps * d, row_shift=row_shift, used=used) for d in depths]
     energy = [gradient_energy(p) for p in planes]
     record = base_record("refocus", source=str(Path(h3d_path).resolve()), depths_mm=depths,
@@ -291,18 +291,18 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     check_output(sheet_path, reads, what="contact sheet")   # and the sidecar both share
     image = read_whole_lenses(h3d_path)
     ny, nx = info["ppl"]
-    focal = _need(info["focal"], "focal length", "--focal")
-    sx = _need(info["pixel_pitch"], "pixel pitch", "--pixel-pitch")
+    focal = _need(info["focal"], "focal length", param("focal"))
+    sx = _need(info["pixel_pitch"], "pixel pitch", param("pixel_pitch"))
     if info.get("lens_array") is None and (image.shape[0] % ny or image.shape[1] % nx):
         raise ConfigError(f"a {image.shape[1]}x{image.shape[0]} image does not hold whole lenses of "
-                          f"{nx}x{ny} pixels; check --ppl")
+                          f"{nx}x{ny} pixels; check {param('ppl')}")
     if frames < 2:
-        raise ConfigError("--frames must be at least 2")
-    check_count("--frames", frames, MAX_PREVIEW_FRAMES, "a preview of a few dozen frames shows the parallax")
+        raise ConfigError(f"{param('frames')} must be at least 2")
+    check_count(param("frames"), frames, MAX_PREVIEW_FRAMES, "a preview of a few dozen frames shows the parallax")
     # each frame: one pixel a lens, enlarged to about 480 pixels across (or by --scale), and its GIF copy
     side = 480 if scale is None else scale * max(image.shape[1] // nx, image.shape[0] // ny)
     check_memory(f"a preview of {frames} frames", frames * (2 * side * side * 3 + image.size // (nx * ny) * 8)
-                 + image.size * 8, "give fewer --frames or a smaller --scale")
+                 + image.size * 8, f"give fewer {param('frames')} or a smaller {param('scale')}")
     angles = viewer_angles(nx * sx, focal, frames)
     if info.get("lens_array") is not None:  # hex, fractional PPL: the views extract writes
         from ..renderer.outputs.views import sidecar_bank

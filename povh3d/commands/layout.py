@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError, warn
+from ..errors import ConfigError, InputError, param, warn
 from ..geometry.lens_array import LensArray
 from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
 from ..display.display import Display
@@ -185,7 +185,7 @@ def volume_shape(volume: Any, iso: tuple[float, ...] | None = None) -> tuple[np.
         lo, hi = volume.value_range()
         wrong = [v for v in iso if not lo <= v <= hi]
         if wrong:
-            raise ConfigError(f"--iso {wrong[0]:g} is outside the volume's values, {lo:g} .. {hi:g}")
+            raise ConfigError(f"{param('iso')} {wrong[0]:g} is outside the volume's values, {lo:g} .. {hi:g}")
     step = max(1, -(-max(values.shape) // PREVIEW_VOXELS))
     values = np.ascontiguousarray(values[::step, ::step, ::step], dtype=np.float32)
     pv = quiet_pyvista()
@@ -242,7 +242,7 @@ def read_volume_content(path: Path, lens_array: LensArray, *, spacing: Any = Non
 def picture_size(size: tuple[int, int]) -> tuple[int, int]:
     w, h = (int(v) for v in size)
     if not (MIN_SIZE <= w <= MAX_SIZE and MIN_SIZE <= h <= MAX_SIZE):
-        raise ConfigError(f"--size takes WxH pixels, each from {MIN_SIZE} to {MAX_SIZE}, got {w}x{h}")
+        raise ConfigError(f"{param('size')} takes WxH pixels, each from {MIN_SIZE} to {MAX_SIZE}, got {w}x{h}")
     return w, h
 
 

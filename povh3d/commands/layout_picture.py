@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import Povh3dError
+from ..errors import Povh3dError, param
 from ..geometry.lens_array import LensArray
 from ..geometry.setup import BEHIND, FRONT, INSIDE, SetUp, classify
 
@@ -158,7 +158,7 @@ def _legend_text(content: Any, setup: SetUp, lens_array: LensArray, numbers: dic
     if content.kind == "scene":
         lines.append(f"frame: {content.units_per_mm:.4g} scene units per mm ({content.record.get('source', 'native')})")
     elif placement:   # a model or a volume, staged in display mm
-        limit = "--depth" if placement["limit"] == "depth" else f"the panel's {placement['limit']}"
+        limit = param("depth") if placement["limit"] == "depth" else f"the panel's {placement['limit']}"
         lines.append(f"placed at {placement['scale']:.4g} display mm per {content.kind} mm, limited by {limit}")
     notes = []
     if cone_length < setup.viewing_distance_mm:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..geometry.lens_array import LensArray
 from ..geometry.moire import PanelPattern, SlantSweep, slant_sweep
 from ..renderer.records import base_record, png_output, write_image
@@ -20,14 +20,14 @@ def parse_range(text: str) -> np.ndarray:
     try:
         start, stop, step = (float(t) for t in text.split(":"))
     except ValueError:
-        raise ConfigError(f"--slant-range takes START:STOP:STEP in degrees, e.g. 0:20:0.25, got {text!r}") from None
+        raise ConfigError(f"{param('slant_range')} takes START:STOP:STEP in degrees, e.g. 0:20:0.25, got {text!r}") from None
     if not all(map(math.isfinite, (start, stop, step))) or step <= 0 or stop < start:
-        raise ConfigError(f"--slant-range needs START <= STOP and a positive STEP, got {text!r}")
+        raise ConfigError(f"{param('slant_range')} needs START <= STOP and a positive STEP, got {text!r}")
     if not (-45 < start and stop <= 45):
-        raise ConfigError(f"--slant-range must stay within (-45, 45] deg, got {text!r}")
+        raise ConfigError(f"{param('slant_range')} must stay within (-45, 45] deg, got {text!r}")
     n = int(math.floor((stop - start) / step + 1e-9)) + 1
     if n > 2000:
-        raise ConfigError(f"--slant-range asks for {n} angles; use at most 2000 (a larger STEP)")
+        raise ConfigError(f"{param('slant_range')} asks for {n} angles; use at most 2000 (a larger STEP)")
     return start + step * np.arange(n)
 
 
@@ -36,9 +36,9 @@ def moire_sweep_file(lens_array: LensArray, slants: np.ndarray, output: str | Pa
     """Sweep two crossed sheets of the array's lens pitch over the panel's pixels; write the plot."""
     path = png_output(output, "plot")
     if not (math.isfinite(distance) and distance > 0):
-        raise ConfigError(f"--distance must be a positive number of mm, got {distance!r}")
+        raise ConfigError(f"{param('distance')} must be a positive number of mm, got {distance!r}")
     if not (math.isfinite(blur) and blur > 0) or not (math.isfinite(spot) and spot >= 0):
-        raise ConfigError(f"--blur must be positive and --spot at least 0, got {blur!r}, {spot!r}")
+        raise ConfigError(f"{param('blur')} must be positive and {param('spot')} at least 0, got {blur!r}, {spot!r}")
     panel = lens_array.panel
     pattern = PanelPattern(panel.pitch_x, panel.pitch_y)
     pitch = lens_array.pitch_x

@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param, raw_message
 from ..geometry.axes import to_edge
 from ..image.interleave import extract, interleave
 from ..image.io import check_output, read_png, read_sidecar, with_sidecar
@@ -41,15 +41,15 @@ def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, 
 
         display = Display.from_record(record)
         if ppl is not None and display.lens_array.views not in (None, tuple(ppl)):
-            raise ConfigError(f"--ppl contradicts the sidecar of {str(h3d_path)!r}; leave --ppl out")
+            raise ConfigError(f"{param('ppl')} contradicts the sidecar of {str(h3d_path)!r}; leave {param('ppl')} out")
         bank = sidecar_bank(image, sidecar_array(image, h3d_path, record))
     else:
         if ppl is None:
-            raise ConfigError("the pixels per lens are unknown (no sidecar); give them with --ppl, e.g. --ppl 8")
+            raise ConfigError(f"the pixels per lens are unknown (no sidecar); give them with {param('ppl')}, e.g. {param('ppl')} 8")
         try:
             bank = extract(image, ppl)
         except ValueError as exc:
-            raise ConfigError(str(exc)) from None
+            raise ConfigError(raw_message(exc)) from None
     views = bank_to_quilt_order(bank, rows)
     n, h, w = views.shape[:3]
     device = _device(display)
@@ -59,7 +59,7 @@ def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, 
         raise ConfigError(f"grid is (cols, rows) or 'auto', got {grid!r}")
     if n != grid[0] * grid[1]:
         raise ConfigError(f"{n} views do not fill a {grid[0]}x{grid[1]} quilt exactly; "
-                          f"give --quilt with cols x rows = {n}, or --quilt auto")
+                          f"give {param('quilt')} with cols x rows = {n}, or {param('quilt')} auto")
     aspect = aspect or quilt_aspect(display, image.shape[:2])
     folder = Path(output_dir)
     out = folder / quilt_name(Path(h3d_path).stem, grid[0], grid[1], aspect)
@@ -99,7 +99,7 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     parsed = parse_quilt_name(Path(quilt_path).name)
     if grid is None:
         if parsed is None:
-            raise ConfigError(f"{Path(quilt_path).name!r} does not name its grid (_qs8x6a0.75); give --quilt 8x6")
+            raise ConfigError(f"{Path(quilt_path).name!r} does not name its grid (_qs8x6a0.75); give {param('quilt')} 8x6")
         grid = parsed[:2]
     out = png_output(output, inputs=with_sidecar(quilt_path))
     views = quilt_to_views(read_png(quilt_path), grid[0], grid[1], count)

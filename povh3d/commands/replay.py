@@ -16,7 +16,7 @@ import numpy as np
 from ..display.display import Display
 from ..display.replay import (OPTICS, Replay, aperture_views, default_eye, label_centre_offset, light_shares,
                               mapped_report, mapped_sheet, psnr, replay, report, sweep_eyes)
-from ..errors import ConfigError, InputError, warn
+from ..errors import ConfigError, InputError, warn, param
 from ..image.io import atomic_path, check_output, check_writable, read_png, read_sidecar, write_png
 from ..renderer.budget import check_memory
 from ..renderer.records import base_record, png_output, write_image
@@ -63,7 +63,7 @@ def device_image(h3d_path: str | Path) -> DeviceImage | None:
     if record.get("mapping") == "looking-glass-shader":
         if not record.get("calibration"):
             raise InputError(f"{str(h3d_path)!r} is a Looking Glass native image whose sidecar names no calibration; "
-                             "render it again with --calibration visual.json")
+                             f"render it again with {param('calibration')} visual.json")
         cal = read_visual(record["calibration"])
         dev = device_of(cal)
         if dev is None:
@@ -80,7 +80,7 @@ def device_image(h3d_path: str | Path) -> DeviceImage | None:
     spec = ((source or {}).get("display") or {}).get("quilt") or {}
     if not spec.get("device"):
         raise ConfigError(f"{str(h3d_path)!r} is a quilt without its Looking Glass device (its source render's "
-                          "sidecar names none); replay the quilt povh3d render --preset looking-glass-... wrote")
+                          f"sidecar names none); replay the quilt a render with {param('preset')} looking-glass-... wrote")
     dev = device(spec["device"])
     cal = device_calibration(dev, spec.get("calibration"))
     from ..display.mappings.looking_glass_shader import quilt_to_native
@@ -103,8 +103,8 @@ def replay_device(dev_image: DeviceImage, eyes: np.ndarray, optics: str, size: A
     from ..display.replay import device_report, device_sheet
 
     if optics not in ("pinhole", "barrier"):
-        raise ConfigError(f"a Looking Glass panel is replayed through its sheet's slits (--optics pinhole or barrier), "
-                          f"not --optics {optics} (not built yet)")
+        raise ConfigError(f"a Looking Glass panel is replayed through its sheet's slits ({param('optics')} pinhole or barrier), "
+                          f"not {param('optics')} {optics} (not built yet)")
     cal, dev = dev_image.calibration, dev_image.device
     focal = presets.lens_array(dev.name).focal
     distance = default_viewing_distance(cal.size_mm[1])
@@ -184,7 +184,7 @@ def parse_eye(text: str | None) -> tuple[float, float, float] | None:
     try:
         x, y, z = (float(v) for v in text.split(","))
     except ValueError:
-        raise ConfigError(f"--eye must be X,Y,Z in mm, got {text!r}; e.g. --eye 0,0,-300") from None
+        raise ConfigError(f"{param('eye')} must be X,Y,Z in mm, got {text!r}; e.g. {param('eye')} 0,0,-300") from None
     return (x, y, z)
 
 
@@ -201,9 +201,9 @@ def parse_sweep(text: str | None) -> tuple[str, float, float, int] | None:
         if len(parts) != 3:
             raise ValueError
     except (ValueError, IndexError):
-        raise ConfigError(f"--sweep must be X0:X1:N (or y:Y0:Y1:N), got {text!r}; e.g. --sweep -60:60:9") from None
+        raise ConfigError(f"{param('sweep')} must be X0:X1:N (or y:Y0:Y1:N), got {text!r}; e.g. {param('sweep')} -60:60:9") from None
     if not 2 <= count <= MAX_SWEEP:
-        raise ConfigError(f"--sweep needs 2 to {MAX_SWEEP} eye positions, got {count}; e.g. --sweep -60:60:9")
+        raise ConfigError(f"{param('sweep')} needs 2 to {MAX_SWEEP} eye positions, got {count}; e.g. {param('sweep')} -60:60:9")
     return axis, start, stop, count
 
 
@@ -216,9 +216,9 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
 
     With ``sweep``, ``output`` is a ``.gif`` and the frames go beside it as ``stem_NNN.png``."""
     if optics not in OPTICS:
-        raise ConfigError(f"--optics must be one of {', '.join(OPTICS)}, got {optics!r}")
+        raise ConfigError(f"{param('optics')} must be one of {', '.join(OPTICS)}, got {optics!r}")
     if pupil is not None and optics != "lens":
-        raise ConfigError("--pupil blurs the real lenslets' picture (a POV-Ray focal blur); add --optics lens")
+        raise ConfigError(f"{param('pupil')} blurs the real lenslets' picture (a POV-Ray focal blur); add {param('optics')} lens")
     output = Path(output)
     if sweep is None:
         out = png_output(output)
@@ -241,7 +241,7 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     la = display.lens_array
     if not isinstance(size, str):  # the picture's float geometry, a few arrays of it
         check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1] * (1 if sweep is None else 2),
-                     "give a smaller --size, e.g. --size 800x600")
+                     f"give a smaller {param('size')}, e.g. {param('size')} 800x600")
     eye = eye if eye is not None else default_eye(la)
     eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
     results: list[Replay] = []
@@ -251,8 +251,8 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     sheet = mapped(display, image, h3d_path)
     if sheet is not None:  # a mapped panel, subpixel by subpixel through the sheet its mapping addresses
         if optics not in ("pinhole", "barrier"):
-            raise ConfigError(f"a mapped panel is replayed through its sheet's slits (--optics pinhole or barrier), "
-                              f"not --optics {optics} (not built yet)")
+            raise ConfigError(f"a mapped panel is replayed through its sheet's slits ({param('optics')} pinhole or barrier), "
+                              f"not {param('optics')} {optics} (not built yet)")
         mapping, la, shift, views = sheet
         for e in eyes:
             results.append(replay(image, la, e, optics="barrier", size=size, shift=shift, subpixels=True))
@@ -302,7 +302,7 @@ def _replay_device_file(dev_image: DeviceImage, h3d_path: str | Path, out: Path,
     from ..display.quilt import default_viewing_distance
 
     if not isinstance(size, str):
-        check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1], "give a smaller --size, e.g. --size 800x600")
+        check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1], f"give a smaller {param('size')}, e.g. {param('size')} 800x600")
     eye = eye if eye is not None else (0.0, 0.0, -default_viewing_distance(dev_image.calibration.size_mm[1]))
     eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
     frames, reports, entry = replay_device(dev_image, eyes, optics, size, with_report=True)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param, raw_message
 from ..geometry.axes import to_edge
 from ..geometry.lens_array import LensArray, Panel
 from ..image.io import read_png, read_sidecar, with_sidecar
@@ -25,9 +25,9 @@ def _check_budget(out: Path, pixels: float, image_bytes: int, channels: int, ite
                   ppl_out: tuple[float, float]) -> None:
     # the output in float64 beside its encoded copy, and the input's float copy: 64 bytes a pixel
     check_memory(f"resampling to {ppl_out[1]:g}x{ppl_out[0]:g} pixels per lens ({pixels:.3g} pixels)",
-                 pixels * 64 + image_bytes * 8, "give a smaller --ppl-out")
+                 pixels * 64 + image_bytes * 8, f"give a smaller {param('ppl_out')}")
     check_disk(out.parent, f"a {pixels:.3g} pixel image", pixels * channels * itemsize,
-               "give a smaller --ppl-out or free some space")
+               f"give a smaller {param('ppl_out')} or free some space")
 
 
 def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int, int],
@@ -48,7 +48,8 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
         else:
             raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
     except ValueError as exc:
-        raise ConfigError(f"{str(exc).removesuffix('; check --ppl')}; check --ppl and --ppl-out") from None
+        end = f"; check {param('ppl')}"
+        raise ConfigError(f"{raw_message(exc).removesuffix(end)}; check {param('ppl')} and {param('ppl_out')}") from None
     record = base_record("h3d", method=f"resample-{mode}", ppl_in=to_edge(ppl_in),
                          ppl_out=to_edge(ppl_out), source=str(Path(input_path).resolve()),
                          size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
@@ -107,20 +108,20 @@ def resample_panel_file(input_path: str | Path, output: str | Path, ppl_out: tup
     image = read_png(input_path)
     lens_in = sidecar_array(image, input_path)
     if mode == "lenses":
-        raise ConfigError(f"--mode lenses cuts each lens's whole-pixel micro-image into smaller lenses, and "
+        raise ConfigError(f"{param('mode')} lenses cuts each lens's whole-pixel micro-image into smaller lenses, and "
                           f"{str(input_path)!r} has {_what(lens_in)}, whose micro-images are not whole "
-                          "pixels; use --mode micro (the same lenses, new pixels per lens)")
+                          f"pixels; use {param('mode')} micro (the same lenses, new pixels per lens)")
     if mode != "micro":
         raise ConfigError(f"unknown resample mode {mode!r}; choose micro or lenses")
     my, mx = ppl_out
     if min(mx, my) < 1:
-        raise ConfigError(f"--ppl-out {mx:g}x{my:g} puts a lens under one pixel; give at least 1 pixel per lens")
+        raise ConfigError(f"{param('ppl_out')} {mx:g}x{my:g} puts a lens under one pixel; give at least 1 pixel per lens")
     if lens_in.grid == "hex" and my != mx:
         raise ConfigError(f"a hex lens's pixels per lens are one number (its pitch over the pixel pitch, pixels "
-                          f"keeping their shape), got --ppl-out {mx:g}x{my:g}; give one, e.g. --ppl-out {mx:g}")
+                          f"keeping their shape), got {param('ppl_out')} {mx:g}x{my:g}; give one, e.g. {param('ppl_out')} {mx:g}")
     if lens_in.grid == "lenticular" and my != 1:
-        raise ConfigError(f"a lenticular sheet keeps its rows (1 pixel per lens vertically), got --ppl-out "
-                          f"{mx:g}x{my:g}; give one number, e.g. --ppl-out {mx:g}")
+        raise ConfigError(f"a lenticular sheet keeps its rows (1 pixel per lens vertically), got {param('ppl_out')} "
+                          f"{mx:g}x{my:g}; give one number, e.g. {param('ppl_out')} {mx:g}")
     # the budget first, from the scale alone (a huge --ppl-out is no panel to build)
     scale_x = mx * lens_in.panel.pitch_x / lens_in.pitch_x
     scale_y = {"lenticular": 1.0, "hex": scale_x}.get(lens_in.grid, my * lens_in.panel.pitch_y / lens_in.pitch_y)

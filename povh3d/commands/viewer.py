@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, param
 from ..image.io import atomic_path, check_output, read_png, read_sidecar, with_sidecar
 from ..renderer.outputs.views import h3d_views, read_views
 
@@ -77,7 +77,7 @@ def read_render_views(render: str | Path) -> RenderViews:
         record = read_sidecar(image_path)
         if not record or "lens_array" not in record:
             raise InputError(f"{str(image_path)!r} has no sidecar with its lens array; give its views folder "
-                             "(render --views-dir) instead")
+                             f"(render {param('views_dir')}) instead")
         views, grid = h3d_views(read_png(image_path), record, image_path)
         frames.append(views)
         numbers.append(n)
@@ -143,6 +143,6 @@ def _view_boxes(objects: str | Path, rendered: RenderViews) -> tuple[Any, ...]:
     ny, nx, ly, lx = rendered.frames[0].shape[:4]
     if table.frames != rendered.numbers or table.views != (ny, nx) or table.view_size != (ly, lx):
         raise InputError(f"the object masks in {str(objects)!r} are of another render (frames, views or size "
-                         "differ); render --objects with the same options")
+                         f"differ); render {param('objects')} with the same options")
     return tuple([[mask_boxes(read_mask(objects, table, n, (l, k))) for k in range(nx)] for l in range(ny)]
                  for n in rendered.numbers)

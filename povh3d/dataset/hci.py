@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, OutputError
+from ..errors import ConfigError, OutputError, param
 from ..image.io import atomic_path, write_png
 from ..image.pfm import write_pfm
 
@@ -91,7 +91,7 @@ def centre_camera(views: tuple[int, int]) -> tuple[int, int, int]:
     if ny % 2 == 0 or nx % 2 == 0:
         raise ConfigError(f"the HCI toolkit takes camera num_cams_x * num_cams_y // 2 as the centre view, which "
                           f"is the centre only of an odd grid, not {nx}x{ny} views; render an odd count each way, "
-                          f"e.g. --ppl {nx | 1}x{ny | 1}")
+                          f"e.g. {param('ppl')} {nx | 1}x{ny | 1}")
     cam = int(nx * ny / 2)
     r, c = divmod(cam, nx)
     return cam, ny - 1 - r, nx - 1 - c

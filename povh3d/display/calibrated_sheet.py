@@ -19,7 +19,7 @@ import math
 from typing import Any
 
 from .looking_glass import check_view_cone
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..geometry.lens_array import LensArray, Panel
 from .subpixel import placed_sheet
 
@@ -95,11 +95,11 @@ def _check_panel(calibration: dict[str, Any], panel: Panel) -> None:
     if size != [panel.width, panel.height]:
         shown = "x".join(f"{v:g}" for v in size) if isinstance(size, list) else repr(size)
         raise ConfigError(f"the calibration is of a {shown} pixel screen but the panel is {panel.width}x"
-                          f"{panel.height}; give this panel's calibration, or its size with --panel")
+                          f"{panel.height}; give this panel's calibration, or its size with {param('panel')}")
     dpi = _field(calibration, "DPI")
     if dpi is not None and abs(25.4 / dpi / panel.pitch_x - 1) > DPI_TOLERANCE:
         raise ConfigError(f"the calibration's DPI {dpi:g} means {25.4 / dpi:.4g} mm pixels but the panel's are "
-                          f"{panel.pitch_x:.4g} mm; give this panel's calibration, or its pitch with --pixel-pitch")
+                          f"{panel.pitch_x:.4g} mm; give this panel's calibration, or its pitch with {param('pixel_pitch')}")
 
 
 def _check_nominal(sheet: LensArray, nominal: LensArray) -> None:
@@ -109,4 +109,4 @@ def _check_nominal(sheet: LensArray, nominal: LensArray) -> None:
             f"the calibration's sheet (pitch {pitch:.5g} mm, slant {slant:.4g} deg) is not this display's "
             f"(pitch {nominal.pitch_x:.5g} mm, slant {nominal.rotation:.4g} deg): more than "
             f"{100 * PITCH_TOLERANCE:g} % or {SLANT_TOLERANCE_DEG:g} deg apart; give this display's calibration, "
-            "or the display it was made for (--preset, or --grid lenticular --ppl --lens-rotation)")
+            f"or the display it was made for ({param('preset')}, or {param('grid')} lenticular {param('ppl')} {param('lens_rotation')})")

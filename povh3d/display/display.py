@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, param
 from ..geometry.lens_array import LensArray, Panel
 from .mappings.base import Mapping
 
@@ -124,7 +124,7 @@ class Display:
         side = record.get("lens_array") if isinstance(record, MappingABC) else None
         if not isinstance(side, MappingABC):
             raise ConfigError(f"the sidecar's lens_array is {_kind(side)}, not a lens array; "
-                              "delete the sidecar and give --ppl NxxNy")
+                              f"delete the sidecar and give {param('ppl')} NxxNy")
         try:
             _check_pairs(side, ("lenses", "lens_pitch_mm"), ("views",))
             (lenses_x, lenses_y), (pitch_x, pitch_y) = side["lenses"], side["lens_pitch_mm"]  # pairs: checked
@@ -134,11 +134,11 @@ class Display:
                                    basis)
         except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError, ZeroDivisionError) as exc:
             raise ConfigError(f"the sidecar's lens array is incomplete or damaged ({type(exc).__name__}: {exc}); "
-                              "delete the sidecar and give --ppl NxxNy") from None
+                              f"delete the sidecar and give {param('ppl')} NxxNy") from None
         if side.get("views") is not None and [int(v) for v in side["views"]] != \
                 (list(lens_array.views[::-1]) if lens_array.views else None):
             raise ConfigError(f"the sidecar's lens array has views {side['views']!r}, which its lenses and panel "
-                              "contradict; delete the sidecar and give --ppl NxxNy")
+                              f"contradict; delete the sidecar and give {param('ppl')} NxxNy")
         d = record.get("display") or {}
         if not isinstance(d, MappingABC):
             raise ConfigError(f"the sidecar's display is {_kind(d)}, not a display; delete the sidecar")
@@ -233,11 +233,11 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
         if preset in DEVICES:  # the device's views at its tile size, for its quilt
             return _device_display(display, DEVICES[preset], calibration, camera_model or "perspective")
     if camera_model is not None:
-        raise ConfigError(f"--camera-model chooses a Looking Glass preset's views; {preset or 'this display'} "
-                          "with these options renders its lens array's own: drop --camera-model")
+        raise ConfigError(f"{param('camera_model')} chooses a Looking Glass preset's views; {preset or 'this display'} "
+                          f"with these options renders its lens array's own: drop {param('camera_model')}")
     if calibration is not None and not mapping and method != "subpixel":
-        raise ConfigError("--calibration gives the sheet of --mapping slanted or of --method subpixel; "
-                          "add one of them, or drop --calibration")
+        raise ConfigError(f"{param('calibration')} gives the sheet of {param('mapping')} slanted or of {param('method')} subpixel; "
+                          f"add one of them, or drop {param('calibration')}")
     if method == "subpixel":
         return _subpixel_sheet(display, mapping, options, calibration)
     if mapping:
@@ -266,13 +266,13 @@ def _subpixel_sheet(display: Display, mapping: str | None, options: dict[str, An
     sheet that mapping describes, traced subpixel by subpixel straight to the panel image; with
     a calibration, the calibrated sheet where the calibration puts it."""
     if mapping:
-        raise ConfigError("--method subpixel writes the panel image itself; drop --mapping (a preset's "
+        raise ConfigError(f"{param('method')} subpixel writes the panel image itself; drop {param('mapping')} (a preset's "
                           "slanted mapping gives the sheet it traces)")
     if not display.mapping_name and calibration is None:
         return display
     if options.get("offset"):
-        raise ConfigError("--method subpixel traces the sheet centred on the panel, or where --calibration puts "
-                          "it; drop --offset (the sidecar records the mapping offset that addresses the same sheet)")
+        raise ConfigError(f"{param('method')} subpixel traces the sheet centred on the panel, or where {param('calibration')} puts "
+                          f"it; drop {param('offset')} (the sidecar records the mapping offset that addresses the same sheet)")
     from .subpixel import slanted_sheet
 
     la = display.lens_array
@@ -305,7 +305,7 @@ def mapping_for_display(name: str, display: Display, *, calibration: str | Path 
     if calibration is not None and is_visual(data := read_calibration(calibration)):
         if name != "slanted":
             raise ConfigError(f"a Looking Glass calibration gives a slanted sheet, not mapping {name!r}; "
-                              "use --mapping slanted")
+                              f"use {param('mapping')} slanted")
         return _visual_mapping(data, display, **options)
     fields = {k: v for k, v in (("slant_deg", display.slant_deg), ("views", display.views)) if v is not None}
     fields.update(lens_pitch=display.lens_array.pitch_x, pixel_pitch=panel.pitch_x)
@@ -339,7 +339,7 @@ def _visual_mapping(data: dict[str, Any], display: Display, *, views: int | None
         check_panel(cal, (p.width, p.height), p.pitch_x)
     views = views or display.views
     if not views:
-        raise ConfigError("a Looking Glass calibration needs the view count; give it with --views")
+        raise ConfigError(f"a Looking Glass calibration needs the view count; give it with {param('views')}")
     unused = sorted(k for k, v in others.items() if v not in (None, False))
     if unused:
         raise ConfigError(f"the calibration gives the sheet; drop --{', --'.join(k.replace('_', '-') for k in unused)}")

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError, InputError, warn
+from ..errors import ConfigError, InputError, param, warn
 
 MM_PER_INCH = 25.4
 CELL_PATTERNS = (0, 1, 2, 3, 4)   # the vendor's cellPatternType values
@@ -334,7 +334,7 @@ def check_panel(cal: Calibration, size_px: tuple[int, int], pixel_pitch_mm: floa
     """Refuse a calibration of another panel: ``size_px = (W, H)``, pixel pitch in mm."""
     if (cal.screen_w, cal.screen_h) != tuple(size_px):
         raise ConfigError(f"the calibration is of a {cal.screen_w}x{cal.screen_h} pixel screen but the panel is "
-                          f"{size_px[0]}x{size_px[1]}; give this panel's calibration, or its size with --panel")
+                          f"{size_px[0]}x{size_px[1]}; give this panel's calibration, or its size with {param('panel')}")
     if pixel_pitch_mm is not None and not math.isclose(cal.pixel_pitch_mm, pixel_pitch_mm, rel_tol=0.02):
         raise ConfigError(f"the calibration's DPI {cal.dpi:g} means {cal.pixel_pitch_mm:.4g} mm pixels but the panel's "
-                          f"are {pixel_pitch_mm:.4g} mm; give this panel's calibration, or --pixel-pitch")
+                          f"are {pixel_pitch_mm:.4g} mm; give this panel's calibration, or {param('pixel_pitch')}")

@@ -13,7 +13,7 @@ from functools import cache
 from importlib import resources
 from typing import TYPE_CHECKING, Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
     from ..geometry.lens_array import LensArray, Panel
@@ -111,7 +111,7 @@ def merge_overrides(fields: dict[str, Any], overrides: dict[str, Any]) -> dict[s
     # Lattice vectors replace the grid and its pitches; any other grid drops them.
     if "lattice" in given:
         if "ppl" in given or "lens_pitch" in given or given.get("grid", "lattice") != "lattice":
-            raise ConfigError("--lattice gives the lens cells itself; drop --ppl and --grid")
+            raise ConfigError(f"{param('lattice')} gives the lens cells itself; drop {param('ppl')} and {param('grid')}")
         given["grid"] = "lattice"
     elif given.get("grid", "lattice") != "lattice" or "ppl" in given:
         merged.pop("lattice", None)
@@ -132,11 +132,11 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
 
     grid = fields.get("grid", "square")
     if "focal" not in fields:
-        raise ConfigError("the focal length is missing; give it with --focal (mm)")
+        raise ConfigError(f"the focal length is missing; give it with {param('focal')} (mm)")
     if "pixel_pitch" not in fields:
-        raise ConfigError("the pixel pitch is missing; give it with --pixel-pitch (mm)")
-    sx, sy = _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"], bounds=LENGTH_RANGE_MM, unit="mm")
-    panel_size = _pair("panel size (--panel)", fields["panel"], integral=True) if "panel" in fields else None
+        raise ConfigError(f"the pixel pitch is missing; give it with {param('pixel_pitch')} (mm)")
+    sx, sy = _pair(f"pixel pitch ({param('pixel_pitch')})", fields["pixel_pitch"], bounds=LENGTH_RANGE_MM, unit="mm")
+    panel_size = _pair(f"panel size ({param('panel')})", fields["panel"], integral=True) if "panel" in fields else None
 
     if fields.get("views") and fields.get("mapping") and panel_size is not None and "lens_pitch" in fields:
         views = int(fields["views"])
@@ -148,12 +148,12 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     if grid == "lattice" or "lattice" in fields:
         return _lattice_from_fields(fields, sx, sy, panel_size)
     if "ppl" in fields:
-        nx, ny = _pair("pixels per lens (--ppl)", fields["ppl"], bounds=PPL_RANGE, unit="pixels")
+        nx, ny = _pair(f"pixels per lens ({param('ppl')})", fields["ppl"], bounds=PPL_RANGE, unit="pixels")
         px, py = nx * sx, ny * sy
     elif "lens_pitch" in fields:
         px = py = _pair("lens pitch", fields["lens_pitch"], bounds=LENGTH_RANGE_MM, unit="mm")[0]
     else:
-        raise ConfigError("the lens pitch is missing; give pixels per lens with --ppl")
+        raise ConfigError(f"the lens pitch is missing; give pixels per lens with {param('ppl')}")
     if grid == "lenticular":
         py = sy
     elif grid == "hex":
@@ -163,33 +163,33 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     if "lenses" in fields:
         if grid == "lenticular":
             if isinstance(fields["lenses"], (list, tuple)):
-                raise ConfigError("a lenticular array takes one lens count (--lenses 60) and the rows with --rows")
+                raise ConfigError(f"a lenticular array takes one lens count ({param('lenses')} 60) and the rows with {param('rows')}")
             lx = fields["lenses"]
             ly = rows if rows is not None else (panel_size[1] if panel_size else None)
             if ly is None:
-                raise ConfigError("a lenticular array needs the panel height; give it with --rows")
+                raise ConfigError(f"a lenticular array needs the panel height; give it with {param('rows')}")
         else:
-            lx, ly = _pair("lens count (--lenses)", fields["lenses"], integral=True)
+            lx, ly = _pair(f"lens count ({param('lenses')})", fields["lenses"], integral=True)
     elif panel_size is not None:
         lx = math.floor(panel_size[0] * sx / px + _EPS) if grid != "hex" else math.floor((panel_size[0] * sx - px / 2) / px + _EPS)
         ly = panel_size[1] if grid == "lenticular" else math.floor(panel_size[1] * sy / py + _EPS)
     else:
-        raise ConfigError("the lens count is missing; give it with --lenses")
+        raise ConfigError(f"the lens count is missing; give it with {param('lenses')}")
     if grid == "lenticular" and rows is not None:
         ly = rows
     if not (math.isfinite(lx) and math.isfinite(ly)) or max(lx, ly) > MAX_PANEL_PIXELS:
-        raise ConfigError(f"the display has {lx:g} x {ly:g} lenses; check --ppl, --pixel-pitch and --panel")
+        raise ConfigError(f"the display has {lx:g} x {ly:g} lenses; check {param('ppl')}, {param('pixel_pitch')} and {param('panel')}")
     lx, ly = int(lx), int(ly)
     rotation = fields.get("lens_rotation", 0.0)
     if rotation and "lenses" not in fields and panel_size is not None:
         lx, ly = _covering_counts(grid, rotation, panel_size[0] * sx, panel_size[1] * sy, px, py, lx, ly)
     if lx < 1 or ly < 1:
         raise ConfigError(f"the lens array would have {lx}x{ly} lenses; it needs at least one each way: give "
-                          "--lenses (and --rows for lenticular), a larger --panel or fewer pixels per lens (--ppl)")
+                          f"{param('lenses')} (and {param('rows')} for lenticular), a larger {param('panel')} or fewer pixels per lens ({param('ppl')})")
     for length in (sx, sy, px, py):
         _length(length)
     if lx * ly > MAX_PANEL_PIXELS:
-        raise ConfigError(f"{lx}x{ly} lenses are more than povh3d can render; use fewer lenses (--lenses)")
+        raise ConfigError(f"{lx}x{ly} lenses are more than povh3d can render; use fewer lenses ({param('lenses')})")
 
     if panel_size is not None:
         w, h = int(panel_size[0]), int(panel_size[1])
@@ -224,7 +224,7 @@ def parse_lattice(value: Any) -> tuple[tuple[float, float], tuple[float, float]]
                 return cross_lenticular_basis(pv, ph, slant)
             value = [[float(t) for t in vector.split(",")] for vector in text.split(";")]
         except ValueError:
-            raise ConfigError(f"--lattice cannot read {value!r}; {example}") from None
+            raise ConfigError(f"{param('lattice')} cannot read {value!r}; {example}") from None
     a1, a2 = lattice_vectors(value)
     return (float(a1[0]), float(a1[1])), (float(a2[0]), float(a2[1]))
 
@@ -239,9 +239,9 @@ def _lattice_from_fields(fields: dict[str, Any], sx: float, sy: float,
     from ..geometry.lens_array import MAX_PANEL_PIXELS, Panel, lattice_array, lens_rotation
 
     if "lattice" not in fields:
-        raise ConfigError("grid 'lattice' needs its two lattice vectors; give them with --lattice")
+        raise ConfigError(f"grid 'lattice' needs its two lattice vectors; give them with {param('lattice')}")
     if fields.get("grid", "lattice") != "lattice":
-        raise ConfigError(f"lattice vectors are a grid of their own, not {fields['grid']!r}; drop --grid or --lattice")
+        raise ConfigError(f"lattice vectors are a grid of their own, not {fields['grid']!r}; drop {param('grid')} or {param('lattice')}")
     a1, a2 = (np.asarray(a) for a in parse_lattice(fields["lattice"]))
     rotation = lens_rotation(fields.get("lens_rotation") or 0.0)
     if rotation:  # a turned lattice is the lattice of turned vectors
@@ -249,17 +249,17 @@ def _lattice_from_fields(fields: dict[str, Any], sx: float, sy: float,
         turn = np.array([[c, -s], [s, c]])
         a1, a2 = lattice_vectors((turn @ a1, turn @ a2))
     if "lenses" in fields:
-        lx, ly = _pair("lens count (--lenses)", fields["lenses"], integral=True)
+        lx, ly = _pair(f"lens count ({param('lenses')})", fields["lenses"], integral=True)
     elif panel_size is not None:
         half_w, half_h = panel_size[0] * sx / 2, panel_size[1] * sy / 2
         s_, t_ = lattice_coordinates(a1, a2, np.array([-half_w, half_w, half_w, -half_w]),
                                      np.array([-half_h, -half_h, half_h, half_h]))
         lx, ly = (math.ceil(2 * np.abs(v).max() - _EPS) for v in (s_, t_))
     else:
-        raise ConfigError("a lattice needs the panel size (--panel) or the lens count (--lenses)")
+        raise ConfigError(f"a lattice needs the panel size ({param('panel')}) or the lens count ({param('lenses')})")
     lx, ly = int(lx), int(ly)
     if lx * ly > MAX_PANEL_PIXELS:
-        raise ConfigError(f"{lx}x{ly} lenses are more than povh3d can render; use fewer lenses (--lenses)")
+        raise ConfigError(f"{lx}x{ly} lenses are more than povh3d can render; use fewer lenses ({param('lenses')})")
     if panel_size is None:  # the panel that holds every cell: corners (+-Lx/2) a1 + (+-Ly/2) a2
         reach = lx / 2 * np.abs(a1) + ly / 2 * np.abs(a2)
         panel_size = (math.ceil(2 * reach[0] / sx - _EPS), math.ceil(2 * reach[1] / sy - _EPS))
@@ -285,7 +285,7 @@ def _length(value: float) -> None:
     low, high = LENGTH_RANGE_MM
     if not low <= value <= high:
         raise ConfigError(f"pitches must be between {low:g} and {high:g} mm, got {value:g}; "
-                          "check --pixel-pitch and --ppl")
+                          f"check {param('pixel_pitch')} and {param('ppl')}")
 
 
 def physical_panel(fields: dict[str, Any]) -> Panel | None:
@@ -294,5 +294,5 @@ def physical_panel(fields: dict[str, Any]) -> Panel | None:
 
     if "panel" not in fields or not fields.get("mapping"):
         return None
-    (w, h), (sx, sy) = fields["panel"], _pair("pixel pitch (--pixel-pitch)", fields["pixel_pitch"])
+    (w, h), (sx, sy) = fields["panel"], _pair(f"pixel pitch ({param('pixel_pitch')})", fields["pixel_pitch"])
     return Panel(int(w), int(h), float(sx), float(sy))

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..geometry.lens_array import LensArray
 from ..geometry.rays import lens_of_points
 
@@ -65,15 +65,15 @@ def check_eye(eye, lens_array: LensArray) -> np.ndarray:
     try:
         e = np.asarray(eye, dtype=np.float64).reshape(3)
     except (TypeError, ValueError):
-        raise ConfigError(f"the eye must be three numbers X,Y,Z in mm, got {eye!r}; e.g. --eye 0,0,-300") from None
+        raise ConfigError(f"the eye must be three numbers X,Y,Z in mm, got {eye!r}; e.g. {param('eye')} 0,0,-300") from None
     if not np.all(np.isfinite(e)):
-        raise ConfigError(f"the eye ({', '.join(f'{v:g}' for v in e)}) is not finite; give it in mm, e.g. --eye 0,0,-300")
+        raise ConfigError(f"the eye ({', '.join(f'{v:g}' for v in e)}) is not finite; give it in mm, e.g. {param('eye')} 0,0,-300")
     if e[2] >= 0:
         raise ConfigError(f"the eye at z = {e[2]:g} mm is on the panel's side (the viewer is at z < 0); "
-                          "give a negative z, e.g. --eye 0,0,-300")
+                          f"give a negative z, e.g. {param('eye')} 0,0,-300")
     if -e[2] <= lens_array.focal:
         raise ConfigError(f"the eye at z = {e[2]:g} mm is inside the lens sheet ({lens_array.focal:g} mm deep); "
-                          "move it out to a viewing distance, e.g. --eye 0,0,-300")
+                          f"move it out to a viewing distance, e.g. {param('eye')} 0,0,-300")
     return e
 
 
@@ -141,10 +141,10 @@ def replay(h3d: np.ndarray, lens_array: LensArray, eye, *, optics: str = "pinhol
     alone; ``pixel`` then holds ``(3 col + c, row)``."""
     if optics not in NUMPY_OPTICS:
         raise ConfigError(f"optics {optics!r} is not one NumPy replays ({', '.join(NUMPY_OPTICS)}); "
-                          "'lens' runs POV-Ray (povh3d replay --optics lens)")
+                          f"'lens' runs POV-Ray (povh3d replay {param('optics')} lens)")
     if optics == "barrier" and lens_array.grid != "lenticular":
         raise ConfigError(f"a parallax barrier (slits) is for a lenticular panel, not a {lens_array.grid} one; "
-                          "use --optics pinhole")
+                          f"use {param('optics')} pinhole")
     h3d = np.asarray(h3d)
     p = lens_array.panel
     if h3d.ndim != 3 or h3d.shape[:2] != (p.height, p.width):
@@ -153,7 +153,7 @@ def replay(h3d: np.ndarray, lens_array: LensArray, eye, *, optics: str = "pinhol
     e = check_eye(eye, lens_array)
     if size == "lenses":
         if optics == "none":
-            raise ConfigError("without a sheet (--optics none) there are no lenses to sample; give --size WxH")
+            raise ConfigError(f"without a sheet ({param('optics')} none) there are no lenses to sample; give {param('size')} WxH")
         c = sheet_centres(lens_array, shift)
         rows, cols = c.shape[:2]
         jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
@@ -188,10 +188,10 @@ def _size(size) -> tuple[int, int]:
     try:
         width, height = (int(v) for v in size)
     except (TypeError, ValueError):
-        raise ConfigError(f"the replay size must be 'lenses' or (W, H) pixels, got {size!r}; e.g. --size 800x600") from None
+        raise ConfigError(f"the replay size must be 'lenses' or (W, H) pixels, got {size!r}; e.g. {param('size')} 800x600") from None
     if width < 1 or height < 1 or width * height > 1 << 26:
         raise ConfigError(f"the replay size {width}x{height} must be at least 1x1 and at most 64 Mpixel; "
-                          "e.g. --size 800x600")
+                          f"e.g. {param('size')} 800x600")
     return width, height
 
 
@@ -203,7 +203,7 @@ def default_eye(lens_array: LensArray, distance: float | None = None) -> tuple[f
 def sweep_eyes(eye, axis: str, start: float, stop: float, count: int) -> np.ndarray:
     """``count`` eyes from ``eye`` with ``x`` (or ``y``) from ``start`` to ``stop`` mm, (count, 3)."""
     if count < 2:
-        raise ConfigError(f"a sweep needs at least 2 eye positions, got {count}; e.g. --sweep -60:60:9")
+        raise ConfigError(f"a sweep needs at least 2 eye positions, got {count}; e.g. {param('sweep')} -60:60:9")
     eyes = np.repeat(np.asarray(eye, np.float64).reshape(1, 3), count, axis=0)
     eyes[:, 0 if axis == "x" else 1] = np.linspace(start, stop, count)
     return eyes

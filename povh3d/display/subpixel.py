@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..geometry.camera_mesh import CameraMesh
 from ..geometry.view_bank import stack_frames
 from ..geometry.lens_array import LensArray, Panel
@@ -40,8 +40,8 @@ def subpixel_array(lens_array: LensArray) -> LensArray:
     """The same sheet over the subpixel panel: ``3 W x H`` cells of ``s/3 x s`` mm."""
     la = lens_array
     if la.grid != "lenticular":
-        raise ConfigError(f"--method subpixel renders lenticular sheets, got a {la.grid} grid; "
-                          "use --grid lenticular (with --lens-rotation for a slanted sheet)")
+        raise ConfigError(f"{param('method')} subpixel renders lenticular sheets, got a {la.grid} grid; "
+                          f"use {param('grid')} lenticular (with {param('lens_rotation')} for a slanted sheet)")
     p = la.panel
     panel = Panel(3 * p.width, p.height, p.pitch_x / 3, p.pitch_y)
     return LensArray("lenticular", la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, la.focal, panel, la.rotation)
@@ -82,8 +82,8 @@ def _check_subpixel_mapping(mapping: Mapping, reverse_ok: bool = False) -> Slant
     from .mappings.slanted import Slanted  # only the CLI asks: keeps the render's import chain short
 
     if not isinstance(mapping, Slanted) or mapping.unit != "subpixel" or (mapping.reverse and not reverse_ok):
-        raise ConfigError(f"--method subpixel traces the sheet of a slanted subpixel mapping; {mapping.name!r} "
-                          "is not one: give the sheet with --grid lenticular --ppl --lens-rotation instead")
+        raise ConfigError(f"{param('method')} subpixel traces the sheet of a slanted subpixel mapping; {mapping.name!r} "
+                          f"is not one: give the sheet with {param('grid')} lenticular {param('ppl')} {param('lens_rotation')} instead")
     return mapping
 
 

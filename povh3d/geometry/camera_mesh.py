@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 if TYPE_CHECKING:
     from .lens_array import LensArray
@@ -94,18 +94,18 @@ def check_front_clearance(lens_array: LensArray, front_clearance: float, units_p
         w, h = lens_array.panel.size_mm
         raise ConfigError(
             f"a {w:.4g} x {h:.4g} mm display with rays this oblique is beyond POV-Ray's {POVRAY_MAX_DEPTH:g} {unit} "
-            f"ray length{scale} whatever the front clearance; check --pixel-pitch and --focal (mm), or "
+            f"ray length{scale} whatever the front clearance; check {param('pixel_pitch')} and {param('focal')} (mm), or "
             "model the scene and the display in larger units (smaller numbers)")
     if not front_clearance >= least:
         raise ConfigError(
             f"the front clearance {front_clearance:g} mm is under {least:g} mm{scale}: POV-Ray ignores surfaces "
-            f"nearer than {POVRAY_MIN_DEPTH:g} {near_unit} to where a ray starts; use --front-clearance {lo:.6g} or more")
+            f"nearer than {POVRAY_MIN_DEPTH:g} {near_unit} to where a ray starts; use {param('front_clearance')} {lo:.6g} or more")
     if front_clearance > most:
         path = front_clearance * ray_stretch(lens_array) * max(units, 1.0)
         raise ConfigError(
             f"rays starting {front_clearance:.6g} mm in front of the screen travel {path:.4g} {unit} to reach it{scale}, "
             f"over half of POV-Ray's {POVRAY_MAX_DEPTH:g} {unit} ray length, so the scene behind it would vanish; "
-            f"use --front-clearance between {lo:.6g} and {hi:.6g} mm (or model the scene in smaller units)")
+            f"use {param('front_clearance')} between {lo:.6g} and {hi:.6g} mm (or model the scene in smaller units)")
 
 
 # -- the same bank in one pass: a mesh camera ----------------------------------------

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from .capture_bank import border_margin
 from .lens_array import LensArray, Panel
 from .optics import Lenslet
@@ -180,8 +180,8 @@ def check_ior(ior: float | None) -> None:
     """Refuse, in one line, an index of refraction no lens material has (None, 1 and below: the default)."""
     lo, hi = PHYSICAL_IOR
     if ior is not None and ior > 1 and not lo <= ior <= hi:
-        raise ConfigError(f"--ior {ior:g} is no lens material: real lenses have indices from {lo:g} (water 1.33) "
-                          f"to {hi:g} (diamond 2.42); raise --ior above {lo:g} or lower it to {hi:g} at most "
+        raise ConfigError(f"{param('ior')} {ior:g} is no lens material: real lenses have indices from {lo:g} (water 1.33) "
+                          f"to {hi:g} (diamond 2.42); raise {param('ior')} above {lo:g} or lower it to {hi:g} at most "
                           f"(1.5 is glass)")
 
 

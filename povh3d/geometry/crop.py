@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from .lens_array import LensArray
 
 #: Lens columns/rows of background kept around whatever a view can see.
@@ -203,11 +203,11 @@ def check_bbox(bbox: np.ndarray | tuple | list[float]) -> np.ndarray:
     try:
         box = np.asarray(bbox, dtype=np.float64).reshape(2, 3)
     except (TypeError, ValueError):
-        raise ConfigError(f"--bbox takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {bbox!r}") from None
+        raise ConfigError(f"{param('bbox')} takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {bbox!r}") from None
     if np.isnan(box).any() or np.any(box[0] > box[1]):
-        raise ConfigError(f"--bbox needs xmin <= xmax, ymin <= ymax, zmin <= zmax (mm), got {box.reshape(-1).tolist()}")
+        raise ConfigError(f"{param('bbox')} needs xmin <= xmax, ymin <= ymax, zmin <= zmax (mm), got {box.reshape(-1).tolist()}")
     if np.isposinf(box[0]).any() or np.isneginf(box[1]).any():   # a box at infinity holds nothing
-        raise ConfigError(f"--bbox holds nothing: a min of inf or a max of -inf, got {box.reshape(-1).tolist()}; "
+        raise ConfigError(f"{param('bbox')} holds nothing: a min of inf or a max of -inf, got {box.reshape(-1).tolist()}; "
                           "give -inf for a min and inf for a max that is unbounded")
     return box
 
@@ -367,7 +367,7 @@ class CropSettings:
 
     def __post_init__(self) -> None:
         if self.mode not in CROP_MODES:
-            raise ConfigError(f"--crop must be one of {', '.join(CROP_MODES)}, got {self.mode!r}")
+            raise ConfigError(f"{param('crop')} must be one of {', '.join(CROP_MODES)}, got {self.mode!r}")
         if self.bbox is not None:
             box = check_bbox(self.bbox)
             object.__setattr__(self, "bbox", tuple(tuple(float(x) for x in row) for row in box))
@@ -383,7 +383,7 @@ def parse_bbox(text: str) -> tuple[tuple[float, float, float], tuple[float, floa
     except ValueError:
         values = []
     if len(values) != 6:
-        raise ConfigError(f"--bbox takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {text!r}")
+        raise ConfigError(f"{param('bbox')} takes 6 numbers xmin,ymin,zmin,xmax,ymax,zmax in mm, got {text!r}")
     box = check_bbox(values)
     (x0, y0, z0), (x1, y1, z1) = box.tolist()
     return (x0, y0, z0), (x1, y1, z1)

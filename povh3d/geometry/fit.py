@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from .lens_array import LensArray
 
 FILL = 0.9  # of the display's width and height: a margin so the model is not cut at the edge
@@ -70,7 +70,7 @@ def fit_to_display(lo: np.ndarray, hi: np.ndarray, lens_array: LensArray, *,
     budget: ``Placement.depth`` is the budget, ``size[2]`` what the model takes.
     """
     if depth is not None and not (np.isfinite(depth) and depth > 0):
-        raise ConfigError(f"--depth must be a positive number of mm, got {depth!r}")
+        raise ConfigError(f"{param('depth')} must be a positive number of mm, got {depth!r}")
     budget = depth if depth is not None else depth_budget_mm(lens_array)
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     size = hi - lo
@@ -88,7 +88,7 @@ def depth_warning(placement: Placement, what: str) -> list[str]:
     """The warning when ``what`` (``'model'``, ``'volume'``), placed, is deeper than the depth budget; else none."""
     if placement.size[2] > placement.depth * (1 + 1e-9):
         return [f"the {what} is {placement.size[2]:.3g} mm deep at this size, beyond the depth budget of "
-                f"{placement.depth:.3g} mm (2 N f): its front and back look blurred; --depth "
+                f"{placement.depth:.3g} mm (2 N f): its front and back look blurred; {param('depth')} "
                 f"{placement.depth:.3g} fits it"]
     return []
 

@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 #: The options a user can set instead of a frame povh3d cannot work out.
-EXPLICIT_OPTIONS = "--display-center X,Y,Z --display-normal X,Y,Z [--display-up X,Y,Z] --display-width UNITS"
+EXPLICIT_OPTIONS = f"{param('display_frame.center')} X,Y,Z {param('display_frame.normal')} X,Y,Z [{param('display_frame.up')} X,Y,Z] {param('display_frame.width')} UNITS"
 
 
 def _vec(value: Any, name: str) -> np.ndarray:
@@ -155,7 +155,7 @@ def up_warning(normal: Any, up: Any = None) -> str | None:
     ``UP_WARNING_DEG`` of the scene's y axis, where a small turn of the normal turns the image a lot."""
     if up is not None:
         return None
-    n = _vec(normal, "--display-normal")
+    n = _vec(normal, param("display_frame.normal"))
     if not np.linalg.norm(n) > 0:
         return None
     angle = math.degrees(math.acos(min(1.0, abs(n[1]) / np.linalg.norm(n))))
@@ -163,7 +163,7 @@ def up_warning(normal: Any, up: Any = None) -> str | None:
         return None
     return (f"the display normal is {angle:.3g} deg from the scene's y axis, so its default up (the scene's y "
             f"projected onto the display: {', '.join(f'{v:.3g}' for v in default_up(n))}) turns fast with the "
-            f"normal; give --display-up X,Y,Z to fix which way is up")
+            f"normal; give {param('display_frame.up')} X,Y,Z to fix which way is up")
 
 
 def explicit_frame(centre: Any, normal: Any, width: float, panel_width_mm: float, up: Any = None,
@@ -174,20 +174,20 @@ def explicit_frame(centre: Any, normal: Any, width: float, panel_width_mm: float
     (POV-Ray's ``right`` for a camera with ``sky`` up looking along the normal), ``y``
     completes it.
     """
-    c, n = _vec(centre, "--display-center"), _vec(normal, "--display-normal")
+    c, n = _vec(centre, param("display_frame.center")), _vec(normal, param("display_frame.normal"))
     if not np.linalg.norm(n) > 0:
-        raise ConfigError(f"--display-normal must not be zero; use {EXPLICIT_OPTIONS}")
+        raise ConfigError(f"{param('display_frame.normal')} must not be zero; use {EXPLICIT_OPTIONS}")
     z = n / np.linalg.norm(n)
     if up is None:
         up = default_up(z)
-    u = _vec(up, "--display-up")
+    u = _vec(up, param("display_frame.up"))
     x = np.cross(u, z)
     if not np.linalg.norm(x) > 1e-9 * max(float(np.linalg.norm(u)), 1e-300):
-        raise ConfigError("the display's up is parallel to its normal; give a --display-up across the normal")
+        raise ConfigError(f"the display's up is parallel to its normal; give a {param('display_frame.up')} across the normal")
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
     if not (math.isfinite(width) and width > 0):
-        raise ConfigError(f"--display-width must be a positive number of scene units, got {width!r}")
+        raise ConfigError(f"{param('display_frame.width')} must be a positive number of scene units, got {width!r}")
     return DisplayFrame(tuple(c), tuple(x), tuple(y), tuple(z), width / panel_width_mm, source, note)
 
 

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 # Lattice vectors closer than this to parallel (degrees between them) are a typing
 # error, not a lens sheet: their cells would be slivers.
@@ -28,7 +28,7 @@ def lattice_vectors(basis) -> tuple[np.ndarray, np.ndarray]:
     except (TypeError, ValueError):
         a = np.full(1, np.nan)
     if a.shape != (2, 2) or not np.isfinite(a).all():
-        raise ConfigError(f"a lattice is two vectors of two numbers (mm), e.g. --lattice '0.6,0;0.1,0.6', got {basis!r}")
+        raise ConfigError(f"a lattice is two vectors of two numbers (mm), e.g. {param('lattice')} '0.6,0;0.1,0.6', got {basis!r}")
     a1, a2 = a
     if not all(1e-9 <= float(np.hypot(*v)) <= 1e9 for v in (a1, a2)):
         raise ConfigError(f"lattice vectors must be between 1e-9 and 1e9 mm long, got {basis!r}; give them in mm")
@@ -38,7 +38,7 @@ def lattice_vectors(basis) -> tuple[np.ndarray, np.ndarray]:
     angle = math.degrees(math.asin(min(1.0, abs(det) / (np.hypot(*a1) * np.hypot(*a2)))))
     if angle < MIN_LATTICE_ANGLE_DEG:
         raise ConfigError(f"the lattice vectors are {angle:.3g} deg from parallel (at least {MIN_LATTICE_ANGLE_DEG:g} "
-                          "needed): their cells would be slivers; check --lattice")
+                          f"needed): their cells would be slivers; check {param('lattice')}")
     return a1, (a2 if det > 0 else -a2)
 
 

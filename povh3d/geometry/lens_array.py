@@ -15,7 +15,7 @@ from typing import TypeVar
 import numpy as np
 
 from .axes import to_edge
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 GRIDS = ("square", "lenticular", "hex", "lattice")
 
@@ -60,7 +60,7 @@ def lens_rotation(value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
             or not -45 < value <= 45:
         raise ConfigError(f"the lens rotation must be a number of degrees within (-45, 45], got {value!r}; "
-                          "a lattice turned further is the same lattice turned less (--lens-rotation)")
+                          f"a lattice turned further is the same lattice turned less ({param('lens_rotation')})")
     return float(value)
 
 
@@ -82,14 +82,14 @@ class Panel:
     pitch_y: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "width", _count("panel width", self.width, "give the panel size as WxH pixels, e.g. --panel 1920x1080"))
-        object.__setattr__(self, "height", _count("panel height", self.height, "give the panel size as WxH pixels, e.g. --panel 1920x1080"))
-        object.__setattr__(self, "pitch_x", _positive("pixel pitch", self.pitch_x, "give it in mm, e.g. --pixel-pitch 0.1"))
-        object.__setattr__(self, "pitch_y", _positive("vertical pixel pitch", self.pitch_y, "give it in mm, e.g. --pixel-pitch 0.1"))
+        object.__setattr__(self, "width", _count("panel width", self.width, f"give the panel size as WxH pixels, e.g. {param('panel')} 1920x1080"))
+        object.__setattr__(self, "height", _count("panel height", self.height, f"give the panel size as WxH pixels, e.g. {param('panel')} 1920x1080"))
+        object.__setattr__(self, "pitch_x", _positive("pixel pitch", self.pitch_x, f"give it in mm, e.g. {param('pixel_pitch')} 0.1"))
+        object.__setattr__(self, "pitch_y", _positive("vertical pixel pitch", self.pitch_y, f"give it in mm, e.g. {param('pixel_pitch')} 0.1"))
         if self.width * self.height > MAX_PANEL_PIXELS:
             raise ConfigError(f"a {self.width}x{self.height} panel has {self.width * self.height:.3g} pixels, over "
-                              f"povh3d's limit of {MAX_PANEL_PIXELS:.3g} (32768x32768); use fewer lenses (--lenses) "
-                              "or fewer pixels per lens (--ppl)")
+                              f"povh3d's limit of {MAX_PANEL_PIXELS:.3g} (32768x32768); use fewer lenses ({param('lenses')}) "
+                              f"or fewer pixels per lens ({param('ppl')})")
 
     @property
     def size_mm(self) -> tuple[float, float]:
@@ -154,21 +154,21 @@ class LensArray:
         self._check_basis()
         object.__setattr__(self, "rotation", lens_rotation(self.rotation))
         if self.grid not in GRIDS:
-            raise ConfigError(f"grid must be one of {', '.join(GRIDS)}, got {self.grid!r}; pick one with --grid")
-        object.__setattr__(self, "lenses_x", _count("lens count", self.lenses_x, "give it as --lenses 60x40 (lenticular: --lenses 60)"))
-        object.__setattr__(self, "lenses_y", _count("lens rows", self.lenses_y, "give it as --lenses 60x40 (lenticular: --rows)"))
-        object.__setattr__(self, "pitch_x", _positive("lens pitch", self.pitch_x, "give pixels per lens with --ppl or a lens pitch in mm"))
-        object.__setattr__(self, "pitch_y", _positive("vertical lens pitch", self.pitch_y, "give pixels per lens with --ppl 8x8"))
-        object.__setattr__(self, "focal", _positive("focal length", self.focal, "give it in mm with --focal, e.g. --focal 1.5"))
+            raise ConfigError(f"grid must be one of {', '.join(GRIDS)}, got {self.grid!r}; pick one with {param('grid')}")
+        object.__setattr__(self, "lenses_x", _count("lens count", self.lenses_x, f"give it as {param('lenses')} 60x40 (lenticular: {param('lenses')} 60)"))
+        object.__setattr__(self, "lenses_y", _count("lens rows", self.lenses_y, f"give it as {param('lenses')} 60x40 (lenticular: {param('rows')})"))
+        object.__setattr__(self, "pitch_x", _positive("lens pitch", self.pitch_x, f"give pixels per lens with {param('ppl')} or a lens pitch in mm"))
+        object.__setattr__(self, "pitch_y", _positive("vertical lens pitch", self.pitch_y, f"give pixels per lens with {param('ppl')} 8x8"))
+        object.__setattr__(self, "focal", _positive("focal length", self.focal, f"give it in mm with {param('focal')}, e.g. {param('focal')} 1.5"))
         p = self.panel
         if self.grid == "lenticular":
             if self.lenses_y != p.height or not math.isclose(self.pitch_y, p.pitch_y, rel_tol=1e-12):
-                raise ConfigError("a lenticular array has one lens row per panel row; set the panel height with --rows")
+                raise ConfigError(f"a lenticular array has one lens row per panel row; set the panel height with {param('rows')}")
         if self.grid == "hex" and not math.isclose(self.pitch_y, self.pitch_x * math.sqrt(3) / 2, rel_tol=1e-9):
             raise ConfigError("a hex array has rows spaced pitch*sqrt(3)/2; give only the horizontal lens pitch")
         if self.pitch_x < p.pitch_x * (1 - 1e-9) or self.pitch_y < p.pitch_y * (1 - 1e-9):
             raise ConfigError(f"the lens pitch {self.pitch_x:g} mm is under one pixel ({p.pitch_x:g} mm); "
-                              "use at least 1 pixel per lens (--ppl)")
+                              f"use at least 1 pixel per lens ({param('ppl')})")
         width_mm, height_mm = p.size_mm
         # hex odd rows are shifted right by half a pitch, so they reach further.
         array_w = self.lenses_x * self.pitch_x + (self.pitch_x / 2 if self.grid == "hex" and self.lenses_y > 1 else 0)
@@ -178,18 +178,18 @@ class LensArray:
         if self.rotation == 0.0 and self.grid != "lattice" and (array_w > width_mm + slack or array_h > height_mm + slack):
             raise ConfigError(
                 f"the lens array ({array_w:.6g} x {array_h:.6g} mm) is larger than the panel "
-                f"({width_mm:.6g} x {height_mm:.6g} mm); use fewer lenses (--lenses) or a larger panel (--panel)")
+                f"({width_mm:.6g} x {height_mm:.6g} mm); use fewer lenses ({param('lenses')}) or a larger panel ({param('panel')})")
 
     def _check_basis(self) -> None:
         from .lattice import cell_widths, lattice_vectors  # here: keeps lens_array's imports shallow
 
         if self.grid != "lattice":
             if self.basis is not None:
-                raise ConfigError(f"lattice vectors are for grid 'lattice', not {self.grid!r}; drop --lattice or --grid")
+                raise ConfigError(f"lattice vectors are for grid 'lattice', not {self.grid!r}; drop {param('lattice')} or {param('grid')}")
             return
         a1, a2 = lattice_vectors(self.basis)
         if self.rotation:
-            raise ConfigError("a lattice given by its vectors is not turned again (--lens-rotation); "
+            raise ConfigError(f"a lattice given by its vectors is not turned again ({param('lens_rotation')}); "
                               "turn its vectors instead")
         object.__setattr__(self, "basis", (tuple(map(float, a1)), tuple(map(float, a2))))
         px, py = cell_widths(a1, a2)
@@ -239,13 +239,13 @@ class LensArray:
         if self.views is None:
             if self.grid == "hex":
                 raise ConfigError("a hex lens array has no orthographic camera bank; render it through a "
-                                  "virtual lens array with --method single-stage (views: 'povh3d extract' "
-                                  "resamples them), or pick a square or lenticular --grid")
+                                  f"virtual lens array with {param('method')} single-stage (views: 'povh3d extract' "
+                                  f"resamples them), or pick a square or lenticular {param('grid')}")
             if self.grid == "lattice":
-                raise ConfigError("a lattice given by two vectors (--lattice) has no camera bank; render it with "
-                                  "--method multi-ortho, which traces one cell per lens")
+                raise ConfigError(f"a lattice given by two vectors ({param('lattice')}) has no camera bank; render it with "
+                                  f"{param('method')} multi-ortho, which traces one cell per lens")
             raise ConfigError(f"a camera bank needs whole pixels per lens (got {self.ppl_x:g} x {self.ppl_y:g}) "
-                              "and an even pixel margin around the array; change --ppl, --lenses or the panel")
+                              f"and an even pixel margin around the array; change {param('ppl')}, {param('lenses')} or the panel")
         return self.views
 
     @property

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from .lens_array import LensArray
 
 #: Rec. 709 luminance of linear R, G, B: the brightness a viewer sees of a colour.
@@ -97,7 +97,7 @@ def lattice_basis(lens_array: LensArray) -> tuple[np.ndarray, np.ndarray]:
         return (np.array(la.from_lattice(np.float64(la.pitch_x), np.float64(0.0))),
                 np.array(la.from_lattice(np.float64(0.0), np.float64(la.pitch_y))))
     raise ConfigError(f"the moire of a {la.grid} sheet is not modelled (its lenses are not one lattice of 2D "
-                      "lenses); use a square grid or a lattice (--lattice, e.g. cross-lenticular)")
+                      f"lenses); use a square grid or a lattice ({param('lattice')}, e.g. cross-lenticular)")
 
 
 def seen_points(lens_array: LensArray, viewer: tuple[float, float, float]) -> np.ndarray:

@@ -27,7 +27,7 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 SHAPES = ("spherical", "conic")
 APERTURES = ("square", "hex", "lenticular")
@@ -112,14 +112,14 @@ class Lenslet:
 
     def __post_init__(self) -> None:
         if self.shape not in SHAPES:
-            raise ConfigError(f"--lenslet must be one of {', '.join(SHAPES)}, got {self.shape!r}")
+            raise ConfigError(f"{param('lenslet')} must be one of {', '.join(SHAPES)}, got {self.shape!r}")
         rho = aperture_radius(self.aperture, self.pitch_x, self.pitch_y)
         if self.ior is None:
             object.__setattr__(self, "ior", default_ior(self.focal, rho))
         n = self.ior
         if isinstance(n, bool) or not isinstance(n, (int, float)) or not math.isfinite(n) or n <= 1.0:
             raise ConfigError(f"the index of refraction must be greater than 1 (a lens of index <= 1 "
-                              f"does not converge), got {n!r}; change --ior, e.g. --ior 1.5")
+                              f"does not converge), got {n!r}; change {param('ior')}, e.g. {param('ior')} 1.5")
         object.__setattr__(self, "ior", float(n))
         if self.shape == "spherical" and self.radius <= rho * (1 + 1e-9):
             # A sphere of radius R covers at most a disc of radius R: the cap
@@ -127,15 +127,15 @@ class Lenslet:
             need_n = 1.0 + rho / self.focal
             raise ConfigError(
                 f"a spherical lenslet of focal length {self.focal:g} mm and index {n:g} has radius "
-                f"{self.radius:.4g} mm, too small to span the {rho:.4g} mm aperture corner; raise --ior "
-                f"above {need_n:.4g}, lengthen --focal above {rho / (n - 1):.4g} mm, or use --lenslet conic")
+                f"{self.radius:.4g} mm, too small to span the {rho:.4g} mm aperture corner; raise {param('ior')} "
+                f"above {need_n:.4g}, lengthen {param('focal')} above {rho / (n - 1):.4g} mm, or use {param('lenslet')} conic")
 
         if self.corner_sag > MAX_SAG_FOCALS * self.focal:
             # Near n = 1 the curved face needs an enormous sag, and its maths loses
             # precision (measured: focus off by half at n - 1 = 1e-9).
             raise ConfigError(
                 f"an index of refraction of {n:.12g} makes the {self.shape} lenslet {self.corner_sag:.4g} mm "
-                f"deep, {self.corner_sag / self.focal:.0f} focal lengths; raise --ior (at least about "
+                f"deep, {self.corner_sag / self.focal:.0f} focal lengths; raise {param('ior')} (at least about "
                 f"{self._least_ior():.4g}; 1.5 is glass)")
 
     def _least_ior(self) -> float:

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from importlib import resources
 
-from ..errors import InputError
+from ..errors import InputError, raw_message
 
 SCHEMA = "THREEDCDP.xsd"
 _XSI = "http://www.w3.org/2001/XMLSchema-instance"
@@ -205,7 +205,7 @@ def from_xml(data: bytes, name: str = "the header") -> CdpHeader:
     try:
         return _header(root)
     except ValueError as exc:
-        raise InputError(f"{name}: {exc}") from None
+        raise InputError(f"{name}: {raw_message(exc)}") from None
 
 
 def _ints(text: str, what: str) -> tuple[int, int]:

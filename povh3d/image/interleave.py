@@ -15,6 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from ..system import cpu_count
+from ..errors import param
 
 
 def _with_channels(array: np.ndarray, ndim: int, name: str) -> tuple[np.ndarray, bool]:
@@ -144,7 +145,7 @@ def extract(h3d: np.ndarray, ppl: tuple[int, int]) -> np.ndarray:
     h, w, c = img.shape
     if h % ny or w % nx:
         raise ValueError(f"an H3D image of {w}x{h} pixels does not hold whole lenses of {nx}x{ny} pixels; "
-                         "check --ppl")
+                         f"check {param('ppl')}")
     views = np.empty((ny, nx, h // ny, w // nx, c), img.dtype)
     if not _extract_fast(img, ny, nx, views):
         _copy_planes(views, img.reshape(h // ny, ny, w // nx, nx, c).transpose(1, 3, 0, 2, 4))

@@ -30,7 +30,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError, OutputError
+from ..errors import InputError, OutputError, param, plain
 
 if TYPE_CHECKING:  # NumPy, Pillow and pypng are imported where images are coded: a cached
     import numpy as np  # output is copied as bytes without them (renderer/output_cache.py)
@@ -244,10 +244,10 @@ def check_png_memory(head: bytes, name: str) -> None:
     width, height, per_pixel = size
     need = 2 * width * height * per_pixel   # the decoded image and its array
     if need > budget:
-        whose = "your --max-memory limit" if budget == memory_limit() else "the memory available"
+        whose = f"your {param('max_memory')} limit" if budget == memory_limit() else "the memory available"
         raise InputError(f"{name!r} is a {width}x{height} image: reading it needs about {need / 2**30:.3g} GiB "
                          f"of memory, more than {whose} ({budget / 2**30:.3g} GiB); give a smaller image or "
-                         "raise --max-memory")
+                         f"raise {param('max_memory')}")
 
 
 def _decode_png16(data: bytes) -> np.ndarray:
@@ -309,7 +309,7 @@ def _replace_pair(path: Path, write: Any, record: dict[str, Any]) -> None:
 
 
 def _write_json(path: Path, record: dict[str, Any]) -> None:
-    path.write_text(json.dumps(record, indent=2, sort_keys=False) + "\n", encoding="utf-8")
+    path.write_text(json.dumps(plain(record), indent=2, sort_keys=False) + "\n", encoding="utf-8")
 
 
 def sidecar_path(image_path: str | Path) -> Path:

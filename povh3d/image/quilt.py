@@ -16,7 +16,7 @@ import re
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 _NAME = re.compile(r"_qs(\d+)x(\d+)a(\d+(?:\.\d+)?)(?=\.[A-Za-z]+$|$)")
 
@@ -39,7 +39,7 @@ def views_to_quilt(views: np.ndarray, cols: int, rows: int) -> np.ndarray:
     """
     n, h, w, c = views.shape
     if n > cols * rows:
-        raise ConfigError(f"{n} views do not fit a {cols}x{rows} quilt; give a larger --quilt")
+        raise ConfigError(f"{n} views do not fit a {cols}x{rows} quilt; give a larger {param('quilt')}")
     grid = np.zeros((rows * cols, h, w, c), views.dtype)
     grid[:n] = views
     # tile t sits in column t % cols of grid row t // cols counted from the bottom
@@ -52,7 +52,7 @@ def quilt_to_views(quilt: np.ndarray, cols: int, rows: int, count: int | None = 
     height, width, c = quilt.shape
     if height % rows or width % cols:
         raise ConfigError(f"a {width}x{height} quilt does not split into {cols}x{rows} equal views; "
-                          "check --quilt")
+                          f"check {param('quilt')}")
     h, w = height // rows, width // cols
     grid = quilt.reshape(rows, h, cols, w, c).transpose(0, 2, 1, 3, 4)[::-1].reshape(rows * cols, h, w, c)
     return np.ascontiguousarray(grid[: count or rows * cols])
@@ -73,8 +73,8 @@ def bank_to_quilt_order(views: np.ndarray, rows: str | None = None) -> np.ndarra
     ny = views.shape[0]
     if rows is None:
         if ny != 1:
-            raise ConfigError(f"the image has {ny} rows of views and a quilt holds one row; give --rows centre "
-                              "(the middle row) or --rows all")
+            raise ConfigError(f"the image has {ny} rows of views and a quilt holds one row; give {param('rows')} centre "
+                              f"(the middle row) or {param('rows')} all")
         rows = "centre"
     if rows == "centre":
         return views[ny // 2, ::-1]

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, InputError, OutputError
+from ..errors import ConfigError, InputError, OutputError, param
 from .io import atomic_path
 
 __all__ = ["VIDEO_WRITERS", "write_video", "to_rgb8"]
@@ -96,7 +96,7 @@ def check_video_path(path: str | Path) -> Path:
     """`path` as a Path when its suffix names a known format; ConfigError otherwise."""
     path = Path(path)
     if path.suffix.lower() not in VIDEO_WRITERS:
-        raise ConfigError(f"--video {str(path)!r}: the file name must end in "
+        raise ConfigError(f"{param('video')} {str(path)!r}: the file name must end in "
                           f"{' or '.join(VIDEO_WRITERS)}")
     if path.suffix.lower() == ".mp4":  # before any frame is rendered, not after the last
         from ..extras import require
@@ -116,7 +116,7 @@ def write_video(frames: Sequence[np.ndarray], path: str | Path, *, fps: float = 
     """
     path = check_video_path(path)
     if not fps > 0:
-        raise ConfigError(f"--fps must be a positive number, got {fps}")
+        raise ConfigError(f"{param('fps')} must be a positive number, got {fps}")
     if not frames:
         raise ConfigError("a video needs at least one frame")
     rgb = _Rgb8(frames)   # each frame converted as the writer takes it: a lazy sequence stays lazy

@@ -13,7 +13,7 @@ from functools import cache
 from importlib import resources
 from pathlib import Path
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 _VALID = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 # POV-Ray 3.7 accepts longer names, but keep IDENT_min and friends readable.
@@ -31,12 +31,12 @@ def check_identifier(name: str) -> str:
     """``name`` if it can be ``#declare``d, else a ConfigError saying why and what to use."""
     if not _VALID.match(name):
         suggestion = identifier_from_path(name)
-        raise ConfigError(f"--name {name!r} is not a POV-Ray identifier (letters, digits and _, not starting "
+        raise ConfigError(f"{param('name')} {name!r} is not a POV-Ray identifier (letters, digits and _, not starting "
                           f"with a digit); use for example {suggestion!r}")
     if len(name) > MAX_LENGTH:
-        raise ConfigError(f"--name {name!r} is longer than {MAX_LENGTH} characters; choose a shorter name")
+        raise ConfigError(f"{param('name')} {name!r} is longer than {MAX_LENGTH} characters; choose a shorter name")
     if name in pov_keywords():
-        raise ConfigError(f"--name {name!r} is a POV-Ray keyword; choose another name, for example "
+        raise ConfigError(f"{param('name')} {name!r} is a POV-Ray keyword; choose another name, for example "
                           f"{name.capitalize() + '_model'!r}")
     return name
 

@@ -23,7 +23,7 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, param
 from .formats import FORMATS, UNITS, MeshFormat
 
 _FLIP = np.array([1.0, 1.0, -1.0])
@@ -286,7 +286,7 @@ def load_model(path: str | Path, *, unit: str | None = None) -> LoadedModel:
         raise InputError(f"{str(path)!r} has the unknown mesh extension {path.suffix!r}; "
                          f"povh3d reads {', '.join(FORMATS)}")
     if unit is not None and unit not in UNITS:
-        raise ConfigError(f"--unit must be one of {', '.join(UNITS)}, got {unit!r}")
+        raise ConfigError(f"{param('unit')} must be one of {', '.join(UNITS)}, got {unit!r}")
     if not path.is_file():
         raise InputError(f"model file {str(path)!r} does not exist; check the path")
     try:

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 UPS = ("x", "y", "z", "-x", "-y", "-z")
 _AXES = {"x": np.array([1.0, 0, 0]), "y": np.array([0.0, 1, 0]), "z": np.array([0.0, 0, 1])}
@@ -34,7 +34,7 @@ FORMAT_UP = {".gltf": "y", ".glb": "y", ".obj": "y", ".3mf": "z"}
 
 def _axis(name: str) -> np.ndarray:
     if name not in UPS:
-        raise ConfigError(f"--up must be one of {', '.join(UPS)}, got {name!r}")
+        raise ConfigError(f"{param('up')} must be one of {', '.join(UPS)}, got {name!r}")
     return -_AXES[name[1:]] if name.startswith("-") else _AXES[name]
 
 
@@ -87,4 +87,4 @@ def detect_up(suffix: str, lo: np.ndarray, hi: np.ndarray) -> tuple[str, str]:
     on_y = abs(float(lo[1])) <= 1e-6 * extent
     if on_z and not on_y:
         return "z", "detected: the model stands on z = 0, as CAD exports do"
-    return "y", "the default for this format (no build plate at z = 0 found); --up z turns a z-up model"
+    return "y", f"the default for this format (no build plate at z = 0 found); {param('up')} z turns a z-up model"

@@ -46,7 +46,9 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError, InputError, PovrayError, PovrayNotFound, Povh3dError, RenderInterrupted
+from ..errors import (
+    ConfigError, InputError, Povh3dError, PovrayError, PovrayNotFound, RenderInterrupted, param,
+)
 from ..scene.format import pov_string
 from .job import JobResult, PovrayJob
 from .process import find_povray, povray_version, run_jobs
@@ -83,7 +85,7 @@ def check_address(address: str) -> tuple[str, str, int]:
     """
     match = _ADDRESS.fullmatch(address or "")
     if match is None or not 0 < int(match[3]) < 65536:
-        raise ConfigError(f"--scheduler takes an address like tcp://HOST:8786, got {address!r}")
+        raise ConfigError(f"{param('scheduler')} takes an address like tcp://HOST:8786, got {address!r}")
     scheme = match[1] or "tcp"
     return f"{scheme}://{match[2]}:{match[3]}", match[2].strip("[]"), int(match[3])
 
@@ -160,7 +162,7 @@ def connect(address: str) -> Any:
             return client
         from ..extras import require
 
-        require("distributed", "cluster", "--scheduler (a Dask cluster)")
+        require("distributed", "cluster", f"{param('scheduler')} (a Dask cluster)")
         import dask
         from distributed import Client
 
@@ -174,7 +176,7 @@ def connect(address: str) -> Any:
         if address.startswith("tls://") and not dask.config.get("distributed.comm.tls.ca-file", None):
             # distributed would fail on its missing SSLContext with a TypeError, and leave a client
             # whose clean-up prints a traceback at exit
-            raise ConfigError(f"--scheduler {address} needs Dask's TLS settings (distributed.comm.tls: ca-file, "
+            raise ConfigError(f"{param('scheduler')} {address} needs Dask's TLS settings (distributed.comm.tls: ca-file, "
                               "client cert and key, in the Dask config or DASK_DISTRIBUTED__COMM__TLS__*); set "
                               "them, or use tcp://")
         try:

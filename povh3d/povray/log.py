@@ -96,13 +96,15 @@ def parse_error(log: str) -> str | None:
         the log holds no error.  Warnings, including "Possible Parse Error",
         are not errors, though one may explain a fatal error that follows it.
     """
+    from ..errors import param   # here: log.py stays a leaf of the import graph
+
     lines = [line.strip() for line in unwrap(log)]
     for find in (_first_error, _access_error, _fatal_error, _plain_error):
         message = find(lines)
         if message is not None:
             if "bad_alloc" in message or "out of memory" in message.lower():
                 message += (" (POV-Ray ran out of the memory it may use: the memory available, or "
-                            "--max-memory; look for huge arrays or meshes in the scene)")
+                            f"{param('max_memory')}; look for huge arrays or meshes in the scene)")
             return message
     return None
 
@@ -246,17 +248,19 @@ def denied_note(reason: str, include_dirs: tuple[str, ...], log: str = "", confi
     """What to add to a "cannot open" error: POV-Ray's ASCII file names when it replaced
     non-ASCII characters; that the file is not there; else, when `confined`, the sandbox
     note (the file exists, so the sandbox refused it)."""
+    from ..errors import param   # here: log.py stays a leaf of the import graph
+
     if _replaced_non_ascii(reason, log):
         return (" (POV-Ray 3.7 reads the file names written in a scene as ASCII and turned each non-ASCII "
                 "character into a space; povh3d bridges that for names relative to the scene's folder or an "
-                "--include folder, not for absolute names, names with '..' or names computed while parsing: "
+                f"{param('include_dirs')} folder, not for absolute names, names with '..' or names computed while parsing: "
                 "rename the file and its folders with ASCII characters only)")
     match = _INCLUDE_NAME.search(reason)
     if match:
         name = match[1].strip()
         if not any(os.path.exists(os.path.join(d, name)) for d in (*include_dirs, ".")):
-            return (f" ({name} is neither beside the scene nor in an --include folder; check the name, "
-                    "or add its folder with --include)")
+            return (f" ({name} is neither beside the scene nor in an {param('include_dirs')} folder; check the name, "
+                    f"or add its folder with {param('include_dirs')})")
     if not confined:
         return ""
     return (" (povh3d lets a scene read only its own files and POV-Ray's include files, "

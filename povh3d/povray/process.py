@@ -65,12 +65,12 @@ def _version(binary: str) -> str:
         raise PovrayNotFound(f"Cannot run {binary}: {error.strerror}; "
                              f"{INSTALL_HINT}.") from None
     except subprocess.TimeoutExpired:
-        raise PovrayError(f"{binary} --version did not answer within 30 s.",
+        raise PovrayError(f"{' '.join(command)} did not answer within 30 s.",
                           command=command) from None
     output = done.stdout + done.stderr  # POV-Ray 3.7 prints it on stderr
     match = re.search(r"^POV-Ray (\d+\.\d+\S*)", output, re.MULTILINE)
     if match is None:
-        raise PovrayError(f"{binary} --version did not report a POV-Ray version.",
+        raise PovrayError(f"{' '.join(command)} did not report a POV-Ray version.",
                           command=command, returncode=done.returncode,
                           log_tail=tail(output))
     return match[1]

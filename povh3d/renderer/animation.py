@@ -49,7 +49,7 @@ import numpy as np
 
 from .shots.clock_runs import ClockSequence, SequenceLedger, povray_clock
 from .methods.quality import Progress
-from ..errors import ConfigError, OutputError, PovrayError
+from ..errors import ConfigError, OutputError, PovrayError, param, raw_message
 from ..image.io import read_png, write_sidecar
 from ..image.video import write_video
 from ..system import owned_prefix, sweep_orphans
@@ -77,14 +77,14 @@ class FrameRange:
         for name in ("first", "last"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 0:
-                raise ConfigError(f"--frames: {name} frame must be a whole number >= 0, got {value!r}")
+                raise ConfigError(f"{param('frames')}: {name} frame must be a whole number >= 0, got {value!r}")
         if self.last < self.first:
-            raise ConfigError(f"--frames {self.first}:{self.last} is reversed (no frames); "
+            raise ConfigError(f"{param('frames')} {self.first}:{self.last} is reversed (no frames); "
                               f"write FIRST:LAST with FIRST <= LAST, e.g. {self.last}:{self.first}")
         for name in ("clock_start", "clock_end"):
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or value != value or abs(value) == float("inf"):
-                raise ConfigError(f"--clock: {name} must be a finite number, got {value!r}")
+                raise ConfigError(f"{param('clock')}: {name} must be a finite number, got {value!r}")
 
     @property
     def numbers(self) -> range:
@@ -113,11 +113,11 @@ def parse_frames(text: str) -> tuple[int, int]:
     """``'0:47'`` -> ``(0, 47)``; a ConfigError naming the rule otherwise."""
     match = _RANGE.match(text or "")
     if not match:
-        raise ConfigError(f"--frames takes FIRST:LAST with whole numbers, e.g. 0:47, got {text!r}")
+        raise ConfigError(f"{param('frames')} takes FIRST:LAST with whole numbers, e.g. 0:47, got {text!r}")
     first, last = int(match[1]), int(match[2])
     if last - first + 1 > MAX_FRAMES:   # a range typed wrong runs for days, one frame file each
-        raise ConfigError(f"--frames {text} is {last - first + 1} frames, over {MAX_FRAMES} (an hour at 24 fps is "
-                          f"86400); render the animation in parts, e.g. --frames {first}:{first + 9999}")
+        raise ConfigError(f"{param('frames')} {text} is {last - first + 1} frames, over {MAX_FRAMES} (an hour at 24 fps is "
+                          f"86400); render the animation in parts, e.g. {param('frames')} {first}:{first + 9999}")
     return first, last
 
 
@@ -129,7 +129,7 @@ def parse_clock(text: str) -> tuple[float, float]:
             raise ValueError
         start, end = float(parts[0]), float(parts[1])
     except ValueError:
-        raise ConfigError(f"--clock takes START:END numbers, e.g. 0:1, got {text!r}") from None
+        raise ConfigError(f"{param('clock')} takes START:END numbers, e.g. 0:1, got {text!r}") from None
     return start, end
 
 
@@ -206,7 +206,7 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
                                          _frame_progress(progress, index, total, scale, shown),
                                          sequence=frames.sequence(n, ledger) if uses_clock else None)
                 except PovrayError as exc:  # name the animation frame, not only POV-Ray's camera batch
-                    raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {exc}", command=exc.command,
+                    raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {raw_message(exc)}", command=exc.command,
                                     returncode=exc.returncode, log_tail=exc.log_tail) from None
                 report["from_cache" if frame.from_cache else "rendered"] += 1
                 extra, made[n] = companions(staged, frame) if companions else ({}, [])

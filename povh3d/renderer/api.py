@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from .methods.quality import Progress, RenderSettings
-from ..errors import ConfigError, warn
+from ..errors import ConfigError, plain, warn
 from ..geometry.lens_array import LensArray
 from ..display.display import build_display
 from .run import run_request as render_request
@@ -65,13 +65,13 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
         if hit is not None:
             for line in hit.warnings:
                 warn(line)
-            return hit.record
+            return plain(hit.record)   # a Python caller reads parameter names, not marks
     with output_cache.warnings_kept() as given:
         record = _render(source, output, preset, lens_array, mapping, mapping_options, calibration, progress,
                          objects, options, camera_model)
     if key is not None and output_cache.api_key(source, output, inputs) == key:
         output_cache.keep(key, Path(output), "", given, cache_dir)
-    return record
+    return plain(record)
 
 
 def _render(source: str | Path, output: str | Path, preset: str, lens_array: LensArray | None,

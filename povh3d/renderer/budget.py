@@ -12,7 +12,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..system import LIMIT_ENV, memory_budget, memory_limit, parse_size
 
 __all__ = ["LIMIT_ENV", "check_count", "check_disk", "check_memory", "memory_budget", "parse_size"]
@@ -29,7 +29,7 @@ def check_memory(what: str, need: float, fix: str) -> None:
     """Refuse ``what`` when its estimate ``need`` (bytes) is over the budget."""
     budget = memory_budget()
     if budget is not None and need > budget:
-        whose = "your --max-memory limit" if memory_limit() is not None and budget == memory_limit() \
+        whose = f"your {param('max_memory')} limit" if memory_limit() is not None and budget == memory_limit() \
             else "the memory available"
         raise ConfigError(f"{what} needs about {gib(need)} of memory, more than {whose} ({gib(budget)}); {fix}")
 

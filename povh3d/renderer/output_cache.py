@@ -44,7 +44,7 @@ from typing import Any
 from .. import cache
 from .._version import __version__
 from ..display.looking_glass import DEVICES
-from ..errors import Povh3dError, Povh3dWarning
+from ..errors import Povh3dError, Povh3dWarning, raw_message
 from ..image.io import sidecar_path, write_png_bytes_pair
 from ..mesh.formats import is_mesh_file
 from ..scene.scene import load_scene
@@ -117,7 +117,7 @@ def warnings_kept() -> Iterator[list[str]]:
     def keep(message: Any, category: type[Warning], filename: str, lineno: int, file: Any = None,
              line: str | None = None) -> None:
         if issubclass(category, Povh3dWarning):
-            given.append(str(message))
+            given.append(raw_message(message) if isinstance(message, Warning) else str(message))
         shown(message, category, filename, lineno, file, line)
 
     warnings.showwarning = keep

@@ -22,7 +22,7 @@ import numpy as np
 from .methods.registry import run_method
 from .shots.clock_runs import ClockSequence
 from .methods.quality import Progress, Quality, RenderSettings
-from ..errors import warn
+from ..errors import param, warn
 from pathlib import Path
 from .budget import check_disk, check_memory as check_memory_budget
 from ..image.interleave import extract
@@ -115,8 +115,8 @@ def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Pa
         for path in quilt_outputs(output, dev, request.display.quilt.get("calibration") is not None):
             if path is not None:
                 check_output(path, inputs)
-    for folder, what in ((request.views_dir, "--views-dir"), (request.depth_maps, "--depth-maps"),
-                         (request.dataset, "--dataset")):
+    for folder, what in ((request.views_dir, param("views_dir")), (request.depth_maps, param("depth_maps")),
+                         (request.dataset, param("dataset"))):
         if folder is not None:
             check_output_folder(folder, inputs, what=f"{what} folder")
 
@@ -162,11 +162,11 @@ def check_memory(request: RenderRequest) -> None:
     w, h = request.image_size
     rw, rh = request.render_array.panel.width, request.render_array.panel.height
     need = max(w * h, rw * rh) * BYTES_PER_PIXEL
-    check_memory_budget(f"a {rw}x{rh} pixel render", need, "use fewer lenses (--lenses) or pixels per lens (--ppl)")
+    check_memory_budget(f"a {rw}x{rh} pixel render", need, f"use fewer lenses ({param('lenses')}) or pixels per lens ({param('ppl')})")
     if request.frames is not None:  # every frame is a PNG of at most 3 (8-bit) or 6 bytes a pixel, staged
         count = request.frames.last - request.frames.first + 1
         check_disk(Path(request.output).parent, f"{count} frames of {w}x{h} pixels", count * w * h * 3,
-                   "render fewer frames (--frames FIRST:LAST) or free some space")
+                   f"render fewer frames ({param('frames')} FIRST:LAST) or free some space")
 
 
 def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
@@ -262,7 +262,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         # units); said once per request, not per animation frame.
         w, h = array.panel.size_mm
         warn(f"every pixel of {request.output.name} is the same colour, as if no ray hit anything; check the display "
-             "frame (--display-*) or the model's units and orientation (--unit, --up); a scene without a "
+             f"frame ({param('display')}-*) or the model's units and orientation ({param('unit')}, {param('up')}); a scene without a "
              f"camera is modelled in mm around z = 0, viewer on -z, the display spanning {w:.4g} x {h:.4g} mm")
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
     mapping = request.display.mapping
@@ -284,12 +284,12 @@ def foreground_cut(display_frame: dict[str, Any], front_clearance: float, method
     if limit is not None:
         why = (f"the scene's camera stands {limit / 0.9:.3g} mm out and nothing behind it may enter the image"
                f"{'; single-stage moves its lenses in steps' if method == 'single-stage' else ''}")
-        fix = ("--fit-depth auto shrinks the scene onto the display" if not depth.get("fit") else
-               "a smaller --fit-depth MM shrinks it further")
-        fix += ", --method multi-ortho starts rays at any distance" if method == "single-stage" else ""
+        fix = (f"{param('fit_depth')} auto shrinks the scene onto the display" if not depth.get("fit") else
+               f"a smaller {param('fit_depth')} MM shrinks it further")
+        fix += f", {param('method')} multi-ortho starts rays at any distance" if method == "single-stage" else ""
     else:
-        why = f"--method {method} starts them there"
-        fix = f"--front-clearance {-near:.3g} starts them farther out"
+        why = f"{param('method')} {method} starts them there"
+        fix = f"{param('front_clearance')} {-near:.3g} starts them farther out"
     return [f"the scene reaches z = {near:.3g} mm, but rays start at z = {start:.3g} mm ({why}): the foreground "
             f"nearer than that is cut; {fix}"]
 

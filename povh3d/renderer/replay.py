@@ -21,7 +21,7 @@ import numpy as np
 
 from .._version import __version__
 from ..display.replay import check_eye, coded_panel
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..geometry.lens_array import LensArray
 from ..geometry.chief_rays import check_ior
 from ..geometry.optics import Lenslet
@@ -38,11 +38,11 @@ def replay_lenslet(lens_array: LensArray, ior: float = REPLAY_IOR, shape: str = 
     """The display's lenslet: plano-convex, focal ``f``, index ``ior`` (a sphere that cannot span the
     aperture at that index is one error line from ``Lenslet``)."""
     if lens_array.grid == "lattice":
-        raise ConfigError("a lattice given by two vectors has no lenslet shape to replay; use --optics pinhole")
+        raise ConfigError(f"a lattice given by two vectors has no lenslet shape to replay; use {param('optics')} pinhole")
     aperture = {"square": "square", "hex": "hex", "lenticular": "lenticular"}[lens_array.grid]
     check_ior(ior)
     if not ior > 1:  # NaN too
-        raise ConfigError(f"--ior {ior!r} does not make a converging lens; give an index above 1, e.g. --ior 1.49")
+        raise ConfigError(f"{param('ior')} {ior!r} does not make a converging lens; give an index above 1, e.g. {param('ior')} 1.49")
     return Lenslet(shape, aperture, lens_array.pitch_x, lens_array.pitch_y, lens_array.focal, ior)
 
 
@@ -68,7 +68,7 @@ def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, s
     centres = lenslet_centres(la)
     if len(centres) > MAX_LENSLETS:
         raise ConfigError(f"{len(centres)} lenslets are more than the replay builds ({MAX_LENSLETS}); "
-                          "use --optics pinhole")
+                          f"use {param('optics')} pinhole")
     t = lenslet.thickness
     return render_template(
         "replay.pov.j2", version=__version__, lenslet=lenslet, aperture=lenslet.aperture,
@@ -91,17 +91,17 @@ def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *,
     from ..povray.process import run_jobs
 
     if isinstance(size, str):
-        raise ConfigError("--optics lens renders a picture of the display's area; give --size WxH, e.g. --size 800x600")
+        raise ConfigError(f"{param('optics')} lens renders a picture of the display's area; give {param('size')} WxH, e.g. {param('size')} 800x600")
     width, height = (int(v) for v in size)
     eyes = np.asarray(eyes, np.float64).reshape(-1, 3)
     for e in eyes:
         check_eye(e, lens_array)
     lenslet = replay_lenslet(lens_array, ior, shape)
     if pupil is not None and not (isinstance(pupil, (int, float)) and 0 < pupil <= 20):
-        raise ConfigError(f"--pupil must be the eye's pupil diameter in mm, above 0 and at most 20, got {pupil!r}; "
-                          "e.g. --pupil 4")
+        raise ConfigError(f"{param('pupil')} must be the eye's pupil diameter in mm, above 0 and at most 20, got {pupil!r}; "
+                          f"e.g. {param('pupil')} 4")
     if quality not in ("draft", "high"):
-        raise ConfigError(f"--quality must be draft or high, got {quality!r}")
+        raise ConfigError(f"{param('quality')} must be draft or high, got {quality!r}")
     options = ("-A",) if quality == "draft" else ("+A0.05", "+AM2", "+R3")
     bit_depth = 16 if image.dtype == np.uint16 else 8
     start = time.perf_counter()

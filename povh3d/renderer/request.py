@@ -18,7 +18,7 @@ from typing import Any
 
 from .methods.registry import get_method
 from .methods.quality import RenderSettings
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from ..geometry.crop import CropSettings
 from ..geometry.lens_array import LensArray
 from ..image.video import check_video_path
@@ -54,16 +54,16 @@ class ModelOptions:
 
     def __post_init__(self) -> None:
         if self.depth is not None and not (math.isfinite(self.depth) and self.depth > 0):
-            raise ConfigError(f"--depth must be a positive number of mm, got {self.depth!r}")
+            raise ConfigError(f"{param('depth')} must be a positive number of mm, got {self.depth!r}")
         if self.shading not in SHADINGS:
             raise ConfigError(f"shading must be one of {', '.join(SHADINGS)}, got {self.shading!r}")
         m = self.max_triangles
         if m is not None and m != "auto" and (isinstance(m, bool) or not isinstance(m, int) or m < 4):
-            raise ConfigError(f"--max-triangles takes a whole number >= 4 or 'auto', got {m!r}")
+            raise ConfigError(f"{param('max_triangles')} takes a whole number >= 4 or 'auto', got {m!r}")
         if self.up is not None and self.up not in ("x", "y", "z", "-x", "-y", "-z"):
-            raise ConfigError(f"--up must be one of x, y, z, -x, -y, -z, got {self.up!r}")
+            raise ConfigError(f"{param('up')} must be one of x, y, z, -x, -y, -z, got {self.up!r}")
         if self.rotate is not None and (len(self.rotate) != 3 or not all(math.isfinite(a) for a in self.rotate)):
-            raise ConfigError(f"--rotate takes three angles X,Y,Z in degrees, got {self.rotate!r}")
+            raise ConfigError(f"{param('rotate')} takes three angles X,Y,Z in degrees, got {self.rotate!r}")
 
 
 @dataclass(frozen=True)
@@ -101,17 +101,17 @@ class VolumeOptions:
         from ..volume.orient import ORIENTATIONS
 
         if self.orientation not in ORIENTATIONS:
-            raise ConfigError(f"--orientation must be one of {', '.join(ORIENTATIONS)}, got {self.orientation!r}")
-        chosen = [name for name, on in (("--labels", self.labels is not None), ("--iso", self.iso is not None),
-                                        ("--volume", self.volume)) if on]
+            raise ConfigError(f"{param('orientation')} must be one of {', '.join(ORIENTATIONS)}, got {self.orientation!r}")
+        chosen = [name for name, on in ((param("labels"), self.labels is not None), (param("iso"), self.iso is not None),
+                                        (param("volume"), self.volume)) if on]
         if len(chosen) > 1:
             raise ConfigError(f"{' and '.join(chosen)} exclude each other; choose one way to draw the volume")
         if self.iso is not None and not (self.iso and all(math.isfinite(v) for v in self.iso)):
-            raise ConfigError(f"--iso takes numbers VALUE[,VALUE...], got {self.iso!r}")
+            raise ConfigError(f"{param('iso')} takes numbers VALUE[,VALUE...], got {self.iso!r}")
         if self.smoothing is not None and (isinstance(self.smoothing, bool) or self.smoothing < 0):
-            raise ConfigError(f"--smoothing takes a whole number of iterations >= 0, got {self.smoothing!r}")
+            raise ConfigError(f"{param('smoothing')} takes a whole number of iterations >= 0, got {self.smoothing!r}")
         if self.df3_bits not in (8, 16):
-            raise ConfigError(f"--df3-bits must be 8 or 16, got {self.df3_bits!r}")
+            raise ConfigError(f"{param('df3_bits')} must be 8 or 16, got {self.df3_bits!r}")
 
 
 @dataclass(frozen=True)
@@ -189,31 +189,31 @@ class RenderRequest:
         if self.frames is None:
             for name in ("video",):
                 if getattr(self, name) is not None:
-                    raise ConfigError(f"--{name} needs --frames FIRST:LAST")
+                    raise ConfigError(f"--{name} needs {param('frames')} FIRST:LAST")
         elif self.views_dir is not None:
-            raise ConfigError("--views-dir cannot be combined with --frames; render one frame for its views")
+            raise ConfigError(f"{param('views_dir')} cannot be combined with {param('frames')}; render one frame for its views")
         if self.video is not None:
             set_("video", check_video_path(self.video))
         if not (isinstance(self.fps, (int, float)) and math.isfinite(self.fps) and self.fps > 0):
-            raise ConfigError(f"--fps must be a positive number, got {self.fps}")
+            raise ConfigError(f"{param('fps')} must be a positive number, got {self.fps}")
         if self.views_dir is not None:
             self.render_array.require_views()
         if self.depth_format not in ("npy", "png"):
-            raise ConfigError(f"--depth-format must be npy or png, got {self.depth_format!r}")
+            raise ConfigError(f"{param('depth_format')} must be npy or png, got {self.depth_format!r}")
         if self.depth_maps is not None:
             set_("depth_maps", Path(self.depth_maps))
             if self.frames is not None:
-                raise ConfigError("--depth-maps cannot be combined with --frames; render one frame for them")
+                raise ConfigError(f"{param('depth_maps')} cannot be combined with {param('frames')}; render one frame for them")
             self.render_array.require_views()
         if self.dataset is not None:
             set_("dataset", Path(self.dataset))
             if self.frames is not None:
-                raise ConfigError("--dataset cannot be combined with --frames; render one frame for it")
+                raise ConfigError(f"{param('dataset')} cannot be combined with {param('frames')}; render one frame for it")
         elif self.dataset_all_views:
-            raise ConfigError("--dataset-all-views needs --dataset DIR")
+            raise ConfigError(f"{param('dataset_all_views')} needs {param('dataset')} DIR")
         if not self.is_volume and _replace(self.volume, rotate=None) != VolumeOptions():
-            raise ConfigError(f"{self.source.name!r} is not a volume; the volume options (--labels, --iso, --volume, "
-                              "--orientation, --spacing, --series ...) apply to volume files and DICOM folders")
+            raise ConfigError(f"{self.source.name!r} is not a volume; the volume options ({param('labels')}, {param('iso')}, {param('volume')}, "
+                              f"{param('orientation')}, {param('spacing')}, {param('series')} ...) apply to volume files and DICOM folders")
 
     @property
     def is_model(self) -> bool:

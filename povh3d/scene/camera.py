@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 _TOKEN = re.compile(r'//[^\n]*|/\*.*?\*/|"(?:\\.|[^"\\\n])*"|#\s*[A-Za-z_]\w*|[A-Za-z_]\w*|\S', re.S)
 _OPENERS = {"#if", "#ifdef", "#ifndef", "#switch", "#while", "#for", "#macro"}
@@ -87,12 +87,12 @@ def _closing_brace(toks: list[Token], opening: int) -> int:
 
 
 #: The same words as ``geometry.frame.EXPLICIT_OPTIONS`` (scene/ does not import geometry/).
-EXPLICIT_OPTIONS = "--display-center X,Y,Z --display-normal X,Y,Z [--display-up X,Y,Z] --display-width UNITS"
+EXPLICIT_OPTIONS = f"{param('display_frame.center')} X,Y,Z {param('display_frame.normal')} X,Y,Z [{param('display_frame.up')} X,Y,Z] {param('display_frame.width')} UNITS"
 
 
 def _cannot(reason: str) -> CameraError:
     return CameraError(f"cannot use the scene's camera ({reason}); place the display with "
-                       f"{EXPLICIT_OPTIONS}, or --display-frame native")
+                       f"{EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
 
 
 @dataclass(frozen=True)

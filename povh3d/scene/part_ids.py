@@ -16,6 +16,7 @@ from __future__ import annotations
 import re
 
 from .object_ids import _ID_FINISH, MAX_OBJECTS, ObjectsError, id_colour
+from ..errors import param
 
 _SCAN = re.compile(r'//[^\n]*|/\*.*?\*/|"(?:[^"\\\n]|\\.)*"|\bmesh2\b|\btexture\b|[{}]', re.S)
 
@@ -66,7 +67,7 @@ def part_ids_include(text: str, parts: int) -> str:
         pending = ""
     if part != parts:
         raise ObjectsError(f"the converted include holds {part} mesh2 parts, not the {parts} its record names; "
-                           "render without --objects once to convert it again")
+                           f"render without {param('objects')} once to convert it again")
     out.append(text[pos:])
     return "".join(out)
 

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, param
 from .features import Features, features_of_words, strip_comments, words_of
 
 #: The UTF-8 byte-order mark an editor may write first.  POV-Ray 3.7 skips it at the start of the file it
@@ -234,7 +234,7 @@ def load_scene(path: str | Path, include_dirs: tuple[str | Path, ...] = (),
     for d in include_dirs:
         d = Path(d).resolve()
         if not d.is_dir():
-            raise InputError(f"include folder {str(d)!r} does not exist; check --include")
+            raise InputError(f"include folder {str(d)!r} does not exist; check {param('include_dirs')}")
         if d not in dirs:
             dirs.append(d)
     system = list(system_include_dirs() if system_dirs is None else system_dirs)

@@ -28,7 +28,7 @@ import struct
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, param
 
 BITS = (8, 16)
 HEADER = struct.Struct(">3H")
@@ -39,7 +39,7 @@ PAD = 1
 
 def _dtype(bits: int) -> np.dtype:
     if bits not in BITS:
-        raise ConfigError(f"--df3-bits must be 8 or 16, got {bits!r}")
+        raise ConfigError(f"{param('df3_bits')} must be 8 or 16, got {bits!r}")
     return np.dtype(">u1" if bits == 8 else ">u2")
 
 

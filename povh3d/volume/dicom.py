@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, param
 from .grid import Volume
 
 
@@ -60,7 +60,7 @@ def read_dicom_series(folder: Path, series: str | None = None) -> Volume:
         raise InputError(f"{str(folder)!r} holds no DICOM image slices; give a folder of one DICOM series "
                          "or a volume file")
     if series is None and len(groups) > 1:
-        raise ConfigError(f"{str(folder)!r} holds {len(groups)} DICOM series; pick one with --series UID: "
+        raise ConfigError(f"{str(folder)!r} holds {len(groups)} DICOM series; pick one with {param('series')} UID: "
                           + "; ".join(_describe(uid, s) for uid, s in groups.items()))
     if series is not None and series not in groups:
         raise ConfigError(f"no DICOM series {series!r} in {str(folder)!r}; it holds "

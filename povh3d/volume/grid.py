@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,7 +53,7 @@ class Volume:
         s = np.asarray(self.spacing, dtype=np.float64)
         if s.shape != (3,) or not np.all(np.isfinite(s)) or np.any(s <= 0):
             raise ConfigError(f"{self.name}: voxel spacing must be three positive mm values, got "
-                              f"{self.spacing!r}; give --spacing SX,SY,SZ")
+                              f"{self.spacing!r}; give {param('spacing')} SX,SY,SZ")
         d = np.asarray(self.direction, dtype=np.float64)
         if d.shape != (3, 3) or not np.allclose(d.T @ d, np.eye(3), atol=1e-4):
             raise ConfigError(f"{self.name}: the volume's direction matrix is not a rotation or reflection")

@@ -20,6 +20,7 @@ from ..mesh.clean import clean_part, vertex_normals
 from ..mesh.load import Part
 from ..mesh.write import include_text, mesh2_text
 from .surfaces import Surface
+from ..errors import param
 
 #: Pixels across the window of the decimation's silhouette error (a segmentation's thousands of
 #: small triangles make the rasterising the cost; a display resolves fewer lenses than this).
@@ -110,7 +111,7 @@ def surfaces_include(surfaces: list[Surface], matrix: np.ndarray, budget: int | 
     if not parts:
         from ..errors import InputError
 
-        raise InputError(f"no surface to draw in {source}; check --labels or --iso")
+        raise InputError(f"no surface to draw in {source}; check {param('labels')} or {param('iso')}")
     before = [p.triangles for p in parts]
     start = time.perf_counter()
     silhouette, specks = None, 0

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 from .df3 import quantise
 from .grid import Volume
 from .transfer import MAX_LABEL_ENTRIES, Transfer
@@ -77,13 +77,13 @@ def classify(volume: Volume, transfer: Transfer, bits: int) -> dict[str, Any]:
     if transfer.kind == "labels":
         present = present_labels(values)
         if present.min() < 0 or present.max() > top or np.any(present != np.rint(present)):
-            raise ConfigError(f"label values must be whole numbers within 0..{top} for --df3-bits {bits}, "
+            raise ConfigError(f"label values must be whole numbers within 0..{top} for {param('df3_bits')} {bits}, "
                               f"the volume has {present.min():g}..{present.max():g}"
-                              + ("; use --df3-bits 16" if bits == 8 and present.max() <= 65535 else ""))
+                              + (f"; use {param('df3_bits')} 16" if bits == 8 and present.max() <= 65535 else ""))
         entries = np.union1d(present, [0]).astype(np.int64)
         if len(entries) > MAX_LABEL_ENTRIES:
             raise ConfigError(f"the volume holds {len(entries)} distinct labels; POV-Ray's colour maps hold "
-                              f"{MAX_LABEL_ENTRIES}: render surfaces with --labels instead")
+                              f"{MAX_LABEL_ENTRIES}: render surfaces with {param('labels')} instead")
         listed = {int(v): k for k, v in enumerate(transfer.values)}
         emission, extinction = transfer.emission, np.asarray(transfer.extinction, dtype=np.float64)
         rows = [(int(v), emission[listed[v]] if v in listed else np.zeros(3),

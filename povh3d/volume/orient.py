@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, param
 
 # (forward, up) in LPS for each preset; rows of the matrix are (right, up, forward).
 _VIEWS = {
@@ -37,7 +37,7 @@ ORIENTATIONS = tuple(_VIEWS)
 def lps_to_display(orientation: str) -> np.ndarray:
     """(3, 3) matrix ``R``: display coordinates = ``R @ lps`` (rows: the screen's right, up, away)."""
     if orientation not in _VIEWS:
-        raise ConfigError(f"--orientation must be one of {', '.join(ORIENTATIONS)}, got {orientation!r}")
+        raise ConfigError(f"{param('orientation')} must be one of {', '.join(ORIENTATIONS)}, got {orientation!r}")
     forward, up = (np.asarray(v) for v in _VIEWS[orientation])
     return np.array([np.cross(forward, up), up, forward])
 

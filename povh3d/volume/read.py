@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError, MissingExtra, warn
+from ..errors import ConfigError, InputError, MissingExtra, param, warn
 from .grid import Volume
 from .sources import SUFFIXES, is_polydata_vtk, is_volume_source, suffix as _suffix
 
@@ -49,7 +49,7 @@ def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = N
         volume = read_dicom_series(path, series)
     else:
         if series is not None:
-            raise ConfigError("--series picks one series of a DICOM folder; the volume is a single file")
+            raise ConfigError(f"{param('series')} picks one series of a DICOM folder; the volume is a single file")
         readers = {".vti": _read_vtk, ".vtk": _read_vtk, ".mha": _read_meta, ".mhd": _read_meta,
                    ".nii": _read_nifti, ".nii.gz": _read_nifti, ".nrrd": _read_nrrd, ".nhdr": _read_nrrd,
                    ".npy": _read_npy}
@@ -66,7 +66,7 @@ def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = N
                              f"{str(exc).strip().splitlines()[0] if str(exc).strip() else 'no details'}); "
                              "check that it is a complete file of its format") from None
     if spacing is not None and path.suffix.lower() != ".npy":
-        warn(f"--spacing {','.join(f'{s:g}' for s in spacing)} replaces the spacing {str(path.name)!r} gives "
+        warn(f"{param('spacing')} {','.join(f'{s:g}' for s in spacing)} replaces the spacing {str(path.name)!r} gives "
              f"({','.join(f'{s:g}' for s in volume.spacing)})")
         volume = Volume(volume.values, spacing, volume.origin, volume.direction, volume.name, volume.label_names,
                         volume.label_colours)
@@ -79,7 +79,7 @@ def _spacing(value: Any) -> tuple[float, float, float]:
     except (TypeError, ValueError):
         values = ()
     if len(values) != 3 or not all(np.isfinite(v) and v > 0 for v in values):
-        raise ConfigError(f"--spacing takes three positive voxel sizes SX,SY,SZ in mm, got {value!r}")
+        raise ConfigError(f"{param('spacing')} takes three positive voxel sizes SX,SY,SZ in mm, got {value!r}")
     return values
 
 
@@ -229,7 +229,7 @@ def _read_nrrd(path: Path, spacing: Any) -> Volume:
     elif spacing is not None:
         sizes, direction = np.asarray(spacing), np.eye(3)
     else:
-        raise ConfigError(f"{path.name!r} gives no voxel spacing; give --spacing SX,SY,SZ in mm")
+        raise ConfigError(f"{path.name!r} gives no voxel spacing; give {param('spacing')} SX,SY,SZ in mm")
     origin = to_lps @ np.asarray(header.get("space origin", np.zeros(3)), dtype=float)
     names, colours = _slicer_segments(header)
     return Volume(values, tuple(sizes.tolist()), tuple(origin.tolist()), direction, path.name, names, colours)
@@ -252,6 +252,6 @@ def _slicer_segments(header: dict) -> tuple[dict[int, str], dict[int, tuple[floa
 
 def _read_npy(path: Path, spacing: Any) -> Volume:
     if spacing is None:
-        raise ConfigError(f"{path.name!r} (a NumPy array) carries no voxel size; give --spacing SX,SY,SZ in mm")
+        raise ConfigError(f"{path.name!r} (a NumPy array) carries no voxel size; give {param('spacing')} SX,SY,SZ in mm")
     values = np.load(path, allow_pickle=False)
     return Volume(_scalar(np.asarray(values), path.name), spacing, name=path.name)

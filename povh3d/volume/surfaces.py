@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, param
 from .grid import Volume
 
 #: SurfaceNets smoothing iterations for labels when none are asked for (PyVista's default).
@@ -102,7 +102,7 @@ def check_labels(volume: Volume, labels: list[int] | None) -> list[int]:
     if not (np.issubdtype(values.dtype, np.integer) or np.all(np.mod(values, 1) == 0)):
         lo, hi = volume.value_range()
         raise ConfigError(f"{volume.name} holds continuous values ({lo:.6g} to {hi:.6g}), not labels; "
-                          "use --iso VALUE or --volume")
+                          f"use {param('iso')} VALUE or {param('volume')}")
     present = volume.labels()
     if labels is None:
         if not present:
@@ -260,8 +260,8 @@ def _per_surface(opacity: list[float] | None, count: int) -> list[float]:
     if len(opacity) == 1:
         opacity = list(opacity) * count
     if len(opacity) != count:
-        raise ConfigError(f"--opacity takes one value or one per surface ({count}), got {len(opacity)}")
+        raise ConfigError(f"{param('opacity')} takes one value or one per surface ({count}), got {len(opacity)}")
     for a in opacity:
         if not (0.0 < a <= 1.0):
-            raise ConfigError(f"--opacity values must be in (0, 1], got {a:g}")
+            raise ConfigError(f"{param('opacity')} values must be in (0, 1], got {a:g}")
     return [float(a) for a in opacity]

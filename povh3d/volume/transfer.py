@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, param
 from ..image.colour import srgb_to_linear
 
 KINDS = ("absolute", "relative", "labels")
@@ -136,7 +136,7 @@ def label_transfer(labels: list[int], *, extinction: float = 0.05) -> Transfer:
         raise ConfigError("the volume has no labels other than 0 (the background): nothing to draw")
     if len(labels) >= MAX_LABEL_ENTRIES:
         raise ConfigError(f"the volume has {len(labels)} labels; direct volume rendering draws at most "
-                          f"{MAX_LABEL_ENTRIES - 1}: render surfaces with --labels instead")
+                          f"{MAX_LABEL_ENTRIES - 1}: render surfaces with {param('labels')} instead")
     colour = srgb_to_linear(_PALETTE_SRGB[np.arange(len(labels)) % len(_PALETTE_SRGB)])
     return Transfer("labels", "labels", np.array(labels, dtype=np.float64), colour,
                     np.full(len(labels), float(extinction)))

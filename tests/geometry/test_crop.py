@@ -102,7 +102,7 @@ def test_infinite_and_bad_boxes():
     with pytest.raises(ConfigError, match="6 numbers"):
         parse_bbox("1,2,3")
     assert parse_bbox("-1,-2,-3,1,2,inf") == ((-1.0, -2.0, -3.0), (1.0, 2.0, float("inf")))
-    with pytest.raises(ConfigError, match="--crop"):
+    with pytest.raises(ConfigError, match="crop"):
         CropSettings("sometimes")
 
 

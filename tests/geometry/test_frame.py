@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from povh3d.errors import ConfigError
+from povh3d.errors import ConfigError, param
 from povh3d.geometry.frame import DisplayFrame, camera_frame, explicit_frame
 
 finite = st.floats(-1e3, 1e3, allow_nan=False)
@@ -102,8 +102,8 @@ def test_a_normal_along_y_keeps_x_of_a_display_tilted_from_facing_z():
 def test_a_chosen_up_near_the_y_axis_is_warned_about():
     from povh3d.geometry.frame import up_warning
 
-    assert "--display-up" in up_warning((0, 1, 0.05))
-    assert "--display-up" in up_warning((0, -1, 0))
+    assert param("display_frame.up") in up_warning((0, 1, 0.05))
+    assert param("display_frame.up") in up_warning((0, -1, 0))
     assert up_warning((0, 1, 0.05), up=(0, 0, 1)) is None   # the user's own up
     assert up_warning((0, 0, 1)) is None
     assert up_warning((1, 0.1, 1)) is None

@@ -137,7 +137,7 @@ def test_bad_lattices_are_one_config_error(text):
 
 
 def test_lattice_with_grid_options_is_refused():
-    with pytest.raises(ConfigError, match="drop --ppl"):
+    with pytest.raises(ConfigError, match="drop ppl"):
         preset_array("demo", lattice="cross:0.8,6.34", ppl=4)
     with pytest.raises(ConfigError, match="turn its vectors"):
         LensArray("lattice", 4, 4, 0.6, 0.6, 1.5, PANEL, 5.0, ((0.6, 0.0), (0.0, 0.6)))

@@ -287,7 +287,7 @@ def test_default_clearance_is_traceable_and_refusals_name_the_range(la):
     assert front_clearance >= MIN_FRONT_CLEARANCE
     if front_clearance * ray_stretch(la) <= POVRAY_MAX_DEPTH / 2:
         check_front_clearance(la, front_clearance)
-    with pytest.raises(ConfigError, match=r"--front-clearance 0\.01 or more"):
+    with pytest.raises(ConfigError, match=r"front_clearance 0\.01 or more"):
         check_front_clearance(la, MIN_FRONT_CLEARANCE / 2)
     too_far = POVRAY_MAX_DEPTH / ray_stretch(la)
     with pytest.raises(ConfigError, match=r"between 0\.01 and"):

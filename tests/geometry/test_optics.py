@@ -95,18 +95,18 @@ def test_aperture_radius():
 
 @pytest.mark.parametrize("ior", [1.0, 0.9, -2.0, float("nan")])
 def test_ior_of_one_or_less_is_refused(ior):
-    with pytest.raises(ConfigError, match="--ior"):
+    with pytest.raises(ConfigError, match="ior"):
         Lenslet("conic", "square", 0.6, 0.6, 1.5, ior)
 
 
 def test_spherical_cap_that_cannot_span_the_aperture_is_refused():
     # hex-5.6: corner 0.491 mm, f 1.0; at the thesis's n = 1.283 the radius is 0.283 mm.
-    with pytest.raises(ConfigError, match=r"raise --ior above 1\.49.*--focal"):
+    with pytest.raises(ConfigError, match=r"raise ior above 1\.49.*focal"):
         Lenslet("spherical", "hex", 0.85, 0.85 * math.sqrt(3) / 2, 1.0, 1.283)
     # The hyperboloid spans any aperture.
     Lenslet("conic", "hex", 0.85, 0.85 * math.sqrt(3) / 2, 1.0, 1.283)
 
 
 def test_unknown_shape_is_refused():
-    with pytest.raises(ConfigError, match="--lenslet"):
+    with pytest.raises(ConfigError, match="lenslet"):
         Lenslet("parabolic", "square", 0.6, 0.6, 1.5)

@@ -104,7 +104,7 @@ def test_all_rows_run_left_to_right_then_upward_by_viewer_position(ny, nx):
 def test_centre_row_and_refusals():
     bank = np.arange(5)[:, None, None, None, None] * np.ones((5, 3, 1, 1, 1))
     assert np.all(bank_to_quilt_order(bank, "centre") == 2)
-    with pytest.raises(ConfigError, match="--rows"):
+    with pytest.raises(ConfigError, match="rows"):
         bank_to_quilt_order(bank)
     with pytest.raises(ConfigError, match="centre or all"):
         bank_to_quilt_order(bank, "middle")

@@ -40,5 +40,5 @@ def test_video_16_bit_and_bad_input(tmp_path: Path) -> None:
     assert to_rgb8(np.array([[[0, 32896, 65535]]], np.uint16)).tolist() == [[[0, 128, 255]]]
     with pytest.raises(ConfigError):
         write_video([], tmp_path / "e.mp4")
-    with pytest.raises(ConfigError, match="--fps"):
+    with pytest.raises(ConfigError, match="fps"):
         write_video([np.zeros((2, 2, 3), np.uint8)], tmp_path / "e.gif", fps=0)

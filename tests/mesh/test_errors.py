@@ -139,9 +139,9 @@ def test_failure_after_textures_removes_them(tmp_path, monkeypatch):
 
 
 def test_bad_options(tmp_path):
-    with pytest.raises(ConfigError, match="--fit-depth"):
+    with pytest.raises(ConfigError, match="fit_depth"):
         convert_mesh(SAMPLES / "blob.ply", tmp_path / "x.inc", fit_depth=-1.0)
-    with pytest.raises(ConfigError, match="--max-triangles"):
+    with pytest.raises(ConfigError, match="max_triangles"):
         convert_mesh(SAMPLES / "blob.ply", tmp_path / "x.inc", max_triangles=0)
     flat = tmp_path / "flat.obj"
     flat.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")

@@ -41,5 +41,5 @@ def test_detect_up():
     # loader frame: file z in [0, 2] -> loader z in [-2, 0]; stands on z = 0, not on y = 0
     assert detect_up(".stl", np.array([-1, -1, -2.0]), np.array([1, 1, 0.0]))[0] == "z"
     assert detect_up(".stl", np.array([-1, 0, -2.0]), np.array([1, 1, 0.0]))[0] == "y"
-    with pytest.raises(ConfigError, match="--up"):
+    with pytest.raises(ConfigError, match="up"):
         model_to_pov("w")

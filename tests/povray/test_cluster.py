@@ -183,7 +183,7 @@ def test_unreachable_scheduler(tmp_path: Path, cli) -> None:
     assert result.code == 2
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in result.err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["behind.pov"]
-    with pytest.raises(ConfigError, match="--scheduler takes"):
+    with pytest.raises(ConfigError, match="scheduler takes"):
         DaskRunner("tcp://host with space:1")
 
 

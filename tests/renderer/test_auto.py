@@ -165,9 +165,9 @@ def test_auto_meets_the_target_on_the_full_image(textured, full_reference, targe
 @pytest.mark.povray
 def test_auto_refuses_a_target_past_its_samples(textured):
     la = square_array(lx=10, ly=8, nx=4, ny=4)
-    with pytest.raises(ConfigError, match=r"noise floor .* use --max-error [0-9.]+ or less"):
+    with pytest.raises(ConfigError, match=r"noise floor .* use max_error_db [0-9.]+ or less"):
         resolve_auto(textured, la, "multi-ortho", RenderSettings(quality="auto", max_error_db=99))
-    with pytest.raises(ConfigError, match=r"1024 footprint samples reach .* use --max-error [0-9.]+ or less"):
+    with pytest.raises(ConfigError, match=r"1024 footprint samples reach .* use max_error_db [0-9.]+ or less"):
         resolve_auto(textured, la, "multi-ortho", RenderSettings(quality="auto", max_error_db=80, bit_depth=16))
 
 
@@ -204,9 +204,9 @@ def test_auto_renders_the_full_image_only_where_it_can_split_samples_and_hold_th
 
 
 def test_auto_needs_a_target_and_a_target_needs_auto():
-    with pytest.raises(ConfigError, match="--max-error"):
+    with pytest.raises(ConfigError, match="max_error_db"):
         RenderSettings(quality="auto")
-    with pytest.raises(ConfigError, match="--quality auto"):
+    with pytest.raises(ConfigError, match="quality auto"):
         RenderSettings(quality="normal", max_error_db=30)
 
 

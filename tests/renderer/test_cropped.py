@@ -126,13 +126,13 @@ def test_crop_refused_where_pixels_could_change(quarter_scene, tmp_path, monkeyp
     assert not r.crop["applied"] and "fog" in r.crop["reason"]
     # No box, auto: nothing to crop to.
     r = run_method("multi-ortho", quarter_scene, la, RenderSettings(quality="draft"), crop=CropSettings())
-    assert not r.crop["applied"] and "--bbox" in r.crop["reason"]
+    assert not r.crop["applied"] and "bbox" in r.crop["reason"]
 
 
 def test_too_small_bbox_is_refused(quarter_scene, tmp_path):
     out = tmp_path / "o.png"
     from tests.support.render import render
-    with pytest.raises(InputError, match="outside --bbox"):
+    with pytest.raises(InputError, match="outside bbox"):
         render(quarter_scene.path, ARRAYS["square"], out, settings=RenderSettings(quality="draft"),
                crop=CropSettings("auto", ((0.0, 0.0, 0.0), (0.3, 0.3, 0.3))))
     assert not out.exists()

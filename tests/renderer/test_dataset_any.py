@@ -163,7 +163,7 @@ def test_even_views_are_refused_before_any_work(tmp_path):
 
     bank = LensArray("lenticular", 10, 4, 0.8, S, F, Panel(80, 4, S, S))                 # 8 views
     hex6 = LensArray("hex", 6, 5, 0.6, 0.6 * math.sqrt(3) / 2, F, Panel(66, 30, S, S))   # 6x6 views
-    for la, fix in ((bank, "odd count each way"), (hex6, "odd --ppl")):
+    for la, fix in ((bank, "odd count each way"), (hex6, "odd ppl")):
         with pytest.raises(ConfigError, match=fix):
             check_dataset_dir(tmp_path / "d", la)
     check_dataset_dir(tmp_path / "d", LensArray("hex", 6, 5, 0.5, 0.5 * math.sqrt(3) / 2, F, Panel(56, 30, S, S)))

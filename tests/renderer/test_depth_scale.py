@@ -172,11 +172,11 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
 
 
 def test_depth_scale_options_are_checked():
-    with pytest.raises(ConfigError, match="needs --fit-depth"):
+    with pytest.raises(ConfigError, match="needs fit_depth"):
         DisplayFrameOptions(depth_scale="fit")
     with pytest.raises(ConfigError, match="both set the depth"):
         DisplayFrameOptions(fit_depth="auto", depth_scale=0.5)
-    with pytest.raises(ConfigError, match="depth-scale"):
+    with pytest.raises(ConfigError, match="depth_scale"):
         RenderSettings(depth_scale=0.0)
 
 

@@ -176,7 +176,7 @@ def test_camera_that_cannot_be_used_is_one_line_naming_the_options(tmp_path, cam
     with pytest.raises(CameraError) as info:
         resolve_frame(DisplayFrameOptions(), load_scene(_scene(tmp_path, camera)), small_array())
     message = str(info.value)
-    assert words in message and "--display-center" in message and "\n" not in message
+    assert words in message and "display_frame.center" in message and "\n" not in message
 
 
 def test_explicit_and_native_frames(tmp_path):

@@ -91,14 +91,14 @@ def test_impossible_lenslets_are_refused_in_one_line(tmp_path):
     # f = 0.05 mm under a 0.6 mm lenticule: no real index bends the rim pixels' rays
     # (before: index 3601 picked, hits 7-21 mm off, exit 0).
     short = lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=0.05)
-    with pytest.raises(ConfigError, match=r"lengthen --focal to [0-9.]+ mm or more") as err:
+    with pytest.raises(ConfigError, match=r"lengthen focal to [0-9.]+ mm or more") as err:
         run_method("single-stage", scene, short, settings)
     assert "\n" not in str(err.value) and "1.3..2.5" in str(err.value)
     for ior in (1.1, 3.0, 6401.0):
         with pytest.raises(ConfigError, match="no lens material"):
             run_method("single-stage", scene, GRIDS["square-8"], settings, ior=ior)
     # The focal length the refusal names is accepted (at the index it names).
-    need = float(str(err.value).split("lengthen --focal to ")[1].split(" mm")[0])
+    need = float(str(err.value).split("lengthen focal to ")[1].split(" mm")[0])
     ok = lenticular_array(lx=24, rows=40, nx=6, s=0.1, f=need)
     got = render_hits("single-stage", ok, tmp_path, 30.0, half_for(ok, 30.0), ior=2.5)
     assert score(ok, got, 30.0).within >= 0.995

@@ -73,9 +73,9 @@ def test_every_lattice_ray_in_povray(tmp_path, z0):
 
 def test_single_stage_refuses_a_lattice_in_one_line(tmp_path):
     scene = load_scene(write_checker_plane(tmp_path, 6.0, PERIOD))
-    with pytest.raises(ConfigError, match="--method multi-ortho"):
+    with pytest.raises(ConfigError, match="method multi-ortho"):
         run_method("single-stage", scene, lattice("skewed"), DRAFT)
-    with pytest.raises(ConfigError, match="--method multi-ortho"):
+    with pytest.raises(ConfigError, match="method multi-ortho"):
         run_method("pinhole", scene, lattice("skewed"), DRAFT)
 
 

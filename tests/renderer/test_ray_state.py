@@ -24,7 +24,7 @@ FOG = Features(frozenset({"fog"}))
 @pytest.mark.parametrize("inside", [0.05, 0.5, 1.0])   # 1.0: or the scene's own fog hid the pass's
 @pytest.mark.parametrize("feature", ["fog", "media", "ior"])
 def test_a_mesh_camera_refuses_rays_partly_inside_a_solid_with_fog(inside, feature):
-    with pytest.raises(ConfigError, match=rf"inside a solid.*{feature}.*hollow.*--method multi-ortho-views") as error:
+    with pytest.raises(ConfigError, match=rf"inside a solid.*{feature}.*hollow.*method multi-ortho-views") as error:
         check_ray_state("multi-ortho", True, Features(frozenset({feature})), inside)
     assert "\n" not in str(error.value)
 

@@ -231,7 +231,7 @@ def test_scripts_hold_only_finite_numbers(method, index):
     except ConfigError as err:
         # Single-stage refuses lenslets no real index can make (45-80 degree views):
         # in one line, naming the focal length that works.
-        assert method == "single-stage" and "lengthen --focal to" in str(err), str(err)
+        assert method == "single-stage" and "lengthen focal to" in str(err), str(err)
         return
     script = build_script(batch, batch.shots, method=method, scene_path="/s.pov", add_assumed_gamma=True,
                           header=display_header(la))
@@ -271,10 +271,10 @@ def test_clearance_beyond_povray_reach_is_refused_before_rendering(tmp_path):
     la = scaled_array("square", 1e6)      # a 14 km panel: the default clearance is 58 000 km
     out = tmp_path / "h3d.png"
     # multi-ortho's view bank starts whole steps of f x views (9e6 mm) out: past reach whatever the request
-    with pytest.raises(ConfigError, match=r"POV-Ray can trace here; use --method multi-ortho-views --front-clearance"):
+    with pytest.raises(ConfigError, match=r"POV-Ray can trace here; use method multi-ortho-views front_clearance"):
         render(write_checker_plane(tmp_path, 6e6, 2.5e6), la, out, settings=DRAFT)
     assert not out.exists() and not out.with_suffix(".json").exists()
-    with pytest.raises(ConfigError, match=r"POV-Ray's 1e\+07 mm ray length.*--front-clearance between 0\.01 and"):
+    with pytest.raises(ConfigError, match=r"POV-Ray's 1e\+07 mm ray length.*front_clearance between 0\.01 and"):
         run_method("multi-ortho-views", load_scene(write_checker_plane(tmp_path, 6e6, 2.5e6)), la, DRAFT)
     with pytest.raises(ConfigError, match=f"under {MIN_FRONT_CLEARANCE:g} mm"):
         run_method("multi-ortho-views", load_scene(write_checker_plane(tmp_path, 1.0, 1.0)),
@@ -298,9 +298,9 @@ def test_a_large_scale_ratio_is_checked_in_scene_units_and_its_advice_renders(tm
     assert_matches(run_method("multi-ortho-views", scene, la, replace(settings, front_clearance=advised)).h3d,
                    expected, clear)
     # multi-ortho's view bank starts whole steps of f x views (9 mm) out, beyond reach here
-    with pytest.raises(ConfigError, match="--method multi-ortho-views") as refused:
+    with pytest.raises(ConfigError, match="method multi-ortho-views") as refused:
         run_method("multi-ortho", scene, la, settings)
-    advised = float(re.search(r"--front-clearance (\S+) ", str(refused.value)).group(1))
+    advised = float(re.search(r"front_clearance (\S+) ", str(refused.value)).group(1))
     assert_matches(run_method("multi-ortho-views", scene, la, replace(settings, front_clearance=advised)).h3d,
                    expected, clear)
     # Negative control: the check in mm (one unit per mm) lets the default through, and it fails the oracle.
@@ -331,5 +331,5 @@ def test_ior_too_close_to_one_is_refused_not_mistraced(ior):
     # collimated light at half the focal length (and the lens was 12.6 m deep).
     from povh3d.geometry.optics import Lenslet
 
-    with pytest.raises(ConfigError, match=r"raise --ior \(at least about 1\.00"):
+    with pytest.raises(ConfigError, match=r"raise ior \(at least about 1\.00"):
         Lenslet("conic", "square", 0.8, 0.8, 1.5, ior)

@@ -56,7 +56,7 @@ def test_8_bit_is_half_the_size_of_16():
 
 
 def test_bad_inputs():
-    with pytest.raises(ConfigError, match="--df3-bits must be 8 or 16"):
+    with pytest.raises(ConfigError, match="df3_bits must be 8 or 16"):
         df3_bytes(np.zeros((2, 2, 2), dtype=np.uint8), 12)
     with pytest.raises(ConfigError, match="0..255"):
         df3_bytes(np.full((2, 2, 2), 300, dtype=np.uint16), 8)

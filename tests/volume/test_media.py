@@ -144,7 +144,7 @@ def test_bad_input_writes_nothing(tmp_path):
     w2d = placement(volume, "coronal", None)
     with pytest.raises(InputError, match="neither a preset"):
         media_stage(volume, w2d, ARRAY, transfer=str(tmp_path / "missing.tf"), folder=folder)
-    with pytest.raises(ConfigError, match="--df3-bits must be 8 or 16"):
+    with pytest.raises(ConfigError, match="df3_bits must be 8 or 16"):
         media_stage(volume, w2d, ARRAY, bits=12, folder=folder)
     squash = w2d @ np.diag([1.0, 2.0, 1.0, 1.0])
     with pytest.raises(ConfigError, match="uniform scale"):
@@ -152,7 +152,7 @@ def test_bad_input_writes_nothing(tmp_path):
     with pytest.raises(ConfigError, match="media step"):
         media_stage(volume, w2d, ARRAY, step=0, folder=folder)
     big = Volume(np.full((3, 3, 3), 300, dtype=np.uint16), SPACING)
-    with pytest.raises(ConfigError, match="--df3-bits 16"):
+    with pytest.raises(ConfigError, match="df3_bits 16"):
         media_stage(big, w2d, ARRAY, transfer=LABELS, bits=8, folder=folder)
     assert not folder.exists() or not any(folder.iterdir())
 

@@ -56,5 +56,5 @@ def test_box_and_placement():
 
 
 def test_bad_spacing_is_a_config_error():
-    with pytest.raises(ConfigError, match="--spacing"):
+    with pytest.raises(ConfigError, match="spacing"):
         Volume(np.zeros((2, 2, 2)), (1.0, 0.0, 1.0))

@@ -85,7 +85,7 @@ def test_npy_needs_spacing(tmp_path):
     volume = asymmetric_phantom()
     path = tmp_path / "p.npy"
     np.save(path, volume.values)
-    with pytest.raises(ConfigError, match="--spacing"):
+    with pytest.raises(ConfigError, match="spacing"):
         read_volume(path)
     read = read_volume(path, spacing="1,1.5,2")
     assert read.spacing == (1.0, 1.5, 2.0) and np.array_equal(read.values, volume.values)

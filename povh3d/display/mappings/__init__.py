@@ -13,7 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, cast  # cast: parse_name gives every mapping with an n_range its N
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from .base import Mapping
 from .sampling import Sampling, Source
 from .slanted import Slanted, from_calibration, looking_glass
@@ -59,19 +59,19 @@ class Entry:
 
 def _need_ppl(name: str, opts: MappingOptions) -> int:
     if opts.ppl is None:
-        raise ConfigError(f"mapping {name!r} needs whole pixels per lens; give them with --ppl")
+        raise ConfigError(f"mapping {name!r} needs whole pixels per lens; give them with {param('ppl')}")
     return opts.ppl
 
 
 def _slanted(_: int | None, o: MappingOptions) -> Mapping:
     if o.calibration is not None:
         if o.views is None:
-            raise ConfigError("a Looking Glass calibration needs the view count; give it with --views")
+            raise ConfigError(f"a Looking Glass calibration needs the view count; give it with {param('views')}")
         return from_calibration(o.calibration, o.views, blend=o.blend)
-    missing = [flag for flag, v in (("--subpixels-per-lens", o.per_lens), ("--views", o.views),
-                                    ("--slant-tan or --slant-deg", o.slope)) if v is None]
+    missing = [flag for flag, v in ((param("subpixels_per_lens"), o.per_lens), (param("views"), o.views),
+                                    (f"{param('slant_tan')} or {param('slant_deg')}", o.slope)) if v is None]
     if missing:
-        raise ConfigError(f"mapping 'slanted' needs {', '.join(missing)} (or --calibration FILE.json)")
+        raise ConfigError(f"mapping 'slanted' needs {', '.join(missing)} (or {param('calibration')} FILE.json)")
     rows = o.rows_per_view
     if rows is None:
         rows = round(3 / o.slope) if o.slope and abs(3 / o.slope - round(3 / o.slope)) < 1e-9 and \

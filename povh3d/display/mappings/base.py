@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...geometry.lens_array import LensArray, Panel
 from ...image.colour import from_linear, to_linear
 from .plan import build_plan
@@ -124,8 +124,8 @@ class Mapping(ABC):
             raise ConfigError(
                 f"mapping {self.name!r} on a {panel[0]}x{panel[1]} panel reads a view-space image of "
                 f"{src.shape[1]}x{src.shape[0]} pixels ({src.lenses} lenses x {src.views} views, "
-                f"{src.rows} rows), got {h3d.shape[1]}x{h3d.shape[0]}; render it with --mapping "
-                f"{self.name} or give the panel size with --panel")
+                f"{src.rows} rows), got {h3d.shape[1]}x{h3d.shape[0]}; render it with {param('mapping')} "
+                f"{self.name} or give the panel size with {param('panel')}")
         if h3d.shape[2] == 1:
             h3d = np.repeat(h3d, 3, axis=2)
         elif h3d.shape[2] == 4:
@@ -172,5 +172,5 @@ def centred_margin(width: int, lens: int) -> tuple[int, int]:
     """``(lens count, first column)`` of lenses ``lens`` units wide centred on ``width`` units."""
     count = width // lens
     if count < 1:
-        raise ConfigError(f"a lens of {lens} does not fit a panel {width} wide; use fewer pixels per lens (--ppl)")
+        raise ConfigError(f"a lens of {lens} does not fit a panel {width} wide; use fewer pixels per lens ({param('ppl')})")
     return count, (width - count * lens) // 2

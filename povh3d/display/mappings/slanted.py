@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from .base import EPS, Mapping, centred_margin
 from .sampling import Sampling, Source, flat_index
 
@@ -299,7 +299,7 @@ def from_calibration(calibration: dict[str, Any], views: int, *, blend: bool = F
     kind = calibration.get("kind")
     if kind == "povh3d-lens-grid":
         raise ConfigError(f"the calibration is a {calibration.get('lattice', 'lens')} lens grid, not a lenticular "
-                          "sheet; calibrate the sheet with 'povh3d calibrate --lattice lenticular'")
+                          f"sheet; calibrate the sheet with 'povh3d calibrate {param('lattice')} lenticular'")
     if "pitch" in calibration or kind != "lenticular":
         return looking_glass(calibration, views, blend=blend)
     pitch, slant, phase = (_number(calibration, key) for key in ("pitch_px", "slant_deg", "phase_px"))

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from .base import Mapping, centred_margin
 from .sampling import Sampling, Source, flat_index
 from .slanted import Slanted
@@ -34,7 +34,7 @@ TRIANGLE = (0, 1, -1)
 
 def _ppl(name: str, ppl: int) -> int:
     if isinstance(ppl, bool) or not isinstance(ppl, int) or ppl < 1:
-        raise ConfigError(f"mapping {name!r} needs whole pixels per lens (--ppl), got {ppl!r}")
+        raise ConfigError(f"mapping {name!r} needs whole pixels per lens ({param('ppl')}), got {ppl!r}")
     return ppl
 
 

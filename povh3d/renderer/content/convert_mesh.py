@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import ConfigError, InputError, warn
+from ...errors import ConfigError, InputError, param, warn
 from ...image.io import atomic_path, write_png
 from ...mesh.clean import CleanReport, clean_part, vertex_normals
 from ...mesh.identifiers import check_identifier, identifier_from_path
@@ -80,7 +80,7 @@ def place(parts: list[Part], *, fit_depth: float | None, center: bool,
     elif fit_depth is not None:
         depth = hi[2] - lo[2]
         if not depth > 0:
-            raise ConfigError("--fit-depth cannot scale a model that is flat in z (zero depth); leave it out")
+            raise ConfigError(f"{param('fit_depth')} cannot scale a model that is flat in z (zero depth); leave it out")
         scale = fit_depth / depth
     shift = -(lo + hi) / 2 * scale if center else np.zeros(3)
     if scale == 1.0 and not shift.any():
@@ -143,7 +143,7 @@ def turned_parts(model: Path, *, unit: str | None = None, up: str | None = None,
     if up is None:
         up, up_reason = detect_up(model.suffix, *model_bounds(parts))
     else:
-        up_reason = "--up"
+        up_reason = param("up")
     return TurnedModel(loaded, reorient(parts, up, rotate), report, up, up_reason)
 
 
@@ -179,9 +179,9 @@ def convert_mesh(model: str | Path, output: str | Path | None = None, *, name: s
     ident = check_identifier(name) if name is not None else identifier_from_path(model)
     if shading not in SHADING:
         raise ConfigError(f"shading must be one of {', '.join(SHADING)}, got {shading!r}")
-    _positive("--fit-depth", fit_depth)
+    _positive(param("fit_depth"), fit_depth)
     if max_triangles is not None and max_triangles < 4:
-        raise ConfigError(f"--max-triangles must be at least 4, got {max_triangles}")
+        raise ConfigError(f"{param('max_triangles')} must be at least 4, got {max_triangles}")
     output = Path(output) if output is not None else model.with_suffix(".inc")
     if output.resolve() == model.resolve():
         raise ConfigError(f"the output {str(output)!r} would overwrite the model; choose another name")

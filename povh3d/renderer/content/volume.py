@@ -25,7 +25,7 @@ from ... import cache
 from ..._version import __version__
 from ...cache import content_key
 from .stage_text import model_stage_text
-from ...errors import ConfigError, InputError, warn
+from ...errors import ConfigError, InputError, param, warn
 from ...geometry.fit import depth_warning, fit_to_display, placement_record
 from ...geometry.lens_array import LensArray
 from ...image.io import atomic_path
@@ -69,11 +69,11 @@ def what_to_draw(volume: Volume, options: VolumeOptions) -> tuple[str, list[str]
     integral = np.issubdtype(values.dtype, np.integer) or bool(np.all(np.mod(values, 1) == 0))
     labels = volume.labels() if integral else []
     if 0 < len(labels) <= MAX_AUTO_LABELS:
-        return "labels", [f"no --labels, --iso or --volume: {volume.name} holds {len(labels)} integer labels, "
-                          "drawing every one (--labels LIST picks some)"]
+        return "labels", [f"no {param('labels')}, {param('iso')} or {param('volume')}: {volume.name} holds {len(labels)} integer labels, "
+                          f"drawing every one ({param('labels')} LIST picks some)"]
     lo, hi = volume.value_range()
-    raise ConfigError(f"{volume.name} holds values from {lo:.6g} to {hi:.6g}; say what to draw: --iso VALUE "
-                      "(a surface at that value), --labels (a segmentation) or --volume (a medium)")
+    raise ConfigError(f"{volume.name} holds values from {lo:.6g} to {hi:.6g}; say what to draw: {param('iso')} VALUE "
+                      f"(a surface at that value), {param('labels')} (a segmentation) or {param('volume')} (a medium)")
 
 
 def place_volume(volume: Volume, lens_array: LensArray, orientation: str, rotate: Any = None,
@@ -98,8 +98,8 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     options = options or VolumeOptions()
     if is_polydata_vtk(source):
         if dataclasses.replace(options, rotate=None) != VolumeOptions():
-            raise ConfigError(f"{Path(source).name!r} is a polygon mesh, not a volume; the volume options (--labels, "
-                              "--iso, --volume, --orientation ...) do not apply to it")
+            raise ConfigError(f"{Path(source).name!r} is a polygon mesh, not a volume; the volume options ({param('labels')}, "
+                              f"{param('iso')}, {param('volume')}, {param('orientation')} ...) do not apply to it")
         return _mesh_stage(Path(source), lens_array, depth=depth, max_triangles=max_triangles,
                            cache_dir=cache_dir, rotate=options.rotate)
     volume = read_volume(source, spacing=options.spacing, series=options.series)

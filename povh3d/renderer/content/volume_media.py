@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from .stage_text import media_stage_text
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...geometry.lens_array import LensArray
 from ...image.io import atomic_path, file_sha256
 from ...volume.df3 import df3_bytes, padded_shape
@@ -58,7 +58,7 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
         labels = present_labels(volume.values).tolist() if str(transfer) == "labels" else None
         transfer = load_transfer(transfer, labels)
     if bits not in (8, 16):
-        raise ConfigError(f"--df3-bits must be 8 or 16, got {bits!r}")
+        raise ConfigError(f"{param('df3_bits')} must be 8 or 16, got {bits!r}")
     scale = uniform_scale(world_to_display)
     intervals, samples = sampling_for(volume, step)
     red, green, blue = (float(c) for c in np.broadcast_to(np.asarray(background, dtype=np.float64), 3))

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import pixel_rays
 from ...image.metrics import Reference
@@ -126,7 +126,7 @@ def resolve_auto(scene: Scene, lens_array: LensArray, method: str, settings: Ren
     if first is None:
         best = max(tried, key=lambda t: t[1])
         raise ConfigError(f"no quality setting reaches {target:g} dB on this scene (best {best[1]:.1f} dB with "
-                          f"{best[0]}, on the central {window.lenses_x}x{window.lenses_y} lenses); lower --max-error")
+                          f"{best[0]}, on the central {window.lenses_x}x{window.lenses_y} lenses); lower {param('max_error_db')}")
     quality = ladder[first]
     choice = AutoChoice(quality, target, tuple(tried), (window.lenses_x, window.lenses_y),
                         time.perf_counter() - start, samples, reference.floor_db)
@@ -157,9 +157,9 @@ def probe_reference(scene: Scene, window: LensArray, declared: LensArray, mask: 
         reference = Reference(first, second, mask)
         if reference.floor_db >= target_db:
             return reference, samples
-    raise ConfigError(f"--max-error {target_db:g} dB is above the converged reference's own noise floor on this "
+    raise ConfigError(f"{param('max_error_db')} {target_db:g} dB is above the converged reference's own noise floor on this "
                       f"scene ({reference.floor_db:.1f} dB between two {samples}-sample references); "
-                      f"use --max-error {math.floor(reference.floor_db * 10) / 10:g} or less")
+                      f"use {param('max_error_db')} {math.floor(reference.floor_db * 10) / 10:g} or less")
 
 
 def probe_window(lens_array: LensArray, max_lenses: tuple[int, int] = (16, 12)) -> tuple[LensArray, np.ndarray]:
@@ -199,7 +199,7 @@ def probe_window(lens_array: LensArray, max_lenses: tuple[int, int] = (16, 12)) 
             if best is None or same.sum() > best[2].sum():
                 best = (window, (r0, c0), same)
     if best is None or not best[2].any():
-        raise ConfigError("--quality auto found no window of this display to probe; choose --quality "
+        raise ConfigError(f"{param('quality')} auto found no window of this display to probe; choose {param('quality')} "
                           "draft, normal or high")
     return best[0], best[2]
 

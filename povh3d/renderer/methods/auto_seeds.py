@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...geometry.footprint import CENTRE, scrambled_sobol
 from ...geometry.lens_array import LensArray
 from ...image.colour import encode
@@ -180,8 +180,8 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
     need = target + MARGIN_DB
     rounding = quantisation_mse(settings.bit_depth)
     if need >= -10 * math.log10(rounding):
-        raise ConfigError(f"--max-error {target:g} dB is above the noise floor of {settings.bit_depth}-bit "
-                          f"codes themselves ({-10 * math.log10(rounding):.1f} dB); use --max-error "
+        raise ConfigError(f"{param('max_error_db')} {target:g} dB is above the noise floor of {settings.bit_depth}-bit "
+                          f"codes themselves ({-10 * math.log10(rounding):.1f} dB); use {param('max_error_db')} "
                           f"{math.floor(-10 * math.log10(rounding) - 3):g} or less")
     base = replace(settings, quality=Quality(footprint=1), max_error_db=None)
     runs = SeedRuns(view_labels(lens_array))
@@ -218,13 +218,13 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
         more += -more % 4 if more > 8 else 0   # frames of a few banks each (``view_bank.bank_groups``)
         if runs.total + 2 * more > MAX_SAMPLES:
             best = with_rounding(-10 * math.log10(error * (runs.total / MAX_SAMPLES) ** ALPHA), rounding)
-            raise ConfigError(f"--max-error {target:g} dB is above what {MAX_SAMPLES} footprint samples reach on "
+            raise ConfigError(f"{param('max_error_db')} {target:g} dB is above what {MAX_SAMPLES} footprint samples reach on "
                               f"this scene (about {best:.1f} dB by the noise floor of two seeds of "
-                              f"{n}); use --max-error {math.floor(best * 10) / 10:g} or less")
+                              f"{n}); use {param('max_error_db')} {math.floor(best * 10) / 10:g} or less")
         reference = render(more)
     if chosen is None:
-        raise ConfigError(f"--quality auto did not reach {target:g} dB in {MAX_RUNS} runs; lower --max-error "
-                          f"or give --quality {runs.total}")
+        raise ConfigError(f"{param('quality')} auto did not reach {target:g} dB in {MAX_RUNS} runs; lower {param('max_error_db')} "
+                          f"or give {param('quality')} {runs.total}")
     quality, image = chosen
     dtype = np.uint8 if settings.bit_depth == 8 else np.uint16
     h3d = encode(image, dtype) if image is not None else runs.image(dtype)

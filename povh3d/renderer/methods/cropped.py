@@ -31,7 +31,7 @@ import numpy as np
 from ...geometry.view_bank import stack_frames, view_bank_frames
 from ...geometry.crop import (CropSettings, bbox_hits, fill_colour, layout_independent,
     mask_hits, paste, plan_crop)
-from ...errors import InputError
+from ...errors import InputError, param
 from ...geometry.footprint import CENTRE
 from ...geometry.lens_array import LensArray
 from ...scene.scene import Scene
@@ -79,10 +79,10 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
     """
     info: dict[str, Any] = {"mode": crop.mode}
     if crop.mode == "off":
-        return CroppedTiles(None, None, {**info, "applied": False, "reason": "--crop off"})
+        return CroppedTiles(None, None, {**info, "applied": False, "reason": f"{param('crop')} off"})
     if crop.mode == "auto" and crop.bbox is None:
         return CroppedTiles(None, None, {**info, "applied": False,
-                                         "reason": "no --bbox given (--crop measure finds it with a pre-pass)"})
+                                         "reason": f"no {param('bbox')} given ({param('crop')} measure finds it with a pre-pass)"})
     if lens_array.views is None:
         return CroppedTiles(None, None, {**info, "applied": False,
                                          "reason": "fractional pixels per lens: one quad per lens, not cropped"})
@@ -122,9 +122,9 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
     fill = first if first is not None and all(f is not None and np.array_equal(f, first) for f in fills) else None
     if fill is None:
         if info["source"] == "bbox" and crop.bbox is not None:
-            raise InputError(f"objects reach outside --bbox {list(crop.bbox[0]) + list(crop.bbox[1])} "
+            raise InputError(f"objects reach outside {param('bbox')} {list(crop.bbox[0]) + list(crop.bbox[1])} "
                              "(the pixels at the crop edges are not all background); give a box that "
-                             "holds every object, or --crop off")
+                             f"holds every object, or {param('crop')} off")
         return CroppedTiles(None, None, {**info, "applied": False,
                                          "reason": "the pixels at the crop edges differ: background not constant"})
     info.update(applied=True, fill=fill.tolist())

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...system import thread_limit
 from ...geometry.footprint import GRID, angular_grid, latin_hypercube
 from ...scene.features import Features, needed_settings
@@ -197,29 +197,29 @@ class RenderSettings:
     def __post_init__(self) -> None:
         k = self.depth_scale
         if isinstance(k, bool) or not isinstance(k, (int, float)) or not DEPTH_SCALE_RANGE[0] <= k <= DEPTH_SCALE_RANGE[1]:
-            raise ConfigError(f"--depth-scale must be a number within {DEPTH_SCALE_RANGE[0]:g}..{DEPTH_SCALE_RANGE[1]:g}, "
+            raise ConfigError(f"{param('depth_scale')} must be a number within {DEPTH_SCALE_RANGE[0]:g}..{DEPTH_SCALE_RANGE[1]:g}, "
                               f"got {k!r}")
         if self.frame is not None and len(self.frame) != 12:
             raise ConfigError(f"the display frame is a matrix of 12 numbers, got {len(self.frame)}")
         if not isinstance(self.quality, Quality) and self.quality != AUTO:
             quality_level(self.quality)
         if (self.quality == AUTO) != (self.max_error_db is not None):
-            raise ConfigError("--quality auto needs --max-error DB (the lowest PSNR to accept), "
-                              "and --max-error needs --quality auto")
+            raise ConfigError(f"{param('quality')} auto needs {param('max_error_db')} DB (the lowest PSNR to accept), "
+                              f"and {param('max_error_db')} needs {param('quality')} auto")
         if self.jobs is not None and self.jobs < 1:
-            raise ConfigError(f"--jobs must be at least 1, got {self.jobs}")
+            raise ConfigError(f"{param('jobs')} must be at least 1, got {self.jobs}")
         if self.threads is not None and self.threads < 1:
-            raise ConfigError(f"--threads must be at least 1, got {self.threads}")
+            raise ConfigError(f"{param('threads')} must be at least 1, got {self.threads}")
         if self.threads is not None and self.threads > (limit := thread_limit(self.scheduler is not None)):
             where = "a cluster's process" if self.scheduler else f"this machine's {limit} cores"
-            raise ConfigError(f"--threads {self.threads} is more than {where} can run (at most {limit}); "
-                              "give fewer or leave --threads out (the cores / jobs)")
+            raise ConfigError(f"{param('threads')} {self.threads} is more than {where} can run (at most {limit}); "
+                              f"give fewer or leave {param('threads')} out (the cores / jobs)")
         if self.timeout is not None and not self.timeout > 0:
-            raise ConfigError(f"--timeout must be a positive number of seconds, got {self.timeout}")
+            raise ConfigError(f"{param('timeout')} must be a positive number of seconds, got {self.timeout}")
         if self.bit_depth not in (8, 16):
             raise ConfigError(f"bit depth must be 8 or 16, got {self.bit_depth}")
         if self.front_clearance is not None and not (np.isfinite(self.front_clearance) and self.front_clearance > 0):
-            raise ConfigError(f"--front-clearance must be a positive number of mm, got {self.front_clearance}")
+            raise ConfigError(f"{param('front_clearance')} must be a positive number of mm, got {self.front_clearance}")
         clearance_limit = self.front_clearance_limit
         if clearance_limit is not None and not (np.isfinite(clearance_limit) and clearance_limit > 0):
             raise ConfigError(f"the front clearance limit must be a positive number of mm, got {clearance_limit}")
@@ -230,7 +230,7 @@ class RenderSettings:
     @property
     def spec(self) -> Quality:
         if self.quality == AUTO:
-            raise RuntimeError("resolve --quality auto first (quality_bench.resolve_auto)")
+            raise RuntimeError(f"resolve {param('quality')} auto first (quality_bench.resolve_auto)")
         return self.quality if isinstance(self.quality, Quality) else quality_level(self.quality)
 
     @property

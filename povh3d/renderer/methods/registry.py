@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError, warn
+from ...errors import ConfigError, param, warn
 from ...geometry.cameras import ortho_view_frames, pinhole_frames
 from ...geometry.camera_mesh import check_front_clearance, clearance_range, default_front_clearance
 from ...geometry.view_bank import bank_front_clearance, stack_frames, view_bank_frames
@@ -138,8 +138,8 @@ def _pinhole(lens_array: LensArray, front_clearance: float, samples: np.ndarray)
 def _single_stage(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *,
                   lenslet: str, ior: float | None, supersample: int = 1) -> MethodPlan:
     if lens_array.grid == "lattice":
-        raise ConfigError("--method single-stage builds square, hex and lenticular lenslets, not a general "
-                          "lattice (--lattice); render it with --method multi-ortho")
+        raise ConfigError(f"{param('method')} single-stage builds square, hex and lenticular lenslets, not a general "
+                          f"lattice ({param('lattice')}); render it with {param('method')} multi-ortho")
     plan = SingleStagePlan.checked(lens_array, lenslet_for(lens_array, lenslet, ior, front_clearance), front_clearance, supersample)
     return MethodPlan(plan.batch(), lambda images: plan.assemble(images[0]), plan.as_record())
 
@@ -173,7 +173,7 @@ def _subpixel(lens_array: LensArray, front_clearance: float, samples: np.ndarray
     tiles = phase_tiles(sub)
     if tiles is None:
         if supersample > 1:
-            warn("this lens sheet's phases do not repeat within 64 subpixels and rows, so --method subpixel "
+            warn(f"this lens sheet's phases do not repeat within 64 subpixels and rows, so {param('method')} subpixel "
                  "traces it point-sampled (one strip per lenticule); give a rational sheet to antialias")
         meshes = [lens_mesh(sub, front_clearance, shift)]
     else:
@@ -267,8 +267,8 @@ def _check_clearance(name: str, method: Method, lens_array: LensArray, front_cle
     if least <= most and rounded(least) > most and name == "multi-ortho":
         raise ConfigError(
             f"multi-ortho's view bank starts its rays a whole {step:.4g} mm (focal x views) in front of the screen, "
-            f"beyond the {most:.4g} mm POV-Ray can trace here; use --method multi-ortho-views "
-            f"--front-clearance {float(f'{0.99 * most:.3g}'):g} (its views start anywhere)")
+            f"beyond the {most:.4g} mm POV-Ray can trace here; use {param('method')} multi-ortho-views "
+            f"{param('front_clearance')} {float(f'{0.99 * most:.3g}'):g} (its views start anywhere)")
     check_front_clearance(lens_array, front_clearance, units_per_mm, accepted=(least, top))
 
 

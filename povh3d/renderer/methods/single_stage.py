@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...geometry.capture_bank import CaptureBank, capture_bank, recentre_unit
 from ...geometry.chief_rays import (DEFAULT_IORS, PHYSICAL_IOR, UNSERVED_SHARE, ChiefRays, capture_rays, check_ior,
                                    chief_mesh, lenslet_offset, probe_array, unserved_count)
@@ -318,8 +318,8 @@ class SingleStagePlan:
         raise ConfigError(
             f"single-stage cannot pass {bad} pixel rays through a {lens.shape} lenslet of focal length "
             f"{la.focal:g} mm, pitch {la.pitch_x:g} mm and index {lens.ior:g} (total internal reflection or a "
-            f"lenslet's side): real indices are {lo:g}..{hi:g}; lengthen --focal to {need:.3g} mm or more, "
-            f"or use --method multi-ortho")
+            f"lenslet's side): real indices are {lo:g}..{hi:g}; lengthen {param('focal')} to {need:.3g} mm or more, "
+            f"or use {param('method')} multi-ortho")
 
     def batch(self) -> ShotBatch:
         if self.traces_chief_rays:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ...dataset.hci import BankGeometry, centre_camera, write_hci
-from ...errors import ConfigError, InputError, OutputError, warn
+from ...errors import ConfigError, InputError, OutputError, param, warn
 from ...geometry.lens_array import LensArray
 from ...image.colour import decode, encode
 from ...geometry.rays import cell_contains
@@ -58,16 +58,16 @@ def export_grid(lens_array: LensArray) -> ExportGrid:
         centre_camera(la.views)   # HCI's centre camera is the centre only of an odd grid: refuse before work
         return ExportGrid(la.views, la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, False)
     if la.grid == "lattice" or la.rotation:
-        what = "a slanted sheet's (--lens-rotation)" if la.rotation else "a --lattice array's"
+        what = f"a slanted sheet's ({param('lens_rotation')})" if la.rotation else f"a {param('lattice')} array's"
         raise ConfigError(f"the HCI layout needs views on the screen's rows and columns, and {what} lenses lean "
-                          "off them; export an unslanted square, lenticular or hex render (--lens-rotation 0), or "
+                          f"off them; export an unslanted square, lenticular or hex render ({param('lens_rotation')} 0), or "
                           "take its views with 'povh3d extract'")
     views = view_grid(la)
     if views[0] % 2 == 0 or views[1] % 2 == 0:
         ny, nx = views
         raise ConfigError(f"the HCI toolkit's centre camera is the centre only of an odd grid, and this "
                           f"{la.grid} array's {la.ppl_x:g} pixels per lens give {nx}x{ny} views (extract's: "
-                          "whole pixels, rounded); render with an odd --ppl, e.g. 5 or 7")
+                          f"whole pixels, rounded); render with an odd {param('ppl')}, e.g. 5 or 7")
     if la.grid != "hex":
         return ExportGrid(views, la.lenses_x, la.lenses_y, la.pitch_x, la.pitch_y, False)
     # Lx - 1 columns centred on the origin are the odd rows' lens centres, halfway between the even
@@ -75,7 +75,7 @@ def export_grid(lens_array: LensArray) -> ExportGrid:
     rows = math.floor((la.lenses_y - 1) * la.pitch_y / la.pitch_x + 1 + 1e-9)
     if la.lenses_x < 2 or la.lenses_y < 2:
         raise ConfigError("the HCI export resamples a hex array between its lenses and needs at least 2x2 of them; "
-                          "render more lenses (--lenses)")
+                          f"render more lenses ({param('lenses')})")
     return ExportGrid(views, la.lenses_x - 1, rows, la.pitch_x, la.pitch_x, True)
 
 
@@ -133,10 +133,10 @@ def hex_onto_grid(views: np.ndarray, lens_array: LensArray, grid: ExportGrid) ->
 def check_dataset_dir(folder: Path, lens_array: LensArray, *, mapped: bool = False) -> None:
     """Before any work: an unmapped bank that fits HCI's layout, and ``folder`` holding no dataset."""
     if mapped:
-        raise ConfigError("--dataset exports the camera bank's views; drop --mapping (map the image afterwards)")
+        raise ConfigError(f"{param('dataset')} exports the camera bank's views; drop {param('mapping')} (map the image afterwards)")
     bank_geometry(lens_array)
     if folder.exists() and not folder.is_dir():
-        raise OutputError(f"--dataset {str(folder)!r} is a file; give a folder")
+        raise OutputError(f"{param('dataset')} {str(folder)!r} is a file; give a folder")
     if (folder / "input_Cam000.png").exists() or (folder / "parameters.cfg").exists():
         raise OutputError(f"{str(folder)!r} already holds a dataset; give an empty or new folder")
 
@@ -181,12 +181,12 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
     record = read_sidecar(h3d_path)
     if not record or "lens_array" not in record:
         raise InputError(f"{str(h3d_path)!r} has no sidecar with its lens array; render it with povh3d, or use "
-                         "render --dataset")
+                         f"render {param('dataset')}")
     if record.get("kind") != "h3d" or record.get("quilt"):
         what = "a mapped panel image" if record.get("kind") == "panel" else "not an H3D image of a camera bank"
         if record.get("quilt"):
             what = "a Looking Glass render (its views span the device's cone in even count)"
-        raise ConfigError(f"{str(h3d_path)!r} is {what}; render an odd number of views without --mapping "
+        raise ConfigError(f"{str(h3d_path)!r} is {what}; render an odd number of views without {param('mapping')} "
                           "and export that")
     lens_array = Display.from_record(record).lens_array
     folder = Path(folder)
@@ -200,7 +200,7 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
                          f"{lens_array.panel.width}x{lens_array.panel.height} panel; render it again")
     if not scene_path.is_file():
         raise InputError(f"the scene {str(scene_path)!r} the sidecar names is gone; the depth pass needs it: "
-                         "render again with --dataset")
+                         f"render again with {param('dataset')}")
     frame_record = record.get("display_frame") or {}
     frame = recorded_frame(frame_record)
     settings = RenderSettings(quality="draft", frame=frame, depth_scale=float(frame_record.get("depth_scale", 1.0)))

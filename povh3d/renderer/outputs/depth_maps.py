@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import OutputError, warn
+from ...errors import OutputError, param, plain, warn
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import disparity
 from ...image.depth_codes import quantise
@@ -37,7 +37,7 @@ from .views import check_replaced_dir, replaced_whole
 
 def check_depth_dir(folder: Path) -> None:
     """Before any work: the folder new, empty or a depth-maps folder povh3d wrote (it is replaced whole)."""
-    check_replaced_dir(folder, MANIFEST, _ours, "--depth-maps")
+    check_replaced_dir(folder, MANIFEST, _ours, param("depth_maps"))
 
 
 MANIFEST = "depth_maps.json"
@@ -88,7 +88,7 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
                             write_png(tmp / f"{prefix}_{l:03d}_{k:03d}.png", codes[prefix][0][l, k])
                             continue
                         np.save(tmp / f"{prefix}_{l:03d}_{k:03d}.npy", data)
-            (tmp / MANIFEST).write_text(json.dumps(info, indent=2) + "\n", encoding="utf-8")
+            (tmp / MANIFEST).write_text(json.dumps(plain(info), indent=2) + "\n", encoding="utf-8")
     except OSError as exc:
         raise OutputError(f"cannot write the depth maps in {str(folder)!r}: {exc.strerror or exc}; the previous "
                           "maps, if any, are unchanged") from None

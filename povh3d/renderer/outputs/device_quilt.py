@@ -20,7 +20,7 @@ import numpy as np
 
 from ...display.looking_glass import Device
 from ...display.quilt import device_calibration, device_quilt
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...geometry.lens_array import LensArray
 from ...image.io import check_output
 from ...image.quilt import quilt_name
@@ -70,11 +70,11 @@ def check_device_render(spec: Mapping[str, Any], output: Path, animated: bool, d
     from ...display.looking_glass import device
 
     if auto_quality and spec.get("camera_model") == "perspective":
-        raise ConfigError("--quality auto scores renders of the lens array's rays, not the vendor's perspective "
-                          "cameras; give --quality draft, normal or high, or add --camera-model orthographic")
+        raise ConfigError(f"{param('quality')} auto scores renders of the lens array's rays, not the vendor's perspective "
+                          f"cameras; give {param('quality')} draft, normal or high, or add {param('camera_model')} orthographic")
     if depth_maps and spec.get("camera_model") == "perspective":
-        raise ConfigError("--depth-maps traces the lens array's rays, not the vendor's perspective cameras; add "
-                          "--camera-model orthographic for a Looking Glass render with depth maps")
+        raise ConfigError(f"{param('depth_maps')} traces the lens array's rays, not the vendor's perspective cameras; add "
+                          f"{param('camera_model')} orthographic for a Looking Glass render with depth maps")
     dev = device(spec["device"])
     device_calibration(dev, spec.get("calibration"))
     quilt_outputs(output, dev, spec.get("calibration") is not None)

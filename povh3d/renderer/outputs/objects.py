@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import InputError, OutputError
+from ...errors import InputError, OutputError, param, plain
 from ..._version import __version__
 from ...image.io import read_png, read_sidecar, write_png
 from .views import VIEW_NAME, check_replaced_dir, replaced_whole
@@ -64,7 +64,7 @@ class ObjectTable:
             return cls(names, tuple(int(n) for n in record["frames"]), (int(ny), int(nx)), (int(h), int(w)),
                        None if panel is None else (int(panel[1]), int(panel[0])), str(record.get("render_id", "")))
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
-            raise InputError(f"the object table is incomplete or damaged ({exc}); render --objects again") from None
+            raise InputError(f"the object table is incomplete or damaged ({exc}); render {param('objects')} again") from None
 
 
 def check_objects_dir(folder: str | Path, inputs: tuple[Path, ...] = ()) -> Path:
@@ -72,8 +72,8 @@ def check_objects_dir(folder: str | Path, inputs: tuple[Path, ...] = ()) -> Path
     holding none of ``inputs`` (the scene and the files it reads)."""
     from ...image.io import check_output_folder
 
-    check_output_folder(folder, inputs, what="--objects folder")
-    return check_replaced_dir(folder, MANIFEST, lambda record: record.get("kind") == "objects", "--objects")
+    check_output_folder(folder, inputs, what=f"{param('objects')} folder")
+    return check_replaced_dir(folder, MANIFEST, lambda record: record.get("kind") == "objects", param("objects"))
 
 
 def write_masks(folder: str | Path, table: ObjectTable, masks: dict[int, np.ndarray],
@@ -94,7 +94,7 @@ def write_masks(folder: str | Path, table: ObjectTable, masks: dict[int, np.ndar
                 if table.panel is not None and panels is not None:  # given together
                     write_png(frame_dir / PANEL_NAME, panels[n].astype(np.uint16))
             record = {"povh3d_version": __version__, **table.as_record()}
-            (tmp / MANIFEST).write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+            (tmp / MANIFEST).write_text(json.dumps(plain(record), indent=2) + "\n", encoding="utf-8")
     except OSError as exc:
         raise OutputError(f"cannot write the object masks into {str(folder)!r}: {exc.strerror or exc}; the previous "
                           "masks, if any, are unchanged") from None
@@ -104,7 +104,7 @@ def read_table(folder: str | Path) -> ObjectTable:
     folder = Path(folder)
     record = read_sidecar(folder / MANIFEST) if (folder / MANIFEST).is_file() else None
     if not record:
-        raise InputError(f"{str(folder)!r} holds no object masks ({MANIFEST}); render with --objects DIR first")
+        raise InputError(f"{str(folder)!r} holds no object masks ({MANIFEST}); render with {param('objects')} DIR first")
     return ObjectTable.from_record(record)
 
 
@@ -116,14 +116,14 @@ def read_mask(folder: str | Path, table: ObjectTable, frame: int, view: tuple[in
     else:
         path, size = Path(folder) / FRAME_DIR.format(n=frame) / VIEW_NAME.format(l=view[0], k=view[1]), table.view_size
     if not path.is_file() or size is None:
-        raise InputError(f"the object mask {str(path)!r} is missing; render --objects again")
+        raise InputError(f"the object mask {str(path)!r} is missing; render {param('objects')} again")
     mask = read_png(path)
     if mask.shape[2] != 1 or mask.shape[:2] != size:
         raise InputError(f"{str(path)!r} is not a {size[1]}x{size[0]} grey id mask; "
-                         "render --objects again")
+                         f"render {param('objects')} again")
     ids = mask[..., 0].astype(np.int64)
     unknown = sorted(set(np.unique(ids).tolist()) - set(table.names) - {0})
     if unknown:
         raise InputError(f"{str(path)!r} holds object id {unknown[0]} that {MANIFEST} does not name; "
-                         "render --objects again")
+                         f"render {param('objects')} again")
     return ids

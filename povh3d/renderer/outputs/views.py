@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError, InputError, OutputError
+from ...errors import ConfigError, InputError, OutputError, param, plain, raw_message
 from ...geometry.axes import to_edge
 from ...geometry.lens_array import LensArray
 from ...image.elemental import extract_views, view_grid
@@ -106,7 +106,7 @@ def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray 
                     hashes[name] = file_sha256(tmp / name)
             record = base_record("views", lens_array, views=[nx, ny], view_size_px=[views.shape[3], views.shape[2]],
                                  source=source or {}, render_id=secrets.token_hex(8), view_sha256=hashes)
-            (tmp / "views.json").write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+            (tmp / "views.json").write_text(json.dumps(plain(record), indent=2) + "\n", encoding="utf-8")
     except OSError as exc:
         raise OutputError(f"cannot write the views in {str(folder)!r}: {exc.strerror or exc}; "
                           "the previous views, if any, are unchanged") from None
@@ -200,7 +200,7 @@ def read_views(views_dir: str | Path) -> np.ndarray:
         raise InputError(f"views folder {str(folder)!r} does not exist; check the path")
     found = _view_files(folder)
     if not found:
-        raise InputError(f"no view images (v_LLL_KKK.png) in {str(folder)!r}; render with --views-dir first")
+        raise InputError(f"no view images (v_LLL_KKK.png) in {str(folder)!r}; render with {param('views_dir')} first")
     ny = max(l for l, _ in found) + 1
     nx = max(k for _, k in found) + 1
     absent = [(l, k) for l in range(ny) for k in range(nx) if (l, k) not in found]
@@ -292,7 +292,7 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: s
     try:
         views = extract(h3d, ppl)
     except ValueError as exc:
-        raise ConfigError(str(exc)) from None
+        raise ConfigError(raw_message(exc)) from None
     write_views(views_dir, views, None, {"h3d": str(Path(h3d_path).resolve())})
     return {"views": to_edge(ppl), "view_size_px": to_edge(views.shape[2:4])}
 
@@ -301,7 +301,7 @@ def sidecar_array(h3d: np.ndarray, h3d_path: str | Path, record: dict[str, Any] 
     """The lens array of an H3D image's sidecar (``record``, else read), checked against the image's size."""
     record = read_sidecar(h3d_path) if record is None else record
     if not record or "lens_array" not in record:
-        raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give --ppl NxxNy")
+        raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give {param('ppl')} NxxNy")
     lens_array = Display.from_record(record).lens_array
     if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
         raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
@@ -331,7 +331,7 @@ def image_views(h3d: np.ndarray, lens_array: LensArray) -> np.ndarray:
     try:
         return extract(h3d, lens_array.views)
     except ValueError as exc:
-        raise ConfigError(str(exc)) from None
+        raise ConfigError(raw_message(exc)) from None
 
 
 def h3d_views(h3d: np.ndarray, record: dict[str, Any], h3d_path: str | Path) -> tuple[np.ndarray, str]:

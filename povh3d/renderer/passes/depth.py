@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import Povh3dError, warn
+from ...errors import Povh3dError, param, warn
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import depth_scaled_rays
 from ...image.colour import decode
@@ -62,7 +62,7 @@ BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (
                 "POV-Ray applies no fog inside a non-hollow object; add 'hollow' to that object")
 SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
                     "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
-                    "or place the display with --display-center/--display-normal/--display-width")
+                    f"or place the display with {param('display_frame.center')}/{param('display_frame.normal')}/{param('display_frame.width')}")
 #: POV-Ray threads of a pass.  A jittered area light (and subsurface scattering) samples at random per
 #: render thread, so at two threads, which take the pixels in another order in each frame, a surface's
 #: colour differs between the two fog frames (a sphere before a plane: its shadow's edge 7-10 mm off in

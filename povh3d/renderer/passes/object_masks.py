@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ConfigError, InputError, Povh3dWarning
+from ...errors import ConfigError, InputError, Povh3dWarning, param
 from ...geometry.lens_array import LensArray
 from ...scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from ..outputs.objects import ObjectTable, write_masks
@@ -40,21 +40,21 @@ def check_objects_request(request: RenderRequest, folder: str | Path | None = No
         check_objects_dir(folder, (request.source, *reads))
     if request.is_model:
         if request.volume.volume:
-            raise ConfigError("a volume drawn as a medium (--volume) has no surfaces to tell apart; render the "
-                              "masks of its --labels or --iso surfaces")
+            raise ConfigError(f"a volume drawn as a medium ({param('volume')}) has no surfaces to tell apart; render the "
+                              f"masks of its {param('labels')} or {param('iso')} surfaces")
     elif request.source.suffix.lower() != ".pov":
-        raise ConfigError(f"render --objects takes a POV-Ray scene (.pov), a model or a volume, not "
+        raise ConfigError(f"render {param('objects')} takes a POV-Ray scene (.pov), a model or a volume, not "
                           f"{request.source.name!r}")
     if (request.display.quilt or {}).get("camera_model") == "perspective":
         raise ConfigError("the object masks trace the lens array's rays, not the vendor's perspective cameras; "
-                          "add --camera-model orthographic for a Looking Glass render with masks")
+                          f"add {param('camera_model')} orthographic for a Looking Glass render with masks")
     if request.method == "subpixel":
-        raise ConfigError("--method subpixel traces each colour channel of a pixel along its own ray, so a pixel "
-                          "has no one object id; render the masks with --method multi-ortho")
+        raise ConfigError(f"{param('method')} subpixel traces each colour channel of a pixel along its own ray, so a pixel "
+                          f"has no one object id; render the masks with {param('method')} multi-ortho")
     if request.display.mapping is not None and (request.frames is not None or request.render_array.views is None):
         # the image written is the mapped panel: its pixels mix views, and only a still's views are kept whole
         raise ConfigError("the object masks of a mapped display come from the views of a still; render one "
-                          "frame (no --frames) for them")
+                          f"frame (no {param('frames')}) for them")
     if request.is_model:
         return None
     try:

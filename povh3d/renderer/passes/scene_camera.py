@@ -34,6 +34,7 @@ from ...scene.camera import CameraError, CameraScript, camera_from_log, parse_lo
 from ...scene.features import strip_comments
 from ...scene.scene import Scene, source_text
 from .record import note
+from ...errors import param, raw_message
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from .depth import DepthMap
@@ -154,7 +155,7 @@ def _run(job: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scen
         if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
             raise
         message = re.sub(rf"{re.escape(SCENE_FILE)} line (\d+)",
-                         lambda m: source_line(lines, int(m[1]), scene.path.name), str(exc), count=1)
+                         lambda m: source_line(lines, int(m[1]), scene.path.name), raw_message(exc), count=1)
         raise PovrayError(message, command=exc.command, returncode=exc.returncode,
                           log_tail=exc.log_tail) from None
 
@@ -241,7 +242,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     printed = next((tuple(v) for k, v in parse_log(log) if k == "depth_frame" and isinstance(v, list)), ())
     if len(printed) != 14 or len(images) != 2:
         raise CameraError(f"cannot use the scene's camera (POV-Ray did not finish the depth pass through its "
-                          f"frame); place the display with {EXPLICIT_OPTIONS}, or --display-frame native")
+                          f"frame); place the display with {EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
     distances, unmeasured = fog_distances(images[:1], images[1:], printed[12] * printed[13])
     seen = Seen(distances[0].astype(np.float32), float(unmeasured[0]), printed)
     if use_cache:

@@ -12,6 +12,7 @@ from typing import Any, Protocol
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import depth_scaled_rays
 from ..methods.quality import AUTO, RenderSettings
+from ...errors import param
 
 
 
@@ -36,7 +37,7 @@ def limited_front_clearance(method: Method, lens_array: LensArray, settings: Ren
     """Where rays start (mm) and why: the clearance asked for (or the method's default), rounded up to
     the method's step; under ``settings.front_clearance_limit`` rounded down instead (a method whose
     rounding up passed the scene camera let a wall behind the camera fill the image)."""
-    why = "--front-clearance" if settings.front_clearance else "the method's default"
+    why = param("front_clearance") if settings.front_clearance else "the method's default"
     limit = settings.front_clearance_limit
     if limit is None or rounded <= limit * (1 + 1e-12):
         rounding = "" if rounded == asked else f" {asked:.4g} mm, rounded up (whole view shifts)"

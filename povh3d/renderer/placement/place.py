@@ -19,7 +19,7 @@ from ..passes.depth import DepthMap, depth_pass
 from ..methods.registry import get_method
 from ...geometry.camera_mesh import default_front_clearance
 from ..methods.quality import DEPTH_SCALE_RANGE, Progress
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...geometry.frame import NATIVE, DisplayFrame
 from ...scene.scene import Scene
 from .pose import resolve_frame_and_depth
@@ -45,9 +45,9 @@ def place_display(request: RenderRequest, scene: Scene,
     options = request.display_frame
     if (request.display.quilt or {}).get("camera_model") == "perspective":
         if options.fit_depth is not None or options.depth_scale is not None:
-            raise ConfigError("--fit-depth and --depth-scale shape the rays of a lens array; the vendor's "
+            raise ConfigError(f"{param('fit_depth')} and {param('depth_scale')} shape the rays of a lens array; the vendor's "
                               "perspective cameras take the scene as its camera sees it: drop them, or add "
-                              "--camera-model orthographic")
+                              f"{param('camera_model')} orthographic")
         # The vendor's cameras start at the viewer's eye, wherever the scene is: the frame alone, no depth pass.
         placed, record, _ = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                     use_cache=s.use_cache, timeout=s.timeout)
@@ -73,7 +73,7 @@ def place_display(request: RenderRequest, scene: Scene,
             record["warnings"].append(
                 f"the framed scene spans z = {depth['near_mm']:.3g} .. {depth['far_mm']:.3g} mm, beyond the "
                 f"depth budget of +-{budget / 2:.3g} mm (2 N f): it looks blurred there; "
-                f"--fit-depth auto scales the frame to fit")
+                f"{param('fit_depth')} auto scales the frame to fit")
         elif not depth.get("empty") and not depth["field_within_budget"]:
             record["warnings"].append(
                 f"something beyond the framed subject (a ground plane or a backdrop?) reaches z = "
@@ -177,11 +177,11 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
         return frame, ({**shown(depth, scale), "measured": depth} if scale != 1 else depth), scale
     target = budget if fit == "auto" else float(fit)
     if "reason" in depth:
-        raise ConfigError(f"--fit-depth cannot fit: {depth['reason']}")
+        raise ConfigError(f"{param('fit_depth')} cannot fit: {depth['reason']}")
     if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
-        raise ConfigError("--fit-depth cannot fit: the depth pass measured nothing in the framed field "
+        raise ConfigError(f"{param('fit_depth')} cannot fit: the depth pass measured nothing in the framed field "
                           "(nothing hit, or the viewpoint inside a solid object); place the display with "
-                          "--display-center/--display-normal/--display-width instead")
+                          f"{param('display_frame.center')}/{param('display_frame.normal')}/{param('display_frame.width')} instead")
     reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
     if not reach > 0:
         return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}, scale
@@ -189,9 +189,9 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
     if fit_scale:  # compress depth alone: the frame (lateral sizes) stays
         scale = 1 / factor
         if scale < DEPTH_SCALE_RANGE[0]:
-            raise ConfigError(f"--fit-depth cannot fit by --depth-scale: the scene reaches {reach:.4g} mm, "
-                              f"a compression of {scale:.3g} is under {DEPTH_SCALE_RANGE[0]:g}; drop --depth-scale "
-                              "to shrink the whole scene, or place the display with --display-*")
+            raise ConfigError(f"{param('fit_depth')} cannot fit by {param('depth_scale')}: the scene reaches {reach:.4g} mm, "
+                              f"a compression of {scale:.3g} is under {DEPTH_SCALE_RANGE[0]:g}; drop {param('depth_scale')} "
+                              f"to shrink the whole scene, or place the display with {param('display')}-*")
         return frame, {**shown(depth, scale), "before_fit": depth,
                        "fit": {"target_mm": target, "factor": factor, "by": "depth_scale"}}, scale
     # Display z scales as 1 / factor for the same scene points (the frame scales about its centre):

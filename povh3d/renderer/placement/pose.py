@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ...errors import ConfigError, PovrayError, PovrayTimeout
+from ...errors import ConfigError, PovrayError, PovrayTimeout, param
 from ...geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame, up_warning
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError
@@ -60,31 +60,31 @@ class DisplayFrameOptions:
     def __post_init__(self) -> None:
         k = self.depth_scale
         if k == "fit" and self.fit_depth is None:
-            raise ConfigError("--depth-scale without a factor needs --fit-depth auto|MM (which then chooses "
-                              "it); or give the factor, e.g. --depth-scale 0.5")
+            raise ConfigError(f"{param('depth_scale')} without a factor needs {param('fit_depth')} auto|MM (which then chooses "
+                              f"it); or give the factor, e.g. {param('depth_scale')} 0.5")
         if k not in (None, "fit") and self.fit_depth is not None:
-            raise ConfigError(f"--depth-scale {k} and --fit-depth both set the depth; give --fit-depth with a "
-                              "bare --depth-scale to compress depth until it fits, or the factor alone")
+            raise ConfigError(f"{param('depth_scale')} {k} and {param('fit_depth')} both set the depth; give {param('fit_depth')} with a "
+                              f"bare {param('depth_scale')} to compress depth until it fits, or the factor alone")
         if k not in (None, "fit"):
             from ..methods.quality import DEPTH_SCALE_RANGE
 
             low, high = DEPTH_SCALE_RANGE
             if isinstance(k, bool) or not isinstance(k, (int, float)) or not low <= k <= high:
-                raise ConfigError(f"--depth-scale must be a number within {low:g}..{high:g} (or nothing, with "
-                                  f"--fit-depth), got {k!r}")
+                raise ConfigError(f"{param('depth_scale')} must be a number within {low:g}..{high:g} (or nothing, with "
+                                  f"{param('fit_depth')}), got {k!r}")
         f = self.fit_depth
         if f is not None and f != "auto" and (isinstance(f, bool) or not isinstance(f, (int, float))
                                               or not (f > 0 and f < float("inf"))):
-            raise ConfigError(f"--fit-depth takes 'auto' or a positive number of mm, got {f!r}")
+            raise ConfigError(f"{param('fit_depth')} takes 'auto' or a positive number of mm, got {f!r}")
         if self.mode not in FRAME_MODES:
-            raise ConfigError(f"--display-frame must be one of {', '.join(FRAME_MODES)}, got {self.mode!r}")
+            raise ConfigError(f"{param('display_frame.mode')} must be one of {', '.join(FRAME_MODES)}, got {self.mode!r}")
         given = [n for n in ("center", "normal", "width") if getattr(self, n) is not None]
         if given and len(given) < 3:
             raise ConfigError(f"an explicit display frame needs all of {EXPLICIT_OPTIONS}")
         if self.up is not None and not given:
-            raise ConfigError(f"--display-up needs the rest of {EXPLICIT_OPTIONS}")
+            raise ConfigError(f"{param('display_frame.up')} needs the rest of {EXPLICIT_OPTIONS}")
         if given and self.mode != "auto":
-            raise ConfigError("--display-frame cannot be combined with --display-center and the other "
+            raise ConfigError(f"{param('display_frame.mode')} cannot be combined with {param('display_frame.center')} and the other "
                               "explicit options; give one or the other")
 
     @property
@@ -127,8 +127,8 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     # The camera's reading keeps a token of every word and number: about 200 bytes a byte of text
     # (a 5 MB one-expression scene took 0.96 GB), estimated before it starts.
     check_memory(f"reading the camera of {scene.path.name} ({len(text) / 2**20:.3g} MB of text)", 200 * len(text),
-                 "give the display's place with --display-frame native or --display-center/--display-normal, "
-                 "or raise --max-memory")
+                 f"give the display's place with {param('display_frame.mode')} native or {param('display_frame.center')}/{param('display_frame.normal')}, "
+                 f"or raise {param('max_memory')}")
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
     refused = refused_type(written)
@@ -136,7 +136,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         raise CameraError(_unusable_type(refused))
     if script is None:
         if options.mode == "camera":
-            raise ConfigError(f"--display-frame camera: the scene {scene.path.name} has no camera; "
+            raise ConfigError(f"{param('display_frame.mode')} camera: the scene {scene.path.name} has no camera; "
                               f"place the display with {EXPLICIT_OPTIONS}")
         why = "the scene has no camera: mm around the screen z = 0"
         return NATIVE, {**NATIVE.as_record(), "note": why, "warnings": []}, None
@@ -204,7 +204,7 @@ def _camera_frame(camera: dict[str, Any], width_mm: float) -> tuple[DisplayFrame
 
 def _unusable_type(kind: str) -> str:
     return (f"cannot use the scene's {kind} camera (only a perspective one defines a frame); place the display "
-            f"with {EXPLICIT_OPTIONS}, or --display-frame native")
+            f"with {EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
 
 
 def _orthographic_options(camera: dict[str, Any]) -> str:
@@ -218,8 +218,8 @@ def _orthographic_options(camera: dict[str, Any]) -> str:
     def triple(v: Any) -> str:
         return ",".join(f"{float(x):.6g}" for x in v)
 
-    return (f"--display-center={triple(centre)} --display-normal={triple(camera['direction'])} "
-            f"--display-up={triple(camera['up'])} --display-width {width:.6g}")
+    return (f"{param('display_frame.center')}={triple(centre)} {param('display_frame.normal')}={triple(camera['direction'])} "
+            f"{param('display_frame.up')}={triple(camera['up'])} {param('display_frame.width')} {width:.6g}")
 
 
 def recorded_frame(record: dict[str, Any]) -> tuple[float, ...] | None:

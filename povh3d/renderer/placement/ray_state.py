@@ -28,7 +28,7 @@ from .clearance import planned_front_clearance
 from ..passes.depth import origins_inside
 from ..methods.registry import frame_units, get_method
 from ..passes.scene_camera import uses_image_size
-from ...errors import ConfigError, warn
+from ...errors import ConfigError, param, warn
 from ...geometry.rays import depth_scaled_rays
 from ...scene.features import Features, features_of_text, strip_comments
 from ...scene.scene import Scene, load_scene, source_text
@@ -115,7 +115,7 @@ class MethodProblem:
 _ORIGINS_INSIDE = "rays start inside an object"
 _MESH_CAMERA = ("traces with POV-Ray's mesh camera, which gives every ray the inside/outside state of the first "
                 "one it traces, so part of the image would be wrong")
-_ORTHOGRAPHIC = f"use --method {FALLBACK} (an orthographic camera a view, which tests each ray)"
+_ORTHOGRAPHIC = f"use {param('method')} {FALLBACK} (an orthographic camera a view, which tests each ray)"
 
 
 def ray_state_problem(method: str, shares_ray_state: bool, features: Features, inside: float | None
@@ -139,7 +139,7 @@ def ray_state_problem(method: str, shares_ray_state: bool, features: Features, i
     return MethodProblem(
         f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside a solid object (a ground "
         f"'plane' the rays start below, a room or a sky around the camera) and the scene has {' and '.join(used)}, "
-        f"which POV-Ray works out from the solids a ray starts in; --method {method} {_MESH_CAMERA}",
+        f"which POV-Ray works out from the solids a ray starts in; {param('method')} {method} {_MESH_CAMERA}",
         f"add 'hollow' to that object, or {_ORTHOGRAPHIC}", _ORIGINS_INSIDE)
 
 
@@ -159,7 +159,7 @@ def hollow_problem(method: str, used: list[str], inside: float) -> MethodProblem
     return MethodProblem(
         f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside an object, hollow ones "
         f"counted (a room or a sky around the camera that the frame cuts), and the scene has {' and '.join(used)}, "
-        f"which POV-Ray works out from the objects a ray starts in, hollow or not; --method {method} {_MESH_CAMERA}",
+        f"which POV-Ray works out from the objects a ray starts in, hollow or not; {param('method')} {method} {_MESH_CAMERA}",
         _ORTHOGRAPHIC, _ORIGINS_INSIDE)
 
 
@@ -170,11 +170,11 @@ def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None)
     the other methods trace many views (or lenses) in one run of another size."""
     if method == FALLBACK or not uses_image_size(scene):
         return None
-    fix = (f"use --method {FALLBACK} (each view a POV-Ray run of its own size)" if views is not None
-           else "use a display with whole views and --method " + FALLBACK)
+    fix = (f"use {param('method')} {FALLBACK} (each view a POV-Ray run of its own size)" if views is not None
+           else f"use a display with whole views and {param('method')} " + FALLBACK)
     return MethodProblem(
         f"{scene.path.name} builds something from image_width or image_height (other than their ratio), "
-        f"which POV-Ray sets to the size of each run; --method {method} traces many views in one run of "
+        f"which POV-Ray sets to the size of each run; {param('method')} {method} traces many views in one run of "
         "another size, so each view would differ from a render of that view",
         f"{fix}, or #declare the sizes the scene needs", "the scene reads image_width/image_height")
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from ...errors import ConfigError
+from ...errors import ConfigError, param
 from ...system import cpu_count
 
 
@@ -39,8 +39,8 @@ def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...]
     width, height = meshes[0].image_size
     if width < 3:  # measured: +W2 (one pixel plus the mesh's extra column) crashes POV-Ray 3.7, +H2 does not
         raise ConfigError("POV-Ray 3.7's mesh camera crashes (segmentation fault) on an image one pixel wide: "
-                          "give at least 2 lenses or 2 pixels per lens across (--lenses, --ppl), or use "
-                          "--method single-stage")
+                          f"give at least 2 lenses or 2 pixels per lens across ({param('lenses')}, {param('ppl')}), or use "
+                          f"{param('method')} single-stage")
     if len(meshes) == 1:
         return ShotBatch(template, {"mesh": meshes[0]}, [{}], width, height, processes=1, options=options)
     processes = min(cpu_count(), len(meshes))

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ... import cache
-from ...errors import Povh3dError, warn
+from ...errors import Povh3dError, param, raw_message, warn
 from ...image.io import decode_png
 
 
@@ -55,9 +55,9 @@ class ImageCache:
         try:
             cache.store(self.path(key), key, Path(source).read_bytes())
         except (OSError, Povh3dError) as exc:
-            self._give_up(str(exc) if isinstance(exc, Povh3dError) else f"{exc.strerror or exc}")
+            self._give_up(raw_message(exc) if isinstance(exc, Povh3dError) else f"{exc.strerror or exc}")
 
     def _give_up(self, why: str) -> None:
         self.usable = False
         warn(f"the image cache {str(self.root)!r} cannot be used: {why}; rendering without it "
-             "(set POVH3D_CACHE to a writable folder, or pass --no-cache)")
+             f"(set POVH3D_CACHE to a writable folder, or pass {param('no_cache')})")

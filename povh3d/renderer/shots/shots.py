@@ -30,7 +30,7 @@ from ...povray.job import ClockRun
 from ...povray.process import JobResult, PovrayJob, povray_version, run_jobs
 from ...povray.sandbox import confines, scene_inputs
 from ...povray.version_memo import remembered_version
-from ...errors import PovrayError, PovrayTimeout, warn
+from ...errors import PovrayError, PovrayTimeout, raw_message, warn
 from ...scene.scene import BOM, Scene, has_bom
 from ...system import cpu_count, find_povray
 from .batch import ShotBatch, RenderStats
@@ -163,7 +163,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                                      progress=progress)
             if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
                 raise
-            raise PovrayError(past_scene_end(str(exc), scene.path.name, SCENE_FILE), command=exc.command,
+            raise PovrayError(past_scene_end(raw_message(exc), scene.path.name, SCENE_FILE), command=exc.command,
                               returncode=exc.returncode, log_tail=exc.log_tail) from None
     for index, source in copies.items():
         if images[index] is None:

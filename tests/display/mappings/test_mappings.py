@@ -278,7 +278,7 @@ def test_names_and_ranges():
     for bad in ("smart:1", "smart:8", "smart:x", "smart", "distributed-smart:9", "philips:3"):
         with pytest.raises(ConfigError):
             parse_name(bad)
-    with pytest.raises(ConfigError, match="--ppl"):
+    with pytest.raises(ConfigError, match="ppl"):
         build_mapping("smart:3")
 
 
