@@ -89,11 +89,18 @@ def test_depth_maps_are_written_per_view_with_their_disparity(cli, tmp_path):
 
 @pytest.mark.povray
 def test_fit_depth_that_cannot_fit_is_one_line_and_nothing_written(cli, tmp_path):
-    scene = tmp_path / "inside.pov"   # the viewpoint inside a solid: no fog, nothing measured
-    scene.write_text("#version 3.7;\nlight_source { <0, 9, -9> rgb 1 }\nplane { z, 10 pigment { rgb 1 } }\n"
+    # the viewpoint inside a solid the hollow copy cannot reach (an include of another folder): no fog,
+    # nothing measured
+    lib, folder = tmp_path / "lib", tmp_path / "scene"
+    lib.mkdir()
+    folder.mkdir()
+    (lib / "backdrop.inc").write_text("plane { z, 10 pigment { rgb 1 } }\n")
+    scene = folder / "inside.pov"
+    scene.write_text("#version 3.7;\nlight_source { <0, 9, -9> rgb 1 }\n#include \"backdrop.inc\"\n"
                      "sphere { 0, 3 pigment { rgb 0.5 } }\n")
     out = tmp_path / "x.png"
-    result = cli("render", str(scene), "-o", str(out), "--quality", "draft", "--fit-depth", "auto", *ARRAY)
+    result = cli("render", str(scene), "-o", str(out), "--quality", "draft", "--fit-depth", "auto",
+                 "--include", str(lib), *ARRAY)
     assert result.code == 2 and "--fit-depth cannot fit" in result.err
     assert result.err.strip().count("\n") == 0 and not out.exists() and not out.with_suffix(".json").exists()
 

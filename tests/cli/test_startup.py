@@ -78,8 +78,9 @@ plane { y, -1 pigment { checker rgb 1 rgb 0.3 } }
 
 
 @pytest.mark.povray
-@pytest.mark.parametrize("extra", [[], ["--depth-maps", "maps", "--depth-format", "png"], ["--dataset", "hci"],
-                                   ["--preset", "ipad-retina"]],
+# (a plain render of a camera scene runs no depth pass: --depth-report asks for it)
+@pytest.mark.parametrize("extra", [["--depth-report"], ["--depth-maps", "maps", "--depth-format", "png"],
+                                   ["--dataset", "hci"], ["--preset", "ipad-retina"]],
                          ids=["camera", "depth-maps-png", "dataset", "slanted-mapping"])
 def test_render_paths_that_read_16_bit_passes_or_gather_pixels_import_no_jit(tmp_path, extra):
     # A scene camera (its depth pass is a 16-bit PNG), 16-bit depth maps, a panel mapping's gather:

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from povh3d.renderer.placement.ray_state import check_ray_state, state_features
-from povh3d.errors import ConfigError
+from povh3d.errors import ConfigError, param
 from povh3d.image.io import read_png
 from povh3d.povray.process import PovrayJob, run_jobs
 from povh3d.scene.features import Features
@@ -48,7 +48,7 @@ def test_the_refusal_and_the_fallback_note_say_the_same_cause(tmp_path):
     scene = tmp_path / "size.pov"
     scene.write_text("#declare N = image_width;\nsphere { 0, 1 }\n")
     problems = [(ray_state_problem("multi-ortho", True, FOG, 0.25), "hollow", "inside an object"),
-                (hollow_problem("multi-ortho", ["media"], 0.5), "--method multi-ortho-views", "inside an object"),
+                (hollow_problem("multi-ortho", ["media"], 0.5), param("method") + " multi-ortho-views", "inside an object"),
                 (image_size_problem(load_scene(scene), "multi-ortho", (4, 4)), "#declare", "image_width")]
     for problem, fix, short in problems:
         line = problem.line()
