@@ -12,6 +12,7 @@ from povh3d.image.colour import srgb_to_linear
 from povh3d.renderer.content.convert_mesh import convert_mesh
 from povh3d.mesh.identifiers import check_identifier, identifier_from_path, pov_keywords
 from tests.conftest import SAMPLES
+from tests.support.cli import one_error_line
 
 
 def only(folder: Path) -> set[str]:
@@ -166,3 +167,20 @@ def test_converted_include_parses_in_a_scene_without_assumed_gamma(tmp_path):
                           capture_output=True, text=True, check=False, timeout=60)
     assert done.returncode == 0, done.stderr[-800:]
     assert "sRGB" not in done.stderr and (tmp_path / "out.png").is_file()
+
+
+@pytest.mark.povray   # the command as a process: --max-memory is the run's
+def test_a_model_past_the_memory_budget_is_refused_before_it_is_read(tmp_path, cli):
+    """The reading's memory is estimated from the file's size before trimesh reads it (issue 38:
+    povh3d's own process is bounded too); the control, the same model with room, converts."""
+    mesh = trimesh.creation.icosphere(subdivisions=5)   # 20,480 faces: about 1.5 MB of OBJ
+    model = tmp_path / "ball.obj"
+    mesh.export(model)
+    size = model.stat().st_size
+    small = f"{max(1, (12 * size) // 2**20 - 1)}M"   # under the estimate of 12 bytes a byte of file
+    line = one_error_line(cli("convert-mesh", model, "-o", tmp_path / "ball.inc", "--max-memory", small), 2)
+    assert "reading ball.obj" in line and "--max-memory" in line, line
+    assert not (tmp_path / "ball.inc").exists()
+    ok = cli("convert-mesh", model, "-o", tmp_path / "ball.inc", "--max-memory", "2G")
+    assert ok.code == 0, ok.err
+    assert (tmp_path / "ball.inc").is_file()
