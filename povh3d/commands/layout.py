@@ -236,6 +236,9 @@ def read_volume_content(path: Path, lens_array: LensArray, *, spacing: Any = Non
     except ImportError:
         raise ConfigError(f"reading volumes ({path.name}) is not available in this povh3d; "
                           "give a scene or a mesh model") from None
+    from ..renderer.content.volume import check_volume_memory
+
+    check_volume_memory(path, series)
     return volume_content(read_volume(path, spacing=spacing, series=series), lens_array, **placement)
 
 

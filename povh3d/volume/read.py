@@ -32,7 +32,8 @@ from ..errors import ConfigError, InputError, MissingExtra, param, warn
 from .grid import Volume
 from .sources import SUFFIXES, is_polydata_vtk, is_volume_source, suffix as _suffix
 
-__all__ = ["SUFFIXES", "is_polydata_vtk", "is_volume_source", "read_volume", "read_vtk_mesh", "vtk_quiet"]
+__all__ = ["SUFFIXES", "is_polydata_vtk", "is_volume_source", "read_volume", "read_vtk_mesh", "volume_size",
+           "vtk_quiet"]
 _RAS_TO_LPS = np.diag([-1.0, -1.0, 1.0])
 
 def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = None) -> Volume:
@@ -71,6 +72,50 @@ def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = N
         volume = Volume(volume.values, spacing, volume.origin, volume.direction, volume.name, volume.label_names,
                         volume.label_colours)
     return volume
+
+
+#: Bytes of a voxel of NRRD's common types (any other: 8).
+_NRRD_BYTES = {"uchar": 1, "unsigned char": 1, "uint8": 1, "signed char": 1, "int8": 1, "short": 2, "ushort": 2,
+               "unsigned short": 2, "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
+               "float": 4, "double": 8}
+
+
+def volume_size(path: str | Path, series: str | None = None) -> tuple[int, int] | None:
+    """Voxels and bytes per voxel of the volume in ``path``, from its header alone (no voxel read), so
+    that a caller can weigh the reading against a memory budget first; None where the header does not
+    tell (a legacy VTK file) or cannot be read (the reading then says why)."""
+    path = Path(path)
+    try:
+        if path.is_dir():
+            from .dicom import list_series
+
+            groups = list_series(path)
+            slices = groups.get(series) if series is not None else (next(iter(groups.values())) if groups else None)
+            if not slices:
+                return None
+            first = slices[0][1]
+            return len(slices) * int(first.Rows) * int(first.Columns), max(1, int(first.BitsAllocated) // 8)
+        kind = _suffix(path)
+        if kind == ".npy":
+            values = np.load(path, mmap_mode="r", allow_pickle=False)
+            return int(values.size), int(values.itemsize)
+        if kind in (".nrrd", ".nhdr"):
+            from ..extras import require
+
+            header = require("nrrd", "volume", "a NRRD volume").read_header(str(path))
+            return int(np.prod(header["sizes"])), _NRRD_BYTES.get(str(header.get("type", "")).lower(), 8)
+        if kind in (".nii", ".nii.gz", ".mha", ".mhd"):
+            from vtkmodules.vtkIOImage import vtkMetaImageReader, vtkNIFTIImageReader
+
+            reader = vtkNIFTIImageReader() if kind.startswith(".nii") else vtkMetaImageReader()
+            reader.SetFileName(str(path))
+            with vtk_quiet():
+                reader.UpdateInformation()
+            x0, x1, y0, y1, z0, z1 = reader.GetDataExtent()
+            return (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1), 8
+    except Exception:  # a header povh3d cannot read: the reading itself says what is wrong, in one line
+        return None
+    return None
 
 
 def _spacing(value: Any) -> tuple[float, float, float]:

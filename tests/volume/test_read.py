@@ -137,3 +137,47 @@ def test_a_missing_dicom_slice_is_refused(tmp_path):
     sorted(folder.iterdir())[5].unlink()
     with pytest.raises(InputError, match="unevenly spaced .*2 to 4 mm"):
         read_volume(folder)
+
+
+@pytest.mark.parametrize("kind", ["npy", "nrrd", "nii", "mha", "dicom", "vtk"])
+def test_the_header_tells_the_voxels_before_they_are_read(tmp_path, kind):
+    """``volume_size`` from the header alone equals the voxels the reading gives (issue 38: the memory
+    is weighed before the reading); a legacy VTK file's header does not tell (None, never a wrong count)."""
+    from povh3d.volume.read import read_volume, volume_size
+    from tests.support.volumes import (asymmetric_phantom, write_dicom_series, write_legacy_vtk, write_meta,
+                                       write_nifti, write_nrrd)
+
+    volume = asymmetric_phantom(dtype="int16")
+    if kind == "npy":
+        path = tmp_path / "v.npy"
+        np.save(path, volume.values)
+    elif kind == "dicom":
+        path = write_dicom_series(volume, tmp_path / "series")
+    else:
+        writer = {"nrrd": write_nrrd, "nii": write_nifti, "mha": write_meta, "vtk": write_legacy_vtk}[kind]
+        path = writer(volume, tmp_path / f"v.{kind}")
+    size = volume_size(path)
+    if kind == "vtk":
+        assert size is None
+        return
+    spacing = (1.0, 1.0, 1.0) if kind == "npy" else None
+    assert size is not None and size[0] == read_volume(path, spacing=spacing).values.size == volume.values.size
+    assert size[1] in (2, 8)
+
+
+@pytest.mark.povray
+def test_a_volume_past_the_memory_budget_is_refused_before_it_is_read(tmp_path, cli):
+    """Its estimate (voxels times their bytes and 12 more, measured) against --max-memory, before a voxel
+    is read; the control, the same volume with room, renders."""
+    from tests.support.cli import one_error_line
+
+    z, y, x = np.mgrid[:96, :96, :96] / 96 - 0.5
+    path = tmp_path / "ball.npy"
+    np.save(path, ((np.sqrt(x * x + y * y + z * z) < 0.35) * 1000).astype(np.int16))   # 12 MB estimated
+    args = ["render", path, "--spacing", "1,1,1", "--iso", "500", "--preset", "demo", "--quality", "draft",
+            "-o", tmp_path / "v.png"]
+    line = one_error_line(cli(*args, "--max-memory", "8M"), 2)
+    assert "reading the volume ball.npy" in line and "--max-memory" in line, line
+    assert not (tmp_path / "v.png").exists()
+    ok = cli(*args, "--max-memory", "2G")
+    assert ok.code == 0, ok.err
