@@ -336,12 +336,24 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
         images = collect_images(child.folder, child.job)
         if (child.process.returncode != 0 and not child.watch.early) or images is None:
             raise _failure(child, log)
+        _keep(child)
         if on_result is not None:
             on_result(JobResult(child.job, images, seconds, log))
         return seconds
     finally:
         child.watch.close()
         shutil.rmtree(child.folder, ignore_errors=True)
+
+
+def _keep(child: _Child) -> None:
+    """Move the files the job keeps (``PovrayJob.keep_files``) out of its folder before it is deleted."""
+    for name, destination in child.job.keep_files:
+        try:
+            shutil.move(str(child.folder / name), destination)
+        except OSError as error:
+            raise PovrayError(f"{child.job.name}: POV-Ray finished without writing {name} "
+                              f"({error.strerror})", command=child.command, returncode=child.process.returncode,
+                              log_tail=tail(child.log)) from None
 
 
 def _failure(child: _Child, log: str) -> PovrayError:

@@ -32,6 +32,9 @@ class ShotBatch:
     shots_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
     options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
+    # The shot that sees most of what the others see (the centre view): where a lighting solution
+    # shared by every shot is computed (``renderer.shots.lighting``); None: the middle one.
+    lighting_shot: int | None = None
 
 
 def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...] = ()) -> ShotBatch:
@@ -61,10 +64,12 @@ class RenderStats:
     wall_seconds: float = 0.0
     povray_version: str = ""
     uncached: str = ""   # why the image cache was not used, when the scene forbids it
+    lighting: dict[str, Any] | None = None   # the shared lighting solution (``renderer.shots.lighting``)
 
     def as_record(self) -> dict[str, Any]:
         return {"frames": self.frames, "frames_from_cache": self.cached, "povray_jobs": self.jobs,
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),
                 "wall_seconds": round(self.wall_seconds, 4),
-                **({"image_cache": f"not used: {self.uncached}"} if self.uncached else {})}
+                **({"image_cache": f"not used: {self.uncached}"} if self.uncached else {}),
+                **({"shared_lighting": self.lighting} if self.lighting else {})}
