@@ -65,6 +65,7 @@ class RenderStats:
     povray_version: str = ""
     uncached: str = ""   # why the image cache was not used, when the scene forbids it
     lighting: dict[str, Any] | None = None   # the shared lighting solution (``renderer.shots.lighting``)
+    radiosity_samples: int = 0   # radiosity samples POV-Ray computed over every run (its statistics)
 
     def as_record(self) -> dict[str, Any]:
         return {"frames": self.frames, "frames_from_cache": self.cached, "povray_jobs": self.jobs,
@@ -72,4 +73,5 @@ class RenderStats:
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),
                 "wall_seconds": round(self.wall_seconds, 4),
                 **({"image_cache": f"not used: {self.uncached}"} if self.uncached else {}),
+                **({"radiosity_samples_computed": self.radiosity_samples} if self.radiosity_samples else {}),
                 **({"shared_lighting": self.lighting} if self.lighting else {})}

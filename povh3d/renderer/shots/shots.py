@@ -140,6 +140,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                     return render_frames(scene, batch, replace(settings, sequence=None), method=method,
                                          header=header, progress=progress)
                 raise _said(exc, scene) from None
+    stats.radiosity_samples = sum(counts[0] for counts in taker.radiosity.values() if counts)
     for index, source in copies.items():
         if images[index] is None:
             images[index] = images[source]
