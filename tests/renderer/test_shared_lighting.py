@@ -78,34 +78,34 @@ def _psnrs(views, reference) -> np.ndarray:
 def test_shared_views_within_pov_rays_own_spread(renders):
     """Every view lit by the shared solution is as close to its independent render as POV-Ray's own
     render of the same rays (the mesh camera's view) is, at the worst (measured: 43.7 dB at the
-    least against 38.3), and the sidecar says which shot computed it."""
+    least against 38.3 with the centre view's solution alone), and the sidecar says which shot computed it."""
     spread = _psnrs(renders["mesh_views"], renders["independent"]).min()
     shared = _psnrs(renders["shared"], renders["independent"])
     assert 25.0 < spread < 60.0, f"test set-up: the spread {spread:.1f} dB is no spread"
     assert shared.min() >= spread, (shared.min(), spread)
-    assert renders["shared_stats"].lighting["saving_shot"] == 2 * 4 + 2   # the centre view
-    assert renders["shared_stats"].as_record()["shared_lighting"]["loading_frames"] == VIEWS - 1
+    assert renders["shared_stats"].lighting["saving_shots"] == [2 * 4 + 2, 0, 3, 12, 15]   # centre, corners
+    assert renders["shared_stats"].as_record()["shared_lighting"]["loading_frames"] == VIEWS - 5
 
 
 @pytest.mark.povray
 def test_a_wrong_solution_fails_the_oracle(renders):
-    """Negative control: views lit by a solution of a radiosity count of 3 (measured: 20.6 dB at the
-    least) fall outside the spread."""
+    """Negative control: views lit by a solution of a radiosity count of 3 fall outside the spread
+    (measured: 34.2 dB at the least against 38.4; 20.6 with the centre view's solution alone)."""
     spread = _psnrs(renders["mesh_views"], renders["independent"]).min()
-    assert _psnrs(renders["wrong"], renders["independent"]).min() < spread - 6.0
+    assert _psnrs(renders["wrong"], renders["independent"]).min() < spread - 2.0
 
 
 @pytest.mark.povray
 def test_later_runs_load_rather_than_compute(renders):
     """POV-Ray's statistics: an independent view computes its own samples (about 150), a view that
-    loads the solution a few (where the centre view saw too little), its pretrace a single pixel;
-    the saving run computes what an independent view does."""
+    loads the solution a few at most (where the saving views saw too little), its pretrace a single
+    pixel; the saving run (five views) computes more than one independent view and less than five."""
     independent = renders["independent_stats"].radiosity_samples / VIEWS
     lighting = renders["shared_stats"].lighting
     assert renders["independent_stats"].lighting is None
     assert independent > 50, "test set-up: the independent views compute few samples"
     assert lighting["samples_computed_per_loading_frame"] * 10 < independent
-    assert 0.5 * independent < lighting["samples_computed"] < 2 * independent
+    assert independent < lighting["samples_computed"] < len(lighting["saving_shots"]) * independent
     assert lighting["loading_pretrace_seconds"] <= lighting["pretrace_seconds"] + 0.05
 
 
@@ -123,9 +123,9 @@ def test_shared_and_independent_shots_are_cached_apart(renders, tmp_path):
 
 
 def test_keys_name_the_saving_shot():
-    keys = SharedLighting(saver=1).keyed(["a", "b", "c"])
+    keys = SharedLighting(savers=(1, 2)).keyed(["a", "b", "c"])
     assert keys[1] == "b" and keys[0] != "a" and keys[2] != "c" and len(set(keys)) == 3
-    assert SharedLighting(saver=0).keyed(["x", "b", "c"])[1] != keys[1]  # another saving shot, another key
+    assert SharedLighting(savers=(1, 0)).keyed(["a", "b", "c"])[2] != keys[2]  # another solution, another key
 
 
 def test_loading_header_keeps_the_quality_settings():

@@ -118,7 +118,8 @@ def _multi_ortho_views(lens_array: LensArray, front_clearance: float, samples: n
     per_job = max(1, -(-len(frames) // processes))
     batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": front_clearance}, frames,
                        width, height, shots_per_job=per_job, processes=processes,
-                       lighting_shot=(ny // 2) * nx + nx // 2)
+                       lighting_shots=tuple(dict.fromkeys(((ny // 2) * nx + nx // 2, 0, nx - 1, (ny - 1) * nx,
+                                                           ny * nx - 1))))
     return MethodPlan(batch, lambda images: interleave(np.stack(images).reshape(ny, nx, *images[0].shape)))
 
 

@@ -32,9 +32,10 @@ class ShotBatch:
     shots_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
     options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
-    # The shot that sees most of what the others see (the centre view): where a lighting solution
-    # shared by every shot is computed (``renderer.shots.lighting``); None: the middle one.
-    lighting_shot: int | None = None
+    # The shots whose runs compute a lighting solution shared by every shot, the one that sees most
+    # of what the others see first (the centre view, then the corner views: ``renderer.shots.lighting``);
+    # empty: the middle one.
+    lighting_shots: tuple[int, ...] = ()
 
 
 def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...] = ()) -> ShotBatch:

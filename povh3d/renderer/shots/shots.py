@@ -122,7 +122,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     taker = _Taker(images, keys, cache, settings, {}, Counter(copies.values()), stats.cached, progress)
     if progress:
         progress(taker.done, len(keys))
-    if lighting is not None and any(i != lighting.saver for i in missing):
+    if lighting is not None and any(i not in lighting.savers for i in missing):
         _run_lit(lighting, runner, taker, scene, batch, settings, stats, method, header, missing, progress)
     else:
         later = {} if lighting is not None else _later_frames(stats.povray_version, scene, batch, header, settings,
@@ -159,16 +159,17 @@ def _said(exc: PovrayError, scene: Scene) -> PovrayError:
 def _run_lit(lighting: SharedLighting, runner: Any, taker: _Taker, scene: Scene, batch: ShotBatch,
              settings: RenderSettings, stats: RenderStats, method: str, header: dict[str, Any],
              missing: list[int], progress: Progress | None) -> None:
-    """Render the missing shots on one lighting solution: the saving shot's run first (at every core),
+    """Render the missing shots on one lighting solution: the saving shots' run first (at every core),
     then the others' runs, which load it (``renderer.shots.lighting``)."""
     with tempfile.TemporaryDirectory(prefix=owned_prefix(JOB_PREFIX) + "lighting-") as name:
         folder = Path(name)
         try:
-            saving, targets = _planned_jobs(scene, batch, settings, stats, method, header, [lighting.saver], {},
+            chain = replace(batch, shots_per_job=len(lighting.savers))  # one run: each frame adds to the file
+            saving, targets = _planned_jobs(scene, chain, settings, stats, method, header, list(lighting.savers), {},
                                             extra=lighting.saving(folder))
             taker.targets.update(targets)
             _run(runner, saving, taker, settings, progress, stats)
-            rest = [i for i in missing if i != lighting.saver]
+            rest = [i for i in missing if i not in lighting.savers]
             loading, targets = _planned_jobs(scene, batch, settings, stats, method, loading_header(header), rest,
                                              {}, extra=lighting.loading(folder))
             taker.targets.update(targets)
