@@ -12,6 +12,8 @@ independent frame's.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -21,7 +23,8 @@ from povh3d.povray.job import PovrayJob
 from povh3d.povray.log import parse_radiosity
 from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.renderer.methods.registry import METHODS, display_header
-from povh3d.renderer.shots.lighting import SharedLighting, loading_header
+from povh3d.renderer.shots.batch import ShotBatch
+from povh3d.renderer.shots.lighting import SharedLighting, loading_header, shared_lighting
 from povh3d.renderer.shots.shots import render_frames
 from povh3d.scene.scene import load_scene
 from tests.support.arrays import square_array
@@ -146,3 +149,17 @@ def test_radiosity_statistics_are_read_from_the_log():
            "Radiosity samples calculated:               12 (0.10 %)\n")
     assert parse_radiosity(log) == (150, 0.25)
     assert parse_radiosity("Trace Time: 0 hours 0 minutes 1 seconds (1.0 seconds)") is None
+
+
+def test_only_batches_that_name_their_lighting_shots_share(tmp_path):
+    """The passes (whose frames must each light themselves: the depth pass's fog pairs) name none."""
+    lit, unlit = _scene(tmp_path, GOOD, "lit.pov"), tmp_path / "unlit.pov"
+    unlit.write_text("#version 3.7;\nsphere { 0, 1 pigment { rgb 1 } }\nlight_source { <0, 5, -5> rgb 1 }\n")
+    batch = ShotBatch("x.pov.j2", {}, [{}, {}, {}], 4, 4, lighting_shots=(1, 0))
+    settings = RenderSettings(quality="draft")
+    assert shared_lighting(lit, batch, settings, True) == SharedLighting((1, 0))
+    assert shared_lighting(lit, replace(batch, lighting_shots=()), settings, True) is None
+    assert shared_lighting(lit, batch, replace(settings, shared_lighting=False), True) is None
+    assert shared_lighting(lit, batch, settings, False) is None          # a cluster
+    assert shared_lighting(load_scene(unlit), batch, settings, True) is None
+    assert shared_lighting(lit, replace(batch, shots=[{}]), settings, True) is None

@@ -124,9 +124,14 @@ def _multi_ortho_views(lens_array: LensArray, front_clearance: float, samples: n
     processes = -(-len(frames) // per_job)
     batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": front_clearance}, frames,
                        width, height, shots_per_job=per_job, processes=processes,
-                       lighting_shots=tuple(dict.fromkeys(((ny // 2) * nx + nx // 2, 0, nx - 1, (ny - 1) * nx,
-                                                           ny * nx - 1))))
+                       lighting_shots=centre_and_corners(ny, nx))
     return MethodPlan(batch, lambda images: interleave(np.stack(images).reshape(ny, nx, *images[0].shape)))
+
+
+def centre_and_corners(rows: int, columns: int) -> tuple[int, ...]:
+    """Shots of a row-major grid that light the others (``ShotBatch.lighting_shots``): the centre, the corners."""
+    return tuple(dict.fromkeys((rows // 2 * columns + columns // 2, 0, columns - 1, (rows - 1) * columns,
+                                rows * columns - 1)))
 
 
 def _pinhole(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
@@ -136,8 +141,8 @@ def _pinhole(lens_array: LensArray, front_clearance: float, samples: np.ndarray)
     processes = 2 * cpu_count()
     # Many small frames per run: each extra frame costs a re-parse, not a start-up.
     per_job = max(1, min(500, -(-len(frames) // processes)))
-    batch = ShotBatch("pinhole.pov.j2", common, frames, width, height,
-                       shots_per_job=per_job, processes=processes)
+    batch = ShotBatch("pinhole.pov.j2", common, frames, width, height, shots_per_job=per_job, processes=processes,
+                       lighting_shots=centre_and_corners(lens_array.lenses_y, lens_array.lenses_x))
     lenses = (lens_array.lenses_y, lens_array.lenses_x)
     return MethodPlan(batch, lambda images: tile_elemental_images(
         np.stack(images).reshape(*lenses, *images[0].shape)))

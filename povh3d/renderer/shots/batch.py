@@ -32,9 +32,9 @@ class ShotBatch:
     shots_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
     options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
-    # The shots whose runs compute a lighting solution shared by every shot, the one that sees most
+    # The shots whose run computes a lighting solution shared by every shot, the one that sees most
     # of what the others see first (the centre view, then the corner views: ``renderer.shots.lighting``);
-    # empty: the middle one.
+    # empty: each shot computes its own (the passes).
     lighting_shots: tuple[int, ...] = ()
 
 

@@ -1,7 +1,7 @@
 """One lighting solution for every shot of a still: radiosity computed once, loaded by every other run.
 
 POV-Ray computes radiosity anew for each image it renders, so a still traced as many cameras
-(``multi-ortho-views``' views, ``pinhole``'s lenses, footprint banks) would pay for a solution a
+(``multi-ortho-views``' views, ``pinhole``'s lenses: the batches that name ``lighting_shots``) would pay for a solution a
 shot: ``advanced/diffuse_back.pov``, whose 2D render spends 98 % of its time there, never finished.
 POV-Ray 3.7 saves a solution and loads it again, through command-line options only (the scene's
 ``save_file``/``load_file`` are ignored since 3.7):
@@ -83,13 +83,14 @@ def loading_header(header: dict[str, Any]) -> dict[str, Any]:
 
 
 def shared_lighting(scene: Scene, batch: ShotBatch, settings: RenderSettings, local: bool) -> SharedLighting | None:
-    """The shared solution of this batch, or None where each shot lights itself: a scene without
-    radiosity, a single shot, turned off, a cluster (no shared file system), an animation whose frames
-    go in clock sequences (each frame's runs then hold several clocks)."""
-    if ("radiosity" not in scene.features or len(batch.shots) < 2 or not settings.shared_lighting or not local
-            or (settings.sequence is not None and settings.sequence.later)):
+    """The shared solution of this batch, or None where each shot lights itself: a batch that names no
+    ``lighting_shots`` (the passes, whose frames must each light themselves; the mesh camera's
+    footprint banks), a scene without radiosity, a single shot, turned off, a cluster (no shared file
+    system), an animation whose frames go in clock sequences (each frame's runs then hold several clocks)."""
+    if (not batch.lighting_shots or "radiosity" not in scene.features or len(batch.shots) < 2
+            or not settings.shared_lighting or not local or (settings.sequence is not None and settings.sequence.later)):
         return None
-    savers = batch.lighting_shots or (len(batch.shots) // 2,)
+    savers = batch.lighting_shots
     if scene.animation_words - SEQUENCE_SAFE_WORDS:
         savers = savers[:1]  # each shot a run of its own (``shots._planned_jobs``): no chain of frames
     return SharedLighting(tuple(savers))
