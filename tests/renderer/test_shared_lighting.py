@@ -163,3 +163,19 @@ def test_only_batches_that_name_their_lighting_shots_share(tmp_path):
     assert shared_lighting(lit, batch, settings, False) is None          # a cluster
     assert shared_lighting(load_scene(unlit), batch, settings, True) is None
     assert shared_lighting(lit, replace(batch, shots=[{}]), settings, True) is None
+
+
+@pytest.mark.povray
+def test_a_radiosity_block_not_in_force_stays_off(tmp_path):
+    """A scene whose radiosity block sits under an ``#if`` that is false: the saving run reports no
+    radiosity, so the other runs get no radiosity block of povh3d's (which would turn radiosity on,
+    brightening the walls): every view equals its independent render to the bit."""
+    scene = _scene(tmp_path, GOOD, "off.pov")
+    scene.path.write_text(scene.path.read_text().replace("radiosity {", "#if (0) radiosity {").replace(
+        "} }\nbox", "} #end }\nbox", 1))
+    scene = load_scene(scene.path)
+    assert "radiosity" in scene.features
+    _, shared, stats = _render(scene, "multi-ortho-views")
+    _, independent, _ = _render(scene, "multi-ortho-views", shared_lighting=False)
+    assert stats.lighting is None
+    assert all(np.array_equal(a, b) for a, b in zip(shared, independent))

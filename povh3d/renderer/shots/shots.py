@@ -170,15 +170,19 @@ def _run_lit(lighting: SharedLighting, runner: Any, taker: _Taker, scene: Scene,
             taker.targets.update(targets)
             _run(runner, saving, taker, settings, progress, stats)
             rest = [i for i in missing if i not in lighting.savers]
-            loading, targets = _planned_jobs(scene, batch, settings, stats, method, loading_header(header), rest,
-                                             {}, extra=lighting.loading(folder))
+            saved = taker.radiosity.get(id(saving[0]))
+            # No radiosity statistics: the scene's radiosity block is not in force (under an #if), so
+            # there is nothing to share, and a later radiosity block would turn radiosity on.
+            shared = {"extra": lighting.loading(folder)} if saved is not None else {}
+            loading, targets = _planned_jobs(scene, batch, settings, stats, method,
+                                             loading_header(header) if shared else header, rest, {}, **shared)
             taker.targets.update(targets)
             _run(runner, loading, taker, settings, progress, stats)
         except PovrayError as exc:
             raise _said(exc, scene) from None
     stats.jobs += 1
-    stats.lighting = lighting_record(lighting, taker.radiosity.get(id(saving[0])),
-                                     [taker.radiosity.get(id(job)) for job in loading], len(rest))
+    if saved is not None:
+        stats.lighting = lighting_record(lighting, saved, [taker.radiosity.get(id(job)) for job in loading], len(rest))
 
 
 def _runner(settings: RenderSettings) -> Any:
