@@ -50,9 +50,8 @@ from ...display import subpixel
 from .single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
 
 
-#: multi-ortho-views: the fewest frames a POV-Ray run of views renders, and the most runs a core
-#: (``_multi_ortho_views``).
-FRAMES_PER_RUN, RUNS_PER_CORE = 4, 8
+#: multi-ortho-views: the most POV-Ray runs a core, the views spread evenly over them (``_multi_ortho_views``).
+RUNS_PER_CORE = 8
 
 #: Pixels between the tiles of a one-pass view bank when antialiasing samples pixel
 #: borders: one, each tile reaching half of it (``view_bank._bank_mesh``).
@@ -119,8 +118,9 @@ def _multi_ortho_views(lens_array: LensArray, front_clearance: float, samples: n
     # POV-Ray idles about 0.7 s starting and 0.24 s a frame (measured: 64 frames of 4x3 pixels, 15.6 s
     # wall, 0.2 s of CPU), so runs of a few frames, many more than the cores, overlap that idling:
     # desk.pov's 64 views on 2 cores rendered in 2.0 s as 16 runs of 4 frames, 2.4-2.8 s as 8 of 8,
-    # 4.1 s as 64 of 1 (each run's own start-up CPU), 7.8 s as 2 of 32 (docs/benchmarks.md).
-    per_job = max(FRAMES_PER_RUN, -(-len(frames) // (RUNS_PER_CORE * cpu_count())))
+    # 4.1 s as 64 of 1 (each run's own start-up CPU), 7.8 s as 2 of 32 (docs/benchmarks.md).  A few
+    # views go one a run, which lets an animation's frames run in clock sequences (``clock_runs``).
+    per_job = -(-len(frames) // (RUNS_PER_CORE * cpu_count()))
     processes = -(-len(frames) // per_job)
     batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": front_clearance}, frames,
                        width, height, shots_per_job=per_job, processes=processes,
