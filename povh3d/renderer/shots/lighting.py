@@ -1,8 +1,8 @@
 """One lighting solution for every shot of a still: radiosity computed once, loaded by every other run.
 
 POV-Ray computes radiosity anew for each image it renders, so a still traced as many cameras
-(``multi-ortho-views``' views, ``pinhole``'s lenses: the batches that name ``lighting_shots``) would pay for a solution a
-shot: ``advanced/diffuse_back.pov``, whose 2D render spends 98 % of its time there, never finished.
+(``multi-ortho-views``' views, ``pinhole``'s lenses: the batches that name ``lighting_shots``) would
+pay for a solution a shot: ``advanced/diffuse_back.pov``, whose 2D render spends 98 % of its time there, never finished.
 POV-Ray 3.7 saves a solution and loads it again, through command-line options only (the scene's
 ``save_file``/``load_file`` are ignored since 3.7):
 
@@ -16,11 +16,11 @@ POV-Ray 3.7 saves a solution and loads it again, through command-line options on
   pass at one pixel (``pretrace_start 1 pretrace_end 1``: a loaded solution still gets the scene's
   whole pretrace otherwise, ``Radiosity_Vain_Pretrace=off`` notwithstanding, measured: 1.4 s and a
   third of the samples a frame on cornell) and ``always_sample off``, so its final render reuses the
-  loaded samples and computes new ones only where none is near enough (surfaces the centre view
-  does not see).  Their keys name the saving shots' keys: a shot lit by a shared
+  loaded samples and computes new ones only where none is near enough (surfaces the saving views
+  do not see).  Their keys name the saving shots' keys: a shot lit by a shared
   solution is not the image of an independent render, and the cache keeps them apart.
   (The centre view's solution alone left the corner views of cornell 38.8 dB from their
-  independent renders, outside POV-Ray's own spread of 44.4 dB; with the corners': 45.1 dB.)
+  independent renders, outside POV-Ray's own spread of 44.4 dB; with the corners': 44.8 dB.)
 
 The file lives in a folder of the render's own (removed with it); the saving run writes it in its job
 folder (the only place the sandbox lets POV-Ray write) and hands it over (``PovrayJob.keep_files``);
@@ -75,7 +75,7 @@ class SharedLighting:
 
 
 def loading_header(header: dict[str, Any]) -> dict[str, Any]:
-    """``header`` with ``always_sample off`` added to the later ``global_settings`` radiosity block."""
+    """``header`` with ``LOADED`` added to the later ``global_settings`` radiosity block (the quality's own kept)."""
     settings = dict(header.get("global_settings") or {})
     own = settings.get("radiosity", "{ }").strip()
     settings["radiosity"] = own[:-1].rstrip() + f" {LOADED} }}"
