@@ -346,14 +346,16 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
 
 
 def _keep(child: _Child) -> None:
-    """Move the files the job keeps (``PovrayJob.keep_files``) out of its folder before it is deleted."""
+    """Move the files the job keeps (``PovrayJob.keep_files``) out of its folder before it is deleted;
+    one POV-Ray did not write stays missing at its destination (the caller's to notice)."""
     for name, destination in child.job.keep_files:
+        if not (child.folder / name).is_file():
+            continue
         try:
             shutil.move(str(child.folder / name), destination)
         except OSError as error:
-            raise PovrayError(f"{child.job.name}: POV-Ray finished without writing {name} "
-                              f"({error.strerror})", command=child.command, returncode=child.process.returncode,
-                              log_tail=tail(child.log)) from None
+            raise OutputError(f"{child.job.name}: cannot keep {name} POV-Ray wrote, in {destination}: "
+                              f"{error.strerror}.") from None
 
 
 def _failure(child: _Child, log: str) -> PovrayError:

@@ -179,3 +179,18 @@ def test_a_radiosity_block_not_in_force_stays_off(tmp_path):
     _, independent, _ = _render(scene, "multi-ortho-views", shared_lighting=False)
     assert stats.lighting is None
     assert all(np.array_equal(a, b) for a, b in zip(shared, independent))
+
+
+@pytest.mark.povray
+def test_a_kept_file_leaves_the_job_folder(tmp_path):
+    """What a job writes in its folder (the only place the sandbox lets it write) reaches its
+    destination before the folder goes; a file it did not write stays missing, for the caller to notice."""
+    from povh3d.povray.process import run_jobs
+
+    script = ('#version 3.7;\n#fopen F "solution.txt" write\n#write (F, "42\\n")\n#fclose F\n'
+              "sphere { 0, 1 pigment { rgb 1 } }\nlight_source { <0, 5, -5> rgb 1 }\ncamera { location -3*z }\n")
+    kept, unwritten = tmp_path / "kept.txt", tmp_path / "unwritten.txt"
+    job = PovrayJob(name="keep", script=script, width=4, height=3,
+                    keep_files=(("solution.txt", str(kept)), ("other.txt", str(unwritten))))
+    run_jobs([job], processes=1, workdir=tmp_path)
+    assert kept.read_text() == "42\n" and not unwritten.exists()

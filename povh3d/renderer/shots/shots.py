@@ -35,7 +35,7 @@ from ...scene.scene import Scene
 from ...system import cpu_count, find_povray, owned_prefix
 from .batch import ShotBatch, RenderStats
 from .clock_runs import SEQUENCE_SAFE_WORDS, plan_runs
-from .lighting import SharedLighting, loading_header, shared_lighting
+from .lighting import SOLUTION, SharedLighting, loading_header, shared_lighting
 from .lighting import record as lighting_record
 from ..methods.quality import Progress, RenderSettings
 from ...scene.templates import render_template, templates_dir
@@ -170,9 +170,9 @@ def _run_lit(lighting: SharedLighting, runner: Any, taker: _Taker, scene: Scene,
             taker.targets.update(targets)
             _run(runner, saving, taker, settings, progress, stats)
             rest = [i for i in missing if i not in lighting.savers]
-            saved = taker.radiosity.get(id(saving[0]))
-            # No radiosity statistics: the scene's radiosity block is not in force (under an #if), so
-            # there is nothing to share, and a later radiosity block would turn radiosity on.
+            saved = taker.radiosity.get(id(saving[0])) if (folder / SOLUTION).is_file() else None
+            # No radiosity statistics (or no file): the scene's radiosity block is not in force (under an
+            # #if), so there is nothing to share, and a later radiosity block would turn radiosity on.
             shared = {"extra": lighting.loading(folder)} if saved is not None else {}
             loading, targets = _planned_jobs(scene, batch, settings, stats, method,
                                              loading_header(header) if shared else header, rest, {}, **shared)
