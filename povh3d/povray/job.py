@@ -73,6 +73,9 @@ class PovrayJob:
         ``(name, file)``: a link ``name`` (relative) in the job's folder, POV-Ray's
         working folder, to ``file``: how a scene reaches a file it names with
         non-ASCII characters (``scene.Scene.ascii_names``).
+    keep_files : tuple of (str, str)
+        ``(name, destination)``: a file the job writes in its folder (a radiosity solution
+        it saves for later runs) moved to ``destination`` once the job succeeds.
     """
 
     name: str
@@ -91,6 +94,7 @@ class PovrayJob:
     read_files: tuple[str, ...] | None = None
     links: tuple[tuple[str, str], ...] = ()
     clock_run: ClockRun | None = None
+    keep_files: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         if self.read_files is not None:
@@ -104,10 +108,12 @@ class PovrayJob:
                 self._reject(name, "must be a sequence of strings", value)
             # Lists are accepted for convenience; stored as tuples to stay hashable.
             object.__setattr__(self, name, tuple(str(item) for item in value))
-        object.__setattr__(self, "links", tuple((str(name), str(file)) for name, file in self.links))
-        for name, _ in self.links:  # a link stays inside the job folder
-            if not name or os.path.isabs(name) or ".." in Path(name).parts:
-                self._reject("links", "must name paths inside the job folder", name)
+        for field_name in ("links", "keep_files"):
+            pairs = tuple((str(name), str(file)) for name, file in getattr(self, field_name))
+            object.__setattr__(self, field_name, pairs)
+            for name, _ in pairs:  # a link, a kept file: inside the job folder
+                if not name or os.path.isabs(name) or ".." in Path(name).parts:
+                    self._reject(field_name, "must name paths inside the job folder", name)
         for name in ("width", "height", "frames"):
             self._check_positive(name, getattr(self, name))
         if self.threads is not None:

@@ -193,6 +193,19 @@ def parse_render_time(log: str) -> float | None:
     return sum(times) if times else None
 
 
+_RADIOSITY_SAMPLES = re.compile(r"^\s*Radiosity samples calculated:\s*(?P<count>\d+)")
+_RADIOSITY_TIME = re.compile(r"^\s*Radiosity Time:.*\((?P<seconds>\d+(?:\.\d+)?) seconds\)")
+
+
+def parse_radiosity(log: str) -> tuple[int, float] | None:
+    """The radiosity samples POV-Ray computed (pretrace and final render) and the seconds of its
+    pretrace, summed over every frame of the log; None if it reports no radiosity statistics."""
+    lines = unwrap(log)
+    counts = [int(m["count"]) for line in lines if (m := _RADIOSITY_SAMPLES.match(line))]
+    seconds = [float(m["seconds"]) for line in lines if (m := _RADIOSITY_TIME.match(line))]
+    return (sum(counts), sum(seconds)) if counts or seconds else None
+
+
 def parse_progress(text: str, frame: int = 1, share: float = 0.0) -> tuple[int, float]:
     """Where a verbose (``+V``) POV-Ray run is, after reading `text` of its log.
 

@@ -341,6 +341,7 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
         images = collect_images(child.folder, child.job)
         if (child.process.returncode != 0 and not child.watch.early) or images is None:
             raise full_disk(child.folder, _image_bytes(child.job), child.job.name) or _failure(child, log)
+        _keep(child)
         if on_result is not None:
             on_result(JobResult(child.job, images, seconds, log))
         return seconds
@@ -365,6 +366,19 @@ def full_disk(folder: Path, need: int, name: str) -> OutputError | None:
         return None
     return OutputError(f"{name}: the disk of {str(folder.parent)!r} is full ({free / 2**20:.3g} MiB free); free "
                        "space there, or set TMPDIR to a folder on a disk with room")
+
+
+def _keep(child: _Child) -> None:
+    """Move the files the job keeps (``PovrayJob.keep_files``) out of its folder before it is deleted;
+    one POV-Ray did not write stays missing at its destination (the caller's to notice)."""
+    for name, destination in child.job.keep_files:
+        if not (child.folder / name).is_file():
+            continue
+        try:
+            shutil.move(str(child.folder / name), destination)
+        except OSError as error:
+            raise OutputError(f"{child.job.name}: cannot keep {name} POV-Ray wrote, in {destination}: "
+                              f"{error.strerror}.") from None
 
 
 def _failure(child: _Child, log: str) -> PovrayError:

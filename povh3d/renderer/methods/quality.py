@@ -174,6 +174,8 @@ class RenderSettings:
                                 distortion, traced as every ray's slope times it (``depth_scaled_rays``)
     should_stop : callable or None  polled while local POV-Ray runs; True stops them (``RenderInterrupted``):
                                 a caller's way to cancel a render (the command itself sets none)
+    shared_lighting : bool      a still's shots share one radiosity solution (``renderer.shots.lighting``);
+                                False: each POV-Ray frame computes its own, as a plain render does
     """
 
     quality: str | Quality = "normal"
@@ -192,6 +194,7 @@ class RenderSettings:
     max_error_db: float | None = None
     frame: tuple[float, ...] | None = None
     depth_scale: float = 1.0
+    shared_lighting: bool = True
     should_stop: Callable[[], bool] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:

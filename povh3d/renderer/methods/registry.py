@@ -50,6 +50,9 @@ from ...display import subpixel
 from .single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
 
 
+#: multi-ortho-views: the most POV-Ray runs a core, the views spread evenly over them (``_multi_ortho_views``).
+RUNS_PER_CORE = 8
+
 #: Pixels between the tiles of a one-pass view bank when antialiasing samples pixel
 #: borders: one, each tile reaching half of it (``view_bank._bank_mesh``).
 GUTTER = 1
@@ -112,13 +115,23 @@ def _multi_ortho_views(lens_array: LensArray, front_clearance: float, samples: n
     check_front_clearance(lens_array, front_clearance)
     common, frames = ortho_view_frames(lens_array)
     width, height = common.pop("width"), common.pop("height")
-    # Process start-up (~0.7 s) is mostly idle, so more processes than cores
-    # overlap it; a few frames per run amortise it further.
-    processes = 4 * cpu_count()
-    per_job = max(1, -(-len(frames) // processes))
+    # POV-Ray idles about 0.7 s starting and 0.24 s a frame (measured: 64 frames of 4x3 pixels, 15.6 s
+    # wall, 0.2 s of CPU), so runs of a few frames, many more than the cores, overlap that idling:
+    # desk.pov's 64 views on 2 cores rendered in 2.0 s as 16 runs of 4 frames, 2.4-2.8 s as 8 of 8,
+    # 4.1 s as 64 of 1 (each run's own start-up CPU), 7.8 s as 2 of 32 (docs/benchmarks.md).  A few
+    # views go one a run, which lets an animation's frames run in clock sequences (``clock_runs``).
+    per_job = -(-len(frames) // (RUNS_PER_CORE * cpu_count()))
+    processes = -(-len(frames) // per_job)
     batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": front_clearance}, frames,
-                       width, height, shots_per_job=per_job, processes=processes)
+                       width, height, shots_per_job=per_job, processes=processes,
+                       lighting_shots=centre_and_corners(ny, nx))
     return MethodPlan(batch, lambda images: interleave(np.stack(images).reshape(ny, nx, *images[0].shape)))
+
+
+def centre_and_corners(rows: int, columns: int) -> tuple[int, ...]:
+    """Shots of a row-major grid that light the others (``ShotBatch.lighting_shots``): the centre, the corners."""
+    return tuple(dict.fromkeys((rows // 2 * columns + columns // 2, 0, columns - 1, (rows - 1) * columns,
+                                rows * columns - 1)))
 
 
 def _pinhole(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
@@ -128,8 +141,8 @@ def _pinhole(lens_array: LensArray, front_clearance: float, samples: np.ndarray)
     processes = 2 * cpu_count()
     # Many small frames per run: each extra frame costs a re-parse, not a start-up.
     per_job = max(1, min(500, -(-len(frames) // processes)))
-    batch = ShotBatch("pinhole.pov.j2", common, frames, width, height,
-                       shots_per_job=per_job, processes=processes)
+    batch = ShotBatch("pinhole.pov.j2", common, frames, width, height, shots_per_job=per_job, processes=processes,
+                       lighting_shots=centre_and_corners(lens_array.lenses_y, lens_array.lenses_x))
     lenses = (lens_array.lenses_y, lens_array.lenses_x)
     return MethodPlan(batch, lambda images: tile_elemental_images(
         np.stack(images).reshape(*lenses, *images[0].shape)))

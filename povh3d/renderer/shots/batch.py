@@ -32,6 +32,10 @@ class ShotBatch:
     shots_per_job: int = 1
     processes: int | None = None  # the method's preferred process count
     options: tuple[str, ...] = ()  # POV-Ray switches after the quality's, e.g. a coverage pre-pass
+    # The shots whose run computes a lighting solution shared by every shot, the one that sees most
+    # of what the others see first (the centre view, then the corner views: ``renderer.shots.lighting``);
+    # empty: each shot computes its own (the passes).
+    lighting_shots: tuple[int, ...] = ()
 
 
 def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...] = ()) -> ShotBatch:
@@ -61,10 +65,14 @@ class RenderStats:
     wall_seconds: float = 0.0
     povray_version: str = ""
     uncached: str = ""   # why the image cache was not used, when the scene forbids it
+    lighting: dict[str, Any] | None = None   # the shared lighting solution (``renderer.shots.lighting``)
+    radiosity_samples: int = 0   # radiosity samples POV-Ray computed over every run (its statistics)
 
     def as_record(self) -> dict[str, Any]:
         return {"frames": self.frames, "frames_from_cache": self.cached, "povray_jobs": self.jobs,
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),
                 "wall_seconds": round(self.wall_seconds, 4),
-                **({"image_cache": f"not used: {self.uncached}"} if self.uncached else {})}
+                **({"image_cache": f"not used: {self.uncached}"} if self.uncached else {}),
+                **({"radiosity_samples_computed": self.radiosity_samples} if self.radiosity_samples else {}),
+                **({"shared_lighting": self.lighting} if self.lighting else {})}

@@ -9,6 +9,7 @@ from the cache however the missing ones are batched into POV-Ray runs.
 from __future__ import annotations
 
 import hashlib
+import tempfile
 import time
 from collections import Counter
 from dataclasses import replace
@@ -25,16 +26,18 @@ from ...cache import cache_root, code_stamp, content_key
 from .cache import ImageCache
 from ...image.io import read_png
 from ...povray.job import SCENE_FILE
-from ...povray.log import past_scene_end
+from ...povray.log import parse_radiosity, past_scene_end
 from ...povray.job import ClockRun
-from ...povray.process import JobResult, PovrayJob, povray_version, run_jobs
+from ...povray.process import JOB_PREFIX, JobResult, PovrayJob, povray_version, run_jobs
 from ...povray.sandbox import confines, scene_inputs
 from ...povray.version_memo import remembered_version
 from ...errors import PovrayError, PovrayTimeout, raw_message, warn
 from ...scene.scene import BOM, Scene, has_bom
-from ...system import cpu_count, find_povray
+from ...system import cpu_count, find_povray, owned_prefix
 from .batch import ShotBatch, RenderStats
 from .clock_runs import SEQUENCE_SAFE_WORDS, plan_runs
+from .lighting import SOLUTION, SharedLighting, loading_header, shared_lighting
+from .lighting import record as lighting_record
 from ..methods.quality import Progress, RenderSettings
 from ...scene.templates import render_template, templates_dir
 
@@ -140,36 +143,79 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
     runner = _runner(settings)
     stats = RenderStats(frames=len(batch.shots), povray_version=runner.version)
     cache = _usable_cache(scene, settings, stats)
+    lighting = shared_lighting(scene, batch, settings, isinstance(runner, LocalRunner))
     keys = shot_keys(stats.povray_version, scene, batch, header, settings)
+    if lighting is not None:
+        keys = lighting.keyed(keys)
     images, missing = _looked_up(keys, cache, settings, stats)
     # Identical frames (same content key) in one batch are traced once.
     first_of: dict[str, int] = {}
     copies = {i: first_of.setdefault(keys[i], i) for i in missing}
     missing = [i for i in missing if copies[i] == i]
-    later = _later_frames(stats.povray_version, scene, batch, header, settings, cache, keys, missing)
-    jobs, targets = _planned_jobs(scene, batch, settings, stats, method, header, missing, later)
-    taker = _Taker(images, keys, cache, settings, targets, Counter(copies.values()), stats.cached, progress, method)
+    taker = _Taker(images, keys, cache, settings, {}, Counter(copies.values()), stats.cached, progress, method)
     if progress:
         progress(taker.done, len(keys))
-    if jobs:
-        try:
-            _run(runner, jobs, taker, settings, progress, stats)
-        except PovrayError as exc:
-            if later and not isinstance(exc, PovrayTimeout):
-                # A frame of the sequence failed, maybe a later one: the rest of the request goes frame
-                # by frame (what finished is in the cache), so the error names the frame that fails.
-                settings.sequence.ledger.failed = True
-                return render_frames(scene, batch, replace(settings, sequence=None), method=method, header=header,
-                                     progress=progress)
-            if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
-                raise
-            raise PovrayError(past_scene_end(raw_message(exc), scene.path.name, SCENE_FILE), command=exc.command,
-                              returncode=exc.returncode, log_tail=exc.log_tail) from None
+    if lighting is not None and any(i not in lighting.savers for i in missing):
+        _run_lit(lighting, runner, taker, scene, batch, settings, stats, method, header, missing, progress)
+    else:
+        later = {} if lighting is not None else _later_frames(stats.povray_version, scene, batch, header, settings,
+                                                              cache, keys, missing)
+        jobs, targets = _planned_jobs(scene, batch, settings, stats, method, header, missing, later)
+        taker.targets.update(targets)
+        if jobs:
+            try:
+                _run(runner, jobs, taker, settings, progress, stats)
+            except PovrayError as exc:
+                if later and not isinstance(exc, PovrayTimeout):
+                    # A frame of the sequence failed, maybe a later one: the rest of the request goes frame
+                    # by frame (what finished is in the cache), so the error names the frame that fails.
+                    settings.sequence.ledger.failed = True
+                    return render_frames(scene, batch, replace(settings, sequence=None), method=method,
+                                         header=header, progress=progress)
+                raise _said(exc, scene) from None
+    stats.radiosity_samples = sum(counts[0] for counts in taker.radiosity.values() if counts)
     for index, source in copies.items():
         if images[index] is None:
             images[index] = images[source]
     stats.wall_seconds = time.perf_counter() - start
     return [img for img in images if img is not None], stats
+
+
+def _said(exc: PovrayError, scene: Scene) -> PovrayError:
+    """``exc`` with a location past the end of the user's scene said as such (``past_scene_end``)."""
+    if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
+        return exc
+    return PovrayError(past_scene_end(raw_message(exc), scene.path.name, SCENE_FILE), command=exc.command,
+                       returncode=exc.returncode, log_tail=exc.log_tail)
+
+
+def _run_lit(lighting: SharedLighting, runner: Any, taker: _Taker, scene: Scene, batch: ShotBatch,
+             settings: RenderSettings, stats: RenderStats, method: str, header: dict[str, Any],
+             missing: list[int], progress: Progress | None) -> None:
+    """Render the missing shots on one lighting solution: the saving shots' run first (at every core),
+    then the others' runs, which load it (``renderer.shots.lighting``)."""
+    with tempfile.TemporaryDirectory(prefix=owned_prefix(JOB_PREFIX) + "lighting-") as name:
+        folder = Path(name)
+        try:
+            chain = replace(batch, shots_per_job=len(lighting.savers))  # one run: each frame adds to the file
+            saving, targets = _planned_jobs(scene, chain, settings, stats, method, header, list(lighting.savers), {},
+                                            extra=lighting.saving(folder))
+            taker.targets.update(targets)
+            _run(runner, saving, taker, settings, progress, stats)
+            rest = [i for i in missing if i not in lighting.savers]
+            saved = taker.radiosity.get(id(saving[0])) if (folder / SOLUTION).is_file() else None
+            # No radiosity statistics (or no file): the scene's radiosity block is not in force (under an
+            # #if), so there is nothing to share, and a later radiosity block would turn radiosity on.
+            shared = {"extra": lighting.loading(folder)} if saved is not None else {}
+            loading, targets = _planned_jobs(scene, batch, settings, stats, method,
+                                             loading_header(header) if shared else header, rest, {}, **shared)
+            taker.targets.update(targets)
+            _run(runner, loading, taker, settings, progress, stats)
+        except PovrayError as exc:
+            raise _said(exc, scene) from None
+    stats.jobs += 1
+    if saved is not None:
+        stats.lighting = lighting_record(lighting, saved, [taker.radiosity.get(id(job)) for job in loading], len(rest))
 
 
 def _runner(settings: RenderSettings) -> Any:
@@ -224,9 +270,10 @@ Target = tuple[int | None, str | None]
 
 def _planned_jobs(scene: Scene, batch: ShotBatch, settings: RenderSettings, stats: RenderStats, method: str,
                   header: dict[str, Any], missing: list[int], later: dict[int, dict[int, str]],
-                  ) -> tuple[list[PovrayJob], dict[int, list[Target]]]:
+                  extra: dict[str, Any] | None = None) -> tuple[list[PovrayJob], dict[int, list[Target]]]:
     """The POV-Ray runs of the missing shots (and of the later frames' shots of a clock sequence),
-    each with the targets of its frames; ``stats`` gets the jobs, processes and threads."""
+    each with the targets of its frames; ``stats`` gets the jobs, processes and threads.  ``extra``:
+    job fields added to each run's (a shared lighting solution's options, links, files)."""
     # Frames reach the cache one by one as POV-Ray writes them (``_Taker.take``), so the method's
     # batching into runs costs nothing when a run is stopped (Ctrl-C, timeout, crash).
     per_job = batch.shots_per_job
@@ -246,6 +293,10 @@ def _planned_jobs(scene: Scene, batch: ShotBatch, settings: RenderSettings, stat
     scene_file, inputs = scene_include(scene, settings)
     common = dict(width=batch.width, height=batch.height, threads=threads, bit_depth=settings.bit_depth,
                   file_gamma="sRGB", timeout=settings.timeout, **inputs)
+    extra = dict(extra or {})
+    added = extra.pop("options", ())
+    for field, value in extra.items():
+        common[field] = tuple(common.get(field) or ()) + tuple(value)
     script_of = lambda shots: build_script(batch, shots, method=method, scene_path=scene_file,  # noqa: E731
                                            add_assumed_gamma=scene.adds_assumed_gamma, header=header)
     jobs: list[PovrayJob] = []
@@ -267,7 +318,7 @@ def _planned_jobs(scene: Scene, batch: ShotBatch, settings: RenderSettings, stat
         for chunk in chunks:
             name = f"{method} camera {chunk[0] + 1}" + (f"-{chunk[-1] + 1}" if len(chunk) > 1 else "")
             job = PovrayJob(name=name, script=script_of([batch.shots[i] for i in chunk]), frames=len(chunk),
-                            options=settings.options + batch.options, **common)
+                            options=settings.options + batch.options + tuple(added), **common)
             jobs.append(job)
             targets[id(job)] = [(i, None) for i in chunk]
     return jobs, targets
@@ -283,6 +334,7 @@ class _Taker:
         self.images, self.keys, self.cache, self.settings = images, keys, cache, settings
         self.targets, self.copies, self.done, self.progress, self.method = targets, copies, done, progress, method
         self.taken: set[tuple[int, int]] = set()
+        self.radiosity: dict[int, tuple[int, float] | None] = {}  # job id -> POV-Ray's radiosity statistics
 
     def take(self, target: Target, image_path: Path) -> None:
         index, key = target
@@ -296,10 +348,11 @@ class _Taker:
                 stored[key] = None if self.cache is not None else _read_frame(image_path, self.method)
             self.done += 1
             return
+        counted = self.images[index] is not None  # from the cache, rendered again to save a lighting solution
         self.images[index] = _read_frame(image_path, f"{self.method} camera {index + 1}")  # decoded whole
         if self.cache is not None:
             self.cache.store(self.keys[index], image_path)
-        self.done += self.copies.get(index, 1)
+        self.done += 0 if counted else self.copies.get(index, 1)
 
     def frame_done(self, job: PovrayJob, frame: int, image_path: Path) -> None:
         """A frame of a running job, as soon as POV-Ray has written it."""
@@ -309,6 +362,7 @@ class _Taker:
 
     def collect(self, result: JobResult) -> None:
         """A finished job (jobs finish in any order): the frames not taken while it ran."""
+        self.radiosity[id(result.job)] = parse_radiosity(result.log)
         for frame, (target, image_path) in enumerate(zip(self.targets[id(result.job)], result.images)):
             if (id(result.job), frame) not in self.taken:
                 self.take(target, image_path)
@@ -331,7 +385,8 @@ def _run(runner: Any, jobs: list[PovrayJob], taker: _Taker, settings: RenderSett
                              if isinstance(runner, LocalRunner) else {})
     if progress and isinstance(runner, LocalRunner):
         extra["on_running"] = taker.running
-    stats.povray_seconds = runner.run(jobs, processes=stats.processes, on_result=taker.collect, **extra)
+    stats.povray_seconds = stats.povray_seconds + runner.run(jobs, processes=stats.processes,
+                                                             on_result=taker.collect, **extra)
 
 
 #: Raised when what a shot's image depends on changes without a change the key sees: 2, a still's
