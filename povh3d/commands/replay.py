@@ -286,14 +286,8 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
                          **({"timings_s": timings} if timings else {}),
                          **({"reports": [{k: v for k, v in r.items() if k != "view_of_lens"} for r in reports]}
                             if reports else {}))  # the per-lens views: in --json's report only
-    if sweep is None:
-        write_image(out, frames[0], record)
-    else:
-        _write_sweep(out, frames, record, sweep[0])
-    if json_path is not None:
-        with atomic_path(json_path) as tmp:
-            tmp.write_text(json.dumps({"eyes": reports, **({"timings_s": timings} if timings else {})}, indent=2)
-                           + "\n", encoding="utf-8")
+    _write_replay(out, frames, record, sweep, json_path,
+                  {"eyes": reports, **({"timings_s": timings} if timings else {})})
     return record
 
 
@@ -309,14 +303,20 @@ def _replay_device_file(dev_image: DeviceImage, h3d_path: str | Path, out: Path,
     record = base_record("replay", source=str(Path(h3d_path).resolve()), optics=optics,
                          size=size if isinstance(size, str) else list(size), eyes_mm=eyes.tolist(),
                          device=entry, reports=reports)
+    _write_replay(out, frames, record, sweep, json_path, {"eyes": reports, "device": entry})
+    return record
+
+
+def _write_replay(out: Path, frames: list[np.ndarray], record: dict[str, Any], sweep: Any,
+                  json_path: str | Path | None, report: dict[str, Any]) -> None:
+    """The replay (or the sweep's frames, film and page) with its sidecar, and the ``--json`` report."""
     if sweep is None:
         write_image(out, frames[0], record)
     else:
         _write_sweep(out, frames, record, sweep[0])
     if json_path is not None:
         with atomic_path(json_path) as tmp:
-            tmp.write_text(json.dumps({"eyes": reports, "device": entry}, indent=2) + "\n", encoding="utf-8")
-    return record
+            tmp.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
 
 
 def _write_sweep(output: Path, frames: list[np.ndarray], record: dict[str, Any], axis: str = "x") -> None:

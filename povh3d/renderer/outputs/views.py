@@ -37,17 +37,24 @@ _VIEW_RE = re.compile(r"^v_(\d{3,})_(\d{3,})\.png$")
 _VIEWS_FILES = ("views.json",)
 
 
-def check_views_dir(views_dir: str | Path) -> Path:
-    """Check, before any work, that ``views_dir`` can be written: its parent is writable, and the
-    folder is new, empty or holds one views stack (it is replaced whole, so nothing else in it
-    may be lost)."""
-    folder = Path(views_dir)
+def _folder_to_replace(folder: str | Path, what: str) -> Path:
+    """``folder`` with its parent made; refused in one line where the parent cannot be made or the
+    folder is a file."""
+    folder = Path(folder)
     try:
         folder.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create {str(folder.parent)!r}: {exc.strerror}") from None
     if folder.exists() and not folder.is_dir():
-        raise OutputError(f"the views folder {str(folder)!r} is a file; give a folder name")
+        raise OutputError(f"{what} {str(folder)!r} is a file; give a folder name")
+    return folder
+
+
+def check_views_dir(views_dir: str | Path) -> Path:
+    """Check, before any work, that ``views_dir`` can be written: its parent is writable, and the
+    folder is new, empty or holds one views stack (it is replaced whole, so nothing else in it
+    may be lost)."""
+    folder = _folder_to_replace(views_dir, "the views folder")
     if folder.is_dir():
         others = sorted(p.name for p in folder.iterdir()
                         if not (_VIEW_RE.match(p.name) or p.name in _VIEWS_FILES or p.name.endswith(".part")))
@@ -63,13 +70,7 @@ def check_replaced_dir(folder: str | Path, manifest: str, is_ours: Callable[[dic
     """Check, before any work, a folder that is replaced whole (``replaced_whole``): its parent can be
     written, and it is new, empty or one povh3d wrote (its ``manifest`` a JSON object ``is_ours``
     accepts), so that nothing povh3d did not make is deleted."""
-    folder = Path(folder)
-    try:
-        folder.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create {str(folder.parent)!r}: {exc.strerror}") from None
-    if folder.exists() and not folder.is_dir():
-        raise OutputError(f"{what} {str(folder)!r} is a file; give a folder")
+    folder = _folder_to_replace(folder, what)
     if folder.is_dir() and any(folder.iterdir()):
         try:
             record = json.loads((folder / manifest).read_text(encoding="utf-8"))
