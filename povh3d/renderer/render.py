@@ -31,6 +31,7 @@ from .placement.place import place_display
 from .placement.ray_state import settle_method
 from .outputs.device_quilt import write_device_outputs
 from .outputs.steps import Still, check_outputs, write_outputs
+from .outputs.steps import check_outputs_against as outputs_against
 from .passes.record import PassCost, recording
 from ..povray.sandbox import describe as describe_sandbox
 from ..scene.scene import Scene, load_scene
@@ -92,9 +93,9 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
 
 def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Path, ...]) -> None:
     """Refuse, before any POV-Ray run, an output that is one of ``inputs`` (the scene and every file it
-    reads: an include, an ``image_map``) or holds one: the image, its sidecar, an animation's
-    frames, a Looking Glass quilt, the views, depth-maps and dataset folders (``image.io.check_output``)."""
-    from ..image.io import check_output, check_output_folder
+    reads: an include, an ``image_map``) or holds one: the image, its sidecar, an animation's frames
+    (``image.io.check_output``), and every optional output (``outputs.steps``: quilt, folders)."""
+    from ..image.io import check_output
     from .animation import frame_path
 
     if request.frames is None:
@@ -107,18 +108,7 @@ def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Pa
             found = named.fullmatch(name)
             if found and len(found[1]) == digits and int(found[1]) in request.frames.numbers:
                 check_output(frame_path(output, int(found[1]), digits), inputs)
-    if request.display.quilt is not None:
-        from ..display.looking_glass import device
-        from .outputs.device_quilt import quilt_outputs
-
-        dev = device(request.display.quilt["device"])
-        for path in quilt_outputs(output, dev, request.display.quilt.get("calibration") is not None):
-            if path is not None:
-                check_output(path, inputs)
-    for folder, what in ((request.views_dir, param("views_dir")), (request.depth_maps, param("depth_maps")),
-                         (request.dataset, param("dataset"))):
-        if folder is not None:
-            check_output_folder(folder, inputs, what=f"{what} folder")
+    outputs_against(request, output, inputs)
 
 
 def vendor_cameras(request: RenderRequest) -> bool:

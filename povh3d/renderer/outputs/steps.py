@@ -16,9 +16,12 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
+from ...display.looking_glass import device
+from ...errors import param
+from ...image.io import check_output, check_output_folder
 from .dataset import check_dataset_dir, dataset_depth, write_dataset
 from .depth_maps import check_depth_dir, write_depth_maps
-from .device_quilt import check_device_render, write_device_outputs
+from .device_quilt import check_device_render, quilt_outputs, write_device_outputs
 from .views import check_views_dir, write_views
 
 if TYPE_CHECKING:  # for annotations only: keeps the render's import chain short
@@ -60,11 +63,13 @@ class Still:
 @dataclass(frozen=True)
 class OutputStep:
     """One optional output of a still: ``wanted`` by the request, ``check`` before any work (given the
-    output path), ``write`` after the render (adding its entry to ``still.image.record``)."""
+    output path), ``against`` once the render's inputs are known (given the output path and the inputs:
+    refuse writing over one), ``write`` after the render (adding its entry to ``still.image.record``)."""
 
     name: str
     wanted: Callable[[RenderRequest], bool]
     check: Callable[[RenderRequest, Path], object]  # what it returns is not read
+    against: Callable[[RenderRequest, Path, tuple[Path, ...]], object]
     write: Callable[[Still], None]
 
 
@@ -110,6 +115,19 @@ def _write_quilt(still: Still) -> None:
                                                        quilt)
 
 
+def _folder_against(field: str) -> Callable[[RenderRequest, Path, tuple[Path, ...]], object]:
+    """The ``against`` check of a folder output (the request's ``field``): it neither is nor holds an input."""
+    return lambda r, out, inputs: check_output_folder(_wanted(getattr(r, field)), inputs,
+                                                      what=f"{param(field)} folder")
+
+
+def _quilt_against(request: RenderRequest, output: Path, inputs: tuple[Path, ...]) -> None:
+    quilt: Any = _wanted(request.display.quilt)
+    for path in quilt_outputs(output, device(quilt["device"]), quilt.get("calibration") is not None):
+        if path is not None:
+            check_output(path, inputs)
+
+
 def _check_quilt(request: RenderRequest, output: Path) -> None:
     check_device_render(_wanted(request.display.quilt), output, request.frames is not None, request.depth_maps is not None,
                         request.settings.quality == "auto")
@@ -119,13 +137,13 @@ def _check_quilt(request: RenderRequest, output: Path) -> None:
 #: maps, made on first use, before they are written).
 OUTPUT_STEPS: tuple[OutputStep, ...] = (
     OutputStep("views", lambda r: r.views_dir is not None, lambda r, out: check_views_dir(_wanted(r.views_dir)),
-               _write_views),
+               _folder_against("views_dir"), _write_views),
     OutputStep("dataset", lambda r: r.dataset is not None,
                lambda r, out: check_dataset_dir(_wanted(r.dataset), r.render_array, mapped=r.display.mapping is not None),
-               _write_dataset),
+               _folder_against("dataset"), _write_dataset),
     OutputStep("depth-maps", lambda r: r.depth_maps is not None, lambda r, out: check_depth_dir(_wanted(r.depth_maps)),
-               _write_depth_maps),
-    OutputStep("quilt", lambda r: r.display.quilt is not None, _check_quilt, _write_quilt),
+               _folder_against("depth_maps"), _write_depth_maps),
+    OutputStep("quilt", lambda r: r.display.quilt is not None, _check_quilt, _quilt_against, _write_quilt),
 )
 
 
@@ -134,6 +152,14 @@ def check_outputs(request: RenderRequest, output: Path) -> None:
     for step in OUTPUT_STEPS:
         if step.wanted(request):
             step.check(request, output)
+
+
+def check_outputs_against(request: RenderRequest, output: Path, inputs: tuple[Path, ...]) -> None:
+    """Every wanted output refused where it would write over one of ``inputs`` (the render's scene and
+    every file it reads), once they are known and before any POV-Ray run."""
+    for step in OUTPUT_STEPS:
+        if step.wanted(request):
+            step.against(request, output, inputs)
 
 
 def write_outputs(still: Still) -> None:
