@@ -236,10 +236,10 @@ def read_volume_content(path: Path, lens_array: LensArray, *, spacing: Any = Non
     except ImportError:
         raise ConfigError(f"reading volumes ({path.name}) is not available in this povh3d; "
                           "give a scene or a mesh model") from None
-    from ..renderer.content.volume import check_volume_memory
+    from ..renderer.content.volume import volume_weigher
 
-    check_volume_memory(path, series)
-    return volume_content(read_volume(path, spacing=spacing, series=series), lens_array, **placement)
+    return volume_content(read_volume(path, spacing=spacing, series=series, weigh=volume_weigher(path)), lens_array,
+                          **placement)
 
 
 def picture_size(size: tuple[int, int]) -> tuple[int, int]:

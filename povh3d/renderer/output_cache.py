@@ -100,9 +100,7 @@ def api_key(source: str | Path, output: str | Path, inputs: Mapping[str, Any]) -
     ``inputs`` are the call's own arguments (a lens array by its value); the same rules as the
     command line's (``request_key``), kept apart from its entries by an ``api`` mark.
     """
-    if inputs.get("progress") is not None and not callable(inputs["progress"]):
-        return None
-    kept = {k: (repr(v) if k == "lens_array" else v) for k, v in inputs.items() if k != "progress"}
+    kept = {k: (repr(v) if k == "lens_array" else v) for k, v in inputs.items()}
     include = kept.pop("include_dirs", ()) or ()
     return request_key(source, Path(output), {"api": True, **kept}, tuple(include))
 

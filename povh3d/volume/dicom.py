@@ -14,6 +14,7 @@ between columns): the column spacing is the ``i`` spacing.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -53,8 +54,16 @@ def _describe(uid: str, slices: list) -> str:
     return f"{uid} ({description}, {len(slices)} slices)"
 
 
-def read_dicom_series(folder: Path, series: str | None = None) -> Volume:
-    """The series of ``folder`` (the only one, or ``series``) as a ``Volume``."""
+def series_size(slices: list) -> tuple[int, int]:
+    """Voxels and bytes per voxel of a series (``list_series``'s headers: no pixel read)."""
+    first = slices[0][1]
+    return len(slices) * int(first.Rows) * int(first.Columns), max(1, int(first.BitsAllocated) // 8)
+
+
+def read_dicom_series(folder: Path, series: str | None = None,
+                      weigh: Callable[[int, int], object] | None = None) -> Volume:
+    """The series of ``folder`` (the only one, or ``series``) as a ``Volume``; ``weigh(voxels, bytes per
+    voxel)`` is told its size from the headers before a pixel is read."""
     groups = list_series(folder)
     if not groups:
         raise InputError(f"{str(folder)!r} holds no DICOM image slices; give a folder of one DICOM series "
@@ -66,6 +75,8 @@ def read_dicom_series(folder: Path, series: str | None = None) -> Volume:
         raise ConfigError(f"no DICOM series {series!r} in {str(folder)!r}; it holds "
                           + "; ".join(_describe(uid, s) for uid, s in groups.items()))
     uid = series if series is not None else next(iter(groups))
+    if weigh is not None:
+        weigh(*series_size(groups[uid]))
     return _assemble(groups[uid], f"{folder.name} ({uid})")
 
 

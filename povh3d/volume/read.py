@@ -21,7 +21,7 @@ Heavy packages are imported inside the readers, so naming a source's kind
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -36,9 +36,12 @@ __all__ = ["SUFFIXES", "is_polydata_vtk", "is_volume_source", "read_volume", "re
            "vtk_quiet"]
 _RAS_TO_LPS = np.diag([-1.0, -1.0, 1.0])
 
-def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = None) -> Volume:
+def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = None,
+                weigh: Callable[[int, int], object] | None = None) -> Volume:
     """The volume in ``path``; ``spacing`` (mm, 3 values) replaces the file's; ``series`` picks a
-    DICOM series by its UID.  Every failure is an ``InputError``/``ConfigError`` with one line."""
+    DICOM series by its UID; ``weigh(voxels, bytes per voxel)`` is told the volume's size from its
+    header before a voxel is read (not called where the header does not tell: ``volume_size``).
+    Every failure is an ``InputError``/``ConfigError`` with one line."""
     path = Path(path)
     if not path.exists():
         raise InputError(f"volume {str(path)!r} does not exist; check the path")
@@ -47,7 +50,7 @@ def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = N
     if path.is_dir():
         from .dicom import read_dicom_series
 
-        volume = read_dicom_series(path, series)
+        volume = read_dicom_series(path, series, weigh)
     else:
         if series is not None:
             raise ConfigError(f"{param('series')} picks one series of a DICOM folder; the volume is a single file")
@@ -58,6 +61,9 @@ def read_volume(path: str | Path, *, spacing: Any = None, series: str | None = N
         if reader is None:
             raise InputError(f"{path.name!r} is not a volume format povh3d reads; use one of "
                              f"{', '.join(SUFFIXES)} or a DICOM folder")
+        size = volume_size(path) if weigh is not None else None
+        if weigh is not None and size is not None:
+            weigh(*size)
         try:
             volume = reader(path, spacing)
         except (InputError, ConfigError, MissingExtra):
@@ -87,14 +93,11 @@ def volume_size(path: str | Path, series: str | None = None) -> tuple[int, int] 
     path = Path(path)
     try:
         if path.is_dir():
-            from .dicom import list_series
+            from .dicom import list_series, series_size
 
             groups = list_series(path)
             slices = groups.get(series) if series is not None else (next(iter(groups.values())) if groups else None)
-            if not slices:
-                return None
-            first = slices[0][1]
-            return len(slices) * int(first.Rows) * int(first.Columns), max(1, int(first.BitsAllocated) // 8)
+            return series_size(slices) if slices else None
         kind = _suffix(path)
         if kind == ".npy":
             values = np.load(path, mmap_mode="r", allow_pickle=False)

@@ -181,3 +181,27 @@ def test_a_volume_past_the_memory_budget_is_refused_before_it_is_read(tmp_path, 
     assert not (tmp_path / "v.png").exists()
     ok = cli(*args, "--max-memory", "2G")
     assert ok.code == 0, ok.err
+
+
+@pytest.mark.parametrize("kind", ["npy", "dicom"])
+def test_the_reading_weighs_the_volume_before_reading_it(tmp_path, kind):
+    """``read_volume(weigh=...)`` is told the size once, from the headers it reads anyway (a DICOM
+    series' headers are not read twice), and a refusal there stops the reading."""
+    from povh3d.volume.read import read_volume
+    from tests.support.volumes import asymmetric_phantom, write_dicom_series
+
+    volume = asymmetric_phantom(dtype="int16")
+    if kind == "npy":
+        path = tmp_path / "v.npy"
+        np.save(path, volume.values)
+    else:
+        path = write_dicom_series(volume, tmp_path / "series")
+    told: list[tuple[int, int]] = []
+    read = read_volume(path, spacing=(1.0, 1.0, 1.0) if kind == "npy" else None, weigh=lambda *s: told.append(s))
+    assert told == [(read.values.size, 2)]
+
+    def refuse(voxels: int, itemsize: int) -> None:
+        raise ConfigError("too big")
+
+    with pytest.raises(ConfigError, match="too big"):   # negative control: the weigher decides
+        read_volume(path, spacing=(1.0, 1.0, 1.0) if kind == "npy" else None, weigh=refuse)

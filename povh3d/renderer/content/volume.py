@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, cast
 
@@ -102,8 +103,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
                               f"{param('iso')}, {param('volume')}, {param('orientation')} ...) do not apply to it")
         return _mesh_stage(Path(source), lens_array, depth=depth, max_triangles=max_triangles,
                            cache_dir=cache_dir, rotate=options.rotate)
-    check_volume_memory(source, options.series)
-    volume = read_volume(source, spacing=options.spacing, series=options.series)
+    volume = read_volume(source, spacing=options.spacing, series=options.series, weigh=volume_weigher(source))
     kind, notes = what_to_draw(volume, options)
     for note in notes:
         warn(note)
@@ -216,16 +216,13 @@ def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max
 VOLUME_BYTES_PER_VOXEL = 12
 
 
-def check_volume_memory(source: str | Path, series: str | None = None) -> None:
-    """Refuse, before a voxel is read, a volume whose reading is estimated over the run's memory budget
-    (``--max-memory``, else what the machine has free): its size from the header (``volume_size``)."""
-    from ...volume.read import volume_size
+def volume_weigher(source: str | Path) -> Callable[[int, int], None]:
+    """What ``read_volume`` tells a volume's size to before a voxel is read: a refusal of a reading
+    estimated over the run's memory budget (``--max-memory``, else what the machine has free)."""
     from ..budget import check_memory
 
-    size = volume_size(source, series)
-    if size is None:
-        return
-    voxels, itemsize = size
-    check_memory(f"reading the volume {Path(source).name} ({voxels:,} voxels)",
-                 voxels * (itemsize + VOLUME_BYTES_PER_VOXEL),
-                 f"crop or downsample it before rendering, or raise {param('max_memory')}")
+    def weigh(voxels: int, itemsize: int) -> None:
+        check_memory(f"reading the volume {Path(source).name} ({voxels:,} voxels)",
+                     voxels * (itemsize + VOLUME_BYTES_PER_VOXEL),
+                     f"crop or downsample it before rendering, or raise {param('max_memory')}")
+    return weigh
