@@ -16,6 +16,7 @@ table already in docs/benchmarks.md (``make gallery`` writes it).
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import shutil
@@ -37,7 +38,7 @@ PANELS = {"demo": (320, 240), "ipad-retina": (2048, 1536)}
 def percentile(values: list[float], share: float) -> float:
     """The ``share`` quantile (nearest rank) of ``values``."""
     ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, max(0, round(share * len(ordered) + 0.5) - 1))]
+    return ordered[min(len(ordered) - 1, max(0, math.ceil(share * len(ordered)) - 1))]
 
 
 def gallery_column() -> dict[str, list[float]]:
