@@ -57,7 +57,7 @@ def hit_miss_mm(views_dir: Path, record: dict, period: float) -> tuple[float, fl
     from povh3d.image.colour import decode
     from povh3d.image.io import read_png
 
-    la, upm = record["lens_array"], record["display_frame"]["units_per_mm"]
+    la, upm = record["lens_array"], record["placement"]["units_per_mm"]
     (lx, ly), (px, py), (nx, ny) = la["lenses"], la["lens_pitch_mm"], la["views"]
     centre = np.stack(np.broadcast_arrays((np.arange(lx) + 0.5 - lx / 2)[None, :] * px,
                                           (ly / 2 - np.arange(ly) - 0.5)[:, None] * py), -1) * upm
@@ -86,7 +86,7 @@ def measure(preset: str, folder: Path) -> tuple[dict, float]:
         run = folder / f"{preset}_{period:.3g}"
         run.mkdir()
         record = _render(encode_scene(folder, period), preset, run)
-        upm = record["display_frame"]["units_per_mm"]
+        upm = record["placement"]["units_per_mm"]
         resolution = 2.3 * period / 65535 / upm   # sRGB's steepest step: 2.3 codes per linear code
         if np.isfinite(miss) and miss > period / upm / 4:   # the coarser miss does not pin this period's wrap
             break

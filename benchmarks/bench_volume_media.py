@@ -93,8 +93,8 @@ def main() -> int:
     load = time.perf_counter() - t
     turn = volume_to_display(args.orientation)
     lo, hi = display_box(volume.corners(), turn)
-    placement = fit_to_display(lo, hi, la)
-    w2d = world_to_display(turn, placement.shift, placement.scale)
+    fit = fit_to_display(lo, hi, la)
+    w2d = world_to_display(turn, fit.shift, fit.scale)
     before = os.getloadavg()[0]
     if args.picture:
         with tempfile.TemporaryDirectory() as tmp:
@@ -109,7 +109,7 @@ def main() -> int:
         for bits in args.bits:
             runs[bits].append(run_once(volume, w2d, la, bits, args))
     print(f"frog_tissues {volume.shape} voxels, spacing {volume.spacing} mm, read with PyVista in {load:.2f} s; "
-          f"preset {args.preset} ({la.panel.width}x{la.panel.height}), {args.orientation}, scale {placement.scale:.4g}, "
+          f"preset {args.preset} ({la.panel.width}x{la.panel.height}), {args.orientation}, scale {fit.scale:.4g}, "
           f"labels transfer, multi-ortho, quality {args.quality}, step {args.step} voxel; median (min-max) of "
           f"{args.repeats} interleaved runs; load average {before:.2f} before, {os.getloadavg()[0]:.2f} after, "
           f"{os.cpu_count()} cores")

@@ -166,7 +166,7 @@ def judge(scene: Path, preset: str, timeout: float, seconds_2d: float, views: in
             return Outcome(name, preset, "refused" if one_line else "crash", "", "", float("nan"), seconds,
                            seconds_2d, note)
         record = json.loads(out.with_suffix(".json").read_text())
-        frame = record.get("display_frame", {})
+        frame = record.get("placement", {})
         depth = frame.get("depth") or {}
         problems = []
         if frame.get("source") != "camera":

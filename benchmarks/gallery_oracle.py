@@ -30,14 +30,14 @@ MESH_CAMERA_METHODS = ("multi-ortho",)
 
 
 def _frame_of(record: dict):
-    """The display frame a sidecar records (native: the identity)."""
-    from povh3d.geometry.frame import DisplayFrame
+    """The pose a sidecar's placement records (native: the identity)."""
+    from povh3d.geometry.pose import DisplayPose
 
-    f = record["display_frame"]
+    f = record["placement"]
     if "centre" in f:
-        return DisplayFrame(tuple(f["centre"]), tuple(f["axis_x"]), tuple(f["axis_y"]), tuple(f["normal"]),
+        return DisplayPose(tuple(f["centre"]), tuple(f["axis_x"]), tuple(f["axis_y"]), tuple(f["normal"]),
                             f["units_per_mm"], f["source"])
-    return DisplayFrame((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), 1.0, "native")
+    return DisplayPose((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), 1.0, "native")
 
 
 def oracle_view(scene: Path, record: dict, view: tuple[int, int], shape: tuple[int, int], timeout: float,

@@ -302,7 +302,7 @@ def replay(h3d: np.ndarray, lens_array: LensArray, eye: tuple[float, float, floa
     ----------
     h3d : (H, W, C) array      an image of ``lens_array``'s panel
     lens_array : LensArray
-    eye : (x, y, z) mm         display frame, the viewer at ``z < 0`` (default ``(0, 0, -300)``)
+    eye : (x, y, z) mm         display coordinates, the viewer at ``z < 0`` (default ``(0, 0, -300)``)
     optics : str               ``pinhole`` (a pinhole mask at the lens centres), ``barrier`` (slits, lenticular),
                                ``none`` (no sheet: the panel in the lens plane)
     size : 'lenses' or (W, H)  one pixel a lens, or a perspective picture of the display's area
@@ -447,5 +447,10 @@ def layout(source: str | Path, output: str | Path, *, preset: str = "demo", lens
     and its record."""
     from .commands.layout import layout as _layout
 
+    if "frame_options" in options:   # its name before "placement" (issue 36)
+        import warnings
+
+        warnings.warn("layout(frame_options=...) is deprecated; use placement=", DeprecationWarning, stacklevel=2)
+        options.setdefault("placement", options.pop("frame_options"))
     display = _display(preset, lens_array)
     return _layout(source, output, display.lens_array, display=display, **options)

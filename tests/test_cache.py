@@ -55,19 +55,19 @@ def _output(root: Path) -> bool:
 
 
 def _camera(root: Path) -> bool:
-    from povh3d.renderer.placement.pose import DisplayFrameOptions, resolve_frame
+    from povh3d.renderer.placement.pose import PlacementOptions, resolve_pose
     from povh3d.scene.scene import load_scene
 
-    _, record = resolve_frame(DisplayFrameOptions(mode="camera"), load_scene(GALLERY / "inches.pov"), _array(),
+    _, record = resolve_pose(PlacementOptions(mode="camera"), load_scene(GALLERY / "inches.pov"), _array(),
                               cache_dir=root)
     return bool(record["evaluation_from_cache"])
 
 
 def _camera_depth(root: Path) -> bool:
-    from povh3d.renderer.placement.pose import DisplayFrameOptions, resolve_frame_and_depth
+    from povh3d.renderer.placement.pose import PlacementOptions, resolve_pose_and_depth
     from povh3d.scene.scene import load_scene
 
-    _, record, seen = resolve_frame_and_depth(DisplayFrameOptions(), load_scene(GALLERY / "tilted.pov"), _array(),
+    _, record, seen = resolve_pose_and_depth(PlacementOptions(), load_scene(GALLERY / "tilted.pov"), _array(),
                                               cache_dir=root, front_clearance=80.0)
     assert seen is not None
     return bool(record["evaluation_from_cache"])

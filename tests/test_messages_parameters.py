@@ -128,7 +128,7 @@ def test_the_flag_of_a_parameter():
     assert flags.as_flag("lens_rotation") == "--lens-rotation"     # the option spelled like the name
     assert flags.as_flag("shading") == "--flat"                    # a dest with another option
     assert flags.as_flag("lenses_x") == flags.as_flag("lenses_y") == "--lenses"   # the table
-    assert flags.as_flag("display_frame.center") == "--display-center"
+    assert flags.as_flag("placement.center") == "--display-center"
     assert flags.as_flag("no_such_name") == "--no-such-name"       # unknown: the name with dashes
     assert flags.flags(ConfigError(f"bad {param('ppl_out')}")) == "bad --ppl-out"
 
@@ -146,7 +146,7 @@ def test_the_command_line_shows_a_warnings_flag(capsys):
     from povh3d.cli.options import warn as print_warnings
 
     flags.learn(build_parser(), "render")
-    print_warnings([f"the scene moved; give {param('display_frame.up')} 0,1,0"])
+    print_warnings([f"the scene moved; give {param('placement.up')} 0,1,0"])
     assert capsys.readouterr().err.strip() == "povh3d: warning: the scene moved; give --display-up 0,1,0"
 
 

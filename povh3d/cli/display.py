@@ -86,10 +86,10 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 def _print_content(report: dict) -> None:
     print(f"{report['kind']:22s} {report['content']}")
-    placement = report.get("placement") or {}
-    if "size_mm" in placement:
-        w, h, d = placement["size_mm"]
-        print(f"{'placed size':22s} {w:.3g} x {h:.3g} x {d:.3g} mm (set by the display's {placement['limit']})")
+    fit = report.get("fit") or {}
+    if "size_mm" in fit:
+        w, h, d = fit["size_mm"]
+        print(f"{'placed size':22s} {w:.3g} x {h:.3g} x {d:.3g} mm (set by the display's {fit['limit']})")
     d, half = report["depth"], report["depth_budget_mm"] / 2
     if not d.get("points"):
         print(f"{'content depth':22s} nothing to measure")
@@ -100,10 +100,10 @@ def _print_content(report: dict) -> None:
 
 
 def _print_scene(report: dict) -> None:
-    from .render import frame_phrase
+    from .render import placement_phrase
 
     print(f"{'scene':22s} {report['scene']}")
-    print(flags(f"{'display frame':22s} {frame_phrase({**report['display_frame'], 'depth': None})}"))
+    print(flags(f"{'placement':22s} {placement_phrase({**report['placement'], 'depth': None})}"))
     d, half = report["depth"], report["depth_budget_mm"] / 2
     if d.get("empty"):
         print(f"{'scene depth':22s} nothing hit in the middle of the framed field")

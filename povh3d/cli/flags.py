@@ -22,11 +22,11 @@ NAMES = {
     "depth_maps": "--depth-maps",
     "max_error_db": "--max-error",       # RenderSettings.max_error_db
     "include_dirs": "--include",         # RenderRequest.include_dirs
-    "display_frame.mode": "--display-frame",   # RenderRequest.display_frame, a DisplayFrameOptions
-    "display_frame.center": "--display-center",
-    "display_frame.normal": "--display-normal",
-    "display_frame.up": "--display-up",
-    "display_frame.width": "--display-width",
+    "placement.mode": "--placement",   # RenderRequest.placement, a PlacementOptions
+    "placement.center": "--display-center",
+    "placement.normal": "--display-normal",
+    "placement.up": "--display-up",
+    "placement.width": "--display-width",
 }
 
 _options: set[str] = set()

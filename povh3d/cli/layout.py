@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 
 from .options import add_array_options, display_from_args, parse_numbers, parse_size, parse_triple
-from .render import add_frame_options, display_frame_options_from_args
+from .render import add_placement_options, placement_options_from_args
 from .volume import add_volume_source_options
 
 
@@ -23,7 +23,7 @@ def cmd_layout(args: argparse.Namespace) -> int:
     volume: dict[str, Any] = {"orientation": args.orientation, "rotate": rotate, "depth": args.depth,
                               "spacing": spacing, "series": args.series, "iso": parse_numbers(args.iso, "--iso")}
     record = layout(args.source, args.output, display.lens_array, display=display,
-                    frame_options=display_frame_options_from_args(args),
+                    placement=placement_options_from_args(args),
                     include_dirs=tuple(args.include), model=model, volume=volume, size=size,
                     use_cache=not args.no_cache)
     depth = record["content_depth"]
@@ -45,7 +45,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--size", default="1200x900", metavar="WxH", help="picture size in pixels (default 1200x900)")
     p.add_argument("--include", action="append", default=[], metavar="DIR", help="extra include folder (scenes)")
     p.add_argument("--no-cache", action="store_true", help="measure the scene again, ignore the cache")
-    add_frame_options(p)
+    add_placement_options(p)
     g = p.add_argument_group("models and volumes (as 'povh3d render')")
     g.add_argument("--depth", type=float, metavar="MM", help="the content's depth on the display")
     g.add_argument("--up", choices=("x", "y", "z", "-x", "-y", "-z"), help="a model's up axis")

@@ -51,16 +51,16 @@ def request_from_args(args: argparse.Namespace) -> Any:
         model=ModelOptions(args.depth, args.shading, max_triangles(args.max_triangles), args.up,
                            parse_triple(args.rotate, "--rotate"), args.unit),
         frames=frames, video=Path(args.video) if args.video else None, fps=args.fps,
-        display_frame=display_frame_options_from_args(args),
+        placement=placement_options_from_args(args),
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
         volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")),
         dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views,
         objects=Path(args.objects) if args.objects else None)
 
 
-def display_frame_options_from_args(args: argparse.Namespace) -> Any:
-    """``DisplayFrameOptions`` from --display-frame and the explicit --display-* options."""
-    from ..renderer.placement.pose import DisplayFrameOptions
+def placement_options_from_args(args: argparse.Namespace) -> Any:
+    """``PlacementOptions`` from --placement and the explicit --display-* options."""
+    from ..renderer.placement.pose import PlacementOptions
 
     fit = args.fit_depth
     if fit is not None and fit != "auto":
@@ -74,7 +74,7 @@ def display_frame_options_from_args(args: argparse.Namespace) -> Any:
             scale = float(scale)
         except ValueError:
             raise ConfigError(f"--depth-scale takes a factor (e.g. 0.5) or nothing, got {scale!r}") from None
-    return DisplayFrameOptions(args.display_frame, parse_triple(args.display_center, "--display-center"),
+    return PlacementOptions(args.placement, parse_triple(args.display_center, "--display-center"),
                         parse_triple(args.display_normal, "--display-normal"),
                         parse_triple(args.display_up, "--display-up"),
                         args.display_width, fit, scale, bool(getattr(args, "depth_report", False)))
@@ -144,7 +144,7 @@ def _render(args: argparse.Namespace) -> str | None:
         if result["video"]:
             print(result["video"])
         return None
-    placed = result.get("display_frame", {})   # its warnings came through the one channel (renderer.render)
+    placed = result.get("placement", {})   # its warnings came through the one channel (renderer.render)
     t = result["timings"]
     w, h = request.image_size
     mapping = f"  {request.display.mapping.name}" if request.display.mapping else ""
@@ -159,7 +159,7 @@ def _render(args: argparse.Namespace) -> str | None:
         method = "the vendor's perspective cameras"
     if result.get("method_note"):   # the default traded for one that renders the scene right
         method += f" (not the default {request.method}: {result.get('method_fallback', 'see the sidecar')})"
-    summary = flags(f"{w}x{h}  {method}{mapping}  {frame_phrase(placed)}  {clearance_phrase(result)}")
+    summary = flags(f"{w}x{h}  {method}{mapping}  {placement_phrase(placed)}  {clearance_phrase(result)}")
     seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
           f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
@@ -180,16 +180,16 @@ def clearance_phrase(record: dict[str, Any]) -> str:
     return f"rays from {q['front_clearance_mm']:.4g} mm{why}"
 
 
-def frame_phrase(record: dict[str, Any]) -> str:
-    """The display frame in a few words: where it came from, its centre and scale."""
+def placement_phrase(record: dict[str, Any]) -> str:
+    """The placement in a few words: where it came from, its centre and scale."""
     source = record.get("source", "native")
     if source == "native" and record.get("units_per_mm", 1.0) == 1.0:
-        text = "frame native (mm, z = 0)"
+        text = "placement native (mm, z = 0)"
     elif source == "matrix":
-        text = "frame matrix"
+        text = "placement matrix"
     else:
         centre = ",".join(f"{v:.4g}" for v in record["centre"])
-        text = f"frame {source} (centre {centre}, {record['units_per_mm']:.4g} units/mm)"
+        text = f"placement {source} (centre {centre}, {record['units_per_mm']:.4g} units/mm)"
     depth = record.get("depth")
     if depth and "near_mm" in depth:
         fit = f", fitted x{depth['fit']['factor']:.3g}" if depth.get("fit") else ""
@@ -315,7 +315,7 @@ def add_parsers(sub: Any) -> None:
     _add_orientation(p)
     p.add_argument("--unit", choices=("mm", "cm", "m", "in"),
                    help="a model's unit (default: the file's); the stage scales the model to the panel anyway")
-    add_frame_options(p)
+    add_placement_options(p)
     add_volume_options(p)
     add_mesh_options(p)
     add_array_options(p)
@@ -355,13 +355,24 @@ def add_parsers(sub: Any) -> None:
     p.set_defaults(func=cmd_bench)
 
 
-def add_frame_options(p: argparse.ArgumentParser) -> None:
+class _OldPlacementFlag(argparse.Action):
+    """``--display-frame``, the name of ``--placement`` before issue 36: still taken, with a warning."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:
+        warn([f"--display-frame is deprecated; use --placement {values}"])
+        setattr(namespace, self.dest, values)
+
+
+def add_placement_options(p: argparse.ArgumentParser) -> None:
     """Where the display sits in the scene (render and layout alike)."""
-    g = p.add_argument_group("display frame (where the display sits in the scene)")
-    g.add_argument("--display-frame", choices=("auto", "camera", "native"), default="auto",
+    g = p.add_argument_group("placement (where the display sits in the scene)")
+    g.add_argument("--placement", choices=("auto", "camera", "native"), default="auto",
                    help="camera: the scene's camera places the display (look_at on the screen, its field "
                    "across the panel); native: the scene is in mm around the screen z = 0; auto (default): "
                    "camera when the scene has one, else native")
+    g.add_argument("--display-frame", dest="placement", choices=("auto", "camera", "native"),
+                   action=_OldPlacementFlag, help=argparse.SUPPRESS)
     g.add_argument("--display-center", metavar="X,Y,Z", help="the display's centre, scene units")
     g.add_argument("--display-normal", metavar="X,Y,Z", help="the display's normal, from the viewer into the scene")
     g.add_argument("--display-up", metavar="X,Y,Z", help="the display's up (default: the scene's y projected onto the "

@@ -31,7 +31,7 @@ from ..geometry.lens_array import LensArray
 from ..geometry.setup import SetUp, depth_figures, depth_points, set_up
 from ..display.display import Display
 from ..renderer.records import base_record, png_output, write_image
-from ..geometry.fit import FILL, depth_budget_mm, fit_to_display, placement_record
+from ..geometry.fit import FILL, depth_budget_mm, fit_to_display, fit_record
 
 SCENE_SUFFIXES = (".pov",)
 MIN_SIZE, MAX_SIZE = 200, 8000   # picture pixels on a side
@@ -54,8 +54,8 @@ class Content:
                                      points even over a model's surface, or a volume box's depth
     box : (8, 3) float or None       a volume's physical box (``Volume.corners`` order)
     marks : list of (label, (3,) mm) the patient's directions on a volume's box
-    units_per_mm : float             the display frame's scene units per mm (1 for models, volumes)
-    record : mapping                 where it came from: frame, placement, depth pass
+    units_per_mm : float             the placement's scene units per mm (1 for models, volumes)
+    record : mapping                 where it came from: placement, fit, depth pass
     """
 
     kind: str
@@ -85,21 +85,21 @@ def source_kind(path: Path) -> str:
                       f"(.obj .stl .ply ...) or a volume ({' '.join(VOLUME_SUFFIXES)}, a DICOM folder)")
 
 
-def scene_content(path: Path, lens_array: LensArray, frame_options: Any = None, *,
+def scene_content(path: Path, lens_array: LensArray, placement: Any = None, *,
                   include_dirs: tuple = (), use_cache: bool = True) -> Content:
     """The scene as the display sees it: the depth pass's hits in the frame ``render`` would use."""
     from ..renderer.passes.depth import depth_pass
     from ..renderer.methods.registry import get_method
     from ..renderer.methods.quality import RenderSettings
     from ..scene.scene import load_scene
-    from ..renderer.placement.pose import DisplayFrameOptions
+    from ..renderer.placement.pose import PlacementOptions
     from ..renderer.placement.place import place_display
     from ..renderer.request import RenderRequest
 
     scene = load_scene(path, include_dirs)
     request = RenderRequest(source=path, display=Display(lens_array), output=Path("layout.png"),
                             settings=RenderSettings(use_cache=use_cache), include_dirs=include_dirs,
-                            display_frame=frame_options or DisplayFrameOptions())
+                            placement=placement or PlacementOptions())
     placed, record = place_display(request, scene)
     s = placed.settings
     units = float(record.get("units_per_mm", 1.0))
@@ -145,12 +145,12 @@ def model_content(path: Path, lens_array: LensArray, *, depth: float | None = No
         raise InputError(f"model file {str(path)!r} does not exist; check the path")
     _, parts, _, up, reason = turned_parts(path, unit=unit, up=up, rotate=rotate)
     lo, hi = model_bounds(parts)
-    placement = fit_to_display(lo, hi, lens_array, depth=depth)
+    fit = fit_to_display(lo, hi, lens_array, depth=depth)
     offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
-    vertices = (np.concatenate([p.vertices for p in parts]) + placement.shift) * placement.scale
+    vertices = (np.concatenate([p.vertices for p in parts]) + fit.shift) * fit.scale
     faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets)])
     record = {"up": up, "up_reason": reason, "triangles": len(faces),
-              "placement": placement_record(placement, fill=FILL)}
+              "fit": fit_record(fit, fill=FILL)}
     return Content("model", path.name, vertices, faces, _surface_z(vertices, faces), record=record)
 
 
@@ -205,7 +205,7 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
     with a coarse surface of what it holds (``volume_shape``)."""
     from ..renderer.content.volume import place_volume
 
-    _, placement, m = place_volume(volume, lens_array, orientation, rotate, depth)
+    _, fit, m = place_volume(volume, lens_array, orientation, rotate, depth)
     box = volume.corners() @ m[:3, :3].T + m[:3, 3]
     centre = box.mean(axis=0)
     # The patient's directions (LPS: +x left, +y posterior, +z superior) at the box's faces.
@@ -222,12 +222,12 @@ def volume_content(volume: Any, lens_array: LensArray, *, orientation: str = "co
         vertices, faces = shape[0] @ m[:3, :3].T + m[:3, 3], shape[1]
     record = {"volume": volume.as_record(), "orientation": orientation, "rotate": list(rotate) if rotate else None,
               "world_to_display": m.round(12).tolist(), "shape": "iso" if iso else ("labels" if shape else None),
-              "placement": placement_record(placement)}
+              "fit": fit_record(fit)}
     return Content("volume", volume.name, vertices, faces, zs, box=box, marks=marks, record=record)
 
 
 def read_volume_content(path: Path, lens_array: LensArray, *, spacing: Any = None, series: str | None = None,
-                        **placement: Any) -> Content:
+                        **options: Any) -> Content:
     """Read a volume file or DICOM folder (``volume.read``) and place it (``volume_content``)."""
     if not path.exists():
         raise InputError(f"volume {str(path)!r} does not exist; check the path")
@@ -239,7 +239,7 @@ def read_volume_content(path: Path, lens_array: LensArray, *, spacing: Any = Non
     from ..renderer.content.volume import volume_weigher
 
     return volume_content(read_volume(path, spacing=spacing, series=series, weigh=volume_weigher(path)), lens_array,
-                          **placement)
+                          **options)
 
 
 def picture_size(size: tuple[int, int]) -> tuple[int, int]:
@@ -279,12 +279,12 @@ def write_layout(content: Content, lens_array: LensArray, output: str | Path, *,
     return record
 
 
-def find_content(source: Path, lens_array: LensArray, *, frame_options: Any = None, include_dirs: tuple = (),
+def find_content(source: Path, lens_array: LensArray, *, placement: Any = None, include_dirs: tuple = (),
                  model: dict | None = None, volume: dict | None = None, use_cache: bool = True) -> Content:
     """The scene, model or volume at ``source``, placed on the display as ``render`` places it."""
     kind = source_kind(source)
     if kind == "scene":
-        return scene_content(source, lens_array, frame_options, include_dirs=include_dirs, use_cache=use_cache)
+        return scene_content(source, lens_array, placement, include_dirs=include_dirs, use_cache=use_cache)
     if kind == "model":
         return model_content(source, lens_array, **(model or {}))
     return read_volume_content(source, lens_array, **(volume or {}))
@@ -294,13 +294,13 @@ def content_report(source: str | Path, lens_array: LensArray) -> dict[str, Any]:
     """``povh3d info MODEL|VOLUME``: how the default stage places it, and its depth against the budget."""
     content = find_content(Path(source), lens_array)
     setup = set_up(lens_array, depth_budget_mm(lens_array))
-    return {"content": str(source), "kind": content.kind, "placement": content.record.get("placement"),
+    return {"content": str(source), "kind": content.kind, "fit": content.record.get("fit"),
             "depth": figures(content, setup), "depth_budget_mm": setup.budget_mm,
             "warnings": content.record.get("warnings", [])}
 
 
 def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, display: Display | None = None,
-           frame_options: Any = None, include_dirs: tuple = (), model: dict | None = None,
+           placement: Any = None, include_dirs: tuple = (), model: dict | None = None,
            volume: dict | None = None, size: tuple[int, int] = (1200, 900), use_cache: bool = True) -> dict[str, Any]:
     """``povh3d layout SOURCE``: the content found, placed and drawn with the set-up (returns the record).
 
@@ -314,7 +314,7 @@ def layout(source: str | Path, output: str | Path, lens_array: LensArray, *, dis
     reads = (source, *(load_scene(source, include_dirs).files if source_kind(source) == "scene" else ()))
     png_output(output, inputs=reads)
     picture_size(size)
-    content = find_content(source, lens_array, frame_options=frame_options, include_dirs=include_dirs,
+    content = find_content(source, lens_array, placement=placement, include_dirs=include_dirs,
                            model=model, volume=volume, use_cache=use_cache)
     record = write_layout(content, lens_array, output, display=display, size=size,
                           content_seconds=time.perf_counter() - start)

@@ -1,6 +1,6 @@
 """Draw the set-up picture off screen with PyVista: arrays in, an RGB image out (no files).
 
-The display frame is left-handed (``z`` away from the viewer), VTK's is
+Display coordinates are left-handed (``z`` away from the viewer), VTK's is
 right-handed, so every point is drawn at ``(x, y, -z)``: the picture is not a
 mirror image, and the viewer's side (display ``-z``) is VTK's ``+z``.  The
 camera looks from the viewer's side, above and to the right (a 3/4 view).
@@ -154,12 +154,12 @@ def _legend_text(content: Any, setup: SetUp, lens_array: LensArray, numbers: dic
     if content.record.get("depth", {}).get("unmeasured_fraction", 0) > 0.05:
         lines.append(f"depth pass: {100 * subject['unmeasured_fraction']:.0f} % of the field unmeasured "
                      "(viewpoint inside a solid)")
-    placement = content.record.get("placement")
+    fit = content.record.get("fit")
     if content.kind == "scene":
         lines.append(f"frame: {content.units_per_mm:.4g} scene units per mm ({content.record.get('source', 'native')})")
-    elif placement:   # a model or a volume, staged in display mm
-        limit = param("depth") if placement["limit"] == "depth" else f"the panel's {placement['limit']}"
-        lines.append(f"placed at {placement['scale']:.4g} display mm per {content.kind} mm, limited by {limit}")
+    elif fit:   # a model or a volume, staged in display mm
+        limit = param("depth") if fit["limit"] == "depth" else f"the panel's {fit['limit']}"
+        lines.append(f"placed at {fit['scale']:.4g} display mm per {content.kind} mm, limited by {limit}")
     notes = []
     if cone_length < setup.viewing_distance_mm:
         notes.append(f"cone drawn to {cone_length:.3g} mm")

@@ -98,7 +98,7 @@ def centre_camera(views: tuple[int, int]) -> tuple[int, int, int]:
 
 
 def z_from_ray_depth(t: np.ndarray, u: float, v: float, focal: float) -> np.ndarray:
-    """Display-frame depth ``z`` (mm) of points ``t`` mm along the ray ``normalize(u, v, f)``
+    """Display depth ``z`` (mm) of points ``t`` mm along the ray ``normalize(u, v, f)``
     from the display plane (NaN stays NaN)."""
     return np.asarray(t, float) * focal / math.sqrt(u * u + v * v + focal * focal)
 

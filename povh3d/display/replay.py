@@ -133,7 +133,7 @@ def window_points(lens_array: LensArray, size: tuple[int, int]) -> tuple[np.ndar
 
 def replay(h3d: np.ndarray, lens_array: LensArray, eye, *, optics: str = "pinhole",
            size: str | tuple[int, int] = "lenses", shift: float = 0.0, subpixels: bool = False) -> Replay:
-    """What an eye at ``eye`` (mm, display frame) sees of ``h3d`` on its display (module docstring).
+    """What an eye at ``eye`` (mm, display coordinates) sees of ``h3d`` on its display (module docstring).
 
     ``shift``: the sheet lies that many mm across from ``lens_array``'s.  ``subpixels``: the panel is
     seen subpixel by subpixel (a mapped slanted panel, whose sheet addresses R, G and B apart): the ray

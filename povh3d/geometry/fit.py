@@ -40,7 +40,7 @@ def depth_budget_mm(lens_array: LensArray) -> float:
 
 
 @dataclass(frozen=True)
-class Placement:
+class Fit:
     """``object { M translate shift scale scale }``: the model centred on the origin, then scaled.
 
     Attributes
@@ -60,14 +60,14 @@ class Placement:
 
 
 def fit_to_display(lo: np.ndarray, hi: np.ndarray, lens_array: LensArray, *,
-                   depth: float | None = None, fill: float = FILL) -> Placement:
+                   depth: float | None = None, fill: float = FILL) -> Fit:
     """Scale the box ``lo..hi`` (mm) uniformly to fill the display's panel.
 
     The model keeps its proportions: the scale is the largest that fits
     ``fill`` of the panel's width and height (and, with ``depth``, that depth
     in mm), and the box is centred on the origin, so the model straddles the
     screen ``z = 0``.  Without ``depth`` a deep model may reach past the depth
-    budget: ``Placement.depth`` is the budget, ``size[2]`` what the model takes.
+    budget: ``Fit.depth`` is the budget, ``size[2]`` what the model takes.
     """
     if depth is not None and not (np.isfinite(depth) and depth > 0):
         raise ConfigError(f"{param('depth')} must be a positive number of mm, got {depth!r}")
@@ -81,18 +81,18 @@ def fit_to_display(lo: np.ndarray, hi: np.ndarray, lens_array: LensArray, *,
         raise ConfigError("the model is a single point; it cannot be scaled to the display")
     limit = min(scales, key=scales.__getitem__)
     scale = scales[limit]
-    return Placement(tuple((-(lo + hi) / 2).tolist()), float(scale), tuple((size * scale).tolist()), limit, float(budget))
+    return Fit(tuple((-(lo + hi) / 2).tolist()), float(scale), tuple((size * scale).tolist()), limit, float(budget))
 
 
-def depth_warning(placement: Placement, what: str) -> list[str]:
+def depth_warning(fit: Fit, what: str) -> list[str]:
     """The warning when ``what`` (``'model'``, ``'volume'``), placed, is deeper than the depth budget; else none."""
-    if placement.size[2] > placement.depth * (1 + 1e-9):
-        return [f"the {what} is {placement.size[2]:.3g} mm deep at this size, beyond the depth budget of "
-                f"{placement.depth:.3g} mm (2 N f): its front and back look blurred; {param('depth')} "
-                f"{placement.depth:.3g} fits it"]
+    if fit.size[2] > fit.depth * (1 + 1e-9):
+        return [f"the {what} is {fit.size[2]:.3g} mm deep at this size, beyond the depth budget of "
+                f"{fit.depth:.3g} mm (2 N f): its front and back look blurred; {param('depth')} "
+                f"{fit.depth:.3g} fits it"]
     return []
 
 
-def placement_record(placement: Placement, **extra: Any) -> dict[str, Any]:
-    """The sidecar's ``placement``: scale, placed size (mm) and the limit that set the scale, and ``extra``."""
-    return {"scale": placement.scale, "size_mm": list(placement.size), "limit": placement.limit, **extra}
+def fit_record(fit: Fit, **extra: Any) -> dict[str, Any]:
+    """The sidecar's ``fit``: scale, placed size (mm) and the limit that set the scale, and ``extra``."""
+    return {"scale": fit.scale, "size_mm": list(fit.size), "limit": fit.limit, **extra}

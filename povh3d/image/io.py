@@ -356,4 +356,16 @@ def read_sidecar(image_path: str | Path) -> dict[str, Any] | None:
             and file_sha256(image) != digest:
         raise InputError(f"the sidecar {str(path)!r} describes another image than {str(image)!r} "
                          "(the image was replaced); delete the sidecar or render the image again")
+    return renamed_keys(record)
+
+
+#: Sidecar keys renamed since povh3d wrote them (old -> new): sidecars on users' disks still read.
+RENAMED_KEYS = {"display_frame": "placement"}   # issue 36: the display's place in the scene
+
+
+def renamed_keys(record: dict[str, Any]) -> dict[str, Any]:
+    """``record`` (a sidecar) with its keys of an older povh3d under their current names."""
+    for old, new in RENAMED_KEYS.items():
+        if old in record and new not in record:
+            record[new] = record.pop(old)
     return record

@@ -62,19 +62,19 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
     check_outputs(request, output)   # views, dataset, depth maps, a Looking Glass quilt (outputs.steps)
     scene, model_record = load_content(request)
     check_outputs_against(request, output, (request.source, *scene.files))
-    request, frame_record = place_display(request, scene, progress)
+    request, placement_record = place_display(request, scene, progress)
     ray_state = None
     if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
         request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
     if ray_state is not None:
-        frame_record = {**frame_record, "ray_state": ray_state}
+        placement_record = {**placement_record, "ray_state": ray_state}
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
-                    display_frame=frame_record)
+                    placement=placement_record)
     if request.frames is None:
         still = frame(None, progress)
         _warn_unlit(scene, still.image)
-        write_outputs(Still(request, scene, settings, still, output, frame_record.get("units_per_mm", 1.0), progress))
+        write_outputs(Still(request, scene, settings, still, output, placement_record.get("units_per_mm", 1.0), progress))
         still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
         still.record["passes"] = [p.to_json() for p in passes]
         write_image(output, still.image, still.record)
@@ -126,7 +126,7 @@ def _warn_record(record: dict[str, Any]) -> None:
     channel (``errors.warn``) once the image is written: the command line prints them, a Python caller
     sees them as ``Povh3dWarning``s, and the sidecar keeps them."""
     for message in [*record.get("volume", {}).get("warnings", []),
-                    *record.get("display_frame", {}).get("warnings", []), *record.get("warnings", [])]:
+                    *record.get("placement", {}).get("warnings", []), *record.get("warnings", [])]:
         warn(message)
 
 
@@ -195,7 +195,7 @@ def _resolve_quality(request: RenderRequest, scene: Scene,
 
 def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                  progress: Progress | None = None, *, sequence: ClockSequence | None = None, auto: AutoChoice | None = None,
-                 model: dict[str, Any] | None = None, display_frame: dict[str, Any] | None = None) -> RenderedImage:
+                 model: dict[str, Any] | None = None, placement: dict[str, Any] | None = None) -> RenderedImage:
     """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default); ``sequence``:
     the animation frames from this one to the last, which the engine may render alongside it."""
     array = request.render_array
@@ -206,7 +206,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         from .methods.vendor_views import run_vendor_views
 
         result = run_vendor_views(scene, array, replace(settings, clock=clock, sequence=sequence),
-                                  dict(request.display.quilt or {}), display_frame, progress)  # a quilt preset
+                                  dict(request.display.quilt or {}), placement, progress)  # a quilt preset
     else:
         result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
                             progress, crop=request.crop, **request.method_options)
@@ -228,7 +228,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     )
     record.update(request.display.as_record())  # the sidecar's lens_array and display entries
     record["method_chosen"] = request.method_chosen
-    ray_state = (display_frame or {}).get("ray_state") or {}
+    ray_state = (placement or {}).get("ray_state") or {}
     note = ray_state.get("method_note")
     if note:
         record.update(method_note=note, method_fallback=ray_state["method_fallback"])
@@ -242,9 +242,9 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         record["crop"] = result.crop
     if model is not None:
         record[request.content_kind] = model
-    if display_frame is not None:
-        cut = foreground_cut(display_frame, result.front_clearance, request.method)
-        record["display_frame"] = {**display_frame, "warnings": [*display_frame.get("warnings", []), *cut]}
+    if placement is not None:
+        cut = foreground_cut(placement, result.front_clearance, request.method)
+        record["placement"] = {**placement, "warnings": [*placement.get("warnings", []), *cut]}
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
     first = request.frames is None or clock is None or clock == request.frames.clock(request.frames.first)
     if first and bank.size and int(bank.max()) == int(bank.min()):
@@ -262,15 +262,15 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     return RenderedImage(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
 
 
-def foreground_cut(display_frame: dict[str, Any], front_clearance: float, method: str) -> list[str]:
+def foreground_cut(placement: dict[str, Any], front_clearance: float, method: str) -> list[str]:
     """A warning when the measured scene reaches out past where the rays start (mm): that part of the
     foreground is not in the image."""
-    depth = display_frame.get("depth") or {}
+    depth = placement.get("depth") or {}
     near = depth.get("near_mm")
     if depth.get("empty") or near is None or near >= -front_clearance * (1 - 1e-9):
         return []
     start = -front_clearance or 0.0
-    limit = display_frame.get("front_clearance_limit_mm")
+    limit = placement.get("front_clearance_limit_mm")
     if limit is not None:
         why = (f"the scene's camera stands {limit / 0.9:.3g} mm out and nothing behind it may enter the image"
                f"{'; single-stage moves its lenses in steps' if method == 'single-stage' else ''}")

@@ -25,7 +25,7 @@ from ..image.video import check_video_path
 from ..mesh.formats import is_mesh_file
 from .animation import FrameRange
 from ..display.display import Display
-from .placement.pose import DisplayFrameOptions
+from .placement.pose import PlacementOptions
 
 SHADINGS = ("auto", "smooth", "flat")
 
@@ -137,7 +137,7 @@ class RenderRequest:
     frames : FrameRange or None    render an animation: one image per clock value
     video : Path or None           with ``frames``: also assemble them into this .mp4 or .gif
     fps : float                    video frames per second
-    display_frame : DisplayFrameOptions   where the display sits in the scene (scenes only; ``renderer.placement.pose``)
+    placement : PlacementOptions   where the display sits in the scene (scenes only; ``renderer.placement.pose``)
     depth_maps : Path or None      also write per-view depth and disparity maps here (stills only)
     depth_format : {'npy', 'png'}  float32 arrays, or 16-bit PNGs with the scale in depth_maps.json
     volume : VolumeOptions         how a volume is drawn (volume files and DICOM folders only)
@@ -160,7 +160,7 @@ class RenderRequest:
     frames: FrameRange | None = None
     video: Path | None = None
     fps: float = 24.0
-    display_frame: DisplayFrameOptions = field(default_factory=DisplayFrameOptions)
+    placement: PlacementOptions = field(default_factory=PlacementOptions)
     depth_maps: Path | None = None
     depth_format: str = "npy"
     volume: VolumeOptions = field(default_factory=VolumeOptions)
@@ -216,6 +216,12 @@ class RenderRequest:
                               f"{param('orientation')}, {param('spacing')}, {param('series')} ...) apply to volume files and DICOM folders")
 
     @property
+    def display_frame(self) -> PlacementOptions:
+        """``placement`` by its name before issue 36 (deprecated)."""
+        _deprecated("RenderRequest.display_frame")
+        return self.placement
+
+    @property
     def is_model(self) -> bool:
         """Whether ``source`` is put on the default stage (a mesh model, or a volume) rather than a scene."""
         return is_mesh_file(str(self.source)) or self.is_volume
@@ -246,3 +252,22 @@ class RenderRequest:
     def image_size(self) -> tuple[int, int]:
         """``(W, H)`` of the image written (``Display.image_size``)."""
         return self.display.image_size
+
+
+def _deprecated(old: str) -> None:
+    import warnings
+
+    warnings.warn(f"{old} is deprecated; its name is placement (a PlacementOptions)", DeprecationWarning, stacklevel=3)
+
+
+def _init_taking_display_frame(init: Any) -> Any:
+    """``RenderRequest(display_frame=...)``, the name of ``placement`` before issue 36, still taken."""
+    def __init__(self: RenderRequest, *args: Any, display_frame: PlacementOptions | None = None, **kwargs: Any) -> None:
+        if display_frame is not None:
+            _deprecated("RenderRequest(display_frame=...)")
+            kwargs.setdefault("placement", display_frame)
+        init(self, *args, **kwargs)
+    return __init__
+
+
+setattr(RenderRequest, "__init__", _init_taking_display_frame(RenderRequest.__init__))

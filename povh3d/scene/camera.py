@@ -86,13 +86,13 @@ def _closing_brace(toks: list[Token], opening: int) -> int:
     raise CameraError("the scene's camera block has no closing brace; fix the scene")
 
 
-#: The same words as ``geometry.frame.EXPLICIT_OPTIONS`` (scene/ does not import geometry/).
-EXPLICIT_OPTIONS = f"{param('display_frame.center')} X,Y,Z {param('display_frame.normal')} X,Y,Z [{param('display_frame.up')} X,Y,Z] {param('display_frame.width')} UNITS"
+#: The same words as ``geometry.pose.EXPLICIT_OPTIONS`` (scene/ does not import geometry/).
+EXPLICIT_OPTIONS = f"{param('placement.center')} X,Y,Z {param('placement.normal')} X,Y,Z [{param('placement.up')} X,Y,Z] {param('placement.width')} UNITS"
 
 
 def _cannot(reason: str) -> CameraError:
     return CameraError(f"cannot use the scene's camera ({reason}); place the display with "
-                       f"{EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
+                       f"{EXPLICIT_OPTIONS}, or {param('placement.mode')} native")
 
 
 @dataclass(frozen=True)
@@ -273,7 +273,7 @@ class SceneCamera:
     kind: str = "perspective"
     cameras: int = 1
     values: dict = field(default_factory=dict, compare=False)
-    dropped: tuple[str, ...] = ()   # modifiers a display frame does not reproduce (aperture, normal ...)
+    dropped: tuple[str, ...] = ()   # modifiers a placement does not reproduce (aperture, normal ...)
 
     def as_record(self) -> dict:
         return {"type": self.kind, "location": list(self.location), "direction": list(self.direction),

@@ -1,6 +1,6 @@
-"""A volume's surfaces as one POV-Ray include: turned into the display frame, decimated, ``mesh2``.
+"""A volume's surfaces as one POV-Ray include: turned into display coordinates, decimated, ``mesh2``.
 
-Each surface becomes a ``Part`` (mesh/) in display-frame mm (``matrix @
+Each surface becomes a ``Part`` (mesh/) in display mm (``matrix @
 world``, no scale: the stage scales), then goes the way of every model:
 cleaned, decimated together to the triangle budget (``mesh.simplify``, which
 shares it in proportion to their counts), smooth-shaded, written by
@@ -28,8 +28,8 @@ SILHOUETTE_WIDTH = 256
 
 
 def surface_part(surface: Surface, matrix: np.ndarray) -> Part:
-    """``surface`` in display-frame mm: ``matrix`` (3, 3) applied; a mirroring matrix (LPS is
-    right-handed, the display frame left-handed) reverses the winding so normals stay outward."""
+    """``surface`` in display mm: ``matrix`` (3, 3) applied; a mirroring matrix (LPS is
+    right-handed, display coordinates left-handed) reverses the winding so normals stay outward."""
     m = np.asarray(matrix, dtype=np.float64)
     faces = surface.faces[:, [0, 2, 1]] if np.linalg.det(m) < 0 else surface.faces
     rgba = np.array([*(round(255 * c) for c in surface.colour), round(255 * surface.opacity)], dtype=np.uint8)

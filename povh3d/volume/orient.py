@@ -1,6 +1,6 @@
-"""How a volume faces the viewer: LPS patient space -> the display frame.
+"""How a volume faces the viewer: LPS patient space -> display coordinates.
 
-The display frame (docs/geometry.md) is POV-Ray's: ``x`` right on the screen,
+Display coordinates (docs/geometry.md) are POV-Ray's: ``x`` right on the screen,
 ``y`` up, ``z`` away from the viewer, who is at ``-z``.  It is a left-handed
 set of axes, LPS a right-handed one, so a map that keeps the patient unmirrored
 has determinant -1 in coordinates.  Each preset is the view a radiologist
@@ -50,7 +50,7 @@ def pov_rotation(degrees: Any) -> np.ndarray:
 
 
 def volume_to_display(orientation: str, rotate: Any = None) -> np.ndarray:
-    """(3, 3): display-frame direction of an LPS direction, preset then ``rotate``."""
+    """(3, 3): display direction of an LPS direction, preset then ``rotate``."""
     m = lps_to_display(orientation)
     return m if rotate is None else pov_rotation(rotate) @ m
 
@@ -62,7 +62,7 @@ def display_box(corners: np.ndarray, matrix: np.ndarray) -> tuple[np.ndarray, np
 
 
 def world_to_display(matrix: np.ndarray, shift: Any, scale: float) -> np.ndarray:
-    """(4, 4): display mm = ``scale * (matrix @ world + shift)`` (``shift``, ``scale``: geometry.fit.Placement)."""
+    """(4, 4): display mm = ``scale * (matrix @ world + shift)`` (``shift``, ``scale``: geometry.fit.Fit)."""
     m = np.eye(4)
     m[:3, :3] = scale * np.asarray(matrix, dtype=np.float64)
     m[:3, 3] = scale * np.asarray(shift, dtype=np.float64)

@@ -40,7 +40,7 @@ def test_a_blind_pass_names_the_cause_and_the_fix(cli, tmp_path):
                    "--include", str(lib), *ARRAY)
     assert rendered.code == 0, rendered.err
     assert "inside a solid" in rendered.err and "'hollow'" in rendered.err and "nothing in the middle" not in rendered.err
-    depth = json.loads((tmp_path / "b.json").read_text())["display_frame"]["depth"]
+    depth = json.loads((tmp_path / "b.json").read_text())["placement"]["depth"]
     assert depth["blind"] is True and depth["empty"] is False
 
 

@@ -169,7 +169,7 @@ def test_the_mesh_cameras_rays_hit_within_the_chaotic_bound(cli, tmp_path):
         folder.mkdir()
         record = _render_views(cli, encode_scene(folder, period, shift_units), folder, "--bit-depth", "16")
         return (max(hit_miss_mm(folder / "views", record, period)), chaotic_shift_mm(record),
-                period / record["display_frame"]["units_per_mm"])
+                period / record["placement"]["units_per_mm"])
 
     miss, bound, period_mm = worst_miss_mm(0.0)
     # 16 bits of the period (sRGB's steepest step 2.3 codes) resolve a tenth of the bound; the control's

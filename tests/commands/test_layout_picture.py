@@ -64,10 +64,10 @@ def test_a_model_is_placed_as_the_stage_places_it(tmp_path):
     record = check_picture_of(layout(ANT, tmp_path / "ant.png", a, size=SIZE), tmp_path / "ant.png")
     # the render's own stage (converted to POV-Ray, placed from the include's bounds) agrees
     _, stage = prepare_stage(ANT, a, cache_dir=tmp_path / "cache")
-    assert np.allclose(record["content"]["placement"]["size_mm"], stage["placement"]["size_mm"], rtol=1e-9)
+    assert np.allclose(record["content"]["fit"]["size_mm"], stage["fit"]["size_mm"], rtol=1e-9)
     assert record["content"]["up"] == stage["up"]
     depth = record["content_depth"]
-    assert depth["depth_mm"] == pytest.approx(stage["placement"]["size_mm"][2], rel=1e-9)
+    assert depth["depth_mm"] == pytest.approx(stage["fit"]["size_mm"][2], rel=1e-9)
     assert depth["near_mm"] == pytest.approx(-depth["far_mm"])   # centred on the screen
 
 
@@ -80,7 +80,7 @@ def check_picture_of(record: dict, path: Path) -> dict:
 @pytest.mark.povray
 def test_a_scene_with_a_camera_is_measured_in_the_cameras_frame(tmp_path):
     from povh3d.renderer.placement.place import scene_report
-    from povh3d.geometry.frame import DisplayFrame
+    from povh3d.geometry.pose import DisplayPose
 
     scene = tmp_path / "cam.pov"
     scene.write_text(CAMERA_SCENE)
@@ -88,10 +88,10 @@ def test_a_scene_with_a_camera_is_measured_in_the_cameras_frame(tmp_path):
     content = scene_content(scene, a)
     write_layout(content, a, tmp_path / "cam.png", size=SIZE)
     record = check_picture(tmp_path / "cam.png")
-    info = scene_report(scene, a)["display_frame"]   # what 'povh3d info SCENE' reports
+    info = scene_report(scene, a)["placement"]   # what 'povh3d info SCENE' reports
     assert record["content"]["source"] == "camera"
     assert record["units_per_mm"] == pytest.approx(info["units_per_mm"])
-    frame = DisplayFrame(info["centre"], info["axis_x"], info["axis_y"], info["normal"], info["units_per_mm"])
+    frame = DisplayPose(info["centre"], info["axis_x"], info["axis_y"], info["normal"], info["units_per_mm"])
     # every hit, taken back into the scene, lies on the sphere or on the box (to the pass's resolution)
     p = frame.to_scene(content.vertices)
     assert len(p) > 500

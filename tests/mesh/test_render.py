@@ -62,5 +62,5 @@ def test_render_model_cli_demo(tmp_path, cli):
     import json
 
     record = json.loads(out.with_suffix(".json").read_text())
-    assert record["model"]["placement"]["limit"] == "height"
+    assert record["model"]["fit"]["limit"] == "height"
     assert out.is_file()

@@ -42,7 +42,7 @@ def test_a_wall_behind_the_camera_stays_out(cli, tmp_path, extra):
     result = cli("render", str(scene), "-o", str(out), *ARRAY, *extra)
     assert result.code == 0, result.err
     record = json.loads(out.with_suffix(".json").read_text())
-    frame = record["display_frame"]
+    frame = record["placement"]
     distance_mm = 10 / frame["units_per_mm"]
     used = record["quality"]["front_clearance_mm"]
     assert used <= 0.9 * distance_mm * (1 + 1e-9)
@@ -82,7 +82,7 @@ def test_a_foreground_cut_by_the_clearance_is_one_warning(cli, tmp_path):
     lines = [line for line in cut.err.splitlines() if "foreground" in line]
     assert len(lines) == 1 and "rays start at z = -24 mm" in lines[0] and "--method multi-ortho" in lines[0]
     record = json.loads((tmp_path / "s.json").read_text())
-    assert any("foreground" in w for w in record["display_frame"]["warnings"])
+    assert any("foreground" in w for w in record["placement"]["warnings"])
     whole = cli("render", str(scene), "-o", str(tmp_path / "m.png"), *ARRAY)   # negative control
     assert whole.code == 0 and "foreground" not in whole.err, whole.err
 

@@ -10,7 +10,7 @@ import pytest
 
 from povh3d.renderer.passes.depth import depth_pass
 from povh3d.renderer.methods.quality import RenderSettings
-from povh3d.geometry.frame import DisplayFrame
+from povh3d.geometry.pose import DisplayPose
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.scene.scene import load_scene
 
@@ -53,7 +53,7 @@ def test_depth_of_a_sphere_before_a_plane(tmp_path, moved):
         rx = np.array([[1, 0, 0], [0, np.cos(ax), np.sin(ax)], [0, -np.sin(ax), np.cos(ax)]])
         ry = np.array([[np.cos(ay), 0, -np.sin(ay)], [0, 1, 0], [np.sin(ay), 0, np.cos(ay)]])
         r = rx @ ry
-        frame = DisplayFrame((500, 20, -70), r[0], r[1], r[2], 40.0, "explicit")
+        frame = DisplayPose((500, 20, -70), r[0], r[1], r[2], 40.0, "explicit")
         settings = RenderSettings(frame=tuple(frame.matrix().ravel()))
         units = 40.0
     scene.write_text(text)

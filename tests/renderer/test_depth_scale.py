@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from povh3d.display.display import Display
-from povh3d.renderer.placement.pose import DisplayFrameOptions
+from povh3d.renderer.placement.pose import PlacementOptions
 from povh3d.renderer.placement.place import place_display
 from povh3d.renderer.request import RenderRequest
 from povh3d.renderer.methods.quality import RenderSettings
@@ -84,7 +84,7 @@ def test_compressed_render_equals_the_physically_compressed_scene(tmp_path, meth
     differ = (np.abs(a - b).max(-1) > 2).mean()
     assert differ < 0.003, differ        # a few pixels on checker edges, in the last bits of a ray
     assert (np.abs(a - c).max(-1) > 2).mean() > 0.05   # negative control: uncompressed differs
-    record = ours["display_frame"]
+    record = ours["placement"]
     assert record["depth_scale"] == k and "distortion" in record["depth_scale_note"]
     assert ours["lens_array"]["focal_mm"] == array.focal   # the display is recorded as it is
 
@@ -154,7 +154,7 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     array = small()
     request = RenderRequest(source=scene, display=Display(array), output=tmp_path / "o.png",
                             settings=RenderSettings(quality="draft"),
-                            display_frame=DisplayFrameOptions(fit_depth="auto", depth_scale="fit"))
+                            placement=PlacementOptions(fit_depth="auto", depth_scale="fit"))
     placed, record = place_display(request, load_scene(scene))
     k = placed.settings.depth_scale
     before = record["depth"]["before_fit"]
@@ -166,16 +166,16 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     assert placed.settings.frame is None   # the frame is not scaled: lateral sizes kept
     # Without --depth-scale the frame shrinks instead.
     request = RenderRequest(source=scene, display=Display(array), output=tmp_path / "o.png",
-                            settings=RenderSettings(quality="draft"), display_frame=DisplayFrameOptions(fit_depth="auto"))
+                            settings=RenderSettings(quality="draft"), placement=PlacementOptions(fit_depth="auto"))
     placed, record = place_display(request, load_scene(scene))
     assert placed.settings.depth_scale == 1 and record["units_per_mm"] == pytest.approx(1 / k)
 
 
 def test_depth_scale_options_are_checked():
     with pytest.raises(ConfigError, match="needs fit_depth"):
-        DisplayFrameOptions(depth_scale="fit")
+        PlacementOptions(depth_scale="fit")
     with pytest.raises(ConfigError, match="both set the depth"):
-        DisplayFrameOptions(fit_depth="auto", depth_scale=0.5)
+        PlacementOptions(fit_depth="auto", depth_scale=0.5)
     with pytest.raises(ConfigError, match="depth_scale"):
         RenderSettings(depth_scale=0.0)
 

@@ -53,7 +53,7 @@ def test_planet_in_metres_far_away_fills_the_panel(cli, tmp_path):
     rows = np.flatnonzero(mask.any(axis=1))
     assert np.ptp(rows) + 1 >= 0.8 * mask.shape[0]        # the disc fills ~90 % of the height
     record = json.loads(out.with_suffix(".json").read_text())
-    assert record["model"]["placement"]["limit"] == "height"
+    assert record["model"]["fit"]["limit"] == "height"
 
 
 def test_an_empty_image_is_a_warning(cli, tmp_path):

@@ -245,7 +245,7 @@ def test_a_camera_scenes_masks_take_the_colour_pass_placement(tmp_path: Path, mo
                      "box { <1, -3, -1>, <4, 0, 2> pigment { rgb <1, 0, 0> } }\n"
                      "plane { z, 6 pigment { rgb 0.5 } }\n")
     record = povh3d.render(scene, tmp_path / "c.png", preset="demo", quality="draft", use_cache=False)
-    assert record["display_frame"]["source"] == "camera"
+    assert record["placement"]["source"] == "camera"
     from povh3d.display.display import build_display
     from povh3d.renderer.request import RenderRequest
     from povh3d.renderer.methods.quality import RenderSettings
@@ -266,8 +266,8 @@ def test_a_camera_scenes_masks_take_the_colour_pass_placement(tmp_path: Path, mo
             a, b = (read_mask(tmp_path / name, table, 0, (l, k)) for name in ("reused", "again"))
             assert (a == b).all()
     # control: a frame moved by 1 mm gives other masks, so the equality above can fail
-    shifted = dict(record, display_frame={**record["display_frame"],
-                                          "centre": [c + 1.0 for c in record["display_frame"]["centre"]]})
+    shifted = dict(record, placement={**record["placement"],
+                                          "centre": [c + 1.0 for c in record["placement"]["centre"]]})
     object_masks.render_objects(request, tmp_path / "moved", shifted)
     assert any((read_mask(tmp_path / "moved", table, 0, (l, k)) != read_mask(tmp_path / "again", table, 0, (l, k))).any()
                for l in range(ny) for k in range(nx))

@@ -32,7 +32,7 @@ def _fresh(tmp_path) -> dict[str, str]:
 
 def _passes(path) -> tuple[list[dict], dict]:
     record = json.loads(path.with_suffix(".json").read_text())
-    return record["passes"], record["display_frame"]
+    return record["passes"], record["placement"]
 
 
 @pytest.mark.povray
@@ -56,7 +56,7 @@ def test_a_plain_render_runs_no_depth_pass_and_fit_depth_does(cli, tmp_path):
     assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and frame["normal"] == pytest.approx([0, 0, 1])
     # The sphere's front (1.5 units before the centre) in mm: the measured subject reaches it.
     before = frame["depth"]["before_fit"]
-    units = json.loads(plain.with_suffix(".json").read_text())["display_frame"]["units_per_mm"]
+    units = json.loads(plain.with_suffix(".json").read_text())["placement"]["units_per_mm"]
     assert before["near_mm"] == pytest.approx(-1.5 / units, rel=0.05)
     # A camera of declared values is evaluated by POV-Ray, alone: one run of one row; again from the cache.
     declared = tmp_path / "declared.pov"

@@ -93,7 +93,7 @@ def test_a_default_render_whose_oblique_rays_start_below_the_ground_falls_back_a
     assert record["method"] == "multi-ortho-views" and record["method_chosen"] is False
     assert "inside a solid" in record["method_note"] and "fog" in record["method_note"]
     assert "not the default multi-ortho" in result.out
-    assert record["display_frame"]["ray_state"]["origins_inside_fraction"] == pytest.approx(10 / 44, abs=0.02)
+    assert record["placement"]["ray_state"]["origins_inside_fraction"] == pytest.approx(10 / 44, abs=0.02)
     assert _worst_db(scene, record, views) >= 35
 
 
@@ -129,7 +129,7 @@ def test_one_state_for_every_ray_keeps_the_default_and_is_right(cli, tmp_path, c
     assert result.code == 0, result.err
     assert record["method"] == ("multi-ortho" if kept else "multi-ortho-views")
     assert ("method_note" not in record) == kept
-    state = record["display_frame"]["ray_state"]
+    state = record["placement"]["ray_state"]
     assert state["origins_inside_fraction"] == (0.0 if kept else 1.0)
     # The pass looked from where the render's rays start (renderer/placement/clearance.py: the same rule).
     if kept:
@@ -195,7 +195,7 @@ def test_origins_partly_inside_a_hollow_room_of_media(cli, tmp_path, top, method
         assert "hollow ones counted" in lines[0] and "media" in lines[0] and "multi-ortho-views" in lines[0]
         return
     assert result.code == 0, result.err
-    state = record["display_frame"]["ray_state"]
+    state = record["placement"]["ray_state"]
     assert state["origins_inside_fraction"] == 0.0   # fog would pass: the hollow room holds no solid
     assert state["origins_inside_hollow_or_solid_fraction"] == pytest.approx(0.5 if top == 0 else 1.0, abs=0.03)
     assert record["method"] == "multi-ortho-views"

@@ -144,7 +144,7 @@ def test_a_fogged_ground_below_the_rays_is_refused_or_rendered(cli, tmp_path, fo
         assert len(lines) == 1 and "inside a solid" in lines[0] and "hollow" in lines[0], result.err
     else:
         assert result.code == 0, result.err
-        depth = json.loads(out.with_suffix(".json").read_text())["display_frame"]["depth"]
+        depth = json.loads(out.with_suffix(".json").read_text())["placement"]["depth"]
         assert np.isfinite(depth["near_mm"])
 
 

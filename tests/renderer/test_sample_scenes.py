@@ -51,7 +51,7 @@ def test_crater_on_a_lenticular_panel_frames_as_its_2d_render(cli, tmp_path):
     result = cli("render", str(scene), "-o", str(out), "--preset", "alioscopy-42", "--panel", "480x270",
                  "--quality", "draft", "--views-dir", str(tmp_path / "views"), "-q")
     assert result.code == 0, result.err
-    record = json.loads(out.with_suffix(".json").read_text())["display_frame"]
+    record = json.loads(out.with_suffix(".json").read_text())["placement"]
     assert record["source"] == "camera"
     # 2D render at 16:9; the camera sees a field 16/9 / 5 of its distance wide at look_at.
     reference = plain_render(scene, 320, 180)
@@ -108,10 +108,10 @@ def test_a_camera_in_an_include_or_a_macro_frames_the_render(cli, tmp_path, fold
     # refused there (renderer/placement/ray_state.py), one orthographic camera per view is right.
     method = ["--method", "multi-ortho-views"] if name == "screen.pov" else []
     result = cli("render", str(scene), "-o", str(out), "--preset", "demo", "--quality", "draft",
-                 "--display-frame", "camera", "--views-dir", str(tmp_path / "views"), "-q", *method)
+                 "--placement", "camera", "--views-dir", str(tmp_path / "views"), "-q", *method)
     assert result.code == 0, result.err
-    assert "frame camera" in result.out
-    record = json.loads(out.with_suffix(".json").read_text())["display_frame"]
+    assert "placement camera" in result.out
+    record = json.loads(out.with_suffix(".json").read_text())["placement"]
     # The frame is the camera's field at the centre: 2 d tan(angle / 2) over the panel's 32 mm.
     assert record["units_per_mm"] == pytest.approx(2 * distance * np.tan(np.radians(angle) / 2) / 32, rel=1e-3)
     image = np.asarray(Image.open(out).convert("L"), dtype=np.float64)
@@ -134,7 +134,7 @@ def test_a_right_handed_camera_shows_what_its_2d_render_shows(cli, tmp_path):
     result = cli("render", str(scene), "-o", str(out), "--preset", "demo", "--quality", "draft",
                  "--views-dir", str(tmp_path / "views"), "-q")
     assert result.code == 0 and "mirror" not in result.err, result.err
-    assert json.loads(out.with_suffix(".json").read_text())["display_frame"]["mirrored"] is True
+    assert json.loads(out.with_suffix(".json").read_text())["placement"]["mirrored"] is True
     reference = plain_render(scene, 320, 240)
     view = tmp_path / "views" / "v_003_003.png"
     assert framing(view, reference) > 0.8

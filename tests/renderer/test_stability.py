@@ -25,7 +25,7 @@ from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
 from povh3d.renderer.methods import registry as methods
 from povh3d.renderer.methods.registry import METHODS, display_header, run_method
-from povh3d.geometry.frame import DisplayFrame
+from povh3d.geometry.pose import DisplayPose
 from povh3d.scene.format import pov_number
 from povh3d.povray.process import PovrayJob, run_jobs
 from povh3d.renderer.methods.quality import RenderSettings
@@ -288,7 +288,7 @@ def test_a_large_scale_ratio_is_checked_in_scene_units_and_its_advice_renders(tm
     image came out black, exit 0; checked in scene units it is refused, and the clearance
     (or method) the refusal advises renders the analytic checker exactly."""
     la, units = scaled_array("square", 1.0), 1e6
-    settings = replace(DRAFT, frame=tuple(DisplayFrame(units_per_mm=units).matrix().ravel()))
+    settings = replace(DRAFT, frame=tuple(DisplayPose(units_per_mm=units).matrix().ravel()))
     # 2 mm behind the screen: within the half of POV-Ray's ray length kept for the scene
     scene = load_scene(write_checker_plane(tmp_path, 2 * units, 1.5 * units))
     expected, clear = point_oracle(la, 2.0, 1.5, margin=1e-3 * 1.5)
@@ -304,7 +304,7 @@ def test_a_large_scale_ratio_is_checked_in_scene_units_and_its_advice_renders(tm
     assert_matches(run_method("multi-ortho-views", scene, la, replace(settings, front_clearance=advised)).h3d,
                    expected, clear)
     # Negative control: the check in mm (one unit per mm) lets the default through, and it fails the oracle.
-    monkeypatch.setattr(methods, "frame_units", lambda frame: 1.0)
+    monkeypatch.setattr(methods, "pose_units", lambda frame: 1.0)
     h3d = run_method("multi-ortho-views", scene, la, settings).h3d
     with pytest.raises(AssertionError, match="clear pixels match"):
         assert_matches(h3d, expected, clear)

@@ -122,7 +122,7 @@ def test_frog_tissues_renders(cli, tmp_path):
     assert [s["label"] for s in surfaces] == [2, 6, 10]
     # Extracted from voxels at most a fifth of a lens across (a lens spans many frog voxels here), then
     # decimated to the display.
-    fifth = 0.8 / record["placement"]["scale"] / 5                     # a fifth of a lens, in frog mm
+    fifth = 0.8 / record["fit"]["scale"] / 5                     # a fifth of a lens, in frog mm
     step, spacing = np.asarray(record["voxel_step"]), np.asarray([1.0, 1.0, 1.5])
     assert np.all(step * spacing <= fifth) and np.all((step + 1) * spacing > fifth) and min(step) > 1
     assert all(s["triangles_extracted"] > 2 * s["triangles"] for s in surfaces)

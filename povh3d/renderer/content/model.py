@@ -1,7 +1,7 @@
 """The default stage for ``povh3d render MODEL``: the model converted (cached) and placed where the
 display shows it sharply.
 
-The placement and the depth budget are ``geometry/fit.py``'s, the stage scene's
+The fit and the depth budget are ``geometry/fit.py``'s, the stage scene's
 text ``renderer/content/stage_text.py``'s; this module converts the model into the cache
 (``povh3d.cache``: ``meshes/ab/KEY/``, its manifest an entry of the one cache) and
 writes the stage file beside it (``write_stage``, which ``renderer/content/volume.py`` uses too).
@@ -21,7 +21,7 @@ from ..._version import __version__
 from ...cache import content_key
 from .stage_text import model_stage_text
 from ...errors import warn
-from ...geometry.fit import depth_warning, fit_to_display, placement_record
+from ...geometry.fit import depth_warning, fit_to_display, fit_record
 from ...geometry.lens_array import LensArray
 from ...image.io import atomic_path
 
@@ -122,12 +122,12 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
     include, manifest = cached_include(model, shading=shading, max_triangles=max_triangles, cache_dir=cache_dir,
                                        up=up, rotate=rotate, unit=unit)
     lo, hi = (np.asarray(b, dtype=np.float64) for b in manifest["bounds"])
-    placement = fit_to_display(lo, hi, lens_array, depth=depth)
-    stage = write_stage(include.parent, model_stage_text(include.name, manifest["ident"], placement, lens_array,
+    fit = fit_to_display(lo, hi, lens_array, depth=depth)
+    stage = write_stage(include.parent, model_stage_text(include.name, manifest["ident"], fit, lens_array,
                                                          model=Path(model).name))
     # The conversion's warnings were said when it ran; a converted model from the cache says them again.
     said = [] if manifest["from_cache"] else list(manifest["warnings"])
-    warnings = list(manifest["warnings"]) + depth_warning(placement, "model")
+    warnings = list(manifest["warnings"]) + depth_warning(fit, "model")
     for message in warnings[len(said):]:
         warn(message)
     record = {"model": str(Path(model)), "include": str(include), "triangles": manifest["triangles"],
@@ -135,5 +135,5 @@ def prepare_stage(model: str | Path, lens_array: LensArray, *, depth: float | No
               "conversion_from_cache": manifest["from_cache"], "warnings": warnings,
               "up": manifest.get("up"), "up_reason": manifest.get("up_reason"),
               "simplification": manifest["simplification"],
-              "placement": placement_record(placement, depth_budget_mm=placement.depth)}
+              "fit": fit_record(fit, depth_budget_mm=fit.depth)}
     return stage, record

@@ -2,7 +2,7 @@
 
 ``model_stage_text`` puts a converted model (or a volume's surfaces) on the
 default stage (``templates/stage.pov.j2``: background, two lights, the model
-placed by a ``geometry.fit.Placement``); ``media_stage_text`` puts a volume's
+placed by a ``geometry.fit.Fit``); ``media_stage_text`` puts a volume's
 df3 medium in its box (``templates/volume_media.pov.j2``).  Script text is the
 engine's (it alone talks to ``povray/``); ``renderer/content/model.py`` and
 ``renderer/content/volume_media.py`` write the files.
@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..._version import __version__
-from ...geometry.fit import Placement
+from ...geometry.fit import Fit
 from ...geometry.lens_array import LensArray
 from ...scene.templates import render_template
 from ...volume.df3 import SAMPLE_SHIFT, padded_shape
@@ -24,14 +24,14 @@ from ...volume.media import pov_matrix, uniform_scale
 from ...volume.transfer import Transfer
 
 
-def model_stage_text(include: str, ident: str, placement: Placement, lens_array: LensArray, *, model: str) -> str:
+def model_stage_text(include: str, ident: str, fit: Fit, lens_array: LensArray, *, model: str) -> str:
     """The stage scene (no camera): background, two lights, the placed model."""
     width, height = lens_array.panel.size_mm
     reach = max(width, height)
     return render_template(
         "stage.pov.j2", version=__version__, model=model, include=include, ident=ident,
-        shift=placement.shift, scale=placement.scale, size=placement.size, limit=placement.limit,
-        depth=placement.depth,
+        shift=fit.shift, scale=fit.scale, size=fit.size, limit=fit.limit,
+        depth=fit.depth,
         key_light=(-0.6 * reach, 0.9 * reach, -1.5 * reach), fill_light=(0.9 * reach, 0.2 * reach, -1.0 * reach))
 
 

@@ -1,6 +1,6 @@
 """The stage for ``povh3d render VOLUME``: a volume's surfaces (or its medium) placed on the display.
 
-The volume's physical box is turned into the display frame by the orientation
+The volume's physical box is turned into display coordinates by the orientation
 preset (and ``--rotate``), centred and scaled like a model (``geometry.fit``'s
 ``fit_to_display``: fill the panel, or ``--depth``).  Surfaces (``--labels``,
 ``--iso``) are extracted in LPS mm, turned, decimated to the display's
@@ -27,7 +27,7 @@ from ..._version import __version__
 from ...cache import content_key
 from .stage_text import model_stage_text
 from ...errors import ConfigError, InputError, param, warn
-from ...geometry.fit import depth_warning, fit_to_display, placement_record
+from ...geometry.fit import depth_warning, fit_to_display, fit_record
 from ...geometry.lens_array import LensArray
 from ...image.io import atomic_path
 from ...volume.grid import Volume
@@ -80,10 +80,10 @@ def what_to_draw(volume: Volume, options: VolumeOptions) -> tuple[str, list[str]
 def place_volume(volume: Volume, lens_array: LensArray, orientation: str, rotate: Any = None,
                  depth: float | None = None) -> tuple[np.ndarray, Any, np.ndarray]:
     """The volume turned (orientation preset, then ``rotate``) and its physical box fitted to the display:
-    the turn (3, 3), the ``Placement`` and the world-to-display matrix (4, 4)."""
+    the turn (3, 3), the ``Fit`` and the world-to-display matrix (4, 4)."""
     matrix = volume_to_display(orientation, rotate)
-    placement = fit_to_display(*display_box(volume.corners(), matrix), lens_array, depth=depth)
-    return matrix, placement, world_to_display(matrix, placement.shift, placement.scale)
+    fit = fit_to_display(*display_box(volume.corners(), matrix), lens_array, depth=depth)
+    return matrix, fit, world_to_display(matrix, fit.shift, fit.scale)
 
 
 def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: VolumeOptions | None = None, *,
@@ -107,13 +107,13 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     kind, notes = what_to_draw(volume, options)
     for note in notes:
         warn(note)
-    matrix, placement, to_display = place_volume(volume, lens_array, options.orientation, options.rotate, depth)
+    matrix, fit, to_display = place_volume(volume, lens_array, options.orientation, options.rotate, depth)
     digest = volume_digest(volume)
     record: dict[str, Any] = {
         "volume": volume.as_record(), "source": str(source), "draw": kind, "orientation": options.orientation,
         "rotate": list(options.rotate) if options.rotate else None, "world_to_display": to_display.tolist(),
-        "placement": placement_record(placement, depth_budget_mm=placement.depth),
-        "warnings": depth_warning(placement, "volume")}
+        "fit": fit_record(fit, depth_budget_mm=fit.depth),
+        "warnings": depth_warning(fit, "volume")}
     root = cache.cache_root(cache_dir)
     if kind == "volume":
         from .volume_media import media_stage
@@ -129,7 +129,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
 
     # None or 'auto' (the one word ModelOptions takes)
     budget = auto_budget(lens_array) if max_triangles is None or isinstance(max_triangles, str) else max_triangles
-    speck = min(lens_array.pitch_x, lens_array.pitch_y) / placement.scale   # one lens, in the surfaces' mm
+    speck = min(lens_array.pitch_x, lens_array.pitch_y) / fit.scale   # one lens, in the surfaces' mm
     include, manifest = cached_surfaces(volume, digest, kind, options, matrix, budget, root, speck)
     record["surfaces"] = manifest["surfaces"]
     record["triangles"] = manifest["triangles"]
@@ -139,7 +139,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
     record["silhouette_error"] = manifest["silhouette_error"]
     record["specks_left_out"] = manifest.get("specks_left_out", 0)
     record["voxel_step"] = manifest.get("voxel_step", [1, 1, 1])
-    stage = write_stage(include.parent, model_stage_text(include.name, IDENT, placement, lens_array,
+    stage = write_stage(include.parent, model_stage_text(include.name, IDENT, fit, lens_array,
                                                          model=volume.name))
     return stage, record
 

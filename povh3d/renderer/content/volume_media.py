@@ -45,7 +45,7 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
                 ) -> tuple[Path, dict[str, Any]]:
     """Write the df3 file and a stage scene (no camera) into ``folder``; return the scene and its record.
 
-    ``world_to_display`` (4, 4) maps the volume's LPS world mm to display-frame mm
+    ``world_to_display`` (4, 4) maps the volume's LPS world mm to display mm
     (``volume.orient.world_to_display``); ``transfer`` is a preset name, a file or a
     ``Transfer``; ``bits`` the df3 value width; ``step`` the distance between media
     samples along a ray, in voxels (of the smallest side); ``background`` linear RGB.

@@ -168,8 +168,8 @@ class RenderSettings:
                                 may render in the same POV-Ray runs (``renderer.shots.clock_runs``)
     scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
     max_error_db : float or None   with quality 'auto': the lowest PSNR against the reference to accept
-    frame : tuple of 12 floats or None   the display frame's POV-Ray ``matrix`` (display mm -> scene
-                                units, ``geometry.frame.DisplayFrame.matrix``); None: native
+    frame : tuple of 12 floats or None   the placement's pose as a POV-Ray ``matrix`` (display mm -> scene
+                                units, ``geometry.pose.DisplayPose.matrix``); None: native
     depth_scale : float             compress depth along the display normal by this factor (1: none); a
                                 distortion, traced as every ray's slope times it (``depth_scaled_rays``)
     should_stop : callable or None  polled while local POV-Ray runs; True stops them (``RenderInterrupted``):
@@ -203,7 +203,7 @@ class RenderSettings:
             raise ConfigError(f"{param('depth_scale')} must be a number within {DEPTH_SCALE_RANGE[0]:g}..{DEPTH_SCALE_RANGE[1]:g}, "
                               f"got {k!r}")
         if self.frame is not None and len(self.frame) != 12:
-            raise ConfigError(f"the display frame is a matrix of 12 numbers, got {len(self.frame)}")
+            raise ConfigError(f"the pose is a matrix of 12 numbers, got {len(self.frame)}")
         if not isinstance(self.quality, Quality) and self.quality != AUTO:
             quality_level(self.quality)
         if (self.quality == AUTO) != (self.max_error_db is not None):

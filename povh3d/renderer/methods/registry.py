@@ -264,7 +264,7 @@ METHODS: dict[str, Method] = {
 }
 
 
-def frame_units(frame: tuple[float, ...] | None) -> float:
+def pose_units(frame: tuple[float, ...] | None) -> float:
     """Scene units per display mm of a frame matrix (its rows' common length; 1 without a frame)."""
     return 1.0 if frame is None else float(np.linalg.norm(np.asarray(frame[:3], dtype=np.float64)))
 
@@ -348,7 +348,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
     clearance = front_clearance_for(method, lens_array, settings, plan_options)
     if name != "single-stage":  # its depth is checked by its own optics (check_optics)
-        _check_clearance(name, method, lens_array, clearance.rounded, frame_units(settings.frame))
+        _check_clearance(name, method, lens_array, clearance.rounded, pose_units(settings.frame))
     front_clearance, reason = clearance.used, clearance.reason
     if clearance.lens_mesh:
         plan_options["bank"], crop = False, None
@@ -357,7 +357,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         raise GroupsUnsupported(f"{name} cannot return footprint sample groups here (no view bank)")
     samples = quality.samples() if footprint_groups is None else np.concatenate(footprint_groups)
     if settings.frame is not None:  # move every camera (and a lens array) into the scene
-        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
+        header.update(pose_matrix=tuple(settings.frame), pose_transform=" transform { Povh3d_Display_Pose }")
     settings_needed = quality_settings(scene.features, quality)
     if settings_needed:
         header["global_settings"] = settings_needed

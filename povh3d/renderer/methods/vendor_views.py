@@ -29,10 +29,10 @@ from .quality import Progress, quality_settings
 from .registry import MethodResult, display_header
 
 
-def viewer_distance(display_frame: dict[str, Any] | None, height_mm: float) -> tuple[float, str]:
+def viewer_distance(placement: dict[str, Any] | None, height_mm: float) -> tuple[float, str]:
     """The viewer's distance from the screen (mm) and where it came from: the scene camera's
     distance to its look_at (a camera frame), else the vendor's default viewer."""
-    record = display_frame or {}
+    record = placement or {}
     camera = record.get("camera")
     if record.get("source") == "camera" and camera:
         gap = np.asarray(record["centre"], dtype=np.float64) - np.asarray(camera["location"], dtype=np.float64)
@@ -42,18 +42,18 @@ def viewer_distance(display_frame: dict[str, Any] | None, height_mm: float) -> t
 
 
 def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: dict[str, Any],
-                     display_frame: dict[str, Any] | None, progress: Progress | None = None) -> MethodResult:
+                     placement: dict[str, Any] | None, progress: Progress | None = None) -> MethodResult:
     """Render the device's views with the vendor's cameras; return them as ``quilt_array``'s H3D image."""
     dev = device(spec["device"])
     cal = device_calibration(dev, spec.get("calibration"))
     width, height = lens_array.panel.size_mm
-    distance, source = viewer_distance(display_frame, height)
+    distance, source = viewer_distance(placement, height)
     cameras = vendor_cameras(dev.views, cal.view_cone, distance, (width, height))
     quality = settings.spec.point_sampled()   # one ray a pixel of a view: POV-Ray's antialiasing
     settings = replace(settings, quality=quality)
     header = display_header(lens_array)
     if settings.frame is not None:
-        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
+        header.update(pose_matrix=tuple(settings.frame), pose_transform=" transform { Povh3d_Display_Pose }")
     needed = quality_settings(scene.features, quality)
     if needed:
         header["global_settings"] = needed

@@ -4,9 +4,9 @@ HCI 4D light-field benchmark layout (``dataset.hci.write_hci``; docs/datasets.md
 The views are those ``extract`` writes (the camera bank, or each lens resampled at the view offsets;
 a hex array's then interpolated onto the grid of its lens columns, ``export_grid``); the depth is
 the render's depth pass along the ray of each exported pixel (``renderer.passes.depth.view_depth_maps``:
-mm of the display frame from the screen, negative in front, NaN where nothing is hit), which is
+display mm from the screen, negative in front, NaN where nothing is hit), which is
 what ``write_hci`` takes.  From an existing render the
-depth pass is made again from its sidecar: the scene, the display frame and the front clearance
+depth pass is made again from its sidecar: the scene, the placement and the front clearance
 it was rendered with.
 """
 
@@ -160,7 +160,7 @@ def write_dataset(folder: Path, h3d: np.ndarray, lens_array: LensArray, ray_dept
     if not np.isfinite(ray_depth).any():   # never a silent all-NaN ground truth
         warn(f"the ground truth in {str(folder)!r} (gt_disp_lowres.pfm, gt_depth_lowres.pfm) is all NaN: the depth "
              "pass measured no pixel (nothing in the field, or every ray starts inside a solid); check the scene "
-             "and the display frame")
+             "and the placement")
     bank = export_views(h3d, lens_array)
     meta = {}
     if lens_array.views is None:
@@ -172,9 +172,9 @@ def write_dataset(folder: Path, h3d: np.ndarray, lens_array: LensArray, ray_dept
 
 def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: bool = False) -> list[Path]:
     """``povh3d dataset``: the HCI folder of an existing render, its depth pass made again from its
-    sidecar (scene, display frame, front clearance, depth scale)."""
+    sidecar (scene, placement, front clearance, depth scale)."""
     from ..methods.quality import RenderSettings
-    from ..placement.pose import recorded_frame
+    from ..placement.pose import recorded_pose
     from ...scene.scene import load_scene
     from ...display.display import Display
 
@@ -201,9 +201,9 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
     if not scene_path.is_file():
         raise InputError(f"the scene {str(scene_path)!r} the sidecar names is gone; the depth pass needs it: "
                          f"render again with {param('dataset')}")
-    frame_record = record.get("display_frame") or {}
-    frame = recorded_frame(frame_record)
-    settings = RenderSettings(quality="draft", frame=frame, depth_scale=float(frame_record.get("depth_scale", 1.0)))
+    placement_record = record.get("placement") or {}
+    frame = recorded_pose(placement_record)
+    settings = RenderSettings(quality="draft", frame=frame, depth_scale=float(placement_record.get("depth_scale", 1.0)))
     depth = dataset_depth(load_scene(scene_path), lens_array, settings, record["quality"]["front_clearance_mm"],
-                          float(frame_record.get("units_per_mm", 1.0)))
+                          float(placement_record.get("units_per_mm", 1.0)))
     return write_dataset(folder, h3d, lens_array, depth, all_views=all_views, scene=scene_path.stem)

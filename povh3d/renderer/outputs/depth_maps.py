@@ -2,7 +2,7 @@
 
 For view ``(l, k)`` (docs/geometry.md: direction ``(u_k, v_l, f)``), pixel
 ``(i, j)`` is the ray through lens ``(j, i)``.  ``d_LLL_KKK.npy`` holds, as
-float32 millimetres of the display frame, the distance along that ray from the
+float32 display millimetres, the distance along that ray from the
 screen (where the ray crosses ``z = 0``) to the first surface: negative in
 front of the screen, NaN where nothing is hit.  ``p_LLL_KKK.npy`` holds the
 matching disparity in view pixels (lenses) per view step, ``z s / (f p)`` with
@@ -58,18 +58,18 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
 
     if not np.isfinite(depth).any():   # never a silent all-NaN folder
         warn(f"the depth maps in {str(folder)!r} are all NaN: the depth pass measured no pixel (nothing in the "
-             "field, or every ray starts inside a solid); check the scene and the display frame")
+             "field, or every ray starts inside a solid); check the scene and the placement")
     par = disparity(depth, lens_array)
     ny, nx = depth.shape[:2]
     codes = {"d": quantise(depth), "p": quantise(par)} if fmt == "png" else {}
     info: dict[str, Any] = {
             "povh3d_version": __version__, "kind": "depth_maps",
             "views": [ny, nx], "size_px": [depth.shape[3], depth.shape[2]], "format": fmt,
-            "depth": "d_LLL_KKK: mm of the display frame along each ray, from the screen "
+            "depth": "d_LLL_KKK: display mm along each ray, from the screen "
                      "(z = 0, at the lens centre) to the first surface; negative in front; NaN: nothing hit",
             "disparity": "p_LLL_KKK: lenses per view step, z s / (f p), z = d / |(u/f, v/f, 1)|",
             "pixel_pitch_mm": lens_array.panel.pitch_x, "focal_mm": lens_array.focal,
-            "lens_pitch_mm": lens_array.pitch_x, "display_frame": record.get("display_frame"),
+            "lens_pitch_mm": lens_array.pitch_x, "placement": record.get("placement"),
             "method": "two renders per view with a constant fog of colour 0 and 1 (renderer/passes/depth.py)",
             "nan_fraction": float(np.isnan(depth).mean())}
     if fmt == "png":

@@ -62,7 +62,7 @@ BLIND_REASON = ("the depth pass is blind: its rays start inside a solid object (
                 "POV-Ray applies no fog inside a non-hollow object; add 'hollow' to that object")
 SATURATED_REASON = ("the depth pass cannot measure the middle of the field: its surfaces are brighter than 1 in "
                     "every colour channel (emissive, 'ambient' or 'emission' above 1); keep one channel below 1 "
-                    f"or place the display with {param('display_frame.center')}/{param('display_frame.normal')}/{param('display_frame.width')}")
+                    f"or place the display with {param('placement.center')}/{param('placement.normal')}/{param('placement.width')}")
 #: POV-Ray threads of a pass.  A jittered area light (and subsurface scattering) samples at random per
 #: render thread, so at two threads, which take the pixels in another order in each frame, a surface's
 #: colour differs between the two fog frames (a sphere before a plane: its shadow's edge 7-10 mm off in
@@ -85,7 +85,7 @@ LIGHTING_OFF = {"radiosity": "{ pretrace_start 1 pretrace_end 1 count 1 nearest_
 
 @dataclass(frozen=True)
 class DepthMap:
-    """Display-frame depth ``z`` (mm, screen 0, viewer at -z) of each pixel; NaN where nothing is hit."""
+    """Display depth ``z`` (mm, screen 0, viewer at -z) of each pixel; NaN where nothing is hit."""
 
     z: np.ndarray          # (H, W) float, mm
     width_mm: float
@@ -167,7 +167,7 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
     header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
                               "focal": lens_array.focal}   # as methods.display_header
     if settings.frame is not None:
-        header.update(frame_matrix=tuple(settings.frame), frame_transform=" transform { Povh3d_Display_Frame }")
+        header.update(pose_matrix=tuple(settings.frame), pose_transform=" transform { Povh3d_Display_Pose }")
     lighting = pass_lighting(scene)
     if lighting:
         header["global_settings"] = lighting
@@ -235,7 +235,7 @@ def depth_map(distances: np.ndarray, lens_array: LensArray, front_clearance: flo
 
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
                units_per_mm: float, progress: Progress | None = None) -> DepthMap:
-    """Measure the scene's depth in the display frame of ``settings.frame`` (None: native); ``progress(done,
+    """Measure the scene's depth in the pose of ``settings.frame`` (None: native); ``progress(done,
     total)``: its two frames."""
     w, h = pass_size(lens_array)
     fog = front_clearance * units_per_mm   # scene units: t = 1/e at the screen
@@ -323,7 +323,7 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
                     units_per_mm: float, *, views: tuple[int, int] | None = None,
                     grid: tuple[int, int, float, float] | None = None, progress: Progress | None = None,
                     name: str = "depth-maps") -> np.ndarray:
-    """Per view ``(l, k)``: the distance (mm of the display frame) along each of its rays from the screen
+    """Per view ``(l, k)``: the distance (display mm) along each of its rays from the screen
     (where the ray crosses ``z = 0``, at its lens centre) to the first surface; negative in front.
 
     With ``settings.depth_scale`` k the maps are the compressed scene's, as the display

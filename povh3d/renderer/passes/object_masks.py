@@ -24,7 +24,7 @@ from ...errors import ConfigError, InputError, Povh3dWarning, param
 from ...geometry.lens_array import LensArray
 from ...scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from ..outputs.objects import ObjectTable, write_masks
-from ..placement.pose import DisplayFrameOptions, recorded_frame
+from ..placement.pose import PlacementOptions, recorded_pose
 from ..request import ModelOptions, RenderRequest, VolumeOptions
 
 
@@ -117,7 +117,7 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
                                      include_dirs=(request.source.resolve().parent, *request.include_dirs),
                                      # a stage is in display mm, as its colour pass knew (renderer.placement.place): no
                                      # camera to look for in the model's include
-                                     display_frame=request.display_frame if mask else DisplayFrameOptions("native"))
+                                     placement=request.placement if mask else PlacementOptions("native"))
         traced = _colour_pass(request, colour)
         masked = _method_as(masked, traced)
         with warnings.catch_warnings():   # the colour pass has said what its method sees of the scene
@@ -176,13 +176,13 @@ def _placed_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRe
     """``masked`` with the colour pass's frame, front clearance and depth scale as settings (the
     Python API's matrix path of ``renderer.placement.place``): the same rays without evaluating the scene's
     camera or measuring its depth again (a POV-Ray run each)."""
-    frame_record = (colour or {}).get("display_frame") or {}
+    placement_record = (colour or {}).get("placement") or {}
     clearance = ((colour or {}).get("quality") or {}).get("front_clearance_mm")
-    frame = recorded_frame(frame_record) if frame_record and clearance is not None else None
+    frame = recorded_pose(placement_record) if placement_record and clearance is not None else None
     if frame is None or clearance is None or masked.is_model:   # native or staged in mm: placed without a POV-Ray run
         return masked
     settings = dataclasses.replace(masked.settings, frame=frame, front_clearance=float(clearance),
-                                   depth_scale=float(frame_record.get("depth_scale", 1.0)))
+                                   depth_scale=float(placement_record.get("depth_scale", 1.0)))
     return dataclasses.replace(masked, settings=settings)
 
 

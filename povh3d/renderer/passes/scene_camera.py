@@ -6,11 +6,11 @@ panel's physical shape in mm, ``physical_size``, not the pixel grid of a lenticu
 view space, whose pixels are not square: 16 x 9 pixels for a 16:9 panel);
 ``evaluate_and_measure``, where a depth pass is wanted (``renderer.placement.place``), runs them
 with the rest of the scene and
-``templates/camera_depth.pov.j2``, which works out the display frame from the
+``templates/camera_depth.pov.j2``, which works out the pose from the
 declared values and renders the fog depth pass through it in the same run.
 Both are cached in the one cache (``povh3d.cache``: ``cameras/ab/<key>.camera``),
 keyed by the scene's digest and the panel, so a re-run starts no POV-Ray.  The
-display frame these numbers define is worked out in ``geometry/frame.py``; which
+pose these numbers define is worked out in ``geometry/pose.py``; which
 frame a render uses is decided in ``renderer/placement/pose.py``.
 """
 
@@ -28,7 +28,7 @@ import numpy as np
 from ... import cache
 from ..._version import __version__
 from ...cache import content_key
-from ...geometry.frame import EXPLICIT_OPTIONS, DisplayFrame
+from ...geometry.pose import EXPLICIT_OPTIONS, DisplayPose
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError, CameraScript, camera_from_log, parse_log
 from ...scene.features import strip_comments
@@ -242,7 +242,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     printed = next((tuple(v) for k, v in parse_log(log) if k == "depth_frame" and isinstance(v, list)), ())
     if len(printed) != 14 or len(images) != 2:
         raise CameraError(f"cannot use the scene's camera (POV-Ray did not finish the depth pass through its "
-                          f"frame); place the display with {EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
+                          f"frame); place the display with {EXPLICIT_OPTIONS}, or {param('placement.mode')} native")
     distances, unmeasured = fog_distances(images[:1], images[1:], printed[12] * printed[13])
     seen = Seen(distances[0].astype(np.float32), float(unmeasured[0]), printed)
     if use_cache:
@@ -264,7 +264,7 @@ class Seen:
     unmeasured: float
     printed: tuple[float, ...]
 
-    def depth(self, frame: DisplayFrame, front_clearance: float, lens_array: LensArray) -> DepthMap | None:
+    def depth(self, frame: DisplayPose, front_clearance: float, lens_array: LensArray) -> DepthMap | None:
         """The depth map, if the pass was made in ``frame`` with ``front_clearance``; else None (measure again)."""
         from .depth import depth_map
 

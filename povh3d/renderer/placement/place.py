@@ -20,9 +20,9 @@ from ..methods.registry import get_method
 from ...geometry.camera_mesh import default_front_clearance
 from ..methods.quality import DEPTH_SCALE_RANGE, Progress
 from ...errors import ConfigError, param
-from ...geometry.frame import NATIVE, DisplayFrame
+from ...geometry.pose import NATIVE, DisplayPose
 from ...scene.scene import Scene
-from .pose import resolve_frame_and_depth
+from .pose import resolve_pose_and_depth
 from ...geometry.fit import depth_budget_mm
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
@@ -31,7 +31,7 @@ if TYPE_CHECKING:  # only for annotations: keeps the import chain short
 
 def place_display(request: RenderRequest, scene: Scene,
                   progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any]]:
-    """The request with its display frame (and clearance) resolved into the settings, and the record;
+    """The request with its placement (and clearance) resolved into the settings, and the record;
     ``progress(done, total)``: a depth pass's frames."""
     array = request.render_array
     budget = depth_budget_mm(array)
@@ -42,14 +42,14 @@ def place_display(request: RenderRequest, scene: Scene,
     if s.frame is not None:  # the Python API gave the matrix itself: use it, and say so
         _check_similarity(s.frame)
         return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
-    options = request.display_frame
+    options = request.placement
     if (request.display.quilt or {}).get("camera_model") == "perspective":
         if options.fit_depth is not None or options.depth_scale is not None:
             raise ConfigError(f"{param('fit_depth')} and {param('depth_scale')} shape the rays of a lens array; the vendor's "
                               "perspective cameras take the scene as its camera sees it: drop them, or add "
                               f"{param('camera_model')} orthographic")
         # The vendor's cameras start at the viewer's eye, wherever the scene is: the frame alone, no depth pass.
-        placed, record, _ = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
+        placed, record, _ = resolve_pose_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                     use_cache=s.use_cache, timeout=s.timeout)
         matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
         return replace(request, settings=replace(s, frame=matrix)), {**record, "depth_budget_mm": budget}
@@ -59,7 +59,7 @@ def place_display(request: RenderRequest, scene: Scene,
     # A camera frame's depth pass is made in the run that evaluates the camera, when it can be, and only
     # where something reads it (``depth_wanted``); else that run evaluates the camera alone.
     wanted = depth_wanted(request, default)
-    placed, record, seen = resolve_frame_and_depth(options, scene, array, cache_dir=s.cache_dir,
+    placed, record, seen = resolve_pose_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                    use_cache=s.use_cache, timeout=s.timeout,
                                                    front_clearance=(s.front_clearance or default) if wanted else None)
     front_clearance = s.front_clearance or _front_clearance(placed, default)
@@ -104,7 +104,7 @@ def depth_wanted(request: RenderRequest, default: float) -> bool:
     dataset (whose users want its budget warnings), or a method that may start its rays nearer than the
     depth pass looks from (``default`` mm), so that the foreground it cuts must be measured to be said.
     Otherwise no depth pass runs: a scene camera is evaluated alone (docs/geometry.md)."""
-    options, s = request.display_frame, request.settings
+    options, s = request.placement, request.settings
     if options.fit_depth is not None or options.depth_report or request.depth_maps is not None \
             or request.dataset is not None:
         return True
@@ -119,15 +119,15 @@ def _check_similarity(matrix: tuple[float, ...]) -> None:
     gram = m @ m.T
     scale = float(np.trace(gram)) / 3
     if not (scale > 0 and np.allclose(gram, scale * np.eye(3), rtol=0, atol=1e-9 * scale)):
-        raise ConfigError("the display frame matrix must be a rotation times one uniform scale (no shear, "
-                          "no depth-only scale); build it with povh3d.geometry.frame.DisplayFrame")
+        raise ConfigError("the pose matrix must be a rotation times one uniform scale (no shear, "
+                          "no depth-only scale); build it with povh3d.geometry.pose.DisplayPose")
 
 
 #: Why a camera frame's rays start no farther out than ``camera_front_clearance_limit``.
 CAMERA_LIMIT_REASON = "within 0.9 of the scene camera's distance: nothing behind the camera enters the image"
 
 
-def camera_front_clearance_limit(frame: DisplayFrame) -> float | None:
+def camera_front_clearance_limit(frame: DisplayPose) -> float | None:
     """How far out (mm) rays may start in a camera frame: 0.9 of the scene camera's distance, since
     what lies behind the camera (walls) is no part of its view; None for other frames.  The methods
     round their clearance down to it (``renderer.methods.registry``), whatever their default or step."""
@@ -136,16 +136,16 @@ def camera_front_clearance_limit(frame: DisplayFrame) -> float | None:
     return 0.9 * frame.camera_distance / frame.units_per_mm
 
 
-def _front_clearance(frame: DisplayFrame, default: float) -> float:
+def _front_clearance(frame: DisplayPose, default: float) -> float:
     """The front clearance (mm) of the depth pass: the method's default, within the camera's limit."""
     limit = camera_front_clearance_limit(frame)
     return default if limit is None else min(default, limit)
 
 
-def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_clearance: float, budget: float,
+def _measure(request: RenderRequest, scene: Scene, frame: DisplayPose, front_clearance: float, budget: float,
              fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
              seen: DepthMap | None = None, progress: Progress | None = None
-             ) -> tuple[DisplayFrame, dict[str, Any], float]:
+             ) -> tuple[DisplayPose, dict[str, Any], float]:
     """The depth summary in ``frame`` as the display shows it (depth times ``scale``); with ``fit``, the
     frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
     ``seen``: the depth map of ``frame`` made in the run that evaluated the scene's camera; else a depth
@@ -153,7 +153,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
     array, s = request.render_array, request.settings
     keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
 
-    def measure(f: DisplayFrame) -> dict[str, Any]:
+    def measure(f: DisplayPose) -> dict[str, Any]:
         if seen is not None and f is frame and seen.unmeasured == 0:   # else measured on a hollow copy
             return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
@@ -181,7 +181,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayFrame, front_cl
     if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
         raise ConfigError(f"{param('fit_depth')} cannot fit: the depth pass measured nothing in the framed field "
                           "(nothing hit, or the viewpoint inside a solid object); place the display with "
-                          f"{param('display_frame.center')}/{param('display_frame.normal')}/{param('display_frame.width')} instead")
+                          f"{param('placement.center')}/{param('placement.normal')}/{param('placement.width')} instead")
     reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
     if not reach > 0:
         return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}, scale
@@ -205,18 +205,18 @@ def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: 
     """``povh3d info SCENE``: the frame the scene would render with and its depth against the budget."""
     from ..methods.quality import RenderSettings
     from ...scene.scene import load_scene
-    from .pose import DisplayFrameOptions
+    from .pose import PlacementOptions
 
     scene = load_scene(path, include_dirs)
-    options = options or DisplayFrameOptions()
+    options = options or PlacementOptions()
     default = get_method("multi-ortho").default_front_clearance(lens_array)
-    placed, record, seen = resolve_frame_and_depth(options, scene, lens_array, front_clearance=default)
+    placed, record, seen = resolve_pose_and_depth(options, scene, lens_array, front_clearance=default)
     budget = depth_budget_mm(lens_array)
     front_clearance = _front_clearance(placed, default)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
     depth = seen.depth(placed, front_clearance, lens_array) if seen else None
     if depth is None or depth.unmeasured > 0:   # a viewer inside a solid: a pass of its own, on the hollow copy
         depth = depth_pass(scene, lens_array, RenderSettings(frame=matrix), front_clearance, placed.units_per_mm)
-    return {"scene": str(scene.path), "display_frame": {**record, **placed.as_record()},
+    return {"scene": str(scene.path), "placement": {**record, **placed.as_record()},
             "depth": depth.summary(budget), "depth_budget_mm": budget,
             "depth_budget_scene_units": budget * placed.units_per_mm}

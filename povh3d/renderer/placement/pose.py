@@ -1,6 +1,6 @@
 """Where the display sits in the user's scene: the frame a render uses, and why.
 
-``resolve_frame`` turns the request's ``DisplayFrameOptions`` into a ``DisplayFrame``:
+``resolve_pose`` turns the request's ``PlacementOptions`` into a ``DisplayPose``:
 
 - explicit ``--display-center/normal/up/width``: that frame;
 - ``native``: the display's own frame (mm, screen ``z = 0``);
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ...errors import ConfigError, PovrayError, PovrayTimeout, param
-from ...geometry.frame import EXPLICIT_OPTIONS, NATIVE, DisplayFrame, camera_frame, explicit_frame, up_warning
+from ...geometry.pose import EXPLICIT_OPTIONS, NATIVE, DisplayPose, camera_pose, explicit_pose, up_warning
 from ...geometry.lens_array import LensArray
 from ...scene.camera import CameraError
 from ...scene.camera_script import REFUSED_TYPES, camera_script, refused_type, written_camera_types
@@ -29,11 +29,11 @@ from ...scene.scene import Scene, source_text
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..passes.scene_camera import Seen
 
-FRAME_MODES = ("auto", "camera", "native")
+PLACEMENT_MODES = ("auto", "camera", "native")
 
 
 @dataclass(frozen=True)
-class DisplayFrameOptions:
+class PlacementOptions:
     """How the display is placed in the scene (``--display-*``).
 
     Attributes
@@ -76,15 +76,15 @@ class DisplayFrameOptions:
         if f is not None and f != "auto" and (isinstance(f, bool) or not isinstance(f, (int, float))
                                               or not (f > 0 and f < float("inf"))):
             raise ConfigError(f"{param('fit_depth')} takes 'auto' or a positive number of mm, got {f!r}")
-        if self.mode not in FRAME_MODES:
-            raise ConfigError(f"{param('display_frame.mode')} must be one of {', '.join(FRAME_MODES)}, got {self.mode!r}")
+        if self.mode not in PLACEMENT_MODES:
+            raise ConfigError(f"{param('placement.mode')} must be one of {', '.join(PLACEMENT_MODES)}, got {self.mode!r}")
         given = [n for n in ("center", "normal", "width") if getattr(self, n) is not None]
         if given and len(given) < 3:
-            raise ConfigError(f"an explicit display frame needs all of {EXPLICIT_OPTIONS}")
+            raise ConfigError(f"an explicit placement needs all of {EXPLICIT_OPTIONS}")
         if self.up is not None and not given:
-            raise ConfigError(f"{param('display_frame.up')} needs the rest of {EXPLICIT_OPTIONS}")
+            raise ConfigError(f"{param('placement.up')} needs the rest of {EXPLICIT_OPTIONS}")
         if given and self.mode != "auto":
-            raise ConfigError(f"{param('display_frame.mode')} cannot be combined with {param('display_frame.center')} and the other "
+            raise ConfigError(f"{param('placement.mode')} cannot be combined with {param('placement.center')} and the other "
                               "explicit options; give one or the other")
 
     @property
@@ -92,18 +92,18 @@ class DisplayFrameOptions:
         return self.center is not None
 
 
-def resolve_frame(options: DisplayFrameOptions, scene: Scene, lens_array: LensArray, *,
-                  cache_dir: Any = None, use_cache: bool = True) -> tuple[DisplayFrame, dict[str, Any]]:
+def resolve_pose(options: PlacementOptions, scene: Scene, lens_array: LensArray, *,
+                  cache_dir: Any = None, use_cache: bool = True) -> tuple[DisplayPose, dict[str, Any]]:
     """The frame to render with and its sidecar record (``warnings`` listed there)."""
-    frame, record, _ = resolve_frame_and_depth(options, scene, lens_array, cache_dir=cache_dir,
+    frame, record, _ = resolve_pose_and_depth(options, scene, lens_array, cache_dir=cache_dir,
                                                use_cache=use_cache)
     return frame, record
 
 
-def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_array: LensArray, *, cache_dir: Any = None,
+def resolve_pose_and_depth(options: PlacementOptions, scene: Scene, lens_array: LensArray, *, cache_dir: Any = None,
                             use_cache: bool = True, front_clearance: float | None = None,
-                            timeout: float | None = None) -> tuple[DisplayFrame, dict[str, Any], Seen | None]:
-    """``resolve_frame``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
+                            timeout: float | None = None) -> tuple[DisplayPose, dict[str, Any], Seen | None]:
+    """``resolve_pose``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
     allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
     import time
@@ -117,7 +117,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
         assert options.width is not None  # explicit: centre, normal and width all given (__post_init__)
-        frame = explicit_frame(options.center, options.normal, float(options.width), width_mm, options.up)
+        frame = explicit_pose(options.center, options.normal, float(options.width), width_mm, options.up)
         warning = up_warning(options.normal, options.up)  # an up chosen for the user near the y axis
         return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
     if options.mode == "native":
@@ -127,7 +127,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
     # The camera's reading keeps a token of every word and number: about 200 bytes a byte of text
     # (a 5 MB one-expression scene took 0.96 GB), estimated before it starts.
     check_memory(f"reading the camera of {scene.path.name} ({len(text) / 2**20:.3g} MB of text)", 200 * len(text),
-                 f"give the display's place with {param('display_frame.mode')} native or {param('display_frame.center')}/{param('display_frame.normal')}, "
+                 f"give the display's place with {param('placement.mode')} native or {param('placement.center')}/{param('placement.normal')}, "
                  f"or raise {param('max_memory')}")
     script = camera_script(text, scene.include_text)
     written = written_camera_types(text, scene.include_text) if script is not None else set()
@@ -136,7 +136,7 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         raise CameraError(_unusable_type(refused))
     if script is None:
         if options.mode == "camera":
-            raise ConfigError(f"{param('display_frame.mode')} camera: the scene {scene.path.name} has no camera; "
+            raise ConfigError(f"{param('placement.mode')} camera: the scene {scene.path.name} has no camera; "
                               f"place the display with {EXPLICIT_OPTIONS}")
         why = "the scene has no camera: mm around the screen z = 0"
         return NATIVE, {**NATIVE.as_record(), "note": why, "warnings": []}, None
@@ -168,20 +168,20 @@ def resolve_frame_and_depth(options: DisplayFrameOptions, scene: Scene, lens_arr
         distances = None
     else:
         camera, distances, seconds, cached = found
-    frame, warnings = _camera_frame(camera, width_mm)
+    frame, warnings = _camera_pose(camera, width_mm)
     record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
               "evaluation_from_cache": cached, "warnings": warnings}
     return frame, record, distances
 
 
-def _camera_frame(camera: dict[str, Any], width_mm: float) -> tuple[DisplayFrame, list[str]]:
-    """The display frame of a perspective scene camera (its evaluated values) and what to say of it."""
+def _camera_pose(camera: dict[str, Any], width_mm: float) -> tuple[DisplayPose, list[str]]:
+    """The pose of a perspective scene camera (its evaluated values) and what to say of it."""
     if camera["type"] == "orthographic":
         raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
                           f"place the display where it looks: {_orthographic_options(camera)}")
     if camera["type"] != "perspective":
         raise CameraError(_unusable_type(camera["type"]))
-    frame = camera_frame(camera["location"], camera["direction"], camera["right"], camera["up"],
+    frame = camera_pose(camera["location"], camera["direction"], camera["right"], camera["up"],
                          camera["look_at"], width_mm,
                          note="look_at" if camera["look_at"] is not None else "no look_at: the point of the "
                          "view axis nearest the scene origin")
@@ -196,7 +196,7 @@ def _camera_frame(camera: dict[str, Any], width_mm: float) -> tuple[DisplayFrame
     # the camera's right as POV-Ray's 2D render does, so the views show what that render shows, the
     # right way round; the record says ``mirrored`` and why.
     if frame.mirrored:
-        frame = DisplayFrame(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
+        frame = DisplayPose(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
                              frame.note + "; right-handed (a negative right): x follows it, as in the 2D render",
                              frame.camera_distance)
     return frame, warnings
@@ -204,7 +204,7 @@ def _camera_frame(camera: dict[str, Any], width_mm: float) -> tuple[DisplayFrame
 
 def _unusable_type(kind: str) -> str:
     return (f"cannot use the scene's {kind} camera (only a perspective one defines a frame); place the display "
-            f"with {EXPLICIT_OPTIONS}, or {param('display_frame.mode')} native")
+            f"with {EXPLICIT_OPTIONS}, or {param('placement.mode')} native")
 
 
 def _orthographic_options(camera: dict[str, Any]) -> str:
@@ -218,18 +218,18 @@ def _orthographic_options(camera: dict[str, Any]) -> str:
     def triple(v: Any) -> str:
         return ",".join(f"{float(x):.6g}" for x in v)
 
-    return (f"{param('display_frame.center')}={triple(centre)} {param('display_frame.normal')}={triple(camera['direction'])} "
-            f"{param('display_frame.up')}={triple(camera['up'])} {param('display_frame.width')} {width:.6g}")
+    return (f"{param('placement.center')}={triple(centre)} {param('placement.normal')}={triple(camera['direction'])} "
+            f"{param('placement.up')}={triple(camera['up'])} {param('placement.width')} {width:.6g}")
 
 
-def recorded_frame(record: dict[str, Any]) -> tuple[float, ...] | None:
-    """The POV-Ray matrix of a sidecar's ``display_frame`` entry (None: native): what a later pass
+def recorded_pose(record: dict[str, Any]) -> tuple[float, ...] | None:
+    """The POV-Ray matrix of a sidecar's ``placement`` entry (None: native): what a later pass
     over the same rays takes as ``RenderSettings.frame`` instead of evaluating the scene again."""
     if "matrix" in record:
         return tuple(float(v) for v in record["matrix"])
     if not record or record.get("source") == "native":
         return None
-    frame = DisplayFrame(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
+    frame = DisplayPose(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
                          tuple(record["normal"]), float(record["units_per_mm"]))
     return None if frame.is_native else tuple(frame.matrix().ravel().tolist())
 

@@ -4,7 +4,7 @@ plain values shared by the methods, the crop and the runner (``renderer.shots.sh
 Words: a *shot* is one image a method asks POV-Ray for (a view, a camera mesh's image);
 a POV-Ray run renders several shots as the frames of its own animation (a *POV-Ray frame*,
 ``povray.job``).  An *animation frame* is one H3D image of ``--frames`` (``renderer.animation``),
-and the *display frame* is where the display sits in the scene (``geometry.frame``).
+and the *placement* is where the display sits in the scene (``renderer.placement``; its pose ``geometry.pose``).
 """
 
 from __future__ import annotations

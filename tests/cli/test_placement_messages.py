@@ -31,7 +31,7 @@ def test_the_orthographic_cameras_advice_is_options_that_work(tmp_path, cli):
     options = [word for part in advice for word in shlex.split(part)]
     followed = cli("render", scene, "-o", tmp_path / "b.png", *TINY, *options)
     assert followed.code == 0, followed.err
-    assert "frame explicit (centre 0,0,0, 3.333 units/mm)" in followed.out   # 8 units over the 2.4 mm panel
+    assert "placement explicit (centre 0,0,0, 3.333 units/mm)" in followed.out   # 8 units over the 2.4 mm panel
 
 
 def test_a_self_lit_scene_without_light_source_has_no_black_warning(tmp_path, cli):
@@ -52,7 +52,7 @@ def test_the_summary_time_is_the_whole_time(tmp_path, cli):
     said = float(re.search(r"  ([0-9.]+) s \(", result.out)[1])
     t = record["timings"]
     assert said == round(t["total_seconds"], 2)
-    assert t["total_seconds"] >= t["render_seconds"] + record["display_frame"]["evaluation_seconds"]
+    assert t["total_seconds"] >= t["render_seconds"] + record["placement"]["evaluation_seconds"]
 
 
 def test_a_missing_include_in_the_cameras_run_names_the_users_file(tmp_path, cli):
@@ -70,5 +70,5 @@ def test_focal_blur_is_named_in_one_warning(tmp_path, cli):
     assert result.code == 0
     lines = [line for line in result.err.splitlines() if "not reproduced" in line]
     assert len(lines) == 1 and "aperture" in lines[0] and "focal_point" in lines[0]
-    record = json.loads(out.with_suffix(".json").read_text())["display_frame"]
+    record = json.loads(out.with_suffix(".json").read_text())["placement"]
     assert record["camera"]["dropped"] == ["aperture", "blur_samples", "focal_point"]

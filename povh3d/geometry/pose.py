@@ -1,7 +1,7 @@
-"""The display frame: where the display sits in a scene modelled in its own units.
+"""The display's pose: where the display sits in a scene modelled in its own units.
 
 The display's own frame is the one of docs/geometry.md: millimetres, the screen
-at ``z = 0``, ``x`` right, ``y`` up, the viewer on ``-z``.  A ``DisplayFrame``
+at ``z = 0``, ``x`` right, ``y`` up, the viewer on ``-z``.  A ``DisplayPose``
 is a rigid placement plus a uniform scale that maps it into scene units:
 
     p_scene = centre + units_per_mm * (x * axis_x + y * axis_y + z * axis_z)
@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import ConfigError, param
 
 #: The options a user can set instead of a frame povh3d cannot work out.
-EXPLICIT_OPTIONS = f"{param('display_frame.center')} X,Y,Z {param('display_frame.normal')} X,Y,Z [{param('display_frame.up')} X,Y,Z] {param('display_frame.width')} UNITS"
+EXPLICIT_OPTIONS = f"{param('placement.center')} X,Y,Z {param('placement.normal')} X,Y,Z [{param('placement.up')} X,Y,Z] {param('placement.width')} UNITS"
 
 
 def _vec(value: Any, name: str) -> np.ndarray:
@@ -39,7 +39,7 @@ def _vec(value: Any, name: str) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class DisplayFrame:
+class DisplayPose:
     """A placement of the display in scene units (see the module docstring).
 
     Attributes
@@ -67,7 +67,7 @@ class DisplayFrame:
                          ((self.axis_x, "x axis"), (self.axis_y, "y axis"), (self.axis_z, "normal"))])
         _vec(self.centre, "the display centre")
         if not np.allclose(axes @ axes.T, np.eye(3), atol=1e-9):
-            raise ConfigError("the display frame's axes must be orthonormal; give a normal and an up "
+            raise ConfigError("the display's axes must be orthonormal; give a normal and an up "
                               "that are not parallel")
         if not (math.isfinite(self.units_per_mm) and self.units_per_mm > 0):
             raise ConfigError(f"the display width must be a positive number of scene units "
@@ -107,9 +107,9 @@ class DisplayFrame:
         axes = np.array([self.axis_x, self.axis_y, self.axis_z])
         return (np.asarray(points, dtype=np.float64) - np.asarray(self.centre)) @ axes.T / self.units_per_mm
 
-    def scaled(self, factor: float) -> DisplayFrame:
+    def scaled(self, factor: float) -> DisplayPose:
         """The same placement with ``factor`` times the units per mm (``--fit-depth``)."""
-        return DisplayFrame(self.centre, self.axis_x, self.axis_y, self.axis_z, self.units_per_mm * factor,
+        return DisplayPose(self.centre, self.axis_x, self.axis_y, self.axis_z, self.units_per_mm * factor,
                             self.source, self.note, self.camera_distance)
 
     def as_record(self) -> dict[str, Any]:
@@ -120,12 +120,12 @@ class DisplayFrame:
     def summary(self) -> str:
         """One short phrase for the CLI's summary line."""
         if self.source == "native":
-            return "frame native (mm, z = 0)"
+            return "placement native (mm, z = 0)"
         c = ", ".join(f"{v:.4g}" for v in self.centre)
-        return f"frame {self.source} (centre {c}, {self.units_per_mm:.4g} units/mm)"
+        return f"placement {self.source} (centre {c}, {self.units_per_mm:.4g} units/mm)"
 
 
-NATIVE = DisplayFrame()
+NATIVE = DisplayPose()
 
 
 #: Within this angle (degrees) of the scene's y axis the default up turns fast with the normal:
@@ -155,7 +155,7 @@ def up_warning(normal: Any, up: Any = None) -> str | None:
     ``UP_WARNING_DEG`` of the scene's y axis, where a small turn of the normal turns the image a lot."""
     if up is not None:
         return None
-    n = _vec(normal, param("display_frame.normal"))
+    n = _vec(normal, param("placement.normal"))
     if not np.linalg.norm(n) > 0:
         return None
     angle = math.degrees(math.acos(min(1.0, abs(n[1]) / np.linalg.norm(n))))
@@ -163,36 +163,36 @@ def up_warning(normal: Any, up: Any = None) -> str | None:
         return None
     return (f"the display normal is {angle:.3g} deg from the scene's y axis, so its default up (the scene's y "
             f"projected onto the display: {', '.join(f'{v:.3g}' for v in default_up(n))}) turns fast with the "
-            f"normal; give {param('display_frame.up')} X,Y,Z to fix which way is up")
+            f"normal; give {param('placement.up')} X,Y,Z to fix which way is up")
 
 
-def explicit_frame(centre: Any, normal: Any, width: float, panel_width_mm: float, up: Any = None,
-                   *, source: str = "explicit", note: str = "") -> DisplayFrame:
+def explicit_pose(centre: Any, normal: Any, width: float, panel_width_mm: float, up: Any = None,
+                   *, source: str = "explicit", note: str = "") -> DisplayPose:
     """The frame from a centre, a normal (away from the viewer), an up and a width in scene units.
 
     ``up`` defaults to ``default_up(normal)``.  The display's ``x`` is ``up x normal``
     (POV-Ray's ``right`` for a camera with ``sky`` up looking along the normal), ``y``
     completes it.
     """
-    c, n = _vec(centre, param("display_frame.center")), _vec(normal, param("display_frame.normal"))
+    c, n = _vec(centre, param("placement.center")), _vec(normal, param("placement.normal"))
     if not np.linalg.norm(n) > 0:
-        raise ConfigError(f"{param('display_frame.normal')} must not be zero; use {EXPLICIT_OPTIONS}")
+        raise ConfigError(f"{param('placement.normal')} must not be zero; use {EXPLICIT_OPTIONS}")
     z = n / np.linalg.norm(n)
     if up is None:
         up = default_up(z)
-    u = _vec(up, param("display_frame.up"))
+    u = _vec(up, param("placement.up"))
     x = np.cross(u, z)
     if not np.linalg.norm(x) > 1e-9 * max(float(np.linalg.norm(u)), 1e-300):
-        raise ConfigError(f"the display's up is parallel to its normal; give a {param('display_frame.up')} across the normal")
+        raise ConfigError(f"the display's up is parallel to its normal; give a {param('placement.up')} across the normal")
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
     if not (math.isfinite(width) and width > 0):
-        raise ConfigError(f"{param('display_frame.width')} must be a positive number of scene units, got {width!r}")
-    return DisplayFrame(tuple(c), tuple(x), tuple(y), tuple(z), width / panel_width_mm, source, note)
+        raise ConfigError(f"{param('placement.width')} must be a positive number of scene units, got {width!r}")
+    return DisplayPose(tuple(c), tuple(x), tuple(y), tuple(z), width / panel_width_mm, source, note)
 
 
-def camera_frame(location: Any, direction: Any, right: Any, up: Any, look_at: Any | None,
-                 panel_width_mm: float, *, note: str = "") -> DisplayFrame:
+def camera_pose(location: Any, direction: Any, right: Any, up: Any, look_at: Any | None,
+                 panel_width_mm: float, *, note: str = "") -> DisplayPose:
     """The frame a perspective camera defines (vectors as POV-Ray computed them).
 
     Centre at ``look_at`` (without one: the point of the view axis nearest the
@@ -221,5 +221,5 @@ def camera_frame(location: Any, direction: Any, right: Any, up: Any, look_at: An
     if np.dot(y, u) < 0:
         y = -y  # a mirrored camera: the image's up stays up
     width = float(distance * np.linalg.norm(r) / np.linalg.norm(d))
-    return DisplayFrame(tuple(centre), tuple(x), tuple(y), tuple(z), width / panel_width_mm, "camera", note,
+    return DisplayPose(tuple(centre), tuple(x), tuple(y), tuple(z), width / panel_width_mm, "camera", note,
                         float(np.linalg.norm(centre - loc)))

@@ -18,13 +18,13 @@ def test_summary_names_the_camera_frame_and_fit_depth_fits(cli, tmp_path):
     # --depth-report: a plain render measures no depth (tests/renderer/test_passes.py)
     plain = cli("render", str(GALLERY / "tilted.pov"), "-o", str(out), "--quality", "draft", "--depth-report", *ARRAY)
     assert plain.code == 0, plain.err
-    assert "frame camera (centre 0.35,0.42,-0.1" in plain.out and "depth" in plain.out
-    record = json.loads(out.with_suffix(".json").read_text())["display_frame"]
+    assert "placement camera (centre 0.35,0.42,-0.1" in plain.out and "depth" in plain.out
+    record = json.loads(out.with_suffix(".json").read_text())["placement"]
     assert record["source"] == "camera" and record["depth"]["empty"] is False
     fitted = cli("render", str(GALLERY / "tilted.pov"), "-o", str(tmp_path / "f.png"), "--quality", "draft",
                  "--fit-depth", "auto", *ARRAY)
     assert fitted.code == 0, fitted.err
-    depth = json.loads((tmp_path / "f.json").read_text())["display_frame"]["depth"]
+    depth = json.loads((tmp_path / "f.json").read_text())["placement"]["depth"]
     assert depth["within_budget"]
     half = depth["depth_budget_mm"] / 2
     assert max(abs(depth["near_mm"]), abs(depth["far_mm"])) == pytest.approx(half, rel=1e-9) \
@@ -36,7 +36,7 @@ def test_native_scene_summary(cli, tmp_path):
     scene = tmp_path / "s.pov"
     scene.write_text("#version 3.7;\nsphere { <0, 0, 0>, 3 pigment { rgb 1 } }\nlight_source { <0, 9, -9> rgb 1 }\n")
     result = cli("render", str(scene), "-o", str(tmp_path / "s.png"), "--quality", "draft", *ARRAY)
-    assert result.code == 0 and "frame native" in result.out
+    assert result.code == 0 and "placement native" in result.out
 
 
 @pytest.mark.parametrize("args, words", [
@@ -49,10 +49,10 @@ def test_native_scene_summary(cli, tmp_path):
     (("--depth-scale", "flat"), "--depth-scale takes a factor"),
     (("--depth-scale", "0"), "--depth-scale must be a number within"),
     (("--fit-depth", "auto", "--depth-scale", "0.5"), "both set the depth"),
-    (("--display-frame", "camera", "--display-center", "0,0,0", "--display-normal", "0,0,1",
+    (("--placement", "camera", "--display-center", "0,0,0", "--display-normal", "0,0,1",
       "--display-width", "2"), "cannot be combined"),
 ])
-def test_bad_frame_options_are_one_line(cli, tmp_path, args, words):
+def test_bad_placement_options_are_one_line(cli, tmp_path, args, words):
     result = cli("render", str(GALLERY / "tilted.pov"), "-o", str(tmp_path / "x.png"), *args, *ARRAY)
     assert result.code == 2 and words in result.err and result.err.strip().count("\n") == 0
     assert not (tmp_path / "x.png").exists()
@@ -62,7 +62,7 @@ def test_bad_frame_options_are_one_line(cli, tmp_path, args, words):
 def test_info_reports_the_scene_depth_against_the_budget(cli):
     result = cli("info", str(GALLERY / "tilted.pov"), *ARRAY)
     assert result.code == 0, result.err
-    assert "frame camera" in result.out and "depth budget +-12 mm" in result.out   # 2 N f = 2 * 6 * 2 = 24
+    assert "placement camera" in result.out and "depth budget +-12 mm" in result.out   # 2 N f = 2 * 6 * 2 = 24
     data = cli("info", str(GALLERY / "tilted.pov"), "--json", *ARRAY)
     report = json.loads(data.out)["scene"]
     assert report["depth_budget_mm"] == pytest.approx(24.0) and report["depth"]["empty"] is False
@@ -77,7 +77,7 @@ def test_depth_maps_are_written_per_view_with_their_disparity(cli, tmp_path):
                  "--depth-maps", str(folder), *ARRAY)
     assert result.code == 0, result.err
     info = json.loads((folder / "depth_maps.json").read_text())
-    assert info["views"] == [6, 6] and info["display_frame"]["source"] == "camera"
+    assert info["views"] == [6, 6] and info["placement"]["source"] == "camera"
     d = np.load(folder / "d_000_005.npy")
     p = np.load(folder / "p_000_005.npy")
     assert d.shape == (18, 24) and np.isfinite(d).mean() > 0.5
@@ -137,7 +137,7 @@ def test_fit_depth_by_depth_scale_says_it_distorts(cli, tmp_path):
                  "--depth-scale", *ARRAY)
     assert result.code == 0, result.err
     record = json.loads(out.with_suffix(".json").read_text())
-    frame = record["display_frame"]
+    frame = record["placement"]
     assert "(distorted)" in result.out and "distortion" in frame["depth_scale_note"]
     assert frame["depth"]["fit"]["by"] == "depth_scale" and frame["depth"]["within_budget"]
     assert frame["depth_scale"] == pytest.approx(1 / frame["depth"]["fit"]["factor"])
@@ -154,7 +154,7 @@ def test_info_reports_a_model_and_a_volume_as_the_stage_places_them(cli):
         assert data.code == 0, data.err
         report = json.loads(data.out)["content"]
         assert report["kind"] == kind and report["depth_budget_mm"] == pytest.approx(24.0)
-        size, depth = report["placement"]["size_mm"], report["depth"]
+        size, depth = report["fit"]["size_mm"], report["depth"]
         assert max(size[0] / (0.9 * width), size[1] / (0.9 * 18 * 6 * 0.2)) == pytest.approx(1.0)
         assert depth["near_mm"] == pytest.approx(-depth["far_mm"], abs=1e-6)   # centred on the screen
         assert depth["far_mm"] - depth["near_mm"] == pytest.approx(size[2], rel=1e-6)

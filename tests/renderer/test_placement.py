@@ -1,4 +1,4 @@
-"""The display frame on scenes with their own camera (issue 13).
+"""The placement on scenes with their own camera (issue 13).
 
 Oracles: the frame against the scene's declared identifiers (analytic); every
 view extracted from the H3D image against a plain POV-Ray render through an
@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from povh3d.display.display import Display
-from povh3d.renderer.placement.pose import DisplayFrameOptions, resolve_frame
+from povh3d.renderer.placement.pose import PlacementOptions, resolve_pose
 from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.errors import ConfigError
-from povh3d.geometry.frame import DisplayFrame, explicit_frame
+from povh3d.geometry.pose import DisplayPose, explicit_pose
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.interleave import extract
 from povh3d.image.io import read_png
@@ -46,8 +46,8 @@ def _povray(script: str, width: int, height: int, include: Path) -> np.ndarray:
     return images[0]
 
 
-def _frame(record: dict) -> DisplayFrame:
-    return DisplayFrame(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
+def _frame(record: dict) -> DisplayPose:
+    return DisplayPose(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
                         tuple(record["normal"]), record["units_per_mm"], record["source"])
 
 
@@ -55,7 +55,7 @@ def _frame(record: dict) -> DisplayFrame:
 def test_frame_follows_the_declared_camera():
     """Centre at look_at, normal along look_at - location, y along the rolled sky, width = field."""
     array = small_array()
-    frame, record = resolve_frame(DisplayFrameOptions(), load_scene(GALLERY / "tilted.pov"), array)
+    frame, record = resolve_pose(PlacementOptions(), load_scene(GALLERY / "tilted.pov"), array)
     target = np.array([0.35, 0.42, -0.10])
     el, az = np.radians(28), np.radians(-37)
     # vrotate(<0,0,-d>, <el, az, 0>) in POV-Ray's left-handed frame: about x, then y.
@@ -80,7 +80,7 @@ def test_frame_follows_the_declared_camera():
 def test_camera_vectors_reproduce_povray_render(tmp_path):
     """POV-Ray through the scene's own camera == through a camera written from povh3d's vectors."""
     scene = GALLERY / "tilted.pov"
-    _, record = resolve_frame(DisplayFrameOptions(), load_scene(scene), small_array())
+    _, record = resolve_pose(PlacementOptions(), load_scene(scene), small_array())
     cam = record["camera"]
     own = _povray(f'#include "{scene.name}"\n', 144, 108, GALLERY)
     ours = _povray(f'#include "{scene.name}"\ncamera {{ location {pov_vector(cam["location"])} '
@@ -100,8 +100,8 @@ def test_views_equal_oblique_orthographic_renders(tmp_path, name):
     """Every view (a sample of them) equals POV-Ray's oblique orthographic render placed by the frame."""
     array = small_array()
     record = render(GALLERY / name, array, tmp_path / "h3d.png", settings=RenderSettings(quality="draft"))
-    frame = _frame(record["display_frame"])
-    assert record["display_frame"]["source"] == "camera"
+    frame = _frame(record["placement"])
+    assert record["placement"]["source"] == "camera"
     front_clearance = record["quality"]["front_clearance_mm"]
     views = extract(read_png(tmp_path / "h3d.png"), array.require_views())
     ny, nx = array.require_views()
@@ -143,7 +143,7 @@ def test_moved_scene_and_frame_give_the_same_pixels(tmp_path):
     ry = np.array([[np.cos(ay), 0, -np.sin(ay)], [0, 1, 0], [np.sin(ay), 0, np.cos(ay)]])
     rz = np.array([[np.cos(az), np.sin(az), 0], [-np.sin(az), np.cos(az), 0], [0, 0, 1]])
     r = rx @ ry @ rz   # POV-Ray's rotate <a,b,c> on row vectors
-    frame = DisplayFrame((100, -40, 300), r[0], r[1], r[2], 2.5, "explicit")
+    frame = DisplayPose((100, -40, 300), r[0], r[1], r[2], 2.5, "explicit")
     # pinhole renders one camera a lens: a ninth of small_array()'s lenses for it.
     arrays = {"multi-ortho": small_array(),
               "pinhole": LensArray("square", 8, 6, 1.2, 1.2, 2.0, Panel(48, 36, 0.2, 0.2))}
@@ -153,10 +153,10 @@ def test_moved_scene_and_frame_give_the_same_pixels(tmp_path):
         b = render(moved, array, tmp_path / f"b-{method}.png", method=method,
                    settings=RenderSettings(quality="draft", frame=tuple(frame.matrix().ravel())))
         assert psnr(read_png(tmp_path / f"a-{method}.png"), read_png(tmp_path / f"b-{method}.png")) > 60
-        assert a["display_frame"]["source"] == "native" and b["display_frame"]["source"] == "matrix"
+        assert a["placement"]["source"] == "native" and b["placement"]["source"] == "matrix"
     c = render(moved, arrays["multi-ortho"], tmp_path / "c.png", settings=RenderSettings(quality="draft"))
     assert psnr(read_png(tmp_path / "a-multi-ortho.png"), read_png(tmp_path / "c.png")) < 20  # control
-    assert c["display_frame"]["source"] == "native"
+    assert c["placement"]["source"] == "native"
 
 
 def _scene(tmp_path: Path, camera: str) -> Path:
@@ -174,32 +174,32 @@ def _scene(tmp_path: Path, camera: str) -> Path:
 ])
 def test_camera_that_cannot_be_used_is_one_line_naming_the_options(tmp_path, camera, words):
     with pytest.raises(CameraError) as info:
-        resolve_frame(DisplayFrameOptions(), load_scene(_scene(tmp_path, camera)), small_array())
+        resolve_pose(PlacementOptions(), load_scene(_scene(tmp_path, camera)), small_array())
     message = str(info.value)
-    assert words in message and "display_frame.center" in message and "\n" not in message
+    assert words in message and "placement.center" in message and "\n" not in message
 
 
 def test_explicit_and_native_frames(tmp_path):
     scene = load_scene(_scene(tmp_path, "camera { location <0,0,-5> look_at 0 }"))
     array = small_array()
-    frame, _ = resolve_frame(DisplayFrameOptions("native"), scene, array)
+    frame, _ = resolve_pose(PlacementOptions("native"), scene, array)
     assert frame.is_native
-    frame, record = resolve_frame(DisplayFrameOptions(center=(1, 2, 3), normal=(0, 0, 2), width=28.8), scene, array)
+    frame, record = resolve_pose(PlacementOptions(center=(1, 2, 3), normal=(0, 0, 2), width=28.8), scene, array)
     assert record["source"] == "explicit" and frame.units_per_mm == pytest.approx(1.0)
     np.testing.assert_allclose(frame.to_scene([0, 0, 0]), [1, 2, 3])
     with pytest.raises(ConfigError, match="parallel"):
-        explicit_frame((0, 0, 0), (0, 1, 0), 10, 28.8, up=(0, 2, 0))
+        explicit_pose((0, 0, 0), (0, 1, 0), 10, 28.8, up=(0, 2, 0))
     with pytest.raises(ConfigError, match="positive"):
-        explicit_frame((0, 0, 0), (0, 0, 1), 0, 28.8)
+        explicit_pose((0, 0, 0), (0, 0, 1), 0, 28.8)
     with pytest.raises(ConfigError, match="needs all"):
-        DisplayFrameOptions(center=(0, 0, 0))
+        PlacementOptions(center=(0, 0, 0))
 
 
 @pytest.mark.povray
 def test_camera_evaluation_is_cached_by_scene_digest():
     scene, array = load_scene(GALLERY / "inches.pov"), small_array()
-    _, first = resolve_frame(DisplayFrameOptions(), scene, array)
-    _, again = resolve_frame(DisplayFrameOptions(), scene, array)
+    _, first = resolve_pose(PlacementOptions(), scene, array)
+    _, again = resolve_pose(PlacementOptions(), scene, array)
     assert not first["evaluation_from_cache"] and again["evaluation_from_cache"]
     assert again["evaluation_seconds"] < 0.05
     assert any("ran 2 camera statements" in w for w in first["warnings"])
@@ -220,7 +220,7 @@ def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
 def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     """The depth pass made in the camera's run equals a depth pass of its own in the same frame."""
     import povh3d.renderer.placement.place as placement
-    from povh3d.renderer.placement.pose import resolve_frame_and_depth
+    from povh3d.renderer.placement.pose import resolve_pose_and_depth
     from povh3d.renderer.request import RenderRequest
     from povh3d.renderer.passes.depth import depth_pass
 
@@ -228,7 +228,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     settings = RenderSettings(quality="draft", cache_dir=tmp_path)
     # --depth-report: a plain render measures no depth (test_passes.py)
     request = RenderRequest(source=scene.path, display=Display(array), output=tmp_path / "o.png", settings=settings,
-                            display_frame=DisplayFrameOptions(depth_report=True))
+                            placement=PlacementOptions(depth_report=True))
     monkeypatch.setattr(placement, "depth_pass", None)   # a separate pass would fail: none is run
     _, record = placement.place_display(request, scene)
     again = placement.place_display(request, scene)[1]
@@ -241,7 +241,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     for key in ("near_mm", "far_mm", "field_near_mm", "field_far_mm"):
         assert record["depth"][key] == pytest.approx(own[key], abs=0.02), key
     # The pass belongs to its frame and clearance: another one is measured again.
-    placed, _, seen = resolve_frame_and_depth(DisplayFrameOptions(), scene, array, cache_dir=tmp_path,
+    placed, _, seen = resolve_pose_and_depth(PlacementOptions(), scene, array, cache_dir=tmp_path,
                                               front_clearance=4 * 28.8)
     assert np.allclose(placed.matrix(), frame.matrix())
     clearance = placement._front_clearance(placed, 4 * 28.8)   # within 0.9 of the camera's distance
@@ -323,7 +323,7 @@ def test_the_renders_timeout_governs_the_camera_run(tmp_path):
     allows it, and a short limit stops the camera run itself."""
     import time
 
-    from povh3d.renderer.placement.pose import resolve_frame_and_depth
+    from povh3d.renderer.placement.pose import resolve_pose_and_depth
     from povh3d.errors import PovrayTimeout
 
     path = tmp_path / "slow.pov"   # about 2 s of parse before the camera
@@ -332,10 +332,10 @@ def test_the_renders_timeout_governs_the_camera_run(tmp_path):
     scene, array = load_scene(path), small_array()
     start = time.perf_counter()
     with pytest.raises(PovrayTimeout):
-        resolve_frame_and_depth(DisplayFrameOptions(), scene, array, use_cache=False, front_clearance=2.0,
+        resolve_pose_and_depth(PlacementOptions(), scene, array, use_cache=False, front_clearance=2.0,
                                 timeout=0.3)
     assert time.perf_counter() - start < 1.5   # stopped at the limit, not after the parse
-    frame, record, seen = resolve_frame_and_depth(DisplayFrameOptions(), scene, array, use_cache=False,
+    frame, record, seen = resolve_pose_and_depth(PlacementOptions(), scene, array, use_cache=False,
                                                   front_clearance=2.0, timeout=60)   # the control
     assert record["source"] == "camera" and seen is not None
 
@@ -363,7 +363,7 @@ def test_a_mesh_camera_built_from_image_width_is_told_at_a_few_rows(tmp_path):
     array = lens_array("ipad-retina")   # 3.1 million triangles at the panel's size: minutes of parse
     start = time.perf_counter()
     with pytest.raises(CameraError, match=r"mesh_camera camera .* told by a parse at \d+x\d+ pixels"):
-        resolve_frame(DisplayFrameOptions(), load_scene(scene(1)), array, use_cache=False)
+        resolve_pose(PlacementOptions(), load_scene(scene(1)), array, use_cache=False)
     assert time.perf_counter() - start < 10
-    frame, record = resolve_frame(DisplayFrameOptions(), load_scene(scene(0)), array, use_cache=False)
+    frame, record = resolve_pose(PlacementOptions(), load_scene(scene(0)), array, use_cache=False)
     assert record["source"] == "camera"

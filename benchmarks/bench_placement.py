@@ -1,4 +1,4 @@
-"""Benchmark: the display frame on scenes with their own camera (issue 13).
+"""Benchmark: the placement on scenes with their own camera (issue 13).
 
 1. Oracle: every sampled view of the H3D image (``demo`` preset, ``--quality
    draft``) against a plain POV-Ray render of the same scene through an oblique
@@ -6,7 +6,7 @@
    PSNR per scene (worst and median of the views).
 2. Cost of the frame on a re-run: whole ``povh3d render`` commands, all frames
    cached, with the scene's camera (frame evaluation and depth pass read from
-   the cache) against ``--display-frame native``; repeats interleaved, median and
+   the cache) against ``--placement native``; repeats interleaved, median and
    spread, load average recorded.  Then in the process: the frame on a re-run,
    and on a first render (fresh cache: how many POV-Ray runs, how long).
 
@@ -14,7 +14,7 @@ Scenes: the gallery scenes of ``tests/support/gallery`` and, when Debian's
 ``povray-examples`` is installed, POV-Ray's sample scenes named in the issue.
 Writes its tables between the ``bench_frame`` markers of docs/benchmarks.md.
 
-    .venv/bin/python benchmarks/bench_frame.py [--repeats 7] [--views 4]
+    .venv/bin/python benchmarks/bench_placement.py [--repeats 7] [--views 4]
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from povh3d.renderer.methods.quality import RenderSettings  # noqa: E402
-from povh3d.geometry.frame import DisplayFrame  # noqa: E402
+from povh3d.geometry.pose import DisplayPose  # noqa: E402
 from povh3d.display.presets import lens_array  # noqa: E402
 from povh3d.image.interleave import extract  # noqa: E402
 from povh3d.image.io import read_png  # noqa: E402
@@ -69,8 +69,8 @@ def oracle(scene: Path, views: int) -> tuple[float, float, dict]:
     array = lens_array("demo")
     out = Path(tempfile.mkdtemp()) / "h.png"
     record = render(scene, array, out, settings=RenderSettings(quality="draft"))
-    f = record["display_frame"]
-    frame = DisplayFrame(tuple(f["centre"]), tuple(f["axis_x"]), tuple(f["axis_y"]), tuple(f["normal"]),
+    f = record["placement"]
+    frame = DisplayPose(tuple(f["centre"]), tuple(f["axis_x"]), tuple(f["axis_y"]), tuple(f["normal"]),
                          f["units_per_mm"], f["source"])
     back = record["quality"]["front_clearance_mm"]
     stack = extract(read_png(out), array.require_views())
@@ -121,11 +121,11 @@ def main() -> int:
     for scene in scenes[:3]:
         out = Path(tempfile.mkdtemp()) / "o.png"
         command_seconds(scene, [], out, env)
-        command_seconds(scene, ["--display-frame", "native"], out, env)   # warm both caches
+        command_seconds(scene, ["--placement", "native"], out, env)   # warm both caches
         framed, native = [], []
         for _ in range(args.repeats):  # interleaved, so load hits both alike
             framed.append(command_seconds(scene, [], out, env))
-            native.append(command_seconds(scene, ["--display-frame", "native"], out, env))
+            native.append(command_seconds(scene, ["--placement", "native"], out, env))
         diffs = [a - b for a, b in zip(framed, native)]
         timing.append(f"| {scene.name} | {statistics.median(framed):.3f} (spread {max(framed) - min(framed):.3f}) | "
                       f"{statistics.median(native):.3f} (spread {max(native) - min(native):.3f}) | "
