@@ -159,3 +159,71 @@ def test_a_sidecar_holds_names_not_marks(tmp_path):
     assert param("ppl") in record["warnings"][0]   # negative control: the record itself holds the marks
     side = write_sidecar(tmp_path / "a.png", record)
     assert json.loads(side.read_text()) == {"warnings": ["give ppl 8"], "crop": {"reason": "crop off"}}
+
+
+def _marked_names() -> dict[str, list[str]]:
+    """Each name a library message marks with ``param("...")`` -> where (``module:line``)."""
+    found: dict[str, list[str]] = {}
+    for module, source in _library_modules():
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.Call) and _called(node.func) == "param" and node.args \
+                    and isinstance(node.args[0], ast.Constant):
+                found.setdefault(node.args[0].value, []).append(f"{module}:{node.lineno}")
+    return found
+
+
+def _python_names() -> set[str]:
+    """The names a Python caller passes: the parameters of povh3d's functions and classes, the fields
+    of the options it takes (``RenderRequest``, ``RenderSettings``, ``placement.*``, a preset's fields,
+    ``mapping_options``, ``method_options``) and the parameters of the file commands (``povh3d.commands``)."""
+    import dataclasses
+    import importlib
+    import inspect
+    import pkgutil
+
+    import povh3d
+    from povh3d.display import presets
+    from povh3d.display.mappings import MappingOptions
+    from povh3d.renderer.methods.registry import METHODS
+    from povh3d.renderer.placement.pose import PlacementOptions
+
+    def parameters(obj) -> set[str]:
+        try:
+            return set(inspect.signature(obj).parameters)
+        except (TypeError, ValueError):
+            return set()
+
+    names: set[str] = set(presets.FIELDS) | {f.name for f in dataclasses.fields(MappingOptions)}
+    names |= {f"placement.{f.name}" for f in dataclasses.fields(PlacementOptions)}
+    names |= {key for method in METHODS.values() for key in method.options}
+    from povh3d.renderer.content.convert_mesh import convert_mesh   # povh3d.convert_mesh(**options)
+
+    objects = [convert_mesh, *(getattr(povh3d, name) for name in povh3d.__dir__())]
+    import povh3d.commands as commands
+    for info in pkgutil.iter_modules(commands.__path__):
+        module = importlib.import_module(f"povh3d.commands.{info.name}")
+        objects += [v for v in vars(module).values() if inspect.isfunction(v) and v.__module__ == module.__name__]
+    for obj in objects:
+        if callable(obj):
+            names |= parameters(obj)
+        if dataclasses.is_dataclass(obj):
+            names |= {f.name for f in dataclasses.fields(obj)}
+    return names
+
+
+#: Marked names no Python call takes, each with why: text a file command parses, a setting of the
+#: process, or a name a flag table cannot tell apart.
+NOT_PYTHON = {
+    "panel_size": "map_file's panel; 'panel' is the preset field (--panel), so the flag table keeps --panel-size",
+    "slant_range": "the text of --slant-range that commands.moire parses (Python passes slants_deg)",
+    "max_memory": "POVH3D_MAX_MEMORY / --max-memory: the process's memory budget, no function's parameter",
+    "sweep": "the text of --sweep that the replay command parses into eyes",
+}
+
+
+def test_the_names_in_messages_are_the_python_names():
+    marked, python = _marked_names(), _python_names()
+    assert "lens_rotation" in marked and "lens_rotation" in python and "no_such_name" not in python   # control
+    wrong = {name: where[:3] for name, where in marked.items() if name not in python and name not in NOT_PYTHON}
+    assert not wrong, f"a message names a parameter no Python call takes (use the Python name): {wrong}"
+    assert set(NOT_PYTHON) <= set(marked), "NOT_PYTHON lists a name no message marks any more"

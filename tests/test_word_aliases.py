@@ -1,6 +1,7 @@
 """The names issue 36 replaced still work, each with a deprecation: the sidecar key
 ``display_frame`` (now ``placement``) of sidecars already on disk, ``RenderRequest(display_frame=)``,
-``povh3d.render(display_frame=)``, ``povh3d.layout(frame_options=)`` and ``--display-frame``."""
+``povh3d.render(display_frame=)``, ``RenderSettings(frame=)`` / ``render(frame=)`` (now ``pose``),
+``povh3d.layout(frame_options=)`` and ``--display-frame``."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from povh3d.image.io import read_sidecar, write_png, write_sidecar
 from povh3d.renderer.placement.pose import PlacementOptions
 from povh3d.renderer.request import RenderRequest
 
+MATRIX = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 5.0, 0.0, 0.0)
 OLD_ENTRY = {"source": "camera", "centre": [1.0, 2.0, 3.0], "units_per_mm": 2.5}
 
 
@@ -69,9 +71,22 @@ def test_render_and_layout_take_the_old_keywords(tmp_path, monkeypatch):
         povh3d.render(tmp_path / "a.pov", tmp_path / "a.png", display_frame=options, use_cache=False)
     assert seen["placement"] == options and "display_frame" not in seen
     seen.clear()
+    with pytest.warns(DeprecationWarning, match="pose="):
+        povh3d.render(tmp_path / "a.pov", tmp_path / "a.png", frame=MATRIX, use_cache=False)
+    assert seen["pose"] == MATRIX and "frame" not in seen
+    seen.clear()
     with pytest.warns(DeprecationWarning, match="placement="):
         povh3d.layout(tmp_path / "a.pov", tmp_path / "a.png", frame_options=options)
     assert seen["placement"] == options and "frame_options" not in seen
+
+
+def test_render_settings_take_frame_as_pose():
+    from povh3d.renderer.methods.quality import RenderSettings
+
+    with pytest.warns(DeprecationWarning, match="pose"):
+        settings = RenderSettings(frame=MATRIX)
+    assert settings.pose == MATRIX and dataclasses.replace(settings, jobs=1).pose == MATRIX
+    assert RenderSettings().pose is None   # control
 
 
 @pytest.mark.parametrize("flag, warned", [("--display-frame", True), ("--placement", False)])

@@ -22,11 +22,15 @@ NAMES = {
     "depth_maps": "--depth-maps",
     "max_error_db": "--max-error",       # RenderSettings.max_error_db
     "include_dirs": "--include",         # RenderRequest.include_dirs
+    "use_cache": "--no-cache",           # RenderSettings.use_cache
+    "per_lens": "--subpixels-per-lens",  # mapping_options (display.mappings.MappingOptions)
+    "slope": "--slant-tan or --slant-deg",
     "placement.mode": "--placement",   # RenderRequest.placement, a PlacementOptions
     "placement.center": "--display-center",
     "placement.normal": "--display-normal",
     "placement.up": "--display-up",
     "placement.width": "--display-width",
+    "placement.fit_depth": "--fit-depth",
 }
 
 _options: set[str] = set()

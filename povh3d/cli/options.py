@@ -112,7 +112,7 @@ def lens_array_from_args(args: argparse.Namespace) -> Any:
     return display_from_args(args).lens_array
 
 
-def progress_bar(enabled: bool, unit: str = "frames"):
+def progress_bar(enabled: bool, unit: str = "shots"):
     """``(update, close)``: a status line on stderr (``cli.progress``), or nothing when not `enabled`."""
     if not enabled:
         return None, lambda: None

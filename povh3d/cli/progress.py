@@ -20,11 +20,11 @@ def _clock(seconds: float) -> str:
         else f"{seconds // 60}:{seconds % 60:02d}"
 
 
-def status_text(done: float, total: float, elapsed: float, unit: str = "frames", width: int = 20) -> str:
+def status_text(done: float, total: float, elapsed: float, unit: str = "shots", width: int = 20) -> str:
     """The status line for `done` of `total` after `elapsed` seconds (no escape codes).
 
     >>> status_text(0.5, 2, 10.0)
-    'povh3d:  25% |#####               | 0/2 frames  0:10, about 0:30 left'
+    'povh3d:  25% |#####               | 0/2 shots  0:10, about 0:30 left'
     """
     share = min(1.0, max(0.0, done / total)) if total > 0 else 0.0
     filled = int(share * width)
@@ -36,7 +36,7 @@ def status_text(done: float, total: float, elapsed: float, unit: str = "frames",
 class StatusLine:
     """Progress on `stream`; call it as ``status(done, total)``, then ``close()``."""
 
-    def __init__(self, stream: TextIO = sys.stderr, unit: str = "frames", interval: float = 0.1) -> None:
+    def __init__(self, stream: TextIO = sys.stderr, unit: str = "shots", interval: float = 0.1) -> None:
         self.stream, self.unit, self.interval = stream, unit, interval
         self.start = time.monotonic()
         self.shown = -float("inf")

@@ -162,7 +162,7 @@ def _render(args: argparse.Namespace) -> str | None:
     summary = flags(f"{w}x{h}  {method}{mapping}  {placement_phrase(placed)}  {clearance_phrase(result)}")
     seconds = t.get("total_seconds", t["render_seconds"])   # the camera and depth runs included
     print(f"{request.output}  {summary}  "
-          f"{seconds:.2f} s ({t['frames_from_cache']}/{t['frames']} frames from cache)")
+          f"{seconds:.2f} s ({t['shots_from_cache']}/{t['shots']} shots from cache)")
     return summary
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import ConfigError, param
 from ..geometry.camera_mesh import CameraMesh
-from ..geometry.view_bank import stack_frames
+from ..geometry.view_bank import stack_shots
 from ..geometry.lens_array import LensArray, Panel
 from ..image.colour import mean_in_linear_light
 
@@ -112,7 +112,7 @@ def sheet_phase(sheet: LensArray, shift: float = 0.0) -> tuple[np.ndarray, np.nd
 
 def subpixel_image(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray]) -> np.ndarray:
     """The ``(H, 3W, C)`` image of every subpixel's ray out of the rendered frame."""
-    image = stack_frames(images)
+    image = stack_shots(images)
     return mesh.crop(image) if tiles is None else tiles.to_panel(image)
 
 

@@ -149,7 +149,7 @@ class CameraMesh:
     margin: tuple[int, int] = (0, 0)  # (columns, rows) of canvas around the panel, cut off after
     # x, y map K (2 x 2, row-major) after ``scale``: origins by K, directions by K^-T (``lattice_mesh``).
     shear: tuple[float, float, float, float] | None = None
-    # View banks with gutters (``view_bank_frames``): the image columns and rows that hold
+    # View banks with gutters (``view_bank_shots``): the image columns and rows that hold
     # pixels, counted after the extra first row and last column are cut; None: all of them.
     kept: tuple[np.ndarray, np.ndarray] | None = None
     # A footprint sample's angle on a lens mesh (``sampled_corners``): every ray direction

@@ -19,20 +19,20 @@ from .lens_array import LensArray
 
 # -- multi-orthographic camera bank, one orthographic camera per view ---------------
 
-def ortho_view_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
+def ortho_view_shots(lens_array: LensArray) -> tuple[dict, list[dict]]:
     """The orthographic camera of every view, row-major over ``(l, k)``.
 
     Returns
     -------
     common : dict
         ``right``, ``up`` (mm vectors spanning the lens array) and image size.
-    frames : list of dict
+    shots : list of dict
         ``{"view": (l, k), "direction": (u/f, v/f, 1)}``; the template backs the
         camera off along ``direction`` (z component 1, so by exactly ``front_clearance``).
     """
     u, v = lens_array.view_offsets()
     f = lens_array.focal
-    frames = [{"view": (l, k), "direction": (float(u[k] / f), float(v[l] / f), 1.0)}
+    shots = [{"view": (l, k), "direction": (float(u[k] / f), float(v[l] / f), 1.0)}
               for l in range(len(v)) for k in range(len(u))]
     common = {
         "right": (lens_array.lenses_x * lens_array.pitch_x, 0.0, 0.0),
@@ -40,7 +40,7 @@ def ortho_view_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
         "width": lens_array.lenses_x,
         "height": lens_array.lenses_y,
     }
-    return common, frames
+    return common, shots
 
 
 TIE_SHIFT = 1 / 256
@@ -144,7 +144,7 @@ def sampled_corners(lens_array: LensArray, sample, origin_x: np.ndarray, origin_
 
 # -- per-lens pinhole cameras ---------------------------------------------------------
 
-def pinhole_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
+def pinhole_shots(lens_array: LensArray) -> tuple[dict, list[dict]]:
     """One perspective camera per lens, pinhole at the lens centre, row-major over lenses.
 
     POV-Ray's perspective pixel ``(k, l)`` looks along
@@ -154,7 +154,7 @@ def pinhole_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
     ny, nx = lens_array.require_views()
     s_x, s_y = lens_array.panel.pitch_x, lens_array.panel.pitch_y
     centres = lens_array.lens_centres()
-    frames = [{"lens": (i, j), "centre": (float(centres[i, j, 0]), float(centres[i, j, 1]), 0.0)}
+    shots = [{"lens": (i, j), "centre": (float(centres[i, j, 0]), float(centres[i, j, 1]), 0.0)}
               for i in range(lens_array.lenses_y) for j in range(lens_array.lenses_x)]
     common = {
         "direction": (0.0, 0.0, lens_array.focal),
@@ -163,4 +163,4 @@ def pinhole_frames(lens_array: LensArray) -> tuple[dict, list[dict]]:
         "width": nx,
         "height": ny,
     }
-    return common, frames
+    return common, shots

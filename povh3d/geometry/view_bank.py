@@ -1,8 +1,8 @@
-"""The view bank: whole-PPL views tiled into mesh-camera frames, one bank per footprint
-sample, and the frames cut back into banks.
+"""The view bank: whole-PPL views tiled into mesh-camera shots, one bank per footprint
+sample, and the shots cut back into banks.
 
 Pure: a LensArray in, ``CameraMesh`` values out (``geometry.cameras`` holds the mesh
-and the single-frame cameras).
+and the single-shot cameras).
 """
 
 from __future__ import annotations
@@ -21,21 +21,21 @@ if TYPE_CHECKING:
     from .lens_array import LensArray
 
 
-# How many footprint banks go into one mesh-camera frame.  POV-Ray 3.7 finds a
+# How many footprint banks go into one mesh-camera shot.  POV-Ray 3.7 finds a
 # ray's face by scanning every face of the mesh (measured with 64 views at 480x272:
-# 38 ms a bank with 8 banks a frame, 88 ms with 128, about 2.5e-11 s per face per
-# ray), while each further frame of a run costs about 0.25 s (parse, start of frame).
-# The banks per frame that minimise the sum: sqrt(FRAME_SECONDS / (rays x faces x SCAN_SECONDS)).
+# 38 ms a bank with 8 banks a shot, 88 ms with 128, about 2.5e-11 s per face per
+# ray), while each further shot of a run costs about 0.25 s (parse, start of shot).
+# The banks per shot that minimise the sum: sqrt(FRAME_SECONDS / (rays x faces x SCAN_SECONDS)).
 FRAME_SECONDS = 0.25
 SCAN_SECONDS = 2.5e-11
 
 
 def bank_groups(samples: np.ndarray, faces_per_bank: int, rays_per_bank: int) -> list[np.ndarray]:
-    """Footprint samples split into equal groups, one mesh-camera frame each.
+    """Footprint samples split into equal groups, one mesh-camera shot each.
 
-    All groups have one size (a batch's frames share one image size): the largest
+    All groups have one size (a batch's shots share one image size): the largest
     divisor of the count not above the cheapest size (see ``FRAME_SECONDS``), so a
-    small probe takes 64 banks a frame, a 480x272 panel 16 and a 1920x1088 one 4.
+    small probe takes 64 banks a shot, a 480x272 panel 16 and a 1920x1088 one 4.
     """
     samples = _per_bank(samples)
     best = math.sqrt(FRAME_SECONDS / (SCAN_SECONDS * max(1, rays_per_bank) * max(1, faces_per_bank)))
@@ -50,9 +50,9 @@ def _per_bank(samples: np.ndarray) -> np.ndarray:
     return samples if samples.ndim == 4 else samples.reshape(-1, 4)
 
 
-def view_bank_frames(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None = None,
+def view_bank_shots(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None = None,
                      plan=None, gutter: int = 0) -> list[CameraMesh]:
-    """The meshes of the frames that trace a view bank per footprint sample (``bank_groups``).
+    """The meshes of the shots that trace a view bank per footprint sample (``bank_groups``).
 
     Each mesh is the orthographic camera bank as one mesh camera, one quad per view
     (or, with a ``crop.CropPlan``, per kept column segment times kept row segment):
@@ -64,7 +64,7 @@ def view_bank_frames(lens_array: LensArray, front_clearance: float, samples: np.
     uncropped mesh gives it.
 
     ``gutter`` > 0 (a render whose antialiasing samples pixel borders): that many
-    pixels between any two quads (``_bank_mesh``), cut off by ``stack_frames``.
+    pixels between any two quads (``_bank_mesh``), cut off by ``stack_shots``.
     """
     cols, rows, size = _bank_tiles(lens_array, plan)
     samples = _per_bank(CENTRE if samples is None else samples)
@@ -173,8 +173,8 @@ def _with_gutters(segments: np.ndarray, size: int, gutter: int) -> np.ndarray:
     return kept
 
 
-def stack_frames(images: list[np.ndarray], meshes: list[CameraMesh] | None = None) -> np.ndarray:
-    """Rendered mesh-camera frames stacked top to bottom, each without the extra first
+def stack_shots(images: list[np.ndarray], meshes: list[CameraMesh] | None = None) -> np.ndarray:
+    """Rendered mesh-camera shots stacked top to bottom, each without the extra first
     row and last column of ``CameraMesh`` (and without the gutters of its mesh, if given)."""
     cut = [im[1:, :-1] for im in images]
     if meshes is not None:

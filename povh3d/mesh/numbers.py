@@ -1,6 +1,6 @@
 """Whole arrays as POV-Ray text in one formatting call, round-tripping exactly.
 
-``povfmt.pov_vector_list`` builds one string per vector; a million-triangle
+``scene.format.pov_vector_list`` builds one string per vector; a million-triangle
 mesh has millions of numbers, so here the whole array goes through a single
 ``%``-format whose ``%r`` is ``repr`` (the shortest text that reads back as the
 same double, locale-independent: docs/geometry.md, "Numbers") and whose ``%d`` is the
@@ -97,7 +97,7 @@ def vector_item(k: int, conversion: str = "%r") -> str:
 
 
 def format_vectors(array: np.ndarray, per_line: int = 4) -> str:
-    """``<a, b, c>`` rows, the same text as ``povfmt.pov_vector_list`` (ints as ints)."""
+    """``<a, b, c>`` rows, the same text as ``scene.format.pov_vector_list`` (ints as ints)."""
     array = np.asarray(array)
     conversion = "%d" if np.issubdtype(array.dtype, np.integer) else "%r"
     return format_rows(array, vector_item(array.shape[1] if array.ndim == 2 else 0, conversion), per_line)

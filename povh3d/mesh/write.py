@@ -1,6 +1,6 @@
 """A model's parts as the text of a POV-Ray include: ``mesh2`` objects and their bounds.
 
-Pure: text and texture images in, nothing written; ``convert.py`` writes them.
+Pure: text and texture images in, nothing written; ``renderer.content.convert_mesh`` writes them.
 The include declares ``IDENT`` (one ``mesh2``, or a ``union`` of them),
 ``IDENT_min`` and ``IDENT_max`` (its bounding box, mm) and ``IDENT_Dir``, the
 folder prefix of its texture files (empty: found beside the scene or through

@@ -56,11 +56,12 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
     """
     from . import output_cache
 
-    if "display_frame" in options:   # the name of ``placement`` before issue 36
-        import warnings
+    for old, new in (("display_frame", "placement"), ("frame", "pose")):   # their names before issue 36
+        if old in options:
+            import warnings
 
-        warnings.warn("render(display_frame=...) is deprecated; use placement=", DeprecationWarning, stacklevel=2)
-        options.setdefault("placement", options.pop("display_frame"))
+            warnings.warn(f"render({old}=...) is deprecated; use {new}=", DeprecationWarning, stacklevel=2)
+            options.setdefault(new, options.pop(old))
     cache_dir = options.get("cache_dir")
     inputs = dict(preset=preset, lens_array=lens_array, mapping=mapping, mapping_options=mapping_options,
                   calibration=calibration, objects=objects, camera_model=camera_model, **options)

@@ -259,7 +259,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if mapping is not None:
         h3d = mapping.apply(h3d, request.image_size)
         record.update(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
-    return RenderedImage(h3d, record, views, from_cache=timings["frames_from_cache"] == timings["frames"])
+    return RenderedImage(h3d, record, views, from_cache=timings["shots_from_cache"] == timings["shots"])
 
 
 def foreground_cut(placement: dict[str, Any], front_clearance: float, method: str) -> list[str]:
@@ -274,8 +274,8 @@ def foreground_cut(placement: dict[str, Any], front_clearance: float, method: st
     if limit is not None:
         why = (f"the scene's camera stands {limit / 0.9:.3g} mm out and nothing behind it may enter the image"
                f"{'; single-stage moves its lenses in steps' if method == 'single-stage' else ''}")
-        fix = (f"{param('fit_depth')} auto shrinks the scene onto the display" if not depth.get("fit") else
-               f"a smaller {param('fit_depth')} MM shrinks it further")
+        fix = (f"{param('placement.fit_depth')} auto shrinks the scene onto the display" if not depth.get("fit") else
+               f"a smaller {param('placement.fit_depth')} MM shrinks it further")
         fix += f", {param('method')} multi-ortho starts rays at any distance" if method == "single-stage" else ""
     else:
         why = f"{param('method')} {method} starts them there"

@@ -40,7 +40,7 @@ def test_render_writes_h3d_sidecar_and_views_then_hits_cache(tmp_path, cli):
     record = json.loads(out.with_suffix(".json").read_text())
     for key in ("lens_array", "method", "quality", "povh3d_version", "povray_version", "timings", "output_gamma"):
         assert key in record
-    assert record["timings"]["frames_from_cache"] == 0
+    assert record["timings"]["shots_from_cache"] == 0
     assert (views / "v_003_002.png").is_file() and len(list(views.glob("v_*.png"))) == 16
     # interleave the written views back: the same H3D image
     result = cli("interleave", views, "-o", tmp_path / "again.png")
@@ -52,9 +52,9 @@ def test_render_writes_h3d_sidecar_and_views_then_hits_cache(tmp_path, cli):
     assert np.array_equal(read_png(tmp_path / "ex" / "v_001_003.png"), read_png(views / "v_001_003.png"))
     # nothing changed: everything from the cache
     result = cli("render", SAMPLE, "-o", out, *SMALL)
-    assert json.loads(out.with_suffix(".json").read_text())["timings"]["frames_from_cache"] == 1
+    assert json.loads(out.with_suffix(".json").read_text())["timings"]["shots_from_cache"] == 1
     result = cli("render", SAMPLE, "-o", out, "--no-cache", *SMALL)
-    assert json.loads(out.with_suffix(".json").read_text())["timings"]["frames_from_cache"] == 0
+    assert json.loads(out.with_suffix(".json").read_text())["timings"]["shots_from_cache"] == 0
 
 
 @pytest.mark.povray

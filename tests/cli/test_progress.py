@@ -16,7 +16,7 @@ from tests.support.cli import cli_command, run_subprocess
 
 # 960x544 antialiased on one thread: a few seconds, long enough for several reports.
 SLOW = ("--lenses", "120x68", "--ppl", "8x8", "--quality", "normal", "--threads", "1", "--no-cache")
-_STATUS = re.compile(r"povh3d: +(\d+)% \|[# ]+\| (\d+)/(\d+) frames +\d+:\d\d, (about \d+:\d\d left|estimating)")
+_STATUS = re.compile(r"povh3d: +(\d+)% \|[# ]+\| (\d+)/(\d+) shots +\d+:\d\d, (about \d+:\d\d left|estimating)")
 
 
 def run_in_pty(args: list[str]) -> tuple[int, str]:
@@ -47,7 +47,7 @@ def shown(tmp_path_factory):
 
 
 @pytest.mark.povray
-def test_terminal_shows_pixel_share_frames_and_time_left(shown):
+def test_terminal_shows_pixel_share_shots_and_time_left(shown):
     out, (code, text) = shown
     assert code == 0, text
     statuses = [m for m in _STATUS.finditer(text)]
@@ -57,7 +57,7 @@ def test_terminal_shows_pixel_share_frames_and_time_left(shown):
     inside = [s for s in shares if 0 < s < 100]
     assert inside and inside == sorted(inside), shares
     assert any("about" in m[4] for m in statuses if 0 < int(m[1]) < 100)
-    assert statuses[-1][2] == statuses[-1][3] == "1"  # the last report: 1/1 frames
+    assert statuses[-1][2] == statuses[-1][3] == "1"  # the last report: 1/1 shots
     # the status line is erased before the result line, which stands alone
     result = text.rsplit("\x1b[K", 1)[1]
     assert result.strip().startswith(str(out)) and "960x544" in result
@@ -73,9 +73,9 @@ def test_quiet_and_pipes_show_nothing(tmp_path):
 
 
 def test_status_text_share_count_and_estimate():
-    assert status_text(0, 4, 3.0).endswith("0/4 frames  0:03, estimating time left")
+    assert status_text(0, 4, 3.0).endswith("0/4 shots  0:03, estimating time left")
     line = status_text(3, 4, 30.0)
-    assert " 75% |###############     | 3/4 frames  0:30, about 0:10 left" in line
+    assert " 75% |###############     | 3/4 shots  0:30, about 0:10 left" in line
     assert "1:00:00, about 0:00 left" in status_text(4, 4, 3600.0)
     assert "2.5" not in status_text(2.5, 4, 1.0) and "2/4" in status_text(2.5, 4, 1.0)
 

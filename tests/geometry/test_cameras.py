@@ -8,7 +8,7 @@ interpolates position and normal barycentrically.
 import numpy as np
 import pytest
 
-from povh3d.geometry.cameras import camera_mesh, ortho_view_frames, pinhole_frames
+from povh3d.geometry.cameras import camera_mesh, ortho_view_shots, pinhole_shots
 from povh3d.geometry.rays import pixel_rays
 
 from tests.support.arrays import lenticular_array, square_array
@@ -85,7 +85,7 @@ def test_mesh_camera_normals_have_equal_length_per_lens():
 
 def test_ortho_view_frames_sample_the_lens_centres():
     la = square_array(lx=6, ly=4, nx=3, ny=2)
-    common, frames = ortho_view_frames(la)
+    common, frames = ortho_view_shots(la)
     assert len(frames) == 6 and frames[4]["view"] == (1, 1)
     # POV-Ray orthographic pixel (j, i) origin: location + ((j+.5)/W - .5) right + (.5 - (i+.5)/H) up,
     # location = -D * direction; moving D along direction lands on z = 0 at:
@@ -99,7 +99,7 @@ def test_ortho_view_frames_sample_the_lens_centres():
 
 def test_pinhole_pixels_look_along_view_directions():
     la = square_array(nx=4, ny=3, f=2.0)
-    common, frames = pinhole_frames(la)
+    common, frames = pinhole_shots(la)
     k, l = np.meshgrid(np.arange(4), np.arange(3))
     d = (np.array(common["direction"]) + ((k + 0.5) / 4 - 0.5)[..., None] * np.array(common["right"])
          + (0.5 - (l + 0.5) / 3)[..., None] * np.array(common["up"]))

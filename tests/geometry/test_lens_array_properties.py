@@ -16,7 +16,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from povh3d.geometry.cameras import TIE_SHIFT, camera_mesh, ortho_view_frames, pinhole_frames
+from povh3d.geometry.cameras import TIE_SHIFT, camera_mesh, ortho_view_shots, pinhole_shots
 from povh3d.geometry.view_bank import bank_front_clearance
 from povh3d.geometry.camera_mesh import MIN_FRONT_CLEARANCE, POVRAY_MAX_DEPTH, check_front_clearance, default_front_clearance, ray_stretch
 from povh3d.errors import ConfigError
@@ -240,13 +240,13 @@ def test_per_lens_camera_mesh_corner_rays_meet_at_their_lens_centre(la):
 @given(la=lens_arrays(grids=("square", "lenticular"), integral=True))
 def test_ortho_and_pinhole_frames_are_finite_and_exact(la):
     assume(la.views is not None)
-    common, frames = ortho_view_frames(la)
+    common, frames = ortho_view_shots(la)
     u, v = la.view_offsets()
     dirs = np.array([f["direction"] for f in frames])
     assert np.isfinite(dirs).all() and np.all(dirs[:, 2] == 1.0)
     np.testing.assert_array_equal(dirs[:, 0], np.tile(u / la.focal, len(v)))
     assert np.isfinite(common["right"]).all() and np.isfinite(common["up"]).all()
-    common, frames = pinhole_frames(la)
+    common, frames = pinhole_shots(la)
     centres = np.array([f["centre"] for f in frames])[:, :2]
     np.testing.assert_array_equal(centres, la.lens_centres().reshape(-1, 2))
 

@@ -1,4 +1,4 @@
-"""The vectorised number writer: the same text as povfmt, and exact round trips."""
+"""The vectorised number writer: the same text as scene.format, and exact round trips."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 @settings(max_examples=60, deadline=None)
 @given(arrays(np.float64, st.tuples(st.integers(0, 30), st.integers(1, 4)), elements=finite),
        st.integers(1, 6))
-def test_same_text_as_povfmt_and_round_trips(array, per_line):
+def test_same_text_as_scene_format_and_round_trips(array, per_line):
     text = format_vectors(array, per_line)
     if len(array):
         assert text == pov_vector_list(array, per_line)

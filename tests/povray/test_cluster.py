@@ -1,4 +1,4 @@
-"""Tests of povh3d.dask_backend on a local Dask cluster of worker processes.
+"""Tests of povh3d.povray.cluster on a local Dask cluster of worker processes.
 
 The oracle is the local process pool: the same render through the cluster
 must give the same pixels, and the same errors.  The fault tests at the end start
@@ -20,7 +20,7 @@ import pytest
 from distributed import LocalCluster
 
 from tests.support.render import render
-from povh3d.povray import cluster as dask_backend
+from povh3d.povray import cluster as cluster_module
 from povh3d.povray.cluster import DaskRunner
 from povh3d.errors import ConfigError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
 from povh3d.image.io import read_png, write_png
@@ -99,13 +99,13 @@ def test_same_pixels_as_the_local_pool(tmp_path: Path, address: str, method: str
     a, b = read_png(local), read_png(remote)
     assert np.array_equal(a, b)
     assert a.std() > 10  # not a blank image: the shipped files were found
-    assert record["timings"]["frames"] >= 1
+    assert record["timings"]["shots"] >= 1
     # The cache key does not depend on where the frames were rendered:
     # frames the cluster rendered come from the cache in a local run.
     first = render(scene, lens, remote, method=method, settings=RenderSettings(scheduler=address))
     assert first["timings"]["povray_jobs"] >= 1
     again = render(scene, lens, local, method=method, settings=RenderSettings())
-    assert again["timings"]["frames_from_cache"] == again["timings"]["frames"]
+    assert again["timings"]["shots_from_cache"] == again["timings"]["shots"]
     assert again["timings"]["povray_jobs"] == 0
 
 
@@ -166,7 +166,7 @@ def test_worker_without_povray(address: str, cluster) -> None:
                                                  r"/nonexistent/povray is not an executable"):
             runner.run([PovrayJob("j", "#version 3.7;\n", 2, 2)])
         # ... and a first connection checks every worker before any job.
-        dask_backend._CHECKED.clear()
+        cluster_module._CHECKED.clear()
         with pytest.raises(PovrayNotFound, match=r"Dask worker tcp://.* cannot run POV-Ray: "
                                                  r"POVH3D_POVRAY=/nonexistent/povray"):
             DaskRunner(address)
@@ -287,8 +287,8 @@ class SpawnedCluster:
         return None
 
     def close(self) -> None:
-        client = dask_backend._CLIENTS.pop(self.address, None)
-        dask_backend._CHECKED.pop(self.address, None)
+        client = cluster_module._CLIENTS.pop(self.address, None)
+        cluster_module._CHECKED.pop(self.address, None)
         if client is not None:
             with contextlib.suppress(Exception):
                 client.close(timeout=2)
@@ -468,14 +468,14 @@ def test_a_killed_client_stops_povray_on_the_worker(tmp_path: Path) -> None:
 
 
 @pytest.mark.povray
-@pytest.mark.parametrize("resubmits", [dask_backend.RESUBMITS, 0], ids=["resubmitted", "control-none"])
+@pytest.mark.parametrize("resubmits", [cluster_module.RESUBMITS, 0], ids=["resubmitted", "control-none"])
 def test_jobs_the_scheduler_forgot_are_submitted_again(tmp_path: Path, address: str, resubmits: int,
                                                        monkeypatch: pytest.MonkeyPatch) -> None:
     # The input files' task cancelled behind the runner's back (as when the scheduler forgets
     # data that died with its workers) takes every job not yet done with it.
     from distributed import Future
 
-    monkeypatch.setattr(dask_backend, "RESUBMITS", resubmits)
+    monkeypatch.setattr(cluster_module, "RESUBMITS", resubmits)
     jobs = busy_jobs(4, loops=300_000)
     local = rendered(lambda j, **k: run_jobs(j, processes=1, **k), jobs)
     runner = DaskRunner(address)

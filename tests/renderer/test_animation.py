@@ -247,7 +247,7 @@ def test_clock_sequence_without_cache_and_resume(tmp_path: Path) -> None:
     assert (again["from_cache"], again["rendered"]) == (3, 3)
     assert all(np.array_equal(read_png(frame_path(out, n)), no_cache[n]) for n in frames.numbers)
     first = json.loads(frame_path(out, 0).with_suffix(".json").read_text())["timings"]
-    assert first["frames_from_cache"] == 1 and first["povray_jobs"] >= 1
+    assert first["shots_from_cache"] == 1 and first["povray_jobs"] >= 1
 
 
 @pytest.mark.povray

@@ -22,7 +22,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from povh3d.renderer.shots.shots import render_frames
+from povh3d.renderer.shots.shots import render_shots
 from povh3d.renderer.methods.registry import display_header, run_method, _multi_ortho
 from povh3d.renderer.methods.quality import QUALITY_LEVELS, RenderSettings
 from povh3d.display.subpixel import sheet_phase, subpixel_array
@@ -141,7 +141,7 @@ def test_views_tiled_edge_to_edge_bleed(tmp_path):
     la = SQUARE
     plan = _multi_ortho(la, default_front_clearance(la), np.zeros((1, 4)), gutter=0)
     settings = RenderSettings(quality="normal", use_cache=False)
-    images, _ = render_frames(scene, plan.batch, settings, method="multi-ortho", header=display_header(la))
+    images, _ = render_shots(scene, plan.batch, settings, method="multi-ortho", header=display_header(la))
     dark, _ = classes_of("multi-ortho", la)
     assert bleed(plan.assemble(images), dark) > 50
 

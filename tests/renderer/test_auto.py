@@ -14,7 +14,7 @@ from povh3d.renderer.methods.auto import (AUTO_LADDER, FULL_IMAGE_PIXELS, full_i
                                 window_offset)
 from povh3d.renderer.methods.auto_seeds import SeedRuns, view_labels, view_seeds
 from povh3d.errors import RenderInterrupted
-from povh3d.geometry.view_bank import view_bank_frames
+from povh3d.geometry.view_bank import view_bank_shots
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.metrics import Reference
 from povh3d.renderer.methods.quality import Quality, RenderSettings
@@ -91,13 +91,13 @@ def test_per_view_samples_move_only_their_own_view():
     only that view's quad."""
     la = square_array(lx=5, ly=3, nx=3, ny=2)
     samples = latin_hypercube(4, seed=5)
-    shared = view_bank_frames(la, 40.0, samples)
+    shared = view_bank_shots(la, 40.0, samples)
     per_view = np.broadcast_to(samples[:, None, None, :], (4, 2, 3, 4)).copy()
-    same = view_bank_frames(la, 40.0, per_view)
+    same = view_bank_shots(la, 40.0, per_view)
     assert all(np.array_equal(a.vertices, b.vertices) and np.array_equal(a.normals, b.normals)
                for a, b in zip(shared, same))
     per_view[2, 1, 0] = latin_hypercube(1, seed=9)[0]   # bank 2, view row 1, column 0
-    moved = view_bank_frames(la, 40.0, per_view)
+    moved = view_bank_shots(la, 40.0, per_view)
     differ = sum(int(np.any(a.vertices != b.vertices, axis=1).sum() + np.any(a.normals != b.normals, axis=1).sum())
                  for a, b in zip(shared, moved))
     assert 0 < differ <= 8   # one quad's four corners, origin and direction

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from povh3d.renderer.shots.shots import ShotBatch, render_frames
+from povh3d.renderer.shots.shots import ShotBatch, render_shots
 from povh3d.renderer.methods.registry import run_method
 from povh3d.renderer.methods.quality import Quality, RenderSettings
 from povh3d.errors import InputError
@@ -97,7 +97,7 @@ def test_footprint_banks_split_over_frames_give_the_same_image(quarter_scene, mo
     one = run_method("multi-ortho", quarter_scene, la, st_)
     monkeypatch.setattr(view_bank, "FRAME_SECONDS", 1e-12)     # frames cost nothing: one bank a frame
     three = run_method("multi-ortho", quarter_scene, la, st_)
-    assert three.stats.frames == 6 and one.stats.frames == 1
+    assert three.stats.shots == 6 and one.stats.shots == 1
     assert np.array_equal(one.h3d, three.h3d)
 
 
@@ -140,13 +140,13 @@ def test_too_small_bbox_is_refused(quarter_scene, tmp_path):
 
 def test_identical_frames_in_one_batch_are_traced_once(quarter_scene):
     la = square_array(lx=8, ly=6, nx=2, ny=2)
-    from povh3d.geometry.cameras import ortho_view_frames
-    common, frames = ortho_view_frames(la)
+    from povh3d.geometry.cameras import ortho_view_shots
+    common, frames = ortho_view_shots(la)
     w, h = common.pop("width"), common.pop("height")
     twice = [frames[0], frames[1], dict(frames[0])]
     batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": 20.0}, twice, w, h)
     seen = []
-    images, stats = render_frames(quarter_scene, batch, RenderSettings(quality="draft", use_cache=False),
+    images, stats = render_shots(quarter_scene, batch, RenderSettings(quality="draft", use_cache=False),
                                   method="multi-ortho-views", header={"panel_size": (1, 1), "lens_pitch": 0.2,
                                                                       "focal": 1.5},
                                   progress=lambda d, t: seen.append((d, t)))

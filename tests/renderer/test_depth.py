@@ -54,7 +54,7 @@ def test_depth_of_a_sphere_before_a_plane(tmp_path, moved):
         ry = np.array([[np.cos(ay), 0, -np.sin(ay)], [0, 1, 0], [np.sin(ay), 0, np.cos(ay)]])
         r = rx @ ry
         frame = DisplayPose((500, 20, -70), r[0], r[1], r[2], 40.0, "explicit")
-        settings = RenderSettings(frame=tuple(frame.matrix().ravel()))
+        settings = RenderSettings(pose=tuple(frame.matrix().ravel()))
         units = 40.0
     scene.write_text(text)
     a = array()

@@ -163,7 +163,7 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
     assert k == pytest.approx(budget / 2 / reach) and k < 1
     assert record["depth"]["within_budget"] and record["units_per_mm"] == 1.0
     assert record["depth"]["far_mm"] == pytest.approx(before["far_mm"] * k)
-    assert placed.settings.frame is None   # the frame is not scaled: lateral sizes kept
+    assert placed.settings.pose is None   # the pose is not scaled: lateral sizes kept
     # Without --depth-scale the frame shrinks instead.
     request = RenderRequest(source=scene, display=Display(array), output=tmp_path / "o.png",
                             settings=RenderSettings(quality="draft"), placement=PlacementOptions(fit_depth="auto"))
@@ -172,7 +172,7 @@ def test_fit_depth_by_depth_scale_keeps_the_frame(tmp_path):
 
 
 def test_depth_scale_options_are_checked():
-    with pytest.raises(ConfigError, match="needs fit_depth"):
+    with pytest.raises(ConfigError, match="needs placement.fit_depth"):
         PlacementOptions(depth_scale="fit")
     with pytest.raises(ConfigError, match="both set the depth"):
         PlacementOptions(fit_depth="auto", depth_scale=0.5)

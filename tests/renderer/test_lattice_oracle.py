@@ -15,7 +15,7 @@ import pytest
 
 from povh3d.renderer.methods.registry import METHODS, run_method
 from povh3d.errors import ConfigError
-from povh3d.geometry.view_bank import stack_frames
+from povh3d.geometry.view_bank import stack_shots
 from povh3d.geometry.lattice import cross_lenticular_basis
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.display.presets import lens_array_from_fields
@@ -64,7 +64,7 @@ def test_every_lattice_ray_in_povray(tmp_path, z0):
     plan = METHODS["multi-ortho"].plan(la, 10.0, np.zeros((1, 4)))
     scene = write_position_plane(tmp_path, z0, half)
     out = render_linear16(plan.batch, "multi-ortho", scene, la)
-    hits = decode_positions(plan.batch.context["mesh"].crop(stack_frames(out)), half)
+    hits = decode_positions(plan.batch.context["mesh"].crop(stack_shots(out)), half)
     centres, dirs, inside = pixel_rays(la)
     expected = centres + dirs[..., :2] * (z0 / dirs[..., 2])[..., None]
     err = np.abs(hits - expected)[inside].max()

@@ -256,4 +256,4 @@ def test_a_second_render_writes_the_quilt_again(tmp_path):
     quilt.unlink()
     record = povh3d.render(scene, tmp_path / "n.png", **kw)
     assert np.array_equal(read_png(quilt), first)
-    assert record["timings"]["frames_from_cache"] == 48 and "output_from_cache" not in record["timings"]
+    assert record["timings"]["shots_from_cache"] == 48 and "output_from_cache" not in record["timings"]

@@ -254,7 +254,7 @@ def test_a_camera_scenes_masks_take_the_colour_pass_placement(tmp_path: Path, mo
                             settings=RenderSettings(quality="draft", use_cache=False))
     placed = []
     real = placement.place_display
-    monkeypatch.setattr(placement, "place_display", lambda r, s: placed.append(r.settings.frame) or real(r, s))
+    monkeypatch.setattr(placement, "place_display", lambda r, s: placed.append(r.settings.pose) or real(r, s))
     reused = object_masks.render_objects(request, tmp_path / "reused", record)
     again = object_masks.render_objects(request, tmp_path / "again")
     assert placed[0] is not None and placed[1] is None   # the first took the recorded frame as its matrix

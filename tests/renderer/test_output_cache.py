@@ -38,7 +38,7 @@ def test_rerun_is_answered_from_the_stored_output(tmp_path, cli):
     scene, out = _scene(tmp_path, "1, 0, 0"), tmp_path / "o.png"
     first = cli("render", scene, "-o", out, *TINY)
     assert first.code == 0, first.err
-    assert "frames from cache" in first.out
+    assert "shots from cache" in first.out
     rendered = out.read_bytes()
     again = cli("render", scene, "-o", out, *TINY)
     assert again.code == 0, again.err

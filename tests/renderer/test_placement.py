@@ -151,7 +151,7 @@ def test_moved_scene_and_frame_give_the_same_pixels(tmp_path):
         a = render(base, array, tmp_path / f"a-{method}.png", method=method,
                    settings=RenderSettings(quality="draft"))
         b = render(moved, array, tmp_path / f"b-{method}.png", method=method,
-                   settings=RenderSettings(quality="draft", frame=tuple(frame.matrix().ravel())))
+                   settings=RenderSettings(quality="draft", pose=tuple(frame.matrix().ravel())))
         assert psnr(read_png(tmp_path / f"a-{method}.png"), read_png(tmp_path / f"b-{method}.png")) > 60
         assert a["placement"]["source"] == "native" and b["placement"]["source"] == "matrix"
     c = render(moved, arrays["multi-ortho"], tmp_path / "c.png", settings=RenderSettings(quality="draft"))
@@ -212,7 +212,7 @@ def test_a_non_uniform_frame_matrix_is_refused(tmp_path):
     matrix[2] *= 2.5
     with pytest.raises(ConfigError, match="uniform scale"):
         render(GALLERY / "inches.pov", small_array(), tmp_path / "x.png",
-               settings=RenderSettings(quality="draft", frame=tuple(matrix.ravel())))
+               settings=RenderSettings(quality="draft", pose=tuple(matrix.ravel())))
     assert not (tmp_path / "x.png").exists()
 
 
@@ -236,7 +236,7 @@ def test_camera_frame_and_its_depth_in_one_povray_run(tmp_path, monkeypatch):
     assert record["depth"]["pass"] == "in the camera's evaluation run" and not record["evaluation_from_cache"]
     assert again["evaluation_from_cache"] and again["evaluation_seconds"] < 0.05
     frame = _frame(record)
-    own = depth_pass(scene, array, RenderSettings(frame=tuple(frame.matrix().ravel())), 4 * 28.8,
+    own = depth_pass(scene, array, RenderSettings(pose=tuple(frame.matrix().ravel())), 4 * 28.8,
                      frame.units_per_mm).summary(record["depth_budget_mm"])
     for key in ("near_mm", "far_mm", "field_near_mm", "field_far_mm"):
         assert record["depth"][key] == pytest.approx(own[key], abs=0.02), key

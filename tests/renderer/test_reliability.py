@@ -230,11 +230,11 @@ def test_damaged_cache_entry_is_reported_removed_and_rendered_again(tmp_path, cl
     warnings = [line for line in result.err.splitlines() if "warning" in line]
     assert len(warnings) == 1 and "damaged" in warnings[0], result.err
     assert np.array_equal(read_png(tmp_path / "b.png"), read_png(tmp_path / "a.png"))
-    assert json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] == 0
+    assert json.loads((tmp_path / "b.json").read_text())["timings"]["shots_from_cache"] == 0
     (again,) = _entries(cache)
     assert ImageCache(cache).load(again.stem) is not None  # stored again, whole
     result = cli("render", SAMPLE, "-o", tmp_path / "c.png", *TINY, env=env)
-    assert "warning" not in result.err and json.loads((tmp_path / "c.json").read_text())["timings"]["frames_from_cache"] == 1
+    assert "warning" not in result.err and json.loads((tmp_path / "c.json").read_text())["timings"]["shots_from_cache"] == 1
 
 
 @pytest.mark.povray
@@ -296,7 +296,7 @@ def test_a_stopped_render_resumes_from_the_frames_it_finished(tmp_path, cli, mon
     result = cli("render", SAMPLE, "-o", out, *PACED, env={"POVH3D_CACHE": str(cache)})
     assert result.code == 0, result.err
     timings = json.loads((tmp_path / "a.json").read_text())["timings"]
-    assert sum(asked) == 24 - kept and timings["frames_from_cache"] == kept and timings["frames"] == 24
+    assert sum(asked) == 24 - kept and timings["shots_from_cache"] == kept and timings["shots"] == 24
     assert np.array_equal(read_png(out), uninterrupted)
     assert not list(tmp_path.glob("povh3d-*")), "job folders removed (a killed run's swept by the re-run)"
 
@@ -426,7 +426,7 @@ def test_a_scene_that_reads_the_clock_or_the_disk_is_never_cached(tmp_path, cli,
     assert "not reproducible" in json.loads((tmp_path / "a.json").read_text())["timings"]["image_cache"]
     assert not _entries(tmp_path / "cache"), "nothing stored: a second run must render again"
     second = cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env)
-    assert second.code == 0 and json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] == 0
+    assert second.code == 0 and json.loads((tmp_path / "b.json").read_text())["timings"]["shots_from_cache"] == 0
 
 
 # issue 38: what the key cannot name: text run as code, a file the scene writes and reads back
@@ -444,8 +444,8 @@ def test_a_scene_the_key_cannot_name_is_never_cached(tmp_path, cli, line):
     assert first.code == 0 and "not reproducible" in first.err, first.err
     assert not _entries(tmp_path / "cache"), "nothing stored: a second run must render again"
     second = cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env)
-    assert second.code == 0 and "1/1 frames from cache" not in second.out + second.err
-    assert json.loads((tmp_path / "a.json").read_text())["timings"]["frames_from_cache"] == 0
+    assert second.code == 0 and "1/1 shots from cache" not in second.out + second.err
+    assert json.loads((tmp_path / "a.json").read_text())["timings"]["shots_from_cache"] == 0
 
 
 def test_what_the_key_cannot_name_is_found_and_strings_do_not_count(tmp_path):
@@ -469,7 +469,7 @@ def test_a_constant_scene_is_still_cached(tmp_path, cli):  # negative control of
     env = {"POVH3D_CACHE": str(tmp_path / "cache")}
     assert cli("render", scene, "-o", tmp_path / "a.png", *TINY, env=env).code == 0
     assert cli("render", scene, "-o", tmp_path / "b.png", *TINY, env=env).code == 0
-    assert json.loads((tmp_path / "b.json").read_text())["timings"]["frames_from_cache"] > 0
+    assert json.loads((tmp_path / "b.json").read_text())["timings"]["shots_from_cache"] > 0
 
 
 @pytest.mark.povray

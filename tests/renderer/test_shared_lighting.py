@@ -25,7 +25,7 @@ from povh3d.renderer.methods.quality import RenderSettings
 from povh3d.renderer.methods.registry import METHODS, display_header
 from povh3d.renderer.shots.batch import ShotBatch
 from povh3d.renderer.shots.lighting import SharedLighting, loading_header, shared_lighting
-from povh3d.renderer.shots.shots import render_frames
+from povh3d.renderer.shots.shots import render_shots
 from povh3d.scene.scene import load_scene
 from tests.support.arrays import square_array
 
@@ -55,7 +55,7 @@ def _scene(folder, radiosity: str, name: str):
 
 def _render(scene, method: str, **settings):
     plan = METHODS[method].plan(LA, CLEARANCE, np.zeros((1, 4)))
-    images, stats = render_frames(scene, plan.batch, RenderSettings(quality="draft", **{"use_cache": False, **settings}),
+    images, stats = render_shots(scene, plan.batch, RenderSettings(quality="draft", **{"use_cache": False, **settings}),
                                   method=method, header=display_header(LA))
     return plan, images, stats
 

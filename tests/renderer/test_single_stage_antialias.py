@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from povh3d.renderer.shots.shots import render_frames
+from povh3d.renderer.shots.shots import render_shots
 from povh3d.renderer.methods.registry import display_header, run_method, single_stage_supersamples as supersamples
 from povh3d.renderer.methods.quality import QUALITY_LEVELS, Quality, RenderSettings
 from povh3d.renderer.methods.single_stage import SingleStagePlan, default_depth, lenslet_for
@@ -58,7 +58,7 @@ def test_povray_antialiasing_on_the_capture_fails(tmp_path):
     thin = Lenslet("conic", "square", REPORT.pitch_x, REPORT.pitch_y, REPORT.focal)
     plan = SingleStagePlan(REPORT, thin, default_depth(REPORT), collimated=True)
     settings = RenderSettings(quality=QUALITY_LEVELS["normal"], use_cache=False)
-    images, _ = render_frames(scene, plan.batch(), settings, method="single-stage",
+    images, _ = render_shots(scene, plan.batch(), settings, method="single-stage",
                               header=display_header(REPORT))
     match = clear_match(plan.assemble(images[0]), REPORT, z0)
     assert match < 0.995, f"the control should mix lenslets at lens borders and fail the oracle, got {match:.4f}"

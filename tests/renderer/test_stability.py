@@ -288,7 +288,7 @@ def test_a_large_scale_ratio_is_checked_in_scene_units_and_its_advice_renders(tm
     image came out black, exit 0; checked in scene units it is refused, and the clearance
     (or method) the refusal advises renders the analytic checker exactly."""
     la, units = scaled_array("square", 1.0), 1e6
-    settings = replace(DRAFT, frame=tuple(DisplayPose(units_per_mm=units).matrix().ravel()))
+    settings = replace(DRAFT, pose=tuple(DisplayPose(units_per_mm=units).matrix().ravel()))
     # 2 mm behind the screen: within the half of POV-Ray's ray length kept for the scene
     scene = load_scene(write_checker_plane(tmp_path, 2 * units, 1.5 * units))
     expected, clear = point_oracle(la, 2.0, 1.5, margin=1e-3 * 1.5)

@@ -146,7 +146,7 @@ def test_antialiased_render_averages_footprint_samples(tmp_path):
     z0, half = 4.0, 12.0
     scene = load_scene(write_position_plane(tmp_path, z0, half))
     result = run_method("subpixel", scene, PHILIPS, RenderSettings(quality="normal", use_cache=False, bit_depth=16))
-    assert result.record["footprint_samples"] == 9 and result.stats.frames == 9
+    assert result.record["footprint_samples"] == 9 and result.stats.shots == 9
     coded = decode(result.h3d) * 2 * half - half                        # (H, W, 3): R codes x, G codes y
     sub = subpixel_array(PHILIPS)
     X, Y = np.meshgrid(*sub.panel.pixel_centres())

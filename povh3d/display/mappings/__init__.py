@@ -68,8 +68,8 @@ def _slanted(_: int | None, o: MappingOptions) -> Mapping:
         if o.views is None:
             raise ConfigError(f"a Looking Glass calibration needs the view count; give it with {param('views')}")
         return from_calibration(o.calibration, o.views, blend=o.blend)
-    missing = [flag for flag, v in ((param("subpixels_per_lens"), o.per_lens), (param("views"), o.views),
-                                    (f"{param('slant_tan')} or {param('slant_deg')}", o.slope)) if v is None]
+    missing = [flag for flag, v in ((param("per_lens"), o.per_lens), (param("views"), o.views),
+                                    (param("slope"), o.slope)) if v is None]
     if missing:
         raise ConfigError(f"mapping 'slanted' needs {', '.join(missing)} (or {param('calibration')} FILE.json)")
     rows = o.rows_per_view

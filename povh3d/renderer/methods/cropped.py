@@ -2,7 +2,7 @@
 
 ``geometry.crop`` decides which lenses of each view to keep; this module runs
 the renders that decision needs through the ``trace`` function the method
-runner hands it (``renderer.shots.shots.render_frames`` bound to the scene and
+runner hands it (``renderer.shots.shots.render_shots`` bound to the scene and
 settings), so every image is cached and every POV-Ray process goes through
 ``povray.process``:
 
@@ -12,7 +12,7 @@ settings), so every image is cached and every POV-Ray process goes through
    glass) but intersects everything, so alpha is exactly "this ray met an object
    that is not ``no_image``";
 2. the cropped render: one quad per kept tile (per footprint sample, banks
-   stacked as in ``view_bank.view_bank_frames``);
+   stacked as in ``view_bank.view_bank_shots``);
 3. the paste into a canvas of the background colour, read at the cuts.
 
 Returns None where cropping does not apply, with the reason, so the caller
@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ...geometry.view_bank import stack_frames, view_bank_frames
+from ...geometry.view_bank import stack_shots, view_bank_shots
 from ...geometry.crop import (CropSettings, bbox_hits, fill_colour, layout_independent,
     mask_hits, paste, plan_crop)
 from ...errors import InputError, param
@@ -38,7 +38,7 @@ from ...scene.scene import Scene
 from ..shots.batch import ShotBatch, RenderStats, mesh_camera_batch
 from .quality import Progress, RenderSettings
 
-# trace(batch, label, progress) -> (images, stats): one batch rendered (``renderer.shots.shots.render_frames``).
+# trace(batch, label, progress) -> (images, stats): one batch rendered (``renderer.shots.shots.render_shots``).
 Trace = Callable[[ShotBatch, str, Progress | None], tuple[list[np.ndarray], RenderStats]]
 
 COVERAGE_OPTIONS = ("-A", "+Q0", "+UA")
@@ -56,9 +56,9 @@ class CroppedTiles:
 def coverage_mask(trace: Trace, lens_array: LensArray, front_clearance: float,
                   samples: np.ndarray = CENTRE) -> tuple[np.ndarray, RenderStats]:
     """(Ny*Ly, Nx*Lx) bool: the tiled image's pixels one of whose ``samples`` meets an object."""
-    batch = mesh_camera_batch("coverage.pov.j2", view_bank_frames(lens_array, front_clearance, samples), COVERAGE_OPTIONS)
+    batch = mesh_camera_batch("coverage.pov.j2", view_bank_shots(lens_array, front_clearance, samples), COVERAGE_OPTIONS)
     images, stats = trace(batch, "multi-ortho coverage", None)
-    alpha = stack_frames(images)[..., -1]
+    alpha = stack_shots(images)[..., -1]
     return np.asarray((alpha > 0).reshape(len(samples), -1, alpha.shape[1]).any(axis=0)), stats
 
 
@@ -68,9 +68,9 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
                          gutter: int = 0) -> CroppedTiles:
     """Render the one-pass view bank cropped to what the objects can reach.
 
-    ``samples`` are the footprint samples of ``view_bank_frames``; each gets a
+    ``samples`` are the footprint samples of ``view_bank_shots``; each gets a
     bank, cropped alike, so the reach is that of the pixel's whole footprint.
-    ``gutter``: pixels between the kept tiles (``view_bank.view_bank_frames``).
+    ``gutter``: pixels between the kept tiles (``view_bank.view_bank_shots``).
 
     Raises
     ------
@@ -112,10 +112,10 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
     if plan.is_full:
         return CroppedTiles(None, None, {**info, "applied": False, "reason": "objects reach every lens"})
 
-    meshes = view_bank_frames(lens_array, front_clearance, samples, plan, gutter)
+    meshes = view_bank_shots(lens_array, front_clearance, samples, plan, gutter)
     batch = mesh_camera_batch("multi_ortho.pov.j2", meshes)
     images, stats = trace(batch, "multi-ortho", progress)
-    tiled = stack_frames(images, meshes)
+    tiled = stack_shots(images, meshes)
     banks = tiled.reshape(len(samples), -1, *tiled.shape[1:])
     fills = [fill_colour(bank, plan) for bank in banks]
     first = fills[0]

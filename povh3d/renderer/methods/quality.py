@@ -121,7 +121,7 @@ QUALITY_LEVELS: dict[str, Quality] = {
     "normal": Quality(antialias=0.1, aa_method=2, aa_depth=3),
     "high": Quality(footprint=256),
 }
-AUTO = "auto"  # --quality auto --max-error DB: the fastest setting that meets DB (quality_bench)
+AUTO = "auto"  # --quality auto --max-error DB: the fastest setting that meets DB (``methods.auto``)
 QUALITY_OPTIONS: dict[str, tuple[str, ...]] = {name: q.options for name, q in QUALITY_LEVELS.items()}
 
 
@@ -150,7 +150,7 @@ class RenderSettings:
     Attributes
     ----------
     quality : {'draft', 'normal', 'high', 'auto'}, 'N' (footprint samples) or Quality
-              ('auto' is resolved before rendering; see ``quality_bench.resolve_auto``)
+              ('auto' is resolved before rendering; see ``methods.auto.resolve_auto``)
     jobs : int or None          parallel POV-Ray processes (None: chosen per method)
     threads : int or None       POV-Ray threads per process (None: cores / jobs)
     timeout : float or None     seconds allowed to each POV-Ray run
@@ -159,7 +159,7 @@ class RenderSettings:
     bit_depth : {8, 16}
     front_clearance : float or None    mm in front of the screen where rays start (None: default)
     front_clearance_limit : float or None   mm: the farthest out rays may start whatever the method's
-                                default or rounding (a camera frame: short of the scene's camera,
+                                default or rounding (a camera placement: short of the scene's camera,
                                 so nothing behind it enters the image); None: no limit
     front_clearance_reason : str   why the limit, for the sidecar
     clock : float or None       POV-Ray's ``clock`` for every run (None: POV-Ray's default, 0);
@@ -168,7 +168,7 @@ class RenderSettings:
                                 may render in the same POV-Ray runs (``renderer.shots.clock_runs``)
     scheduler : str or None     Dask scheduler address (``tcp://host:8786``); None: local processes
     max_error_db : float or None   with quality 'auto': the lowest PSNR against the reference to accept
-    frame : tuple of 12 floats or None   the placement's pose as a POV-Ray ``matrix`` (display mm -> scene
+    pose : tuple of 12 floats or None    the placement's pose as a POV-Ray ``matrix`` (display mm -> scene
                                 units, ``geometry.pose.DisplayPose.matrix``); None: native
     depth_scale : float             compress depth along the display normal by this factor (1: none); a
                                 distortion, traced as every ray's slope times it (``depth_scaled_rays``)
@@ -192,7 +192,7 @@ class RenderSettings:
     sequence: Any = None
     scheduler: str | None = None
     max_error_db: float | None = None
-    frame: tuple[float, ...] | None = None
+    pose: tuple[float, ...] | None = None
     depth_scale: float = 1.0
     shared_lighting: bool = True
     should_stop: Callable[[], bool] | None = field(default=None, compare=False, repr=False)
@@ -202,8 +202,8 @@ class RenderSettings:
         if isinstance(k, bool) or not isinstance(k, (int, float)) or not DEPTH_SCALE_RANGE[0] <= k <= DEPTH_SCALE_RANGE[1]:
             raise ConfigError(f"{param('depth_scale')} must be a number within {DEPTH_SCALE_RANGE[0]:g}..{DEPTH_SCALE_RANGE[1]:g}, "
                               f"got {k!r}")
-        if self.frame is not None and len(self.frame) != 12:
-            raise ConfigError(f"the pose is a matrix of 12 numbers, got {len(self.frame)}")
+        if self.pose is not None and len(self.pose) != 12:
+            raise ConfigError(f"the pose is a matrix of 12 numbers, got {len(self.pose)}")
         if not isinstance(self.quality, Quality) and self.quality != AUTO:
             quality_level(self.quality)
         if (self.quality == AUTO) != (self.max_error_db is not None):
@@ -233,16 +233,32 @@ class RenderSettings:
     @property
     def spec(self) -> Quality:
         if self.quality == AUTO:
-            raise RuntimeError(f"resolve {param('quality')} auto first (quality_bench.resolve_auto)")
+            raise RuntimeError(f"resolve {param('quality')} auto first (renderer.methods.auto.resolve_auto)")
         return self.quality if isinstance(self.quality, Quality) else quality_level(self.quality)
 
     @property
     def options(self) -> tuple[str, ...]:
-        # +K sets the clock of a still; a run of several camera frames is a
+        # +K sets the clock of a still; a run of several shots is a
         # POV-Ray animation, where initial = final clock keeps it constant.
         c = self.clock
         clock = () if c is None else (f"+K{c!r}", f"+KI{c!r}", f"+KF{c!r}")
         return self.spec.options + clock
+
+
+def _init_taking_frame(init: Any) -> Any:
+    """``RenderSettings(frame=...)``, the name of ``pose`` before issue 36 (``frame`` is an
+    animation's), still taken with a deprecation."""
+    def __init__(self: RenderSettings, *args: Any, frame: tuple[float, ...] | None = None, **kwargs: Any) -> None:
+        if frame is not None:
+            import warnings
+
+            warnings.warn("RenderSettings(frame=...) is deprecated; its name is pose", DeprecationWarning, stacklevel=2)
+            kwargs.setdefault("pose", frame)
+        init(self, *args, **kwargs)
+    return __init__
+
+
+setattr(RenderSettings, "__init__", _init_taking_frame(RenderSettings.__init__))
 
 
 def quality_settings(features: Features, quality: Quality) -> dict[str, Any]:

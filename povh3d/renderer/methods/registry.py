@@ -28,9 +28,9 @@ from typing import Any
 import numpy as np
 
 from ...errors import ConfigError, param, warn
-from ...geometry.cameras import ortho_view_frames, pinhole_frames
+from ...geometry.cameras import ortho_view_shots, pinhole_shots
 from ...geometry.camera_mesh import check_front_clearance, clearance_range, default_front_clearance
-from ...geometry.view_bank import bank_front_clearance, stack_frames, view_bank_frames
+from ...geometry.view_bank import bank_front_clearance, stack_shots, view_bank_shots
 from ...geometry.crop import CropSettings
 from ...geometry.footprint import CENTRE, latin_hypercube
 from ...geometry.lattice_mesh import lens_mesh
@@ -44,7 +44,7 @@ from ...system import cpu_count
 from ..placement.clearance import front_clearance as front_clearance_for
 from .cropped import render_cropped_tiles
 from ..shots.batch import ShotBatch, RenderStats, mesh_camera_batch
-from ..shots.shots import render_frames
+from ..shots.shots import render_shots
 from .quality import Progress, Quality, RenderSettings, quality_settings
 from ...display import subpixel
 from .single_stage import SingleStagePlan, default_depth, lenslet_for, recentre_unit
@@ -78,17 +78,17 @@ def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndar
         if len(samples) == 1 and not np.any(samples):
             mesh = lens_mesh(lens_array, front_clearance)
             return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", [mesh]),
-                              lambda images: mesh.crop(stack_frames(images)))
+                              lambda images: mesh.crop(stack_shots(images)))
         # One frame per footprint sample, every sample through the pixel's own lens.
         meshes = [lens_mesh(lens_array, front_clearance, sample=p) for p in samples]
         return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes), lambda images: mean_in_linear_light(
-            np.stack([mesh.crop(stack_frames([im])) for mesh, im in zip(meshes, images)])))
+            np.stack([mesh.crop(stack_shots([im])) for mesh, im in zip(meshes, images)])))
     # Whole PPL: one quad per view (views tiled, gutters between them where antialiasing
     # samples pixel borders), one bank per footprint sample, a few banks a frame.
-    meshes = view_bank_frames(lens_array, front_clearance, samples, gutter=gutter)
+    meshes = view_bank_shots(lens_array, front_clearance, samples, gutter=gutter)
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
-                      lambda images: banks_to_h3d(lens_array, stack_frames(images, meshes)),
-                      assemble_groups=lambda images, counts: bank_groups(lens_array, stack_frames(images, meshes),
+                      lambda images: banks_to_h3d(lens_array, stack_shots(images, meshes)),
+                      assemble_groups=lambda images, counts: bank_groups(lens_array, stack_shots(images, meshes),
                                                                          counts))
 
 
@@ -113,16 +113,16 @@ def bank_groups(lens_array: LensArray, image: np.ndarray, counts: list[int]) -> 
 def _multi_ortho_views(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
     ny, nx = lens_array.require_views()
     check_front_clearance(lens_array, front_clearance)
-    common, frames = ortho_view_frames(lens_array)
+    common, shots = ortho_view_shots(lens_array)
     width, height = common.pop("width"), common.pop("height")
     # POV-Ray idles about 0.7 s starting and 0.24 s a frame (measured: 64 frames of 4x3 pixels, 15.6 s
     # wall, 0.2 s of CPU), so runs of a few frames, many more than the cores, overlap that idling:
     # desk.pov's 64 views on 2 cores rendered in 2.0 s as 16 runs of 4 frames, 2.4-2.8 s as 8 of 8,
     # 4.1 s as 64 of 1 (each run's own start-up CPU), 7.8 s as 2 of 32 (docs/benchmarks.md).  A few
     # views go one a run, which lets an animation's frames run in clock sequences (``clock_runs``).
-    per_job = -(-len(frames) // (RUNS_PER_CORE * cpu_count()))
-    processes = -(-len(frames) // per_job)
-    batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": front_clearance}, frames,
+    per_job = -(-len(shots) // (RUNS_PER_CORE * cpu_count()))
+    processes = -(-len(shots) // per_job)
+    batch = ShotBatch("multi_ortho_views.pov.j2", {**common, "front_clearance": front_clearance}, shots,
                        width, height, shots_per_job=per_job, processes=processes,
                        lighting_shots=centre_and_corners(ny, nx))
     return MethodPlan(batch, lambda images: interleave(np.stack(images).reshape(ny, nx, *images[0].shape)))
@@ -136,12 +136,12 @@ def centre_and_corners(rows: int, columns: int) -> tuple[int, ...]:
 
 def _pinhole(lens_array: LensArray, front_clearance: float, samples: np.ndarray) -> MethodPlan:
     lens_array.require_views()
-    common, frames = pinhole_frames(lens_array)
+    common, shots = pinhole_shots(lens_array)
     width, height = common.pop("width"), common.pop("height")
     processes = 2 * cpu_count()
-    # Many small frames per run: each extra frame costs a re-parse, not a start-up.
-    per_job = max(1, min(500, -(-len(frames) // processes)))
-    batch = ShotBatch("pinhole.pov.j2", common, frames, width, height, shots_per_job=per_job, processes=processes,
+    # Many small shots per run: each further shot costs a re-parse, not a start-up.
+    per_job = max(1, min(500, -(-len(shots) // processes)))
+    batch = ShotBatch("pinhole.pov.j2", common, shots, width, height, shots_per_job=per_job, processes=processes,
                        lighting_shots=centre_and_corners(lens_array.lenses_y, lens_array.lenses_x))
     lenses = (lens_array.lenses_y, lens_array.lenses_x)
     return MethodPlan(batch, lambda images: tile_elemental_images(
@@ -348,7 +348,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         plan_options["gutter"] = GUTTER if quality.samples_pixel_borders else 0
     clearance = front_clearance_for(method, lens_array, settings, plan_options)
     if name != "single-stage":  # its depth is checked by its own optics (check_optics)
-        _check_clearance(name, method, lens_array, clearance.rounded, pose_units(settings.frame))
+        _check_clearance(name, method, lens_array, clearance.rounded, pose_units(settings.pose))
     front_clearance, reason = clearance.used, clearance.reason
     if clearance.lens_mesh:
         plan_options["bank"], crop = False, None
@@ -356,13 +356,13 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
                                          or name != "multi-ortho"):
         raise GroupsUnsupported(f"{name} cannot return footprint sample groups here (no view bank)")
     samples = quality.samples() if footprint_groups is None else np.concatenate(footprint_groups)
-    if settings.frame is not None:  # move every camera (and a lens array) into the scene
-        header.update(pose_matrix=tuple(settings.frame), pose_transform=" transform { Povh3d_Display_Pose }")
+    if settings.pose is not None:  # move every camera (and a lens array) into the scene
+        header.update(pose_matrix=tuple(settings.pose), pose_transform=" transform { Povh3d_Display_Pose }")
     settings_needed = quality_settings(scene.features, quality)
     if settings_needed:
         header["global_settings"] = settings_needed
     def trace(batch: ShotBatch, label: str, progress: Progress | None) -> tuple[list[np.ndarray], RenderStats]:
-        return render_frames(scene, batch, settings, method=label, header=header, progress=progress)
+        return render_shots(scene, batch, settings, method=label, header=header, progress=progress)
 
     h3d, crop_info, record, groups = None, None, None, None
     if method.crops and crop is not None and footprint_groups is None:

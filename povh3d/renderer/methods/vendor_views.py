@@ -24,7 +24,7 @@ from ...image.quilt import quilt_to_bank_order
 from ...scene.scene import Scene
 from ...system import cpu_count
 from ..shots.batch import ShotBatch
-from ..shots.shots import render_frames
+from ..shots.shots import render_shots
 from .quality import Progress, quality_settings
 from .registry import MethodResult, display_header
 
@@ -52,8 +52,8 @@ def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: d
     quality = settings.spec.point_sampled()   # one ray a pixel of a view: POV-Ray's antialiasing
     settings = replace(settings, quality=quality)
     header = display_header(lens_array)
-    if settings.frame is not None:
-        header.update(pose_matrix=tuple(settings.frame), pose_transform=" transform { Povh3d_Display_Pose }")
+    if settings.pose is not None:
+        header.update(pose_matrix=tuple(settings.pose), pose_transform=" transform { Povh3d_Display_Pose }")
     needed = quality_settings(scene.features, quality)
     if needed:
         header["global_settings"] = needed
@@ -64,7 +64,7 @@ def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: d
     processes = min(cpu_count(), len(shots))
     batch = ShotBatch("vendor_views.pov.j2", common, shots, tw, th, shots_per_job=-(-len(shots) // processes),
                       processes=processes)
-    images, stats = render_frames(scene, batch, settings, method="looking-glass", header=header, progress=progress)
+    images, stats = render_shots(scene, batch, settings, method="looking-glass", header=header, progress=progress)
     bank = quilt_to_bank_order(np.stack(images))          # (1, N, th, tw, C): bank view k = quilt view N-1-k
     h3d = interleave(bank)
     half_cone = math.radians(cal.view_cone) / 2

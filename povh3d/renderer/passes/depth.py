@@ -48,7 +48,7 @@ from ...image.colour import decode
 from ...scene.features import needed_settings
 from ...scene.scene import Scene
 from ..shots.batch import ShotBatch
-from ..shots.shots import render_frames
+from ..shots.shots import render_shots
 from ..methods.quality import Progress, RenderSettings
 from .record import note
 
@@ -147,16 +147,16 @@ PAIRS_PER_RUN = 2
 
 def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
                fog: float, width: int, height: int, field: tuple[float, float] | None = None) -> ShotBatch:
-    """Two frames (fog 0, fog 1) per direction, a pair never split between runs, in up to ``FOG_RUNS``
+    """Two shots (fog 0, fog 1) per direction, a pair never split between runs, in up to ``FOG_RUNS``
     POV-Ray runs at once (one thread each: ``PASS_THREADS``).  ``field`` (mm, centred on the origin)
     defaults to the lens array's."""
     width_mm, height_mm = field or (lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y)
     right, up = (width_mm, 0.0, 0.0), (0.0, height_mm, 0.0)
-    frames = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
+    shots = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
     runs = max(1, min(FOG_RUNS, len(directions) // PAIRS_PER_RUN))
     pairs = -(-len(directions) // runs)
     return ShotBatch("depth.pov.j2", {"fog_distance": fog, "front_clearance": front_clearance, "right": right, "up": up},
-                      frames, width, height, shots_per_job=2 * pairs, processes=runs, options=("-A",))
+                      shots, width, height, shots_per_job=2 * pairs, processes=runs, options=("-A",))
 
 
 def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch,
@@ -166,15 +166,15 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
     start = time.perf_counter()
     header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
                               "focal": lens_array.focal}   # as methods.display_header
-    if settings.frame is not None:
-        header.update(pose_matrix=tuple(settings.frame), pose_transform=" transform { Povh3d_Display_Pose }")
+    if settings.pose is not None:
+        header.update(pose_matrix=tuple(settings.pose), pose_transform=" transform { Povh3d_Display_Pose }")
     lighting = pass_lighting(scene)
     if lighting:
         header["global_settings"] = lighting
     pass_settings = replace(settings, quality="draft", bit_depth=16, threads=PASS_THREADS)
-    images, stats = render_frames(scene, batch, pass_settings, method="depth", header=header, progress=progress)
+    images, stats = render_shots(scene, batch, pass_settings, method="depth", header=header, progress=progress)
     found = fog_distances(images[0::2], images[1::2], fog)
-    traced = stats.frames - stats.cached
+    traced = stats.shots - stats.cached
     note(name, time.perf_counter() - start, traced, stats.jobs if traced else 0, from_cache=not traced)
     return found
 
@@ -235,8 +235,8 @@ def depth_map(distances: np.ndarray, lens_array: LensArray, front_clearance: flo
 
 def depth_pass(scene: Scene, lens_array: LensArray, settings: RenderSettings, front_clearance: float,
                units_per_mm: float, progress: Progress | None = None) -> DepthMap:
-    """Measure the scene's depth in the pose of ``settings.frame`` (None: native); ``progress(done,
-    total)``: its two frames."""
+    """Measure the scene's depth in the pose of ``settings.pose`` (None: native); ``progress(done,
+    total)``: its two shots."""
     w, h = pass_size(lens_array)
     fog = front_clearance * units_per_mm   # scene units: t = 1/e at the screen
     batch = _fog_batch([(0.0, 0.0, 1.0)], lens_array, front_clearance, fog, w, h)
@@ -334,7 +334,7 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     (``elemental.view_grid``).  ``grid`` ``(cols, rows, pitch_x, pitch_y)`` puts the rays'
     screen crossings on that rectangular grid centred on the origin (a hex array's views
     resampled onto lens columns) instead of the lens centres of a rectangular array.
-    ``progress(done, total)``: the pass's POV-Ray frames (two a view); ``name``: the pass in the sidecar.
+    ``progress(done, total)``: the pass's shots (two a view); ``name``: the pass in the sidecar.
 
     Returns
     -------

@@ -181,7 +181,7 @@ def _placed_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRe
     frame = recorded_pose(placement_record) if placement_record and clearance is not None else None
     if frame is None or clearance is None or masked.is_model:   # native or staged in mm: placed without a POV-Ray run
         return masked
-    settings = dataclasses.replace(masked.settings, frame=frame, front_clearance=float(clearance),
+    settings = dataclasses.replace(masked.settings, pose=frame, front_clearance=float(clearance),
                                    depth_scale=float(placement_record.get("depth_scale", 1.0)))
     return dataclasses.replace(masked, settings=settings)
 

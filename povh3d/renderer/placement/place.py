@@ -39,20 +39,20 @@ def place_display(request: RenderRequest, scene: Scene,
         return request, {**NATIVE.as_record(), "note": "a mesh model staged in display mm",
                          "depth_budget_mm": budget, "warnings": []}
     s = request.settings
-    if s.frame is not None:  # the Python API gave the matrix itself: use it, and say so
-        _check_similarity(s.frame)
-        return request, {"source": "matrix", "matrix": list(s.frame), "depth_budget_mm": budget, "warnings": []}
+    if s.pose is not None:  # the Python API gave the matrix itself: use it, and say so
+        _check_similarity(s.pose)
+        return request, {"source": "matrix", "matrix": list(s.pose), "depth_budget_mm": budget, "warnings": []}
     options = request.placement
     if (request.display.quilt or {}).get("camera_model") == "perspective":
         if options.fit_depth is not None or options.depth_scale is not None:
-            raise ConfigError(f"{param('fit_depth')} and {param('depth_scale')} shape the rays of a lens array; the vendor's "
+            raise ConfigError(f"{param('placement.fit_depth')} and {param('depth_scale')} shape the rays of a lens array; the vendor's "
                               "perspective cameras take the scene as its camera sees it: drop them, or add "
                               f"{param('camera_model')} orthographic")
         # The vendor's cameras start at the viewer's eye, wherever the scene is: the frame alone, no depth pass.
         placed, record, _ = resolve_pose_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                     use_cache=s.use_cache, timeout=s.timeout)
         matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
-        return replace(request, settings=replace(s, frame=matrix)), {**record, "depth_budget_mm": budget}
+        return replace(request, settings=replace(s, pose=matrix)), {**record, "depth_budget_mm": budget}
     # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
     # what a method starting nearer (single-stage) would cut.
     default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
@@ -73,7 +73,7 @@ def place_display(request: RenderRequest, scene: Scene,
             record["warnings"].append(
                 f"the framed scene spans z = {depth['near_mm']:.3g} .. {depth['far_mm']:.3g} mm, beyond the "
                 f"depth budget of +-{budget / 2:.3g} mm (2 N f): it looks blurred there; "
-                f"{param('fit_depth')} auto scales the frame to fit")
+                f"{param('placement.fit_depth')} auto scales the frame to fit")
         elif not depth.get("empty") and not depth["field_within_budget"]:
             record["warnings"].append(
                 f"something beyond the framed subject (a ground plane or a backdrop?) reaches z = "
@@ -87,7 +87,7 @@ def place_display(request: RenderRequest, scene: Scene,
     record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
     limit = camera_front_clearance_limit(placed) if s.front_clearance is None else None
-    settings = replace(s, frame=matrix, front_clearance_limit=limit, depth_scale=scale,
+    settings = replace(s, pose=matrix, front_clearance_limit=limit, depth_scale=scale,
                        front_clearance_reason="" if limit is None else CAMERA_LIMIT_REASON)
     if scale != 1:
         record["depth_scale"] = scale
@@ -157,7 +157,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayPose, front_cle
         if seen is not None and f is frame and seen.unmeasured == 0:   # else measured on a hollow copy
             return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
-        return depth_pass(scene, array, replace(s, frame=matrix), front_clearance, f.units_per_mm,
+        return depth_pass(scene, array, replace(s, pose=matrix), front_clearance, f.units_per_mm,
                           progress).summary(budget)
 
     def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
@@ -177,9 +177,9 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayPose, front_cle
         return frame, ({**shown(depth, scale), "measured": depth} if scale != 1 else depth), scale
     target = budget if fit == "auto" else float(fit)
     if "reason" in depth:
-        raise ConfigError(f"{param('fit_depth')} cannot fit: {depth['reason']}")
+        raise ConfigError(f"{param('placement.fit_depth')} cannot fit: {depth['reason']}")
     if depth.get("empty") or depth["unmeasured_fraction"] > 0.5:
-        raise ConfigError(f"{param('fit_depth')} cannot fit: the depth pass measured nothing in the framed field "
+        raise ConfigError(f"{param('placement.fit_depth')} cannot fit: the depth pass measured nothing in the framed field "
                           "(nothing hit, or the viewpoint inside a solid object); place the display with "
                           f"{param('placement.center')}/{param('placement.normal')}/{param('placement.width')} instead")
     reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
@@ -189,7 +189,7 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayPose, front_cle
     if fit_scale:  # compress depth alone: the frame (lateral sizes) stays
         scale = 1 / factor
         if scale < DEPTH_SCALE_RANGE[0]:
-            raise ConfigError(f"{param('fit_depth')} cannot fit by {param('depth_scale')}: the scene reaches {reach:.4g} mm, "
+            raise ConfigError(f"{param('placement.fit_depth')} cannot fit by {param('depth_scale')}: the scene reaches {reach:.4g} mm, "
                               f"a compression of {scale:.3g} is under {DEPTH_SCALE_RANGE[0]:g}; drop {param('depth_scale')} "
                               f"to shrink the whole scene, or place the display with {param('display')}-*")
         return frame, {**shown(depth, scale), "before_fit": depth,
@@ -216,7 +216,7 @@ def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: 
     matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
     depth = seen.depth(placed, front_clearance, lens_array) if seen else None
     if depth is None or depth.unmeasured > 0:   # a viewer inside a solid: a pass of its own, on the hollow copy
-        depth = depth_pass(scene, lens_array, RenderSettings(frame=matrix), front_clearance, placed.units_per_mm)
+        depth = depth_pass(scene, lens_array, RenderSettings(pose=matrix), front_clearance, placed.units_per_mm)
     return {"scene": str(scene.path), "placement": {**record, **placed.as_record()},
             "depth": depth.summary(budget), "depth_budget_mm": budget,
             "depth_budget_scene_units": budget * placed.units_per_mm}

@@ -60,10 +60,10 @@ class PlacementOptions:
     def __post_init__(self) -> None:
         k = self.depth_scale
         if k == "fit" and self.fit_depth is None:
-            raise ConfigError(f"{param('depth_scale')} without a factor needs {param('fit_depth')} auto|MM (which then chooses "
+            raise ConfigError(f"{param('depth_scale')} without a factor needs {param('placement.fit_depth')} auto|MM (which then chooses "
                               f"it); or give the factor, e.g. {param('depth_scale')} 0.5")
         if k not in (None, "fit") and self.fit_depth is not None:
-            raise ConfigError(f"{param('depth_scale')} {k} and {param('fit_depth')} both set the depth; give {param('fit_depth')} with a "
+            raise ConfigError(f"{param('depth_scale')} {k} and {param('placement.fit_depth')} both set the depth; give {param('placement.fit_depth')} with a "
                               f"bare {param('depth_scale')} to compress depth until it fits, or the factor alone")
         if k not in (None, "fit"):
             from ..methods.quality import DEPTH_SCALE_RANGE
@@ -71,11 +71,11 @@ class PlacementOptions:
             low, high = DEPTH_SCALE_RANGE
             if isinstance(k, bool) or not isinstance(k, (int, float)) or not low <= k <= high:
                 raise ConfigError(f"{param('depth_scale')} must be a number within {low:g}..{high:g} (or nothing, with "
-                                  f"{param('fit_depth')}), got {k!r}")
+                                  f"{param('placement.fit_depth')}), got {k!r}")
         f = self.fit_depth
         if f is not None and f != "auto" and (isinstance(f, bool) or not isinstance(f, (int, float))
                                               or not (f > 0 and f < float("inf"))):
-            raise ConfigError(f"{param('fit_depth')} takes 'auto' or a positive number of mm, got {f!r}")
+            raise ConfigError(f"{param('placement.fit_depth')} takes 'auto' or a positive number of mm, got {f!r}")
         if self.mode not in PLACEMENT_MODES:
             raise ConfigError(f"{param('placement.mode')} must be one of {', '.join(PLACEMENT_MODES)}, got {self.mode!r}")
         given = [n for n in ("center", "normal", "width") if getattr(self, n) is not None]
@@ -224,7 +224,7 @@ def _orthographic_options(camera: dict[str, Any]) -> str:
 
 def recorded_pose(record: dict[str, Any]) -> tuple[float, ...] | None:
     """The POV-Ray matrix of a sidecar's ``placement`` entry (None: native): what a later pass
-    over the same rays takes as ``RenderSettings.frame`` instead of evaluating the scene again."""
+    over the same rays takes as ``RenderSettings.pose`` instead of evaluating the scene again."""
     if "matrix" in record:
         return tuple(float(v) for v in record["matrix"])
     if not record or record.get("source") == "native":

@@ -196,7 +196,7 @@ def settle_method(request: RenderRequest, scene: Scene,
         s = request.settings
         clearance = planned_front_clearance(method, request.render_array, s)
         rays = depth_scaled_rays(request.render_array, s.depth_scale)
-        inside = origins_inside(scene, rays, s, clearance, pose_units(s.frame), progress=progress)
+        inside = origins_inside(scene, rays, s, clearance, pose_units(s.pose), progress=progress)
         record = {"origins_inside_fraction": inside, "front_clearance_mm": clearance,
                   "depends_on": sorted(features.used)}
         problem = ray_state_problem(request.method, True, features, inside)
@@ -204,7 +204,7 @@ def settle_method(request: RenderRequest, scene: Scene,
         if problem is None and hollow_used:
             with tempfile.TemporaryDirectory(prefix="povh3d-hollow-") as folder:
                 solid = without_hollow(scene, Path(folder))
-                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, pose_units(s.frame),
+                anywhere = None if solid is None else origins_inside(solid, rays, s, clearance, pose_units(s.pose),
                                                                         "origins-inside-hollow", progress)
             if anywhere is not None:
                 record["origins_inside_hollow_or_solid_fraction"] = anywhere

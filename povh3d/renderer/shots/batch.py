@@ -56,7 +56,7 @@ def mesh_camera_batch(template: str, meshes: list[Any], options: tuple[str, ...]
 class RenderStats:
     """What a render did, for the sidecar and the benchmark."""
 
-    frames: int = 0
+    shots: int = 0
     cached: int = 0
     jobs: int = 0
     processes: int = 0
@@ -69,7 +69,7 @@ class RenderStats:
     radiosity_samples: int = 0   # radiosity samples POV-Ray computed over every run (its statistics)
 
     def as_record(self) -> dict[str, Any]:
-        return {"frames": self.frames, "frames_from_cache": self.cached, "povray_jobs": self.jobs,
+        return {"shots": self.shots, "shots_from_cache": self.cached, "povray_jobs": self.jobs,
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),
                 "wall_seconds": round(self.wall_seconds, 4),

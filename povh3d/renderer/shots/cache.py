@@ -1,4 +1,4 @@
-"""The rendered frames in the cache (``povh3d.cache``): a store that cannot return a wrong image.
+"""The rendered shots in the cache (``povh3d.cache``): a store that cannot return a wrong image.
 
 The key of an image is a hash of everything that decides its pixels: tool and
 POV-Ray versions, the scene and every file it reads, the script's camera and
@@ -43,7 +43,7 @@ class ImageCache:
         path = self.path(key)
         try:
             return cache.load(path, key, lambda body: decode_png(body, str(path)),
-                              again="rendering that frame again")
+                              again="rendering that shot again")
         except OSError as exc:
             self._give_up(f"cannot read or remove {str(path)!r} ({exc.strerror})")
             return None
@@ -60,4 +60,4 @@ class ImageCache:
     def _give_up(self, why: str) -> None:
         self.usable = False
         warn(f"the image cache {str(self.root)!r} cannot be used: {why}; rendering without it "
-             f"(set POVH3D_CACHE to a writable folder, or pass {param('no_cache')})")
+             f"(set POVH3D_CACHE to a writable folder, or turn it off: {param('use_cache')})")

@@ -1,8 +1,8 @@
-"""Turn a list of camera frames into images: cache lookups, POV-Ray jobs, reads.
+"""Turn a list of shots into images: cache lookups, POV-Ray jobs, reads.
 
 A rendering method describes what it needs as a ``ShotBatch``: one template,
-values common to every frame, and the per-frame values (a view's direction, a
-lens's centre).  Each frame has its own content key, so an unchanged view comes
+values common to every shot, and the per-shot values (a view's direction, a
+lens's centre).  Each shot has its own content key, so an unchanged view comes
 from the cache however the missing ones are batched into POV-Ray runs.
 """
 
@@ -43,7 +43,7 @@ from ...scene.templates import render_template, templates_dir
 
 
 class LocalRunner:
-    """Runs jobs as POV-Ray processes on this machine (``dask_backend.DaskRunner``: on a cluster)."""
+    """Runs jobs as POV-Ray processes on this machine (``povray.cluster.DaskRunner``: on a cluster)."""
 
     def __init__(self, binary: str) -> None:
         self.binary = binary
@@ -81,11 +81,11 @@ def _template_digest(name: str) -> str:
     return h.hexdigest()
 
 
-def build_script(batch: ShotBatch, frames: list[dict[str, Any]], *, method: str, scene_path: str,
+def build_script(batch: ShotBatch, shots: list[dict[str, Any]], *, method: str, scene_path: str,
                  add_assumed_gamma: bool, header: dict[str, Any]) -> str:
-    """The POV-Ray script that renders ``frames`` of ``batch`` as animation frames 1..n."""
+    """The POV-Ray script that renders ``shots`` of ``batch`` as the frames 1..n of its own POV-Ray animation."""
     return render_template(batch.template, version=__version__, method=method, scene_path=scene_path,
-                           add_assumed_gamma=add_assumed_gamma, frames=frames, **header, **batch.context)
+                           add_assumed_gamma=add_assumed_gamma, shots=shots, **header, **batch.context)
 
 
 def scene_include(scene: Scene, settings: RenderSettings) -> tuple[str, dict[str, Any]]:
@@ -108,8 +108,8 @@ def scene_include(scene: Scene, settings: RenderSettings) -> tuple[str, dict[str
     return str(copy), inputs
 
 
-def _read_frame(image_path: Path, name: str) -> np.ndarray:
-    """A frame POV-Ray wrote; a PNG cut short by a full disk is that disk's error, not the PNG's."""
+def _read_shot(image_path: Path, name: str) -> np.ndarray:
+    """A shot POV-Ray wrote; a PNG cut short by a full disk is that disk's error, not the PNG's."""
     from ...errors import InputError
     from ...povray.process import full_disk
 
@@ -120,10 +120,10 @@ def _read_frame(image_path: Path, name: str) -> np.ndarray:
             f"{name}: POV-Ray wrote a damaged image {image_path.name!r}; render again") from None
 
 
-def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
+def render_shots(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                   method: str, header: dict[str, Any], progress: Progress | None = None,
                   ) -> tuple[list[np.ndarray], RenderStats]:
-    """Render every frame of ``batch`` (or take it from the cache), in order.
+    """Render every shot of ``batch`` (or take it from the cache), in order.
 
     Parameters
     ----------
@@ -136,19 +136,19 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
 
     Returns
     -------
-    images : list of (height, width, C) uint8 or uint16 arrays, one per frame
+    images : list of (height, width, C) uint8 or uint16 arrays, one per shot
     stats : RenderStats
     """
     start = time.perf_counter()
     runner = _runner(settings)
-    stats = RenderStats(frames=len(batch.shots), povray_version=runner.version)
+    stats = RenderStats(shots=len(batch.shots), povray_version=runner.version)
     cache = _usable_cache(scene, settings, stats)
     lighting = shared_lighting(scene, batch, settings, isinstance(runner, LocalRunner))
     keys = shot_keys(stats.povray_version, scene, batch, header, settings)
     if lighting is not None:
         keys = lighting.keyed(keys)
     images, missing = _looked_up(keys, cache, settings, stats)
-    # Identical frames (same content key) in one batch are traced once.
+    # Identical shots (same content key) in one batch are traced once.
     first_of: dict[str, int] = {}
     copies = {i: first_of.setdefault(keys[i], i) for i in missing}
     missing = [i for i in missing if copies[i] == i]
@@ -170,7 +170,7 @@ def render_frames(scene: Scene, batch: ShotBatch, settings: RenderSettings, *,
                     # A frame of the sequence failed, maybe a later one: the rest of the request goes frame
                     # by frame (what finished is in the cache), so the error names the frame that fails.
                     settings.sequence.ledger.failed = True
-                    return render_frames(scene, batch, replace(settings, sequence=None), method=method,
+                    return render_shots(scene, batch, replace(settings, sequence=None), method=method,
                                          header=header, progress=progress)
                 raise _said(exc, scene) from None
     stats.radiosity_samples = sum(counts[0] for counts in taker.radiosity.values() if counts)
@@ -345,11 +345,11 @@ class _Taker:
                 if self.cache is not None:
                     self.cache.store(key, image_path)
                 # In the cache the later frame finds it; without one it is held here for it.
-                stored[key] = None if self.cache is not None else _read_frame(image_path, self.method)
+                stored[key] = None if self.cache is not None else _read_shot(image_path, self.method)
             self.done += 1
             return
         counted = self.images[index] is not None  # from the cache, rendered again to save a lighting solution
-        self.images[index] = _read_frame(image_path, f"{self.method} camera {index + 1}")  # decoded whole
+        self.images[index] = _read_shot(image_path, f"{self.method} camera {index + 1}")  # decoded whole
         if self.cache is not None:
             self.cache.store(self.keys[index], image_path)
         self.done += 0 if counted else self.copies.get(index, 1)
