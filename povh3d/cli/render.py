@@ -344,7 +344,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("-o", "--output", default="bench", help="folder for bench.csv, bench.md, bench.png")
     p.add_argument("--methods", default="multi-ortho",
                    help="comma-separated methods to bench, e.g. multi-ortho,pinhole,single-stage:conic,"
-                   "single-stage:spherical (default: multi-ortho; pinhole traces a frame per lens, "
+                   "single-stage:spherical (default: multi-ortho; pinhole traces a shot per lens, "
                    "over a minute a level on the demo panel)")
     p.add_argument("--reference-samples", type=positive_int, default=512, metavar="N",
                    help="footprint samples per pixel of the reference, drawn twice for its noise floor "
@@ -380,7 +380,7 @@ def add_placement_options(p: argparse.ArgumentParser) -> None:
                    "the y axis a warning asks for this option)")
     g.add_argument("--display-width", type=float, metavar="UNITS", help="the panel's width in scene units")
     g.add_argument("--fit-depth", metavar="auto|MM",
-                   help="measure the framed scene's depth and scale the frame (units per mm) so it fits the "
+                   help="measure the framed scene's depth and scale the pose (units per mm) so it fits the "
                    "display's depth budget (auto: 2 N f) or MM")
     g.add_argument("--depth-report", action="store_true",
                    help="measure the framed scene's depth (a small POV-Ray pass) for the summary and the sidecar, "

@@ -1,6 +1,6 @@
 """The display's pose: where the display sits in a scene modelled in its own units.
 
-The display's own frame is the one of docs/geometry.md: millimetres, the screen
+Display coordinates are those of docs/geometry.md: millimetres, the screen
 at ``z = 0``, ``x`` right, ``y`` up, the viewer on ``-z``.  A ``DisplayPose``
 is a rigid placement plus a uniform scale that maps it into scene units:
 
@@ -10,7 +10,7 @@ povh3d moves its cameras (and the single-stage lens array) into the scene by
 this map, never the scene into the cameras, so a scene is used as it is,
 whatever it keeps at top level (``global_settings``, ``camera``, ``sky_sphere``).
 The axes are orthonormal; ``axis_z`` (the display normal) points away from the
-viewer, into the scene.  A frame whose axes are left-handed in POV-Ray's sense
+viewer, into the scene.  A pose whose axes are left-handed in POV-Ray's sense
 (a scene camera with a negative ``right``, the right-handed convention) is a
 mirror placement; it is allowed and recorded.
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import ConfigError, param
 
-#: The options a user can set instead of a frame povh3d cannot work out.
+#: The options a user can set instead of a pose povh3d cannot work out.
 EXPLICIT_OPTIONS = f"{param('placement.center')} X,Y,Z {param('placement.normal')} X,Y,Z [{param('placement.up')} X,Y,Z] {param('placement.width')} UNITS"
 
 
@@ -49,7 +49,7 @@ class DisplayPose:
     units_per_mm : float                 scene units per display millimetre (> 0)
     source : str                         where it came from: 'native', 'camera', 'explicit'
     note : str                           how it was worked out, for the sidecar
-    camera_distance : float or None      a camera frame's scene camera, how far from the centre
+    camera_distance : float or None      a camera pose's scene camera, how far from the centre
                                          (scene units); what lies behind it is no part of the view
     """
 
@@ -63,7 +63,7 @@ class DisplayPose:
     camera_distance: float | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
-        axes = np.array([_vec(a, f"the frame's {n}") for a, n in
+        axes = np.array([_vec(a, f"the pose's {n}") for a, n in
                          ((self.axis_x, "x axis"), (self.axis_y, "y axis"), (self.axis_z, "normal"))])
         _vec(self.centre, "the display centre")
         if not np.allclose(axes @ axes.T, np.eye(3), atol=1e-9):
@@ -78,7 +78,7 @@ class DisplayPose:
 
     @property
     def is_native(self) -> bool:
-        """Whether the frame is the identity (scene in mm around z = 0): nothing to write."""
+        """Whether the pose is the identity (scene in mm around z = 0): nothing to write."""
         return (self.centre == (0.0, 0.0, 0.0) and self.units_per_mm == 1.0 and self.axis_x == (1.0, 0.0, 0.0)
                 and self.axis_y == (0.0, 1.0, 0.0) and self.axis_z == (0.0, 0.0, 1.0))
 
@@ -168,7 +168,7 @@ def up_warning(normal: Any, up: Any = None) -> str | None:
 
 def explicit_pose(centre: Any, normal: Any, width: float, panel_width_mm: float, up: Any = None,
                    *, source: str = "explicit", note: str = "") -> DisplayPose:
-    """The frame from a centre, a normal (away from the viewer), an up and a width in scene units.
+    """The pose from a centre, a normal (away from the viewer), an up and a width in scene units.
 
     ``up`` defaults to ``default_up(normal)``.  The display's ``x`` is ``up x normal``
     (POV-Ray's ``right`` for a camera with ``sky`` up looking along the normal), ``y``
@@ -193,7 +193,7 @@ def explicit_pose(centre: Any, normal: Any, width: float, panel_width_mm: float,
 
 def camera_pose(location: Any, direction: Any, right: Any, up: Any, look_at: Any | None,
                  panel_width_mm: float, *, note: str = "") -> DisplayPose:
-    """The frame a perspective camera defines (vectors as POV-Ray computed them).
+    """The pose a perspective camera defines (vectors as POV-Ray computed them).
 
     Centre at ``look_at`` (without one: the point of the view axis nearest the
     scene origin), normal along ``direction`` (the viewer on the camera's

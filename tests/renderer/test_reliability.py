@@ -251,7 +251,7 @@ def test_unusable_cache_is_one_warning_and_the_render_goes_on(tmp_path, cli, whe
     assert read_png(tmp_path / "a.png").shape == (16, 24, 3)
 
 
-# Pinhole: one small frame per lens, 24 frames in POV-Ray runs of 6 (--jobs 1), about 0.25 s each.
+# Pinhole: one small shot per lens, 24 shots in POV-Ray runs of 6 (--jobs 1), about 0.25 s each.
 PACED = ["--preset", "demo", "--lenses", "6x4", "--ppl", "8", "--method", "pinhole", "--quality", "high",
          "-q", "--jobs", "1"]
 

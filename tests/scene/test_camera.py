@@ -88,8 +88,8 @@ def test_sky_along_the_view_keeps_the_supplied_right_as_povray_does():
     np.testing.assert_allclose(cam.up, [0, 0, 1])   # direction x right
 
 
-def test_a_camera_type_no_frame_can_come_from_is_told_from_the_text():
-    """Only a perspective camera defines a frame; a mesh_camera's or fisheye's refusal needs no parse."""
+def test_a_camera_type_no_pose_can_come_from_is_told_from_the_text():
+    """Only a perspective camera defines a pose; a mesh_camera's or fisheye's refusal needs no parse."""
     from povh3d.scene.camera_script import written_camera_type
 
     mesh = "camera { mesh_camera { 1 3 mesh { M } } }\n"

@@ -11,7 +11,7 @@ declared values and renders the fog depth pass through it in the same run.
 Both are cached in the one cache (``povh3d.cache``: ``cameras/ab/<key>.camera``),
 keyed by the scene's digest and the panel, so a re-run starts no POV-Ray.  The
 pose these numbers define is worked out in ``geometry/pose.py``; which
-frame a render uses is decided in ``renderer/placement/pose.py``.
+pose a render uses is decided in ``renderer/placement/pose.py``.
 """
 
 from __future__ import annotations
@@ -203,9 +203,9 @@ _RATIO = re.compile(r"\bimage_width\s*/\s*image_height\b|\bimage_height\s*/\s*im
 def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArray, front_clearance: float,
                          cache_dir: Any, use_cache: bool, timeout: float | None = None
                          ) -> tuple[dict[str, Any], Seen, float, bool] | None:
-    """The camera's vectors and a depth pass along the normal of the frame it defines, from one
+    """The camera's vectors and a depth pass along the normal of the pose it defines, from one
     POV-Ray run: the evaluation script, the rest of the scene and ``templates/camera_depth.pov.j2``,
-    which works out the frame and the clearance from the declared values, prints them and renders
+    which works out the pose and the clearance from the declared values, prints them and renders
     the two fog frames (``renderer.passes.depth``).  Cached by the scene's digest, the panel and ``front_clearance``.
     None when the camera needs a run at the panel's own size (``measured_size``)."""
     from .depth import PASS_THREADS, fog_distances, pass_lighting, pass_size
@@ -242,7 +242,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     printed = next((tuple(v) for k, v in parse_log(log) if k == "depth_frame" and isinstance(v, list)), ())
     if len(printed) != 14 or len(images) != 2:
         raise CameraError(f"cannot use the scene's camera (POV-Ray did not finish the depth pass through its "
-                          f"frame); place the display with {EXPLICIT_OPTIONS}, or {param('placement.mode')} native")
+                          f"pose); place the display with {EXPLICIT_OPTIONS}, or {param('placement.mode')} native")
     distances, unmeasured = fog_distances(images[:1], images[1:], printed[12] * printed[13])
     seen = Seen(distances[0].astype(np.float32), float(unmeasured[0]), printed)
     if use_cache:
@@ -257,21 +257,21 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
 @dataclass(frozen=True)
 class Seen:
     """A depth pass made in the camera's own run: ray lengths (scene units, NaN: none), the share the
-    fog did not reach, and the frame and clearance it was made in, as POV-Ray worked them out:
+    fog did not reach, and the pose and clearance it was made in, as POV-Ray worked them out:
     centre, x, y, normal (3 each), units per mm, front clearance (mm)."""
 
     distances: np.ndarray
     unmeasured: float
     printed: tuple[float, ...]
 
-    def depth(self, frame: DisplayPose, front_clearance: float, lens_array: LensArray) -> DepthMap | None:
-        """The depth map, if the pass was made in ``frame`` with ``front_clearance``; else None (measure again)."""
+    def depth(self, pose: DisplayPose, front_clearance: float, lens_array: LensArray) -> DepthMap | None:
+        """The depth map, if the pass was made in ``pose`` with ``front_clearance``; else None (measure again)."""
         from .depth import depth_map
 
-        expected = [*frame.centre, *frame.axis_x, *frame.axis_y, *frame.axis_z, frame.units_per_mm, front_clearance]
-        size = max(1.0, *(abs(v) for v in frame.centre))
+        expected = [*pose.centre, *pose.axis_x, *pose.axis_y, *pose.axis_z, pose.units_per_mm, front_clearance]
+        size = max(1.0, *(abs(v) for v in pose.centre))
         if not (np.allclose(self.printed[:3], expected[:3], rtol=0, atol=1e-9 * size)
                 and np.allclose(self.printed[3:12], expected[3:12], rtol=0, atol=1e-9)
                 and np.allclose(self.printed[12:], expected[12:], rtol=1e-9, atol=0)):
             return None
-        return depth_map(self.distances, lens_array, front_clearance, frame.units_per_mm, self.unmeasured)
+        return depth_map(self.distances, lens_array, front_clearance, pose.units_per_mm, self.unmeasured)

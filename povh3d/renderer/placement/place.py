@@ -1,11 +1,11 @@
-"""Place the display in the scene for a request: the frame, the front clearance, the depth.
+"""Place the display in the scene for a request: the pose, the front clearance, the depth.
 
-``place_display`` resolves the frame (``renderer.placement.pose``), keeps the rays' start in
-front of the scene's camera, measures the scene's depth in the frame
-(``renderer.passes.depth``: only where something reads it, ``depth_wanted``, and for a frame other
+``place_display`` resolves the pose (``renderer.placement.pose``), keeps the rays' start in
+front of the scene's camera, measures the scene's depth in the pose
+(``renderer.passes.depth``: only where something reads it, ``depth_wanted``, and for a pose other
 than native or with ``--fit-depth``),
-scales the frame when ``--fit-depth`` asks, and returns the request with the
-frame in its settings and the record for the sidecar.
+scales the pose when ``--fit-depth`` asks, and returns the request with the
+pose in its settings and the record for the sidecar.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ if TYPE_CHECKING:  # only for annotations: keeps the import chain short
 def place_display(request: RenderRequest, scene: Scene,
                   progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any]]:
     """The request with its placement (and clearance) resolved into the settings, and the record;
-    ``progress(done, total)``: a depth pass's frames."""
+    ``progress(done, total)``: a depth pass's shots."""
     array = request.render_array
     budget = depth_budget_mm(array)
     if request.is_model:  # the stage is built in display mm
@@ -48,7 +48,7 @@ def place_display(request: RenderRequest, scene: Scene,
             raise ConfigError(f"{param('placement.fit_depth')} and {param('depth_scale')} shape the rays of a lens array; the vendor's "
                               "perspective cameras take the scene as its camera sees it: drop them, or add "
                               f"{param('camera_model')} orthographic")
-        # The vendor's cameras start at the viewer's eye, wherever the scene is: the frame alone, no depth pass.
+        # The vendor's cameras start at the viewer's eye, wherever the scene is: the pose alone, no depth pass.
         placed, record, _ = resolve_pose_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                     use_cache=s.use_cache, timeout=s.timeout)
         matrix = None if placed.is_native else tuple(placed.matrix().ravel().tolist())
@@ -56,7 +56,7 @@ def place_display(request: RenderRequest, scene: Scene,
     # The depth pass looks out as far as any method's default (within the scene camera), so that it sees
     # what a method starting nearer (single-stage) would cut.
     default = max(get_method(request.method).default_front_clearance(array), default_front_clearance(array))
-    # A camera frame's depth pass is made in the run that evaluates the camera, when it can be, and only
+    # A camera pose's depth pass is made in the run that evaluates the camera, when it can be, and only
     # where something reads it (``depth_wanted``); else that run evaluates the camera alone.
     wanted = depth_wanted(request, default)
     placed, record, seen = resolve_pose_and_depth(options, scene, array, cache_dir=s.cache_dir,
@@ -73,7 +73,7 @@ def place_display(request: RenderRequest, scene: Scene,
             record["warnings"].append(
                 f"the framed scene spans z = {depth['near_mm']:.3g} .. {depth['far_mm']:.3g} mm, beyond the "
                 f"depth budget of +-{budget / 2:.3g} mm (2 N f): it looks blurred there; "
-                f"{param('placement.fit_depth')} auto scales the frame to fit")
+                f"{param('placement.fit_depth')} auto scales the pose to fit")
         elif not depth.get("empty") and not depth["field_within_budget"]:
             record["warnings"].append(
                 f"something beyond the framed subject (a ground plane or a backdrop?) reaches z = "
@@ -81,7 +81,7 @@ def place_display(request: RenderRequest, scene: Scene,
                 f"+-{budget / 2:.3g} mm: it looks blurred there")
         if depth.get("empty"):
             record["warnings"].append("the depth pass hit nothing in the middle of the framed field: "
-                                      "check the frame")
+                                      "check the pose")
         elif "reason" in depth:   # blind (inside a solid) or too bright: not an empty scene
             record["warnings"].append(depth["reason"])
     record.update(depth_budget_mm=budget, depth_budget_scene_units=budget * placed.units_per_mm)
@@ -113,7 +113,7 @@ def depth_wanted(request: RenderRequest, default: float) -> bool:
 
 
 def _check_similarity(matrix: tuple[float, ...]) -> None:
-    """A frame matrix must be a rotation (or mirror) times one scale: POV-Ray's mesh camera turns its
+    """A pose matrix must be a rotation (or mirror) times one scale: POV-Ray's mesh camera turns its
     normals as surface normals (inverse transpose), so a shear or a depth-only scale would bend its rays."""
     m = np.asarray(matrix, dtype=np.float64).reshape(4, 3)[:3]
     gram = m @ m.T
@@ -123,45 +123,45 @@ def _check_similarity(matrix: tuple[float, ...]) -> None:
                           "no depth-only scale); build it with povh3d.geometry.pose.DisplayPose")
 
 
-#: Why a camera frame's rays start no farther out than ``camera_front_clearance_limit``.
+#: Why a camera pose's rays start no farther out than ``camera_front_clearance_limit``.
 CAMERA_LIMIT_REASON = "within 0.9 of the scene camera's distance: nothing behind the camera enters the image"
 
 
-def camera_front_clearance_limit(frame: DisplayPose) -> float | None:
-    """How far out (mm) rays may start in a camera frame: 0.9 of the scene camera's distance, since
-    what lies behind the camera (walls) is no part of its view; None for other frames.  The methods
+def camera_front_clearance_limit(pose: DisplayPose) -> float | None:
+    """How far out (mm) rays may start in a camera pose: 0.9 of the scene camera's distance, since
+    what lies behind the camera (walls) is no part of its view; None for other poses.  The methods
     round their clearance down to it (``renderer.methods.registry``), whatever their default or step."""
-    if frame.source != "camera" or frame.camera_distance is None:
+    if pose.source != "camera" or pose.camera_distance is None:
         return None
-    return 0.9 * frame.camera_distance / frame.units_per_mm
+    return 0.9 * pose.camera_distance / pose.units_per_mm
 
 
-def _front_clearance(frame: DisplayPose, default: float) -> float:
+def _front_clearance(pose: DisplayPose, default: float) -> float:
     """The front clearance (mm) of the depth pass: the method's default, within the camera's limit."""
-    limit = camera_front_clearance_limit(frame)
+    limit = camera_front_clearance_limit(pose)
     return default if limit is None else min(default, limit)
 
 
-def _measure(request: RenderRequest, scene: Scene, frame: DisplayPose, front_clearance: float, budget: float,
+def _measure(request: RenderRequest, scene: Scene, pose: DisplayPose, front_clearance: float, budget: float,
              fit: str | float | None, scale: float = 1.0, fit_scale: bool = False,
              seen: DepthMap | None = None, progress: Progress | None = None
              ) -> tuple[DisplayPose, dict[str, Any], float]:
-    """The depth summary in ``frame`` as the display shows it (depth times ``scale``); with ``fit``, the
-    frame scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
-    ``seen``: the depth map of ``frame`` made in the run that evaluated the scene's camera; else a depth
+    """The depth summary in ``pose`` as the display shows it (depth times ``scale``); with ``fit``, the
+    pose scaled (or, with ``fit_scale``, the depth compressed: the new ``scale``) so the depth fits first.
+    ``seen``: the depth map of ``pose`` made in the run that evaluated the scene's camera; else a depth
     pass of its own."""
     array, s = request.render_array, request.settings
     keys = ("near_mm", "far_mm", "depth_mm", "field_near_mm", "field_far_mm")
 
     def measure(f: DisplayPose) -> dict[str, Any]:
-        if seen is not None and f is frame and seen.unmeasured == 0:   # else measured on a hollow copy
+        if seen is not None and f is pose and seen.unmeasured == 0:   # else measured on a hollow copy
             return {**seen.summary(budget), "pass": "in the camera's evaluation run"}
         matrix = None if f.is_native else tuple(f.matrix().ravel().tolist())
         return depth_pass(scene, array, replace(s, pose=matrix), front_clearance, f.units_per_mm,
                           progress).summary(budget)
 
     def shown(depth: dict[str, Any], factor: float) -> dict[str, Any]:
-        # The display shows the measured z times ``factor`` (a depth scale, or 1 / a frame's scale).
+        # The display shows the measured z times ``factor`` (a depth scale, or 1 / a pose's scale).
         if "near_mm" not in depth or factor == 1:
             return depth
         after = {**depth, **{k: depth[k] * factor for k in keys}}
@@ -172,9 +172,9 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayPose, front_cle
                                             and after["field_far_mm"] - slack <= half)
         return after
 
-    depth = measure(frame)
+    depth = measure(pose)
     if fit is None:
-        return frame, ({**shown(depth, scale), "measured": depth} if scale != 1 else depth), scale
+        return pose, ({**shown(depth, scale), "measured": depth} if scale != 1 else depth), scale
     target = budget if fit == "auto" else float(fit)
     if "reason" in depth:
         raise ConfigError(f"{param('placement.fit_depth')} cannot fit: {depth['reason']}")
@@ -184,25 +184,25 @@ def _measure(request: RenderRequest, scene: Scene, frame: DisplayPose, front_cle
                           f"{param('placement.center')}/{param('placement.normal')}/{param('placement.width')} instead")
     reach = max(abs(depth["near_mm"]), abs(depth["far_mm"]))
     if not reach > 0:
-        return frame, {**depth, "fit": {"target_mm": target, "factor": 1.0}}, scale
+        return pose, {**depth, "fit": {"target_mm": target, "factor": 1.0}}, scale
     factor = max(1.0, reach / (target / 2))   # only ever shrink the scene onto the display
-    if fit_scale:  # compress depth alone: the frame (lateral sizes) stays
+    if fit_scale:  # compress depth alone: the pose (lateral sizes) stays
         scale = 1 / factor
         if scale < DEPTH_SCALE_RANGE[0]:
             raise ConfigError(f"{param('placement.fit_depth')} cannot fit by {param('depth_scale')}: the scene reaches {reach:.4g} mm, "
                               f"a compression of {scale:.3g} is under {DEPTH_SCALE_RANGE[0]:g}; drop {param('depth_scale')} "
                               f"to shrink the whole scene, or place the display with {param('display')}-*")
-        return frame, {**shown(depth, scale), "before_fit": depth,
+        return pose, {**shown(depth, scale), "before_fit": depth,
                        "fit": {"target_mm": target, "factor": factor, "by": "depth_scale"}}, scale
-    # Display z scales as 1 / factor for the same scene points (the frame scales about its centre):
+    # Display z scales as 1 / factor for the same scene points (the pose scales about its centre):
     # the subject measured before fits exactly; a re-measure would see a wider field, not the same subject.
-    fitted = frame.scaled(factor) if factor > 1 else frame
+    fitted = pose.scaled(factor) if factor > 1 else pose
     return fitted, {**shown(depth, 1 / factor), "before_fit": depth,
                     "fit": {"target_mm": target, "factor": factor, "by": "units_per_mm"}}, scale
 
 
 def scene_report(path: Any, lens_array: Any, options: Any = None, include_dirs: tuple = ()) -> dict[str, Any]:
-    """``povh3d info SCENE``: the frame the scene would render with and its depth against the budget."""
+    """``povh3d info SCENE``: the pose the scene would render with and its depth against the budget."""
     from ..methods.quality import RenderSettings
     from ...scene.scene import load_scene
     from .pose import PlacementOptions

@@ -1,16 +1,16 @@
-"""Where the display sits in the user's scene: the frame a render uses, and why.
+"""Where the display sits in the user's scene: the pose a render uses, and why.
 
 ``resolve_pose`` turns the request's ``PlacementOptions`` into a ``DisplayPose``:
 
-- explicit ``--display-center/normal/up/width``: that frame;
-- ``native``: the display's own frame (mm, screen ``z = 0``);
-- ``camera``, or ``auto`` when the scene has a camera: the frame the scene's
+- explicit ``--display-center/normal/up/width``: that pose;
+- ``native``: display coordinates themselves (mm, screen ``z = 0``);
+- ``camera``, or ``auto`` when the scene has a camera: the pose the scene's
   last camera defines, read from the text where it is one statement of literal values
   (``scene.camera_text``), else evaluated by POV-Ray in one small run
   (``renderer.passes.scene_camera``, cached by the scene's digest and the panel's size);
 - ``auto`` without a camera: native.
 
-The scene's camera never silently wins or loses: the record says which frame
+The scene's camera never silently wins or loses: the record says which pose
 was used, from where, and warns about several cameras.
 """
 
@@ -41,7 +41,7 @@ class PlacementOptions:
     mode : {'auto', 'camera', 'native'}   ignored when ``center`` is given (explicit)
     center, normal, up : (3,) floats or None, scene units
     width : float or None, scene units    the panel's width in the scene
-    fit_depth : 'auto', float (mm) or None  scale the frame so the measured depth fits
+    fit_depth : 'auto', float (mm) or None  scale the pose so the measured depth fits
     depth_scale : float, 'fit' or None   compress depth alone along the normal by this factor (a
                                          distortion); 'fit': the factor --fit-depth chooses
     depth_report : bool                  measure the framed scene's depth (and warn past the budget)
@@ -53,7 +53,7 @@ class PlacementOptions:
     normal: tuple[float, float, float] | None = None
     up: tuple[float, float, float] | None = None
     width: float | None = None
-    fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the frame to fit
+    fit_depth: str | float | None = None   # 'auto' (the depth budget) or mm: scale the pose to fit
     depth_scale: str | float | None = None  # a factor, or 'fit' (with fit_depth: compress depth to fit)
     depth_report: bool = False
 
@@ -94,16 +94,16 @@ class PlacementOptions:
 
 def resolve_pose(options: PlacementOptions, scene: Scene, lens_array: LensArray, *,
                   cache_dir: Any = None, use_cache: bool = True) -> tuple[DisplayPose, dict[str, Any]]:
-    """The frame to render with and its sidecar record (``warnings`` listed there)."""
-    frame, record, _ = resolve_pose_and_depth(options, scene, lens_array, cache_dir=cache_dir,
+    """The pose to render with and its sidecar record (``warnings`` listed there)."""
+    pose, record, _ = resolve_pose_and_depth(options, scene, lens_array, cache_dir=cache_dir,
                                                use_cache=use_cache)
-    return frame, record
+    return pose, record
 
 
 def resolve_pose_and_depth(options: PlacementOptions, scene: Scene, lens_array: LensArray, *, cache_dir: Any = None,
                             use_cache: bool = True, front_clearance: float | None = None,
                             timeout: float | None = None) -> tuple[DisplayPose, dict[str, Any], Seen | None]:
-    """``resolve_pose``, and with ``front_clearance`` (mm) for a camera frame, the depth pass along its normal
+    """``resolve_pose``, and with ``front_clearance`` (mm) for a camera pose, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
     allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
     import time
@@ -117,9 +117,9 @@ def resolve_pose_and_depth(options: PlacementOptions, scene: Scene, lens_array: 
     width_mm = lens_array.panel.size_mm[0]
     if options.explicit:
         assert options.width is not None  # explicit: centre, normal and width all given (__post_init__)
-        frame = explicit_pose(options.center, options.normal, float(options.width), width_mm, options.up)
+        pose = explicit_pose(options.center, options.normal, float(options.width), width_mm, options.up)
         warning = up_warning(options.normal, options.up)  # an up chosen for the user near the y axis
-        return frame, {**frame.as_record(), "warnings": [warning] if warning else []}, None
+        return pose, {**pose.as_record(), "warnings": [warning] if warning else []}, None
     if options.mode == "native":
         return NATIVE, {**NATIVE.as_record(), "warnings": []}, None
     text = source_text(scene.path.read_bytes())
@@ -168,20 +168,20 @@ def resolve_pose_and_depth(options: PlacementOptions, scene: Scene, lens_array: 
         distances = None
     else:
         camera, distances, seconds, cached = found
-    frame, warnings = _camera_pose(camera, width_mm)
-    record = {**frame.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
+    pose, warnings = _camera_pose(camera, width_mm)
+    record = {**pose.as_record(), "camera": camera, "evaluation_seconds": round(seconds, 4),
               "evaluation_from_cache": cached, "warnings": warnings}
-    return frame, record, distances
+    return pose, record, distances
 
 
 def _camera_pose(camera: dict[str, Any], width_mm: float) -> tuple[DisplayPose, list[str]]:
     """The pose of a perspective scene camera (its evaluated values) and what to say of it."""
     if camera["type"] == "orthographic":
-        raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a frame); "
+        raise CameraError(f"cannot use the scene's orthographic camera (only a perspective one defines a pose); "
                           f"place the display where it looks: {_orthographic_options(camera)}")
     if camera["type"] != "perspective":
         raise CameraError(_unusable_type(camera["type"]))
-    frame = camera_pose(camera["location"], camera["direction"], camera["right"], camera["up"],
+    pose = camera_pose(camera["location"], camera["direction"], camera["right"], camera["up"],
                          camera["look_at"], width_mm,
                          note="look_at" if camera["look_at"] is not None else "no look_at: the point of the "
                          "view axis nearest the scene origin")
@@ -192,18 +192,18 @@ def _camera_pose(camera: dict[str, Any], width_mm: float) -> tuple[DisplayPose, 
     if camera.get("dropped"):
         warnings.append(f"the scene camera's {', '.join(camera['dropped'])} (focal blur, a normal pattern) "
                         f"are not reproduced: every view is a sharp, undistorted render")
-    # A mirrored frame (a right-handed camera: a negative right) is no warning: the display's x follows
+    # A mirrored pose (a right-handed camera: a negative right) is no warning: the display's x follows
     # the camera's right as POV-Ray's 2D render does, so the views show what that render shows, the
     # right way round; the record says ``mirrored`` and why.
-    if frame.mirrored:
-        frame = DisplayPose(frame.centre, frame.axis_x, frame.axis_y, frame.axis_z, frame.units_per_mm, frame.source,
-                             frame.note + "; right-handed (a negative right): x follows it, as in the 2D render",
-                             frame.camera_distance)
-    return frame, warnings
+    if pose.mirrored:
+        pose = DisplayPose(pose.centre, pose.axis_x, pose.axis_y, pose.axis_z, pose.units_per_mm, pose.source,
+                             pose.note + "; right-handed (a negative right): x follows it, as in the 2D render",
+                             pose.camera_distance)
+    return pose, warnings
 
 
 def _unusable_type(kind: str) -> str:
-    return (f"cannot use the scene's {kind} camera (only a perspective one defines a frame); place the display "
+    return (f"cannot use the scene's {kind} camera (only a perspective one defines a pose); place the display "
             f"with {EXPLICIT_OPTIONS}, or {param('placement.mode')} native")
 
 
@@ -229,7 +229,7 @@ def recorded_pose(record: dict[str, Any]) -> tuple[float, ...] | None:
         return tuple(float(v) for v in record["matrix"])
     if not record or record.get("source") == "native":
         return None
-    frame = DisplayPose(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
+    pose = DisplayPose(tuple(record["centre"]), tuple(record["axis_x"]), tuple(record["axis_y"]),
                          tuple(record["normal"]), float(record["units_per_mm"]))
-    return None if frame.is_native else tuple(frame.matrix().ravel().tolist())
+    return None if pose.is_native else tuple(pose.matrix().ravel().tolist())
 

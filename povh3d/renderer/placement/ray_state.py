@@ -7,7 +7,7 @@ starts in.  Its orthographic camera works that out for every ray; its mesh camer
 (``--method multi-ortho``, ``subpixel``) in POV-Ray 3.7 works it out once, for the first ray
 a render thread traces, and gives every later ray the same state (tests/renderer/test_ray_state.py).
 Where the display's rays start partly inside a solid and partly outside (a ground plane the
-front clearance reaches below, a room or a sky sphere the frame cuts), a mesh-camera image
+front clearance reaches below, a room or a sky sphere the placement cuts), a mesh-camera image
 puts fog where an orthographic view has none, or the other way round: a wrong image with
 nothing to show it.  A fog pass over the plane that holds every view's ray origins (the
 lens array's field widened by the clearance times the most oblique slope: an oblique view's
@@ -109,7 +109,7 @@ class MethodProblem:
 
     def note(self, default: str) -> str:
         """The sidecar's ``method_note`` when the default ``default`` falls back to ``FALLBACK``."""
-        return f"{FALLBACK}, not the default {default} (slower: one POV-Ray frame a view): {self.cause}"
+        return f"{FALLBACK}, not the default {default} (slower: one shot a view): {self.cause}"
 
 
 _ORIGINS_INSIDE = "rays start inside an object"
@@ -158,7 +158,7 @@ def hollow_problem(method: str, used: list[str], inside: float) -> MethodProblem
         return None
     return MethodProblem(
         f"{100 * inside:.3g} % of the display's ray origins (every view's) lie inside an object, hollow ones "
-        f"counted (a room or a sky around the camera that the frame cuts), and the scene has {' and '.join(used)}, "
+        f"counted (a room or a sky around the camera that the placement cuts), and the scene has {' and '.join(used)}, "
         f"which POV-Ray works out from the objects a ray starts in, hollow or not; {param('method')} {method} {_MESH_CAMERA}",
         _ORTHOGRAPHIC, _ORIGINS_INSIDE)
 
@@ -185,7 +185,7 @@ def settle_method(request: RenderRequest, scene: Scene,
     ``FALLBACK`` where it would render the scene wrong (its mesh camera's one ray state, or the size of its
     runs seen through ``image_width``); and the sidecar's record of the check (None: nothing to check).
     A chosen method is refused instead, in one line naming the fix.  ``progress(done, total)``: the
-    inside-solid passes' frames."""
+    inside-solid passes' shots."""
     if request.is_model:
         return request, None
     method, views = get_method(request.method), request.render_array.views
