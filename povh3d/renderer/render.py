@@ -248,11 +248,11 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
     first = request.frames is None or clock is None or clock == request.frames.clock(request.frames.first)
     if first and bank.size and int(bank.max()) == int(bank.min()):
-        # One flat colour: most likely no ray hit anything (a frame that misses the scene, a model in odd
+        # One flat colour: most likely no ray hit anything (a placement that misses the scene, a model in odd
         # units); said once per request, not per animation frame.
         w, h = array.panel.size_mm
-        warn(f"every pixel of {request.output.name} is the same colour, as if no ray hit anything; check the display "
-             f"frame ({param('display')}-*) or the model's units and orientation ({param('unit')}, {param('up')}); a scene without a "
+        warn(f"every pixel of {request.output.name} is the same colour, as if no ray hit anything; check the "
+             f"placement ({param('placement.mode')}, {param('placement.center')} ...) or the model's units and orientation ({param('unit')}, {param('up')}); a scene without a "
              f"camera is modelled in mm around z = 0, viewer on -z, the display spanning {w:.4g} x {h:.4g} mm")
     views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
     mapping = request.display.mapping

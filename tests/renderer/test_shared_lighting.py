@@ -87,7 +87,7 @@ def test_shared_views_within_pov_rays_own_spread(renders):
     assert 25.0 < spread < 60.0, f"test set-up: the spread {spread:.1f} dB is no spread"
     assert shared.min() >= spread, (shared.min(), spread)
     assert renders["shared_stats"].lighting["saving_shots"] == [2 * 4 + 2, 0, 3, 12, 15]   # centre, corners
-    assert renders["shared_stats"].as_record()["shared_lighting"]["loading_frames"] == VIEWS - 5
+    assert renders["shared_stats"].as_record()["shared_lighting"]["loading_shots"] == VIEWS - 5
 
 
 @pytest.mark.povray
@@ -107,7 +107,7 @@ def test_later_runs_load_rather_than_compute(renders):
     lighting = renders["shared_stats"].lighting
     assert renders["independent_stats"].lighting is None
     assert independent > 50, "test set-up: the independent views compute few samples"
-    assert lighting["samples_computed_per_loading_frame"] * 10 < independent
+    assert lighting["samples_computed_per_loading_shot"] * 10 < independent
     assert independent < lighting["samples_computed"] < len(lighting["saving_shots"]) * independent
     assert lighting["loading_pretrace_seconds"] <= lighting["pretrace_seconds"] + 0.05
 

@@ -215,7 +215,7 @@ def seeded_auto(scene: Scene, lens_array: LensArray, method: str, settings: Rend
         # The samples per seed that bring the error of the seeds' mean down to ``allowed``.
         error, n = runs.error_bound(), runs.per_seed
         more = max(math.ceil(n * (error / allowed) ** (1 / ALPHA)) - n, math.ceil(LEAST_MORE * n))
-        more += -more % 4 if more > 8 else 0   # frames of a few banks each (``view_bank.bank_groups``)
+        more += -more % 4 if more > 8 else 0   # shots of a few banks each (``view_bank.bank_groups``)
         if runs.total + 2 * more > MAX_SAMPLES:
             best = with_rounding(-10 * math.log10(error * (runs.total / MAX_SAMPLES) ** ALPHA), rounding)
             raise ConfigError(f"{param('max_error_db')} {target:g} dB is above what {MAX_SAMPLES} footprint samples reach on "

@@ -1,7 +1,7 @@
 """A Looking Glass's views through the vendor's camera model (``display.quilt.vendor_cameras``).
 
 One POV-Ray perspective camera per view, all from the viewer at distance ``D`` from the
-screen: the scene camera's own distance to its ``look_at`` (a camera frame), else the
+screen: the scene camera's own distance to its ``look_at`` (a camera placement), else the
 vendor's default viewer for a scene without one (``display.quilt.default_viewing_distance``).
 The views are laid out as the camera bank of ``display.quilt.quilt_array`` (one lens per
 tile pixel), so the quilt, the native image and ``--views`` read them as they read the
@@ -31,7 +31,7 @@ from .registry import MethodResult, display_header
 
 def viewer_distance(placement: dict[str, Any] | None, height_mm: float) -> tuple[float, str]:
     """The viewer's distance from the screen (mm) and where it came from: the scene camera's
-    distance to its look_at (a camera frame), else the vendor's default viewer."""
+    distance to its look_at (a camera placement), else the vendor's default viewer."""
     record = placement or {}
     camera = record.get("camera")
     if record.get("source") == "camera" and camera:

@@ -202,8 +202,8 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
         raise InputError(f"the scene {str(scene_path)!r} the sidecar names is gone; the depth pass needs it: "
                          f"render again with {param('dataset')}")
     placement_record = record.get("placement") or {}
-    frame = recorded_pose(placement_record)
-    settings = RenderSettings(quality="draft", pose=frame, depth_scale=float(placement_record.get("depth_scale", 1.0)))
+    pose = recorded_pose(placement_record)
+    settings = RenderSettings(quality="draft", pose=pose, depth_scale=float(placement_record.get("depth_scale", 1.0)))
     depth = dataset_depth(load_scene(scene_path), lens_array, settings, record["quality"]["front_clearance_mm"],
                           float(placement_record.get("units_per_mm", 1.0)))
     return write_dataset(folder, h3d, lens_array, depth, all_views=all_views, scene=scene_path.stem)

@@ -8,7 +8,7 @@ front of the screen, NaN where nothing is hit.  ``p_LLL_KKK.npy`` holds the
 matching disparity in view pixels (lenses) per view step, ``z s / (f p)`` with
 ``z`` the hit's depth ``d / |(u/f, v/f, 1)|``: a point at depth ``z`` moves by
 that many lenses from one view to the next (``geometry.rays.disparity``).
-``depth_maps.json`` says all this and records the frame.  The folder is replaced whole
+``depth_maps.json`` says all this and records the placement.  The folder is replaced whole
 (``views.replaced_whole``): the maps of an older render never stay beside the new manifest, and a
 non-empty folder without povh3d's ``depth_maps.json`` is refused, never deleted.
 

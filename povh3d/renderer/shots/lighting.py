@@ -97,15 +97,15 @@ def shared_lighting(scene: Scene, batch: ShotBatch, settings: RenderSettings, lo
 
 
 def record(lighting: SharedLighting, saved: tuple[int, float] | None, loaded: list[tuple[int, float] | None],
-           frames: int) -> dict[str, Any]:
+           shots: int) -> dict[str, Any]:
     """The sidecar's account: the saving shots, the samples their run computed, and what the loading runs
     computed beside the loaded ones (POV-Ray's statistics, ``povray.log.parse_radiosity``)."""
     out: dict[str, Any] = {"radiosity": "computed once, loaded by the other shots", "saving_shots": list(lighting.savers)}
     if saved is not None:
         out["samples_computed"], out["pretrace_seconds"] = saved[0], round(saved[1], 3)
     counts = [c for c in loaded if c is not None]
-    if counts and frames:
-        out["loading_frames"] = frames
-        out["samples_computed_per_loading_frame"] = round(sum(c[0] for c in counts) / frames, 1)
+    if counts and shots:
+        out["loading_shots"] = shots
+        out["samples_computed_per_loading_shot"] = round(sum(c[0] for c in counts) / shots, 1)
         out["loading_pretrace_seconds"] = round(sum(c[1] for c in counts), 3)
     return out
