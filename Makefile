@@ -93,7 +93,7 @@ bench: povray venv ## measure whole commands against whole-process 2D POV-Ray re
 	$(BIN)/python benchmarks/bench_large.py
 	$(BIN)/python benchmarks/bench_calibrate.py
 	$(BIN)/python benchmarks/bench_subpixel.py
-	$(BIN)/python benchmarks/bench_frame.py
+	$(BIN)/python benchmarks/bench_placement.py
 	$(BIN)/python benchmarks/bench_moire.py
 	$(BIN)/python benchmarks/bench_volume_media.py
 	$(BIN)/python benchmarks/bench_volume.py

@@ -2,17 +2,17 @@
 
 1. Oracle: every sampled view of the H3D image (``demo`` preset, ``--quality
    draft``) against a plain POV-Ray render of the same scene through an oblique
-   orthographic camera with that view's direction, placed by the frame in NumPy;
+   orthographic camera with that view's direction, placed by the pose in NumPy;
    PSNR per scene (worst and median of the views).
-2. Cost of the frame on a re-run: whole ``povh3d render`` commands, all frames
-   cached, with the scene's camera (frame evaluation and depth pass read from
+2. Cost of the placement on a re-run: whole ``povh3d render`` commands, all shots
+   cached, with the scene's camera (camera evaluation and depth pass read from
    the cache) against ``--placement native``; repeats interleaved, median and
-   spread, load average recorded.  Then in the process: the frame on a re-run,
+   spread, load average recorded.  Then in the process: the placement on a re-run,
    and on a first render (fresh cache: how many POV-Ray runs, how long).
 
 Scenes: the gallery scenes of ``tests/support/gallery`` and, when Debian's
 ``povray-examples`` is installed, POV-Ray's sample scenes named in the issue.
-Writes its tables between the ``bench_frame`` markers of docs/benchmarks.md.
+Writes its tables between the ``bench_placement`` markers of docs/benchmarks.md.
 
     .venv/bin/python benchmarks/bench_placement.py [--repeats 7] [--views 4]
 """
@@ -47,7 +47,7 @@ EXAMPLES = Path("/usr/share/doc/povray/examples/advanced")
 SCENES = [REPO / "tests/support/gallery/tilted.pov", REPO / "tests/support/gallery/inches.pov"] + [
     EXAMPLES / name for name in ("chess2.pov", "woodbox.pov", "teapot/teapot.pov", "glasschess/glasschess.pov",
                                  "pawns.pov", "biscuit.pov")]
-BEGIN, END = "<!-- bench_frame -->", "<!-- /bench_frame -->"
+BEGIN, END = "<!-- bench_placement -->", "<!-- /bench_placement -->"
 
 
 def untied_pawns() -> Path | None:
@@ -109,7 +109,7 @@ def main() -> int:
     untied = untied_pawns()
     oracle_scenes = scenes + ([untied] if untied else [])
     load_before = os.getloadavg()
-    rows = ["| scene | frame (centre; units per mm) | worst view, dB | median, dB |", "|---|---|---|---|"]
+    rows = ["| scene | pose (centre; units per mm) | worst view, dB | median, dB |", "|---|---|---|---|"]
     for scene in oracle_scenes:
         worst, median, f = oracle(scene, args.views)
         centre = ", ".join(f"{v:.3g}" for v in f["centre"])
@@ -117,7 +117,7 @@ def main() -> int:
         print(rows[-1], flush=True)
 
     env = {**os.environ, "PYTHONPATH": str(REPO), "POVH3D_CACHE": tempfile.mkdtemp()}
-    timing = ["| scene | re-run with the camera frame, s | re-run native, s | difference, s |", "|---|---|---|---|"]
+    timing = ["| scene | re-run with the camera placement, s | re-run native, s | difference, s |", "|---|---|---|---|"]
     for scene in scenes[:3]:
         out = Path(tempfile.mkdtemp()) / "o.png"
         command_seconds(scene, [], out, env)
@@ -131,13 +131,13 @@ def main() -> int:
                       f"{statistics.median(native):.3f} (spread {max(native) - min(native):.3f}) | "
                       f"{statistics.median(diffs):+.3f} |")
         print(timing[-1], flush=True)
-    # The frame's own cost on a re-run, in process: camera evaluation and depth pass from the cache.
+    # The placement's own cost on a re-run, in process: camera evaluation and depth pass from the cache.
     from povh3d.renderer.placement.place import place_display
     from povh3d.renderer.request import RenderRequest
     from povh3d.scene.scene import load_scene
 
     os.environ["POVH3D_CACHE"] = env["POVH3D_CACHE"]
-    inproc = ["| scene | frame on a re-run (in process), ms: median | max |", "|---|---|---|"]
+    inproc = ["| scene | placement on a re-run (in process), ms: median | max |", "|---|---|---|"]
     for scene in scenes:
         request = RenderRequest(source=scene, lens_array=lens_array("demo"), output=Path("x.png"),
                                 settings=RenderSettings(quality="draft"))
@@ -150,7 +150,7 @@ def main() -> int:
             times.append(1000 * (time.perf_counter() - start))
         inproc.append(f"| {scene.name} | {statistics.median(times):.1f} | {max(times):.1f} |")
         print(inproc[-1], flush=True)
-    # The frame's cost on a first render, in process: POV-Ray runs and seconds, fresh cache each time.
+    # The placement's cost on a first render, in process: POV-Ray runs and seconds, fresh cache each time.
     import povh3d.renderer.shots.shots as engine_frames
     import povh3d.povray.process as process
 
@@ -162,7 +162,7 @@ def main() -> int:
         return original(jobs, *a, **k)
 
     process.run_jobs = engine_frames.run_jobs = counting
-    cold = ["| scene | POV-Ray runs the frame adds (cold) | seconds: median | spread |", "|---|---|---|---|"]
+    cold = ["| scene | POV-Ray runs the placement adds (cold) | seconds: median | spread |", "|---|---|---|---|"]
     for scene in scenes:
         request = RenderRequest(source=scene, lens_array=lens_array("demo"), output=Path("x.png"),
                                 settings=RenderSettings(quality="draft"))
@@ -179,11 +179,11 @@ def main() -> int:
     load_after = os.getloadavg()
     text = "\n".join([BEGIN, "", f"Load average {load_before[0]:.2f} before, {load_after[0]:.2f} after "
                       f"(2 shared cores); `demo` preset, `--quality draft`.", "",
-                      "Views against oblique orthographic renders placed by the frame (PSNR, point-sampled):", "",
+                      "Views against oblique orthographic renders placed by the pose (PSNR, point-sampled):", "",
                       *rows, "", f"Whole `povh3d render` re-runs (all cached), median of {args.repeats} interleaved:", "",
-                      *timing, "", "What the frame adds to a re-run, measured in the process (frame evaluation "
+                      *timing, "", "What the placement adds to a re-run, measured in the process (camera evaluation "
                       "and depth pass, both from the cache):", "", *inproc, "",
-                      "What the frame adds to a first render, in the process (fresh cache; the camera's evaluation "
+                      "What the placement adds to a first render, in the process (fresh cache; the camera's evaluation "
                       "and the depth pass share one POV-Ray run):", "", *cold, "", END])
     doc = REPO / "docs" / "benchmarks.md"
     current = doc.read_text(encoding="utf-8")

@@ -6,7 +6,7 @@ draft``) one whole ``povh3d render`` command, whose outcome is one of
 - ``ok``: exit 0, the scene camera's frame, a finite depth report (or a warning that says why the depth
   pass has none), a non-empty image, and
   every sampled view within ``MIN_DB`` of a plain POV-Ray render of the scene through an
-  oblique orthographic camera placed by the frame (point-sampled, as ``bench_frame``);
+  oblique orthographic camera placed by the pose (point-sampled, as ``bench_placement``);
 - ``refused``: a non-zero exit with one line on stderr (the cause and the fix);
 - ``timeout``: the command, or the oracle that judges it, ran out of its time;
 - ``stochastic``: as ok, but a view below ``MIN_DB`` in a scene whose lighting POV-Ray samples per
