@@ -457,15 +457,21 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     a = np.stack(sheet.from_lattice(X, Y), axis=-1)
     c = np.stack(sheet.from_lattice(axis[:, None, None] + 0 * X, Y), axis=-1)
     land = c + (a - e[:2]) * (sheet.focal / abs(e[2]))
-    if view_at is not None:
-        geometric = view_at(land).astype(np.int64).reshape(flat.size, -1)
+    phase, phase_shift = panel_sheet or (sheet, shift)
+    if view_at is not None:  # the slot coordinate: view k's slot is [k, k + 1)
+        slot = view_at(land).reshape(flat.size, -1)
     else:
-        phase, phase_shift = panel_sheet or (sheet, shift)
         lx, _ = phase.to_lattice(land[..., 0], land[..., 1])
         u = (lx - phase_shift) / phase.pitch_x + phase.lenses_x / 2
         frac = u - np.floor(u)
         g = views * (1 - frac if reverse else frac)
-        geometric = np.floor(g - centre + 0.5).astype(np.int64).reshape(flat.size, -1)
+        slot = (g - centre + 0.5).reshape(flat.size, -1)
+    geometric = np.floor(slot).astype(np.int64)
+    # how far the landing points lie from the nearest slot boundary, in subpixels along a row: a slot is
+    # the lenticule's width along a row over N (subpixel s / 3 wide)
+    slots_per_subpixel = views * (phase.panel.pitch_x / 3) * math.cos(math.radians(phase.rotation)) / phase.pitch_x
+    inside = slot - np.floor(slot)
+    margin = np.minimum(inside, 1 - inside).min(axis=1) / slots_per_subpixel
     from .subpixel import subpixel_array
 
     pix, on = panel_pixel(subpixel_array(panel_sheet[0] if panel_sheet else sheet), land)
@@ -479,6 +485,10 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     np.add.at(counts, (np.repeat(np.arange(flat.size), seen.shape[1])[on.ravel()], seen[on]), 1)
     dominant = counts.argmax(axis=1)
     right = geometric[:, 0] % views if expected is None else np.full(flat.size, int(expected))
+    # the light-weighted mean of the views the lens shows, from the right one (wrapped across lobes):
+    # a subpixel wider than a slot shows an eye a blend of neighbouring views, centred on the eye's
+    wrapped = np.mod(seen - right[:, None] + views / 2, views) - views / 2
+    mean = np.where(on, wrapped, 0).sum(axis=1) / np.maximum(on.sum(axis=1), 1)
     d = np.abs(dominant - right)
     lobes = np.minimum(d, views - d)  # the views repeat in lobes: view N - 1 borders the next lobe's view 0
     if expected is None:
@@ -493,6 +503,19 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
         out["expected_view"] = int(expected)
     # none measured: every lens straddles a boundary, the eye is between two views
     out["dominant_view_share"] = float((kept & (d == 0)).sum() / n) if n else None
+    out["mean_view_share"] = float((kept & (np.abs(mean) < 0.5)).sum() / n) if n else None
+    # the centroid against the eye's place in its slot (slot centre 0): how far the blend is off the eye
+    err = mean - (slot.mean(axis=1) - np.floor(slot.mean(axis=1)) - 0.5)
+    out["mean_view_error"] = [float(v) for v in np.percentile(np.abs(err[kept]), (50, 99, 100))] if n else None
+    # away from view boundaries: the landing points lie over half the aperture's emitting element from a
+    # slot boundary; ``rows`` subpixels stacked along the lenticule sample its phase every 1 / rows subpixel
+    away = whole & (margin > 0.5 / rows)
+    m = int(away.sum())
+    out["subpixel_slots"] = float(slots_per_subpixel)
+    out["away_from_boundaries"] = m
+    out["away_dominant_view_share"] = float((away & (d == 0)).sum() / m) if m else None
+    out["away_mean_view_share"] = float((away & (np.abs(mean) < 0.5)).sum() / m) if m else None
+    out["margin_subpixels_median"] = float(np.median(margin[whole])) if whole.any() else None
     out["dominant_within_one_view_share"] = float((kept & (d <= 1)).sum() / n) if n else None
     if expected is not None:  # the camera's view counted as the far end of the neighbouring lobe too
         out["dominant_within_one_view_share_across_lobes"] = float((kept & (lobes <= 1)).sum() / n) if n else None
@@ -516,6 +539,20 @@ def device_views_at(cal, points: np.ndarray, views: int) -> np.ndarray:
     if cal.inv_view:
         frac = 1.0 - frac
     return np.minimum((np.clip(frac, _LOW, _HIGH) * views).astype(np.int64), views - 1)
+
+
+def device_slots_at(cal, points: np.ndarray, views: int) -> np.ndarray:
+    """The shader's slot coordinate ``N fraction`` (float, view ``k``'s slot is ``[k, k + 1)``) at each panel
+    point, as ``device_views_at`` reads it."""
+    from .mappings.looking_glass_shader import shader_uniforms
+
+    u = shader_uniforms(cal)
+    w_mm, h_mm = cal.size_mm
+    x = points[..., 0] / w_mm + 0.5 + u["subp"]
+    y = points[..., 1] / h_mm + 0.5
+    a = (x + y * u["tilt"]) * u["pitch"] - u["center"]
+    frac = a - np.floor(a)
+    return (1.0 - frac if cal.inv_view else frac) * views
 
 
 def device_sheet(cal, focal: float, distance: float) -> tuple[LensArray, float, LensArray, float]:
@@ -561,20 +598,25 @@ def device_sheet(cal, focal: float, distance: float) -> tuple[LensArray, float, 
 def device_report(cal, labels: np.ndarray, eye, views: int, focal: float, distance: float,
                   cone_deg: float, *, lenses: int | None = APERTURE_LENSES, rows: int = 1) -> dict:
     """Per eye on a Looking Glass: the view each lens shows over its aperture (``aperture_views``) against
-    the view whose vendor camera is nearest the eye's direction (``quilt.view_offsets``: view ``q`` at the
-    angle ``(q / (N - 1) - 1/2) cone``), and the view the shader puts at the landing points."""
+    the view of the eye's slot in the shader's phase at the landing points (the view the display shows
+    there), and against the view whose vendor camera is nearest the eye's direction (``quilt.view_offsets``:
+    view ``q`` at the angle ``(q / (N - 1) - 1/2) cone``; the cameras step the cone in N - 1 steps, the
+    slots in N, so camera ``q`` stands ``(q - (N - 1)/2) / (N (N - 1))`` of the cone off its slot's
+    centre: on a slot boundary at the edge views)."""
     lens_sheet, lens_shift, sheet, shift = device_sheet(cal, focal, distance)
     e = np.asarray(eye, np.float64)
     angle = math.degrees(math.atan2(e[0], -e[2]))
-    expected = int(np.clip(round((angle / cone_deg + 0.5) * (views - 1)), 0, views - 1))
+    camera = int(np.clip(round((angle / cone_deg + 0.5) * (views - 1)), 0, views - 1))
 
     def at(points: np.ndarray) -> np.ndarray:
-        return device_views_at(cal, points, views)
+        return device_slots_at(cal, points, views)
 
     kw: dict[str, Any] = dict(panel_sheet=(sheet, shift), view_at=at, lenses=lenses, rows=rows)
-    out = aperture_views(lens_sheet, lens_shift, labels, e, views, expected=expected, **kw)
-    own = aperture_views(lens_sheet, lens_shift, labels, e, views, **kw)
-    out["camera_view"] = expected
-    out["shader_view_share"] = own["dominant_view_share"]
-    out["shader_within_one_view_share"] = own["dominant_within_one_view_share"]
+    out = aperture_views(lens_sheet, lens_shift, labels, e, views, **kw)
+    cam = aperture_views(lens_sheet, lens_shift, labels, e, views, expected=camera, **kw)
+    centre = -e[:2] * (focal / abs(e[2]))  # the centre lens's landing point
+    out["eye_slot"] = float(device_slots_at(cal, centre, views))
+    out["camera_view"] = camera
+    for key in ("dominant_view_share", "dominant_within_one_view_share", "dominant_within_one_view_share_across_lobes"):
+        out["camera_" + key] = cam[key]
     return out
