@@ -430,10 +430,18 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     the eye), within one view; the sheet's views still decide which lenses straddle a boundary.
     ``panel_sheet``: the sheet and shift whose lenticules' phase on the panel names the views (``labels``,
     ``offset``), when the lens sheet itself is smaller (a Looking Glass's, converging at the viewer).
-    ``view_at``: a function giving the view (int) of panel points ``(..., 2)`` mm instead (a Looking
-    Glass's shader phase, ``device_views_at``).
+    ``view_at``: a function giving the slot coordinate (float: view ``k``'s slot is ``[k, k + 1)``) of
+    panel points ``(..., 2)`` mm instead (a Looking Glass's shader phase, ``device_slots_at``).
 
-    Returns the shares of the lenses left in whose dominant view is the right one, and within one view.
+    Returns the shares of the lenses left in whose dominant view is the right one, and within one view;
+    ``mean_view_share``: whose *mean* view (the light-weighted centre of the views its samples show,
+    wrapped across lobes: a subpixel wider than a slot shows the eye a blend) rounds to the right one,
+    and ``mean_view_error``: how far that centre lies from the eye's own place in its slot (percentiles
+    50, 99, 100, in views).  ``away_from_boundaries``: the lenses whose landing points all lie farther
+    than half the aperture's emitting element from a slot boundary, the element a subpixel over
+    ``rows`` (the ``rows`` subpixels a lenticule crosses sample its phase that much finer): none of a
+    single row when a slot is a subpixel wide or less; ``away_mean_view_share`` and
+    ``away_dominant_view_share`` are theirs (docs/replay.md, "The view each lens shows").
     """
     e = np.asarray(eye, np.float64)
     if offset is None and view_at is None:
@@ -513,6 +521,7 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     m = int(away.sum())
     out["subpixel_slots"] = float(slots_per_subpixel)
     out["away_from_boundaries"] = m
+    out["away_views"] = sorted(set(right[away].tolist()))  # the views judged there
     out["away_dominant_view_share"] = float((away & (d == 0)).sum() / m) if m else None
     out["away_mean_view_share"] = float((away & (np.abs(mean) < 0.5)).sum() / m) if m else None
     out["margin_subpixels_median"] = float(np.median(margin[whole])) if whole.any() else None
@@ -614,8 +623,11 @@ def device_report(cal, labels: np.ndarray, eye, views: int, focal: float, distan
     kw: dict[str, Any] = dict(panel_sheet=(sheet, shift), view_at=at, lenses=lenses, rows=rows)
     out = aperture_views(lens_sheet, lens_shift, labels, e, views, **kw)
     cam = aperture_views(lens_sheet, lens_shift, labels, e, views, expected=camera, **kw)
-    centre = -e[:2] * (focal / abs(e[2]))  # the centre lens's landing point
-    out["eye_slot"] = float(device_slots_at(cal, centre, views))
+    # the landing point of the ray through the axis of the lenticule nearest the screen's centre
+    lx, pitch = lens_sheet.lenses_x, lens_sheet.pitch_x
+    j = round(lx / 2 - 0.5 - lens_shift / pitch)
+    axis = np.stack(lens_sheet.from_lattice(np.array((j + 0.5 - lx / 2) * pitch + lens_shift), np.array(0.0)), axis=-1)
+    out["eye_slot"] = float(device_slots_at(cal, axis + (axis - e[:2]) * (focal / abs(e[2])), views))
     out["camera_view"] = camera
     for key in ("dominant_view_share", "dominant_within_one_view_share", "dominant_within_one_view_share_across_lobes"):
         out["camera_" + key] = cam[key]
