@@ -632,3 +632,79 @@ def device_report(cal, labels: np.ndarray, eye, views: int, focal: float, distan
     for key in ("dominant_view_share", "dominant_within_one_view_share", "dominant_within_one_view_share_across_lobes"):
         out["camera_" + key] = cam[key]
     return out
+
+
+# -- the real lenslets against the slits: the view each lens shows in a picture -----------------------------
+VIEW_CODE = 1000  # a subpixel of view v is coded (v + 1) VIEW_CODE in its own channel (16 bit)
+
+
+def view_codes(views: np.ndarray) -> np.ndarray:
+    """The panel (H, W, 3) uint16 whose every subpixel codes the view it shows: ``(v + 1) VIEW_CODE``."""
+    return ((np.asarray(views, np.int64) + 1) * VIEW_CODE).astype(np.uint16)
+
+
+def decode_views(picture: np.ndarray) -> np.ndarray:
+    """The view (H, W) each picture pixel of a ``view_codes`` panel shows (its one lit channel); -1 dark.
+    A code between two (a pixel antialiased across a subpixel edge) rounds to the nearest view."""
+    lit = picture[..., :3].astype(np.float64).max(axis=-1)
+    return np.where(lit > VIEW_CODE / 2, np.rint(lit / VIEW_CODE) - 1, -1).astype(np.int64)
+
+
+def sheet_slots(sheet: LensArray, shift: float, offset: tuple[float, bool], views: int):
+    """The slot coordinate (float: view ``k``'s slot is ``[k, k + 1)``) of panel points under a mapped
+    panel's sheet, as ``aperture_views`` reads it (``offset`` from ``label_centre_offset``)."""
+    centre, reverse = offset
+
+    def at(points: np.ndarray) -> np.ndarray:
+        lx, _ = sheet.to_lattice(points[..., 0], points[..., 1])
+        u = (lx - shift) / sheet.pitch_x + sheet.lenses_x / 2
+        frac = u - np.floor(u)
+        return np.mod(views * (1 - frac if reverse else frac) - centre + 0.5, views)
+
+    return at
+
+
+def lens_picture_agreement(lens_views: np.ndarray, slit: Replay, views: int, slots, rows: int = 1,
+                           min_pixels: int = 4) -> dict:
+    """Per lens of a picture (the cells of ``slit.lens``, lenticule ``j`` x ``rows`` panel rows): the views
+    the real lenslets show (``lens_views``, decoded from a ``view_codes`` picture through them) against the
+    views the slits show (``slit``, the NumPy replay of the same panel, eye and picture size).  A lens
+    shows the mean of its picture pixels' views (wrapped across lobes, as ``aperture_views``'s
+    ``mean_view_share``) and its commonest view; the two optics show the same view when their means lie
+    within half a view.  A lens counts when the slits' landing points on its pixels lie in one slot
+    (``slots``: the slot coordinate of panel points, ``sheet_slots`` or ``device_slots_at``) on at least
+    ``min_pixels`` lit pixels."""
+    slit_views = decode_views(slit.image)
+    j, i = slit.lens[..., 0], slit.lens[..., 1]
+    ok = (j >= 0) & (slit_views >= 0)
+    key = (i[ok] // rows).astype(np.int64) * (int(j.max()) + 1) + j[ok]
+    uniq, inv = np.unique(key, return_inverse=True)
+    pix = np.bincount(inv)
+    slot = np.floor(slots(slit.landing[ok])).astype(np.int64) % views
+    lo = np.full(uniq.size, 1 << 30, np.int64)
+    hi = np.full(uniq.size, -1, np.int64)
+    np.minimum.at(lo, inv, slot)
+    np.maximum.at(hi, inv, slot)
+
+    def shown(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The mean view (from the slot's, wrapped) and the commonest view of each lens's lit pixels."""
+        lit = v >= 0
+        wrapped = np.mod(v - lo[inv] + views / 2, views) - views / 2
+        mean = np.bincount(inv, np.where(lit, wrapped, 0.0), uniq.size) / np.maximum(np.bincount(inv, lit, uniq.size), 1)
+        counts = np.zeros((uniq.size, views + 1), np.int64)  # the last column: dark
+        np.add.at(counts, (inv, np.where(lit, v, views)), 1)
+        return mean, counts[:, :views].argmax(axis=1)
+
+    lens_mean, lens_top = shown(lens_views[ok])
+    slit_mean, slit_top = shown(slit_views[ok])
+    counted = (lo == hi) & (pix >= min_pixels)
+    d = np.abs(lens_top - slit_top)
+    d = np.minimum(d, views - d)
+    gap = np.abs(lens_mean - slit_mean)
+    n = int(counted.sum())
+    return {"lenses": int(uniq.size), "measured": n, "aperture_rows": rows,
+            "same_view_share": float((counted & (gap < 0.5)).sum() / n) if n else None,
+            "mean_view_gap": [float(v) for v in np.percentile(gap[counted], (50, 99, 100))] if n else None,
+            "same_commonest_view_share": float((counted & (d == 0)).sum() / n) if n else None,
+            "commonest_within_one_view_share": float((counted & (d <= 1)).sum() / n) if n else None,
+            "pixels_same_view_share": float((lens_views[ok] == slit_views[ok]).mean()) if ok.any() else None}
