@@ -156,8 +156,8 @@ def _through_lenses(image: np.ndarray, sheet: Any, shift: float, eyes: np.ndarra
         for e, picture in zip(eyes, pictures):
             slit = replay(codes, sheet, e, optics="barrier", size=size, shift=shift, subpixels=True)
             seen = decode_views(picture)
-            compared.append({"a_row": lens_picture_agreement(seen, slit, views, slots),
-                             f"{rows}_rows": lens_picture_agreement(seen, slit, views, slots, rows)})
+            compared.append({"a_row": lens_picture_agreement(seen, slit, views, slots, sheet=(sheet, shift)),
+                             "3d_pixel": lens_picture_agreement(seen, slit, views, slots, rows)})
     return frames, timings, compared
 
 

@@ -665,7 +665,7 @@ def sheet_slots(sheet: LensArray, shift: float, offset: tuple[float, bool], view
 
 
 def lens_picture_agreement(lens_views: np.ndarray, slit: Replay, views: int, slots, rows: int = 1,
-                           min_pixels: int = 4) -> dict:
+                           min_pixels: int = 4, sheet: tuple[LensArray, float] | None = None) -> dict:
     """Per lens of a picture (the cells of ``slit.lens``, lenticule ``j`` x ``rows`` panel rows): the views
     the real lenslets show (``lens_views``, decoded from a ``view_codes`` picture through them) against the
     views the slits show (``slit``, the NumPy replay of the same panel, eye and picture size).  A lens
@@ -673,7 +673,9 @@ def lens_picture_agreement(lens_views: np.ndarray, slit: Replay, views: int, slo
     ``mean_view_share``) and its commonest view; the two optics show the same view when their means lie
     within half a view.  A lens counts when the slits' landing points on its pixels lie in one slot
     (``slots``: the slot coordinate of panel points, ``sheet_slots`` or ``device_slots_at``) on at least
-    ``min_pixels`` lit pixels."""
+    ``min_pixels`` lit pixels.  ``sheet`` (the lens sheet and its shift): also the share of pixels showing
+    the same view in five bands across the lenticule, by the distance of their lens-plane point from its
+    axis (0 to 0.1 pitch, ... 0.4 to 0.5): a lenslet's aberrations grow toward its edges."""
     slit_views = decode_views(slit.image)
     j, i = slit.lens[..., 0], slit.lens[..., 1]
     ok = (j >= 0) & (slit_views >= 0)
@@ -707,4 +709,18 @@ def lens_picture_agreement(lens_views: np.ndarray, slit: Replay, views: int, slo
             "mean_view_gap": [float(v) for v in np.percentile(gap[counted], (50, 99, 100))] if n else None,
             "same_commonest_view_share": float((counted & (d == 0)).sum() / n) if n else None,
             "commonest_within_one_view_share": float((counted & (d <= 1)).sum() / n) if n else None,
-            "pixels_same_view_share": float((lens_views[ok] == slit_views[ok]).mean()) if ok.any() else None}
+            "pixels_same_view_share": float((lens_views[ok] == slit_views[ok]).mean()) if ok.any() else None,
+            **({"pixels_same_view_share_across": _across_bands(lens_views, slit_views, ok, *sheet)} if sheet else {})}
+
+
+def _across_bands(lens_views: np.ndarray, slit_views: np.ndarray, ok: np.ndarray, sheet: LensArray,
+                  shift: float) -> list[float | None]:
+    x, y = window_points(sheet, (ok.shape[1], ok.shape[0]))
+    X, _ = sheet.to_lattice(x, y)
+    u = np.abs(((X - shift) / sheet.pitch_x + sheet.lenses_x / 2) % 1 - 0.5)  # from the axis, in pitches
+    same = lens_views == slit_views
+    out: list[float | None] = []
+    for lo in (0.0, 0.1, 0.2, 0.3, 0.4):
+        band = ok & (u >= lo) & (u < lo + 0.1)
+        out.append(float(same[band].mean()) if band.any() else None)
+    return out
