@@ -65,7 +65,8 @@ def add_parsers(sub: Any) -> None:
                    "Looking Glass: its viewer distance)")
     p.add_argument("--optics", default="pinhole", choices=("pinhole", "barrier", "lens", "none"),
                    help="pinhole mask at the lens centres (exact; default), barrier (slits, lenticular), lens "
-                        "(the real lenslets, through POV-Ray), none (no sheet: the panel alone)")
+                        "(the real lenslets, through POV-Ray; a mapped panel or Looking Glass image: its slanted lenticules over "
+                        "its R, G, B stripes), none (no sheet: the panel alone)")
     p.add_argument("--size", default="lenses", metavar="lenses|WxH",
                    help="one pixel a lens (default), or a WxH perspective picture of the display's area")
     p.add_argument("--sweep", metavar="X0:X1:N", help="N eyes from x = X0 to X1 mm (y:Y0:Y1:N along y): "
