@@ -439,8 +439,8 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     and ``mean_view_error``: how far that centre lies from the eye's own place in its slot (percentiles
     50, 99, 100, in views).  ``away_from_boundaries``: the lenses whose landing points all lie farther
     than half the aperture's emitting element from a slot boundary, the element a subpixel over
-    ``rows`` (the ``rows`` subpixels a lenticule crosses sample its phase that much finer): none of a
-    single row when a slot is a subpixel wide or less; ``away_mean_view_share`` and
+    ``rows`` (the rows' share of it): none of a single row when a slot is a subpixel wide or less;
+    ``away_mean_view_share`` and
     ``away_dominant_view_share`` are theirs (docs/replay.md, "The view each lens shows").
     """
     e = np.asarray(eye, np.float64)
@@ -515,8 +515,8 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     # the centroid against the eye's place in its slot (slot centre 0): how far the blend is off the eye
     err = mean - (slot.mean(axis=1) - np.floor(slot.mean(axis=1)) - 0.5)
     out["mean_view_error"] = [float(v) for v in np.percentile(np.abs(err[kept]), (50, 99, 100))] if n else None
-    # away from view boundaries: the landing points lie over half the aperture's emitting element from a
-    # slot boundary; ``rows`` subpixels stacked along the lenticule sample its phase every 1 / rows subpixel
+    # away from view boundaries: the landing points lie over half the aperture's emitting element (a
+    # subpixel over ``rows``) from a slot boundary
     away = whole & (margin > 0.5 / rows)
     m = int(away.sum())
     out["subpixel_slots"] = float(slots_per_subpixel)
