@@ -27,17 +27,20 @@ def cmd_replay(args: argparse.Namespace) -> int:
                      "(the eye is between two views)")
         elif "camera_view" in r.get("aperture", {}):  # a Looking Glass
             a, b = r["aperture"], r["aperture_7_rows"]
-            extra = (f", {record['device']['device']}: camera view {a['camera_view']}, within one view on "
-                     f"{100 * a['dominant_within_one_view_share']:.1f} % of lenses (a row; "
-                     f"{100 * b['dominant_within_one_view_share']:.1f} % over 7 rows), exact on "
-                     f"{100 * a['dominant_view_share']:.1f} %")
+            extra = (f", {record['device']['device']}: the eye in view {int(a['eye_slot'])}'s slot (camera view "
+                     f"{a['camera_view']}); over 7 rows each lens's views centred on its slot's on "
+                     f"{100 * b['mean_view_share']:.1f} % of lenses, its commonest view that one on "
+                     f"{100 * b['dominant_view_share']:.1f} %, within one view on "
+                     f"{100 * a['dominant_within_one_view_share']:.1f} % (a row)")
         elif "geometric_view_share" in r:  # a mapped panel
             extra = (f", the view pointing at the eye on {100 * r['geometric_view_share']:.1f} % of lens samples "
                      f"({100 * r['within_one_view_share']:.1f} % within one view)")
             if r.get("aperture", {}).get("measured") and r["aperture_3d_pixel"]["measured"]:
                 a, b = r["aperture"], r["aperture_3d_pixel"]
-                extra += (f"; over each lens's aperture the right view on {100 * a['dominant_view_share']:.1f} % "
-                          f"of lenses (a row), {100 * b['dominant_view_share']:.1f} % ({b['aperture_rows']} rows)")
+                extra += (f"; over each lens's aperture its commonest view the right one on "
+                          f"{100 * a['dominant_view_share']:.1f} % of lenses (a row), {100 * b['dominant_view_share']:.1f} % "
+                          f"({b['aperture_rows']} rows), its views centred on the right one on "
+                          f"{100 * b['mean_view_share']:.1f} % ({b['aperture_rows']} rows)")
         else:
             extra = f", own lens {100 * r['own_lens_share']:.1f} %"
         if "view_zone" in r:
@@ -62,7 +65,8 @@ def add_parsers(sub: Any) -> None:
                    "Looking Glass: its viewer distance)")
     p.add_argument("--optics", default="pinhole", choices=("pinhole", "barrier", "lens", "none"),
                    help="pinhole mask at the lens centres (exact; default), barrier (slits, lenticular), lens "
-                        "(the real lenslets, through POV-Ray), none (no sheet: the panel alone)")
+                        "(the real lenslets, through POV-Ray; a mapped panel or Looking Glass image: its slanted lenticules over "
+                        "its R, G, B stripes), none (no sheet: the panel alone)")
     p.add_argument("--size", default="lenses", metavar="lenses|WxH",
                    help="one pixel a lens (default), or a WxH perspective picture of the display's area")
     p.add_argument("--sweep", metavar="X0:X1:N", help="N eyes from x = X0 to X1 mm (y:Y0:Y1:N along y): "

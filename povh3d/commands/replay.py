@@ -15,7 +15,7 @@ import numpy as np
 
 from ..display.display import Display
 from ..display.replay import (OPTICS, Replay, aperture_views, default_eye, label_centre_offset, light_shares,
-                              mapped_report, mapped_sheet, psnr, replay, report, sweep_eyes)
+                              mapped_report, mapped_sheet, psnr, replay, report, sheet_slots, sweep_eyes)
 from ..errors import ConfigError, InputError, warn, param
 from ..image.io import atomic_path, check_output, check_writable, read_png, read_sidecar, write_png
 from ..renderer.budget import check_memory
@@ -92,36 +92,73 @@ def device_image(h3d_path: str | Path) -> DeviceImage | None:
     return DeviceImage(cal, dev, quilt_to_native(quilt, dev.grid, cal, views=dev.views), "quilt")
 
 
-def replay_device(dev_image: DeviceImage, eyes: np.ndarray, optics: str, size: Any,
-                  with_report: bool) -> tuple[list[np.ndarray], list[dict[str, Any]], dict[str, Any]]:
+def replay_device(dev_image: DeviceImage, eyes: np.ndarray, optics: str, size: Any, with_report: bool,
+                  lens: dict[str, Any] | None = None) -> tuple[list[np.ndarray], list[dict[str, Any]], dict[str, Any]]:
     """Replay a Looking Glass panel image through the device's sheet (``display/replay.device_sheet``,
     converging at the vendor's viewer distance): the frames, the per-eye reports and the sidecar's
-    ``device`` entry."""
+    ``device`` entry.  ``optics`` lens: through its real lenticules (``render_replay``'s options ``lens``),
+    the panel as its subpixel stripes; with a report, each eye's lenses also compared with the slits'."""
     from ..display import presets
     from ..display.mappings.looking_glass_shader import view_fractions
     from ..display.quilt import default_viewing_distance
-    from ..display.replay import device_report, device_sheet
+    from ..display.replay import device_report, device_sheet, device_slots_at
 
-    if optics not in ("pinhole", "barrier"):
-        raise ConfigError(f"a Looking Glass panel is replayed through its sheet's slits ({param('optics')} pinhole or barrier), "
-                          f"not {param('optics')} {optics} (not built yet)")
+    if optics not in ("pinhole", "barrier", "lens"):
+        raise ConfigError(f"a Looking Glass panel is replayed through its sheet ({param('optics')} pinhole, barrier or lens), "
+                          f"not {param('optics')} {optics}")
     cal, dev = dev_image.calibration, dev_image.device
     focal = presets.lens_array(dev.name).focal
     distance = default_viewing_distance(cal.size_mm[1])
     lens_sheet, lens_shift, _, _ = device_sheet(cal, focal, distance)
-    frames = [replay(dev_image.image, lens_sheet, e, optics="barrier", size=size, shift=lens_shift,
-                     subpixels=True).image for e in eyes]
+    labels = np.minimum((view_fractions(cal) * dev.views).astype(np.int64), dev.views - 1)
+    timings: dict[str, Any] = {}
+    if optics == "lens":
+        frames, timings, compared = _through_lenses(dev_image.image, lens_sheet, lens_shift, eyes, size, lens or {},
+                                                    labels, dev.views, lambda p: device_slots_at(cal, p, dev.views),
+                                                    7, with_report)
+    else:
+        frames = [replay(dev_image.image, lens_sheet, e, optics="barrier", size=size, shift=lens_shift,
+                         subpixels=True).image for e in eyes]
+        compared = []
     reports: list[dict[str, Any]] = []
     if with_report:
-        labels = np.minimum((view_fractions(cal) * dev.views).astype(np.int64), dev.views - 1)
-        for e in eyes:
+        for n, e in enumerate(eyes):
             rep = {"aperture": device_report(cal, labels, e, dev.views, focal, distance, cal.view_cone),
                    "aperture_7_rows": device_report(cal, labels, e, dev.views, focal, distance, cal.view_cone,
                                                     rows=7)}
+            if compared:
+                rep["lenses_against_slits"] = compared[n]
             reports.append(rep)
     entry = {"device": dev.name, "from": dev_image.source, "focal_mm": focal, "sheet_converges_at_mm": distance,
-             "lens_pitch_mm": lens_sheet.pitch_x, "slant_deg": lens_sheet.rotation}
+             "lens_pitch_mm": lens_sheet.pitch_x, "slant_deg": lens_sheet.rotation,
+             **({"timings_s": timings} if timings else {})}
     return frames, reports, entry
+
+
+def _through_lenses(image: np.ndarray, sheet: Any, shift: float, eyes: np.ndarray, size: Any, lens: dict[str, Any],
+                    labels: np.ndarray, views: int, slots: Any, rows: int, compare: bool
+                    ) -> tuple[list[np.ndarray], dict[str, Any], list[dict[str, Any]]]:
+    """A subpixel panel through its real slanted lenticules (``render_replay``, the panel as its R, G, B
+    stripes): the frames, the timings, and with ``compare`` per eye the view each lens shows through the
+    lenticules against the slits' (``lens_picture_agreement``: a row, and ``rows`` rows), from a second
+    picture of the panel whose subpixels code their views (``view_codes(labels)``)."""
+    from ..display.replay import decode_views, lens_picture_agreement, view_codes
+    from ..renderer.replay import REPLAY_IOR, render_replay  # only the renderer starts POV-Ray
+
+    codes = view_codes(labels)
+    ior = lens.get("ior")
+    frames, timings = render_replay(image, sheet, eyes, size=size, quality=lens.get("quality", "draft"),
+                                    ior=REPLAY_IOR if ior is None else ior, shape=lens.get("shape", "spherical"),
+                                    pupil=lens.get("pupil"), shift=shift, subpixels=True, coded=compare, codes=codes)
+    compared = []
+    if compare:
+        pictures, frames = frames[len(eyes):], frames[:len(eyes)]
+        for e, picture in zip(eyes, pictures):
+            slit = replay(codes, sheet, e, optics="barrier", size=size, shift=shift, subpixels=True)
+            seen = decode_views(picture)
+            compared.append({"a_row": lens_picture_agreement(seen, slit, views, slots, sheet=(sheet, shift)),
+                             "3d_pixel": lens_picture_agreement(seen, slit, views, slots, rows)})
+    return frames, timings, compared
 
 
 def mapped(display: Display, image: np.ndarray, h3d_path: str | Path) -> tuple[Any, Any, float, np.ndarray] | None:
@@ -236,7 +273,8 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
         check_writable(json_path)
     dev_image = device_image(h3d_path)
     if dev_image is not None:  # a Looking Glass native image or quilt, through the device's sheet
-        return _replay_device_file(dev_image, h3d_path, out, eye, optics, size, sweep, json_path)
+        return _replay_device_file(dev_image, h3d_path, out, eye, optics, size, sweep, json_path,
+                                   {"quality": quality, "ior": ior, "shape": lenslet, "pupil": pupil})
     image, display = read_display(h3d_path)
     la = display.lens_array
     if not isinstance(size, str):  # the picture's float geometry, a few arrays of it
@@ -250,9 +288,9 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     reports: list[dict[str, Any]] = []
     sheet = mapped(display, image, h3d_path)
     if sheet is not None:  # a mapped panel, subpixel by subpixel through the sheet its mapping addresses
-        if optics not in ("pinhole", "barrier"):
-            raise ConfigError(f"a mapped panel is replayed through its sheet's slits ({param('optics')} pinhole or barrier), "
-                              f"not {param('optics')} {optics} (not built yet)")
+        if optics not in ("pinhole", "barrier", "lens"):
+            raise ConfigError(f"a mapped panel is replayed through its sheet ({param('optics')} pinhole, barrier or lens), "
+                              f"not {param('optics')} {optics}")
         mapping, la, shift, views = sheet
         for e in eyes:
             results.append(replay(image, la, e, optics="barrier", size=size, shift=shift, subpixels=True))
@@ -263,6 +301,12 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
             rep["aperture_3d_pixel"] = aperture_views(la, shift, views, e, n, offset=offset,
                                                       rows=mapping.rows_per_view)
         frames = [r.image for r in results]
+        if optics == "lens":
+            frames, timings, compared = _through_lenses(
+                image, la, shift, eyes, size, {"quality": quality, "ior": ior, "shape": lenslet, "pupil": pupil}, views, n,
+                sheet_slots(la, shift, offset, n), mapping.rows_per_view, json_path is not None)
+            for rep, c in zip(reports, compared):
+                rep["lenses_against_slits"] = c
     elif optics == "lens":
         from ..renderer.replay import REPLAY_IOR, render_replay  # only the renderer starts POV-Ray
 
@@ -292,14 +336,14 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
 
 
 def _replay_device_file(dev_image: DeviceImage, h3d_path: str | Path, out: Path, eye: Any, optics: str, size: Any,
-                        sweep: Any, json_path: str | Path | None) -> dict[str, Any]:
+                        sweep: Any, json_path: str | Path | None, lens: dict[str, Any]) -> dict[str, Any]:
     from ..display.quilt import default_viewing_distance
 
     if not isinstance(size, str):
         check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1], f"give a smaller {param('size')}, e.g. {param('size')} 800x600")
     eye = eye if eye is not None else (0.0, 0.0, -default_viewing_distance(dev_image.calibration.size_mm[1]))
     eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
-    frames, reports, entry = replay_device(dev_image, eyes, optics, size, with_report=True)
+    frames, reports, entry = replay_device(dev_image, eyes, optics, size, with_report=True, lens=lens)
     record = base_record("replay", source=str(Path(h3d_path).resolve()), optics=optics,
                          size=size if isinstance(size, str) else list(size), eyes_mm=eyes.tolist(),
                          device=entry, reports=reports)

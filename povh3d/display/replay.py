@@ -430,10 +430,18 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     the eye), within one view; the sheet's views still decide which lenses straddle a boundary.
     ``panel_sheet``: the sheet and shift whose lenticules' phase on the panel names the views (``labels``,
     ``offset``), when the lens sheet itself is smaller (a Looking Glass's, converging at the viewer).
-    ``view_at``: a function giving the view (int) of panel points ``(..., 2)`` mm instead (a Looking
-    Glass's shader phase, ``device_views_at``).
+    ``view_at``: a function giving the slot coordinate (float: view ``k``'s slot is ``[k, k + 1)``) of
+    panel points ``(..., 2)`` mm instead (a Looking Glass's shader phase, ``device_slots_at``).
 
-    Returns the shares of the lenses left in whose dominant view is the right one, and within one view.
+    Returns the shares of the lenses left in whose dominant view is the right one, and within one view;
+    ``mean_view_share``: whose *mean* view (the light-weighted centre of the views its samples show,
+    wrapped across lobes: a subpixel wider than a slot shows the eye a blend) rounds to the right one,
+    and ``mean_view_error``: how far that centre lies from the eye's own place in its slot (percentiles
+    50, 99, 100, in views).  ``away_from_boundaries``: the lenses whose landing points all lie farther
+    than half the aperture's emitting element from a slot boundary, the element a subpixel over
+    ``rows`` (the rows' share of it): none of a single row when a slot is a subpixel wide or less;
+    ``away_mean_view_share`` and
+    ``away_dominant_view_share`` are theirs (docs/replay.md, "The view each lens shows").
     """
     e = np.asarray(eye, np.float64)
     if offset is None and view_at is None:
@@ -457,15 +465,21 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     a = np.stack(sheet.from_lattice(X, Y), axis=-1)
     c = np.stack(sheet.from_lattice(axis[:, None, None] + 0 * X, Y), axis=-1)
     land = c + (a - e[:2]) * (sheet.focal / abs(e[2]))
-    if view_at is not None:
-        geometric = view_at(land).astype(np.int64).reshape(flat.size, -1)
+    phase, phase_shift = panel_sheet or (sheet, shift)
+    if view_at is not None:  # the slot coordinate: view k's slot is [k, k + 1)
+        slot = view_at(land).reshape(flat.size, -1)
     else:
-        phase, phase_shift = panel_sheet or (sheet, shift)
         lx, _ = phase.to_lattice(land[..., 0], land[..., 1])
         u = (lx - phase_shift) / phase.pitch_x + phase.lenses_x / 2
         frac = u - np.floor(u)
         g = views * (1 - frac if reverse else frac)
-        geometric = np.floor(g - centre + 0.5).astype(np.int64).reshape(flat.size, -1)
+        slot = (g - centre + 0.5).reshape(flat.size, -1)
+    geometric = np.floor(slot).astype(np.int64)
+    # how far the landing points lie from the nearest slot boundary, in subpixels along a row: a slot is
+    # the lenticule's width along a row over N (subpixel s / 3 wide)
+    slots_per_subpixel = views * (phase.panel.pitch_x / 3) * math.cos(math.radians(phase.rotation)) / phase.pitch_x
+    inside = slot - np.floor(slot)
+    margin = np.minimum(inside, 1 - inside).min(axis=1) / slots_per_subpixel
     from .subpixel import subpixel_array
 
     pix, on = panel_pixel(subpixel_array(panel_sheet[0] if panel_sheet else sheet), land)
@@ -479,6 +493,10 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
     np.add.at(counts, (np.repeat(np.arange(flat.size), seen.shape[1])[on.ravel()], seen[on]), 1)
     dominant = counts.argmax(axis=1)
     right = geometric[:, 0] % views if expected is None else np.full(flat.size, int(expected))
+    # the light-weighted mean of the views the lens shows, from the right one (wrapped across lobes):
+    # a subpixel wider than a slot shows an eye a blend of neighbouring views, centred on the eye's
+    wrapped = np.mod(seen - right[:, None] + views / 2, views) - views / 2
+    mean = np.where(on, wrapped, 0).sum(axis=1) / np.maximum(on.sum(axis=1), 1)
     d = np.abs(dominant - right)
     lobes = np.minimum(d, views - d)  # the views repeat in lobes: view N - 1 borders the next lobe's view 0
     if expected is None:
@@ -493,6 +511,20 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
         out["expected_view"] = int(expected)
     # none measured: every lens straddles a boundary, the eye is between two views
     out["dominant_view_share"] = float((kept & (d == 0)).sum() / n) if n else None
+    out["mean_view_share"] = float((kept & (np.abs(mean) < 0.5)).sum() / n) if n else None
+    # the centroid against the eye's place in its slot (slot centre 0): how far the blend is off the eye
+    err = mean - (slot.mean(axis=1) - np.floor(slot.mean(axis=1)) - 0.5)
+    out["mean_view_error"] = [float(v) for v in np.percentile(np.abs(err[kept]), (50, 99, 100))] if n else None
+    # away from view boundaries: the landing points lie over half the aperture's emitting element (a
+    # subpixel over ``rows``) from a slot boundary
+    away = whole & (margin > 0.5 / rows)
+    m = int(away.sum())
+    out["subpixel_slots"] = float(slots_per_subpixel)
+    out["away_from_boundaries"] = m
+    out["away_views"] = sorted(set(right[away].tolist()))  # the views judged there
+    out["away_dominant_view_share"] = float((away & (d == 0)).sum() / m) if m else None
+    out["away_mean_view_share"] = float((away & (np.abs(mean) < 0.5)).sum() / m) if m else None
+    out["margin_subpixels_median"] = float(np.median(margin[whole])) if whole.any() else None
     out["dominant_within_one_view_share"] = float((kept & (d <= 1)).sum() / n) if n else None
     if expected is not None:  # the camera's view counted as the far end of the neighbouring lobe too
         out["dominant_within_one_view_share_across_lobes"] = float((kept & (lobes <= 1)).sum() / n) if n else None
@@ -516,6 +548,20 @@ def device_views_at(cal, points: np.ndarray, views: int) -> np.ndarray:
     if cal.inv_view:
         frac = 1.0 - frac
     return np.minimum((np.clip(frac, _LOW, _HIGH) * views).astype(np.int64), views - 1)
+
+
+def device_slots_at(cal, points: np.ndarray, views: int) -> np.ndarray:
+    """The shader's slot coordinate ``N fraction`` (float, view ``k``'s slot is ``[k, k + 1)``) at each panel
+    point, as ``device_views_at`` reads it."""
+    from .mappings.looking_glass_shader import shader_uniforms
+
+    u = shader_uniforms(cal)
+    w_mm, h_mm = cal.size_mm
+    x = points[..., 0] / w_mm + 0.5 + u["subp"]
+    y = points[..., 1] / h_mm + 0.5
+    a = (x + y * u["tilt"]) * u["pitch"] - u["center"]
+    frac = a - np.floor(a)
+    return (1.0 - frac if cal.inv_view else frac) * views
 
 
 def device_sheet(cal, focal: float, distance: float) -> tuple[LensArray, float, LensArray, float]:
@@ -561,20 +607,120 @@ def device_sheet(cal, focal: float, distance: float) -> tuple[LensArray, float, 
 def device_report(cal, labels: np.ndarray, eye, views: int, focal: float, distance: float,
                   cone_deg: float, *, lenses: int | None = APERTURE_LENSES, rows: int = 1) -> dict:
     """Per eye on a Looking Glass: the view each lens shows over its aperture (``aperture_views``) against
-    the view whose vendor camera is nearest the eye's direction (``quilt.view_offsets``: view ``q`` at the
-    angle ``(q / (N - 1) - 1/2) cone``), and the view the shader puts at the landing points."""
+    the view of the eye's slot in the shader's phase at the landing points (the view the display shows
+    there), and against the view whose vendor camera is nearest the eye's direction (``quilt.view_offsets``:
+    view ``q`` at the angle ``(q / (N - 1) - 1/2) cone``; the cameras step the cone in N - 1 steps, the
+    slots in N, so camera ``q`` stands ``(q - (N - 1)/2) / (N (N - 1))`` of the cone off its slot's
+    centre: on a slot boundary at the edge views)."""
     lens_sheet, lens_shift, sheet, shift = device_sheet(cal, focal, distance)
     e = np.asarray(eye, np.float64)
     angle = math.degrees(math.atan2(e[0], -e[2]))
-    expected = int(np.clip(round((angle / cone_deg + 0.5) * (views - 1)), 0, views - 1))
+    camera = int(np.clip(round((angle / cone_deg + 0.5) * (views - 1)), 0, views - 1))
 
     def at(points: np.ndarray) -> np.ndarray:
-        return device_views_at(cal, points, views)
+        return device_slots_at(cal, points, views)
 
     kw: dict[str, Any] = dict(panel_sheet=(sheet, shift), view_at=at, lenses=lenses, rows=rows)
-    out = aperture_views(lens_sheet, lens_shift, labels, e, views, expected=expected, **kw)
-    own = aperture_views(lens_sheet, lens_shift, labels, e, views, **kw)
-    out["camera_view"] = expected
-    out["shader_view_share"] = own["dominant_view_share"]
-    out["shader_within_one_view_share"] = own["dominant_within_one_view_share"]
+    out = aperture_views(lens_sheet, lens_shift, labels, e, views, **kw)
+    cam = aperture_views(lens_sheet, lens_shift, labels, e, views, expected=camera, **kw)
+    # the landing point of the ray through the axis of the lenticule nearest the screen's centre
+    lx, pitch = lens_sheet.lenses_x, lens_sheet.pitch_x
+    j = round(lx / 2 - 0.5 - lens_shift / pitch)
+    axis = np.stack(lens_sheet.from_lattice(np.array((j + 0.5 - lx / 2) * pitch + lens_shift), np.array(0.0)), axis=-1)
+    out["eye_slot"] = float(device_slots_at(cal, axis + (axis - e[:2]) * (focal / abs(e[2])), views))
+    out["camera_view"] = camera
+    for key in ("dominant_view_share", "dominant_within_one_view_share", "dominant_within_one_view_share_across_lobes"):
+        out["camera_" + key] = cam[key]
+    return out
+
+
+# -- the real lenslets against the slits: the view each lens shows in a picture -----------------------------
+VIEW_CODE = 1000  # a subpixel of view v is coded (v + 1) VIEW_CODE in its own channel (16 bit)
+
+
+def view_codes(views: np.ndarray) -> np.ndarray:
+    """The panel (H, W, 3) uint16 whose every subpixel codes the view it shows: ``(v + 1) VIEW_CODE``."""
+    return ((np.asarray(views, np.int64) + 1) * VIEW_CODE).astype(np.uint16)
+
+
+def decode_views(picture: np.ndarray) -> np.ndarray:
+    """The view (H, W) each picture pixel of a ``view_codes`` panel shows (its one lit channel); -1 dark.
+    A code between two (a pixel antialiased across a subpixel edge) rounds to the nearest view."""
+    lit = picture[..., :3].astype(np.float64).max(axis=-1)
+    return np.where(lit > VIEW_CODE / 2, np.rint(lit / VIEW_CODE) - 1, -1).astype(np.int64)
+
+
+def sheet_slots(sheet: LensArray, shift: float, offset: tuple[float, bool], views: int):
+    """The slot coordinate (float: view ``k``'s slot is ``[k, k + 1)``) of panel points under a mapped
+    panel's sheet, as ``aperture_views`` reads it (``offset`` from ``label_centre_offset``)."""
+    centre, reverse = offset
+
+    def at(points: np.ndarray) -> np.ndarray:
+        lx, _ = sheet.to_lattice(points[..., 0], points[..., 1])
+        u = (lx - shift) / sheet.pitch_x + sheet.lenses_x / 2
+        frac = u - np.floor(u)
+        return np.mod(views * (1 - frac if reverse else frac) - centre + 0.5, views)
+
+    return at
+
+
+def lens_picture_agreement(lens_views: np.ndarray, slit: Replay, views: int, slots, rows: int = 1,
+                           min_pixels: int = 4, sheet: tuple[LensArray, float] | None = None) -> dict:
+    """Per lens of a picture (the cells of ``slit.lens``, lenticule ``j`` x ``rows`` panel rows): the views
+    the real lenslets show (``lens_views``, decoded from a ``view_codes`` picture through them) against the
+    views the slits show (``slit``, the NumPy replay of the same panel, eye and picture size).  A lens
+    shows the mean of its picture pixels' views (wrapped across lobes, as ``aperture_views``'s
+    ``mean_view_share``) and its commonest view; the two optics show the same view when their means lie
+    within half a view.  A lens counts when the slits' landing points on its pixels lie in one slot
+    (``slots``: the slot coordinate of panel points, ``sheet_slots`` or ``device_slots_at``) on at least
+    ``min_pixels`` lit pixels.  ``sheet`` (the lens sheet and its shift): also the share of pixels showing
+    the same view in five bands across the lenticule, by the distance of their lens-plane point from its
+    axis (0 to 0.1 pitch, ... 0.4 to 0.5): a lenslet's aberrations grow toward its edges."""
+    slit_views = decode_views(slit.image)
+    j, i = slit.lens[..., 0], slit.lens[..., 1]
+    ok = (j >= 0) & (slit_views >= 0)
+    key = (i[ok] // rows).astype(np.int64) * (int(j.max()) + 1) + j[ok]
+    uniq, inv = np.unique(key, return_inverse=True)
+    pix = np.bincount(inv)
+    slot = np.floor(slots(slit.landing[ok])).astype(np.int64) % views
+    lo = np.full(uniq.size, 1 << 30, np.int64)
+    hi = np.full(uniq.size, -1, np.int64)
+    np.minimum.at(lo, inv, slot)
+    np.maximum.at(hi, inv, slot)
+
+    def shown(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The mean view (from the slot's, wrapped) and the commonest view of each lens's lit pixels."""
+        lit = v >= 0
+        wrapped = np.mod(v - lo[inv] + views / 2, views) - views / 2
+        mean = np.bincount(inv, np.where(lit, wrapped, 0.0), uniq.size) / np.maximum(np.bincount(inv, lit, uniq.size), 1)
+        counts = np.zeros((uniq.size, views + 1), np.int64)  # the last column: dark
+        np.add.at(counts, (inv, np.where(lit, v, views)), 1)
+        return mean, counts[:, :views].argmax(axis=1)
+
+    lens_mean, lens_top = shown(lens_views[ok])
+    slit_mean, slit_top = shown(slit_views[ok])
+    counted = (lo == hi) & (pix >= min_pixels)
+    d = np.abs(lens_top - slit_top)
+    d = np.minimum(d, views - d)
+    gap = np.abs(lens_mean - slit_mean)
+    n = int(counted.sum())
+    return {"lenses": int(uniq.size), "measured": n, "aperture_rows": rows,
+            "same_view_share": float((counted & (gap < 0.5)).sum() / n) if n else None,
+            "mean_view_gap": [float(v) for v in np.percentile(gap[counted], (50, 99, 100))] if n else None,
+            "same_commonest_view_share": float((counted & (d == 0)).sum() / n) if n else None,
+            "commonest_within_one_view_share": float((counted & (d <= 1)).sum() / n) if n else None,
+            "pixels_same_view_share": float((lens_views[ok] == slit_views[ok]).mean()) if ok.any() else None,
+            **({"pixels_same_view_share_across": _across_bands(lens_views, slit_views, ok, *sheet)} if sheet else {})}
+
+
+def _across_bands(lens_views: np.ndarray, slit_views: np.ndarray, ok: np.ndarray, sheet: LensArray,
+                  shift: float) -> list[float | None]:
+    x, y = window_points(sheet, (ok.shape[1], ok.shape[0]))
+    X, _ = sheet.to_lattice(x, y)
+    u = np.abs(((X - shift) / sheet.pitch_x + sheet.lenses_x / 2) % 1 - 0.5)  # from the axis, in pitches
+    same = lens_views == slit_views
+    out: list[float | None] = []
+    for lo in (0.0, 0.1, 0.2, 0.3, 0.4):
+        band = ok & (u >= lo) & (u < lo + 0.1)
+        out.append(float(same[band].mean()) if band.any() else None)
     return out

@@ -137,6 +137,16 @@ def assemble(mesh: CameraMesh, tiles: PhaseTiles | None, images: list[np.ndarray
     return panel
 
 
+def panel_to_subpixels(image: np.ndarray) -> np.ndarray:
+    """A panel image ``(H, W, C)`` as its subpixel panel ``(H, 3W, C)``: column ``3 col + c`` lit in channel
+    ``c`` alone with pixel ``col``'s value, the others black (R, G, B stripes, left to right)."""
+    h, w = image.shape[:2]
+    out = np.zeros((h, 3 * w) + image.shape[2:], image.dtype)
+    for c in range(3):
+        out[:, c::3, c] = image[:, :, c]
+    return out
+
+
 def subpixels_to_panel(image: np.ndarray) -> np.ndarray:
     """``(H, 3W, C)`` subpixel image -> ``(H, W, 3)`` panel: channel ``c`` from column ``3 col + c``."""
     h, w3 = image.shape[:2]

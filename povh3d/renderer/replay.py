@@ -46,18 +46,21 @@ def replay_lenslet(lens_array: LensArray, ior: float = REPLAY_IOR, shape: str = 
     return Lenslet(shape, aperture, lens_array.pitch_x, lens_array.pitch_y, lens_array.focal, ior)
 
 
-def lenslet_centres(lens_array: LensArray) -> np.ndarray:
+def lenslet_centres(lens_array: LensArray, shift: float = 0.0) -> np.ndarray:
     """Where the lenslets sit, (n, 2) mm: the lens centres; on a lenticular sheet one lenticule a column,
-    its axis through the origin's row (turned with the sheet), long enough to cross the whole panel."""
+    its axis through the origin's row (turned with the sheet, moved ``shift`` mm across it: a mapped
+    panel's sheet), long enough to cross the whole panel."""
     la = lens_array
     if la.grid == "lenticular":
-        cx = la.lattice_centres()[0, :, 0]
+        cx = la.lattice_centres()[0, :, 0] + shift
         return np.stack(la.from_lattice(cx, np.zeros_like(cx)), axis=-1)
+    if shift:
+        raise ConfigError("only a lenticular sheet is moved across its lenticules; give no shift")
     return la.lens_centres().reshape(-1, 2)
 
 
 def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, sheet: bool = True,
-                  pupil: float | None = None) -> str:
+                  pupil: float | None = None, shift: float = 0.0) -> str:
     """The POV-Ray scene of the display seen from ``eye`` (module docstring); the panel is ``panel.png``.
     ``sheet`` False: no lenslets and the panel in the lens plane."""
     la = lens_array
@@ -65,7 +68,7 @@ def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, s
     half_x = la.pitch_x / 2
     half_y = math.hypot(width_mm, height_mm) / 2 + la.pitch_x if la.grid == "lenticular" else la.pitch_y / 2
     hex_half_y = la.pitch_x / math.sqrt(3)
-    centres = lenslet_centres(la)
+    centres = lenslet_centres(la, shift)
     if len(centres) > MAX_LENSLETS:
         raise ConfigError(f"{len(centres)} lenslets are more than the replay builds ({MAX_LENSLETS}); "
                           f"use {param('optics')} pinhole")
@@ -82,11 +85,15 @@ def replay_script(lens_array: LensArray, eye: np.ndarray, lenslet: Lenslet, *, s
 
 def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *, size: Any,
                   quality: str = "draft", ior: float = REPLAY_IOR, shape: str = "spherical", processes: int = 2,
-                  sheet: bool = True, coded: bool = False, pupil: float | None = None
-                  ) -> tuple[list[np.ndarray], dict[str, Any]]:
+                  sheet: bool = True, coded: bool = False, pupil: float | None = None, shift: float = 0.0,
+                  subpixels: bool = False, codes: np.ndarray | None = None) -> tuple[list[np.ndarray], dict[str, Any]]:
     """One picture per eye through the lenslets (``sheet`` False: none, the panel in the lens plane);
     ``(pictures, timings)``.  ``size`` is ``(W, H)``.  ``coded``: each eye also sees ``coded_panel`` (point
-    sampled, 16 bit), whose pictures follow the others: the report's light shares."""
+    sampled, 16 bit), whose pictures follow the others: the report's light shares.  ``shift``: the
+    lenticules lie that many mm across (a mapped panel's sheet).  ``subpixels``: the panel is its R, G
+    and B stripes (``subpixel.panel_to_subpixels``, each a third of a pixel wide and lit in its own
+    channel), as a slanted sheet addressing subpixels sees it.  ``codes``: the panel the coded pictures
+    see instead of ``coded_panel`` (a mapped panel's view of every subpixel, ``view_codes``)."""
     from ..povray.job import PovrayJob
     from ..povray.process import run_jobs
 
@@ -108,17 +115,28 @@ def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *,
     pictures: dict[int, np.ndarray] = {}
     with tempfile.TemporaryDirectory(prefix="povh3d-replay-") as folder:
         panel = Path(folder) / "panel.png"
-        write_png(panel, image[..., :3])
-        jobs = [PovrayJob(name=f"replay eye {n}", script=replay_script(lens_array, e, lenslet, sheet=sheet, pupil=pupil), width=width,
+        from ..display.subpixel import panel_to_subpixels
+
+        if subpixels:
+            if coded and codes is None:
+                raise ConfigError("a subpixel panel's coded pictures need its codes; give codes")
+            write_png(panel, panel_to_subpixels(image[..., :3]))
+        else:
+            write_png(panel, image[..., :3])
+        script = {n: replay_script(lens_array, e, lenslet, sheet=sheet, pupil=pupil, shift=shift) for n, e in enumerate(eyes)}
+        jobs = [PovrayJob(name=f"replay eye {n}", script=script[n], width=width,
                           height=height, options=options, bit_depth=bit_depth, file_gamma="1.0",
                           read_files=(str(panel),), include_dirs=(folder,), links=(("panel.png", str(panel)),))
                 for n, e in enumerate(eyes)]
         if coded:
-            codes = Path(folder) / "codes.png"
-            write_png(codes, coded_panel(lens_array))
-            jobs += [PovrayJob(name=f"replay codes eye {n}", script=replay_script(lens_array, e, lenslet, sheet=sheet),
+            codes_path = Path(folder) / "codes.png"
+            if codes is None:
+                write_png(codes_path, coded_panel(lens_array))
+            else:
+                write_png(codes_path, panel_to_subpixels(codes) if subpixels else codes)
+            jobs += [PovrayJob(name=f"replay codes eye {n}", script=replay_script(lens_array, e, lenslet, sheet=sheet, shift=shift),
                                width=width, height=height, options=("-A",), bit_depth=16, file_gamma="1.0",
-                               read_files=(str(codes),), include_dirs=(folder,), links=(("panel.png", str(codes)),))
+                               read_files=(str(codes_path),), include_dirs=(folder,), links=(("panel.png", str(codes_path)),))
                      for n, e in enumerate(eyes)]
         index = {job.name: n for n, job in enumerate(jobs)}
 
@@ -127,5 +145,5 @@ def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *,
 
         seconds = run_jobs(jobs, processes=min(processes, len(jobs)), on_result=keep)
     timings = {"povray_s": [float(s) for s in seconds], "total_s": time.perf_counter() - start,
-               "lenslets": int(len(lenslet_centres(lens_array))), "lenslet": lenslet.as_record()}
+               "lenslets": int(len(lenslet_centres(lens_array, shift))), "lenslet": lenslet.as_record()}
     return [pictures[n] for n in range(len(jobs))], timings

@@ -284,7 +284,7 @@ def test_command_replays_a_mapped_panel(tmp_path: Path, cli) -> None:
 
     rep = json.loads((tmp_path / "r.json").read_text())["eyes"][0]
     assert rep["geometric_view_share"] > 0.74 and set(rep["view_counts"]) <= {str(v) for v in range(8)}
-    r = cli("replay", str(path), "--optics", "lens", "--size", "80x60", "-o", str(tmp_path / "lens.png"))
+    r = cli("replay", str(path), "--optics", "none", "--size", "80x60", "-o", str(tmp_path / "lens.png"))  # no sheet
     assert r.code != 0 and "mapped panel" in r.err and not (tmp_path / "lens.png").exists()
 
 

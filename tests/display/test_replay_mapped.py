@@ -107,39 +107,48 @@ def test_damaged_mapping_options_are_one_line(tmp_path: Path) -> None:
 
 
 # -- 2. the view each lens shows over its aperture, at the design distance ------------------------------------
-@pytest.mark.parametrize("preset, mapping, rows, exact, worst, within_one", [
-    ("alioscopy-42", "alioscopy", 1, 0.99, 0.99, 0.999),
-    ("alioscopy-42", "alioscopy", 3, 0.99, 0.99, 0.999),
-    ("philips-20", "philips", 1, 0.50, 0.50, 0.99),   # a subpixel is two views wide: a row shows every other view
-    ("philips-20", "philips", 6, 0.99, 0.985, 0.999),  # its 3D pixel (6 rows) shows the right one
+@pytest.mark.parametrize("preset, mapping, options", [
+    ("alioscopy-42", "alioscopy", {}),
+    ("alioscopy-42", "alioscopy", {"offset": 3.0}),
+    ("alioscopy-42", "alioscopy", {"reverse": True}),
+    ("philips-20", "philips", {}),
+    ("philips-20", "philips", {"offset": 2.0}),
+    ("philips-20", "philips", {"reverse": True}),
 ])
-def test_every_view_is_seen_from_its_eye_positions(preset: str, mapping: str, rows: int, exact: float, worst: float,
-                                                   within_one: float) -> None:
-    """Every view v of a panel mapped from view-coded images, the eye in the middle of v's zone at the design
-    distance: over each lens's aperture (a lenticule over ``rows`` panel rows, 8 x 32 samples) the view read from
-    the image that covers most of it is the one pointing at the eye, on the lenses whose aperture straddles no
-    view boundary: on average over the views at least ``exact``, each view at least ``worst``.  Negative
-    control: judged against the sheet half a pitch over, on almost none."""
-    d = build_display(preset, mapping=mapping)
+def test_every_view_is_seen_from_its_eye_positions(preset: str, mapping: str, options: dict) -> None:
+    """The issue's figure: every view v of a panel mapped from view-coded images, the eye at the design
+    distance in the middle of v's slot (for the centre lens; the sheet does not converge, so the other
+    lenses' landing points fall anywhere in their own slots).  Over each lens's 3D pixel (a lenticule over
+    the mapping's rows per view row, 8 x 32 samples), on the lenses farther than half the aperture's
+    element (a subpixel over its rows) from a view boundary, the centre of the views read from the image
+    is the view of the eye's slot on >= 99 % of lenses, and lies within 0.05 view of the eye's place
+    in its slot on 99 % of all lenses measured.  One row: the rule counts no lens (a slot is one
+    subpixel wide or less, and every subpixel along a row is its own view).  Negative controls: the
+    views reversed, and the slots judged half a view over."""
+    d = build_display(preset, mapping=mapping, mapping_options=options)
     labels = decoded(coded_panel(d))
     sheet, shift, views = mapped_sheet(d.mapping, d.mapped_panel, d.lens_array.focal)
     assert np.array_equal(labels, views)  # the mapping writes each subpixel the view mapped_sheet says
-    n = d.mapping.views
+    n, k = d.mapping.views, d.mapping.rows_per_view
     offset = label_centre_offset(sheet, shift, views, n)
+    assert offset[1] == bool(options.get("reverse"))  # the views run the way the mapping says
     D = DESIGN_MM[preset]
-    shares = []
+    judged: set[int] = set()
     for v in range(n):
         eye = zone_eye(sheet, n, v, D)
-        rep = aperture_views(sheet, shift, labels, eye, n, offset=offset, rows=rows, lenses=LENSES, seed=v)
-        assert rep["measured"] > 0.75 * rep["lenses"], rep
-        assert rep["dominant_within_one_view_share"] >= within_one, (v, rep)
-        shares.append(rep["dominant_view_share"])
-    assert np.mean(shares) >= exact and min(shares) >= worst, shares
-    if exact < 0.9:
-        assert max(shares) < 0.7  # the per-row figure stays what docs/replay.md says
-    wrong = aperture_views(sheet, shift + sheet.pitch_x / 2, labels, zone_eye(sheet, n, 0, D), n, offset=offset,
-                           rows=rows, lenses=LENSES)
-    assert wrong["dominant_view_share"] < 0.05
+        row = aperture_views(sheet, shift, labels, eye, n, offset=offset, lenses=LENSES, seed=v)
+        assert row["away_from_boundaries"] == 0 and row["dominant_within_one_view_share"] >= 0.999, (v, row)
+        rep = aperture_views(sheet, shift, labels, eye, n, offset=offset, rows=k, lenses=LENSES, seed=v)
+        assert rep["away_from_boundaries"] > 0.5 * rep["measured"] > 0.3 * rep["lenses"], (v, rep)
+        assert rep["away_mean_view_share"] >= 0.99 and rep["mean_view_error"][1] < 0.05, (v, rep)
+        assert rep["dominant_view_share"] >= 0.98, (v, rep)  # the commonest view too, on all measured
+        judged.update(rep["away_views"])
+    assert judged == set(range(n))
+    eye = zone_eye(sheet, n, 1, D)
+    reversed_ = aperture_views(sheet, shift, n - 1 - labels, eye, n, offset=offset, rows=k, lenses=LENSES)
+    assert reversed_["away_mean_view_share"] < 0.5
+    half = aperture_views(sheet, shift, labels, eye, n, offset=(offset[0] + 0.5, offset[1]), rows=k, lenses=LENSES)
+    assert half["away_mean_view_share"] < 0.7
 
 
 # -- 3. a Looking Glass native image and quilt through the device's sheet ------------------------------------
@@ -166,13 +175,15 @@ def lg_eye(cal, q: int, distance: float) -> tuple[float, float, float]:
     return (distance * t, 0.0, -distance)
 
 
-def test_looking_glass_native_image_shows_each_eye_its_camera_view() -> None:
-    """A Portrait native image (the vendor's shader over a view-coded quilt), through the device's sheet
-    converging at the vendor's viewer (654 mm): from the middle of every view's zone, the view read from the
-    image over each lens's aperture is the view of the vendor camera nearest the eye's direction, within one
-    view, on >= 99 % of lenses away from view boundaries; at the cone's edges (views 0 and 47) only counting
-    the neighbouring lobe's far view as the next one (on about 30 % of lenses it shows).  Negative controls: a native image written with the
-    slope's sign flipped, and the eye of view q judged against camera q + 3."""
+def test_looking_glass_native_image_shows_each_eye_its_slot_view() -> None:
+    """The issue's figure on a Portrait native image (the vendor's shader over a view-coded quilt), through
+    the device's sheet converging at the vendor's viewer (654 mm): the eye in the middle of view q's slot
+    in the shader's phase, every lens's 7-row aperture (the slope's period) shows views centred on q
+    (the eye's slot at every landing point) on >= 99 % of lenses away from boundaries, at the edge views
+    too (their neighbour across the lobe counted as the next view); within one view on a row.  The
+    vendor's camera for view q is q there.  Negative controls: the camera's own position of an edge view
+    (the cameras step the cone in N - 1 steps, the slots in N: it stands on a slot boundary, so every
+    lens straddles it), a native image written with the slope's sign flipped, and the views reversed."""
     cal = PORTRAIT.calibration
     n = PORTRAIT.views
     native = quilt_to_native(coded_quilt(PORTRAIT), PORTRAIT.grid, cal, views=n)
@@ -181,22 +192,26 @@ def test_looking_glass_native_image_shows_each_eye_its_camera_view() -> None:
     focal = presets.lens_array("looking-glass-portrait").focal
     D = default_viewing_distance(cal.size_mm[1])
     assert D == pytest.approx(653.8, abs=0.1)
-    for q in (*range(1, n - 1, 5), n - 2):
-        rep = device_report(cal, labels, lg_eye(cal, q, D), n, focal, D, cal.view_cone, lenses=LENSES)
-        assert rep["camera_view"] == q and rep["measured"] > 0.75 * rep["lenses"], rep
-        assert rep["dominant_within_one_view_share"] >= 0.99, (q, rep)
-    for q in (0, n - 1):  # the cone's edges: the neighbouring lobe's far view shows on about 30 % of lenses
-        rep = device_report(cal, labels, lg_eye(cal, q, D), n, focal, D, cal.view_cone, lenses=LENSES)
-        assert rep["camera_view"] == q and 0.6 < rep["dominant_within_one_view_share"] < 0.8, (q, rep)
-        assert rep["dominant_within_one_view_share_across_lobes"] >= 0.99, (q, rep)
-        three = aperture_views(*device_sheet(cal, focal, D)[:2], labels, lg_eye(cal, q, D), n, expected=(q + 3) % n,
-                               panel_sheet=device_sheet(cal, focal, D)[2:], lenses=LENSES,
-                               view_at=lambda p: np.zeros(p.shape[:-1], np.int64))
-        assert three["dominant_within_one_view_share"] < 0.05
+    for q in (*range(0, n, 5), 1, n - 2, n - 1):
+        eye = lg_eye(cal, q, D)
+        rep = device_report(cal, labels, eye, n, focal, D, cal.view_cone, lenses=LENSES, rows=7)
+        assert rep["camera_view"] == q and math.floor(rep["eye_slot"]) == q, (q, rep)
+        assert rep["away_from_boundaries"] > 0.75 * rep["lenses"] and rep["away_views"] == [q], (q, rep)
+        assert rep["away_mean_view_share"] >= 0.99 and rep["mean_view_error"][1] < 0.15, (q, rep)
+        row = device_report(cal, labels, eye, n, focal, D, cal.view_cone, lenses=LENSES)
+        assert row["away_from_boundaries"] == 0 and row["dominant_within_one_view_share"] >= 0.99, (q, row)
+    for q in (0, n - 1):  # the vendor camera's own position: on the slot boundary
+        angle = math.radians((q / (n - 1) - 0.5) * cal.view_cone)
+        rep = device_report(cal, labels, (D * math.tan(angle), 0.0, -D), n, focal, D, cal.view_cone,
+                            lenses=LENSES, rows=7)
+        assert rep["camera_view"] == q and rep["measured"] == 0 and rep["straddling_a_view_boundary"] > 0.75 * LENSES
+    eye = lg_eye(cal, 24, D)
     flipped = with_overrides(cal, slope=-cal.slope)
     wrong = quilt_to_native(coded_quilt(PORTRAIT), PORTRAIT.grid, flipped, views=n)[..., :3].astype(np.int64) - 1
-    rep = device_report(cal, wrong, lg_eye(cal, 24, D), n, focal, D, cal.view_cone, lenses=LENSES)
-    assert rep["dominant_within_one_view_share"] < 0.5
+    rep = device_report(cal, wrong, eye, n, focal, D, cal.view_cone, lenses=LENSES, rows=7)
+    assert rep["away_mean_view_share"] < 0.5
+    rep = device_report(cal, n - 1 - labels, lg_eye(cal, 5, D), n, focal, D, cal.view_cone, lenses=LENSES, rows=7)
+    assert rep["away_mean_view_share"] < 0.05
 
 
 def write_device_files(tmp_path: Path, with_device: bool = True) -> tuple[Path, Path]:

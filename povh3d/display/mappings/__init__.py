@@ -81,10 +81,10 @@ def _slanted(_: int | None, o: MappingOptions) -> Mapping:
 
 
 MAPPINGS: dict[str, Entry] = {
-    "alioscopy": Entry(lambda n, o: Slanted("alioscopy", 8.0, 8, 1.0, o.offset, 3, blend=o.blend), None,
+    "alioscopy": Entry(lambda n, o: Slanted("alioscopy", 8.0, 8, 1.0, o.offset, 3, o.reverse, o.blend), None,
                        "Alioscopy 8 views, slant atan(1/3) = 18.43 deg (thesis 4.6.2, Eq. 4.3)",
                        MappingOptions()),
-    "philips": Entry(lambda n, o: Slanted("philips", 4.5, 9, 0.5, o.offset, 6, blend=o.blend), None,
+    "philips": Entry(lambda n, o: Slanted("philips", 4.5, 9, 0.5, o.offset, 6, o.reverse, o.blend), None,
                      "Philips 9 views, slant atan(1/6) = 9.46 deg (thesis 4.6.1, Fig. 4.26)",
                      MappingOptions()),
     "slanted": Entry(_slanted, None,
