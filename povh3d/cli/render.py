@@ -4,6 +4,7 @@ request, hand it to ``povh3d.renderer``, print one summary line."""
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 import time
@@ -56,6 +57,19 @@ def request_from_args(args: argparse.Namespace) -> Any:
         volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")),
         dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views,
         objects=Path(args.objects) if args.objects else None, viewing_distance=args.viewing_distance)
+
+
+def viewing_distance(text: str) -> float:
+    """``--viewing-distance``: mm, or ``inf`` (orthographic rows)."""
+    if text.strip().lower() in ("inf", "infinity"):
+        return math.inf
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"takes a distance in mm or inf, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"takes a distance in mm or inf, got {text!r}")
+    return value
 
 
 def display_frame_options_from_args(args: argparse.Namespace) -> Any:
@@ -323,7 +337,7 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--camera-model", choices=("perspective", "orthographic"), default=None,
                    help="a Looking Glass preset's views: the vendor's sheared perspective cameras (default) or "
                         "the lens array's oblique orthographic views (docs/displays.md)")
-    p.add_argument("--viewing-distance", type=float, default=None, metavar="MM",
+    p.add_argument("--viewing-distance", type=viewing_distance, default=None, metavar="MM",
                    help="a lenticular panel's rows rendered as an eye MM in front of the screen, at its centre's "
                         "height, sees them (default: the preset's design distance; a custom array: none, "
                         "orthographic rows; inf: orthographic) (docs/geometry.md)")

@@ -1,0 +1,241 @@
+"""A viewing distance for a lenticular panel (``--viewing-distance``, docs/geometry.md "A viewing
+distance"): every row is rendered as an eye at the screen centre's height, ``D`` in front of the
+lens plane, sees it: the ray through the panel point ``(x, y, f)`` keeps its view's horizontal
+direction and has the vertical slope ``y / (D + f)``, crossing the lens plane at ``y D / (D + f)``.
+
+Oracles written here from that statement: the rays of the view bank's mesh; a floor below the
+screen whose stripes a row shows at the depth where that ray meets it, computed in closed form;
+the scene's 2D render from the eye (POV-Ray alone); and the replay from the eye against that 2D
+render.  Negative control of each: the orthographic rows of the same display.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import subprocess
+
+import numpy as np
+import pytest
+
+from povh3d.display.display import build_display
+from povh3d.errors import ConfigError
+from povh3d.geometry.lens_array import LensArray, Panel
+from povh3d.geometry.view_bank import view_bank_frames
+from povh3d.image.io import read_png
+from povh3d.renderer.request import RenderRequest
+
+D, F, PY = 150.0, 2.0, 0.5
+ARRAY = ("--grid", "lenticular", "--ppl", "4", "--lenses", "40", "--rows", "120", "--pixel-pitch", str(PY),
+         "--focal", str(F))
+W_MM, H_MM, ROWS = 80.0, 60.0, 120
+FLOOR, STRIPE = 10.0, 8.0   # the floor 10 mm below the screen centre, stripes 8 mm deep along z
+RED, WHITE, BLUE = (255, 0, 0), (255, 255, 255), (0, 0, 255)
+FLOOR_SCENE = f"""#version 3.7;
+global_settings {{ assumed_gamma 1.0 }}
+background {{ rgb <1, 0, 0> }}
+plane {{ y, -{FLOOR} pigment {{ gradient z color_map {{ [0 rgb 1] [0.5 rgb 1] [0.5 rgb <0, 0, 1>] [1 rgb <0, 0, 1>] }}
+        scale {STRIPE} }} finish {{ ambient 0 diffuse 0 emission 1 }} }}
+"""
+# A wall 20 mm behind the screen, striped along y: where a row shows it depends on the row's slope.
+WALL, BAND = 20.0, 12.0   # a border every 6 mm (12 rows), of one kind every 24 rows
+WALL_SCENE = f"""#version 3.7;
+global_settings {{ assumed_gamma 1.0 }}
+background {{ rgb <1, 0, 0> }}
+plane {{ z, {WALL} pigment {{ gradient y color_map {{ [0 rgb 1] [0.5 rgb 1] [0.5 rgb <0, 0, 1>] [1 rgb <0, 0, 1>] }}
+        scale {BAND} }} finish {{ ambient 0 diffuse 0 emission 1 }} }}
+"""
+
+
+def lenticular() -> LensArray:
+    return LensArray("lenticular", 40, ROWS, 4 * PY, PY, F, Panel(160, ROWS, PY, PY))
+
+
+# -- the rays of the mesh ---------------------------------------------------------------------------
+
+def corner_rays(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Every vertex's ray in mm: origin and direction (z = 1), after the mesh's ``scale``."""
+    scale = np.array(mesh.scale)
+    origin = mesh.vertices * scale
+    direction = mesh.normals / scale
+    return origin, direction / direction[:, 2:3]
+
+
+def test_every_rows_ray_passes_through_the_eye_and_its_panel_point():
+    """Each corner ray crosses z = -D at height 0 (the eye's) and z = f at its panel point's height, and
+    keeps the orthographic ray's horizontal direction; the orthographic bank fails the first."""
+    la = lenticular()
+    vd = view_bank_frames(la, 144.0, viewing_distance=D)[0]
+    origin, direction = corner_rays(vd)
+    at_eye = origin[:, 1] + (-D - origin[:, 2]) * direction[:, 1]
+    assert np.abs(at_eye).max() < 1e-9
+    # Panel point: the corner's lens-row border (rows of PY mm, from the top), f behind the lens plane.
+    at_panel = origin[:, 1] + (F - origin[:, 2]) * direction[:, 1]
+    assert np.allclose(np.round(at_panel / PY * 2) / 2 * PY, at_panel, atol=1e-9)   # on a row border
+    assert np.abs(at_panel).max() == pytest.approx(H_MM / 2)
+    assert len(vd.faces) == 2 * 4 * ROWS   # one strip a view and a row
+    ortho = view_bank_frames(la, 144.0)[0]
+    o_origin, o_direction = corner_rays(ortho)
+    assert set(np.round(o_direction[:, 0], 12)) == set(np.round(direction[:, 0], 12))   # the views' directions
+    assert np.abs(o_origin[:, 1] + (-D - o_origin[:, 2]) * o_direction[:, 1]).max() > H_MM / 2 - 1
+
+
+# The view bank of a custom lenticular array as the renderer wrote it before viewing distances existed
+# (point-sampled; footprint-sampled with gutters): the digests of its arrays, taken from that code.
+SAMPLES = np.array([[0.125, -0.25, 0.375, 0.25], [-0.375, 0.125, -0.25, -0.125]])
+UNCHANGED = {(None, 0): "983fdef881ec1bda", ("samples", 1): "39fc3adf52ca9208"}
+
+
+def bank_digest(meshes) -> str:
+    h = hashlib.sha256()
+    for m in meshes:
+        for a in (m.vertices, m.normals, m.uvs, m.faces, *(m.kept or ())):
+            h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()[:16]
+
+
+@pytest.mark.parametrize("samples, gutter", list(UNCHANGED))
+def test_a_custom_array_without_a_viewing_distance_keeps_todays_bank_byte_for_byte(samples, gutter):
+    la, given = lenticular(), None if samples is None else SAMPLES
+    assert bank_digest(view_bank_frames(la, 160.0, given, gutter=gutter)) == UNCHANGED[samples, gutter]
+    assert bank_digest(view_bank_frames(la, 160.0, given, gutter=gutter, viewing_distance=D)) != UNCHANGED[samples, gutter]
+
+
+# -- what the request uses, and says ----------------------------------------------------------------
+
+def request(tmp_path, preset="ipad-retina", **kw):
+    display = build_display(preset, kw.pop("overrides", None), method=kw.get("method", "multi-ortho"))
+    return RenderRequest(source=tmp_path / "s.pov", display=display, output=tmp_path / "o.png", **kw)
+
+
+def test_presets_default_to_their_design_distance_and_custom_arrays_to_none(tmp_path):
+    for preset, mm in (("ipad-retina", 846.0), ("philips-20", 800.0), ("alioscopy-42", 805.0)):
+        r = request(tmp_path, preset)
+        used, record = r.viewing()
+        assert used == mm and r.method_options["viewing_distance"] == mm and record["mm"] == mm
+        assert record["source"].startswith(f"preset {preset}: ")
+    assert "thesis 4.6.1" in request(tmp_path, "philips-20").viewing()[1]["source"]
+    custom = request(tmp_path, overrides={"ppl": 8})          # a custom array: orthographic rows
+    assert custom.viewing()[0] is None and custom.method_options["viewing_distance"] is None
+    assert request(tmp_path, "demo").viewing()[0] is None    # a square array
+    assert request(tmp_path, viewing_distance=math.inf).viewing()[0] is None
+    assert request(tmp_path, viewing_distance=300.0).viewing() == (300.0, {"mm": 300.0, "source": "given"})
+    other = request(tmp_path, method="multi-ortho-views")   # its orthographic cameras: not applied, said so
+    assert other.viewing()[0] is None and "multi-ortho-views traces orthographic rows" in other.viewing()[1]["source"]
+    depth = request(tmp_path, depth_maps=tmp_path / "d")
+    assert depth.viewing()[0] is None and "orthographic rows" in depth.viewing()[1]["source"]
+
+
+@pytest.mark.parametrize("kw, words", [
+    ({"viewing_distance": 300.0, "method": "pinhole"}, "multi-ortho"),
+    ({"viewing_distance": 300.0, "depth_maps": "d"}, "orthographic rows"),
+    ({"viewing_distance": -1.0}, "> 0"),
+    ({"viewing_distance": float("nan")}, "> 0"),
+])
+def test_a_viewing_distance_it_cannot_trace_is_refused(tmp_path, kw, words):
+    with pytest.raises(ConfigError, match=words):
+        request(tmp_path, **kw)
+    with pytest.raises(ConfigError, match="lenticular"):
+        request(tmp_path, "demo", viewing_distance=300.0)
+
+
+# -- rendered: the floor, the eye's 2D render, the replay -------------------------------------------
+
+def render(cli, tmp_path, scene_text: str, name: str, *extra: str) -> tuple[np.ndarray, dict]:
+    scene = tmp_path / f"{name}.pov"
+    scene.write_text(scene_text)
+    out = tmp_path / f"{name}.png"
+    result = cli("render", scene, *ARRAY, "--quality", "draft", "-o", out, "-q", *extra)
+    assert result.code == 0, result.err
+    return read_png(out)[..., :3], json.loads(out.with_suffix(".json").read_text())
+
+
+def classify(image: np.ndarray) -> np.ndarray:
+    """0 red (sky), 1 white, 2 blue, -1 anything else (a mixed pixel)."""
+    out = np.full(image.shape[:2], -1)
+    for code, colour in enumerate((RED, WHITE, BLUE)):
+        out[np.all(np.abs(image.astype(int) - colour) < 40, axis=-1)] = code
+    return out
+
+
+def floor_rows() -> tuple[np.ndarray, np.ndarray]:
+    """Per panel row, the colour the ray seen from D shows (closed form) and whether it is clear of a
+    stripe border by 0.3 mm of depth."""
+    y_panel = (ROWS / 2 - np.arange(ROWS) - 0.5) * PY
+    crossing = y_panel * D / (D + F)
+    with np.errstate(divide="ignore"):
+        z = D * (FLOOR / np.abs(crossing) - 1)          # where the ray meets y = -FLOOR
+    phase = np.mod(z / STRIPE, 1)
+    colour = np.where(crossing > 0, 0, np.where(phase < 0.5, 1, 2))
+    clear = (crossing > 0) | (np.minimum(np.abs(phase - 0.5), np.minimum(phase, 1 - phase)) * STRIPE > 0.3)
+    return colour, clear
+
+
+@pytest.mark.povray
+def test_every_row_shows_the_floor_where_its_ray_from_the_eye_meets_it(cli, tmp_path):
+    colour, clear = floor_rows()
+    image, record = render(cli, tmp_path, FLOOR_SCENE, "vd", "--viewing-distance", str(D))
+    assert record["display"]["viewing_distance"] == {"mm": D, "source": "given"}
+    assert record["quality"]["front_clearance_mm"] < D   # rays start at the eye
+    seen = classify(image)
+    assert clear.sum() > 100 and (colour[clear] != 0).sum() > 50
+    assert np.array_equal(seen[clear], np.broadcast_to(colour[clear, None], seen[clear].shape))
+    # Negative control: the orthographic rows of the same display (no flag) never meet the floor.
+    ortho, record = render(cli, tmp_path, FLOOR_SCENE, "ortho")
+    assert "viewing_distance" not in record["display"]
+    assert (classify(ortho)[clear] == colour[clear, None]).mean() < 0.6
+
+
+def eye_render(tmp_path, scene_text: str, name: str, width: int, height: int) -> np.ndarray:
+    """POV-Ray alone: a perspective camera at the eye (0, 0, -D) whose picture is the lens plane's
+    W x H mm window, pixel (col, row) through ((col + 0.5 - w/2) W / w, (h/2 - row - 0.5) H / h, 0)."""
+    path = tmp_path / f"{name}.pov"
+    path.write_text(scene_text + f"camera {{ perspective location <0, 0, {-D}> direction <0, 0, {D}> "
+                                 f"right <{W_MM}, 0, 0> up <0, {H_MM}, 0> }}\n")
+    out = tmp_path / f"{name}.png"
+    subprocess.run(["povray", f"+I{path}", f"+O{out}", f"+W{width}", f"+H{height}", "-A", "-D", "+FN8",
+                    "File_Gamma=sRGB"], check=True, capture_output=True)
+    return read_png(out)[..., :3]
+
+
+@pytest.mark.povray
+def test_the_floor_shows_where_the_eyes_2d_render_shows_floor(cli, tmp_path):
+    image, _ = render(cli, tmp_path, FLOOR_SCENE, "vd", "--viewing-distance", str(D))
+    eye = classify(eye_render(tmp_path, FLOOR_SCENE, "eye", 160, ROWS))
+    floor_2d = (eye != 0).all(axis=1)            # the rows the eye sees floor across
+    assert 50 < floor_2d.sum() < ROWS
+    assert (classify(image)[floor_2d] != 0).all()
+    ortho, _ = render(cli, tmp_path, FLOOR_SCENE, "ortho")
+    assert (classify(ortho)[floor_2d] == 0).all()   # negative control: sky in every one of those rows
+
+
+def stripe_offsets(seen: np.ndarray, expected: np.ndarray) -> float:
+    """The largest distance (rows) from a stripe border of ``expected``'s centre column to the nearest
+    border of the same kind (white to blue, or blue to white) of ``seen``'s."""
+    def borders(image):
+        column = classify(image)[:, image.shape[1] // 2]
+        at = np.flatnonzero((column[1:] != column[:-1]) & (column[1:] > 0) & (column[:-1] > 0))
+        return at + 0.5, column[at]
+    (a, kind_a), (b, kind_b) = borders(expected), borders(seen)
+    assert len(a) >= 8 and len(b) >= 1
+    apart = np.abs(a[:, None] - b[None, :]) + np.where(kind_a[:, None] == kind_b[None, :], 0, np.inf)
+    return float(apart.min(axis=1).max())
+
+
+@pytest.mark.povray
+def test_the_replay_from_the_eye_lines_up_with_its_2d_render_within_a_row(cli, tmp_path):
+    """``povh3d replay --eye 0,0,-D`` of the render, picture 160 x 120 (one picture row a panel row):
+    every stripe border of the wall within one row of the eye's 2D render; the orthographic rows are off
+    by ``y WALL / D`` at height y: 4 mm, 8 rows, at the top and bottom."""
+    expected = eye_render(tmp_path, WALL_SCENE, "eye", 160, ROWS)
+    offsets = {}
+    for name, extra in (("vd", ("--viewing-distance", str(D))), ("ortho", ())):
+        render(cli, tmp_path, WALL_SCENE, name, *extra)
+        picture = tmp_path / f"{name}-eye.png"
+        result = cli("replay", tmp_path / f"{name}.png", "--eye", f"0,0,{-D}", "--size", f"160x{ROWS}",
+                     "-o", picture)
+        assert result.code == 0, result.err
+        offsets[name] = stripe_offsets(read_png(picture)[..., :3], expected)
+    assert offsets["vd"] <= 1.0
+    assert offsets["ortho"] >= 6.0
