@@ -68,11 +68,13 @@ def view_bank_frames(lens_array: LensArray, front_clearance: float, samples: np.
     pixels between any two quads (``_bank_mesh``), cut off by ``stack_frames``.
 
     ``viewing_distance`` D (mm, a lenticular array): every pixel row seen from an eye at the screen
-    centre's height D in front of the lens plane (``_row_strips``); None: the orthographic views.
+    centre's height D in front of the lens plane, one face a strip of rows (``strip_rows``); None: the
+    orthographic views.
     """
     cols, rows, size = _bank_tiles(lens_array, plan)
     samples = _per_bank(CENTRE if samples is None else samples)
-    strips = len(rows) if viewing_distance is None else int((rows[:, 2] - rows[:, 1]).sum())
+    strips = len(rows) if viewing_distance is None else \
+        int((-(-(rows[:, 2] - rows[:, 1]) // strip_rows(lens_array, viewing_distance))).sum())
     groups = bank_groups(samples, 2 * len(cols) * strips, size[0] * size[1])
     return [_bank_mesh(lens_array, front_clearance, group, cols, rows, size, gutter, viewing_distance)
             for group in groups]
@@ -150,7 +152,7 @@ def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarra
     reach = gutter / 2   # lens pitches (one image pixel is one lens) past the outer lens borders
     # Each row segment with its reach past its top and bottom lens borders (a strip inside a segment: none).
     rows = np.column_stack([rows, np.full((len(rows), 2), reach)]) if viewing_distance is None else \
-        _row_strips(rows, reach)
+        _row_strips(rows, reach, strip_rows(lens_array, viewing_distance))
     b = np.repeat(np.arange(len(samples)), len(cols) * len(rows))[:, None]
     r = np.tile(np.repeat(rows, len(cols), axis=0), (len(samples), 1))   # every row segment ...
     c = np.tile(cols, (len(rows) * len(samples), 1))                      # ... times every column segment, per bank
@@ -188,20 +190,39 @@ def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarra
     return replace(mesh, kept=(kept_cols, kept_rows)) if gutter else mesh
 
 
-def _row_strips(rows: np.ndarray, reach: float) -> np.ndarray:
-    """Row segments ``(n, 4)`` cut into one strip a lens row, ``(m, 6)``: ``(view, row, row + 1, image
-    row, reach past its top, reach past its bottom)``, the reach only at a segment's own ends.
+#: The most a strip's traced vertical slope may stray from the row's (``strip_rows``): at a metre's depth,
+#: a micrometre, about 1 % of any preset's pixel row.
+SLOPE_TOLERANCE = 1e-6
 
-    Why one face a row: POV-Ray's mesh camera interpolates its vertices' normals after making them unit
-    vectors (measured: a quad with normals (0, 0, 1) below and (0, 1, 1) above traced the slopes of the
-    normalised blend, 0.414 halfway for the linear 0.5), so a slope that changes along a face is traced
-    exactly only where the face is symmetric about the normal it blends.  A strip a row wide holds the
-    slope within 1e-8 of the row's (``docs/geometry.md``, "A viewing distance").
+
+def strip_rows(lens_array: LensArray, viewing_distance: float) -> int:
+    """How many lens rows one mesh face may span when rows are seen from ``viewing_distance``.
+
+    POV-Ray's mesh camera makes each written vertex normal a unit vector before it blends them
+    (measured: a quad with normals (0, 0, 1) below and (0, 1, 1) above traced the slope 0.414 halfway,
+    where the linear blend is 0.5).  A view bank writes the normal of slope ``s`` as ``(u px, s f py,
+    f)`` (its mesh ``scale``), so across a face whose corner slopes differ by ``ds`` about the mean
+    ``s`` the normals' lengths differ by at most ``py^2 s ds`` of their own, the blend's weight at ``t``
+    strays by ``t (1 - t)`` times that, and the slope by at most ``py^2 s ds^2 / 4``.  A face spans as
+    many rows as keep that within ``SLOPE_TOLERANCE``.
     """
+    f, py = lens_array.focal, lens_array.pitch_y
+    per_row = py / (viewing_distance + f)                         # slope step of one lens row
+    steepest = lens_array.lenses_y * py / 2 / (viewing_distance + f)
+    if steepest == 0:
+        return lens_array.lenses_y
+    return max(1, int(math.sqrt(4 * SLOPE_TOLERANCE / steepest) / py / per_row))
+
+
+def _row_strips(rows: np.ndarray, reach: float, per_strip: int) -> np.ndarray:
+    """Row segments ``(n, 4)`` cut into strips of ``per_strip`` lens rows (``strip_rows``), ``(m, 6)``:
+    ``(view, first row, stop row, image row, reach past its top, reach past its bottom)``, the reach only
+    at a segment's own ends."""
     out = []
     for l, i0, i1, row0 in rows.tolist():
-        for i in range(i0, i1):
-            out.append((l, i, i + 1, row0 + i - i0, reach if i == i0 else 0.0, reach if i == i1 - 1 else 0.0))
+        for i in range(i0, i1, per_strip):
+            stop = min(i + per_strip, i1)
+            out.append((l, i, stop, row0 + i - i0, reach if i == i0 else 0.0, reach if stop == i1 else 0.0))
     return np.array(out, dtype=np.float64).reshape(-1, 6)
 
 

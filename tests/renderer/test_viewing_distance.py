@@ -81,6 +81,54 @@ def test_every_rows_ray_passes_through_the_eye_and_its_panel_point():
     assert np.abs(o_origin[:, 1] + (-D - o_origin[:, 2]) * o_direction[:, 1]).max() > H_MM / 2 - 1
 
 
+def traced_slopes(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Per strip and row centre: the vertical slope POV-Ray traces (each written normal made a unit
+    vector, then blended: measured, docs/geometry.md) and the exact one (the corners' slopes blended
+    linearly, as the rows' slopes are linear in y)."""
+    quads = len(mesh.faces) // 2
+    normals = mesh.normals.reshape(quads, 4, 3)          # corners: bottom left, bottom right, top right, top left
+    rows = np.abs(np.round((mesh.uvs.reshape(quads, 4, 2)[:, 2, 1] - mesh.uvs.reshape(quads, 4, 2)[:, 1, 1])
+                           * mesh.image_size[1])).astype(int)
+    scale = np.array(mesh.scale)
+    traced, exact = [], []
+    for q in range(quads):
+        bottom, top = normals[q, 0], normals[q, 3]
+        t = 1 - (np.arange(rows[q]) + 0.5) / rows[q]
+        blend = (1 - t)[:, None] * bottom / np.linalg.norm(bottom) + t[:, None] * top / np.linalg.norm(top)
+        d = blend / scale
+        traced.append(d[:, 1] / d[:, 2])
+        sb, st = (bottom / scale)[1] / (bottom / scale)[2], (top / scale)[1] / (top / scale)[2]
+        exact.append((1 - t) * sb + t * st)
+    return np.concatenate(traced), np.concatenate(exact)
+
+
+@pytest.mark.parametrize("preset, mapping, rows", [("ipad-retina", None, 623), ("alioscopy-42", None, 12),
+                                                   ("philips-20", "philips", 1)])
+def test_a_strip_of_rows_traces_every_rows_slope_within_the_tolerance(preset, mapping, rows):
+    """Each preset's rows from its design distance: POV-Ray's blend of unit normals strays under 1e-6
+    from every row's slope.  Negative control: faces half a view tall on philips-20's mapped views
+    (1.53 mm rows) stray 1e-3 (a whole view, symmetric about the centre row, blends normals of one
+    length: exact, but not once cropped or footprint-sampled)."""
+    from povh3d.geometry import view_bank
+
+    display = build_display(preset, mapping=mapping)
+    la, distance = display.render_array, display.viewing_distance_mm
+    assert view_bank.strip_rows(la, distance) == rows
+    clearance = view_bank.eye_clearance(la, distance)
+    traced, exact = traced_slopes(view_bank_frames(la, clearance, viewing_distance=distance)[0])
+    assert len(traced) == la.views[1] * la.lenses_y
+    assert np.abs(traced - exact).max() < view_bank.SLOPE_TOLERANCE
+    if mapping is None:
+        return
+    whole = view_bank.strip_rows
+    try:
+        view_bank.strip_rows = lambda array, d: array.lenses_y // 2   # two faces a view
+        traced, exact = traced_slopes(view_bank_frames(la, clearance, viewing_distance=distance)[0])
+    finally:
+        view_bank.strip_rows = whole
+    assert np.abs(traced - exact).max() > 100 * view_bank.SLOPE_TOLERANCE
+
+
 # The view bank of a custom lenticular array as the renderer wrote it before viewing distances existed
 # (point-sampled; footprint-sampled with gutters): the digests of its arrays, taken from that code.
 SAMPLES = np.array([[0.125, -0.25, 0.375, 0.25], [-0.375, 0.125, -0.25, -0.125]])
