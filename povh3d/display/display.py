@@ -152,12 +152,17 @@ class Display:
             raise ConfigError(f"the sidecar's display has {views!r} views, not a whole number >= 1; delete the sidecar")
         if slant is not None and not _finite(slant):
             raise ConfigError(f"the sidecar's display slant {slant!r} is not a finite number; delete the sidecar")
+        seen = d.get("viewing_distance")   # what the rows were rendered for (render's record)
+        distance = seen.get("mm") if isinstance(seen, MappingABC) else None
+        if distance is not None and not (_finite(distance) and distance > 0):
+            raise ConfigError(f"the sidecar's viewing distance {distance!r} is not a distance in mm; delete the sidecar")
         try:
             return cls(lens_array, d.get("preset"), d.get("description"), views, slant,
                        d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
                        sheet=d.get("sheet") if isinstance(d.get("sheet"), MappingABC) else None,
                        quilt=d.get("quilt") if isinstance(d.get("quilt"), MappingABC) else None,
-                       mapping_options=_options(d.get("mapping_options")))
+                       mapping_options=_options(d.get("mapping_options")),
+                       viewing_distance_mm=None if distance is None else float(distance))
         except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as exc:
             raise ConfigError(f"the sidecar's display is damaged ({type(exc).__name__}: {exc}); "
                               "delete the sidecar") from None

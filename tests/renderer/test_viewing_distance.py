@@ -74,7 +74,7 @@ def test_every_rows_ray_passes_through_the_eye_and_its_panel_point():
     at_panel = origin[:, 1] + (F - origin[:, 2]) * direction[:, 1]
     assert np.allclose(np.round(at_panel / PY * 2) / 2 * PY, at_panel, atol=1e-9)   # on a row border
     assert np.abs(at_panel).max() == pytest.approx(H_MM / 2)
-    assert len(vd.faces) == 2 * 4 * ROWS   # one strip a view and a row
+    assert len(vd.faces) == 2 * 4 * ROWS // 2   # a face a view and two rows (``strip_rows``)
     ortho = view_bank_frames(la, 144.0)[0]
     o_origin, o_direction = corner_rays(ortho)
     assert set(np.round(o_direction[:, 0], 12)) == set(np.round(direction[:, 0], 12))   # the views' directions
@@ -287,3 +287,13 @@ def test_the_replay_from_the_eye_lines_up_with_its_2d_render_within_a_row(cli, t
         offsets[name] = stripe_offsets(read_png(picture)[..., :3], expected)
     assert offsets["vd"] <= 1.0
     assert offsets["ortho"] >= 6.0
+
+
+@pytest.mark.povray
+def test_replay_puts_its_default_eye_where_the_rows_were_rendered_for(cli, tmp_path):
+    render(cli, tmp_path, WALL_SCENE, "vd", "--viewing-distance", str(D))
+    render(cli, tmp_path, WALL_SCENE, "ortho")
+    for name, distance in (("vd", D), ("ortho", 300.0)):   # the orthographic rows: replay's own default
+        report = tmp_path / f"{name}.json"
+        assert cli("replay", tmp_path / f"{name}.png", "-o", tmp_path / f"{name}-r.png", "--json", report).code == 0
+        assert json.loads(report.read_text())["eyes"][0]["eye_mm"] == [0.0, 0.0, -distance]
