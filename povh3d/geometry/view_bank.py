@@ -163,6 +163,8 @@ def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarra
         ax, ay, du, dv = (samples[b, n] for n in range(4))               # (quads, 1) each
     else:   # a sample per bank and view
         ax, ay, du, dv = (samples[b, l, k, n] for n in range(4))
+    if viewing_distance is not None:   # a row's vertical direction is the eye's: its footprint spans the row's height only
+        dv = np.zeros_like(dv)
     # Corners counter-clockwise from bottom left, half a lens outside the kept lens
     # centres, in lens pitches (the conventions' centres, on the 1/GRID grid: exact).
     centres = lens_array.lens_centres()

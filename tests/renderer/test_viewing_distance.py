@@ -27,6 +27,8 @@ from povh3d.image.io import read_png
 from povh3d.renderer.request import RenderRequest
 
 D, F, PY = 150.0, 2.0, 0.5
+# Two footprint samples (ax, ay, du, dv), in lens pitches and pixel pitches.
+SAMPLES = np.array([[0.125, -0.25, 0.375, 0.25], [-0.375, 0.125, -0.25, -0.125]])
 ARRAY = ("--grid", "lenticular", "--ppl", "4", "--lenses", "40", "--rows", "120", "--pixel-pitch", str(PY),
          "--focal", str(F))
 W_MM, H_MM, ROWS = 80.0, 60.0, 120
@@ -102,6 +104,18 @@ def traced_slopes(mesh) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(traced), np.concatenate(exact)
 
 
+def test_footprint_samples_of_rows_seen_from_the_eye_still_pass_through_it():
+    """--quality high's samples: a sample's position in the row (ay) moves its crossing, its vertical
+    angle (dv) is the eye's, so every corner ray still crosses z = -D at height 0; the orthographic
+    bank's samples fan vertically by dv s_y / f (its negative control)."""
+    la = lenticular()
+    for mesh in view_bank_frames(la, 144.0, SAMPLES, gutter=1, viewing_distance=D):
+        origin, direction = corner_rays(mesh)
+        assert np.abs(origin[:, 1] + (-D - origin[:, 2]) * direction[:, 1]).max() < 1e-9
+    origin, direction = corner_rays(view_bank_frames(la, 144.0, SAMPLES, gutter=1)[0])
+    assert set(np.round(direction[:, 1], 9)) == {0.25 * PY / F, -0.125 * PY / F}
+
+
 @pytest.mark.parametrize("preset, mapping, rows", [("ipad-retina", None, 623), ("alioscopy-42", None, 12),
                                                    ("philips-20", "philips", 1)])
 def test_a_strip_of_rows_traces_every_rows_slope_within_the_tolerance(preset, mapping, rows):
@@ -131,7 +145,6 @@ def test_a_strip_of_rows_traces_every_rows_slope_within_the_tolerance(preset, ma
 
 # The view bank of a custom lenticular array as the renderer wrote it before viewing distances existed
 # (point-sampled; footprint-sampled with gutters): the digests of its arrays, taken from that code.
-SAMPLES = np.array([[0.125, -0.25, 0.375, 0.25], [-0.375, 0.125, -0.25, -0.125]])
 UNCHANGED = {(None, 0): "983fdef881ec1bda", ("samples", 1): "39fc3adf52ca9208"}
 
 
