@@ -220,16 +220,25 @@ def classify(image: np.ndarray) -> np.ndarray:
     return out
 
 
-def floor_rows() -> tuple[np.ndarray, np.ndarray]:
-    """Per panel row, the colour the ray seen from D shows (closed form) and whether it is clear of a
-    stripe border by 0.3 mm of depth."""
-    y_panel = (ROWS / 2 - np.arange(ROWS) - 0.5) * PY
-    crossing = y_panel * D / (D + F)
+def floor_rows(distance: float = D, focal: float = F, pitch: float = PY, rows: int = ROWS,
+               clearance: float = 144.0) -> tuple[np.ndarray, np.ndarray]:
+    """Per panel row, the colour the ray seen from ``distance`` shows (closed form: sky where it would
+    meet the floor nearer than where rays start, ``clearance`` mm out) and whether it is clear of a
+    stripe border, and of the start, by 0.3 mm of depth."""
+    y_panel = (rows / 2 - np.arange(rows) - 0.5) * pitch
+    crossing = y_panel * distance / (distance + focal)
     with np.errstate(divide="ignore"):
-        z = D * (FLOOR / np.abs(crossing) - 1)          # where the ray meets y = -FLOOR
+        z = distance * (FLOOR / np.abs(crossing) - 1)   # where the ray meets y = -FLOOR
     phase = np.mod(z / STRIPE, 1)
-    colour = np.where(crossing > 0, 0, np.where(phase < 0.5, 1, 2))
-    clear = (crossing > 0) | (np.minimum(np.abs(phase - 0.5), np.minimum(phase, 1 - phase)) * STRIPE > 0.3)
+    sky = (crossing > 0) | (z < -clearance)
+    colour = np.where(sky, 0, np.where(phase < 0.5, 1, 2))
+    # Rows near the horizon meet the floor so far out that a slope 1e-6 off (the strips' tolerance, about
+    # float32's on the mesh's normals) moves the hit by FLOOR / slope^2 * 1e-6: kept only under 0.3 mm.
+    slope = np.abs(crossing) / distance
+    with np.errstate(divide="ignore"):
+        steady = FLOOR / slope ** 2 * 1e-6 < 0.3
+    clear = (crossing > 0) | ((np.minimum(np.abs(phase - 0.5), np.minimum(phase, 1 - phase)) * STRIPE > 0.3)
+                             & (np.abs(z + clearance) > 0.3) & steady)
     return colour, clear
 
 
@@ -310,3 +319,27 @@ def test_replay_puts_its_default_eye_where_the_rows_were_rendered_for(cli, tmp_p
         report = tmp_path / f"{name}.json"
         assert cli("replay", tmp_path / f"{name}.png", "-o", tmp_path / f"{name}-r.png", "--json", report).code == 0
         assert json.loads(report.read_text())["eyes"][0]["eye_mm"] == [0.0, 0.0, -distance]
+
+
+
+@pytest.mark.povray
+def test_a_lenticular_preset_shows_the_floor_as_seen_from_its_design_distance(cli, tmp_path):
+    """ipad-retina (a 600 x 480 pixel window of it: 100 lenses, 480 rows of 0.096 mm) with no option: its
+    rows seen from 846 mm, each showing the floor's stripe where that ray meets it (closed form); the
+    orthographic rows (``--viewing-distance inf``) never meet the floor."""
+    colour, clear = floor_rows(846.0, 1.25, 0.096, 480, clearance=840.0)   # rays from near the eye
+    scene = tmp_path / "floor.pov"
+    scene.write_text(FLOOR_SCENE)
+    seen = {}
+    for name, extra in (("preset", ()), ("ortho", ("--viewing-distance", "inf"))):
+        out = tmp_path / f"{name}.png"
+        result = cli("render", scene, "--preset", "ipad-retina", "--panel", "600x480", "--quality", "draft",
+                     "--front-clearance", "840", "-o", out, "-q", *extra)
+        assert result.code == 0, result.err
+        seen[name] = classify(read_png(out)[..., :3])
+        record = json.loads(out.with_suffix(".json").read_text())
+        assert record["quality"]["front_clearance_mm"] == 840.0
+    assert record["display"]["viewing_distance"] == {"mm": None, "source": "given: infinite (orthographic rows)"}
+    assert clear.sum() > 300 and (colour[clear] != 0).sum() > 150
+    assert np.array_equal(seen["preset"][clear], np.broadcast_to(colour[clear, None], seen["preset"][clear].shape))
+    assert (seen["ortho"][clear] == colour[clear, None]).mean() < 0.6
