@@ -343,3 +343,21 @@ def test_a_lenticular_preset_shows_the_floor_as_seen_from_its_design_distance(cl
     assert clear.sum() > 300 and (colour[clear] != 0).sum() > 150
     assert np.array_equal(seen["preset"][clear], np.broadcast_to(colour[clear, None], seen["preset"][clear].shape))
     assert (seen["ortho"][clear] == colour[clear, None]).mean() < 0.6
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--preset", "demo", "--viewing-distance", "300"), "--viewing-distance renders the rows of a lenticular sheet"),
+    (("--preset", "ipad-retina", "--method", "pinhole", "--viewing-distance", "300"), "--method multi-ortho"),
+    (("--preset", "ipad-retina", "--viewing-distance", "300", "--depth-maps", "d"), "--depth-maps measures"),
+    (("--preset", "ipad-retina", "--viewing-distance", "far"), "mm or inf"),
+    (("--preset", "ipad-retina", "--viewing-distance", "0"), "> 0"),
+    (("--preset", "ipad-retina", "--viewing-distance", "5"), "inside the view bank's first step"),
+])
+def test_the_command_refuses_a_viewing_distance_it_cannot_trace_in_one_line(cli, tmp_path, args, words):
+    from tests.support.cli import one_error_line
+
+    scene = tmp_path / "s.pov"
+    scene.write_text(FLOOR_SCENE)
+    out = tmp_path / "o.png"
+    line = one_error_line(cli("render", scene, *args, "--quality", "draft", "-o", out))
+    assert words in line and not out.exists()
