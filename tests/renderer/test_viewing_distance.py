@@ -221,16 +221,16 @@ def classify(image: np.ndarray) -> np.ndarray:
 
 
 def floor_rows(distance: float = D, focal: float = F, pitch: float = PY, rows: int = ROWS,
-               clearance: float = 144.0) -> tuple[np.ndarray, np.ndarray]:
+               clearance: float = 144.0, depth_scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Per panel row, the colour the ray seen from ``distance`` shows (closed form: sky where it would
     meet the floor nearer than where rays start, ``clearance`` mm out) and whether it is clear of a
     stripe border, and of the start, by 0.3 mm of depth."""
     y_panel = (rows / 2 - np.arange(rows) - 0.5) * pitch
     crossing = y_panel * distance / (distance + focal)
     with np.errstate(divide="ignore"):
-        z = distance * (FLOOR / np.abs(crossing) - 1)   # where the ray meets y = -FLOOR
+        z = distance * (FLOOR / np.abs(crossing) - 1) / depth_scale   # where the ray meets y = -FLOOR
     phase = np.mod(z / STRIPE, 1)
-    sky = (crossing > 0) | (z < -clearance)
+    sky = (crossing > 0) | (z * depth_scale < -clearance)
     colour = np.where(sky, 0, np.where(phase < 0.5, 1, 2))
     # Rows near the horizon meet the floor so far out that a slope 1e-6 off (the strips' tolerance, about
     # float32's on the mesh's normals) moves the hit by FLOOR / slope^2 * 1e-6: kept only under 0.3 mm.
@@ -238,7 +238,7 @@ def floor_rows(distance: float = D, focal: float = F, pitch: float = PY, rows: i
     with np.errstate(divide="ignore"):
         steady = FLOOR / slope ** 2 * 1e-6 < 0.3
     clear = (crossing > 0) | ((np.minimum(np.abs(phase - 0.5), np.minimum(phase, 1 - phase)) * STRIPE > 0.3)
-                             & (np.abs(z + clearance) > 0.3) & steady)
+                             & (np.abs(z * depth_scale + clearance) > 0.3) & steady)
     return colour, clear
 
 
@@ -361,3 +361,18 @@ def test_the_command_refuses_a_viewing_distance_it_cannot_trace_in_one_line(cli,
     out = tmp_path / "o.png"
     line = one_error_line(cli("render", scene, *args, "--quality", "draft", "-o", out))
     assert words in line and not out.exists()
+
+
+@pytest.mark.povray
+def test_rows_seen_from_the_eye_of_a_depth_compressed_scene(cli, tmp_path):
+    """--depth-scale 0.5: the floor's stripes where the eye at D meets the floor compressed to half its
+    depth (its rays from D / k = 300 mm in the scene itself); without the compression's eye the stripes
+    of the uncompressed floor (the negative control) disagree."""
+    image, record = render(cli, tmp_path, FLOOR_SCENE, "ds", "--viewing-distance", str(D), "--depth-scale", "0.5")
+    seen = classify(image)
+    colour, clear = floor_rows(depth_scale=0.5, clearance=record["quality"]["front_clearance_mm"] * 0.5)
+    assert clear.sum() > 100
+    assert np.array_equal(seen[clear], np.broadcast_to(colour[clear, None], seen[clear].shape))
+    wrong, near = floor_rows()
+    both = clear & near & (colour != 0)
+    assert (seen[both] == wrong[both, None]).mean() < 0.7

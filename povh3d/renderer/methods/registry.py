@@ -355,6 +355,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         _check_clearance(name, method, lens_array, clearance.rounded, frame_units(settings.frame))
     front_clearance, reason = clearance.used, clearance.reason
     distance = plan_options.get("viewing_distance")
+    if distance is not None:   # --depth-scale k: the eye of the compressed scene, its slopes k y / D as the views'
+        distance = plan_options["viewing_distance"] = distance / settings.depth_scale
     if distance is not None and front_clearance >= distance:   # an eye sees nothing behind itself
         front_clearance = eye_clearance(lens_array, distance)
         reason = f"the viewing distance {distance:g} mm: rays start at the eye, at the view bank's last step before it"
