@@ -376,3 +376,17 @@ def test_rows_seen_from_the_eye_of_a_depth_compressed_scene(cli, tmp_path):
     wrong, near = floor_rows()
     both = clear & near & (colour != 0)
     assert (seen[both] == wrong[both, None]).mean() < 0.7
+
+
+def test_a_sidecar_gives_back_the_distance_its_rows_were_rendered_for():
+    from povh3d.display.display import Display
+
+    la = lenticular()
+    record = {"lens_array": la.as_record(), "display": {"preset": None, "viewing_distance": {"mm": D, "source": "given"}}}
+    assert Display.from_record(record).viewing_distance_mm == D
+    record["display"]["viewing_distance"] = {"mm": None, "source": "given: infinite (orthographic rows)"}
+    assert Display.from_record(record).viewing_distance_mm is None
+    for damaged in ("far", -3.0, float("nan"), True):
+        record["display"]["viewing_distance"] = {"mm": damaged}
+        with pytest.raises(ConfigError, match="viewing distance"):
+            Display.from_record(record)
