@@ -4,6 +4,7 @@ request, hand it to ``povh3d.renderer``, print one summary line."""
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 import time
@@ -55,7 +56,20 @@ def request_from_args(args: argparse.Namespace) -> Any:
         depth_maps=Path(args.depth_maps) if args.depth_maps else None, depth_format=args.depth_format,
         volume=volume_options_from_args(args, parse_triple(args.rotate, "--rotate")),
         dataset=Path(args.dataset) if args.dataset else None, dataset_all_views=args.dataset_all_views,
-        objects=Path(args.objects) if args.objects else None)
+        objects=Path(args.objects) if args.objects else None, viewing_distance=args.viewing_distance)
+
+
+def viewing_distance(text: str) -> float:
+    """``--viewing-distance``: mm, or ``inf`` (orthographic rows)."""
+    if text.strip().lower() in ("inf", "infinity"):
+        return math.inf
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"takes a distance in mm or inf, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"takes a distance in mm or inf, got {text!r}")
+    return value
 
 
 def placement_options_from_args(args: argparse.Namespace) -> Any:
@@ -323,6 +337,10 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--camera-model", choices=("perspective", "orthographic"), default=None,
                    help="a Looking Glass preset's views: the vendor's sheared perspective cameras (default) or "
                         "the lens array's oblique orthographic views (docs/displays.md)")
+    p.add_argument("--viewing-distance", type=viewing_distance, default=None, metavar="MM",
+                   help="a lenticular panel's rows rendered as an eye MM in front of the screen, at its centre's "
+                        "height, sees them (default: the preset's design distance; a custom array: none, "
+                        "orthographic rows; inf: orthographic) (docs/geometry.md)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("convert-mesh", help="convert a mesh model to a POV-Ray mesh2 include")

@@ -62,7 +62,8 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("-o", "--output", required=True,
                    help="replay .png (with --sweep: a .gif or .mp4, the frames and a viewer page .html beside it)")
     p.add_argument("--eye", metavar="X,Y,Z", help="eye in mm, display coordinates, viewer at z < 0 (default 0,0,-300; a "
-                   "Looking Glass: its viewer distance)")
+                   "lenticular render: the viewing distance its rows were rendered for; a Looking Glass: its viewer "
+                   "distance)")
     p.add_argument("--optics", default="pinhole", choices=("pinhole", "barrier", "lens", "none"),
                    help="pinhole mask at the lens centres (exact; default), barrier (slits, lenticular), lens "
                         "(the real lenslets, through POV-Ray; a mapped panel or Looking Glass image: its slanted lenticules over "

@@ -280,7 +280,7 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
     if not isinstance(size, str):  # the picture's float geometry, a few arrays of it
         check_memory(f"a {size[0]}x{size[1]} replay", 160.0 * size[0] * size[1] * (1 if sweep is None else 2),
                      f"give a smaller {param('size')}, e.g. {param('size')} 800x600")
-    eye = eye if eye is not None else default_eye(la)
+    eye = eye if eye is not None else default_eye(la, display.viewing_distance_mm)   # where its rows are seen from
     eyes = np.asarray([eye], np.float64) if sweep is None else sweep_eyes(eye, *sweep)
     results: list[Replay] = []
     frames: list[np.ndarray] = []

@@ -45,6 +45,9 @@ class Display:
     mapping_options : mapping or None  read from a sidecar: the applied mapping's parameters
                                    (``mappings.mapping_parameters``), which rebuild it exactly
                                    (``mappings.mapping_from_record``); None in older sidecars
+    viewing_distance_mm : float or None  a lenticular preset's design distance, mm (``presets.toml``):
+                                   the default of the render's viewing distance (``RenderRequest.viewing``)
+    viewing_distance_source : str or None  where that distance comes from, for the sidecar
     """
 
     lens_array: LensArray
@@ -58,6 +61,8 @@ class Display:
     sheet: MappingABC[str, Any] | None = None
     quilt: MappingABC[str, Any] | None = None
     mapping_options: MappingABC[str, Any] | None = None
+    viewing_distance_mm: float | None = None
+    viewing_distance_source: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.lens_array, LensArray):
@@ -147,12 +152,17 @@ class Display:
             raise ConfigError(f"the sidecar's display has {views!r} views, not a whole number >= 1; delete the sidecar")
         if slant is not None and not _finite(slant):
             raise ConfigError(f"the sidecar's display slant {slant!r} is not a finite number; delete the sidecar")
+        seen = d.get("viewing_distance")   # what the rows were rendered for (render's record)
+        distance = seen.get("mm") if isinstance(seen, MappingABC) else None
+        if distance is not None and not (_finite(distance) and distance > 0):
+            raise ConfigError(f"the sidecar's viewing distance {distance!r} is not a distance in mm; delete the sidecar")
         try:
             return cls(lens_array, d.get("preset"), d.get("description"), views, slant,
                        d.get("mapping"), _panel(d["physical_panel"]) if d.get("physical_panel") else None,
                        sheet=d.get("sheet") if isinstance(d.get("sheet"), MappingABC) else None,
                        quilt=d.get("quilt") if isinstance(d.get("quilt"), MappingABC) else None,
-                       mapping_options=_options(d.get("mapping_options")))
+                       mapping_options=_options(d.get("mapping_options")),
+                       viewing_distance_mm=None if distance is None else float(distance))
         except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as exc:
             raise ConfigError(f"the sidecar's display is damaged ({type(exc).__name__}: {exc}); "
                               "delete the sidecar") from None
@@ -220,7 +230,8 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
         fields = merge_overrides(get_preset(preset or "demo"), dict(overrides or {}))
         display = Display(lens_array_from_fields(fields), preset or "demo", fields.get("description"),
                           fields.get("views"), fields.get("slant_deg"), fields.get("mapping"),
-                          physical_panel(fields))
+                          physical_panel(fields), viewing_distance_mm=fields.get("viewing_distance_mm"),
+                          viewing_distance_source=fields.get("viewing_distance_source"))
     else:
         if overrides:
             raise ConfigError("a lens array of your own takes no preset overrides; build it with them instead")

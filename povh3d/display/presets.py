@@ -19,7 +19,8 @@ if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
     from ..geometry.lens_array import LensArray, Panel
 
 FIELDS = ("description", "grid", "panel", "pixel_pitch", "lens_pitch", "ppl", "lenses",
-          "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation", "lattice")
+          "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation", "lattice",
+          "viewing_distance_mm", "viewing_distance_source")
 
 # Overriding any of these re-derives the panel from the lens array, unless the
 # panel itself is given.
@@ -103,8 +104,8 @@ def merge_overrides(fields: dict[str, Any], overrides: dict[str, Any]) -> dict[s
             merged.pop("lenses", None)
         if "ppl" in given:
             merged.pop("lens_pitch", None)
-        # A custom array renders as given: the preset's mapping no longer applies.
-        for key in ("views", "mapping", "slant_deg"):
+        # A custom array renders as given: the preset's mapping and design distance no longer apply.
+        for key in ("views", "mapping", "slant_deg", "viewing_distance_mm", "viewing_distance_source"):
             merged.pop(key, None)
     if "ppl" in given and "lens_pitch" not in given:
         merged.pop("lens_pitch", None)

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..errors import ConfigError, param
 from .camera_mesh import CameraMesh, _quad_mesh, check_front_clearance
 from .footprint import CENTRE, GRID
 
@@ -51,7 +52,7 @@ def _per_bank(samples: np.ndarray) -> np.ndarray:
 
 
 def view_bank_shots(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None = None,
-                     plan=None, gutter: int = 0) -> list[CameraMesh]:
+                     plan=None, gutter: int = 0, viewing_distance: float | None = None) -> list[CameraMesh]:
     """The meshes of the shots that trace a view bank per footprint sample (``bank_groups``).
 
     Each mesh is the orthographic camera bank as one mesh camera, one quad per view
@@ -65,11 +66,18 @@ def view_bank_shots(lens_array: LensArray, front_clearance: float, samples: np.n
 
     ``gutter`` > 0 (a render whose antialiasing samples pixel borders): that many
     pixels between any two quads (``_bank_mesh``), cut off by ``stack_shots``.
+
+    ``viewing_distance`` D (mm, a lenticular array): every pixel row seen from an eye at the screen
+    centre's height D in front of the lens plane, one face a strip of rows (``strip_rows``); None: the
+    orthographic views.
     """
     cols, rows, size = _bank_tiles(lens_array, plan)
     samples = _per_bank(CENTRE if samples is None else samples)
-    groups = bank_groups(samples, 2 * len(cols) * len(rows), size[0] * size[1])
-    return [_bank_mesh(lens_array, front_clearance, group, cols, rows, size, gutter) for group in groups]
+    strips = len(rows) if viewing_distance is None else \
+        int((-(-(rows[:, 2] - rows[:, 1]) // strip_rows(lens_array, viewing_distance))).sum())
+    groups = bank_groups(samples, 2 * len(cols) * strips, size[0] * size[1])
+    return [_bank_mesh(lens_array, front_clearance, group, cols, rows, size, gutter, viewing_distance)
+            for group in groups]
 
 
 def _bank_tiles(lens_array: LensArray, plan) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
@@ -96,8 +104,21 @@ def bank_front_clearance(lens_array: LensArray, front_clearance: float) -> float
     return math.ceil(front_clearance / unit * (1 - 1e-12)) * unit
 
 
+def eye_clearance(lens_array: LensArray, viewing_distance: float) -> float:
+    """The front clearance of rows seen from ``viewing_distance``: the last of the view bank's steps
+    (``bank_front_clearance``) before the eye, which sees nothing behind itself."""
+    ny, nx = lens_array.require_views()
+    unit = lens_array.focal * math.lcm(nx, ny)
+    steps = math.ceil(viewing_distance / unit * (1 - 1e-12)) - 1
+    if steps < 1:
+        raise ConfigError(f"a viewing distance of {viewing_distance:g} mm is inside the view bank's first step "
+                          f"({unit:g} mm, focal x views); give a {param('viewing_distance')} over {unit:g} mm")
+    return steps * unit
+
+
 def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarray | None, cols: np.ndarray,
-               rows: np.ndarray, size: tuple[int, int], gutter: int = 0) -> CameraMesh:
+               rows: np.ndarray, size: tuple[int, int], gutter: int = 0,
+               viewing_distance: float | None = None) -> CameraMesh:
     """Quads over column segments x row segments of the tiled views, one bank per sample.
 
     ``cols``/``rows`` are ``(n, 4)``: ``(view, first lens, stop lens, image column/row)``.
@@ -128,23 +149,29 @@ def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarra
         kept_rows = _with_gutters(rows, height, gutter)
         width, height = width + (len(cols) - 1) * gutter, height + (len(rows) - 1) * gutter + gutter
         kept_rows = (np.arange(len(samples))[:, None] * height + kept_rows[None, :]).reshape(-1)
+    reach = gutter / 2   # lens pitches (one image pixel is one lens) past the outer lens borders
+    # Each row segment with its reach past its top and bottom lens borders (a strip inside a segment: none).
+    rows = np.column_stack([rows, np.full((len(rows), 2), reach)]) if viewing_distance is None else \
+        _row_strips(rows, reach, strip_rows(lens_array, viewing_distance))
     b = np.repeat(np.arange(len(samples)), len(cols) * len(rows))[:, None]
     r = np.tile(np.repeat(rows, len(cols), axis=0), (len(samples), 1))   # every row segment ...
     c = np.tile(cols, (len(rows) * len(samples), 1))                      # ... times every column segment, per bank
     k, j0, j1, col0 = (c[:, n:n + 1] for n in range(4))
-    l, i0, i1, row0 = (r[:, n:n + 1] for n in range(4))
+    l, i0, i1, row0 = (r[:, n:n + 1].astype(np.int64) for n in range(4))
+    reach_top, reach_bottom = r[:, 4:5], r[:, 5:6]
     if samples.ndim == 2:
         ax, ay, du, dv = (samples[b, n] for n in range(4))               # (quads, 1) each
     else:   # a sample per bank and view
         ax, ay, du, dv = (samples[b, l, k, n] for n in range(4))
+    if viewing_distance is not None:   # a row's vertical direction is the eye's: its footprint spans the row's height only
+        dv = np.zeros_like(dv)
     # Corners counter-clockwise from bottom left, half a lens outside the kept lens
     # centres, in lens pitches (the conventions' centres, on the 1/GRID grid: exact).
     centres = lens_array.lens_centres()
     cx = np.round(centres[0, :, 0] / px * GRID) / GRID
     cy = np.round(centres[:, 0, 1] / py * GRID) / GRID
-    reach = gutter / 2   # lens pitches (one image pixel is one lens) past the outer lens borders
     left, right = cx[j0] - 0.5 - reach, cx[j1 - 1] + 0.5 + reach
-    top, bottom = cy[i0] + 0.5 + reach, cy[i1 - 1] - 0.5 - reach
+    top, bottom = cy[i0] + 0.5 + reach_top, cy[i1 - 1] - 0.5 - reach_bottom
     x = np.concatenate([left, right, right, left], axis=1) + ax
     y = np.concatenate([bottom, bottom, top, top], axis=1) + ay
     # The origin shift u * front_clearance / f in lens pitches: u = (k - (Nx-1)/2 + du) s and
@@ -154,12 +181,69 @@ def _bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.ndarra
     turn_x = k - (nx - 1) / 2 + du
     turn_y = (ny - 1) / 2 - l + dv
     origin_x, origin_y = x - turn_x * mx, y - turn_y * my
+    v = turn_y * s_y * py
+    if viewing_distance is not None:
+        origin_y, v = _seen_from(y, origin_y - y, v, py, f, front_clearance, viewing_distance)
     j = np.concatenate([j0 - reach, j1 + reach, j1 + reach, j0 - reach], axis=1) - 0.5  # lens index of each corner
-    i = np.concatenate([i1 + reach, i1 + reach, i0 - reach, i0 - reach], axis=1) - 0.5
-    mesh = _quad_mesh(origin_x, origin_y, turn_x * s_x * px, turn_y * s_y * py,
+    i = np.concatenate([i1 + reach_bottom, i1 + reach_bottom, i0 - reach_top, i0 - reach_top], axis=1) - 0.5
+    mesh = _quad_mesh(origin_x, origin_y, turn_x * s_x * px, v,
                       col0 + (j - j0), b * height + row0 + (i - i0),
                       (width, height * len(samples) - (gutter if gutter else 0)), front_clearance, f, (px, py, 1.0))
     return replace(mesh, kept=(kept_cols, kept_rows)) if gutter else mesh
+
+
+#: The most a strip's traced vertical slope may stray from the row's (``strip_rows``): at a metre's depth,
+#: a micrometre, about 1 % of any preset's pixel row.
+SLOPE_TOLERANCE = 1e-6
+
+
+def strip_rows(lens_array: LensArray, viewing_distance: float) -> int:
+    """How many lens rows one mesh face may span when rows are seen from ``viewing_distance``.
+
+    POV-Ray's mesh camera makes each written vertex normal a unit vector before it blends them
+    (measured: a quad with normals (0, 0, 1) below and (0, 1, 1) above traced the slope 0.414 halfway,
+    where the linear blend is 0.5).  A view bank writes the normal of slope ``s`` as ``(u px, s f py,
+    f)`` (its mesh ``scale``), so across a face whose corner slopes differ by ``ds`` about the mean
+    ``s`` the normals' lengths differ by at most ``py^2 s ds`` of their own, the blend's weight at ``t``
+    strays by ``t (1 - t)`` times that, and the slope by at most ``py^2 s ds^2 / 4``.  A face spans as
+    many rows as keep that within ``SLOPE_TOLERANCE``.
+    """
+    f, py = lens_array.focal, lens_array.pitch_y
+    per_row = py / (viewing_distance + f)                         # slope step of one lens row
+    steepest = lens_array.lenses_y * py / 2 / (viewing_distance + f)
+    if steepest == 0:
+        return lens_array.lenses_y
+    return max(1, int(math.sqrt(4 * SLOPE_TOLERANCE / steepest) / py / per_row))
+
+
+def _row_strips(rows: np.ndarray, reach: float, per_strip: int) -> np.ndarray:
+    """Row segments ``(n, 4)`` cut into strips of ``per_strip`` lens rows (``strip_rows``), ``(m, 6)``:
+    ``(view, first row, stop row, image row, reach past its top, reach past its bottom)``, the reach only
+    at a segment's own ends."""
+    out = []
+    for l, i0, i1, row0 in rows.tolist():
+        for i in range(i0, i1, per_strip):
+            stop = min(i + per_strip, i1)
+            out.append((l, i, stop, row0 + i - i0, reach if i == i0 else 0.0, reach if stop == i1 else 0.0))
+    return np.array(out, dtype=np.float64).reshape(-1, 6)
+
+
+def _seen_from(y: np.ndarray, shift: np.ndarray, v: np.ndarray, py: float, f: float, front_clearance: float,
+               distance: float) -> tuple[np.ndarray, np.ndarray]:
+    """The origins' y and the written directions' v of corners whose row an eye sees from ``distance``.
+
+    ``y``: a corner's height on the panel in lens pitches (``py`` mm each); ``shift`` and ``v``: the
+    orthographic ray's origin shift and written vertical direction.  An eye at height 0, ``distance`` mm
+    in front of the lens plane, sees the panel point ``y`` (``f`` behind the lens plane) through the
+    lens-plane point ``y D / (D + f)`` along the slope ``y / (D + f)``: the sheet does not bend a ray
+    vertically.  The ray starts ``front_clearance`` mm in front of the lens plane.
+    """
+    crossing = y * (distance / (distance + f))              # lens pitches
+    slope = crossing * py / distance
+    if abs(front_clearance - distance) <= 1e-9 * distance:  # every origin on one line: the mesh would collapse
+        raise ConfigError(f"the rays start {front_clearance:g} mm in front of the screen, at the viewing distance "
+                          f"itself; give another {param('front_clearance')}")
+    return crossing - slope * front_clearance / py + shift, v + f * slope * py
 
 
 def _with_gutters(segments: np.ndarray, size: int, gutter: int) -> np.ndarray:

@@ -227,6 +227,8 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
     )
     record.update(request.display.as_record())  # the sidecar's lens_array and display entries
+    if request.viewing_distance is not None or request.display.viewing_distance_mm is not None:
+        record["display"]["viewing_distance"] = request.viewing()[1]   # what the rows were rendered for
     record["method_chosen"] = request.method_chosen
     ray_state = (placement or {}).get("ray_state") or {}
     note = ray_state.get("method_note")

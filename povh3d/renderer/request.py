@@ -144,6 +144,9 @@ class RenderRequest:
     dataset : Path or None         also write the HCI 4D light-field layout here (stills; ``renderer.outputs.dataset``)
     dataset_all_views : bool       with ``dataset``: disparity and depth for every view, not only the centre
     objects : Path or None         also write every view's object masks here (``renderer.passes.object_masks``)
+    viewing_distance : float or None  mm: a lenticular array's rows rendered as an eye at the screen centre's
+                                   height that far in front sees them (``geometry.view_bank``); None: the
+                                   preset's design distance (a custom array: none); ``math.inf``: orthographic rows
     """
 
     source: Path
@@ -167,6 +170,7 @@ class RenderRequest:
     dataset: Path | None = None
     dataset_all_views: bool = False
     objects: Path | None = None
+    viewing_distance: float | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (frozen)
@@ -185,6 +189,10 @@ class RenderRequest:
         options = dict(self.method_options)
         if self.display.sheet_shift_mm is not None and self.method == "subpixel":
             options.setdefault("sheet_shift_mm", self.display.sheet_shift_mm)
+        options.pop("viewing_distance", None)   # the request's own (a replaced request carries the last one)
+        distance, _ = self.viewing()
+        if distance is not None:
+            options["viewing_distance"] = distance
         set_("method_options", get_method(self.method).resolve_options(self.method, options))
         if self.frames is None:
             for name in ("video",):
@@ -214,6 +222,42 @@ class RenderRequest:
         if not self.is_volume and _replace(self.volume, rotate=None) != VolumeOptions():
             raise ConfigError(f"{self.source.name!r} is not a volume; the volume options ({param('labels')}, {param('iso')}, {param('volume')}, "
                               f"{param('orientation')}, {param('spacing')}, {param('series')} ...) apply to volume files and DICOM folders")
+
+    def viewing(self) -> tuple[float | None, dict[str, Any]]:
+        """The viewing distance the rows are rendered for (mm; None: orthographic rows) and the
+        sidecar's record of it: what was used and where it came from."""
+        given, array = self.viewing_distance, self.render_array
+        # The depth passes trace orthographic cameras along each view's direction (passes.depth).
+        orthographic = next((name for name, value in (("depth_maps", self.depth_maps), ("dataset", self.dataset))
+                             if value is not None), None)
+        lenticular = array.grid == "lenticular" and array.views is not None
+        if given is not None:
+            if isinstance(given, bool) or not isinstance(given, (int, float)) or not given > 0:
+                raise ConfigError(f"{param('viewing_distance')} takes a distance in mm > 0 (or inf: orthographic rows), "
+                                  f"got {given!r}")
+            if math.isinf(given):
+                return None, {"mm": None, "source": "given: infinite (orthographic rows)"}
+            if not lenticular or self.display.quilt is not None:
+                raise ConfigError(f"{param('viewing_distance')} renders the rows of a lenticular sheet with whole pixels "
+                                  f"per lens; this display's lens array is {array.grid}{'' if array.views else ' with fractional pixels per lens'}"
+                                  f"; drop {param('viewing_distance')}")
+            if self.method != "multi-ortho":
+                raise ConfigError(f"{param('viewing_distance')} is traced by {param('method')} multi-ortho's view bank, not "
+                                  f"{self.method}; drop one of them")
+            if orthographic is not None:
+                raise ConfigError(f"{param(orthographic)} measures the views' orthographic rows, not rows seen from "
+                                  f"{given:g} mm; drop one of them")
+            return float(given), {"mm": float(given), "source": "given"}
+        used, source = self.display.viewing_distance_mm, self.display.viewing_distance_source
+        if used is None or not lenticular or self.display.quilt is not None:
+            return None, {"mm": None, "source": "none: orthographic rows (no design distance for this display)"}
+        if self.method != "multi-ortho":
+            return None, {"mm": None, "source": f"none: {self.method} traces orthographic rows; the preset's "
+                                                  f"{used:g} mm applies to multi-ortho"}
+        if orthographic is not None:
+            return None, {"mm": None, "source": f"none: {param(orthographic)} measures orthographic rows; the "
+                                                  f"preset's {used:g} mm applies without it"}
+        return float(used), {"mm": float(used), "source": f"preset {self.display.preset}: {source}"}
 
     @property
     def display_frame(self) -> PlacementOptions:

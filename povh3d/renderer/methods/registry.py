@@ -30,7 +30,7 @@ import numpy as np
 from ...errors import ConfigError, param, warn
 from ...geometry.cameras import ortho_view_shots, pinhole_shots
 from ...geometry.camera_mesh import check_front_clearance, clearance_range, default_front_clearance
-from ...geometry.view_bank import bank_front_clearance, stack_shots, view_bank_shots
+from ...geometry.view_bank import bank_front_clearance, eye_clearance, stack_shots, view_bank_shots
 from ...geometry.crop import CropSettings
 from ...geometry.footprint import CENTRE, latin_hypercube
 from ...geometry.lattice_mesh import lens_mesh
@@ -71,9 +71,12 @@ class MethodPlan:
 
 
 def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndarray, *, gutter: int = 0,
-                 bank: bool = True) -> MethodPlan:
+                 bank: bool = True, viewing_distance: float | None = None) -> MethodPlan:
     # bank False: a clearance the view bank cannot start at exactly (under one step, kept within a
     # scene camera): the lens mesh, which starts rays anywhere, traces the same rays.
+    if viewing_distance is not None and (not lens_array.views or not bank):
+        raise ConfigError(f"{param('viewing_distance')} traces a view bank's rows: it needs whole pixels per lens "
+                          f"({param('ppl')}) and a {param('front_clearance')} of a whole number of focal x views")
     if not lens_array.views or not bank:  # fractional PPL, hex, rotated lattices: one cell per lens
         if len(samples) == 1 and not np.any(samples):
             mesh = lens_mesh(lens_array, front_clearance)
@@ -85,7 +88,7 @@ def _multi_ortho(lens_array: LensArray, front_clearance: float, samples: np.ndar
             np.stack([mesh.crop(stack_shots([im])) for mesh, im in zip(meshes, images)])))
     # Whole PPL: one quad per view (views tiled, gutters between them where antialiasing
     # samples pixel borders), one bank per footprint sample, a few banks a frame.
-    meshes = view_bank_shots(lens_array, front_clearance, samples, gutter=gutter)
+    meshes = view_bank_shots(lens_array, front_clearance, samples, gutter=gutter, viewing_distance=viewing_distance)
     return MethodPlan(mesh_camera_batch("multi_ortho.pov.j2", meshes),
                       lambda images: banks_to_h3d(lens_array, stack_shots(images, meshes)),
                       assemble_groups=lambda images, counts: bank_groups(lens_array, stack_shots(images, meshes),
@@ -251,7 +254,8 @@ def _whole_views(lens_array: LensArray) -> bool:
 METHODS: dict[str, Method] = {
     # A lens mesh (hex, fractional PPL, turned lattices) lays neighbouring lenses side by side in
     # POV-Ray's image, where corner samples would cross lens borders: footprint samples instead.
-    "multi-ortho": Method(_multi_ortho, takes_samples=_whole_views, crops=True, gutters=True,
+    # viewing_distance: a lenticular array's rows seen from that distance (``view_bank._row_strips``).
+    "multi-ortho": Method(_multi_ortho, {"viewing_distance": None}, takes_samples=_whole_views, crops=True, gutters=True,
                           confines_antialias=_whole_views, shares_ray_state=True,
                           round_front_clearance=lambda la, b: bank_front_clearance(la, b) if la.views else b,
                           front_clearance_step=lambda la, o: la.focal * math.lcm(*la.require_views()) if la.views else 0.0),
@@ -350,6 +354,12 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     if name != "single-stage":  # its depth is checked by its own optics (check_optics)
         _check_clearance(name, method, lens_array, clearance.rounded, pose_units(settings.pose))
     front_clearance, reason = clearance.used, clearance.reason
+    distance = plan_options.get("viewing_distance")
+    if distance is not None:   # --depth-scale k: the eye of the compressed scene, its slopes k y / D as the views'
+        distance = plan_options["viewing_distance"] = distance / settings.depth_scale
+    if distance is not None and front_clearance >= distance:   # an eye sees nothing behind itself
+        front_clearance = eye_clearance(lens_array, distance)
+        reason = f"the viewing distance {distance:g} mm: rays start at the eye, at the view bank's last step before it"
     if clearance.lens_mesh:
         plan_options["bank"], crop = False, None
     if footprint_groups is not None and (plan_options.get("bank") is False or not method.takes_samples(lens_array)
@@ -365,7 +375,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         return render_shots(scene, batch, settings, method=label, header=header, progress=progress)
 
     h3d, crop_info, record, groups = None, None, None, None
-    if method.crops and crop is not None and footprint_groups is None:
+    if method.crops and crop is not None and footprint_groups is None and options.get("viewing_distance") is None:
         tiles = render_cropped_tiles(trace, scene, lens_array, front_clearance, settings, crop, progress, samples,
                                      plan_options.get("gutter", 0))
         crop_info = tiles.info

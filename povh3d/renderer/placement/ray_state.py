@@ -215,7 +215,8 @@ def settle_method(request: RenderRequest, scene: Scene,
                  "a POV-Ray run of the view's own size, which the scene sees there (not the panel's, as in its "
                  "2D render)")
         return request, record or None
-    if request.method_chosen or views is None:
+    given = request.viewing_distance   # rows seen from a distance: only multi-ortho traces them
+    if request.method_chosen or views is None or (given is not None and given < float("inf")):
         raise ConfigError(problem.line())
     return replace(request, method=FALLBACK, method_options={}), {**record, "method_note": problem.note(request.method),
                                                                   "method_fallback": problem.short}
