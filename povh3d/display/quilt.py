@@ -140,8 +140,4 @@ def device_quilt(h3d: np.ndarray, array: LensArray, device: Device) -> np.ndarra
     # layout, by a reshape: no compiled gather to load for one image)
     bank = region.reshape(region.shape[0], array.lenses_x, n, region.shape[2]).transpose(2, 0, 1, 3)[None]
     views = bank_to_quilt_order(bank)
-    tiled = views_to_quilt(views, *device.grid)
-    wq, hq = device.quilt_size
-    if tiled.shape[0] > hq or tiled.shape[1] > wq:   # a bug: the tiles are the quilt divided by the grid
-        raise RuntimeError(f"a {tiled.shape[1]}x{tiled.shape[0]} grid of tiles exceeds the {wq}x{hq} quilt")
-    return np.pad(tiled, ((hq - tiled.shape[0], 0), (0, wq - tiled.shape[1]), (0, 0)))
+    return views_to_quilt(views, *device.grid, size=device.quilt_size)   # each tile copied once, into place

@@ -15,6 +15,7 @@ from povh3d.errors import ConfigError
 from povh3d.image.interleave import extract
 from povh3d.image.io import read_png, read_sidecar
 from povh3d.image.quilt import quilt_to_views
+from tests.conftest import SAMPLES
 from tests.display.mappings.test_looking_glass_shader import agreement
 from tests.support.cli import one_error_line
 
@@ -28,14 +29,12 @@ sphere { <0, 0, 0>, 1 pigment { rgb <1, 0.2, 0.2> } }
 plane { z, 2 pigment { checker rgb 1 rgb 0.2 scale 0.5 } }
 """
 
-#: A made-up landscape unit: a 2560 x 1440 panel 27 in across (108.8 DPI), a sheet of the Gen3
-#: kind (about 46 lenticules per inch, slope -7) and a cone of 45 deg, not the family's 50.  (Its
-#: pixel centres fall on no quilt texel's edge, where the oracle's scalar rounding and the
-#: vectorised one may differ: a 1920 x 1080 panel has a third of its rows there.)
-UNIT = {"configVersion": "3.0", "serial": "LKG-27TEST", "pitch": {"value": 46.1}, "slope": {"value": -7.1},
-        "center": {"value": 0.3}, "viewCone": {"value": 45.0}, "invView": {"value": 1}, "DPI": {"value": 108.8},
-        "screenW": {"value": 2560}, "screenH": {"value": 1440}, "flipImageX": {"value": 0},
-        "flipImageY": {"value": 0}}
+#: A made-up landscape unit (docs/displays.md's example): a 2560 x 1440 panel 27 in across (108.8
+#: DPI), a sheet of the Gen3 kind (46.1 lenticules per inch, slope -7.1) and a cone of 45 deg, not
+#: the family's 50.  (Its pixel centres fall on no quilt texel's edge, where the oracle's scalar
+#: rounding and the vectorised one may differ: a 1920 x 1080 panel has a third of its rows there.)
+EXAMPLE = SAMPLES / "looking_glass_27_example.json"
+UNIT = json.loads(EXAMPLE.read_text())
 
 
 def test_the_public_quilt_layouts():
@@ -110,9 +109,8 @@ def test_a_quilt_renders_from_the_layout_alone(tmp_path, cli, name, grid, tile):
 
 @pytest.mark.povray
 def test_a_native_image_from_the_units_calibration(tmp_path, cli):
-    scene, visual = tmp_path / "s.pov", tmp_path / "visual.json"
+    scene, visual = tmp_path / "s.pov", EXAMPLE
     scene.write_text(SCENE)
-    visual.write_text(json.dumps(UNIT))
     out = tmp_path / "s.png"
     result = cli("render", scene, "--preset", "looking-glass-27-landscape", "--quality", "draft",
                  "--calibration", visual, "-o", out)
