@@ -13,7 +13,10 @@ Rounds are interleaved (command, 48 renders, command, ...); the table gives the 
 spread per scene and the load before and after, and is written into docs/benchmarks.md between
 the ``bench_looking_glass_tiles`` markers.
 
-    .venv/bin/python benchmarks/bench_looking_glass_tiles.py [--repeats 3] [--no-docs]
+    .venv/bin/python benchmarks/bench_looking_glass_tiles.py [--repeats 3] [--no-docs] [--before DIR]
+
+``--before DIR``: a copy of another povh3d (``DIR/povh3d``, ``DIR/templates``), timed in the same
+rounds, for a before/after column.
 """
 
 from __future__ import annotations
@@ -88,6 +91,12 @@ def tile_commands(jobs: list, root: Path) -> list[tuple[list[str], Path, dict[st
 
 
 def main() -> int:
+    before = None
+    if "--before" in sys.argv:   # taken off before the common options are read
+        at = sys.argv.index("--before")
+        before = Path(sys.argv[at + 1]).resolve()
+        del sys.argv[at:at + 2]
+        compileall.compile_dir(str(before / "povh3d"), quiet=1)
     args = repeat_arguments(__doc__, 3)
     # as installed: povh3d's modules byte-compiled (a checkout run with PYTHONDONTWRITEBYTECODE compiles
     # every module at every start, 0.2 s of CPU that no installed copy pays)
@@ -104,11 +113,15 @@ def main() -> int:
             work = tmp / Path(label).stem
             work.mkdir()
             tiles = tile_commands(captured_jobs(scene, work / "capture.png"), work)
-            ours, theirs = [], []
+            ours, theirs, old = [], [], []
             for _ in range(args.repeats):  # interleaved
                 for path in work.glob("lg*"):
                     path.unlink()
                 ours.append(whole_process_times(command(scene, work / "lg.png"), work, env))
+                if before is not None:
+                    old.append(whole_process_times(command(scene, work / "lgb.png"), work,
+                                                   {**env, "PYTHONPATH": str(before)}))
+                    print(label, "before", old[-1], flush=True)
                 wall = cpu = 0.0
                 for argv, folder, tile_env in tiles:
                     w, c = whole_process_times(argv, folder, tile_env)
@@ -117,6 +130,10 @@ def main() -> int:
                 print(label, "command", ours[-1], "48 renders", theirs[-1], flush=True)
             ratios = [o[1] / t[1] for o, t in zip(ours, theirs)]
             cpu_ours, cpu_theirs = [c for _, c in ours], [c for _, c in theirs]
+            if before is not None:
+                cpu_old = [c for _, c in old]
+                label += (f" (before: {_spread(cpu_old)}, "
+                          f"{statistics.median(cpu_old) / statistics.median(cpu_theirs):.2f}x)")
             rows.append((label, _spread(cpu_ours), _spread(cpu_theirs),
                          f"**{statistics.median(cpu_ours) / statistics.median(cpu_theirs):.2f}x** "
                          f"({min(ratios):.2f}-{max(ratios):.2f})",
