@@ -65,7 +65,7 @@ def device_image(h3d_path: str | Path) -> DeviceImage | None:
             raise InputError(f"{str(h3d_path)!r} is a Looking Glass native image whose sidecar names no calibration; "
                              f"render it again with {param('calibration')} visual.json")
         cal = read_visual(record["calibration"])
-        dev = device_of(cal)
+        dev = device(record["device"]) if record.get("device") else device_of(cal)  # the 27": named, no table entry
         if dev is None:
             raise ConfigError(f"the calibration {record['calibration']!r} is of no Looking Glass model povh3d knows; "
                               "give the unit's own visual.json")
@@ -82,6 +82,9 @@ def device_image(h3d_path: str | Path) -> DeviceImage | None:
         raise ConfigError(f"{str(h3d_path)!r} is a quilt without its Looking Glass device (its source render's "
                           f"sidecar names none); replay the quilt a render with {param('preset')} looking-glass-... wrote")
     dev = device(spec["device"])
+    if dev.calibration is None and not spec.get("calibration"):   # the 27": no factory sheet to replay through
+        raise ConfigError(f"{str(h3d_path)!r} is a quilt of the {dev.vendor_name}, which has no public factory "
+                          f"calibration, so its replay needs the unit's; render it again with {param('calibration')} visual.json")
     cal = device_calibration(dev, spec.get("calibration"))
     from ..display.mappings.looking_glass_shader import quilt_to_native
 
@@ -100,14 +103,14 @@ def replay_device(dev_image: DeviceImage, eyes: np.ndarray, optics: str, size: A
     the panel as its subpixel stripes; with a report, each eye's lenses also compared with the slits'."""
     from ..display import presets
     from ..display.mappings.looking_glass_shader import view_fractions
-    from ..display.quilt import default_viewing_distance
+    from ..display.quilt import default_viewing_distance, sheet_focal
     from ..display.replay import device_report, device_sheet, device_slots_at
 
     if optics not in ("pinhole", "barrier", "lens"):
         raise ConfigError(f"a Looking Glass panel is replayed through its sheet ({param('optics')} pinhole, barrier or lens), "
                           f"not {param('optics')} {optics}")
     cal, dev = dev_image.calibration, dev_image.device
-    focal = presets.lens_array(dev.name).focal
+    focal = presets.lens_array(dev.name).focal if dev.calibration is not None else sheet_focal(cal)
     distance = default_viewing_distance(cal.size_mm[1])
     lens_sheet, lens_shift, _, _ = device_sheet(cal, focal, distance)
     labels = np.minimum((view_fractions(cal) * dev.views).astype(np.int64), dev.views - 1)

@@ -226,8 +226,20 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
     """
     from .presets import get_preset, lens_array_from_fields, merge_overrides, physical_panel
 
+    options = {k: v for k, v in (mapping_options or {}).items() if v is not None}
+    given = {k: v for k, v in (overrides or {}).items() if v is not None}
+    device_quilt = lens_array is None and not given and not mapping and method != "subpixel" and not options
     if lens_array is None:
-        fields = merge_overrides(get_preset(preset or "demo"), dict(overrides or {}))
+        fields = get_preset(preset or "demo")
+        if fields.get("sheet_from") == "calibration":  # the 27": the unit's calibration gives the sheet
+            from .presets import calibrated_fields
+
+            if calibration is None and device_quilt:  # a quilt needs no sheet: the layout and a cone
+                return _device_display(Display(_placeholder_array(), preset, fields.get("description"),
+                                               fields.get("views")), _device(preset), None, camera_model or "perspective")
+            if calibration is not None:
+                fields = calibrated_fields(fields, _device_calibration(preset, calibration))
+        fields = merge_overrides(fields, dict(overrides or {}))
         display = Display(lens_array_from_fields(fields), preset or "demo", fields.get("description"),
                           fields.get("views"), fields.get("slant_deg"), fields.get("mapping"),
                           physical_panel(fields), viewing_distance_mm=fields.get("viewing_distance_mm"),
@@ -236,13 +248,8 @@ def build_display(preset: str | None = "demo", overrides: MappingABC[str, Any] |
         if overrides:
             raise ConfigError("a lens array of your own takes no preset overrides; build it with them instead")
         display = Display(lens_array)
-    options = {k: v for k, v in (mapping_options or {}).items() if v is not None}
-    given = {k: v for k, v in (overrides or {}).items() if v is not None}
-    if lens_array is None and not given and not mapping and method != "subpixel" and not options:
-        from .looking_glass import DEVICES
-
-        if preset in DEVICES:  # the device's views at its tile size, for its quilt
-            return _device_display(display, DEVICES[preset], calibration, camera_model or "perspective")
+    if device_quilt and _device(preset) is not None:  # the device's views at its tile size, for its quilt
+        return _device_display(display, _device(preset), calibration, camera_model or "perspective")
     if camera_model is not None:
         raise ConfigError(f"{param('camera_model')} chooses a Looking Glass preset's views; {preset or 'this display'} "
                           f"with these options renders its lens array's own: drop {param('camera_model')}")
@@ -263,12 +270,31 @@ def _device_display(display: Display, device: Any, calibration: str | Path | Non
     """A Looking Glass preset rendered for its quilt (``display.quilt``): the camera bank of
     one lens per tile pixel over the panel, spanning the unit's view cone (its views the
     vendor's perspective cameras, or that bank's oblique orthographic views)."""
-    from .quilt import check_camera_model, device_calibration, quilt_array
+    from .quilt import check_camera_model, quilt_array, quilt_views, warn_default_cone
 
-    cal = device_calibration(device, calibration)
+    views = quilt_views(device, calibration)
     spec = {"device": device.name, "calibration": None if calibration is None else str(Path(calibration).resolve()),
             "camera_model": check_camera_model(camera_model)}
-    return replace(display, lens_array=quilt_array(device, cal), views=device.views, mapping_name=None, quilt=spec)
+    warn_default_cone(device, calibration)
+    return replace(display, lens_array=quilt_array(device, views), views=device.views, mapping_name=None, quilt=spec)
+
+
+def _device(preset: str | None) -> Any:
+    """The Looking Glass device a preset names, or None."""
+    from .looking_glass import DEVICES
+
+    return DEVICES.get(preset or "")
+
+
+def _device_calibration(preset: str | None, calibration: str | Path) -> Any:
+    from .quilt import device_calibration
+
+    return device_calibration(_device(preset), calibration)
+
+
+def _placeholder_array() -> LensArray:
+    """A lens array ``_device_display`` replaces at once (a Display holds one from the start)."""
+    return LensArray("lenticular", 1, 1, 1.0, 1.0, 1.0, Panel(1, 1, 1.0, 1.0))
 
 
 def _subpixel_sheet(display: Display, mapping: str | None, options: dict[str, Any],

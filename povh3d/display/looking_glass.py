@@ -10,7 +10,9 @@ The vendor writes every number as ``{"value": x}``; older tools wrote bare numbe
 and both are read.
 
 ``DEVICES`` holds each model's factory calibration and default quilt, taken from
-the vendor's public device table (docs/displays.md cites each number).
+the vendor's public device table (docs/displays.md cites each number).  The 27" has no
+public factory calibration: its entries hold the quilt alone (from VTK's
+``vtkLookingGlassInterface``), and its sheet comes from the unit's own ``visual.json``.
 """
 
 from __future__ import annotations
@@ -231,18 +233,36 @@ def visual_json(cal: Calibration) -> str:
 class Device:
     """A Looking Glass model: its factory calibration and the vendor's default quilt.
 
+    calibration : the factory calibration, or None where none is public (the 27"): the
+                  unit's own ``visual.json`` gives the sheet
     quilt_size : (width, height) px of the vendor's quilt; may exceed cols x tile (padding)
     grid : (cols, rows) views in the quilt
     aspect : the view's aspect (width / height), the panel's own
+    diagonal_in, default_cone : without a factory calibration, the nominal diagonal (inches)
+                  and the view cone (degrees) a quilt is rendered for until the unit's
+                  calibration gives its own
     """
 
     name: str                 # povh3d's name (a preset)
     vendor_name: str          # the vendor's device type
-    calibration: Calibration
+    calibration: Calibration | None
     quilt_size: tuple[int, int]
     grid: tuple[int, int]
     aspect: float
     serial_prefix: str = field(default="", compare=False)
+    diagonal_in: float = 0.0
+    default_cone: float = 0.0
+
+    def no_calibration(self) -> ConfigError:
+        return no_calibration(self.vendor_name)
+
+    @property
+    def nominal_size_mm(self) -> tuple[float, float]:
+        """The screen (width, height) mm: the factory calibration's, else the nominal diagonal at the aspect."""
+        if self.calibration is not None:
+            return self.calibration.size_mm
+        diagonal = self.diagonal_in * MM_PER_INCH
+        return (diagonal * self.aspect / math.hypot(self.aspect, 1.0), diagonal / math.hypot(self.aspect, 1.0))
 
     @property
     def views(self) -> int:
@@ -254,8 +274,15 @@ class Device:
         return (self.quilt_size[0] // self.grid[0], self.quilt_size[1] // self.grid[1])
 
     def check(self, cal: Calibration) -> None:
-        """Refuse a calibration of another model: another panel size, DPI or view cone."""
+        """Refuse a calibration of another model: another panel size, DPI or view cone (without a
+        factory calibration: a screen of another aspect)."""
         own = self.calibration
+        if own is None:
+            if not math.isclose(cal.screen_w / cal.screen_h, self.aspect, rel_tol=0.01):
+                raise ConfigError(f"the calibration is of a {cal.screen_w}x{cal.screen_h} panel, not the "
+                                  f"{self.vendor_name}'s aspect {self.aspect:g}; give this unit's visual.json "
+                                  "or the device it belongs to")
+            return
         if (cal.screen_w, cal.screen_h) != (own.screen_w, own.screen_h):
             raise ConfigError(f"the calibration is for a {cal.screen_w}x{cal.screen_h} panel but the "
                               f"{self.vendor_name} is {own.screen_w}x{own.screen_h}; give this unit's visual.json "
@@ -266,6 +293,12 @@ class Device:
         if not math.isclose(cal.view_cone, own.view_cone, abs_tol=0.5):
             raise ConfigError(f"the calibration's viewCone {cal.view_cone:g} deg is not the {self.vendor_name}'s "
                               f"{own.view_cone:g} deg; give this unit's visual.json or the device it belongs to")
+
+
+def no_calibration(model: str) -> ConfigError:
+    """The one-line refusal of what needs the sheet of a model with no public factory calibration."""
+    return ConfigError(f"the {model} has no public factory calibration (pitch, slope, center, DPI), so its "
+                       f"sheet is the unit's own; give the unit's visual.json with {param('calibration')}")
 
 
 def _cal(pitch: float, slope: float, center: float, dpi: float, w: int, h: int, cone: float,
@@ -296,6 +329,13 @@ DEVICES: dict[str, Device] = {d.name: d for d in (
            (8184, 8184), (11, 6), 0.5625, "LKG-K"),
     Device("looking-glass-65", "Looking Glass 65\"", _cal(42, -6, 0.3, 136, 7680, 4320, 40, "LKG-D"),
            (8192, 8192), (8, 9), 1.77778, "LKG-D"),
+    # The 27": quilts from VTK's vtkLookingGlassInterface ("27_gen3_l", "27_gen3_p"; its 1.777 is the
+    # 16:9 that [T] writes 1.77778); no factory calibration is public.  The cone until the unit's
+    # calibration gives its own: the Gen3 family's, 50 deg as the 16" and 32" landscape.
+    Device("looking-glass-27-landscape", "Looking Glass 27\" Light Field Display (landscape)", None,
+           (7680, 4320), (8, 6), 1.77778, diagonal_in=27.0, default_cone=50.0),
+    Device("looking-glass-27-portrait", "Looking Glass 27\" Light Field Display (portrait)", None,
+           (7680, 4320), (12, 4), 0.5625, diagonal_in=27.0, default_cone=50.0),
 )}
 
 
@@ -312,8 +352,8 @@ def device_of(cal: Calibration) -> Device | None:
             return d
     for d in DEVICES.values():
         own = d.calibration
-        if (cal.screen_w, cal.screen_h) == (own.screen_w, own.screen_h) and math.isclose(cal.dpi, own.dpi,
-                                                                                          rel_tol=0.02):
+        if own is not None and (cal.screen_w, cal.screen_h) == (own.screen_w, own.screen_h) \
+                and math.isclose(cal.dpi, own.dpi, rel_tol=0.02):
             return d
     return None
 

@@ -20,7 +20,7 @@ if TYPE_CHECKING:  # imported where used: listing presets needs no NumPy
 
 FIELDS = ("description", "grid", "panel", "pixel_pitch", "lens_pitch", "ppl", "lenses",
           "rows", "focal", "views", "slant_deg", "mapping", "lens_rotation", "lattice",
-          "viewing_distance_mm", "viewing_distance_source")
+          "viewing_distance_mm", "viewing_distance_source", "sheet_from")
 
 # Overriding any of these re-derives the panel from the lens array, unless the
 # panel itself is given.
@@ -132,6 +132,10 @@ def lens_array_from_fields(fields: dict[str, Any]) -> LensArray:
     from ..geometry.lens_array import LENGTH_RANGE_MM, MAX_PANEL_PIXELS, LensArray, Panel
 
     grid = fields.get("grid", "square")
+    if fields.get("sheet_from") == "calibration" and "lens_pitch" not in fields:
+        from .looking_glass import no_calibration
+
+        raise no_calibration(str(fields.get("description", "this display")).split(":")[0])
     if "focal" not in fields:
         raise ConfigError(f"the focal length is missing; give it with {param('focal')} (mm)")
     if "pixel_pitch" not in fields:
@@ -297,3 +301,17 @@ def physical_panel(fields: dict[str, Any]) -> Panel | None:
         return None
     (w, h), (sx, sy) = fields["panel"], _pair(f"pixel pitch ({param('pixel_pitch')})", fields["pixel_pitch"])
     return Panel(int(w), int(h), float(sx), float(sy))
+
+
+def calibrated_fields(fields: dict[str, Any], cal: Any) -> dict[str, Any]:
+    """A preset whose sheet is the unit's own (``sheet_from = "calibration"``, the 27") completed
+    from that unit's ``visual.json`` (a ``looking_glass.Calibration``) the way the other Looking
+    Glass presets are made from their factory calibrations (presets.toml): panel, pixel pitch,
+    lens pitch along a row, slant and the focal length that spans the unit's cone."""
+    from .quilt import sheet_focal
+
+    done = {k: v for k, v in fields.items() if k != "sheet_from"}
+    done.update(panel=[cal.screen_w, cal.screen_h], pixel_pitch=cal.pixel_pitch_mm, lens_pitch=cal.lens_pitch_mm,
+                focal=sheet_focal(cal), slant_deg=cal.slant_deg)
+    return done
+

@@ -17,13 +17,14 @@ of the lens array above.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..geometry.lens_array import LensArray, Panel
 from ..image.quilt import bank_to_quilt_order, views_to_quilt
-from ..errors import ConfigError
+from ..errors import ConfigError, param, warn
 from .looking_glass import Calibration, Device, read_visual
 
 #: The camera models of a Looking Glass render: the vendor's sheared perspective cameras (the
@@ -71,23 +72,62 @@ def vendor_cameras(views: int, cone_deg: float, distance_mm: float, size_mm: tup
 
 
 def device_calibration(device: Device, path: str | Path | None) -> Calibration:
-    """The unit's calibration (its ``visual.json``, checked to be of this model), else the factory one."""
+    """The unit's calibration (its ``visual.json``, checked to be of this model), else the factory
+    one; a model with none public (the 27") is refused in one line naming ``--calibration``."""
     if path is None:
+        if device.calibration is None:
+            raise device.no_calibration()
         return device.calibration
     cal = read_visual(path)
     device.check(cal)
     return cal
 
 
-def quilt_array(device: Device, cal: Calibration) -> LensArray:
+@dataclass(frozen=True)
+class QuiltViews:
+    """What a device's quilt is rendered for: the view cone (degrees), the screen (width, height) mm,
+    and where the cone came from (the sidecar says)."""
+
+    cone_deg: float
+    size_mm: tuple[float, float]
+    cone_from: str
+
+
+def quilt_views(device: Device, path: str | Path | None) -> QuiltViews:
+    """The cone and screen of a quilt render: the unit's calibration, else the factory one, else
+    (the 27") the family's default cone over the nominal screen, with a warning."""
+    if path is not None or device.calibration is not None:
+        cal = device_calibration(device, path)
+        return QuiltViews(cal.view_cone, cal.size_mm, "the unit's calibration" if path is not None
+                          else "the factory calibration")
+    return QuiltViews(device.default_cone, device.nominal_size_mm,
+                      f"the Gen3 family's default {device.default_cone:g} deg (no public factory calibration; "
+                      "the unit's calibration refines it)")
+
+
+def warn_default_cone(device: Device, path: str | Path | None) -> None:
+    """One warning when a quilt is rendered for the family's default cone, not the unit's."""
+    if path is None and device.calibration is None:
+        warn(f"the {device.vendor_name} has no public factory calibration: its quilt spans the Gen3 family's "
+             f"{device.default_cone:g} deg cone; give the unit's visual.json with {param('calibration')} "
+             "for its own cone and the panel image")
+
+
+def sheet_focal(cal: Calibration) -> float:
+    """The effective focal length (mm) of a calibration's sheet: ``lens pitch / (2 tan(cone / 2))``,
+    the presets' definition (docs/displays.md)."""
+    return cal.lens_pitch_mm / (2 * math.tan(math.radians(cal.view_cone) / 2))
+
+
+def quilt_array(device: Device, views: QuiltViews) -> LensArray:
     """The lenticular array whose camera bank is the device's quilt: ``tile_w`` lenses across
     the physical panel, ``tile_h`` rows, ``views`` pixels per lens, and the focal length
-    that spans the calibration's view cone."""
+    that spans the view cone."""
     tw, th = device.tile_size
     n = device.views
-    width, height = cal.size_mm
+    width, height = views.size_mm
     pitch_x, pitch_y = width / tw, height / th
-    focal = pitch_x / (2 * math.tan(math.radians(cal.view_cone) / 2))
+    focal = pitch_x / (2 * math.tan(math.radians(views.cone_deg) / 2))
     return LensArray("lenticular", tw, th, pitch_x, pitch_y, focal, Panel(tw * n, th, pitch_x / n, pitch_y))
 
 
@@ -100,8 +140,4 @@ def device_quilt(h3d: np.ndarray, array: LensArray, device: Device) -> np.ndarra
     # layout, by a reshape: no compiled gather to load for one image)
     bank = region.reshape(region.shape[0], array.lenses_x, n, region.shape[2]).transpose(2, 0, 1, 3)[None]
     views = bank_to_quilt_order(bank)
-    tiled = views_to_quilt(views, *device.grid)
-    wq, hq = device.quilt_size
-    if tiled.shape[0] > hq or tiled.shape[1] > wq:   # a bug: the tiles are the quilt divided by the grid
-        raise RuntimeError(f"a {tiled.shape[1]}x{tiled.shape[0]} grid of tiles exceeds the {wq}x{hq} quilt")
-    return np.pad(tiled, ((hq - tiled.shape[0], 0), (0, wq - tiled.shape[1]), (0, 0)))
+    return views_to_quilt(views, *device.grid, size=device.quilt_size)   # each tile copied once, into place

@@ -32,19 +32,24 @@ def parse_quilt_name(name: str) -> tuple[int, int, float] | None:
     return (int(m.group(1)), int(m.group(2)), float(m.group(3))) if m else None
 
 
-def views_to_quilt(views: np.ndarray, cols: int, rows: int) -> np.ndarray:
-    """Tile ``(n, h, w, C)`` views (quilt order) into a ``(rows*h, cols*w, C)`` quilt.
+def views_to_quilt(views: np.ndarray, cols: int, rows: int, size: tuple[int, int] | None = None) -> np.ndarray:
+    """Tile ``(n, h, w, C)`` views (quilt order) into a ``(rows*h, cols*w, C)`` quilt, or one of
+    ``size = (W, H)`` padded (black) at the right and top, as a device's quilt is.
 
     Tiles beyond ``n`` stay black.
     """
     n, h, w, c = views.shape
     if n > cols * rows:
         raise ConfigError(f"{n} views do not fit a {cols}x{rows} quilt; give a larger {param('quilt')}")
-    grid = np.zeros((rows * cols, h, w, c), views.dtype)
-    grid[:n] = views
-    # tile t sits in column t % cols of grid row t // cols counted from the bottom
-    grid = grid.reshape(rows, cols, h, w, c)[::-1]
-    return grid.transpose(0, 2, 1, 3, 4).reshape(rows * h, cols * w, c)
+    width, height = size or (cols * w, rows * h)
+    if width < cols * w or height < rows * h:
+        raise ConfigError(f"a {cols}x{rows} grid of {w}x{h} tiles exceeds the {width}x{height} quilt")
+    quilt = np.zeros((height, width, c), views.dtype)
+    # tile t sits in column t % cols of grid row t // cols counted from the bottom; one copy a tile
+    for t in range(n):
+        bottom = height - (t // cols) * h
+        quilt[bottom - h:bottom, (t % cols) * w:(t % cols + 1) * w] = views[t]
+    return quilt
 
 
 def quilt_to_views(quilt: np.ndarray, cols: int, rows: int, count: int | None = None) -> np.ndarray:

@@ -195,11 +195,14 @@ def parse_render_time(log: str) -> float | None:
 
 _RADIOSITY_SAMPLES = re.compile(r"^\s*Radiosity samples calculated:\s*(?P<count>\d+)")
 _RADIOSITY_TIME = re.compile(r"^\s*Radiosity Time:.*\((?P<seconds>\d+(?:\.\d+)?) seconds\)")
+_RADIOSITY_SECONDS = re.compile(r"Radiosity Time:[^\n]*seconds")
 
 
 def parse_radiosity(log: str) -> tuple[int, float] | None:
     """The radiosity samples POV-Ray computed (pretrace and final render) and the seconds of its
     pretrace, summed over every frame of the log; None if it reports no radiosity statistics."""
+    if "Radiosity samples calculated" not in log and not _RADIOSITY_SECONDS.search(log):
+        return None  # without radiosity ("Radiosity Time: No radiosity"): no log of many frames to unwrap (0.1 s)
     lines = unwrap(log)
     counts = [int(m["count"]) for line in lines if (m := _RADIOSITY_SAMPLES.match(line))]
     seconds = [float(m["seconds"]) for line in lines if (m := _RADIOSITY_TIME.match(line))]

@@ -25,6 +25,18 @@ def test_quilt_round_trip(cols, rows, h, w, data):
     assert np.array_equal(quilt_to_views(views_to_quilt(views, cols, rows), cols, rows, n), views)
 
 
+def test_a_device_quilt_is_padded_at_the_right_and_top():
+    # the vendor's viewPortion reads the tiles from the bottom left of a quilt a few pixels larger
+    views = np.random.default_rng(2).integers(1, 256, (5, 3, 4, 3), dtype=np.uint8)
+    padded = views_to_quilt(views, 3, 2, size=(14, 8))
+    plain = views_to_quilt(views, 3, 2)
+    assert padded.shape == (8, 14, 3)
+    assert np.array_equal(padded, np.pad(plain, ((2, 0), (0, 2), (0, 0))))
+    assert not np.array_equal(padded[:6, :12], plain)   # control: the padding is not at the bottom
+    with pytest.raises(ConfigError):
+        views_to_quilt(views, 3, 2, size=(11, 8))
+
+
 def test_name_carries_grid_and_aspect():
     name = quilt_name("scene", 8, 6, 0.75)
     assert name == "scene_qs8x6a0.75.png"

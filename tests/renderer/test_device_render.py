@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from povh3d.display.quilt import quilt_array
+from povh3d.display.quilt import quilt_array, quilt_views
 from povh3d.display.looking_glass import DEVICES, visual_json
 from povh3d.image.interleave import extract
 from povh3d.image.io import read_png, read_sidecar
@@ -25,14 +25,16 @@ PORTRAIT = DEVICES["looking-glass-portrait"]
 @pytest.mark.parametrize("name", sorted(DEVICES))
 def test_quilt_array_spans_the_cone_at_the_tile_size(name):
     d = DEVICES[name]
-    la = quilt_array(d, d.calibration)
+    views = quilt_views(d, None)   # the factory calibration's cone; the 27": the family's default
+    cone = d.calibration.view_cone if d.calibration is not None else d.default_cone
+    la = quilt_array(d, views)
     assert (la.lenses_x, la.lenses_y) == d.tile_size and la.views == (1, d.views)
-    assert la.panel.size_mm == pytest.approx(d.calibration.size_mm, rel=1e-12)
+    assert la.panel.size_mm == pytest.approx(d.nominal_size_mm, rel=1e-12)
     # the outermost view directions: u = +-(n - 1)/2 pixels of p/n mm, over f
     n, s = d.views, la.panel.pitch_x
     edge = math.degrees(math.atan((n - 1) / 2 * s / la.focal))
-    assert 2 * edge == pytest.approx(d.calibration.view_cone * (n - 1) / n, rel=0.03)
-    assert math.degrees(2 * math.atan(la.pitch_x / (2 * la.focal))) == pytest.approx(d.calibration.view_cone)
+    assert 2 * edge == pytest.approx(cone * (n - 1) / n, rel=0.03)
+    assert math.degrees(2 * math.atan(la.pitch_x / (2 * la.focal))) == pytest.approx(cone)
 
 
 @pytest.mark.povray  # main registers the marker (make test-fast leaves it out)

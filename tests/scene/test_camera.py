@@ -106,3 +106,31 @@ def test_a_camera_type_no_pose_can_come_from_is_told_from_the_text():
     assert written_camera_type("#declare C = camera { mesh_camera { 1 3 mesh { M } } }\ncamera { C }\n",
                                read) is None
     assert written_camera_type("sphere { 0, 1 }\n", read) is None
+
+
+def test_the_camera_scan_reads_files_as_the_tokens_do():
+    """``holds_camera``'s one-regex scan against the tokens (``scene.camera.tokens``): the word
+    ``camera`` outside comments and strings, and the literal ``#include`` names, on POV-Ray's own
+    include files and example scenes and on the corner cases."""
+    import glob
+
+    from povh3d.scene.camera import tokens
+    from povh3d.scene.camera_script import _camera_word_and_includes, _literal_includes
+
+    texts = ['// camera\n#include "a.inc" /* camera\n */ "camera" #include "b.inc"',
+             '#  include "x y.inc"\ncamera {}', "#declare my_camera = 1; #declare camera_x = 1;",
+             '"a \\" camera" #include "q.inc"', '#include "one.inc" #include "two.inc" sphere { 0, 1 }']
+    files = sorted(glob.glob("/usr/share/povray-3.7/include/*.inc")) + \
+        sorted(glob.glob("/usr/share/doc/povray/examples/**/*.pov", recursive=True))[:200]
+    texts += [open(f, encoding="latin-1").read() for f in files]
+    for text in texts:
+        toks = tokens(text)
+        word, includes = _camera_word_and_includes(text)
+        assert word == any(t.text == "camera" for t in toks), text[:60]
+        if not word:   # the scan stops at the first camera; up to there it has every include
+            assert includes == _literal_includes(toks), text[:60]
+    assert _camera_word_and_includes(texts[0]) == (False, ["a.inc", "b.inc"])
+    assert _camera_word_and_includes(texts[1]) == (True, ["x y.inc"])
+    # control: a scan that ignored comments and strings finds the commented camera, which the tokens do not
+    import re
+    assert re.search(r"\bcamera\b", texts[0]) and not any(t.text == "camera" for t in tokens(texts[0]))

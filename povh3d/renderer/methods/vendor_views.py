@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ...display.looking_glass import device
-from ...display.quilt import default_viewing_distance, device_calibration, vendor_cameras
+from ...display.quilt import default_viewing_distance, quilt_views, vendor_cameras
 from ...geometry.lens_array import LensArray
 from ...image.interleave import interleave
 from ...image.quilt import quilt_to_bank_order
@@ -45,10 +45,10 @@ def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: d
                      placement: dict[str, Any] | None, progress: Progress | None = None) -> MethodResult:
     """Render the device's views with the vendor's cameras; return them as ``quilt_array``'s H3D image."""
     dev = device(spec["device"])
-    cal = device_calibration(dev, spec.get("calibration"))
+    cone = quilt_views(dev, spec.get("calibration"))
     width, height = lens_array.panel.size_mm
     distance, source = viewer_distance(placement, height)
-    cameras = vendor_cameras(dev.views, cal.view_cone, distance, (width, height))
+    cameras = vendor_cameras(dev.views, cone.cone_deg, distance, (width, height))
     quality = settings.spec.point_sampled()   # one ray a pixel of a view: POV-Ray's antialiasing
     settings = replace(settings, quality=quality)
     header = display_header(lens_array)
@@ -67,9 +67,9 @@ def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: d
     images, stats = render_shots(scene, batch, settings, method="looking-glass", header=header, progress=progress)
     bank = quilt_to_bank_order(np.stack(images))          # (1, N, th, tw, C): bank view k = quilt view N-1-k
     h3d = interleave(bank)
-    half_cone = math.radians(cal.view_cone) / 2
+    half_cone = math.radians(cone.cone_deg) / 2
     record = {"camera_model": "perspective", "viewer_distance_mm": round(distance, 4), "viewer_distance_from": source,
-              "view_cone_deg": cal.view_cone, "views": dev.views,
+              "view_cone_deg": cone.cone_deg, "view_cone_from": cone.cone_from, "views": dev.views,
               "camera_offsets_mm": [round(-distance * math.tan(half_cone), 4), round(distance * math.tan(half_cone), 4)],
               "screen_mm": [width, height]}
     return MethodResult(h3d, stats, distance, quality, record=record,

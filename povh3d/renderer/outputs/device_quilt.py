@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ...display.looking_glass import Device
-from ...display.quilt import device_calibration, device_quilt
+from ...display.quilt import device_calibration, device_quilt, quilt_views
 from ...errors import ConfigError, param
 from ...geometry.lens_array import LensArray
 from ...image.io import check_output
@@ -45,20 +45,22 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     from ...display.mappings.looking_glass_shader import quilt_to_native
 
     dev = device(spec["device"])
-    cal = device_calibration(dev, spec.get("calibration"))
+    cone = quilt_views(dev, spec.get("calibration"))
     quilt_path, native_path = quilt_outputs(output, dev, spec.get("calibration") is not None)
     quilt = device_quilt(h3d, array, dev)
     entry: dict[str, Any] = {"device": dev.name, "file": quilt_path.name, "grid": list(dev.grid),
                              "quilt_size": list(dev.quilt_size), "tile_size": list(dev.tile_size),
-                             "aspect": dev.aspect, "view_cone_deg": cal.view_cone}
+                             "aspect": dev.aspect, "view_cone_deg": cone.cone_deg, "view_cone_from": cone.cone_from}
     source = str(output.resolve())
     write_image(quilt_path, quilt, base_record("quilt", grid=list(dev.grid), aspect=dev.aspect, views=dev.views,
                                                source=source))
     if native_path is not None:
+        cal = device_calibration(dev, spec["calibration"])
         native = quilt_to_native(quilt, dev.grid, cal, views=dev.views)
         write_image(native_path, native, base_record("panel", mapping="looking-glass-shader",
                                                      calibration=str(Path(spec["calibration"]).resolve()),
-                                                     size_px=[cal.screen_w, cal.screen_h], source=source))
+                                                     device=dev.name, size_px=[cal.screen_w, cal.screen_h],
+                                                     source=source))
         entry["native"] = native_path.name
     return entry
 
@@ -76,5 +78,5 @@ def check_device_render(spec: Mapping[str, Any], output: Path, animated: bool, d
         raise ConfigError(f"{param('depth_maps')} traces the lens array's rays, not the vendor's perspective cameras; add "
                           f"{param('camera_model')} orthographic for a Looking Glass render with depth maps")
     dev = device(spec["device"])
-    device_calibration(dev, spec.get("calibration"))
+    quilt_views(dev, spec.get("calibration"))
     quilt_outputs(output, dev, spec.get("calibration") is not None)
