@@ -138,9 +138,9 @@ def pass_lighting(scene: Scene) -> dict[str, str]:
     return needed_settings(scene.features, LIGHTING_OFF)
 
 
-#: Most POV-Ray runs of a fog pass at once.  A further frame of a run costs about 0.25 s, nearly all of it
-#: POV-Ray waiting (20 frames of an empty scene: 5 s of wall time, 0.1 s of CPU), so the 64 fog pairs of
-#: demo's depth maps, 30 s in one run, take a few seconds in these; each run holds a parse of the scene.
+#: Most POV-Ray runs of a fog pass of many directions at once (the per-view depth maps where their mesh
+#: camera cannot be used, ``_views_pass``).  A further frame of a run costs about 0.25 s, nearly all of it
+#: POV-Ray waiting (20 frames of an empty scene: 5 s of wall time, 0.1 s of CPU); each run parses the scene.
 FOG_RUNS = 16
 #: Fewest fog pairs a run of a many-direction pass renders: a run costs about 0.65 s to start.
 PAIRS_PER_RUN = 2
