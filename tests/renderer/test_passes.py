@@ -282,3 +282,29 @@ def test_the_inside_solid_check_says_its_progress_and_its_cost(tmp_path):
         if name == "fog":
             assert (2, 2) in calls and calls.index((2, 2)) < len(calls) - 1, calls
     assert names == {"fog": ["scene-camera-text", "origins-inside"], "clear": ["scene-camera-text"]}
+
+
+@pytest.mark.povray
+def test_every_pass_says_its_progress(tmp_path):
+    """The issue: a status line at '1/1 frames' and then seconds of silence.  A camera scene with depth maps
+    has three phases, each counted from 0 to its end: the camera's run (its two fog frames), the render,
+    the depth maps' two frames; a scene without a camera has no camera phase (negative control)."""
+    import povh3d
+
+    def phases(text: str) -> list[list[tuple[float, float]]]:
+        scene = tmp_path / "s.pov"
+        scene.write_text(text)
+        calls: list[tuple[float, float]] = []
+        povh3d.render(scene, tmp_path / "o.png", lens_array=_plane_array(), quality="draft", use_cache=False,
+                      depth_maps=tmp_path / "maps", progress=lambda d, t: calls.append((d, t)))
+        found: list[list[tuple[float, float]]] = []
+        for done, total in calls:
+            if not found or total != found[-1][-1][1] or done < found[-1][-1][0]:
+                found.append([])
+            found[-1].append((done, total))
+        return found
+
+    camera = phases(CAMERA)
+    assert [(p[0][0], p[-1]) for p in camera] == [(0, (2, 2)), (0, (1, 1)), (0, (2, 2))], camera
+    plain = phases("\n".join(line for line in CAMERA.splitlines() if not line.startswith("camera")))
+    assert [(p[0][0], p[-1]) for p in plain] == [(0, (1, 1)), (0, (2, 2))], plain
