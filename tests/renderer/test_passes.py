@@ -1,6 +1,6 @@
 """Only the POV-Ray passes something reads (``renderer.placement.place.depth_wanted``), each one in the
 sidecar's ``passes`` with its cost; the scene camera alone at its smallest exact size; the depth maps'
-fog pairs spread over several runs with the same values as one run, and their progress said."""
+fog pairs in one mesh camera with the values of a pair per view, and every pass's progress said."""
 
 from __future__ import annotations
 
@@ -146,7 +146,7 @@ def _plane_and_sphere(array: LensArray) -> tuple[np.ndarray, np.ndarray]:
 
 @pytest.mark.povray
 def test_depth_maps_in_one_mesh_camera_equal_the_per_view_passes_and_say_their_progress(tmp_path, monkeypatch):
-    """Every view's fog pair in one mesh camera (two frames of one run) gives the values of a fog pair per
+    """Every view's fog pair in one mesh camera (two frames, a run each) gives the values of a fog pair per
     view (the code before, ``_fog_batch``) within the pass's 16-bit resolution (here 7e-4 mm; measured
     equal to the bit), and those are the scene's: the plane at z = 5 mm, which a view's ray of slopes
     (a, b) meets 5 |(a, b, 1)| mm from the screen, and the sphere before it."""
@@ -169,7 +169,7 @@ def test_depth_maps_in_one_mesh_camera_equal_the_per_view_passes_and_say_their_p
         tiled = depth.view_depth_maps(scene, array, settings, 10.0, 1.0, progress=lambda d, t: calls.append((d, t)))
         monkeypatch.setattr(depth, "_views_pass", per_view)
         each = depth.view_depth_maps(scene, array, settings, 10.0, 1.0)
-    assert [(n.name, n.shots, n.runs) for n in notes] == [("depth-maps", 2, 1), ("depth-maps", 18, 3)]
+    assert [(n.name, n.shots, n.runs) for n in notes] == [("depth-maps", 2, 2), ("depth-maps", 18, 3)]
     assert np.array_equal(np.isnan(tiled), np.isnan(each))
     assert np.nanmax(np.abs(tiled - each)) < 0.002
     assert calls[-1] == (2, 2) and calls[0][0] == 0
@@ -192,7 +192,7 @@ def test_depth_maps_are_a_pass_of_the_sidecar(cli, tmp_path):
     assert result.code == 0, result.err
     passes, _ = _passes(out)
     assert [p["name"] for p in passes] == ["depth-maps"]      # native frame: no camera, no summary pass
-    assert passes[0]["shots"] == 2 and passes[0]["runs"] == 1   # 16 views' fog pairs in one mesh camera
+    assert passes[0]["shots"] == 2 and passes[0]["runs"] == 2   # 16 views' fog pairs in one mesh camera
 
 
 #: Cameras the text alone decides, with POV-Ray's own evaluation as the oracle.

@@ -162,14 +162,16 @@ def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArr
 
 def _views_batch(slopes: np.ndarray, views: tuple[int, int], cells: tuple[int, int], pitch: tuple[float, float],
                  front_clearance: float, fog: float) -> ShotBatch:
-    """The fog pair of many views as two frames of one POV-Ray run: the views' orthographic cameras
-    tiled into one mesh camera (``camera_mesh.tiled_views_mesh``, the very rays of ``_fog_batch``).
+    """The fog pair of many views as two frames, one POV-Ray run each at once: the views' orthographic
+    cameras tiled into one mesh camera (``camera_mesh.tiled_views_mesh``, the very rays of ``_fog_batch``).
     A further frame of a run costs about 0.25 s, nearly all of it POV-Ray waiting, so demo's 64 views
-    took 128 frames (2 s over 16 runs); their pixels in one image take 2 frames."""
+    took 128 frames (2 s over 16 runs); their pixels in one image take 2 frames, and the two runs side
+    by side 0.45-0.65 s where one run of both took 0.65-1.0 s (the same maps to the bit: each run starts
+    POV-Ray's random sequences afresh, at one thread, ``PASS_THREADS``)."""
     mesh = tiled_views_mesh(slopes, views, cells, pitch, front_clearance)
     w, h = mesh.image_size
     return ShotBatch("depth_mesh.pov.j2", {"fog_distance": fog, "mesh": mesh},
-                     [{"fog": 0}, {"fog": 1}], w, h, shots_per_job=2, processes=1, options=("-A",))
+                     [{"fog": 0}, {"fog": 1}], w, h, shots_per_job=1, processes=2, options=("-A",))
 
 
 def _views_pass(slopes: np.ndarray, views: tuple[int, int], cells: tuple[int, int], pitch: tuple[float, float],
