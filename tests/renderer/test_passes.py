@@ -308,3 +308,14 @@ def test_every_pass_says_its_progress(tmp_path):
     assert [(p[0][0], p[-1]) for p in camera] == [(0, (2, 2)), (0, (1, 1)), (0, (2, 2))], camera
     plain = phases("\n".join(line for line in CAMERA.splitlines() if not line.startswith("camera")))
     assert [(p[0][0], p[-1]) for p in plain] == [(0, (1, 1)), (0, (2, 2))], plain
+
+
+def test_a_tiled_image_one_pixel_wide_takes_a_fog_pair_per_view():
+    """POV-Ray's mesh camera crashes on an image one pixel wide (``mesh_camera_batch``): one view of one
+    lens column takes the per-view pass; two such views, tiled two pixels wide, the mesh camera."""
+    import povh3d.renderer.passes.depth as depth
+
+    batch, tiles = depth._views_pass(np.zeros((1, 2)), (1, 1), (1, 5), (0.6, 0.6), _plane_array(), 10.0, 10.0)
+    assert tiles is None and batch.template == "depth.pov.j2" and [s["fog"] for s in batch.shots] == [0, 1]
+    batch, tiles = depth._views_pass(np.zeros((2, 2)), (1, 2), (1, 5), (0.6, 0.6), _plane_array(), 10.0, 10.0)
+    assert tiles == ((1, 2), (1, 5)) and batch.template == "depth_mesh.pov.j2" and (batch.width, batch.height) == (3, 6)
