@@ -2,7 +2,8 @@
 
 Every cache of povh3d keeps its entries here: the engine's rendered frames and
 scene cameras, the whole outputs of ``renderer/output_cache.py`` and the manifests of
-converted models and volumes (``renderer/content/model.py``, ``renderer/content/volume.py``).  It sits at
+converted models and volumes (``renderer/content/model.py``, ``renderer/content/volume.py``) and
+Jinja's compiled templates (``scene/templates.py``).  It sits at
 the package root beside ``system.py`` (not in ``engine/`` or ``povray/``) because
 every layer keeps something in it, the command line reads the output cache before
 NumPy or the engine is imported, and a root module that all layers may use needs

@@ -202,3 +202,28 @@ def _quad_mesh(origin_x: np.ndarray, origin_y: np.ndarray, u: np.ndarray, v: np.
     faces = np.concatenate([base + [0, t, t + 1] for t in range(1, n - 1)], axis=1).reshape(-1, 3)
     return CameraMesh(vertices, normals, uv.reshape(-1, 2), faces.astype(np.int64), (W + 1, H + 1),
                       (float(scale[0]), float(scale[1]), float(scale[2])))
+
+
+def tiled_views_mesh(slopes: np.ndarray, views: tuple[int, int], cells: tuple[int, int],
+                     pitch: tuple[float, float], front_clearance: float) -> CameraMesh:
+    """Orthographic views tiled into one mesh camera: view ``n = l Nx + k`` of slopes ``(a, b)`` (``slopes``
+    ``(Ny Nx, 2)``) fills image tile ``(l, k)`` of ``cols x rows`` pixels, and its pixel ``(i, j)`` is the
+    ray of direction ``(a, b, 1)`` through ``(x_j, y_i, 0)``, the centre of cell ``(j, i)`` of a
+    ``cols x rows`` grid of ``pitch`` centred on the origin (row 0 on top), started ``front_clearance``
+    mm before the screen: the rays of an ``orthographic`` camera along ``(a, b, 1)`` backed off by the
+    clearance over that grid, one quad per view (the origin is linear in the pixel, the direction constant).
+
+    Vertices are in grid pitches (x, y) and mm (z), scaled by ``(px, py, 1)``: the quads' borders,
+    multiples of 1/2, are exact in POV-Ray's single precision (see ``CameraMesh``).
+    """
+    (ny, nx), (cols, rows), (px, py) = views, cells, pitch
+    a, b = (np.asarray(slopes, dtype=np.float64).reshape(ny * nx, 2)[:, n:n + 1] for n in range(2))
+    view = np.arange(ny * nx)[:, None]
+    col0, row0 = (view % nx) * cols, (view // nx) * rows
+    # Corners counter-clockwise from bottom left, on the grid's outer borders.
+    x = np.array([[-cols / 2, cols / 2, cols / 2, -cols / 2]])
+    y = np.array([[-rows / 2, -rows / 2, rows / 2, rows / 2]])
+    col = col0 + np.array([[-0.5, cols - 0.5, cols - 0.5, -0.5]])
+    row = row0 + np.array([[rows - 0.5, rows - 0.5, -0.5, -0.5]])
+    return _quad_mesh(x - a * front_clearance / px, y - b * front_clearance / py, a * px, b * py, col, row,
+                      (nx * cols, ny * rows), front_clearance, 1.0, (px, py, 1.0))

@@ -194,8 +194,7 @@ def read_png(path: str | Path) -> np.ndarray:
 
 def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     """A PNG file or PNG bytes as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
-    import numpy as np
-    from PIL import Image
+    from . import png_codec
 
     if isinstance(source, Path):
         with open(source, "rb") as fh:
@@ -203,25 +202,35 @@ def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     else:
         head = source[:26]
     check_png_memory(head, name)
-    # Pillow's own bound (a two-line DecompressionBombWarning past 89 Mpixels, an error past twice that)
-    # knows nothing of the memory there is: check_png_memory is the bound here, from the header.
-    Image.MAX_IMAGE_PIXELS = None
     try:
-        if head[24:25] == b"\x10":  # IHDR's bit depth: 16
-            arr = _decode_png16(source.read_bytes() if isinstance(source, Path) else source)
-        else:  # Pillow reads a file by parts: no copy of its bytes beside the image
-            with Image.open(source if isinstance(source, Path) else io.BytesIO(source)) as im:
-                im.load()
-                picture: Image.Image = im
-                if im.mode not in ("RGB", "RGBA", "L", "LA"):
-                    picture = im.convert("RGBA" if "A" in im.getbands() else "RGB")
-                arr = np.asarray(picture)
+        data = source.read_bytes() if isinstance(source, Path) else source
+        # libpng (png_codec) reads 8- and 16-bit grey and RGB(A), every POV-Ray frame; Pillow, whose
+        # import costs a render more than its frames, only the layouts it leaves (palette, interlaced).
+        arr = png_codec.decode(data)
+        if arr is None:
+            arr = _decode_png16(data) if head[24:25] == b"\x10" else _decode_pillow(data)
     except MemoryError:
         raise InputError(f"{name!r} is too large to read into memory") from None
-    except Exception as exc:  # noqa: BLE001 - zlib, pypng and Pillow raise many kinds on a damaged file
+    except Exception as exc:  # noqa: BLE001 - zlib, libpng, pypng and Pillow raise many kinds on a damaged file
         raise InputError(f"cannot read {name!r} as a PNG image ({type(exc).__name__}: {exc}); "
                          "check that it is a complete PNG file") from None
     return arr[..., None] if arr.ndim == 2 else arr
+
+
+def _decode_pillow(data: bytes) -> np.ndarray:
+    """8 bits or fewer in a layout ``png_codec`` leaves (palette, interlaced, 1-4 bits): Pillow, as RGB(A) or grey."""
+    import numpy as np
+    from PIL import Image
+
+    # Pillow's own bound (a two-line DecompressionBombWarning past 89 Mpixels, an error past twice that)
+    # knows nothing of the memory there is: check_png_memory is the bound here, from the header.
+    Image.MAX_IMAGE_PIXELS = None
+    with Image.open(io.BytesIO(data)) as im:
+        im.load()
+        picture: Image.Image = im
+        if im.mode not in ("RGB", "RGBA", "L", "LA"):
+            picture = im.convert("RGBA" if "A" in im.getbands() else "RGB")
+        return np.asarray(picture)
 
 
 def png_size(head: bytes) -> tuple[int, int, int] | None:
@@ -251,17 +260,12 @@ def check_png_memory(head: bytes, name: str) -> None:
 
 
 def _decode_png16(data: bytes) -> np.ndarray:
-    """16 bits per channel: ``png_codec`` (libpng), pypng for the layouts it leaves (interlaced, palette)."""
+    """16 bits per channel in a layout ``png_codec`` leaves (interlaced, palette): pypng (Pillow reads 8 bits)."""
     import numpy as np
     import png
 
-    from . import png_codec
-
-    arr = png_codec.decode(data)
-    if arr is None:
-        width, height, rows, info = png.Reader(bytes=data).asDirect()
-        arr = np.vstack([np.asarray(r, dtype=np.uint16) for r in rows]).reshape(height, width, info["planes"])
-    return arr
+    width, height, rows, info = png.Reader(bytes=data).asDirect()
+    return np.vstack([np.asarray(r, dtype=np.uint16) for r in rows]).reshape(height, width, info["planes"])
 
 
 def write_png(path: str | Path, image: np.ndarray) -> None:

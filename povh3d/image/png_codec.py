@@ -8,8 +8,9 @@ filter used here, for a slightly larger file.
 Reading checks the chunks (their CRCs, the header) here and leaves the pixels
 to libpng (``imagecodecs.png_decode``, 0.65 s for a 3840x2160 16-bit RGB file):
 it undoes the row filters POV-Ray's libpng mixes row by row, as a numba loop
-did before at the cost of a JIT compiler's start-up.  8-bit files are Pillow's
-to read.  Writing filters every row with Up (a NumPy subtraction, a few rows at
+did before at the cost of a JIT compiler's start-up.  8-bit files too: every
+POV-Ray frame is one, and importing Pillow (15-25 ms) cost a render more than
+reading its frames.  Writing filters every row with Up (a NumPy subtraction, a few rows at
 a time: an H3D image's rows are much alike) and deflates at level 1 with
 run-length matching (``Z_RLE``: the runs Up leaves are what there is to find).
 Only what povh3d reads and writes is handled: grey, grey+alpha, RGB or RGBA,
@@ -33,7 +34,7 @@ _BLOCK_BYTES = 1 << 22
 
 
 def decode(data: bytes) -> np.ndarray | None:
-    """A 16-bit PNG's bytes as ``(H, W, C)`` uint16; None when not one this module reads.
+    """An 8- or 16-bit PNG's bytes as ``(H, W, C)`` uint8 or uint16; None when not one this module reads.
 
     Raises ``ValueError`` (or imagecodecs' ``PngError``) on a damaged file.
     """
@@ -58,13 +59,14 @@ def decode(data: bytes) -> np.ndarray | None:
     if header is None:
         raise ValueError("no IHDR chunk")
     width, height, depth, colour, _, _, interlace = header
-    if depth != 16 or colour not in _PLANES or interlace != 0:
+    if depth not in (8, 16) or colour not in _PLANES or interlace != 0:
         return None
     from imagecodecs import png_decode  # libpng; its module loads on this first call
 
     image = png_decode(data)
-    if image.dtype != np.uint16 or image.size != height * width * _PLANES[colour]:
-        raise ValueError(f"libpng read {image.shape} {image.dtype} from a {width}x{height} 16-bit header")
+    dtype = np.uint16 if depth == 16 else np.uint8
+    if image.dtype != dtype or image.size != height * width * _PLANES[colour]:
+        raise ValueError(f"libpng read {image.shape} {image.dtype} from a {width}x{height} {depth}-bit header")
     return image.reshape(height, width, _PLANES[colour])
 
 

@@ -138,11 +138,22 @@ def _warn_unlit(scene: Scene, image: np.ndarray | None = None) -> None:
         return
     if image is not None and image.size:
         full = np.iinfo(image.dtype).max if np.issubdtype(image.dtype, np.integer) else 1.0
-        if float(np.quantile(image, 0.99)) >= _DARK * full:
+        if _quantile(image, 0.99) >= _DARK * full:
             return
     if not scene.lit:
         warn(f"{scene.path.name} has no light_source (and no emission): its objects show only their "
              "ambient colour, nearly black; add a light_source")
+
+
+def _quantile(values: np.ndarray, q: float) -> float:
+    """``np.quantile(values, q)`` (linear), by a partial sort: NumPy's own loads ``numpy.ma`` (7-13 ms of a
+    render's start-up) through ``np.unique``."""
+    flat = values.reshape(-1)
+    pos = q * (flat.size - 1)
+    lo = int(pos)
+    hi = min(lo + 1, flat.size - 1)
+    part = np.partition(flat, (lo, hi))
+    return float(part[lo]) + (pos - lo) * (float(part[hi]) - float(part[lo]))
 
 
 # Bytes a render holds per panel pixel at least: a ray (centre, direction: 5 float64), the

@@ -17,7 +17,7 @@ from povh3d.geometry.footprint import latin_hypercube
 from povh3d.geometry.rays import pixel_rays
 from povh3d.image.interleave import extract
 from tests.support.arrays import lenticular_array, square_array
-from tests.support.oracles import cropped_view_bank_mesh, view_bank_mesh
+from tests.support.oracles import cropped_view_bank_mesh, mesh_rays, view_bank_mesh
 
 BOX = ((-1.2, -0.7, -1.0), (0.9, 0.8, 2.0))
 
@@ -166,26 +166,11 @@ def test_cropped_mesh_rays_match_the_uncropped_mesh(samples):
     assert len(crop.faces) < len(full.faces) * 4
     assert crop.image_size == (plan.size[0] + 1, banks * plan.size[1] + 1)
 
-    def rays(mesh, cols, rows):
-        # Barycentric interpolation at each pixel centre's UV, the lookup rule of camera_mesh.CameraMesh.
-        w, h = mesh.image_size
-        uv = np.stack([(cols + 0.0) / w, 1.0 - (rows + 1.0) / h], -1)
-        out = np.full((len(uv), 6), np.nan)
-        for a, b, c in mesh.faces:
-            t = np.linalg.solve(np.array([mesh.uvs[b] - mesh.uvs[a], mesh.uvs[c] - mesh.uvs[a]]).T,
-                                (uv - mesh.uvs[a]).T).T
-            inside = (t >= -1e-12).all(1) & (t.sum(1) <= 1 + 1e-12)
-            wts = np.column_stack([1 - t.sum(1), t])
-            p = wts @ np.array([mesh.vertices[a], mesh.vertices[b], mesh.vertices[c]])
-            n = wts @ np.array([mesh.normals[a], mesh.normals[b], mesh.normals[c]])
-            out[inside] = np.column_stack([p, n])[inside]
-        return out
-
     for b in range(banks):
         r, c = np.meshgrid(np.flatnonzero(plan.keep_rows), np.flatnonzero(plan.keep_cols), indexing="ij")
         rc, cc = np.meshgrid(np.arange(plan.size[1]), np.arange(plan.size[0]), indexing="ij")
-        got = rays(crop, cc.ravel(), rc.ravel() + b * plan.size[1])
-        want = rays(full, c.ravel(), r.ravel() + b * plan.full_size[1])
+        got = mesh_rays(crop, cc.ravel(), rc.ravel() + b * plan.size[1])
+        want = mesh_rays(full, c.ravel(), r.ravel() + b * plan.full_size[1])
         assert not np.isnan(want).any() and np.allclose(got, want, atol=1e-9), b
 
 

@@ -1,6 +1,6 @@
 """Only the POV-Ray passes something reads (``renderer.placement.place.depth_wanted``), each one in the
 sidecar's ``passes`` with its cost; the scene camera alone at its smallest exact size; the depth maps'
-fog pairs spread over several runs with the same values as one run, and their progress said."""
+fog pairs in one mesh camera with the values of a pair per view, and every pass's progress said."""
 
 from __future__ import annotations
 
@@ -126,31 +126,60 @@ def _plane_array() -> LensArray:
                      panel=Panel(48, 36, 0.2, 0.2))   # 3x3 views
 
 
+def _plane_and_sphere(array: LensArray) -> tuple[np.ndarray, np.ndarray]:
+    """``(Ny, Nx, Ly, Lx)`` mm along each view's rays from the screen to the sphere of radius 2 at (1, 0.5, 0)
+    or else the plane z = 5 (docs/geometry.md: view (l, k) has slopes (u_k, v_l) / f, pixel (i, j) is the
+    ray through lens (j, i)), and where a ray is clear of the sphere's silhouette (0.05 mm)."""
+    ny, nx = array.require_views()
+    s, f = array.panel.pitch_x, array.focal
+    a = ((np.arange(nx) + 0.5 - nx / 2) * s / f)[None, :, None, None]
+    b = ((ny / 2 - np.arange(ny) - 0.5) * s / f)[:, None, None, None]
+    x = ((np.arange(array.lenses_x) + 0.5 - array.lenses_x / 2) * array.pitch_x)[None, None, None, :]
+    y = ((array.lenses_y / 2 - np.arange(array.lenses_y) - 0.5) * array.pitch_y)[None, None, :, None]
+    # (x - 1 + t a)^2 + (y - 0.5 + t b)^2 + t^2 = 4, t along z
+    qa, qb, qc = a * a + b * b + 1, 2 * ((x - 1) * a + (y - 0.5) * b), (x - 1) ** 2 + (y - 0.5) ** 2 - 4
+    disc = qb * qb - 4 * qa * qc
+    t = np.where(disc > 0, (-qb - np.sqrt(np.maximum(disc, 0))) / (2 * qa), 5.0)
+    miss = np.sqrt(np.maximum(disc, 0)) / (2 * qa)   # half the chord, in t: small near the silhouette
+    return np.minimum(t, 5.0) * np.sqrt(qa), (disc <= 0) & (qc > 0.3) | (miss > 0.05)
+
+
 @pytest.mark.povray
-def test_depth_maps_over_several_runs_equal_one_run_and_say_their_progress(tmp_path, monkeypatch):
-    """The fog pairs spread over runs give the very values of one run (the code before), and those are
-    the plane's: at z = 5 mm, a view's ray of slopes (a, b) meets it 5 |(a, b, 1)| mm from the screen."""
+def test_depth_maps_in_one_mesh_camera_equal_the_per_view_passes_and_say_their_progress(tmp_path, monkeypatch):
+    """Every view's fog pair in one mesh camera (two frames, a run each) gives the values of a fog pair per
+    view (the code before, ``_fog_batch``) within the pass's 16-bit resolution (here 7e-4 mm; measured
+    equal to the bit), and those are the scene's: the plane at z = 5 mm, which a view's ray of slopes
+    (a, b) meets 5 |(a, b, 1)| mm from the screen, and the sphere before it."""
     import povh3d.renderer.passes.depth as depth
     from povh3d.renderer.passes.record import recording
 
     path = tmp_path / "plane.pov"
-    path.write_text("light_source { <0, 0, -100> rgb 1 }\nplane { -z, -5 pigment { rgb 0.5 } }\n")
+    path.write_text("light_source { <0, 0, -100> rgb 1 }\nplane { -z, -5 pigment { rgb 0.5 } }\n"
+                    "sphere { <1, 0.5, 0>, 2 pigment { rgb <1, 0.2, 0.2> } }\n")
     scene, array = load_scene(path), _plane_array()
     settings = RenderSettings(quality="draft", use_cache=False)
     calls: list[tuple[float, float]] = []
+
+    def per_view(slopes, views, cells, pitch, lens_array, front_clearance, fog):
+        directions = [(a, b, 1.0) for a, b in slopes.tolist()]
+        field = (cells[0] * pitch[0], cells[1] * pitch[1])
+        return depth._fog_batch(directions, lens_array, front_clearance, fog, *cells, field), None
+
     with recording() as notes:
-        spread = depth.view_depth_maps(scene, array, settings, 10.0, 1.0, progress=lambda d, t: calls.append((d, t)))
-        monkeypatch.setattr(depth, "FOG_RUNS", 1)
-        one = depth.view_depth_maps(scene, array, settings, 10.0, 1.0)
-    assert [(n.name, n.shots) for n in notes] == [("depth-maps", 18), ("depth-maps", 18)]
-    assert notes[0].runs == 3 and notes[1].runs == 1     # 9 views: at most 4 runs, 3 pairs each: 3 runs
-    assert np.array_equal(spread, one, equal_nan=True)
-    assert calls[-1] == (18, 18) and calls[0][0] == 0
-    f, s = array.focal, array.panel.pitch_x
-    slopes = (np.arange(3) + 0.5 - 1.5) * s / f
-    expected = 5 * np.sqrt(slopes[::-1, None] ** 2 + slopes[None, :] ** 2 + 1)   # (l, k): v runs downwards
-    assert np.abs(spread - expected[:, :, None, None]).max() < 0.01
-    assert not np.abs(spread - 1.01 * expected[:, :, None, None]).max() < 0.01   # negative control
+        tiled = depth.view_depth_maps(scene, array, settings, 10.0, 1.0, progress=lambda d, t: calls.append((d, t)))
+        monkeypatch.setattr(depth, "_views_pass", per_view)
+        each = depth.view_depth_maps(scene, array, settings, 10.0, 1.0)
+    assert [(n.name, n.shots, n.runs) for n in notes] == [("depth-maps", 2, 2), ("depth-maps", 18, 3)]
+    assert np.array_equal(np.isnan(tiled), np.isnan(each))
+    assert np.nanmax(np.abs(tiled - each)) < 0.002
+    assert calls[-1] == (2, 2) and calls[0][0] == 0
+    expected, clear = _plane_and_sphere(array)
+    assert clear.mean() > 0.9 and np.abs(tiled - expected)[clear].max() < 0.01
+    assert (expected[clear] < 0).mean() > 0.05     # the sphere seen before the screen too
+    # negative controls: views swapped left to right (another view's rays: the sphere's parallax), lens
+    # columns swapped (the sphere, off the axis, seen on the other side)
+    assert np.nanmax(np.abs(tiled[:, ::-1] - each)) > 0.1
+    assert np.abs(tiled[..., ::-1] - expected)[clear].max() > 1
 
 
 @pytest.mark.povray
@@ -163,7 +192,7 @@ def test_depth_maps_are_a_pass_of_the_sidecar(cli, tmp_path):
     assert result.code == 0, result.err
     passes, _ = _passes(out)
     assert [p["name"] for p in passes] == ["depth-maps"]      # native frame: no camera, no summary pass
-    assert passes[0]["shots"] == 2 * 16 and passes[0]["runs"] == 8
+    assert passes[0]["shots"] == 2 and passes[0]["runs"] == 2   # 16 views' fog pairs in one mesh camera
 
 
 #: Cameras the text alone decides, with POV-Ray's own evaluation as the oracle.
@@ -253,3 +282,40 @@ def test_the_inside_solid_check_says_its_progress_and_its_cost(tmp_path):
         if name == "fog":
             assert (2, 2) in calls and calls.index((2, 2)) < len(calls) - 1, calls
     assert names == {"fog": ["scene-camera-text", "origins-inside"], "clear": ["scene-camera-text"]}
+
+
+@pytest.mark.povray
+def test_every_pass_says_its_progress(tmp_path):
+    """The issue: a status line at '1/1 frames' and then seconds of silence.  A camera scene with depth maps
+    has three phases, each counted from 0 to its end: the camera's run (its two fog frames), the render,
+    the depth maps' two frames; a scene without a camera has no camera phase (negative control)."""
+    import povh3d
+
+    def phases(text: str) -> list[list[tuple[float, float]]]:
+        scene = tmp_path / "s.pov"
+        scene.write_text(text)
+        calls: list[tuple[float, float]] = []
+        povh3d.render(scene, tmp_path / "o.png", lens_array=_plane_array(), quality="draft", use_cache=False,
+                      depth_maps=tmp_path / "maps", progress=lambda d, t: calls.append((d, t)))
+        found: list[list[tuple[float, float]]] = []
+        for done, total in calls:
+            if not found or total != found[-1][-1][1] or done < found[-1][-1][0]:
+                found.append([])
+            found[-1].append((done, total))
+        return found
+
+    camera = phases(CAMERA)
+    assert [(p[0][0], p[-1]) for p in camera] == [(0, (2, 2)), (0, (1, 1)), (0, (2, 2))], camera
+    plain = phases("\n".join(line for line in CAMERA.splitlines() if not line.startswith("camera")))
+    assert [(p[0][0], p[-1]) for p in plain] == [(0, (1, 1)), (0, (2, 2))], plain
+
+
+def test_a_tiled_image_one_pixel_wide_takes_a_fog_pair_per_view():
+    """POV-Ray's mesh camera crashes on an image one pixel wide (``mesh_camera_batch``): one view of one
+    lens column takes the per-view pass; two such views, tiled two pixels wide, the mesh camera."""
+    import povh3d.renderer.passes.depth as depth
+
+    batch, tiles = depth._views_pass(np.zeros((1, 2)), (1, 1), (1, 5), (0.6, 0.6), _plane_array(), 10.0, 10.0)
+    assert tiles is None and batch.template == "depth.pov.j2" and [s["fog"] for s in batch.shots] == [0, 1]
+    batch, tiles = depth._views_pass(np.zeros((2, 2)), (1, 2), (1, 5), (0.6, 0.6), _plane_array(), 10.0, 10.0)
+    assert tiles == ((1, 2), (1, 5)) and batch.template == "depth_mesh.pov.j2" and (batch.width, batch.height) == (3, 6)

@@ -163,6 +163,24 @@ def view_bank_mesh(lens_array: LensArray, front_clearance: float, samples: np.nd
     return _bank_mesh(lens_array, front_clearance, samples, *_bank_tiles(lens_array, None))
 
 
+def mesh_rays(mesh: CameraMesh, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``(n, 6)``: the origin and normal (as written, before ``mesh.scale``) POV-Ray interpolates for panel
+    pixels ``(cols, rows)``: barycentric interpolation at each pixel's UV, the lookup rule of
+    ``camera_mesh.CameraMesh``; NaN where no face holds it."""
+    w, h = mesh.image_size
+    uv = np.stack([(cols + 0.0) / w, 1.0 - (rows + 1.0) / h], -1)
+    out = np.full((len(uv), 6), np.nan)
+    for a, b, c in mesh.faces:
+        t = np.linalg.solve(np.array([mesh.uvs[b] - mesh.uvs[a], mesh.uvs[c] - mesh.uvs[a]]).T,
+                            (uv - mesh.uvs[a]).T).T
+        inside = (t >= -1e-12).all(1) & (t.sum(1) <= 1 + 1e-12)
+        wts = np.column_stack([1 - t.sum(1), t])
+        p = wts @ np.array([mesh.vertices[a], mesh.vertices[b], mesh.vertices[c]])
+        n = wts @ np.array([mesh.normals[a], mesh.normals[b], mesh.normals[c]])
+        out[inside] = np.column_stack([p, n])[inside]
+    return out
+
+
 def cropped_view_bank_mesh(lens_array: LensArray, front_clearance: float, plan,
                            samples: np.ndarray | None = None) -> CameraMesh:
     """``view_bank_mesh`` over the columns and rows a ``crop.CropPlan`` keeps.

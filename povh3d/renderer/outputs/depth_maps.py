@@ -70,7 +70,8 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
             "disparity": "p_LLL_KKK: lenses per view step, z s / (f p), z = d / |(u/f, v/f, 1)|",
             "pixel_pitch_mm": lens_array.panel.pitch_x, "focal_mm": lens_array.focal,
             "lens_pitch_mm": lens_array.pitch_x, "placement": record.get("placement"),
-            "method": "two renders per view with a constant fog of colour 0 and 1 (renderer/passes/depth.py)",
+            "method": ("two renders of every view's rays (one mesh camera) with a constant fog of colour 0 and 1 "
+                       "(renderer/passes/depth.py)"),
             "nan_fraction": float(np.isnan(depth).mean())}
     if fmt == "png":
         info["png"] = {name: {"scale": codes[p][1], "offset": codes[p][2]} for name, p in (("depth", "d"),

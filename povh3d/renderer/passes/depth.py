@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import Povh3dError, param, warn
+from ...geometry.camera_mesh import tiled_views_mesh
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import depth_scaled_rays
 from ...image.colour import decode
@@ -137,9 +138,9 @@ def pass_lighting(scene: Scene) -> dict[str, str]:
     return needed_settings(scene.features, LIGHTING_OFF)
 
 
-#: Most POV-Ray runs of a fog pass at once.  A further frame of a run costs about 0.25 s, nearly all of it
-#: POV-Ray waiting (20 frames of an empty scene: 5 s of wall time, 0.1 s of CPU), so the 64 fog pairs of
-#: demo's depth maps, 30 s in one run, take a few seconds in these; each run holds a parse of the scene.
+#: Most POV-Ray runs of a fog pass of many directions at once (the per-view depth maps where their mesh
+#: camera cannot be used, ``_views_pass``).  A further shot of a run costs about 0.25 s, nearly all of it
+#: POV-Ray waiting (20 shots of an empty scene: 5 s of wall time, 0.1 s of CPU); each run parses the scene.
 FOG_RUNS = 16
 #: Fewest fog pairs a run of a many-direction pass renders: a run costs about 0.65 s to start.
 PAIRS_PER_RUN = 2
@@ -159,10 +160,47 @@ def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArr
                       shots, width, height, shots_per_job=2 * pairs, processes=runs, options=("-A",))
 
 
+def _views_batch(slopes: np.ndarray, views: tuple[int, int], cells: tuple[int, int], pitch: tuple[float, float],
+                 front_clearance: float, fog: float) -> ShotBatch:
+    """The fog pair of many views as two shots, one POV-Ray run each at once: the views' orthographic
+    cameras tiled into one mesh camera (``camera_mesh.tiled_views_mesh``, the very rays of ``_fog_batch``).
+    A further shot of a run costs about 0.25 s, nearly all of it POV-Ray waiting, so demo's 64 views
+    took 128 shots (2 s over 16 runs); their pixels in one image take 2 shots, and the two runs side
+    by side 0.45-0.65 s where one run of both took 0.65-1.0 s (the same maps to the bit: each run starts
+    POV-Ray's random sequences afresh, at one thread, ``PASS_THREADS``)."""
+    mesh = tiled_views_mesh(slopes, views, cells, pitch, front_clearance)
+    w, h = mesh.image_size
+    return ShotBatch("depth_mesh.pov.j2", {"fog_distance": fog, "mesh": mesh},
+                     [{"fog": 0}, {"fog": 1}], w, h, shots_per_job=1, processes=2, options=("-A",))
+
+
+def _views_pass(slopes: np.ndarray, views: tuple[int, int], cells: tuple[int, int], pitch: tuple[float, float],
+                lens_array: LensArray, front_clearance: float, fog: float,
+                ) -> tuple[ShotBatch, tuple[tuple[int, int], tuple[int, int]] | None]:
+    """The batch of ``view_depth_maps``' pass and its ``tiles`` (``_ray_lengths``): every view in one mesh
+    camera (``_views_batch``), or a fog pair per view where the tiled image is one pixel wide (POV-Ray's
+    mesh camera crashes there: ``mesh_camera_batch``)."""
+    if views[1] * cells[0] >= 2:
+        return _views_batch(slopes, views, cells, pitch, front_clearance, fog), (views, cells)
+    directions = [(a, b, 1.0) for a, b in np.asarray(slopes).tolist()]
+    field = (cells[0] * pitch[0], cells[1] * pitch[1])
+    return _fog_batch(directions, lens_array, front_clearance, fog, *cells, field), None
+
+
+def _untiled(image: np.ndarray, views: tuple[int, int], cells: tuple[int, int]) -> np.ndarray:
+    """A ``_views_batch`` shot as ``(Ny Nx, rows, cols, C)``, view ``l Nx + k`` first, without the mesh
+    camera's extra first row and last column (``CameraMesh``)."""
+    (ny, nx), (cols, rows) = views, cells
+    tiled = image[1:, :-1]
+    return tiled.reshape(ny, rows, nx, cols, -1).transpose(0, 2, 1, 3, 4).reshape(ny * nx, rows, cols, -1)
+
+
 def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch,
-                 fog: float, name: str, progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray]:
+                 fog: float, name: str, progress: Progress | None = None,
+                 tiles: tuple[tuple[int, int], tuple[int, int]] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(n, H, W) scene-unit distances from each ray's start (NaN: nothing hit, unmeasured; -inf: too bright)
-    and the fraction of unmeasured pixels per direction; the pass noted as ``name`` (``passes.record``)."""
+    and the fraction of unmeasured pixels per direction; the pass noted as ``name`` (``passes.record``).
+    ``tiles`` ``(views, cells)``: the batch is ``_views_batch``'s, its shots cut into the views."""
     start = time.perf_counter()
     header: dict[str, Any] = {"panel_size": lens_array.panel.size_mm, "lens_pitch": lens_array.pitch_x,
                               "focal": lens_array.focal}   # as methods.display_header
@@ -173,7 +211,11 @@ def _ray_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, 
         header["global_settings"] = lighting
     pass_settings = replace(settings, quality="draft", bit_depth=16, threads=PASS_THREADS)
     images, stats = render_shots(scene, batch, pass_settings, method="depth", header=header, progress=progress)
-    found = fog_distances(images[0::2], images[1::2], fog)
+    if tiles is not None:
+        dark, light = (list(_untiled(image, *tiles)) for image in images)
+        found = fog_distances(dark, light, fog)
+    else:
+        found = fog_distances(images[0::2], images[1::2], fog)
     traced = stats.shots - stats.cached
     note(name, time.perf_counter() - start, traced, stats.jobs if traced else 0, from_cache=not traced)
     return found
@@ -282,14 +324,14 @@ def origins_inside(scene: Scene, lens_array: LensArray, settings: RenderSettings
 
 
 def _inside_solid(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch, fog: float,
-                  d: np.ndarray, unmeasured: np.ndarray, name: str,
-                  progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  d: np.ndarray, unmeasured: np.ndarray, name: str, progress: Progress | None = None,
+                  tiles: tuple[tuple[int, int], tuple[int, int]] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The pass again on a copy of the scene whose top-level objects are all ``hollow``
     (``scene.rewrite.all_hollow``), where rays started inside a solid; a warning naming the share
     still unmeasured (a solid the copy cannot reach: one a macro or another folder's include makes).
     At ``max_trace_level 1`` only the way to the first surface counts, and there the copy's fog is the
     scene's wherever a ray starts outside every solid: its lengths replace the first pass's whole."""
-    again = _hollow_lengths(scene, lens_array, settings, batch, fog, name, progress)
+    again = _hollow_lengths(scene, lens_array, settings, batch, fog, name, progress, tiles)
     if again is not None:
         d, unmeasured = again
     if unmeasured.max() > 0:
@@ -299,7 +341,8 @@ def _inside_solid(scene: Scene, lens_array: LensArray, settings: RenderSettings,
 
 
 def _hollow_lengths(scene: Scene, lens_array: LensArray, settings: RenderSettings, batch: ShotBatch, fog: float,
-                    name: str, progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+                    name: str, progress: Progress | None = None,
+                    tiles: tuple[tuple[int, int], tuple[int, int]] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
     """``_ray_lengths`` on a copy of the scene whose top-level objects are all ``hollow``
     (``scene.rewrite.all_hollow``): POV-Ray applies no fog inside a non-hollow solid, so a ray that
     starts inside one (a backdrop ``plane``, a room, a sky sphere) measures nothing; hollow, the same
@@ -312,7 +355,7 @@ def _hollow_lengths(scene: Scene, lens_array: LensArray, settings: RenderSetting
             copy = copy_rewritten(scene, Path(folder), all_hollow)
             if copy is None:
                 return None
-            return _ray_lengths(copy, lens_array, settings, batch, fog, f"{name}-hollow", progress)
+            return _ray_lengths(copy, lens_array, settings, batch, fog, f"{name}-hollow", progress, tiles)
         except Povh3dError as exc:   # the copy does not parse: say so, keep the first pass
             warn(f"the depth pass could not make {scene.path.name}'s objects hollow ({exc}); the rays that "
                  "start inside a solid stay unmeasured")
@@ -348,12 +391,11 @@ def view_depth_maps(scene: Scene, lens_array: LensArray, settings: RenderSetting
     f = depth_scaled_rays(lens_array, k).focal
     slopes = np.array([((j + 0.5 - nx / 2) * s / f, (ny / 2 - l - 0.5) * sy / f)
                        for l in range(ny) for j in range(nx)])
-    directions = [(a, b, 1.0) for a, b in slopes.tolist()]
     fog = front_clearance * units_per_mm
-    batch = _fog_batch(directions, lens_array, front_clearance, fog, cols, rows, (cols * gx, rows * gy))
-    d, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog, name, progress)
+    batch, tiles = _views_pass(slopes, (ny, nx), (cols, rows), (gx, gy), lens_array, front_clearance, fog)
+    d, unmeasured = _ray_lengths(scene, lens_array, settings, batch, fog, name, progress, tiles)
     if unmeasured.max() > 0:
-        d, unmeasured = _inside_solid(scene, lens_array, settings, batch, fog, d, unmeasured, name, progress)
+        d, unmeasured = _inside_solid(scene, lens_array, settings, batch, fog, d, unmeasured, name, progress, tiles)
     # The ray starts front_clearance * |(a, b, 1)| before the screen; z = length / |(a, b, 1)|.
     lengths = np.sqrt((slopes ** 2).sum(axis=1) + 1.0)[:, None, None]
     z = np.where(np.isneginf(d), np.nan, d) / units_per_mm / lengths - front_clearance

@@ -37,6 +37,7 @@ from .record import note
 from ...errors import param, raw_message
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from ..methods.quality import Progress
     from .depth import DepthMap
 
 _AGAIN = "evaluating the scene's camera again"
@@ -142,7 +143,7 @@ def camera_size(scene: Scene, lens_array: LensArray) -> tuple[int, int]:
     return ratio.numerator, ratio.denominator
 
 
-def _run(job: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scene: Scene) -> None:
+def _run(job: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scene: Scene, on_frame: Any = None) -> None:
     """Run the camera's job; an error at a line of the rewritten script names the user's file and line."""
     from ...errors import PovrayError, PovrayTimeout
     from ...povray.job import SCENE_FILE
@@ -150,7 +151,7 @@ def _run(job: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scen
     from ...scene.camera_script import source_line
 
     try:
-        run_jobs([job], processes=1, on_result=on_result)
+        run_jobs([job], processes=1, on_result=on_result, on_frame=on_frame)
     except PovrayError as exc:
         if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
             raise
@@ -201,13 +202,14 @@ _RATIO = re.compile(r"\bimage_width\s*/\s*image_height\b|\bimage_height\s*/\s*im
 
 
 def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArray, front_clearance: float,
-                         cache_dir: Any, use_cache: bool, timeout: float | None = None
-                         ) -> tuple[dict[str, Any], Seen, float, bool] | None:
+                         cache_dir: Any, use_cache: bool, timeout: float | None = None,
+                         progress: Progress | None = None) -> tuple[dict[str, Any], Seen, float, bool] | None:
     """The camera's vectors and a depth pass along the normal of the pose it defines, from one
     POV-Ray run: the evaluation script, the rest of the scene and ``templates/camera_depth.pov.j2``,
     which works out the pose and the clearance from the declared values, prints them and renders
     the two fog frames (``renderer.passes.depth``).  Cached by the scene's digest, the panel and ``front_clearance``.
-    None when the camera needs a run at the panel's own size (``measured_size``)."""
+    None when the camera needs a run at the panel's own size (``measured_size``).  ``progress(done, total)``:
+    the two frames (the run takes about a second, most of it POV-Ray's start-up)."""
     from .depth import PASS_THREADS, fog_distances, pass_lighting, pass_size
     from ...image.io import read_png
     from ...povray.process import PovrayJob
@@ -236,7 +238,12 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
                     include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), bit_depth=16,
                     read_files=files_within(scene.files, scene.include_dirs), timeout=timeout)
     found: list[tuple[str, list[np.ndarray]]] = []
-    _run(job, lambda r: found.append((r.log, [read_png(i) for i in r.images])), script.lines, scene)
+    if progress:
+        progress(0, 2)
+    _run(job, lambda r: found.append((r.log, [read_png(i) for i in r.images])), script.lines, scene,
+         (lambda job, index, image: progress(index + 1, 2)) if progress else None)
+    if progress:
+        progress(2, 2)
     log, images = found[0] if found else ("", [])
     camera = camera_from_log(log, script.cameras).as_record()
     printed = next((tuple(v) for k, v in parse_log(log) if k == "depth_frame" and isinstance(v, list)), ())

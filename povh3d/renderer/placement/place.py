@@ -61,7 +61,8 @@ def place_display(request: RenderRequest, scene: Scene,
     wanted = depth_wanted(request, default)
     placed, record, seen = resolve_pose_and_depth(options, scene, array, cache_dir=s.cache_dir,
                                                    use_cache=s.use_cache, timeout=s.timeout,
-                                                   front_clearance=(s.front_clearance or default) if wanted else None)
+                                                   front_clearance=(s.front_clearance or default) if wanted else None,
+                                                   progress=progress)
     front_clearance = s.front_clearance or _front_clearance(placed, default)
     scale = s.depth_scale if options.depth_scale in (None, "fit") else float(options.depth_scale)
     if wanted and (not placed.is_native or options.fit_depth is not None or scale != 1 or options.depth_report):

@@ -27,6 +27,7 @@ from ...scene.camera_script import REFUSED_TYPES, camera_script, refused_type, w
 from ...scene.scene import Scene, source_text
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
+    from ..methods.quality import Progress
     from ..passes.scene_camera import Seen
 
 PLACEMENT_MODES = ("auto", "camera", "native")
@@ -102,10 +103,12 @@ def resolve_pose(options: PlacementOptions, scene: Scene, lens_array: LensArray,
 
 def resolve_pose_and_depth(options: PlacementOptions, scene: Scene, lens_array: LensArray, *, cache_dir: Any = None,
                             use_cache: bool = True, front_clearance: float | None = None,
-                            timeout: float | None = None) -> tuple[DisplayPose, dict[str, Any], Seen | None]:
+                            timeout: float | None = None, progress: Progress | None = None,
+                            ) -> tuple[DisplayPose, dict[str, Any], Seen | None]:
     """``resolve_pose``, and with ``front_clearance`` (mm) for a camera pose, the depth pass along its normal
     made in the same POV-Ray run that evaluated the camera (``Seen``); None otherwise.  ``timeout``: seconds
-    allowed to each of those POV-Ray runs (None: no limit, as a render's)."""
+    allowed to each of those POV-Ray runs (None: no limit, as a render's); ``progress(done, total)``: the
+    frames of the run that evaluates the camera and makes the depth pass."""
     import time
 
     from ..passes.record import note
@@ -141,8 +144,8 @@ def resolve_pose_and_depth(options: PlacementOptions, scene: Scene, lens_array: 
         why = "the scene has no camera: mm around the screen z = 0"
         return NATIVE, {**NATIVE.as_record(), "note": why, "warnings": []}, None
     try:
-        found = (evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache, timeout)
-                 if front_clearance is not None else None)
+        found = (evaluate_and_measure(scene, script, lens_array, front_clearance, cache_dir, use_cache, timeout,
+                                      progress) if front_clearance is not None else None)
     except PovrayError as exc:
         if isinstance(exc, PovrayTimeout):
             raise
