@@ -1,4 +1,5 @@
-"""The one JSON reader: every JSON file povh3d reads (sidecars, calibrations, links, cache entries).
+"""The one JSON reader: every JSON file povh3d reads (sidecars, calibrations, links, cache entries), and
+the typed records written as JSON (``Record``: the sidecar and its parts, ``image.sidecar``).
 
 Python's decoder recurses once per level, so JSON nested 100,000 deep is a ``RecursionError``,
 which no caller expects.  Here it is a ``ValueError`` like any other malformed JSON, and so is a
@@ -8,8 +9,16 @@ caller's refusal, or cache miss, holds for it.
 
 from __future__ import annotations
 
+import collections.abc
+import dataclasses
+import functools
 import json
-from typing import Any
+import types
+import typing
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
+
+from .errors import InputError
 
 #: Levels of arrays and objects a JSON document may nest.
 MAX_DEPTH = 64
@@ -38,3 +47,175 @@ def depth(value: Any) -> int:
             deepest = max(deepest, level)
             stack.extend((child, level + 1) for child in item if isinstance(child, (list, dict)))
     return deepest
+
+
+# --- JSON values and typed records -------------------------------------------------------------------
+# What a JSON document holds, for the type checker; at run time two markers, so ``Record`` reads a field
+# annotated ``JSONValue`` (or ``JSONObject``) as "any JSON, kept as read" without walking a recursive alias.
+if TYPE_CHECKING:
+    JSONValue: TypeAlias = "None | bool | int | float | str | Sequence[JSONValue] | Mapping[str, JSONValue]"
+    JSONObject: TypeAlias = "Mapping[str, JSONValue]"
+else:
+    class JSONValue:
+        """Any JSON value (a marker for ``Record``)."""
+
+    class JSONObject:
+        """A JSON object (a marker for ``Record``)."""
+
+R = TypeVar("R", bound="Record")
+
+
+class Record:
+    """A frozen dataclass written to and read from one JSON object: its fields are the object's keys.
+
+    ``to_json`` gives the object; ``from_json`` reads one back and checks every known key's type
+    against the field's annotation (``str``, ``int``, ``float``, ``bool``, ``X | None``, ``tuple``,
+    another ``Record``, or ``JSONValue`` / ``JSONObject`` for what is open-ended): a wrong type, or a
+    field without default that is missing, is one ``InputError`` naming the file, the key and the fix.
+    A subclass may declare ``extra: JSONObject`` (keys it does not know, kept as read: a newer povh3d's)
+    and ``order: tuple[str, ...]`` (``compare=False``: the keys in the order they were written, so a
+    record read and written again is the same bytes).  Without ``order`` the keys follow the fields;
+    a field whose default is None is left out while None, one without a default is written ``null``.
+    """
+
+    def to_json(self) -> dict[str, JSONValue]:
+        names = _fields(type(self))
+        extra: Mapping[str, JSONValue] = getattr(self, "extra", {}) if "extra" in names else {}
+        order: tuple[str, ...] = getattr(self, "order", ()) if "order" in names else ()
+        out: dict[str, JSONValue] = {}
+        keys = [*order, *(n for n, d in names.items() if n not in _SPECIAL), *extra]
+        for key in keys:
+            if key in out:
+                continue
+            if key in names and key not in _SPECIAL:
+                value = getattr(self, key)
+                if value is None and key not in order and names[key]:   # optional, and not given
+                    continue
+                out[key] = to_json_value(value)
+            elif key in extra:
+                out[key] = to_json_value(extra[key])
+        return out
+
+    @classmethod
+    def from_json(cls: type[R], value: object, *, source: object = None, key: str = "") -> R:
+        """``value`` (a parsed JSON object) as this record; ``source``: the file it came from, for the
+        error; ``key``: where it sits in that file (``quality``, ``display_frame.depth``)."""
+        where = _where(source, key)
+        if not isinstance(value, Mapping):
+            raise InputError(f"{where} is {_kind(value)}, not a JSON object; {_FIX}")
+        names = _fields(cls)
+        hints = _hints(cls)
+        given: dict[str, Any] = {}
+        for name, optional in names.items():
+            if name in _SPECIAL:
+                continue
+            path = f"{key}.{name}" if key else name
+            if name not in value:
+                if not optional and not _has_default(cls, name):
+                    raise InputError(f"{_where(source, path)} is missing; {_FIX}")
+                continue
+            given[name] = _read(hints[name], value[name], source, path)
+        if "extra" in names:
+            given["extra"] = {k: v for k, v in value.items() if k not in names or k in _SPECIAL}
+        if "order" in names:
+            given["order"] = tuple(value)
+        return cls(**given)
+
+
+_SPECIAL = ("extra", "order")
+_FIX = "delete the file or write it again with povh3d"
+
+
+def _where(source: object, key: str) -> str:
+    name = f"in {str(source)!r}, " if source is not None else ""
+    return f"{name}{key or 'the record'}"
+
+
+def _kind(value: object) -> str:
+    return "missing" if value is None else f"a {type(value).__name__} ({str(value)[:40]!r})"
+
+
+@functools.cache
+def _fields(cls: type) -> dict[str, bool]:
+    """Each field of the dataclass ``cls``: True when its default is None (left out while None)."""
+    return {f.name: f.default is None for f in dataclasses.fields(cls)}
+
+
+def _has_default(cls: type, name: str) -> bool:
+    f = next(f for f in dataclasses.fields(cls) if f.name == name)
+    return f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
+
+
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def to_json_value(value: Any) -> Any:
+    """``value`` as JSON: records by their ``to_json``, tuples as lists."""
+    if isinstance(value, Record):
+        return value.to_json()
+    if isinstance(value, (list, tuple)):
+        return [to_json_value(v) for v in value]
+    if isinstance(value, Mapping):
+        return {k: to_json_value(v) for k, v in value.items()}
+    return value
+
+
+def read_field(cls: type, name: str, value: object, source: object = None) -> Any:
+    """``value`` (JSON) checked as the field ``name`` of the record ``cls`` (``InputError`` when it is not)."""
+    return _read(_hints(cls)[name], value, source, name)
+
+
+def _number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _read(hint: Any, value: object, source: object, key: str) -> Any:
+    """``value`` checked against ``hint``; a ``Record`` or a tuple built from it."""
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        inner = [a for a in args if a is not type(None)]
+        if len(inner) == 1:
+            return _read(inner[0], value, source, key)
+        for a in inner:   # the first that fits
+            try:
+                return _read(a, value, source, key)
+            except InputError:
+                continue
+        raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {_FIX}")
+    if hint is JSONValue or hint is Any:
+        return value
+    if hint is JSONObject or origin in (Mapping, dict, collections.abc.Mapping):
+        if not isinstance(value, Mapping):
+            raise InputError(f"{_where(source, key)} is {_kind(value)}, not a JSON object; {_FIX}")
+        return dict(value)
+    if isinstance(hint, type) and issubclass(hint, Record):
+        return hint.from_json(value, source=source, key=key)
+    if origin is tuple:
+        if not isinstance(value, list) or (args[-1] is not Ellipsis and len(value) != len(args)):
+            raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {_FIX}")
+        kinds = [args[0]] * len(value) if args[-1] is Ellipsis else list(args)
+        return tuple(_read(k, v, source, f"{key}[{i}]") for i, (k, v) in enumerate(zip(kinds, value)))
+    fits = {str: lambda v: isinstance(v, str), bool: lambda v: isinstance(v, bool),
+            int: lambda v: isinstance(v, int) and not isinstance(v, bool), float: _number}
+    if hint in fits:
+        if not fits[hint](value):
+            raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {_FIX}")
+        return value
+    raise TypeError(f"Record cannot read a field of type {hint!r}")   # a bug in a record's declaration
+
+
+def _spelt(hint: Any) -> str:
+    names = {str: "a string", int: "a whole number", float: "a number", bool: "true or false",
+             type(None): "null", JSONObject: "a JSON object", JSONValue: "JSON"}
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_spelt(a) for a in args)
+    if origin is tuple:
+        return f"a list of {_spelt(args[0])}" if args[-1] is Ellipsis else f"a list of {len(args)} values"
+    if isinstance(hint, type) and issubclass(hint, Record):
+        return "a JSON object"
+    return names.get(hint, str(hint))
