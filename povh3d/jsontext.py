@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import collections.abc
 import dataclasses
-import functools
 import json
 import types
 import typing
@@ -135,10 +134,15 @@ def _kind(value: object) -> str:
     return "missing" if value is None else f"a {type(value).__name__} ({str(value)[:40]!r})"
 
 
-@functools.cache
+_FIELDS: dict[type, dict[str, bool]] = {}
+_HINTS: dict[type, dict[str, Any]] = {}
+
+
 def _fields(cls: type) -> dict[str, bool]:
     """Each field of the dataclass ``cls``: True when its default is None (left out while None)."""
-    return {f.name: f.default is None for f in dataclasses.fields(cls)}
+    if cls not in _FIELDS:
+        _FIELDS[cls] = {f.name: f.default is None for f in dataclasses.fields(cls)}
+    return _FIELDS[cls]
 
 
 def _has_default(cls: type, name: str) -> bool:
@@ -146,9 +150,10 @@ def _has_default(cls: type, name: str) -> bool:
     return f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
 
 
-@functools.cache
 def _hints(cls: type) -> dict[str, Any]:
-    return typing.get_type_hints(cls)
+    if cls not in _HINTS:
+        _HINTS[cls] = typing.get_type_hints(cls)
+    return _HINTS[cls]
 
 
 def to_json_value(value: Any) -> Any:

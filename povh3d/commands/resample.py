@@ -54,14 +54,14 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
                          ppl_out=to_edge(ppl_out), source=str(Path(input_path).resolve()),
                          size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
     if mode == "lenses":
-        record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
-                            "focal_scale": ppl_out[1] / ppl_in[1]}
+        record = record.with_(replay={"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
+                                      "focal_scale": ppl_out[1] / ppl_in[1]})
     else:
         resampled = _bank_array(input_path, result.shape[:2], ppl_out)
         if resampled is not None:
-            record["lens_array"] = resampled.as_record()
+            record = record.with_(lens_array=resampled.as_record())
     write_image(out, result, record)
-    return record
+    return record.to_json()
 
 
 def _bank_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tuple[int, int]) -> Any:
@@ -133,4 +133,4 @@ def resample_panel_file(input_path: str | Path, output: str | Path, ppl_out: tup
                          ppl_out=[lens_out.ppl_x, lens_out.ppl_y], source=str(Path(input_path).resolve()),
                          size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
     write_image(out, result, record)
-    return record
+    return record.to_json()

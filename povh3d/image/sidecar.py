@@ -202,7 +202,6 @@ class Sidecar(Record):
     display_frame: PlacementRecord | None = None
     mapping: str | None = None
     size_px: tuple[int, int] | None = None
-    source: str | None = None
     dataset: JSONObject | None = None
     depth_maps: JSONObject | None = None
     quilt: QuiltRecord | None = None
@@ -215,19 +214,19 @@ class Sidecar(Record):
     order: tuple[str, ...] = field(default=(), compare=False)
 
     @classmethod
-    def new(cls, kind: str, lens_array: LensArray | None = None, **entries: Any) -> Sidecar:
+    def new(cls, kind: str, lens_array: LensArray | None = None, **entries: object) -> Sidecar:
         """``povh3d_version``, ``kind``, the lens array, then ``entries`` in the order given."""
         side = cls(povh3d_version=__version__, kind=kind, order=("povh3d_version", "kind"))
         if lens_array is not None:
             side = side.with_(lens_array=LensArrayRecord.of(lens_array))
         return side.with_(**entries)
 
-    def with_(self, **entries: Any) -> Sidecar:
+    def with_(self, **entries: object) -> Sidecar:
         """This sidecar with ``entries`` set: a new key after the others, a known one in its place.
         A typed field takes its record or its JSON (checked, as ``from_json`` does); any other key is
         kept as given."""
         typed: dict[str, Any] = {}
-        extra = dict(self.extra)
+        extra: dict[str, Any] = dict(self.extra)
         for key, value in entries.items():
             if key in _TYPED:
                 typed[key] = value if _is_typed(value) else _read_field(key, value)
@@ -239,7 +238,7 @@ class Sidecar(Record):
 
     def without(self, *keys: str) -> Sidecar:
         """This sidecar without ``keys``."""
-        typed = {k: None for k in keys if k in _TYPED}
+        typed: dict[str, Any] = {k: None for k in keys if k in _TYPED}
         order = self.order or tuple(self.to_json())
         return dataclasses.replace(self, **typed, extra={k: v for k, v in self.extra.items() if k not in keys},
                                    order=tuple(k for k in order if k not in keys))

@@ -51,6 +51,7 @@ from .shots.clock_runs import ClockSequence, SequenceLedger, povray_clock
 from .methods.quality import Progress
 from ..errors import ConfigError, OutputError, PovrayError, param, raw_message
 from ..image.io import read_png, write_sidecar
+from ..image.sidecar import AnimationRecord, Sidecar
 from ..image.video import write_video
 from ..system import owned_prefix, sweep_orphans
 from .records import write_image
@@ -146,15 +147,15 @@ class RenderedImage:
     """One rendered image and its sidecar record, as written for a still or an animation frame."""
 
     image: np.ndarray                   # (H, W, C) uint8 or uint16
-    record: dict[str, Any]
+    record: Sidecar
     views: np.ndarray | None = None     # (Ny, Nx, Ly, Lx, C) when asked for
     from_cache: bool = False            # every shot came from the cache
 
 
 ImageRenderer = Callable[..., RenderedImage]  # (clock, progress, sequence=ClockSequence or None)
 #: Files made from a frame beside it (a Looking Glass quilt, its native image): ``(staged frame path,
-#: frame) -> (the frame record's additions, the files written beside it)``.
-Companions = Callable[[Path, RenderedImage], tuple[dict[str, Any], list[Path]]]
+#: frame) -> (the frame's record with their entries, the files written beside it)``.
+Companions = Callable[[Path, RenderedImage], tuple[Sidecar, list[Path]]]
 
 
 def render_sequence(frames: FrameRange, output: Path, render_image: ImageRenderer, *, uses_clock: bool,
@@ -198,8 +199,8 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
     try:
         for index, n in enumerate(frames.numbers):
             staged = frame_path(staging / output.name, n, digits)
-            info = {"frame": n, "clock": frames.clock(n), "frames": [frames.first, frames.last],
-                    "clock_range": [frames.clock_start, frames.clock_end], "scene_uses_clock": uses_clock}
+            info = AnimationRecord(frame=n, clock=frames.clock(n), frames=(frames.first, frames.last),
+                                   clock_range=(frames.clock_start, frames.clock_end), scene_uses_clock=uses_clock)
             if uses_clock or first is None:
                 try:
                     frame = render_image(frames.clock(n) if uses_clock else None,
@@ -209,14 +210,14 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
                     raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {raw_message(exc)}", command=exc.command,
                                     returncode=exc.returncode, log_tail=exc.log_tail) from None
                 report["from_cache" if frame.from_cache else "rendered"] += 1
-                extra, made[n] = companions(staged, frame) if companions else ({}, [])
-                write_image(staged, frame.image, {**frame.record, **extra, "animation": info})
+                record, made[n] = companions(staged, frame) if companions else (frame.record, [])
+                write_image(staged, frame.image, record.with_(animation=info))
                 first = first or (frame, staged)
             else:
                 # The scene cannot tell this clock from the first: same pixels.
-                extra, made[n] = companions(staged, first[0]) if companions else ({}, [])
+                record, made[n] = companions(staged, first[0]) if companions else (first[0].record, [])
                 shutil.copyfile(first[1], staged)
-                write_sidecar(staged, {**first[0].record, **extra, "animation": info})
+                write_sidecar(staged, record.with_(animation=info))
                 report["copied"] += 1
             if progress is not None:
                 shown[0] = max(shown[0], (index + 1) * scale[0])
