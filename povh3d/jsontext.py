@@ -15,9 +15,8 @@ import json
 import types
 import typing
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeAlias, TypeVar
 
-from .errors import InputError
 
 #: Levels of arrays and objects a JSON document may nest.
 MAX_DEPTH = 64
@@ -95,13 +94,20 @@ class Record:
                 out[key] = to_json_value(extra[key])
         return out
 
+    #: The fix a refusal gives (a sidecar's: render the image again).
+    FIX: ClassVar[str] = "delete the file or write it again with povh3d"
+
     @classmethod
-    def from_json(cls: type[R], value: object, *, source: object = None, key: str = "") -> R:
+    def from_json(cls: type[R], value: object, *, source: object = None, key: str = "", fix: str = "") -> R:
         """``value`` (a parsed JSON object) as this record; ``source``: the file it came from, for the
-        error; ``key``: where it sits in that file (``quality``, ``display_frame.depth``)."""
+        error; ``key``: where it sits in that file (``quality``, ``display_frame.depth``); ``fix``: the
+        fix the error gives (the record's ``FIX``)."""
+        from .errors import InputError   # here: jsontext stays a leaf of the import graph
+
+        fix = fix or cls.FIX
         where = _where(source, key)
         if not isinstance(value, Mapping):
-            raise InputError(f"{where} is {_kind(value)}, not a JSON object; {_FIX}")
+            raise InputError(f"{where} is {_kind(value)}, not a JSON object; {fix}")
         names = _fields(cls)
         hints = _hints(cls)
         given: dict[str, Any] = {}
@@ -111,9 +117,9 @@ class Record:
             path = f"{key}.{name}" if key else name
             if name not in value:
                 if not optional and not _has_default(cls, name):
-                    raise InputError(f"{_where(source, path)} is missing; {_FIX}")
+                    raise InputError(f"{_where(source, path)} is missing; {fix}")
                 continue
-            given[name] = _read(hints[name], value[name], source, path)
+            given[name] = _read(hints[name], value[name], source, path, fix)
         if "extra" in names:
             given["extra"] = {k: v for k, v in value.items() if k not in names or k in _SPECIAL}
         if "order" in names:
@@ -122,16 +128,22 @@ class Record:
 
 
 _SPECIAL = ("extra", "order")
-_FIX = "delete the file or write it again with povh3d"
-
-
 def _where(source: object, key: str) -> str:
     name = f"in {str(source)!r}, " if source is not None else ""
     return f"{name}{key or 'the record'}"
 
 
 def _kind(value: object) -> str:
-    return "missing" if value is None else f"a {type(value).__name__} ({str(value)[:40]!r})"
+    """``value`` as the error says it: ``the number 1``, ``the text '8'``, ``a list [...]``."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return f"{str(value).lower()}"
+    what = ("the number" if isinstance(value, (int, float)) else "the text" if isinstance(value, str)
+            else "a list" if isinstance(value, (list, tuple)) else "an object" if isinstance(value, Mapping)
+            else f"a {type(value).__name__}")
+    shown = repr(value)
+    return f"{what} {shown[:40]}{'...' if len(shown) > 40 else ''}"
 
 
 _FIELDS: dict[type, dict[str, bool]] = {}
@@ -169,46 +181,47 @@ def to_json_value(value: Any) -> Any:
 
 def read_field(cls: type, name: str, value: object, source: object = None) -> Any:
     """``value`` (JSON) checked as the field ``name`` of the record ``cls`` (``InputError`` when it is not)."""
-    return _read(_hints(cls)[name], value, source, name)
+    return _read(_hints(cls)[name], value, source, name, getattr(cls, "FIX", ""))
 
 
 def _number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _read(hint: Any, value: object, source: object, key: str) -> Any:
+def _read(hint: Any, value: object, source: object, key: str, fix: str) -> Any:
     """``value`` checked against ``hint``; a ``Record`` or a tuple built from it."""
+    from .errors import InputError
     origin, args = typing.get_origin(hint), typing.get_args(hint)
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:
             return None
         inner = [a for a in args if a is not type(None)]
         if len(inner) == 1:
-            return _read(inner[0], value, source, key)
+            return _read(inner[0], value, source, key, fix)
         for a in inner:   # the first that fits
             try:
-                return _read(a, value, source, key)
+                return _read(a, value, source, key, fix)
             except InputError:
                 continue
-        raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {_FIX}")
+        raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {fix}")
     if hint is JSONValue or hint is Any:
         return value
     if hint is JSONObject or origin in (Mapping, dict, collections.abc.Mapping):
         if not isinstance(value, Mapping):
-            raise InputError(f"{_where(source, key)} is {_kind(value)}, not a JSON object; {_FIX}")
+            raise InputError(f"{_where(source, key)} is {_kind(value)}, not a JSON object; {fix}")
         return dict(value)
     if isinstance(hint, type) and issubclass(hint, Record):
-        return hint.from_json(value, source=source, key=key)
+        return hint.from_json(value, source=source, key=key, fix=fix)
     if origin is tuple:
         if not isinstance(value, list) or (args[-1] is not Ellipsis and len(value) != len(args)):
-            raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {_FIX}")
+            raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {fix}")
         kinds = [args[0]] * len(value) if args[-1] is Ellipsis else list(args)
-        return tuple(_read(k, v, source, f"{key}[{i}]") for i, (k, v) in enumerate(zip(kinds, value)))
+        return tuple(_read(k, v, source, f"{key}[{i}]", fix) for i, (k, v) in enumerate(zip(kinds, value)))
     fits = {str: lambda v: isinstance(v, str), bool: lambda v: isinstance(v, bool),
             int: lambda v: isinstance(v, int) and not isinstance(v, bool), float: _number}
     if hint in fits:
         if not fits[hint](value):
-            raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {_FIX}")
+            raise InputError(f"{_where(source, key)} is {_kind(value)}, not {_spelt(hint)}; {fix}")
         return value
     raise TypeError(f"Record cannot read a field of type {hint!r}")   # a bug in a record's declaration
 

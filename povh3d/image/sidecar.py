@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from .._version import __version__
 from ..jsontext import JSONObject, JSONValue, Record, read_field, to_json_value
@@ -180,6 +180,8 @@ class Sidecar(Record):
     Built by ``Sidecar.new`` (``renderer.records.base_record``) and grown by ``with_``, each new key
     after the others, as the file shows them.
     """
+
+    FIX: ClassVar[str] = "delete the sidecar or render the image again"
 
     povh3d_version: str
     kind: str
