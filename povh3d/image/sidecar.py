@@ -14,6 +14,7 @@ and ``write_sidecar`` write one.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator, KeysView
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -165,10 +166,10 @@ class AnimationRecord(Record):
     """An animation frame's place in its sequence (``renderer.animation``)."""
 
     frame: int
-    clock: float
-    frames: tuple[int, int]
-    clock_range: tuple[float, float]
-    scene_uses_clock: bool
+    clock: float | None = None
+    frames: tuple[int, int] | None = None
+    clock_range: tuple[float, float] | None = None
+    scene_uses_clock: bool | None = None
     extra: JSONObject = field(default_factory=dict)
     order: tuple[str, ...] = field(default=(), compare=False)
 
@@ -252,7 +253,21 @@ class Sidecar(Record):
             return default if value is None and key not in self.order else _json(value)
         return self.extra.get(key, default)
 
-    def __contains__(self, key: str) -> bool:
+    # Read as a mapping of its JSON (``{**side, ...}``, ``side["kind"]``, ``Display.from_record(side)``): the
+    # file's keys and values, never a way to change them (``with_``).
+    def keys(self) -> KeysView[str]:
+        return self.to_json().keys()
+
+    def __getitem__(self, key: str) -> JSONValue:
+        return self.to_json()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.to_json())
+
+    def __len__(self) -> int:
+        return len(self.to_json())
+
+    def __contains__(self, key: object) -> bool:
         return key in self.to_json()
 
 

@@ -8,14 +8,16 @@ path is checked here before any work starts: never one of the command's inputs, 
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+
 import numpy as np
 
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
 from ..image.io import check_output, write_image_pair
 from ..image.sidecar import Sidecar
+from ..jsontext import JSONValue
 
 
 
@@ -36,7 +38,7 @@ def png_output(path: str | Path, what: str = "output", inputs: Iterable[str | Pa
     return check_output(path, inputs, what=what, sidecar=sidecar)
 
 
-def write_image(path: str | Path, image: np.ndarray, record: Sidecar) -> None:
+def write_image(path: str | Path, image: np.ndarray, record: Sidecar | Mapping[str, JSONValue]) -> None:
     """Write ``image`` and its sidecar ``record`` beside it, replaced as a pair
     (``image.io.write_image_pair``: a sidecar always describes the image beside it)."""
     write_image_pair(path, image, record)
