@@ -222,7 +222,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
                                   progress)  # a quilt preset
     else:
         result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
-                            progress, crop=request.crop, **request.method_options)
+                            progress, crop=request.crop, method_options=request.method_options)
     seconds = auto.seconds if auto is not None and result is auto.image else time.perf_counter() - start
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)

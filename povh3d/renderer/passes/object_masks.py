@@ -228,7 +228,7 @@ def _trace_still(masked: RenderRequest, settle: bool = False) -> np.ndarray:
     if settle:
         placed, _ = settle_method(placed, scene)
     return run_method(placed.method, scene, placed.render_array, placed.settings, crop=placed.crop,
-                      **placed.method_options).h3d
+                      method_options=placed.method_options).h3d
 
 
 def mask_views(ids: np.ndarray, lens_array: LensArray) -> np.ndarray:
