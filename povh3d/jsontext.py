@@ -110,7 +110,7 @@ class Record:
             raise InputError(f"{where} is {_kind(value)}, not a JSON object; {fix}")
         names = _fields(cls)
         hints = _hints(cls)
-        given: dict[str, Any] = {}
+        given: dict[str, object] = {}
         for name, optional in names.items():
             if name in _SPECIAL:
                 continue
@@ -147,7 +147,7 @@ def _kind(value: object) -> str:
 
 
 _FIELDS: dict[type, dict[str, bool]] = {}
-_HINTS: dict[type, dict[str, Any]] = {}
+_HINTS: dict[type, dict[str, object]] = {}
 
 
 def _fields(cls: type) -> dict[str, bool]:
@@ -162,7 +162,7 @@ def _has_default(cls: type, name: str) -> bool:
     return f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
 
 
-def _hints(cls: type) -> dict[str, Any]:
+def _hints(cls: type) -> dict[str, object]:
     if cls not in _HINTS:
         _HINTS[cls] = typing.get_type_hints(cls)
     return _HINTS[cls]

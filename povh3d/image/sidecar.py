@@ -228,13 +228,13 @@ class Sidecar(Record):
         """This sidecar with ``entries`` set: a new key after the others, a known one in its place.
         A typed field takes its record or its JSON (checked, as ``from_json`` does); any other key is
         kept as given."""
-        typed: dict[str, Any] = {}
-        extra: dict[str, Any] = dict(self.extra)
+        typed: dict[str, Any] = {}   # each value checked as its field (read_field): no one static type fits all
+        extra: dict[str, JSONValue] = dict(self.extra)
         for key, value in entries.items():
             if key in _TYPED:
                 typed[key] = value if _is_typed(value) else _read_field(key, value)
             else:
-                extra[key] = value
+                extra[key] = to_json_value(value)
         order = self.order or tuple(self.to_json())
         return dataclasses.replace(self, **typed, extra=extra,
                                    order=order + tuple(k for k in entries if k not in order))

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import ConfigError, param, warn
-from ...jsontext import JSONValue
+from ...jsontext import JSONObject, JSONValue
 from ...geometry.cameras import ortho_view_frames, pinhole_frames
 from ...geometry.camera_mesh import check_front_clearance, clearance_range, default_front_clearance
 from ...geometry.view_bank import bank_front_clearance, stack_frames, view_bank_frames
@@ -65,7 +65,7 @@ class MethodPlan:
 
     batch: ShotBatch
     assemble: Callable[[list[np.ndarray]], np.ndarray]
-    record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
+    record: JSONObject | None = None    # what the sidecar says of the method's own set-up
     # The H3D image of each run of consecutive samples (their counts), in linear light, from the
     # same images: what --quality auto scores its seeds with (None: the method cannot split them).
     assemble_groups: Callable[[list[np.ndarray], list[int]], list[np.ndarray]] | None = None
@@ -308,8 +308,8 @@ class MethodResult:
     stats: RenderStats
     front_clearance: float
     quality: Quality         # as rendered (after any fallback to antialiasing)
-    crop: dict[str, Any] | None = None    # what the crop did, for the sidecar
-    record: dict[str, Any] | None = None  # the method's own set-up, for the sidecar
+    crop: JSONObject | None = None    # what the crop did, for the sidecar
+    record: JSONObject | None = None  # the method's own set-up, for the sidecar
     front_clearance_reason: str = ""      # why rays start there, for the sidecar and the summary
     groups: list[np.ndarray] | None = None   # ``footprint_groups``: each group's H3D image, linear light
 
