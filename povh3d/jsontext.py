@@ -94,6 +94,14 @@ class Record:
                 out[key] = to_json_value(extra[key])
         return out
 
+    def updated(self: R, **changes: Any) -> R:
+        """``dataclasses.replace(self, **changes)``, a key not written before after the others (its ``order``)."""
+        names = _fields(type(self))
+        if "order" in names:
+            order: tuple[str, ...] = getattr(self, "order") or tuple(self.to_json())
+            changes["order"] = order + tuple(k for k in changes if k not in order and k != "order")
+        return dataclasses.replace(self, **changes)  # type: ignore[type-var]
+
     #: The fix a refusal gives (a sidecar's: render the image again).
     FIX: ClassVar[str] = "delete the file or write it again with povh3d"
 

@@ -80,11 +80,8 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
                      frame_record.units_per_mm if frame_record.units_per_mm is not None else 1.0, progress)
         write_outputs(done)   # each adds its entry to the record
         still = done.image
-        timings = still.record.timings or Timings()
-        still = replace(still, record=still.record.with_(
-            timings=replace(timings, total_seconds=round(time.perf_counter() - started, 4),
-                            order=timings.order + (() if "total_seconds" in timings.order else ("total_seconds",))),
-            passes=tuple(passes)))
+        timings = (still.record.timings or Timings()).updated(total_seconds=round(time.perf_counter() - started, 4))
+        still = replace(still, record=still.record.with_(timings=timings, passes=tuple(passes)))
         write_image(output, still.image, still.record)
         _warn_record(still.record)
         return still.record.to_json()
@@ -230,12 +227,11 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         raise RuntimeError(f"{request.method} produced {h3d.shape[:2]}, expected {expected}")
 
     timings = Timings.from_json({"render_seconds": round(seconds, 4), **result.stats.as_record()})
-    quality = quality_record(settings, result.quality)
-    quality = replace(quality, bit_depth=settings.bit_depth, front_clearance_mm=result.front_clearance,
-                      front_clearance_reason=result.front_clearance_reason,
-                      order=(*quality.order, "bit_depth", "front_clearance_mm", "front_clearance_reason"))
+    quality = quality_record(settings, result.quality).updated(
+        bit_depth=settings.bit_depth, front_clearance_mm=result.front_clearance,
+        front_clearance_reason=result.front_clearance_reason)
     if auto is not None:
-        quality = replace(quality, level="auto", auto=auto.as_record(), order=(*quality.order, "auto"))
+        quality = quality.updated(level="auto", auto=auto.as_record())
     display = request.display.as_record()   # the sidecar's lens_array and display entries
     record = base_record(
         "h3d", method=request.method, scene=str(scene.path),
@@ -257,10 +253,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         record = record.with_(**{request.content_kind: model})
     if display_frame is not None:
         cut = foreground_cut(display_frame, result.front_clearance, request.method)
-        warnings = (*(display_frame.warnings or ()), *cut)
-        record = record.with_(display_frame=replace(
-            display_frame, warnings=warnings,
-            order=display_frame.order + (() if "warnings" in display_frame.order else ("warnings",))))
+        record = record.with_(display_frame=display_frame.updated(warnings=(*(display_frame.warnings or ()), *cut)))
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
     first = request.frames is None or clock is None or clock == request.frames.clock(request.frames.first)
     if first and bank.size and int(bank.max()) == int(bank.min()):
@@ -305,6 +298,6 @@ def quality_record(settings: RenderSettings, rendered: Quality) -> QualityRecord
     level = settings.quality if isinstance(settings.quality, str) else "custom"
     return QualityRecord(level=level, setting=rendered.label, povray_options=tuple(rendered.options),
                          subviews=rendered.subviews, footprint_samples=rendered.footprint,
-                         max_trace_level=rendered.max_trace_level,
+                         max_trace_level=rendered.max_trace_level,   # written even when null:
                          order=("level", "setting", "povray_options", "subviews", "footprint_samples",
                                 "max_trace_level"))
