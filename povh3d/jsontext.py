@@ -60,6 +60,7 @@ else:
     class JSONObject:
         """A JSON object (a marker for ``Record``)."""
 
+
 R = TypeVar("R", bound="Record")
 
 
@@ -73,7 +74,9 @@ class Record:
     A subclass may declare ``extra: JSONObject`` (keys it does not know, kept as read: a newer povh3d's)
     and ``order: tuple[str, ...]`` (``compare=False``: the keys in the order they were written, so a
     record read and written again is the same bytes).  Without ``order`` the keys follow the fields;
-    a field whose default is None is left out while None, one without a default is written ``null``.
+    a field whose default is None is left out while None (unless ``order`` names it: a ``null`` read is
+    written back), one without a default is written ``null``.  A value is kept as read: an int where a
+    float is typed stays an int, so it is written back as it was.
     """
 
     def to_json(self) -> dict[str, JSONValue]:
@@ -136,6 +139,8 @@ class Record:
 
 
 _SPECIAL = ("extra", "order")
+
+
 def _where(source: object, key: str) -> str:
     name = f"in {str(source)!r}, " if source is not None else ""
     return f"{name}{key or 'the record'}"
@@ -199,6 +204,7 @@ def _number(value: object) -> bool:
 def _read(hint: Any, value: object, source: object, key: str, fix: str) -> Any:
     """``value`` checked against ``hint``; a ``Record`` or a tuple built from it."""
     from .errors import InputError
+
     origin, args = typing.get_origin(hint), typing.get_args(hint)
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:

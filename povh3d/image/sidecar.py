@@ -239,18 +239,11 @@ class Sidecar(Record):
         return dataclasses.replace(self, **typed, extra=extra,
                                    order=order + tuple(k for k in entries if k not in order))
 
-    def without(self, *keys: str) -> Sidecar:
-        """This sidecar without ``keys``."""
-        typed: dict[str, Any] = {k: None for k in keys if k in _TYPED}
-        order = self.order or tuple(self.to_json())
-        return dataclasses.replace(self, **typed, extra={k: v for k, v in self.extra.items() if k not in keys},
-                                   order=tuple(k for k in order if k not in keys))
-
     def get(self, key: str, default: JSONValue = None) -> JSONValue:
         """The JSON value of ``key``, typed or kept (a command's own keys: ``side.get("depths_mm")``)."""
         if key in _TYPED:
             value = getattr(self, key)
-            return default if value is None and key not in self.order else _json(value)
+            return default if value is None and key not in self.order else to_json_value(value)
         return self.extra.get(key, default)
 
     # Read as a mapping of its JSON (``{**side, ...}``, ``side["kind"]``, ``Display.from_record(side)``): the
@@ -276,11 +269,7 @@ def _is_typed(value: Any) -> bool:
 
 
 def _read_field(key: str, value: Any) -> Any:
-    return read_field(Sidecar, key, _json(value))
-
-
-def _json(value: Any) -> Any:
-    return to_json_value(value)
+    return read_field(Sidecar, key, to_json_value(value))
 
 
 _TYPED = frozenset(f.name for f in dataclasses.fields(Sidecar)) - {"extra", "order"}
