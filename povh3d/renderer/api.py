@@ -67,7 +67,7 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
         if hit is not None:
             for line in hit.warnings:
                 warn(line)
-            return plain(hit.record.to_json())   # a Python caller reads parameter names, not marks
+            return plain(hit.record)   # a Python caller reads parameter names, not marks
     with output_cache.warnings_kept() as given:
         record = _render(source, output, preset, lens_array, mapping, mapping_options, calibration, progress,
                          objects, options, camera_model)
