@@ -231,8 +231,8 @@ class Sidecar(Record):
         typed: dict[str, Any] = {}   # each value checked as its field (read_field): no one static type fits all
         extra: dict[str, JSONValue] = dict(self.extra)
         for key, value in entries.items():
-            if key in _TYPED:
-                typed[key] = value if _is_typed(value) else _read_field(key, value)
+            if key in _TYPED:   # a record or its JSON, read back as the field: checked whichever is given
+                typed[key] = read_field(Sidecar, key, to_json_value(value))
             else:
                 extra[key] = to_json_value(value)
         order = self.order or tuple(self.to_json())
@@ -262,14 +262,6 @@ class Sidecar(Record):
 
     def __contains__(self, key: object) -> bool:
         return key in self.to_json()
-
-
-def _is_typed(value: Any) -> bool:
-    return isinstance(value, Record) or (isinstance(value, tuple) and all(isinstance(v, Record) for v in value))
-
-
-def _read_field(key: str, value: Any) -> Any:
-    return read_field(Sidecar, key, to_json_value(value))
 
 
 _TYPED = frozenset(f.name for f in dataclasses.fields(Sidecar)) - {"extra", "order"}
