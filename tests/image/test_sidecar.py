@@ -151,3 +151,26 @@ def test_the_round_trip_can_fail():
     with pytest.raises(InputError, match=r"size_px\[0\] is the number 4.0, not a whole number"):
         Sidecar.from_json(document)
     assert Sidecar.from_json({**side.to_json(), "size_px": [4, 5]}) != side
+
+
+@pytest.mark.povray
+def test_a_render_s_sidecar_reads_back_typed_and_byte_for_byte(tmp_path):
+    """The render path's record (quality, timings, passes, display frame) is the typed sidecar: what
+    ``povh3d.render`` returns is its JSON, it reads back as ``Sidecar`` and is written back the same bytes."""
+    from pathlib import Path
+
+    import povh3d
+
+    out = tmp_path / "s.png"
+    scene = Path(__file__).parents[2] / "sample_models" / "sample.pov"
+    record = povh3d.render(scene, out, preset="demo", quality="draft", use_cache=False)
+    side = read_sidecar_record(out)
+    assert side is not None and side.kind == "h3d" and side.method == "multi-ortho"
+    assert isinstance(side.quality, QualityRecord) and side.quality.front_clearance_mm is not None
+    assert side.timings is not None and side.timings.total_seconds is not None and side.timings.frames == 1
+    assert isinstance(side.display_frame, PlacementRecord) and side.display_frame.source == "native"
+    assert side.passes is not None and all(isinstance(p, PassCost) for p in side.passes)
+    assert {k: v for k, v in side.to_json().items() if k != "image_sha256"} == record
+    before = sidecar_path(out).read_bytes()
+    write_sidecar(out, side)
+    assert sidecar_path(out).read_bytes() == before
