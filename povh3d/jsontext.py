@@ -192,11 +192,6 @@ def to_json_value(value: Any) -> Any:
     return value
 
 
-def read_field(cls: type, name: str, value: object, source: object = None) -> Any:
-    """``value`` (JSON) checked as the field ``name`` of the record ``cls`` (``InputError`` when it is not)."""
-    return _read(_hints(cls)[name], value, source, name, getattr(cls, "FIX", ""))
-
-
 def _number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 

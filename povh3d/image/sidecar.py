@@ -16,10 +16,10 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterator, KeysView
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from .._version import __version__
-from ..jsontext import JSONObject, JSONValue, Record, read_field, to_json_value
+from ..jsontext import JSONObject, JSONValue, Record, to_json_value
 
 if TYPE_CHECKING:
     from ..geometry.lens_array import LensArray
@@ -226,18 +226,9 @@ class Sidecar(Record):
 
     def with_(self, **entries: object) -> Sidecar:
         """This sidecar with ``entries`` set: a new key after the others, a known one in its place.
-        A typed field takes its record or its JSON (checked, as ``from_json`` does); any other key is
-        kept as given."""
-        typed: dict[str, Any] = {}   # each value checked as its field (read_field): no one static type fits all
-        extra: dict[str, JSONValue] = dict(self.extra)
-        for key, value in entries.items():
-            if key in _TYPED:   # a record or its JSON, read back as the field: checked whichever is given
-                typed[key] = read_field(Sidecar, key, to_json_value(value))
-            else:
-                extra[key] = to_json_value(value)
-        order = self.order or tuple(self.to_json())
-        return dataclasses.replace(self, **typed, extra=extra,
-                                   order=order + tuple(k for k in entries if k not in order))
+        A typed field takes its record or its JSON; the whole is read back as ``from_json`` reads a
+        file, so every entry is checked; any other key is kept as given."""
+        return Sidecar.from_json({**self.to_json(), **{k: to_json_value(v) for k, v in entries.items()}})
 
     def get(self, key: str, default: JSONValue = None) -> JSONValue:
         """The JSON value of ``key``, typed or kept (a command's own keys: ``side.get("depths_mm")``)."""
