@@ -21,7 +21,7 @@ from ..errors import ConfigError, InputError, Povh3dError, param, raw_message
 from ..renderer.budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_memory
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import _positive as positive_length  # the lens array's own rule
-from ..image.io import (atomic_path, check_output, read_png, read_sidecar, read_sidecar_record, with_sidecar,
+from ..image.io import (atomic_path, check_output, read_png, read_sidecar_record, with_sidecar,
                         write_png,
                         write_sidecar)
 from ..renderer.records import base_record, png_output, write_image
@@ -182,8 +182,9 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
         raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
                           "unmapped lenticular image (one row of views): render with the display's preset or "
                           f"{param('mapping')} instead")
-    display = (read_sidecar(input_path) or {}).get("display")
-    recorded: Any = (display.get("physical_panel") if isinstance(display, MappingABC) else None) or {}
+    record = read_sidecar_record(input_path)
+    display = record.display if record is not None else None
+    recorded: Any = (display.get("physical_panel") if display is not None else None) or {}
     if recorded.get("size_px"):   # the render's own panel: a guess from the image's size may be another
         # cast: the panel's size_px, as povh3d wrote it: W, H
         size = cast(tuple[int, int], tuple(int(v) for v in recorded["size_px"]))

@@ -14,7 +14,7 @@ from typing import Any
 from ..errors import ConfigError, param, raw_message
 from ..geometry.axes import to_edge
 from ..geometry.lens_array import LensArray, Panel
-from ..image.io import read_png, read_sidecar, with_sidecar
+from ..image.io import read_png, read_sidecar_record, with_sidecar
 from ..image.resample import resample_micro_images, resample_panel, resampled_array, trade_views_for_lenses
 from ..renderer.budget import check_disk, check_memory
 from .images import read_whole_lenses
@@ -69,9 +69,10 @@ def _bank_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tuple[i
     to them), or None when the input has none or it does not fit ``shape``."""
     from ..display.display import Display
 
-    side = read_sidecar(input_path) or {}
-    if not side.get("lens_array"):
+    record = read_sidecar_record(input_path)
+    if record is None or record.lens_array is None:
         return None
+    side = record.to_json()
     try:
         a = Display.from_record(side).lens_array
         ny, nx = ppl_out

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, param
-from ..image.io import atomic_path, check_output, read_png, read_sidecar, read_sidecar_record, with_sidecar
+from ..image.io import atomic_path, check_output, read_png, read_sidecar_record, with_sidecar
 from ..image.sidecar import Sidecar
 from ..renderer.outputs.views import h3d_views, read_views
 
@@ -72,10 +72,11 @@ def read_render_views(render: str | Path) -> RenderViews:
     """Read the views of a render (see the module docstring for what a render is)."""
     path = Path(render)
     if path.is_dir():
-        manifest = read_sidecar(path / "views.json") or {}
-        lens_array = manifest.get("lens_array")
-        grid = str(lens_array.get("grid", "square")) if isinstance(lens_array, Mapping) else "square"
-        return RenderViews((read_views(path),), (0,), grid, (), (), view_pixel_aspect(manifest.get("lens_array")))
+        manifest = read_sidecar_record(path / "views.json")
+        lens_array = manifest.lens_array if manifest is not None else None
+        grid = lens_array.grid if lens_array is not None else "square"
+        return RenderViews((read_views(path),), (0,), grid, (), (),
+                           view_pixel_aspect(lens_array.to_json() if lens_array is not None else None))
     frames, numbers, images, records, grids = [], [], [], [], set()
     for n, image_path in frame_files(path):
         record = read_sidecar_record(image_path)
