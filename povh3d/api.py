@@ -54,10 +54,10 @@ def read_h3d(path: str | Path) -> tuple[np.ndarray, LensArray | None]:
     lens_array : LensArray or None
     """
     from .display.display import Display
-    from .image.io import read_png, read_sidecar
+    from .image.io import read_png, read_sidecar_record
 
-    side = read_sidecar(path) or {}
-    return read_png(path), (Display.from_record(side).lens_array if side.get("lens_array") else None)
+    side = read_sidecar_record(path)
+    return read_png(path), (Display.from_record(side.to_json()).lens_array if side and side.lens_array else None)
 
 
 # -- views -------------------------------------------------------------------------------------------

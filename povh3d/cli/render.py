@@ -143,7 +143,7 @@ def _render(args: argparse.Namespace) -> str | None:
     request = request_from_args(args)
     update, close = progress_bar(not args.quiet and sys.stderr.isatty())
     try:
-        result = render(request, update)
+        result: dict[str, Any] = render(request, update)   # the still's sidecar or the animation's report, as JSON
     finally:
         close()
     if request.objects is not None:   # renderer.render wrote them after the colour pass

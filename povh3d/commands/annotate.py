@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, param
-from ..image.io import atomic_path, check_output, read_sidecar, with_sidecar
+from ..image.io import atomic_path, check_output, read_sidecar_record, with_sidecar
 from ..renderer.outputs.objects import ObjectTable, read_mask, read_table
 from .viewer import frame_files
 
@@ -53,9 +53,11 @@ def read_links(path: str | Path, names: set[str]) -> dict[str, Any]:
 def _render_frames(render: Path) -> tuple[list[int], dict[str, Any]]:
     """The render's frame numbers and the sidecar of its first image (a views folder: frame 0)."""
     if render.is_dir():
-        return [0], read_sidecar(render / "views.json") or {}
-    files = frame_files(render)
-    return [n for n, _ in files], read_sidecar(files[0][1]) or {}
+        numbers, side = [0], read_sidecar_record(render / "views.json")
+    else:
+        files = frame_files(render)
+        numbers, side = [n for n, _ in files], read_sidecar_record(files[0][1])
+    return numbers, (side.to_json() if side is not None else {})
 
 
 def _check_against(table: ObjectTable, frames: list[int], record: dict[str, Any], masks: Path) -> None:

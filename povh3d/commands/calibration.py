@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import ConfigError, param
 from ..image.io import atomic_path, check_output, check_output_folder, read_png, with_sidecar
+from ..image.sidecar import Sidecar
 from ..renderer.records import base_record, png_output, write_image
 from ..calibration.borders import correct_borders
 from ..calibration.distortion import undistort_image
@@ -25,7 +26,7 @@ from ..calibration.stitch import stitch
 from ..calibration.viewpoints import viewpoints
 
 
-def _record(kind: str, grid_path: str | Path | None, **extra: Any) -> dict[str, Any]:
+def _record(kind: str, grid_path: str | Path | None, **extra: object) -> Sidecar:
     grid = {} if grid_path is None else {"grid": str(Path(grid_path).resolve())}
     return base_record(kind, None, **grid, **extra)
 
@@ -93,7 +94,7 @@ def undistort_file(image_path, grid_path, output) -> dict[str, Any]:
     record = _record("undistorted", grid_path, source=str(Path(image_path).resolve()),
                      distortion=grid.distortion.as_record(), output_gamma="sRGB")
     write_image(output, undistort_image(image, grid.distortion), record)
-    return record
+    return record.to_json()
 
 
 def borders_file(image_path, grid_path, output, *, threshold: float = 0.5, fill: str = "black") -> dict[str, Any]:
@@ -103,7 +104,7 @@ def borders_file(image_path, grid_path, output, *, threshold: float = 0.5, fill:
     record = _record("border-corrected", grid_path, source=str(Path(image_path).resolve()), threshold=threshold,
                      fill=fill, border_fraction=round(float(border.mean()), 6), output_gamma="sRGB")
     write_image(output, out, record)
-    return record
+    return record.to_json()
 
 
 def equalise_file(image_path, grid_path, output, *, size: int | None = None) -> dict[str, Any]:
@@ -113,7 +114,7 @@ def equalise_file(image_path, grid_path, output, *, size: int | None = None) -> 
     record = _record("equalised", grid_path, source=str(Path(image_path).resolve()), ppl=[used, used],
                      lenses=[grid.table[1], grid.table[0]], output_gamma="sRGB")
     write_image(output, out, record)
-    return record
+    return record.to_json()
 
 
 def viewpoints_file(image_path, grid_path, views_dir, *, ppl: int) -> dict[str, Any]:
@@ -139,4 +140,4 @@ def stitch_files(a_path, b_path, grid_path, output) -> dict[str, Any]:
                      shift_lenses={"rows": shift.di, "cols": shift.dj}, mismatch=round(shift.mismatch, 6),
                      mode=mode, size_px=[out.shape[1], out.shape[0]], output_gamma="sRGB")
     write_image(output, out, record)
-    return record
+    return record.to_json()

@@ -9,6 +9,7 @@ anything is written.
 
 from __future__ import annotations
 
+from collections.abc import Mapping as MappingABC
 from pathlib import Path
 from typing import Any, cast
 
@@ -20,7 +21,8 @@ from ..errors import ConfigError, InputError, Povh3dError, param, raw_message
 from ..renderer.budget import MAX_PLANES, MAX_PREVIEW_FRAMES, check_count, check_memory
 from ..geometry.axes import from_edge, to_edge
 from ..geometry.lens_array import _positive as positive_length  # the lens array's own rule
-from ..image.io import (atomic_path, check_output, read_png, read_sidecar, with_sidecar, write_png,
+from ..image.io import (atomic_path, check_output, read_png, read_sidecar_record, with_sidecar,
+                        write_png,
                         write_sidecar)
 from ..renderer.records import base_record, png_output, write_image
 from ..image.interleave import extract
@@ -91,11 +93,12 @@ def lens_record(path: str | Path, key: str = "lens_array") -> dict[str, Any]:
     a damaged or forged one is one ``ConfigError`` here, not a crash in the work that reads it."""
     from ..display.display import Display
 
-    side = (read_sidecar(path) or {}).get(key)
+    record = read_sidecar_record(path)
+    side = record.get(key) if record is not None else None
     if side is None or side == {}:
         return {}
     Display.from_record({"lens_array": side})
-    return side
+    return dict(side) if isinstance(side, MappingABC) else {}
 
 
 def check_against_sidecar(path: str | Path, lens_array: dict[str, Any]) -> None:
@@ -128,8 +131,8 @@ def read_whole_lenses(path: str | Path) -> np.ndarray:
     341 lenses of 6 px is centred on a 2048 px panel (``ipad-retina``), so 1 px either side
     is no lens's; ``extract`` reads the same region.  Without a sidecar, the whole image."""
     image = read_png(path)
-    record = read_sidecar(path) or {}
-    if not record.get("lens_array"):
+    record = read_sidecar_record(path)
+    if record is None or record.lens_array is None:
         return image
     from ..renderer.outputs.views import sidecar_array
 
@@ -179,7 +182,9 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
         raise ConfigError(f"{str(input_path)!r} is a {side['grid']} H3D image ({views} views); a mapping reads an "
                           "unmapped lenticular image (one row of views): render with the display's preset or "
                           f"{param('mapping')} instead")
-    recorded = ((read_sidecar(input_path) or {}).get("display") or {}).get("physical_panel") or {}
+    record = read_sidecar_record(input_path)
+    display = record.display if record is not None else None
+    recorded: Any = (display.get("physical_panel") if display is not None else None) or {}
     if recorded.get("size_px"):   # the render's own panel: a guess from the image's size may be another
         # cast: the panel's size_px, as povh3d wrote it: W, H
         size = cast(tuple[int, int], tuple(int(v) for v in recorded["size_px"]))
@@ -200,7 +205,7 @@ def map_file(input_path: str | Path, mapping: Mapping, output: str | Path,
     record = base_record("panel", mapping=mapping.name, mapping_parameters=_params(mapping),
                      source=str(Path(input_path).resolve()), size_px=list(panel), output_gamma="sRGB")
     write_image(out, mapped, record)
-    return record
+    return record.to_json()
 
 
 def _params(mapping: Mapping) -> dict[str, Any]:
@@ -269,9 +274,9 @@ def refocus_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     else:
         for n, img in enumerate(encoded):
             write_png(out.with_name(f"{out.stem}_{n:03d}.png"), img)
-        record["sharpest_depth_mm"] = depths[int(np.argmax(energy))]
+        record = record.with_(sharpest_depth_mm=depths[int(np.argmax(energy))])
         write_image(out, contact_sheet(encoded), record)
-    return record
+    return record.to_json()
 
 
 # -- preview ---------------------------------------------------------------------------------------
@@ -323,4 +328,4 @@ def preview_file(h3d_path: str | Path, output: str | Path, info: dict[str, Any],
     record = base_record("preview", source=str(Path(h3d_path).resolve()), angles_deg=list(map(float, angles)),
                      frames=frames)
     write_sidecar(sheet_path, record)   # the sheet's sidecar (its SHA-256), which the .gif shares
-    return record
+    return record.to_json()

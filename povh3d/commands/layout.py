@@ -276,7 +276,7 @@ def write_layout(content: Content, lens_array: LensArray, output: str | Path, *,
         timings={"content_seconds": round(content_seconds, 3),
                  "picture_seconds": round(time.perf_counter() - start, 3)})
     write_image(output, image, record)
-    return record
+    return record.to_json()
 
 
 def find_content(source: Path, lens_array: LensArray, *, placement: Any = None, include_dirs: tuple = (),

@@ -47,16 +47,16 @@ def moire_sweep_file(lens_array: LensArray, slants: np.ndarray, output: str | Pa
     lenses = (max(least, math.ceil(width / pitch)), max(least, math.ceil(height / pitch)))
     sweep = slant_sweep(pattern, pitch, lens_array.focal, slants, (0.0, 0.0, distance), lenses,
                         turn=turn, spot=spot, blur=blur)
-    record = base_record("moire", lens_array, moire={
+    moire = {
         "sheets": "cross-lenticular, whole pair turned" if turn else "cross-lenticular, horizontal sheet slanted",
         "pitch_mm": pitch, "lenses": list(lenses), "viewer_mm": [0.0, 0.0, distance], "blur_lenses": blur,
         "spot_mm": spot, "panel_open": [pattern.open_x, pattern.open_y],
         "slant_deg": sweep.slants_deg.tolist(), "contrast": sweep.contrast.tolist(),
         "row_contrast": sweep.row_contrast.tolist(), "column_contrast": sweep.column_contrast.tolist(),
         "period_mm": sweep.period_mm.tolist(), "direction_deg": sweep.direction_deg.tolist(),
-        "row_period_mm": sweep.row_period_mm.tolist(), "row_predicted_mm": sweep.row_predicted_mm.tolist()})
-    write_image(path, _plot(sweep, pitch, distance, turn, blur), record)
-    return record["moire"]
+        "row_period_mm": sweep.row_period_mm.tolist(), "row_predicted_mm": sweep.row_predicted_mm.tolist()}
+    write_image(path, _plot(sweep, pitch, distance, turn, blur), base_record("moire", lens_array, moire=moire))
+    return moire
 
 
 def _plot(sweep: SlantSweep, pitch: float, distance: float, turn: bool, blur: float) -> np.ndarray:

@@ -13,7 +13,7 @@ from typing import Any
 from ..errors import ConfigError, param, raw_message
 from ..geometry.axes import to_edge
 from ..image.interleave import extract, interleave
-from ..image.io import check_output, read_png, read_sidecar, with_sidecar
+from ..image.io import check_output, read_png, read_sidecar_record, with_sidecar
 from ..image.quilt import (auto_grid, bank_to_quilt_order, parse_quilt_name, quilt_name, quilt_to_bank_order,
                            quilt_to_views, view_aspect, views_to_quilt)
 from .images import lens_record
@@ -34,12 +34,12 @@ def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, 
     from ..renderer.outputs.views import sidecar_array, sidecar_bank
 
     image = read_png(h3d_path)
-    record = read_sidecar(h3d_path) or {}
+    record = read_sidecar_record(h3d_path)
     display = None
-    if record.get("lens_array"):
+    if record is not None and record.lens_array is not None:
         from ..display.display import Display
 
-        display = Display.from_record(record)
+        display = Display.from_record(record.to_json())
         if ppl is not None and display.lens_array.views not in (None, tuple(ppl)):
             raise ConfigError(f"{param('ppl')} contradicts the sidecar of {str(h3d_path)!r}; leave {param('ppl')} out")
         bank = sidecar_bank(image, sidecar_array(image, h3d_path, record))
@@ -67,8 +67,8 @@ def export_quilt(h3d_path: str | Path, output_dir: str | Path, grid: tuple[int, 
     check_output(out, with_sidecar(h3d_path))
     out_record = base_record("quilt", grid=list(grid), aspect=aspect, views=int(n), rows=rows or "centre",
                              source=str(Path(h3d_path).resolve()))
-    if record.get("lens_array"):  # so that importing the quilt gives back the H3D image with its lens array
-        out_record["source_lens_array"] = record["lens_array"]
+    if record is not None and record.lens_array is not None:  # so that importing the quilt gives back the H3D
+        out_record = out_record.with_(source_lens_array=record.lens_array.to_json())   # image with its lens array
     write_image(out, views_to_quilt(views, *grid), out_record)
     return out
 
@@ -110,9 +110,9 @@ def import_quilt(quilt_path: str | Path, output: str | Path, grid: tuple[int, in
     side = lens_record(quilt_path, "source_lens_array")
     if side.get("views") == [int(views.shape[0]), 1] and side.get("panel", {}).get("size_px") == \
             to_edge(h3d.shape[:2]):
-        record["lens_array"] = side
+        record = record.with_(lens_array=side)
     write_image(out, h3d, record)
-    return record
+    return record.to_json()
 
 
 # -- refocus ---------------------------------------------------------------------------------------

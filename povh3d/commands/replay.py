@@ -17,7 +17,8 @@ from ..display.display import Display
 from ..display.replay import (OPTICS, Replay, aperture_views, default_eye, label_centre_offset, light_shares,
                               mapped_report, mapped_sheet, psnr, replay, report, sheet_slots, sweep_eyes)
 from ..errors import ConfigError, InputError, warn, param
-from ..image.io import atomic_path, check_output, check_writable, read_png, read_sidecar, write_png
+from ..image.io import atomic_path, check_output, check_writable, read_png, read_sidecar_record, write_png
+from ..image.sidecar import Sidecar
 from ..renderer.budget import check_memory
 from ..renderer.records import base_record, png_output, write_image
 from .images import check_against_sidecar
@@ -27,15 +28,15 @@ MAX_SWEEP = 240
 
 def read_display(h3d_path: str | Path) -> tuple[np.ndarray, Display]:
     """The H3D image and the display its sidecar describes; one error line when there is none."""
-    record = read_sidecar(h3d_path)
+    record = read_sidecar_record(h3d_path)
     if not Path(h3d_path).is_file():
         raise InputError(f"image {str(h3d_path)!r} does not exist; check the path")
-    if not record or not record.get("lens_array"):
+    if record is None or record.lens_array is None:
         raise InputError(f"{str(h3d_path)!r} has no sidecar with its lens array ({Path(h3d_path).stem}.json); "
                          "replay an image povh3d rendered, with its sidecar beside it")
-    display = Display.from_record(record)
+    display = Display.from_record(record.to_json())
     if display.physical_panel is None:
-        check_against_sidecar(h3d_path, record["lens_array"])
+        check_against_sidecar(h3d_path, record.lens_array.to_json())
     return read_png(h3d_path), display
 
 
@@ -57,27 +58,31 @@ def device_image(h3d_path: str | Path) -> DeviceImage | None:
     from ..display.looking_glass import device, device_of, read_visual
     from ..display.quilt import device_calibration
 
-    record = read_sidecar(h3d_path) or {}
+    record = read_sidecar_record(h3d_path)
     if not Path(h3d_path).is_file():
         raise InputError(f"image {str(h3d_path)!r} does not exist; check the path")
-    if record.get("mapping") == "looking-glass-shader":
-        if not record.get("calibration"):
+    if record is None:
+        return None
+    calibration, source_path = record.get("calibration"), record.get("source")
+    if record.mapping == "looking-glass-shader":
+        if not isinstance(calibration, str) or not calibration:
             raise InputError(f"{str(h3d_path)!r} is a Looking Glass native image whose sidecar names no calibration; "
                              f"render it again with {param('calibration')} visual.json")
-        cal = read_visual(record["calibration"])
-        dev = device(record["device"]) if record.get("device") else device_of(cal)  # the 27": named, no table entry
+        cal = read_visual(calibration)
+        device_name = record.get("device")
+        dev = device(device_name) if isinstance(device_name, str) and device_name else device_of(cal)  # the 27": named, no table entry
         if dev is None:
-            raise ConfigError(f"the calibration {record['calibration']!r} is of no Looking Glass model povh3d knows; "
+            raise ConfigError(f"the calibration {calibration!r} is of no Looking Glass model povh3d knows; "
                               "give the unit's own visual.json")
         image = read_png(h3d_path)
         if image.shape[:2] != (cal.screen_h, cal.screen_w):
             raise InputError(f"{str(h3d_path)!r} is {image.shape[1]}x{image.shape[0]}, not the {cal.screen_w}x"
                              f"{cal.screen_h} panel of its calibration; render it again")
         return DeviceImage(cal, dev, image, "native")
-    if record.get("kind") != "quilt":
+    if record.kind != "quilt":
         return None
-    source = read_sidecar(record["source"]) if record.get("source") and Path(record["source"]).is_file() else None
-    spec = ((source or {}).get("display") or {}).get("quilt") or {}
+    source = read_sidecar_record(source_path) if isinstance(source_path, str) and Path(source_path).is_file() else None
+    spec: Any = ((source.display if source is not None else None) or {}).get("quilt") or {}
     if not spec.get("device"):
         raise ConfigError(f"{str(h3d_path)!r} is a quilt without its Looking Glass device (its source render's "
                           f"sidecar names none); replay the quilt a render with {param('preset')} looking-glass-... wrote")
@@ -329,13 +334,13 @@ def replay_file(h3d_path: str | Path, output: str | Path, *, eye: tuple[float, f
             reports = [report(r, la, e) for r, e in zip(results, eyes)]
     record = base_record("replay", la, source=str(Path(h3d_path).resolve()), optics=optics,
                          size=size if isinstance(size, str) else list(size),
-                         eyes_mm=eyes.tolist(), output_gamma=(read_sidecar(h3d_path) or {}).get("output_gamma", "sRGB"),
+                         eyes_mm=eyes.tolist(), output_gamma=_output_gamma(h3d_path),
                          **({"timings_s": timings} if timings else {}),
                          **({"reports": [{k: v for k, v in r.items() if k != "view_of_lens"} for r in reports]}
                             if reports else {}))  # the per-lens views: in --json's report only
     _write_replay(out, frames, record, sweep, json_path,
                   {"eyes": reports, **({"timings_s": timings} if timings else {})})
-    return record
+    return record.to_json()
 
 
 def _replay_device_file(dev_image: DeviceImage, h3d_path: str | Path, out: Path, eye: Any, optics: str, size: Any,
@@ -351,16 +356,21 @@ def _replay_device_file(dev_image: DeviceImage, h3d_path: str | Path, out: Path,
                          size=size if isinstance(size, str) else list(size), eyes_mm=eyes.tolist(),
                          device=entry, reports=reports)
     _write_replay(out, frames, record, sweep, json_path, {"eyes": reports, "device": entry})
-    return record
+    return record.to_json()
 
 
-def _write_replay(out: Path, frames: list[np.ndarray], record: dict[str, Any], sweep: Any,
+def _output_gamma(h3d_path: str | Path) -> str:
+    side = read_sidecar_record(h3d_path)
+    return side.output_gamma if side is not None and side.output_gamma is not None else "sRGB"
+
+
+def _write_replay(out: Path, frames: list[np.ndarray], record: Sidecar, sweep: Any,
                   json_path: str | Path | None, report: dict[str, Any]) -> None:
     """The replay (or the sweep's frames, film and page) with its sidecar, and the ``--json`` report."""
     if sweep is None:
         write_image(out, frames[0], record)
     else:
-        _write_sweep(out, frames, record, sweep[0])
+        _write_sweep(out, frames, record.to_json(), sweep[0])
     if json_path is not None:
         with atomic_path(json_path) as tmp:
             tmp.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")

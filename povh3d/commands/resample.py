@@ -14,7 +14,7 @@ from typing import Any
 from ..errors import ConfigError, param, raw_message
 from ..geometry.axes import to_edge
 from ..geometry.lens_array import LensArray, Panel
-from ..image.io import read_png, read_sidecar, with_sidecar
+from ..image.io import read_png, read_sidecar_record, with_sidecar
 from ..image.resample import resample_micro_images, resample_panel, resampled_array, trade_views_for_lenses
 from ..renderer.budget import check_disk, check_memory
 from .images import read_whole_lenses
@@ -54,14 +54,14 @@ def resample_file(input_path: str | Path, output: str | Path, ppl_in: tuple[int,
                          ppl_out=to_edge(ppl_out), source=str(Path(input_path).resolve()),
                          size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
     if mode == "lenses":
-        record["replay"] = {"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
-                            "focal_scale": ppl_out[1] / ppl_in[1]}
+        record = record.with_(replay={"lens_pitch_scale": [ppl_out[1] / ppl_in[1], ppl_out[0] / ppl_in[0]],
+                                      "focal_scale": ppl_out[1] / ppl_in[1]})
     else:
         resampled = _bank_array(input_path, result.shape[:2], ppl_out)
         if resampled is not None:
-            record["lens_array"] = resampled.as_record()
+            record = record.with_(lens_array=resampled.as_record())
     write_image(out, result, record)
-    return record
+    return record.to_json()
 
 
 def _bank_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tuple[int, int]) -> Any:
@@ -69,9 +69,10 @@ def _bank_array(input_path: str | Path, shape: tuple[int, int], ppl_out: tuple[i
     to them), or None when the input has none or it does not fit ``shape``."""
     from ..display.display import Display
 
-    side = read_sidecar(input_path) or {}
-    if not side.get("lens_array"):
+    record = read_sidecar_record(input_path)
+    if record is None or record.lens_array is None:
         return None
+    side = record.to_json()
     try:
         a = Display.from_record(side).lens_array
         ny, nx = ppl_out
@@ -133,4 +134,4 @@ def resample_panel_file(input_path: str | Path, output: str | Path, ppl_out: tup
                          ppl_out=[lens_out.ppl_x, lens_out.ppl_y], source=str(Path(input_path).resolve()),
                          size_px=to_edge(result.shape[:2]), output_gamma="sRGB")
     write_image(out, result, record)
-    return record
+    return record.to_json()

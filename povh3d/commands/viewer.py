@@ -10,12 +10,14 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError, param
-from ..image.io import atomic_path, check_output, read_png, read_sidecar, with_sidecar
+from ..image.io import atomic_path, check_output, read_png, read_sidecar_record, with_sidecar
+from ..image.sidecar import Sidecar
 from ..renderer.outputs.views import h3d_views, read_views
 
 _FRAME_RE = re.compile(r"^(?P<stem>.+)_(?P<n>\d{4,})$")
@@ -29,14 +31,15 @@ class RenderViews:
     numbers: tuple[int, ...]            # the animation frame numbers (0 for a still)
     grid: str
     images: tuple[Path, ...]            # the H3D images (empty for a views folder)
-    records: tuple[dict[str, Any], ...]  # their sidecars
+    records: tuple[Sidecar, ...]  # their sidecars
     pixel_aspect: float = 1.0           # a view pixel's width over height on the display (view_pixel_aspect)
 
 
-def view_pixel_aspect(lens_array: dict[str, Any] | None) -> float:
+def view_pixel_aspect(lens_array: object) -> float:
     """Width over height of a view's pixel on the display, from a sidecar's lens array: each view
     pixel is one lens, ``pixel_distance_3d_mm`` (the lens pitches) apart; 1 when it is not known."""
-    pitch: Any = (lens_array or {}).get("pixel_distance_3d_mm") or (lens_array or {}).get("lens_pitch_mm")
+    side: Any = lens_array if isinstance(lens_array, Mapping) else {}
+    pitch: Any = side.get("pixel_distance_3d_mm") or side.get("lens_pitch_mm")
     try:
         aspect = float(pitch[0]) / float(pitch[1])
     except (TypeError, ValueError, IndexError, ZeroDivisionError):
@@ -48,9 +51,9 @@ def frame_files(render: str | Path) -> list[tuple[int, Path]]:
     """The H3D images a render names: one still, or every frame of its animation, in order."""
     path = Path(render)
     if path.is_file():
-        record = read_sidecar(path) or {}
+        record = read_sidecar_record(path)
         match = _FRAME_RE.match(path.stem)
-        if "animation" not in record or not match:
+        if record is None or record.animation is None or not match:
             return [(0, path)]
         stem = match["stem"]
     else:
@@ -69,13 +72,15 @@ def read_render_views(render: str | Path) -> RenderViews:
     """Read the views of a render (see the module docstring for what a render is)."""
     path = Path(render)
     if path.is_dir():
-        manifest = read_sidecar(path / "views.json") or {}
-        grid = (manifest.get("lens_array") or {}).get("grid", "square")
-        return RenderViews((read_views(path),), (0,), grid, (), (), view_pixel_aspect(manifest.get("lens_array")))
+        manifest = read_sidecar_record(path / "views.json")
+        lens_array = manifest.lens_array if manifest is not None else None
+        grid = lens_array.grid if lens_array is not None else "square"
+        return RenderViews((read_views(path),), (0,), grid, (), (),
+                           view_pixel_aspect(lens_array.to_json() if lens_array is not None else None))
     frames, numbers, images, records, grids = [], [], [], [], set()
     for n, image_path in frame_files(path):
-        record = read_sidecar(image_path)
-        if not record or "lens_array" not in record:
+        record = read_sidecar_record(image_path)
+        if record is None or record.lens_array is None:
             raise InputError(f"{str(image_path)!r} has no sidecar with its lens array; give its views folder "
                              f"(render {param('views_dir')}) instead")
         views, grid = h3d_views(read_png(image_path), record, image_path)

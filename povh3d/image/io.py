@@ -35,6 +35,9 @@ from ..errors import InputError, OutputError, param, plain
 if TYPE_CHECKING:  # NumPy, Pillow and pypng are imported where images are coded: a cached
     import numpy as np  # output is copied as bytes without them (renderer/output_cache.py)
 
+    from ..jsontext import JSONObject, JSONValue
+    from .sidecar import Sidecar
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
@@ -289,7 +292,7 @@ def _encode_png(path: Path, image: np.ndarray) -> None:
         raise ValueError(f"write_png takes uint8 or uint16 images, got {image.dtype}")
 
 
-def write_image_pair(path: str | Path, image: np.ndarray, record: dict[str, Any]) -> None:
+def write_image_pair(path: str | Path, image: np.ndarray, record: Sidecar | JSONObject) -> None:
     """Replace ``path`` and its sidecar together (see the module docstring for the order).
 
     Both are written to temporary names first; on any failure neither the old
@@ -298,21 +301,27 @@ def write_image_pair(path: str | Path, image: np.ndarray, record: dict[str, Any]
     _replace_pair(Path(path), lambda tmp: _encode_png(tmp, image), record)
 
 
-def write_png_bytes_pair(path: str | Path, data: bytes, record: dict[str, Any]) -> None:
+def write_png_bytes_pair(path: str | Path, data: bytes, record: Sidecar | JSONObject) -> None:
     """``write_image_pair`` for an image already encoded: ``data`` are the PNG file's bytes."""
     _replace_pair(Path(path), lambda tmp: tmp.write_bytes(data), record)
 
 
-def _replace_pair(path: Path, write: Any, record: dict[str, Any]) -> None:
+def _replace_pair(path: Path, write: Any, record: Sidecar | JSONObject) -> None:
     side = sidecar_path(path)
     with atomic_path(side) as side_tmp:
         with atomic_path(path) as image_tmp:
             write(image_tmp)
-            _write_json(side_tmp, {**record, "image_sha256": file_sha256(image_tmp)})
+            _write_json(side_tmp, {**_as_json(record), "image_sha256": file_sha256(image_tmp)})
         # the image is in place; the sidecar is renamed when this block ends
 
 
-def _write_json(path: Path, record: dict[str, Any]) -> None:
+def _as_json(record: Sidecar | JSONObject) -> JSONObject:
+    from .sidecar import Sidecar
+
+    return record.to_json() if isinstance(record, Sidecar) else record
+
+
+def _write_json(path: Path, record: JSONObject) -> None:
     path.write_text(json.dumps(plain(record), indent=2, sort_keys=False) + "\n", encoding="utf-8")
 
 
@@ -321,9 +330,10 @@ def sidecar_path(image_path: str | Path) -> Path:
     return Path(image_path).with_suffix(".json")
 
 
-def write_sidecar(image_path: str | Path, record: dict[str, Any]) -> Path:
+def write_sidecar(image_path: str | Path, record: Sidecar | JSONObject) -> Path:
     """Write the sidecar of an image already in place (it records the image's SHA-256)."""
     path = sidecar_path(image_path)
+    record = _as_json(record)
     if Path(image_path).is_file():
         record = {**record, "image_sha256": file_sha256(image_path)}
     with atomic_path(path) as tmp:
@@ -331,8 +341,19 @@ def write_sidecar(image_path: str | Path, record: dict[str, Any]) -> Path:
     return path
 
 
-def read_sidecar(image_path: str | Path) -> dict[str, Any] | None:
-    """The sidecar of ``image_path``; None when there is none.
+def read_sidecar_record(image_path: str | Path) -> Sidecar | None:
+    """The sidecar of ``image_path`` as a ``Sidecar``, every key it knows checked (``image.sidecar``);
+    None when there is none.  A wrong type or a missing ``kind`` is an ``InputError`` naming the file
+    and the key, as an unreadable one is (``read_sidecar``)."""
+    from .sidecar import Sidecar
+
+    record = read_sidecar(image_path)
+    return None if record is None else Sidecar.from_json(record, source=sidecar_path(image_path))
+
+
+def read_sidecar(image_path: str | Path) -> dict[str, JSONValue] | None:
+    """The sidecar of ``image_path`` as parsed JSON (``read_sidecar_record``: typed and checked);
+    None when there is none.
 
     An unreadable or malformed sidecar, or one whose ``image_sha256`` is not the
     image's (the image was replaced after it), is an ``InputError``: a sidecar

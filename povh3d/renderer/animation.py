@@ -43,7 +43,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -51,6 +50,8 @@ from .shots.clock_runs import ClockSequence, SequenceLedger, povray_clock
 from .methods.quality import Progress
 from ..errors import ConfigError, OutputError, PovrayError, param, raw_message
 from ..image.io import read_png, write_sidecar
+from ..image.sidecar import AnimationRecord, Sidecar
+from ..jsontext import JSONValue
 from ..image.video import write_video
 from ..system import owned_prefix, sweep_orphans
 from .records import write_image
@@ -146,20 +147,20 @@ class RenderedImage:
     """One rendered image and its sidecar record, as written for a still or an animation frame."""
 
     image: np.ndarray                   # (H, W, C) uint8 or uint16
-    record: dict[str, Any]
+    record: Sidecar
     views: np.ndarray | None = None     # (Ny, Nx, Ly, Lx, C) when asked for
     from_cache: bool = False            # every shot came from the cache
 
 
 ImageRenderer = Callable[..., RenderedImage]  # (clock, progress, sequence=ClockSequence or None)
 #: Files made from a frame beside it (a Looking Glass quilt, its native image): ``(staged frame path,
-#: frame) -> (the frame record's additions, the files written beside it)``.
-Companions = Callable[[Path, RenderedImage], tuple[dict[str, Any], list[Path]]]
+#: frame) -> (the frame's record with their entries, the files written beside it)``.
+Companions = Callable[[Path, RenderedImage], tuple[Sidecar, list[Path]]]
 
 
 def render_sequence(frames: FrameRange, output: Path, render_image: ImageRenderer, *, uses_clock: bool,
                     progress: Progress | None = None, video: Path | None = None,
-                    fps: float = 24.0, companions: Companions | None = None) -> dict[str, Any]:
+                    fps: float = 24.0, companions: Companions | None = None) -> dict[str, JSONValue]:
     """Render frames ``frames.first..last`` as ``OUT_nnnn.png``, each by ``render_image(clock, progress)``.
 
     The frames are made in a hidden folder beside `output` and moved into
@@ -188,7 +189,8 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
 
     total = len(frames)
     start = time.perf_counter()
-    report: dict[str, Any] = {"frames": [], "rendered": 0, "from_cache": 0, "copied": 0,
+    counts = {"rendered": 0, "from_cache": 0, "copied": 0}
+    report: dict[str, JSONValue] = {"frames": [], "rendered": 0, "from_cache": 0, "copied": 0,
                               "scene_uses_clock": uses_clock, "video": None}
     scale = [1]  # camera frames per animation frame, learnt from the first render
     ledger = SequenceLedger()  # what the clock sequences of this request share
@@ -198,8 +200,8 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
     try:
         for index, n in enumerate(frames.numbers):
             staged = frame_path(staging / output.name, n, digits)
-            info = {"frame": n, "clock": frames.clock(n), "frames": [frames.first, frames.last],
-                    "clock_range": [frames.clock_start, frames.clock_end], "scene_uses_clock": uses_clock}
+            info = AnimationRecord(frame=n, clock=frames.clock(n), frames=(frames.first, frames.last),
+                                   clock_range=(frames.clock_start, frames.clock_end), scene_uses_clock=uses_clock)
             if uses_clock or first is None:
                 try:
                     frame = render_image(frames.clock(n) if uses_clock else None,
@@ -208,16 +210,16 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
                 except PovrayError as exc:  # name the animation frame, not only POV-Ray's camera batch
                     raise type(exc)(f"animation frame {n} (clock {frames.clock(n):g}), {raw_message(exc)}", command=exc.command,
                                     returncode=exc.returncode, log_tail=exc.log_tail) from None
-                report["from_cache" if frame.from_cache else "rendered"] += 1
-                extra, made[n] = companions(staged, frame) if companions else ({}, [])
-                write_image(staged, frame.image, {**frame.record, **extra, "animation": info})
+                counts["from_cache" if frame.from_cache else "rendered"] += 1
+                record, made[n] = companions(staged, frame) if companions else (frame.record, [])
+                write_image(staged, frame.image, record.with_(animation=info))
                 first = first or (frame, staged)
             else:
                 # The scene cannot tell this clock from the first: same pixels.
-                extra, made[n] = companions(staged, first[0]) if companions else ({}, [])
+                record, made[n] = companions(staged, first[0]) if companions else (first[0].record, [])
                 shutil.copyfile(first[1], staged)
-                write_sidecar(staged, {**first[0].record, **extra, "animation": info})
-                report["copied"] += 1
+                write_sidecar(staged, record.with_(animation=info))
+                counts["copied"] += 1
             if progress is not None:
                 shown[0] = max(shown[0], (index + 1) * scale[0])
                 progress(shown[0], total * scale[0])
@@ -231,7 +233,7 @@ def render_sequence(frames: FrameRange, output: Path, render_image: ImageRendere
                 companion.replace(final.with_name(companion.name))
                 if companion.with_suffix(".json").exists():
                     companion.with_suffix(".json").replace(final.with_name(companion.with_suffix(".json").name))
-        report["frames"] = [str(p) for p in finals]
+        report.update(counts, frames=[str(p) for p in finals])
         shown_frames = finals
         if made:
             report["companions"] = [[str(final.with_name(p.name)) for p in made[n]]

@@ -7,6 +7,7 @@ path as ``povh3d render`` on the command line.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -17,6 +18,7 @@ from ..geometry.lens_array import LensArray
 from ..display.display import build_display
 from .run import run_request as render_request
 from .request import RenderRequest
+from ..jsontext import JSONValue
 
 _REQUEST = tuple(f.name for f in fields(RenderRequest)
                  if f.name not in ("source", "output", "display", "settings", "objects"))
@@ -24,9 +26,9 @@ _SETTINGS = tuple(f.name for f in fields(RenderSettings))
 
 
 def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens_array: LensArray | None = None,
-           mapping: str | None = None, mapping_options: dict[str, Any] | None = None,
+           mapping: str | None = None, mapping_options: Mapping[str, JSONValue] | None = None,
            calibration: str | Path | None = None, progress: Progress | None = None,
-           objects: str | Path | None = None, camera_model: str | None = None, **options: Any) -> dict[str, Any]:
+           objects: str | Path | None = None, camera_model: str | None = None, **options: Any) -> dict[str, JSONValue]:
     """Render a scene or a mesh model into ``output`` (PNG + JSON sidecar); return the sidecar record.
 
     Parameters
@@ -81,9 +83,9 @@ def render(source: str | Path, output: str | Path, *, preset: str = "demo", lens
 
 
 def _render(source: str | Path, output: str | Path, preset: str, lens_array: LensArray | None,
-            mapping: str | None, mapping_options: dict[str, Any] | None, calibration: str | Path | None,
+            mapping: str | None, mapping_options: Mapping[str, JSONValue] | None, calibration: str | Path | None,
             progress: Progress | None, objects: str | Path | None, options: dict[str, Any],
-            camera_model: str | None = None) -> dict[str, Any]:
+            camera_model: str | None = None) -> dict[str, JSONValue]:
     """The render itself (``render`` above, past its cache)."""
     unknown = sorted(set(options) - set(_REQUEST) - set(_SETTINGS))
     if unknown:

@@ -46,6 +46,7 @@ from .._version import __version__
 from ..display.looking_glass import DEVICES
 from ..errors import Povh3dError, Povh3dWarning, raw_message
 from ..image.io import sidecar_path, write_png_bytes_pair
+from ..jsontext import JSONValue
 from ..mesh.formats import is_mesh_file
 from ..scene.scene import load_scene
 from ..system import binary_key, find_povray
@@ -63,7 +64,7 @@ class Hit:
 
     summary: str
     warnings: tuple[str, ...]
-    record: dict[str, Any]
+    record: dict[str, JSONValue]   # the sidecar written, as JSON
 
 
 def request_key(scene: str | Path, output: Path, options: Mapping[str, Any],
@@ -140,19 +141,20 @@ def answer(key: str, output: Path, cache_dir: Path | None = None) -> Hit | None:
         return None
     if stored is None:
         return None
-    meta, image = stored
-    record = meta["record"]
-    record["timings"] = {**record.get("timings", {}), "output_from_cache": True}
+    hit, image = stored
+    timings = hit.record.get("timings")
+    record = {**hit.record, "timings": {**(timings if isinstance(timings, Mapping) else {}), "output_from_cache": True}}
     write_png_bytes_pair(output, image, record)
-    return Hit(str(meta["summary"]), tuple(str(w) for w in meta["warnings"]), record)
+    return Hit(hit.summary, hit.warnings, record)
 
 
-def _parse(body: bytes) -> tuple[dict[str, Any], bytes]:
-    """The JSON block and the PNG bytes of an entry's body; ``ValueError`` unless it is whole."""
+def _parse(body: bytes) -> tuple[Hit, bytes]:
+    """The entry's record (the sidecar as povh3d wrote it), summary and warnings, and the PNG bytes of
+    its body; ``ValueError`` unless it is whole."""
     meta, image = cache.split_json(body)
     if not {"record", "summary", "warnings"} <= meta.keys() or not isinstance(meta["record"], dict):
         raise ValueError("not an output entry")
-    return meta, image
+    return Hit(str(meta["summary"]), tuple(str(w) for w in meta["warnings"]), meta["record"]), image
 
 
 def keep(key: str, output: Path, summary: str, warnings: list[str], cache_dir: Path | None = None) -> None:

@@ -1,32 +1,30 @@
 """The sidecar record and the output checks every command shares.
 
 Every image povh3d writes has a JSON sidecar (``name.json`` beside
-``name.png``); its base record is built here and only here, and every output
+``name.png``, ``image.sidecar.Sidecar``); its base record is built here and only here, and every output
 path is checked here before any work starts: never one of the command's inputs, nor over a
 ``NAME.json`` that povh3d did not write (``image.io.check_output``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from .._version import __version__
 from ..errors import ConfigError
 from ..geometry.lens_array import LensArray
 from ..image.io import check_output, write_image_pair
+from ..image.sidecar import Sidecar
+from ..jsontext import JSONValue
 
 
-def base_record(kind: str, lens_array: LensArray | None = None, **extra: Any) -> dict[str, Any]:
-    """``povh3d_version``, ``kind`` (``h3d``, ``panel``, ``views``, ...), the lens array, then ``extra``."""
-    record: dict[str, Any] = {"povh3d_version": __version__, "kind": kind}
-    if lens_array is not None:
-        record["lens_array"] = lens_array.as_record()
-    record.update(extra)
-    return record
+
+def base_record(kind: str, lens_array: LensArray | None = None, **extra: object) -> Sidecar:
+    """``povh3d_version``, ``kind`` (``h3d``, ``panel``, ``views``, ...), the lens array, then ``extra``
+    (``image.sidecar.Sidecar.new``: the keys it knows are checked)."""
+    return Sidecar.new(kind, lens_array, **extra)
 
 
 def png_output(path: str | Path, what: str = "output", inputs: Iterable[str | Path] = (), *,
@@ -40,7 +38,7 @@ def png_output(path: str | Path, what: str = "output", inputs: Iterable[str | Pa
     return check_output(path, inputs, what=what, sidecar=sidecar)
 
 
-def write_image(path: str | Path, image: np.ndarray, record: dict[str, Any]) -> None:
+def write_image(path: str | Path, image: np.ndarray, record: Sidecar | Mapping[str, JSONValue]) -> None:
     """Write ``image`` and its sidecar ``record`` beside it, replaced as a pair
     (``image.io.write_image_pair``: a sidecar always describes the image beside it)."""
     write_image_pair(path, image, record)

@@ -15,7 +15,8 @@ import re
 import time
 from dataclasses import replace
 from functools import partial
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -38,12 +39,14 @@ from ..scene.scene import Scene, load_scene
 from .animation import RenderedImage, render_sequence
 from .records import base_record, png_output, write_image
 from .request import RenderRequest
+from ..image.sidecar import PlacementRecord, QualityRecord, Sidecar, Timings
+from ..jsontext import JSONObject, JSONValue
 
 if TYPE_CHECKING:
     from .methods.auto import AutoChoice
 
 
-def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
+def render(request: RenderRequest, progress: Progress | None = None) -> dict[str, JSONValue]:
     """Carry out ``request``; return the sidecar record of the still, or the animation's report.
 
     Every output is checked before any work and written atomically.  The record's ``passes`` lists
@@ -55,36 +58,39 @@ def render(request: RenderRequest, progress: Progress | None = None) -> dict[str
         return _render(request, progress, passes)
 
 
-def _render(request: RenderRequest, progress: Progress | None, passes: list[PassCost]) -> dict[str, Any]:
+def _render(request: RenderRequest, progress: Progress | None, passes: list[PassCost]) -> dict[str, JSONValue]:
     started = time.perf_counter()   # the whole time: the camera and depth runs too
     check_memory(request)
     output = png_output(request.output, inputs=(request.source,), sidecar=request.frames is None)
     check_outputs(request, output)   # views, dataset, depth maps, a Looking Glass quilt (outputs.steps)
     scene, model_record = load_content(request)
     check_outputs_against(request, output, (request.source, *scene.files))
-    request, placement_record = place_display(request, scene, progress)
+    request, placed = place_display(request, scene, progress)
     ray_state = None
     if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
         request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
-    if ray_state is not None:
-        placement_record = {**placement_record, "ray_state": ray_state}
+    placement_record = PlacementRecord.from_json({**placed, "ray_state": ray_state} if ray_state is not None else placed)
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
                     placement=placement_record)
     if request.frames is None:
         still = frame(None, progress)
         _warn_unlit(scene, still.image)
-        write_outputs(Still(request, scene, settings, still, output, placement_record.get("units_per_mm", 1.0), progress))
-        still.record["timings"]["total_seconds"] = round(time.perf_counter() - started, 4)
-        still.record["passes"] = [p.to_json() for p in passes]
+        done = Still(request, scene, settings, still, output,
+                     placement_record.units_per_mm if placement_record.units_per_mm is not None else 1.0, progress)
+        write_outputs(done)   # each adds its entry to the record
+        still = done.image
+        timings = (still.record.timings or Timings()).updated(total_seconds=round(time.perf_counter() - started, 4))
+        still = replace(still, record=still.record.with_(timings=timings, passes=tuple(passes)))
         write_image(output, still.image, still.record)
         _warn_record(still.record)
-        return still.record
+        return still.record.to_json()
     companions = None
     if (quilt := request.display.quilt) is not None:   # a Looking Glass preset: each frame's quilt (and native image)
-        def companions(staged: Path, image: RenderedImage) -> tuple[dict[str, Any], list[Path]]:
+        def companions(staged: Path, image: RenderedImage) -> tuple[Sidecar, list[Path]]:
             entry = write_device_outputs(staged, image.image, request.render_array, quilt)
-            return {"quilt": entry}, [staged.with_name(entry[k]) for k in ("file", "native") if k in entry]
+            names = [entry.file, *([entry.native] if entry.native is not None else [])]
+            return image.record.with_(quilt=entry), [staged.with_name(n) for n in names]
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
                              video=request.video, fps=request.fps, companions=companions)
     _warn_unlit(scene)
@@ -121,13 +127,16 @@ def vendor_cameras(request: RenderRequest) -> bool:
 _DARK = 0.5
 
 
-def _warn_record(record: dict[str, Any]) -> None:
+def _warn_record(record: Sidecar) -> None:
     """The warnings a still's record holds (the placement's, the volume's), given through the one
     channel (``errors.warn``) once the image is written: the command line prints them, a Python caller
     sees them as ``Povh3dWarning``s, and the sidecar keeps them."""
-    for message in [*record.get("volume", {}).get("warnings", []),
-                    *record.get("placement", {}).get("warnings", []), *record.get("warnings", [])]:
-        warn(message)
+    volume = record.extra.get("volume")
+    volume_warnings = volume.get("warnings", []) if isinstance(volume, Mapping) else []
+    placed = record.placement.warnings if record.placement is not None else None
+    for message in [*(volume_warnings if isinstance(volume_warnings, list) else []), *(placed or ()),
+                    *(record.warnings or ())]:
+        warn(str(message))
 
 
 def _warn_unlit(scene: Scene, image: np.ndarray | None = None) -> None:
@@ -173,7 +182,7 @@ def check_memory(request: RenderRequest) -> None:
                    f"render fewer frames ({param('frames')} FIRST:LAST) or free some space")
 
 
-def load_content(request: RenderRequest) -> tuple[Scene, dict[str, Any] | None]:
+def load_content(request: RenderRequest) -> tuple[Scene, JSONObject | None]:
     """The scene to render: the request's own, or a mesh model staged for the display (converted
     once, cached by content) or a volume's surfaces or medium (``renderer.content.volume``); and the model's or
     volume's record for the sidecar (None for a scene)."""
@@ -209,7 +218,7 @@ def _resolve_quality(request: RenderRequest, scene: Scene,
 
 def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                  progress: Progress | None = None, *, sequence: ClockSequence | None = None, auto: AutoChoice | None = None,
-                 model: dict[str, Any] | None = None, placement: dict[str, Any] | None = None) -> RenderedImage:
+                 model: JSONObject | None = None, placement: PlacementRecord | None = None) -> RenderedImage:
     """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default); ``sequence``:
     the animation frames from this one to the last, which the engine may render alongside it."""
     array = request.render_array
@@ -220,47 +229,49 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         from .methods.vendor_views import run_vendor_views
 
         result = run_vendor_views(scene, array, replace(settings, clock=clock, sequence=sequence),
-                                  dict(request.display.quilt or {}), placement, progress)  # a quilt preset
+                                  dict(request.display.quilt or {}), placement.to_json() if placement else None,
+                                  progress)  # a quilt preset
     else:
         result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
-                            progress, crop=request.crop, **request.method_options)
+                            progress, crop=request.crop, method_options=request.method_options)
     seconds = auto.seconds if auto is not None and result is auto.image else time.perf_counter() - start
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)
     if h3d.shape[:2] != expected:  # a bug, never the user's doing
         raise RuntimeError(f"{request.method} produced {h3d.shape[:2]}, expected {expected}")
 
-    timings = {"render_seconds": round(seconds, 4), **result.stats.as_record()}
+    timings = Timings.from_json({"render_seconds": round(seconds, 4), **result.stats.as_record()})
+    quality = quality_record(settings, result.quality).updated(
+        bit_depth=settings.bit_depth, front_clearance_mm=result.front_clearance,
+        front_clearance_reason=result.front_clearance_reason)
+    if auto is not None:
+        quality = quality.updated(level="auto", auto=auto.as_record())
+    display = request.display.as_record()   # the sidecar's lens_array and display entries
     record = base_record(
         "h3d", method=request.method, scene=str(scene.path),
-        scene_sha256=scene.digest,
-        quality={**quality_record(settings, result.quality), "bit_depth": settings.bit_depth,
-                 "front_clearance_mm": result.front_clearance,
-                 "front_clearance_reason": result.front_clearance_reason},
+        scene_sha256=scene.digest, quality=quality,
         output_gamma="sRGB", povray_version=result.stats.povray_version,
         sandbox=describe_sandbox(), scheduler=settings.scheduler, timings=timings,
     )
-    record.update(request.display.as_record())  # the sidecar's lens_array and display entries
+    display_entry = dict(display["display"])
     if request.viewing_distance is not None or request.display.viewing_distance_mm is not None:
-        record["display"]["viewing_distance"] = request.viewing()[1]   # what the rows were rendered for
-    record["method_chosen"] = request.method_chosen
-    ray_state = (placement or {}).get("ray_state") or {}
+        display_entry["viewing_distance"] = request.viewing()[1]   # what the rows were rendered for
+    record = record.with_(lens_array=display["lens_array"], display=display_entry, method_chosen=request.method_chosen)
+    ray_state = (placement.ray_state if placement is not None else None) or {}
     note = ray_state.get("method_note")
     if note:
-        record.update(method_note=note, method_fallback=ray_state["method_fallback"])
-    if auto is not None:
-        record["quality"].update(level="auto", auto=auto.as_record())
+        record = record.with_(method_note=note, method_fallback=ray_state["method_fallback"])
     if vendor_cameras(request):   # the method named no part of it: the record says the cameras
-        record["camera_model"] = result.record
+        record = record.with_(camera_model=result.record)
     elif result.record is not None:
-        record[request.method.replace("-", "_")] = result.record
+        record = record.with_(**{request.method.replace("-", "_"): result.record})
     if result.crop is not None:
-        record["crop"] = result.crop
+        record = record.with_(crop=result.crop)
     if model is not None:
-        record[request.content_kind] = model
+        record = record.with_(**{request.content_kind: model})
     if placement is not None:
         cut = foreground_cut(placement, result.front_clearance, request.method)
-        record["placement"] = {**placement, "warnings": [*placement.get("warnings", []), *cut]}
+        record = record.with_(placement=placement.updated(warnings=(*(placement.warnings or ()), *cut)))
     bank = h3d[array.bank_region] if array.views is not None else h3d   # hex, fractional PPL: all of it
     first = request.frames is None or clock is None or clock == request.frames.clock(request.frames.first)
     if first and bank.size and int(bank.max()) == int(bank.min()):
@@ -274,19 +285,19 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     mapping = request.display.mapping
     if mapping is not None:
         h3d = mapping.apply(h3d, request.image_size)
-        record.update(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
-    return RenderedImage(h3d, record, views, from_cache=timings["shots_from_cache"] == timings["shots"])
+        record = record.with_(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
+    return RenderedImage(h3d, record, views, from_cache=timings.shots_from_cache == timings.shots)
 
 
-def foreground_cut(placement: dict[str, Any], front_clearance: float, method: str) -> list[str]:
+def foreground_cut(placement: PlacementRecord, front_clearance: float, method: str) -> list[str]:
     """A warning when the measured scene reaches out past where the rays start (mm): that part of the
     foreground is not in the image."""
-    depth = placement.get("depth") or {}
+    depth = placement.depth or {}
     near = depth.get("near_mm")
-    if depth.get("empty") or near is None or near >= -front_clearance * (1 - 1e-9):
+    if depth.get("empty") or not isinstance(near, (int, float)) or near >= -front_clearance * (1 - 1e-9):
         return []
     start = -front_clearance or 0.0
-    limit = placement.get("front_clearance_limit_mm")
+    limit = placement.front_clearance_limit_mm
     if limit is not None:
         why = (f"the scene's camera stands {limit / 0.9:.3g} mm out and nothing behind it may enter the image"
                f"{'; single-stage moves its lenses in steps' if method == 'single-stage' else ''}")
@@ -300,9 +311,11 @@ def foreground_cut(placement: dict[str, Any], front_clearance: float, method: st
             f"nearer than that is cut; {fix}"]
 
 
-def quality_record(settings: RenderSettings, rendered: Quality) -> dict[str, Any]:
+def quality_record(settings: RenderSettings, rendered: Quality) -> QualityRecord:
     """The quality asked for and as rendered (a method without sub-views antialiases instead)."""
     level = settings.quality if isinstance(settings.quality, str) else "custom"
-    return {"level": level, "setting": rendered.label, "povray_options": list(rendered.options),
-            "subviews": rendered.subviews, "footprint_samples": rendered.footprint,
-            "max_trace_level": rendered.max_trace_level}
+    return QualityRecord(level=level, setting=rendered.label, povray_options=tuple(rendered.options),
+                         subviews=rendered.subviews, footprint_samples=rendered.footprint,
+                         max_trace_level=rendered.max_trace_level,   # written even when null:
+                         order=("level", "setting", "povray_options", "subviews", "footprint_samples",
+                                "max_trace_level"))

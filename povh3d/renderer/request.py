@@ -14,11 +14,11 @@ from collections.abc import Mapping as MappingABC
 from dataclasses import dataclass, field
 from dataclasses import replace as _replace
 from pathlib import Path
-from typing import Any
 
 from .methods.registry import get_method
 from .methods.quality import RenderSettings
 from ..errors import ConfigError, param
+from ..jsontext import JSONValue
 from ..geometry.crop import CropSettings
 from ..geometry.lens_array import LensArray
 from ..image.video import check_video_path
@@ -154,7 +154,7 @@ class RenderRequest:
     output: Path
     method: str = "multi-ortho"
     method_chosen: bool = True
-    method_options: MappingABC[str, Any] = field(default_factory=dict)
+    method_options: MappingABC[str, JSONValue] = field(default_factory=dict)
     settings: RenderSettings = field(default_factory=RenderSettings)
     crop: CropSettings | None = None
     include_dirs: tuple[Path, ...] = ()

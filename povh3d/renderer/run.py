@@ -5,14 +5,15 @@ masks after it (``renderer.passes.object_masks``), orchestrated once for the com
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:   # the render's own modules load when it runs: the import chain stays within 8 levels
+    from ..jsontext import JSONValue
     from .methods.quality import Progress
     from .request import RenderRequest
 
 
-def run_request(request: RenderRequest, progress: Progress | None = None) -> dict[str, Any]:
+def run_request(request: RenderRequest, progress: Progress | None = None) -> dict[str, JSONValue]:
     """Carry out ``request``: the sidecar record of the still (or the animation's report), with
     ``object_masks`` (the folder, the number of objects and frames, the share of pixels no id)
     when the request asks for them."""

@@ -26,6 +26,7 @@ from ... import cache
 from ..._version import __version__
 from ...cache import content_key
 from .stage_text import model_stage_text
+from ...jsontext import JSONValue
 from ...errors import ConfigError, InputError, param, warn
 from ...geometry.fit import depth_warning, fit_to_display, fit_record
 from ...geometry.lens_array import LensArray
@@ -88,7 +89,7 @@ def place_volume(volume: Volume, lens_array: LensArray, orientation: str, rotate
 
 def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: VolumeOptions | None = None, *,
                          depth: float | None = None, max_triangles: int | str | None = None,
-                         cache_dir: Path | None = None) -> tuple[Path, dict[str, Any]]:
+                         cache_dir: Path | None = None) -> tuple[Path, dict[str, JSONValue]]:
     """Read, place, extract (cached) and write the stage scene; returns its path and the sidecar record.
 
     ``max_triangles``: the surfaces' triangle budget (None or ``'auto'``: the display's, ``auto_budget``).
@@ -109,7 +110,7 @@ def prepare_volume_stage(source: str | Path, lens_array: LensArray, options: Vol
         warn(note)
     matrix, fit, to_display = place_volume(volume, lens_array, options.orientation, options.rotate, depth)
     digest = volume_digest(volume)
-    record: dict[str, Any] = {
+    record: dict[str, JSONValue] = {
         "volume": volume.as_record(), "source": str(source), "draw": kind, "orientation": options.orientation,
         "rotate": list(options.rotate) if options.rotate else None, "world_to_display": to_display.tolist(),
         "fit": fit_record(fit, depth_budget_mm=fit.depth),
@@ -187,7 +188,7 @@ def cached_surfaces(volume: Volume, digest: str, kind: str, options: VolumeOptio
 
 
 def _mesh_stage(source: Path, lens_array: LensArray, *, depth: float | None, max_triangles: Any,
-                cache_dir: Path | None, rotate: Any) -> tuple[Path, dict[str, Any]]:
+                cache_dir: Path | None, rotate: Any) -> tuple[Path, dict[str, JSONValue]]:
     """A polygon-mesh ``.vtk``: triangulated into a PLY in the cache, then staged as any model."""
     import trimesh
 

@@ -16,11 +16,11 @@ from __future__ import annotations
 import hashlib
 import time
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from .stage_text import media_stage_text
+from ...jsontext import JSONValue
 from ...errors import ConfigError, param
 from ...geometry.lens_array import LensArray
 from ...image.io import atomic_path, file_sha256
@@ -42,7 +42,7 @@ def _write_once(path: Path, data: bytes, sha256: str) -> None:
 def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensArray, *,
                 transfer: str | Path | Transfer = "ct-soft", bits: int = 16, folder: Path,
                 step: float = 1.0, background: tuple[float, float, float] = (0.0, 0.0, 0.0),
-                ) -> tuple[Path, dict[str, Any]]:
+                ) -> tuple[Path, dict[str, JSONValue]]:
     """Write the df3 file and a stage scene (no camera) into ``folder``; return the scene and its record.
 
     ``world_to_display`` (4, 4) maps the volume's LPS world mm to display mm
@@ -78,15 +78,15 @@ def media_stage(volume: Volume, world_to_display: np.ndarray, lens_array: LensAr
     text_digest = hashlib.sha256(text).hexdigest()
     stage = folder / f"volume-media-{text_digest[:16]}.pov"
     _write_once(stage, text, text_digest)
-    record = {"kind": "media", "volume": volume.as_record(), "transfer": transfer.as_record(),
-              "df3": {"path": str(df3_path), "bits": bits, "shape": list(padded_shape(volume.shape)),
-                      "bytes": len(data), "interpolate": classified["interpolate"],
-                      "window": classified["window"]},
-              "scale": scale, "media": {
-                  "method": 3, "intervals": intervals, "samples": samples,
-                  "sub_intervals": intervals * sub_intervals(samples), "step_voxels": float(step)},
-              # How many voxels one lens (the display's 3D pixel) spans: detail finer than that is lost.
-              "voxels_per_lens": round(lens_array.pitch_x / (min(volume.spacing) * scale), 3),
-              "seconds": {"df3_encode": round(encoded - started, 4),
-                          "write": round(time.perf_counter() - encoded, 4)}}
+    record: dict[str, JSONValue] = {"kind": "media", "volume": volume.as_record(), "transfer": transfer.as_record(),
+                                 "df3": {"path": str(df3_path), "bits": bits, "shape": list(padded_shape(volume.shape)),
+                                         "bytes": len(data), "interpolate": classified["interpolate"],
+                                         "window": classified["window"]},
+                                 "scale": scale, "media": {
+                                     "method": 3, "intervals": intervals, "samples": samples,
+                                     "sub_intervals": intervals * sub_intervals(samples), "step_voxels": float(step)},
+                                 # How many voxels one lens (the display's 3D pixel) spans: detail finer than that is lost.
+                                 "voxels_per_lens": round(lens_array.pitch_x / (min(volume.spacing) * scale), 3),
+                                 "seconds": {"df3_encode": round(encoded - started, 4),
+                                             "write": round(time.perf_counter() - encoded, 4)}}
     return stage, record

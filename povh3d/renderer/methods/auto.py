@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from ...jsontext import JSONValue
 from ...errors import ConfigError, param
 from ...geometry.lens_array import LensArray
 from ...geometry.rays import pixel_rays
@@ -61,7 +62,7 @@ class AutoChoice:
     # The full image already rendered at the choice (``auto_seeds``): written as it is, not rendered again.
     image: MethodResult | None = field(default=None, compare=False, repr=False)
 
-    def as_record(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, JSONValue]:
         return {"max_error_db": self.min_psnr_db, "chosen": self.quality.label,
                 "probe_lenses": list(self.probe_lenses), "probe_seconds": round(self.seconds, 3),
                 "probe_reference_samples": self.reference_samples,

@@ -24,13 +24,13 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from ...geometry.view_bank import stack_shots, view_bank_shots
 from ...geometry.crop import (CropSettings, bbox_hits, fill_colour, layout_independent,
     mask_hits, paste, plan_crop)
+from ...jsontext import JSONValue
 from ...errors import InputError, param
 from ...geometry.footprint import CENTRE
 from ...geometry.lens_array import LensArray
@@ -50,7 +50,7 @@ class CroppedTiles:
 
     tiled: np.ndarray | None      # (K*Ny*Ly, Nx*Lx, C), one bank per sample; None: not cropped
     stats: RenderStats | None
-    info: dict[str, Any]
+    info: dict[str, JSONValue]
 
 
 def coverage_mask(trace: Trace, lens_array: LensArray, front_clearance: float,
@@ -77,7 +77,7 @@ def render_cropped_tiles(trace: Trace, scene: Scene, lens_array: LensArray, fron
     InputError
         A ``--bbox`` that does not hold every object (seen at the cuts).
     """
-    info: dict[str, Any] = {"mode": crop.mode}
+    info: dict[str, JSONValue] = {"mode": crop.mode}
     if crop.mode == "off":
         return CroppedTiles(None, None, {**info, "applied": False, "reason": f"{param('crop')} off"})
     if crop.mode == "auto" and crop.bbox is None:

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import ConfigError, param, warn
+from ...jsontext import JSONObject, JSONValue
 from ...geometry.cameras import ortho_view_shots, pinhole_shots
 from ...geometry.camera_mesh import check_front_clearance, clearance_range, default_front_clearance
 from ...geometry.view_bank import bank_front_clearance, eye_clearance, stack_shots, view_bank_shots
@@ -64,7 +65,7 @@ class MethodPlan:
 
     batch: ShotBatch
     assemble: Callable[[list[np.ndarray]], np.ndarray]
-    record: dict[str, Any] | None = None    # what the sidecar says of the method's own set-up
+    record: JSONObject | None = None    # what the sidecar says of the method's own set-up
     # The H3D image of each run of consecutive samples (their counts), in linear light, from the
     # same images: what --quality auto scores its seeds with (None: the method cannot split them).
     assemble_groups: Callable[[list[np.ndarray], list[int]], list[np.ndarray]] | None = None
@@ -311,8 +312,8 @@ class MethodResult:
     stats: RenderStats
     front_clearance: float
     quality: Quality         # as rendered (after any fallback to antialiasing)
-    crop: dict[str, Any] | None = None    # what the crop did, for the sidecar
-    record: dict[str, Any] | None = None  # the method's own set-up, for the sidecar
+    crop: JSONObject | None = None    # what the crop did, for the sidecar
+    record: JSONObject | None = None  # the method's own set-up, for the sidecar
     front_clearance_reason: str = ""      # why rays start there, for the sidecar and the summary
     groups: list[np.ndarray] | None = None   # ``footprint_groups``: each group's H3D image, linear light
 
@@ -320,11 +321,11 @@ class MethodResult:
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
                progress: Progress | None = None, crop: CropSettings | None = None,
                declared: LensArray | None = None, footprint_groups: list[np.ndarray] | None = None,
-               **options: Any) -> MethodResult:
+               method_options: Mapping[str, JSONValue] | None = None, **options: Any) -> MethodResult:
     """Render ``scene`` with method ``name`` and return the H3D image.
 
-    ``options`` are the method's own (``single-stage``: ``lenslet``, ``ior``);
-    None values count as not given.  ``crop`` (methods that crop): trace each
+    ``options`` (and ``method_options``, a request's) are the method's own (``single-stage``:
+    ``lenslet``, ``ior``); None values count as not given.  ``crop`` (methods that crop): trace each
     view only where objects can be, fill the rest with the background
     (``cropped``); None renders everything.  ``declared``: the display the scene is told
     about (``Povh3d_Panel_Width`` ...) when ``lens_array`` is a window of it (auto's probe).
@@ -333,7 +334,7 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     their mean over every sample in ``h3d``: --quality auto's seeds and its draft, priced as one render.
     """
     method = get_method(name)
-    options = method.resolve_options(name, options)
+    options = method.resolve_options(name, {**(method_options or {}), **options})
     asked = settings.spec
     header = display_header(declared or lens_array)   # the display's own constants, whatever --depth-scale does
     lens_array = depth_scaled_rays(lens_array, settings.depth_scale)

@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from ...jsontext import JSONValue
 from ...errors import ConfigError, param
 from ...geometry.capture_bank import CaptureBank, capture_bank, recentre_unit
 from ...geometry.chief_rays import (DEFAULT_IORS, PHYSICAL_IOR, UNSERVED_SHARE, ChiefRays, capture_rays, check_ior,
@@ -379,7 +380,7 @@ class SingleStagePlan:
                 out[l, k] = views[l, k, i0:i0 + la.lenses_y, j0:j0 + la.lenses_x]
         return interleave(out)
 
-    def as_record(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, JSONValue]:
         cap = self.capture_array
         return {"lenslet": self.lenslet.as_record(), "focal_plane_z_mm": -self.depth,
                 "principal_plane_z_mm": -self.depth - self.lenslet.focal,

@@ -11,6 +11,7 @@ orthographic model's.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -22,6 +23,7 @@ from ...geometry.lens_array import LensArray
 from ...image.interleave import interleave
 from ...image.quilt import quilt_to_bank_order
 from ...scene.scene import Scene
+from ...jsontext import JSONValue
 from ...system import cpu_count
 from ..shots.batch import ShotBatch
 from ..shots.shots import render_shots
@@ -29,7 +31,7 @@ from .quality import Progress, quality_settings
 from .registry import MethodResult, display_header
 
 
-def viewer_distance(placement: dict[str, Any] | None, height_mm: float) -> tuple[float, str]:
+def viewer_distance(placement: Mapping[str, Any] | None, height_mm: float) -> tuple[float, str]:
     """The viewer's distance from the screen (mm) and where it came from: the scene camera's
     distance to its look_at (a camera placement), else the vendor's default viewer."""
     record = placement or {}
@@ -41,8 +43,8 @@ def viewer_distance(placement: dict[str, Any] | None, height_mm: float) -> tuple
     return default_viewing_distance(height_mm), "the vendor's default viewer (a 14 deg vertical field)"
 
 
-def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: dict[str, Any],
-                     placement: dict[str, Any] | None, progress: Progress | None = None) -> MethodResult:
+def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: Mapping[str, Any],
+                     placement: Mapping[str, JSONValue] | None, progress: Progress | None = None) -> MethodResult:
     """Render the device's views with the vendor's cameras; return them as ``quilt_array``'s H3D image."""
     dev = device(spec["device"])
     cone = quilt_views(dev, spec.get("calibration"))
@@ -68,8 +70,9 @@ def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: d
     bank = quilt_to_bank_order(np.stack(images))          # (1, N, th, tw, C): bank view k = quilt view N-1-k
     h3d = interleave(bank)
     half_cone = math.radians(cone.cone_deg) / 2
-    record = {"camera_model": "perspective", "viewer_distance_mm": round(distance, 4), "viewer_distance_from": source,
-              "view_cone_deg": cone.cone_deg, "view_cone_from": cone.cone_from, "views": dev.views,
+    record: dict[str, JSONValue] = {"camera_model": "perspective", "viewer_distance_mm": round(distance, 4),
+                                    "viewer_distance_from": source,
+                                    "view_cone_deg": cone.cone_deg, "view_cone_from": cone.cone_from, "views": dev.views,
               "camera_offsets_mm": [round(-distance * math.tan(half_cone), 4), round(distance * math.tan(half_cone), 4)],
               "screen_mm": [width, height]}
     return MethodResult(h3d, stats, distance, quality, record=record,

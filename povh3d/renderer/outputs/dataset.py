@@ -25,7 +25,8 @@ from ...geometry.lens_array import LensArray
 from ...image.colour import decode, encode
 from ...geometry.rays import cell_contains
 from ...image.elemental import view_grid, view_offsets
-from ...image.io import check_output_folder, read_png, read_sidecar, with_sidecar
+from ...image.io import check_output_folder, read_png, read_sidecar_record, with_sidecar
+from ...image.sidecar import PlacementRecord
 
 
 @dataclass(frozen=True)
@@ -178,20 +179,20 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
     from ...scene.scene import load_scene
     from ...display.display import Display
 
-    record = read_sidecar(h3d_path)
-    if not record or "lens_array" not in record:
+    record = read_sidecar_record(h3d_path)
+    if record is None or record.lens_array is None:
         raise InputError(f"{str(h3d_path)!r} has no sidecar with its lens array; render it with povh3d, or use "
                          f"render {param('dataset')}")
-    if record.get("kind") != "h3d" or record.get("quilt"):
-        what = "a mapped panel image" if record.get("kind") == "panel" else "not an H3D image of a camera bank"
-        if record.get("quilt"):
+    if record.kind != "h3d" or record.quilt:
+        what = "a mapped panel image" if record.kind == "panel" else "not an H3D image of a camera bank"
+        if record.quilt:
             what = "a Looking Glass render (its views span the device's cone in even count)"
         raise ConfigError(f"{str(h3d_path)!r} is {what}; render an odd number of views without {param('mapping')} "
                           "and export that")
-    lens_array = Display.from_record(record).lens_array
+    lens_array = Display.from_record(record.to_json()).lens_array
     folder = Path(folder)
     check_dataset_dir(folder, lens_array)
-    scene_path = Path(record.get("scene", ""))
+    scene_path = Path(record.scene or "")
     reads = (*with_sidecar(h3d_path), *(load_scene(scene_path).files if scene_path.is_file() else ()))
     check_output_folder(folder, reads, what="dataset folder")
     h3d = read_png(h3d_path)
@@ -201,9 +202,15 @@ def dataset_from_render(h3d_path: str | Path, folder: str | Path, *, all_views: 
     if not scene_path.is_file():
         raise InputError(f"the scene {str(scene_path)!r} the sidecar names is gone; the depth pass needs it: "
                          f"render again with {param('dataset')}")
-    placement_record = record.get("placement") or {}
-    pose = recorded_pose(placement_record)
-    settings = RenderSettings(quality="draft", pose=pose, depth_scale=float(placement_record.get("depth_scale", 1.0)))
-    depth = dataset_depth(load_scene(scene_path), lens_array, settings, record["quality"]["front_clearance_mm"],
-                          float(placement_record.get("units_per_mm", 1.0)))
+    placed = record.placement or PlacementRecord()
+    pose = recorded_pose(placed.to_json())
+    scale = placed.get("depth_scale", 1.0)
+    settings = RenderSettings(quality="draft", pose=pose,
+                              depth_scale=float(scale) if isinstance(scale, (int, float)) else 1.0)
+    clearance = record.quality.front_clearance_mm if record.quality is not None else None
+    if clearance is None:
+        raise InputError(f"the sidecar of {str(h3d_path)!r} has no quality.front_clearance_mm; render it again "
+                         f"with {param('dataset')}")
+    depth = dataset_depth(load_scene(scene_path), lens_array, settings, clearance,
+                          placed.units_per_mm if placed.units_per_mm is not None else 1.0)
     return write_dataset(folder, h3d, lens_array, depth, all_views=all_views, scene=scene_path.stem)

@@ -22,8 +22,8 @@ a ``scale`` (``image.depth_codes``).
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -33,6 +33,8 @@ from ...geometry.rays import disparity
 from ...image.depth_codes import quantise
 from ..._version import __version__
 from .views import check_replaced_dir, replaced_whole
+from ...image.sidecar import Sidecar
+from ...jsontext import JSONValue
 
 
 def check_depth_dir(folder: Path) -> None:
@@ -43,7 +45,7 @@ def check_depth_dir(folder: Path) -> None:
 MANIFEST = "depth_maps.json"
 
 
-def _ours(record: dict[str, Any]) -> bool:
+def _ours(record: Mapping[str, JSONValue]) -> bool:
     # povh3d_version since issue 38; before, the fields only depth_maps.json has
     return record.get("kind") == "depth_maps" or {"depth", "disparity", "views", "method"} <= record.keys()
 
@@ -51,7 +53,7 @@ def _ours(record: dict[str, Any]) -> bool:
 DEPTH_FORMATS = ("npy", "png")
 
 
-def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, record: dict[str, Any],
+def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, record: Sidecar,
                      fmt: str = "npy") -> None:
     """Write ``d_*.npy``, ``p_*.npy`` (``fmt`` 'png': 16-bit PNGs) and ``depth_maps.json`` into ``folder``."""
     from ...image.io import write_png
@@ -62,7 +64,7 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
     par = disparity(depth, lens_array)
     ny, nx = depth.shape[:2]
     codes = {"d": quantise(depth), "p": quantise(par)} if fmt == "png" else {}
-    info: dict[str, Any] = {
+    info: dict[str, JSONValue] = {
             "povh3d_version": __version__, "kind": "depth_maps",
             "views": [ny, nx], "size_px": [depth.shape[3], depth.shape[2]], "format": fmt,
             "depth": "d_LLL_KKK: display mm along each ray, from the screen "
@@ -74,10 +76,11 @@ def write_depth_maps(folder: Path, depth: np.ndarray, lens_array: LensArray, rec
                        "(renderer/passes/depth.py)"),
             "nan_fraction": float(np.isnan(depth).mean())}
     if fmt == "png":
-        info["png"] = {name: {"scale": codes[p][1], "offset": codes[p][2]} for name, p in (("depth", "d"),
-                                                                                         ("disparity", "p"))}
-        info["png"]["decode"] = ("16-bit greyscale: code 0 = nothing hit (NaN); else value = offset + "
-                                 "(code - 1) * scale (mm for d_, lenses per view step for p_), within scale / 2")
+        png: dict[str, JSONValue] = {name: {"scale": codes[p][1], "offset": codes[p][2]}
+                                     for name, p in (("depth", "d"), ("disparity", "p"))}
+        png["decode"] = ("16-bit greyscale: code 0 = nothing hit (NaN); else value = offset + "
+                         "(code - 1) * scale (mm for d_, lenses per view step for p_), within scale / 2")
+        info["png"] = png
     else:
         info["npy"] = "float32 arrays (numpy.load), NaN where nothing is hit"
     try:

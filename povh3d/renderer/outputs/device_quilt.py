@@ -13,6 +13,7 @@ the panel image its shader would show (``display.mappings.looking_glass_shader.q
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,7 @@ from ...geometry.lens_array import LensArray
 from ...image.io import check_output
 from ...image.quilt import quilt_name
 from ..records import base_record, write_image
+from ...image.sidecar import QuiltRecord
 
 
 def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Path | None]:
@@ -38,7 +40,7 @@ def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Pat
     return quilt, panel
 
 
-def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: Mapping[str, Any]) -> dict[str, Any]:
+def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: Mapping[str, Any]) -> QuiltRecord:
     """Write the quilt (and with a calibration the native panel image) of a device render beside
     ``output``; return the sidecar's ``quilt`` entry."""
     from ...display.looking_glass import device
@@ -48,9 +50,9 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
     cone = quilt_views(dev, spec.get("calibration"))
     quilt_path, native_path = quilt_outputs(output, dev, spec.get("calibration") is not None)
     quilt = device_quilt(h3d, array, dev)
-    entry: dict[str, Any] = {"device": dev.name, "file": quilt_path.name, "grid": list(dev.grid),
-                             "quilt_size": list(dev.quilt_size), "tile_size": list(dev.tile_size),
-                             "aspect": dev.aspect, "view_cone_deg": cone.cone_deg, "view_cone_from": cone.cone_from}
+    entry = QuiltRecord(device=dev.name, file=quilt_path.name, grid=dev.grid, quilt_size=dev.quilt_size,
+                        tile_size=dev.tile_size, aspect=dev.aspect, view_cone_deg=cone.cone_deg,
+                        view_cone_from=cone.cone_from)
     source = str(output.resolve())
     write_image(quilt_path, quilt, base_record("quilt", grid=list(dev.grid), aspect=dev.aspect, views=dev.views,
                                                source=source))
@@ -61,7 +63,7 @@ def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: 
                                                      calibration=str(Path(spec["calibration"]).resolve()),
                                                      device=dev.name, size_px=[cal.screen_w, cal.screen_h],
                                                      source=source))
-        entry["native"] = native_path.name
+        return replace(entry, native=native_path.name)
     return entry
 
 

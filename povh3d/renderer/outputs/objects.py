@@ -6,12 +6,14 @@ first hits (0: nothing).  A hex or fractional-PPL render, whose views are resamp
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ...jsontext import JSONValue
 from ...errors import InputError, OutputError, param, plain
 from ..._version import __version__
 from ...image.io import read_png, read_sidecar, write_png
@@ -45,8 +47,8 @@ class ObjectTable:
         if not self.frames:
             raise ValueError("frames: at least one")
 
-    def as_record(self) -> dict[str, Any]:
-        record = {"kind": "objects", "objects": {str(i): n for i, n in sorted(self.names.items())},
+    def as_record(self) -> dict[str, JSONValue]:
+        record: dict[str, JSONValue] = {"kind": "objects", "objects": {str(i): n for i, n in sorted(self.names.items())},
                   "frames": list(self.frames), "views": [self.views[1], self.views[0]],
                   "view_size_px": [self.view_size[1], self.view_size[0]]}
         if self.panel is not None:
@@ -56,7 +58,7 @@ class ObjectTable:
         return record
 
     @classmethod
-    def from_record(cls, record: dict[str, Any]) -> ObjectTable:
+    def from_record(cls, record: Mapping[str, Any]) -> ObjectTable:
         try:
             names = {int(i): str(n) for i, n in record["objects"].items()}
             (nx, ny), (w, h) = record["views"], record["view_size_px"]

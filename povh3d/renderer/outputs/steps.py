@@ -10,7 +10,7 @@ here (docs/architecture.md, "Where a new thing goes").
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -25,6 +25,7 @@ from .device_quilt import check_device_render, quilt_outputs, write_device_outpu
 from .views import check_views_dir, write_views
 
 if TYPE_CHECKING:  # for annotations only: keeps the render's import chain short
+
     from ..animation import RenderedImage
     from ..methods.quality import Progress, RenderSettings
     from ..request import RenderRequest
@@ -48,7 +49,14 @@ class Still:
     @property
     def front_clearance(self) -> float:
         """mm: where the render's rays started, so where the depth maps' rays start."""
-        return float(self.image.record["quality"]["front_clearance_mm"])
+        quality = self.image.record.quality
+        if quality is None or quality.front_clearance_mm is None:  # a bug: render_image records it
+            raise RuntimeError("the still's record has no front_clearance_mm")
+        return float(quality.front_clearance_mm)
+
+    def add(self, **entries: object) -> None:
+        """Add ``entries`` to the still's record (``image.sidecar.Sidecar.with_``)."""
+        self.image = replace(self.image, record=self.image.record.with_(**entries))
 
     def depth_maps(self) -> np.ndarray:
         """Every view's depth along its rays (``passes.depth.view_depth_maps``), made on first use."""
@@ -98,21 +106,19 @@ def _write_dataset(still: Still) -> None:
                                                          progress=still.progress)
     write_dataset(_wanted(request.dataset), still.image.image, request.render_array, depth,
                   all_views=request.dataset_all_views, scene=still.scene.path.stem)
-    still.image.record["dataset"] = {"folder": str(request.dataset), "layout": "HCI 4D light field"}
+    still.add(dataset={"folder": str(request.dataset), "layout": "HCI 4D light field"})
 
 
 def _write_depth_maps(still: Still) -> None:
     depth = still.depth_maps()
     write_depth_maps(_wanted(still.request.depth_maps), depth, still.request.render_array, still.image.record,
                      still.request.depth_format)
-    still.image.record["depth_maps"] = {"folder": str(still.request.depth_maps),
-                                        "nan_fraction": float(np.isnan(depth).mean())}
+    still.add(depth_maps={"folder": str(still.request.depth_maps), "nan_fraction": float(np.isnan(depth).mean())})
 
 
 def _write_quilt(still: Still) -> None:
     quilt: Any = still.request.display.quilt
-    still.image.record["quilt"] = write_device_outputs(still.output, still.image.image, still.request.render_array,
-                                                       quilt)
+    still.add(quilt=write_device_outputs(still.output, still.image.image, still.request.render_array, quilt))
 
 
 def _folder_against(field: str) -> Callable[[RenderRequest, Path, tuple[Path, ...]], object]:

@@ -12,7 +12,7 @@ import os
 import re
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +24,13 @@ from ...geometry.lens_array import LensArray
 from ...image.elemental import extract_views, view_grid
 from ...image.interleave import extract, interleave
 from ...image.io import (check_output_folder, check_writable, file_mode, file_sha256, read_png, read_sidecar,
+                         read_sidecar_record,
                          with_sidecar, write_png)
 from ...system import sweep_orphans
 from ...display.display import Display
 from ..records import base_record, png_output, write_image
+from ...image.sidecar import Sidecar
+from ...jsontext import JSONValue
 
 VIEW_NAME = "v_{l:03d}_{k:03d}.png"
 _VIEW_RE = re.compile(r"^v_(\d{3,})_(\d{3,})\.png$")
@@ -65,7 +68,7 @@ def check_views_dir(views_dir: str | Path) -> Path:
     return folder
 
 
-def check_replaced_dir(folder: str | Path, manifest: str, is_ours: Callable[[dict[str, Any]], bool],
+def check_replaced_dir(folder: str | Path, manifest: str, is_ours: Callable[[Mapping[str, JSONValue]], bool],
                        what: str) -> Path:
     """Check, before any work, a folder that is replaced whole (``replaced_whole``): its parent can be
     written, and it is new, empty or one povh3d wrote (its ``manifest`` a JSON object ``is_ours``
@@ -84,7 +87,7 @@ def check_replaced_dir(folder: str | Path, manifest: str, is_ours: Callable[[dic
 
 
 def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray | None,
-                source: dict[str, Any] | None = None) -> None:
+                source: Sidecar | Mapping[str, JSONValue] | None = None) -> None:
     """Write a ``(Ny, Nx, Ly, Lx, C)`` view stack as ``v_{l:03d}_{k:03d}.png`` plus ``views.json``.
 
     A views folder holds one render, complete, or the previous one untouched: the views and
@@ -106,8 +109,9 @@ def write_views(views_dir: str | Path, views: np.ndarray, lens_array: LensArray 
                     write_png(tmp / name, views[l, k])
                     hashes[name] = file_sha256(tmp / name)
             record = base_record("views", lens_array, views=[nx, ny], view_size_px=[views.shape[3], views.shape[2]],
-                                 source=source or {}, render_id=secrets.token_hex(8), view_sha256=hashes)
-            (tmp / "views.json").write_text(json.dumps(plain(record), indent=2) + "\n", encoding="utf-8")
+                                 source=(source.to_json() if isinstance(source, Sidecar) else source) or {},
+                                 render_id=secrets.token_hex(8), view_sha256=hashes)
+            (tmp / "views.json").write_text(json.dumps(plain(record.to_json()), indent=2) + "\n", encoding="utf-8")
     except OSError as exc:
         raise OutputError(f"cannot write the views in {str(folder)!r}: {exc.strerror or exc}; "
                           "the previous views, if any, are unchanged") from None
@@ -273,9 +277,9 @@ def interleave_dir(views_dir: str | Path, output: str | Path) -> dict[str, Any]:
                       output_gamma="sRGB")
     if source.get("lens_array"):
         Display.from_record(source)  # a damaged lens array is one line here, not a bad sidecar later
-        record["lens_array"] = source["lens_array"]
+        record = record.with_(lens_array=source["lens_array"])
     write_image(output, h3d, record)
-    return record
+    return record.to_json()
 
 
 def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: str | Path) -> dict[str, Any]:
@@ -298,12 +302,12 @@ def extract_file(h3d_path: str | Path, ppl: tuple[int, int] | None, views_dir: s
     return {"views": to_edge(ppl), "view_size_px": to_edge(views.shape[2:4])}
 
 
-def sidecar_array(h3d: np.ndarray, h3d_path: str | Path, record: dict[str, Any] | None = None) -> LensArray:
+def sidecar_array(h3d: np.ndarray, h3d_path: str | Path, record: Sidecar | None = None) -> LensArray:
     """The lens array of an H3D image's sidecar (``record``, else read), checked against the image's size."""
-    record = read_sidecar(h3d_path) if record is None else record
-    if not record or "lens_array" not in record:
+    record = read_sidecar_record(h3d_path) if record is None else record
+    if record is None or record.lens_array is None:
         raise ConfigError(f"{str(h3d_path)!r} has no sidecar with its lens array; give {param('ppl')} NxxNy")
-    lens_array = Display.from_record(record).lens_array
+    lens_array = Display.from_record(record.to_json()).lens_array
     if h3d.shape[:2] != (lens_array.panel.height, lens_array.panel.width):
         raise InputError(f"{str(h3d_path)!r} is {h3d.shape[1]}x{h3d.shape[0]} but its sidecar describes a "
                          f"{lens_array.panel.width}x{lens_array.panel.height} panel; re-render it")
@@ -335,7 +339,7 @@ def image_views(h3d: np.ndarray, lens_array: LensArray) -> np.ndarray:
         raise ConfigError(raw_message(exc)) from None
 
 
-def h3d_views(h3d: np.ndarray, record: dict[str, Any], h3d_path: str | Path) -> tuple[np.ndarray, str]:
+def h3d_views(h3d: np.ndarray, record: Sidecar | None, h3d_path: str | Path) -> tuple[np.ndarray, str]:
     """The ``(Ny, Nx, Ly, Lx, C)`` views of an H3D image through its sidecar's lens array, and its grid."""
     lens_array = sidecar_array(h3d, h3d_path, record)
     return sidecar_bank(h3d, lens_array), lens_array.grid
@@ -345,7 +349,7 @@ def _extract_resampled(h3d: np.ndarray, h3d_path: str | Path, views_dir: str | P
     lens_array = sidecar_array(h3d, h3d_path)
     views = sidecar_bank(h3d, lens_array)
     ny, nx = views.shape[:2]
-    source = {"h3d": str(Path(h3d_path).resolve()), "resampled": lens_array.views is None,
+    source: dict[str, JSONValue] = {"h3d": str(Path(h3d_path).resolve()), "resampled": lens_array.views is None,
               "lens_centres_mm": lens_array.lens_centres().reshape(-1, 2).tolist()}
     write_views(views_dir, views, lens_array, source)
     return {"views": [nx, ny], "view_size_px": [views.shape[3], views.shape[2]]}

@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from ...jsontext import JSONValue
 from ...errors import Povh3dError, param, warn
 from ...geometry.camera_mesh import tiled_views_mesh
 from ...geometry.lens_array import LensArray
@@ -95,7 +96,7 @@ class DepthMap:
     saturated: np.ndarray | None = None   # (H, W) bool: a surface brighter than 1 in every channel
     hollow_copy: bool = False   # measured on a copy of the scene whose top-level objects are hollow
 
-    def summary(self, budget_mm: float) -> dict[str, Any]:
+    def summary(self, budget_mm: float) -> dict[str, JSONValue]:
         """The framed subject's near and far z against the budget (``2 N f``, centred on the screen).
 
         The subject is what the middle half of the field (in width and height) shows,
@@ -108,7 +109,7 @@ class DepthMap:
         middle = self.z[h // 4:h - h // 4, w // 4:w - w // 4]
         middle = middle[np.isfinite(middle)]
         saturated = self.saturated if self.saturated is not None else np.zeros(self.z.shape, bool)
-        record: dict[str, Any] = {"depth_budget_mm": budget_mm, "hit_fraction": float(hit.size / self.z.size),
+        record: dict[str, JSONValue] = {"depth_budget_mm": budget_mm, "hit_fraction": float(hit.size / self.z.size),
                                   "unmeasured_fraction": self.unmeasured,
                                   "saturated_fraction": float(saturated.mean()), "pixels": [w, h]}
         if self.hollow_copy:   # the viewer stood inside a solid: measured where POV-Ray's fog reaches
@@ -123,7 +124,7 @@ class DepthMap:
                 "within_budget": bool(-half <= near and far <= half),
                 "field_within_budget": bool(-half <= field_near and field_far <= half)}
 
-    def _why_unmeasured(self) -> dict[str, Any]:
+    def _why_unmeasured(self) -> dict[str, JSONValue]:
         """Why the middle of the field has no depth: blind (inside a solid), too bright, or nothing there."""
         h, w = self.z.shape
         if self.unmeasured > 0.5:

@@ -16,11 +16,13 @@ import shutil
 import tempfile
 import warnings
 from pathlib import Path
-from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
 from ...errors import ConfigError, InputError, Povh3dWarning, param
+from ...image.sidecar import Sidecar
+from ...jsontext import JSONValue
 from ...geometry.lens_array import LensArray
 from ...scene.object_ids import UNRESOLVED, MaskScene, mask_scene
 from ..outputs.objects import ObjectTable, write_masks
@@ -81,7 +83,9 @@ def staged_mask(request: RenderRequest, folder: Path) -> tuple[Path, dict[int, s
     found = re.search(r'#include\s+"([^"]+)"', stage)
     if found is None or record is None:
         raise RuntimeError(f"the stage {str(scene.path)!r} includes no converted model")   # a bug
-    names = [row["name"] for row in record["surfaces"]] if "surfaces" in record else record["parts"]
+    rows, parts = record.get("surfaces"), record.get("parts")
+    names = ([str(row["name"]) for row in rows if isinstance(row, Mapping)] if isinstance(rows, list)
+             else [str(p) for p in parts] if isinstance(parts, list) else [])
     table = part_table(names)
     include = (scene.path.parent / found[1]).read_text(encoding="utf-8")
     (folder / "parts.inc").write_text(part_ids_include(include, len(table)), encoding="utf-8")
@@ -90,14 +94,15 @@ def staged_mask(request: RenderRequest, folder: Path) -> tuple[Path, dict[int, s
     return path, table
 
 
-def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str, Any] | None = None) -> dict[str, Any]:
+def render_objects(request: RenderRequest, folder: str | Path,
+                   colour: Mapping[str, JSONValue] | None = None) -> dict[str, JSONValue]:
     """Render the object masks of ``request``'s still or frames into ``folder``; return what was
     written.  ``colour``: the colour pass's record (a still's sidecar, an animation's report), whose method
     the masks trace (the default may have fallen back) and whose placement a still's take as it is (no
     camera or depth run again); None: the mask copy settles its own."""
     from ...hyper.ids import decode_ids
     from ..render import render
-    from ...image.io import read_png, read_sidecar
+    from ...image.io import read_png
 
     mask = check_objects_request(request)
     out = Path(folder)
@@ -126,8 +131,7 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
                 images = {0: _trace_still(_placed_as(masked, traced), settle=traced is None)}
             else:                        # each frame's panel (the lens mesh's rays, point-sampled)
                 report = render(masked)
-                images = {int((read_sidecar(name) or {})["animation"]["frame"]): read_png(name)  # sidecars: written
-                          for name in report["frames"]}
+                images = {_frame_number(name): read_png(name) for name in _frame_names(report)}
         masks, panels = {}, {}
         for n, h3d in images.items():
             ids = decode_ids(h3d, len(names))
@@ -150,40 +154,63 @@ def render_objects(request: RenderRequest, folder: str | Path, colour: dict[str,
 _SAID = r".* uses image_width or image_height other than as their ratio"
 
 
-def _colour_pass(request: RenderRequest, colour: dict[str, Any] | None) -> dict[str, Any] | None:
+def _frame_names(report: Mapping[str, JSONValue]) -> list[str]:
+    """An animation report's frames (``renderer.animation.render_sequence``)."""
+    frames = report.get("frames")
+    return [str(name) for name in frames] if isinstance(frames, list) else []
+
+
+def _frame_number(name: str) -> int:
+    """The animation frame whose image is ``name``, as its sidecar says (written by this render)."""
+    from ...image.io import read_sidecar_record
+
+    side = read_sidecar_record(name)
+    if side is None or side.animation is None:   # a bug: render_sequence writes it
+        raise RuntimeError(f"the frame {name!r} has no sidecar with its animation entry")
+    return side.animation.frame
+
+
+def _colour_pass(request: RenderRequest, colour: Mapping[str, JSONValue] | None) -> Sidecar | None:
     """The colour pass's record: a still's sidecar, or an animation's first frame's (its frames share
     one method: ``renderer.render`` settles it once); None: not known."""
-    from ...image.io import read_sidecar
+    from ...image.io import read_sidecar_record
 
     if colour is not None and request.frames is not None:
-        names = colour.get("frames") or []
-        return read_sidecar(names[0]) if names else None
-    return colour
+        names = _frame_names(colour)
+        return read_sidecar_record(names[0]) if names else None
+    return None if colour is None else Sidecar.from_json(colour)
 
 
-def _method_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRequest:
+def _method_as(masked: RenderRequest, colour: Sidecar | None) -> RenderRequest:
     """``masked`` traced with the method the colour pass used: the default may have fallen back to
     ``ray_state.FALLBACK`` (the sidecar's ``method_note``), and a scene that reads ``image_width``
     builds other geometry in a mesh-camera run than in each view's own."""
-    method = (colour or {}).get("method")
+    method = colour.method if colour is not None else None
     if method is None or method == masked.method:
         return masked
     # as ``ray_state.settle_method`` trades it; chosen, so that the mask pass trades nothing again
     return dataclasses.replace(masked, method=method, method_options={}, method_chosen=True)
 
 
-def _placed_as(masked: RenderRequest, colour: dict[str, Any] | None) -> RenderRequest:
-    """``masked`` with the colour pass's frame, front clearance and depth scale as settings (the
+def _placed_as(masked: RenderRequest, colour: Sidecar | None) -> RenderRequest:
+    """``masked`` with the colour pass's pose, front clearance and depth scale as settings (the
     Python API's matrix path of ``renderer.placement.place``): the same rays without evaluating the scene's
     camera or measuring its depth again (a POV-Ray run each)."""
-    placement_record = (colour or {}).get("placement") or {}
-    clearance = ((colour or {}).get("quality") or {}).get("front_clearance_mm")
-    frame = recorded_pose(placement_record) if placement_record and clearance is not None else None
-    if frame is None or clearance is None or masked.is_model:   # native or staged in mm: placed without a POV-Ray run
+    placement_record = colour.placement.to_json() if colour is not None and colour.placement is not None else {}
+    quality = colour.quality if colour is not None else None
+    clearance = quality.front_clearance_mm if quality is not None else None
+    pose = recorded_pose(placement_record) if placement_record and clearance is not None else None
+    if pose is None or clearance is None or masked.is_model:   # native or staged in mm: placed without a POV-Ray run
         return masked
-    settings = dataclasses.replace(masked.settings, pose=frame, front_clearance=float(clearance),
-                                   depth_scale=float(placement_record.get("depth_scale", 1.0)))
+    settings = dataclasses.replace(masked.settings, pose=pose, front_clearance=float(clearance),
+                                   depth_scale=_number(placement_record.get("depth_scale", 1.0)))
     return dataclasses.replace(masked, settings=settings)
+
+
+def _number(value: JSONValue) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):  # a bug: the render writes a number
+        raise RuntimeError(f"the colour pass's depth_scale is {value!r}, not a number")
+    return float(value)
 
 
 def _trace_still(masked: RenderRequest, settle: bool = False) -> np.ndarray:
@@ -201,7 +228,7 @@ def _trace_still(masked: RenderRequest, settle: bool = False) -> np.ndarray:
     if settle:
         placed, _ = settle_method(placed, scene)
     return run_method(placed.method, scene, placed.render_array, placed.settings, crop=placed.crop,
-                      **placed.method_options).h3d
+                      method_options=placed.method_options).h3d
 
 
 def mask_views(ids: np.ndarray, lens_array: LensArray) -> np.ndarray:
@@ -221,7 +248,7 @@ def mask_views(ids: np.ndarray, lens_array: LensArray) -> np.ndarray:
 
 def _note_in_sidecars(request: RenderRequest, folder: Path, table: ObjectTable) -> None:
     """The render's own sidecars name the masks folder and the ids' names (the table's copy)."""
-    from ...image.io import read_sidecar, write_sidecar
+    from ...image.io import read_sidecar_record, write_sidecar
     from ..animation import frame_path
 
     if request.frames is None:
@@ -232,6 +259,6 @@ def _note_in_sidecars(request: RenderRequest, folder: Path, table: ObjectTable) 
     note = {"folder": str(folder.resolve()), "names": {str(i): n for i, n in sorted(table.names.items())},
             "render_id": table.render_id}
     for image in images:
-        record = read_sidecar(image)
+        record = read_sidecar_record(image)
         if record is not None:
-            write_sidecar(image, {**record, "objects": note})
+            write_sidecar(image, record.with_(objects=note))

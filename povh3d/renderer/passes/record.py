@@ -10,32 +10,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
-from dataclasses import dataclass
-from typing import Any
 
-
-@dataclass(frozen=True)
-class PassCost:
-    """One pass of a request.
-
-    Attributes
-    ----------
-    name : str          e.g. ``scene-camera``, ``scene-camera-depth``, ``depth``, ``origins-inside``, ``depth-maps``
-    seconds : float     wall time of the pass, its POV-Ray runs and the reading of their images
-    shots : int         images POV-Ray traced for it (0: all from the cache)
-    runs : int          POV-Ray processes it started
-    from_cache : bool   its result came from the cache, no POV-Ray run
-    """
-
-    name: str
-    seconds: float
-    shots: int
-    runs: int
-    from_cache: bool = False
-
-    def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "seconds": round(self.seconds, 4), "shots": self.shots, "runs": self.runs,
-                "from_cache": self.from_cache}
+from ...image.sidecar import PassCost   # the sidecar's record of a pass
 
 
 _NOTES: ContextVar[list[PassCost] | None] = ContextVar("povh3d_pass_notes", default=None)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ...jsontext import JSONValue
 from ...errors import ConfigError, param
 from ...system import cpu_count
 
@@ -65,10 +66,10 @@ class RenderStats:
     wall_seconds: float = 0.0
     povray_version: str = ""
     uncached: str = ""   # why the image cache was not used, when the scene forbids it
-    lighting: dict[str, Any] | None = None   # the shared lighting solution (``renderer.shots.lighting``)
+    lighting: dict[str, JSONValue] | None = None   # the shared lighting solution (``renderer.shots.lighting``)
     radiosity_samples: int = 0   # radiosity samples POV-Ray computed over every run (its statistics)
 
-    def as_record(self) -> dict[str, Any]:
+    def as_record(self) -> dict[str, JSONValue]:
         return {"shots": self.shots, "shots_from_cache": self.cached, "povray_jobs": self.jobs,
                 "processes": self.processes, "threads_per_process": self.threads,
                 "povray_seconds_total": round(sum(self.povray_seconds), 4),

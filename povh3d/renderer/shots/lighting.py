@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ...jsontext import JSONValue
 from ...cache import content_key
 from ...scene.scene import Scene
 from .batch import ShotBatch
@@ -97,10 +98,10 @@ def shared_lighting(scene: Scene, batch: ShotBatch, settings: RenderSettings, lo
 
 
 def record(lighting: SharedLighting, saved: tuple[int, float] | None, loaded: list[tuple[int, float] | None],
-           shots: int) -> dict[str, Any]:
+           shots: int) -> dict[str, JSONValue]:
     """The sidecar's account: the saving shots, the samples their run computed, and what the loading runs
     computed beside the loaded ones (POV-Ray's statistics, ``povray.log.parse_radiosity``)."""
-    out: dict[str, Any] = {"radiosity": "computed once, loaded by the other shots", "saving_shots": list(lighting.savers)}
+    out: dict[str, JSONValue] = {"radiosity": "computed once, loaded by the other shots", "saving_shots": list(lighting.savers)}
     if saved is not None:
         out["samples_computed"], out["pretrace_seconds"] = saved[0], round(saved[1], 3)
     counts = [c for c in loaded if c is not None]
