@@ -10,7 +10,7 @@ It is frozen and checked on construction: a request that exists can be rendered.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping as MappingABC
+from collections.abc import Callable, Mapping as MappingABC
 from dataclasses import dataclass, field
 from dataclasses import replace as _replace
 from pathlib import Path
@@ -223,7 +223,7 @@ class RenderRequest:
             raise ConfigError(f"{self.source.name!r} is not a volume; the volume options ({param('labels')}, {param('iso')}, {param('volume')}, "
                               f"{param('orientation')}, {param('spacing')}, {param('series')} ...) apply to volume files and DICOM folders")
 
-    def viewing(self) -> tuple[float | None, dict[str, Any]]:
+    def viewing(self) -> tuple[float | None, dict[str, JSONValue]]:
         """The viewing distance the rows are rendered for (mm; None: orthographic rows) and the
         sidecar's record of it: what was used and where it came from."""
         given, array = self.viewing_distance, self.render_array
@@ -304,9 +304,10 @@ def _deprecated(old: str) -> None:
     warnings.warn(f"{old} is deprecated; its name is placement (a PlacementOptions)", DeprecationWarning, stacklevel=3)
 
 
-def _init_taking_display_frame(init: Any) -> Any:
+def _init_taking_display_frame(init: Callable[..., None]) -> Callable[..., None]:
     """``RenderRequest(display_frame=...)``, the name of ``placement`` before issue 36, still taken."""
-    def __init__(self: RenderRequest, *args: Any, display_frame: PlacementOptions | None = None, **kwargs: Any) -> None:
+    def __init__(self: RenderRequest, *args: object, display_frame: PlacementOptions | None = None,
+                 **kwargs: object) -> None:
         if display_frame is not None:
             _deprecated("RenderRequest(display_frame=...)")
             kwargs.setdefault("placement", display_frame)

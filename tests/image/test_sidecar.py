@@ -105,7 +105,7 @@ def test_with_adds_a_key_after_the_others_and_keeps_a_known_one_in_place():
     changed = side.with_(kind="panel", mapping="m", method="x")
     assert list(changed.to_json()) == ["povh3d_version", "kind", "method", "note", "mapping"]
     assert changed.kind == "panel" and changed.method == "x" and dict(changed)["mapping"] == "m"
-    with pytest.raises(InputError, match="timings.frames is the text '1'"):
+    with pytest.raises(InputError, match="timings.shots is the text '1'"):
         side.with_(timings={"shots": "1"})   # a typed key given as JSON is checked as read
 
 
@@ -122,7 +122,7 @@ def sidecars(draw):
                                          front_clearance_mm=st.none() | _number,
                                          povray_options=st.none() | st.lists(_text, max_size=3).map(tuple)))
     timings = draw(st.none() | st.builds(Timings, render_seconds=st.none() | _number,
-                                         frames=st.none() | st.integers(0, 999), output_from_cache=st.none() | st.booleans()))
+                                         shots=st.none() | st.integers(0, 999), output_from_cache=st.none() | st.booleans()))
     passes = draw(st.none() | st.lists(st.builds(PassCost, _text, st.floats(0, 1e4).map(lambda s: round(s, 4)),
                                                  st.integers(0, 99), st.integers(0, 99), st.booleans()),
                                        max_size=3).map(tuple))
@@ -167,7 +167,7 @@ def test_a_render_s_sidecar_reads_back_typed_and_byte_for_byte(tmp_path):
     side = read_sidecar_record(out)
     assert side is not None and side.kind == "h3d" and side.method == "multi-ortho"
     assert isinstance(side.quality, QualityRecord) and side.quality.front_clearance_mm is not None
-    assert side.timings is not None and side.timings.total_seconds is not None and side.timings.frames == 1
+    assert side.timings is not None and side.timings.total_seconds is not None and side.timings.shots == 1
     assert isinstance(side.placement, PlacementRecord) and side.placement.source == "native"
     assert side.passes is not None and all(isinstance(p, PassCost) for p in side.passes)
     assert {k: v for k, v in side.to_json().items() if k != "image_sha256"} == record
