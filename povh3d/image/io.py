@@ -388,7 +388,7 @@ def read_sidecar(image_path: str | Path) -> dict[str, JSONValue] | None:
 RENAMED_KEYS = {"display_frame": "placement"}   # issue 36: the display's place in the scene
 
 
-def renamed_keys(record: dict[str, Any]) -> dict[str, Any]:
+def renamed_keys(record: dict[str, jsontext.JSONValue]) -> dict[str, jsontext.JSONValue]:
     """``record`` (a sidecar) with its keys of an older povh3d under their current names."""
     for old, new in RENAMED_KEYS.items():
         if old in record and new not in record:
