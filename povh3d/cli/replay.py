@@ -77,7 +77,7 @@ def add_parsers(sub: Any) -> None:
                    help="--optics lens: draft (one ray a pixel) or high (antialiased)")
     p.add_argument("--ior", type=float, help="--optics lens: the lenslets' index of refraction (default 1.49)")
     p.add_argument("--lenslet", default="spherical", choices=("spherical", "conic"),
-                   help="--optics lens: the curved face, a sphere (default) or the aberration-free conic")
+                   help="--optics lens: the curved face, a sphere (default) or a conic (aberration-free only for a panel on its flat face)")
     p.add_argument("--pupil", type=float, metavar="MM", help="--optics lens: the eye's pupil diameter, as focal "
                    "blur focused on the lens plane (default: a pinhole eye)")
     p.set_defaults(func=cmd_replay)

@@ -331,13 +331,16 @@ def test_the_renders_timeout_governs_the_camera_run(tmp_path):
                     "camera { location <0, 0, -5> look_at 0 }\nsphere { 0, 1 pigment { rgb 1 } }\n")
     scene, array = load_scene(path), small_array()
     start = time.perf_counter()
+    frame, record, seen = resolve_pose_and_depth(PlacementOptions(), scene, array, use_cache=False,
+                                                  front_clearance=2.0, timeout=60)   # the control
+    whole = time.perf_counter() - start
+    assert record["source"] == "camera" and seen is not None
+    start = time.perf_counter()
     with pytest.raises(PovrayTimeout):
         resolve_pose_and_depth(PlacementOptions(), scene, array, use_cache=False, front_clearance=2.0,
                                 timeout=0.3)
-    assert time.perf_counter() - start < 1.5   # stopped at the limit, not after the parse
-    frame, record, seen = resolve_pose_and_depth(PlacementOptions(), scene, array, use_cache=False,
-                                                  front_clearance=2.0, timeout=60)   # the control
-    assert record["source"] == "camera" and seen is not None
+    # stopped at the limit, not after the parse: a share of the whole run, which a loaded machine slows alike
+    assert time.perf_counter() - start < 0.6 * whole
 
 
 @pytest.mark.povray
