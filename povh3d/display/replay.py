@@ -532,27 +532,9 @@ def aperture_views(sheet: LensArray, shift: float, labels: np.ndarray, eye, view
 
 
 # -- a Looking Glass: its native image through the device's sheet --------------------------------------
-def device_views_at(cal, points: np.ndarray, views: int) -> np.ndarray:
-    """The view (int) the vendor's shader gives a subpixel centred at each panel point ``(..., 2)`` mm
-    (panel frame: origin at the centre, y up).  The shader reads subpixel ``c`` of pixel ``col`` at
-    ``(col + 1/2 + c/3) / W``, a third of a pixel right of its centre ``(col + c/3 + 1/6) / W``; the
-    calibration was made with it, so that is the view of the light there."""
-    from .mappings.looking_glass_shader import _HIGH, _LOW, shader_uniforms
-
-    u = shader_uniforms(cal)
-    w_mm, h_mm = cal.size_mm
-    x = points[..., 0] / w_mm + 0.5 + u["subp"]
-    y = points[..., 1] / h_mm + 0.5
-    a = (x + y * u["tilt"]) * u["pitch"] - u["center"]
-    frac = a - np.floor(a)
-    if cal.inv_view:
-        frac = 1.0 - frac
-    return np.minimum((np.clip(frac, _LOW, _HIGH) * views).astype(np.int64), views - 1)
-
-
-def device_slots_at(cal, points: np.ndarray, views: int) -> np.ndarray:
-    """The shader's slot coordinate ``N fraction`` (float, view ``k``'s slot is ``[k, k + 1)``) at each panel
-    point, as ``device_views_at`` reads it."""
+def _shader_fraction(cal, points: np.ndarray) -> np.ndarray:
+    """The vendor's shader's view fraction in ``[0, 1)`` at each panel point ``(..., 2)`` mm (panel
+    frame: origin at the centre, y up), ``inv_view`` applied."""
     from .mappings.looking_glass_shader import shader_uniforms
 
     u = shader_uniforms(cal)
@@ -561,7 +543,24 @@ def device_slots_at(cal, points: np.ndarray, views: int) -> np.ndarray:
     y = points[..., 1] / h_mm + 0.5
     a = (x + y * u["tilt"]) * u["pitch"] - u["center"]
     frac = a - np.floor(a)
-    return (1.0 - frac if cal.inv_view else frac) * views
+    return 1.0 - frac if cal.inv_view else frac
+
+
+def device_views_at(cal, points: np.ndarray, views: int) -> np.ndarray:
+    """The view (int) the vendor's shader gives a subpixel centred at each panel point ``(..., 2)`` mm
+    (panel frame: origin at the centre, y up).  The shader reads subpixel ``c`` of pixel ``col`` at
+    ``(col + 1/2 + c/3) / W``, a third of a pixel right of its centre ``(col + c/3 + 1/6) / W``; the
+    calibration was made with it, so that is the view of the light there."""
+    from .mappings.looking_glass_shader import _HIGH, _LOW
+
+    frac = _shader_fraction(cal, points)
+    return np.minimum((np.clip(frac, _LOW, _HIGH) * views).astype(np.int64), views - 1)
+
+
+def device_slots_at(cal, points: np.ndarray, views: int) -> np.ndarray:
+    """The shader's slot coordinate ``N fraction`` (float, view ``k``'s slot is ``[k, k + 1)``) at each panel
+    point, as ``device_views_at`` reads it."""
+    return _shader_fraction(cal, points) * views
 
 
 def device_sheet(cal, focal: float, distance: float) -> tuple[LensArray, float, LensArray, float]:
