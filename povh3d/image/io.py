@@ -195,6 +195,33 @@ def read_png(path: str | Path) -> np.ndarray:
     return decode_png(path, str(path))
 
 
+def read_image(path: str | Path) -> np.ndarray:
+    """An image POV-Ray wrote, PNG or PPM (``image.ppm``), by its content, as ``(H, W, C)``."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"image {str(path)!r} does not exist; check the path")
+    return decode_image(path, str(path))
+
+
+def decode_image(source: Path | bytes, name: str) -> np.ndarray:
+    """A PNG or PPM file, or its bytes, as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
+    from .ppm import MAGIC, decode_ppm
+
+    if isinstance(source, Path):
+        with open(source, "rb") as fh:
+            head = fh.read(len(MAGIC))
+    else:
+        head = source[:len(MAGIC)]
+    if head != MAGIC:
+        return decode_png(source, name)
+    try:
+        return decode_ppm(source, name)
+    except MemoryError:
+        raise InputError(f"{name!r} is too large to read into memory") from None
+    except ValueError as exc:
+        raise InputError(f"cannot read {name!r} ({exc}); render it again") from None
+
+
 def decode_png(source: Path | bytes, name: str) -> np.ndarray:
     """A PNG file or PNG bytes as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
     from . import png_codec
