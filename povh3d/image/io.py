@@ -187,20 +187,19 @@ def _temp_beside(path: Path) -> Path:
     return Path(tmp)
 
 
-def read_png(path: str | Path) -> np.ndarray:
-    """A PNG as ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"image {str(path)!r} does not exist; check the path")
-    return decode_png(path, str(path))
-
-
 def read_image(path: str | Path) -> np.ndarray:
-    """An image POV-Ray wrote, PNG or PPM (``image.ppm``), by its content, as ``(H, W, C)``."""
+    """A PNG, or a binary PPM as POV-Ray writes its frames (``image.ppm``), by its content, as
+    ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"image {str(path)!r} does not exist; check the path")
     return decode_image(path, str(path))
+
+
+def read_png(path: str | Path) -> np.ndarray:
+    """A PNG as ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth; a POV-Ray frame
+    (``povray.job.JobResult.images``, a PPM) reads too (``read_image``)."""
+    return read_image(path)
 
 
 def decode_image(source: Path | bytes, name: str) -> np.ndarray:
