@@ -5,7 +5,8 @@ Portrait's 48 views through the vendor's sheared cameras (``renderer.methods.ven
 writes the camera bank, the 3360 x 3360 quilt and their sidecars.  Against it: 48 separate
 ``povray`` processes, one per tile, each rendering the very script povh3d gave POV-Ray for that
 view (captured from one untimed render, its frame index fixed), at the tile's size, with
-povh3d's draft switches and one thread (``+WT1``: no thread overhead counted against POV-Ray).
+povh3d's draft switches and one thread (``+WT1``: no thread overhead counted against POV-Ray),
+writing a PNG as a 2D render does (povh3d's own runs write PPM frames).
 
 povh3d's modules are byte-compiled first, as an installed copy's are.  The figure is CPU time, user + system of the whole process tree (``getrusage`` of the children,
 as ``/usr/bin/time`` reports it): the machine is shared, so wall times spread with the load.
@@ -83,11 +84,18 @@ def tile_commands(jobs: list, root: Path) -> list[tuple[list[str], Path, dict[st
             folder = root / f"view{view:02d}"
             folder.mkdir()
             env = _prepare(folder, one)
-            runs.append((build_command(one, binary), folder, env))
+            runs.append((as_png(build_command(one, binary)), folder, env))
             view += 1
     if view != 48:
         raise SystemExit(f"expected 48 views, captured {view}")
     return runs
+
+
+def as_png(argv: list[str]) -> list[str]:
+    """A 2D render's command writes a PNG (+FN), as a user's would; povh3d's shots are PPMs
+    (``PovrayJob.image_suffix``), which the command is measured with."""
+    return [re.sub(r"^\+FP(\d+)$", r"+FN\1", a) if a.startswith("+FP")
+            else re.sub(r"\.ppm$", ".png", a) if a.startswith("+O") else a for a in argv]
 
 
 def main() -> int:

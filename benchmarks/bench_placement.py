@@ -37,7 +37,7 @@ from povh3d.renderer.methods.quality import RenderSettings  # noqa: E402
 from povh3d.geometry.pose import DisplayPose  # noqa: E402
 from povh3d.display.presets import lens_array  # noqa: E402
 from povh3d.image.interleave import extract  # noqa: E402
-from povh3d.image.io import read_png  # noqa: E402
+from povh3d.image.io import read_image, read_png  # noqa: E402
 from povh3d.image.metrics import psnr  # noqa: E402
 from povh3d.scene.format import pov_vector  # noqa: E402
 from povh3d.povray.process import PovrayJob, run_jobs  # noqa: E402
@@ -87,7 +87,7 @@ def oracle(scene: Path, views: int) -> tuple[float, float, dict]:
         images = []
         run_jobs([PovrayJob(name="oracle", script=script, width=array.lenses_x, height=array.lenses_y,
                             include_dirs=(str(scene.parent), str(EXAMPLES)), options=("-A",))], processes=1,
-                 on_result=lambda r: images.append(read_png(r.images[0])))
+                 on_result=lambda r: images.append(read_image(r.images[0])))
         values.append(psnr(stack[l, k], images[0]))
     return min(values), float(np.median(values)), f
 

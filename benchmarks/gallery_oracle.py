@@ -55,7 +55,7 @@ def oracle_view(scene: Path, record: dict, view: tuple[int, int], shape: tuple[i
     precision (``chaotic_floor``).  ``tilt``: added to every ray's direction's x and y (its z is 1), the
     direction's own rounding (``chaotic_floor``).
     """
-    from povh3d.image.io import read_png
+    from povh3d.image.io import read_image
     from povh3d.scene.format import pov_vector
     from povh3d.povray.process import PovrayJob, run_jobs
 
@@ -82,7 +82,7 @@ def oracle_view(scene: Path, record: dict, view: tuple[int, int], shape: tuple[i
     m = supersample
     run_jobs([PovrayJob(name="oracle", script=script, width=(cols + extra_cols) * m, height=(rows + extra_rows) * m,
                         include_dirs=(str(scene.parent), str(EXAMPLES)), options=("-A",), timeout=timeout)],
-             processes=1, on_result=lambda r: images.append(read_png(r.images[0])))
+             processes=1, on_result=lambda r: images.append(read_image(r.images[0])))
     return images[0][m // 2::m, m // 2::m][extra_rows:, extra_cols:]
 
 

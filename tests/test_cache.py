@@ -42,6 +42,22 @@ def _frame(root: Path) -> bool:
     return False
 
 
+def _frame_ppm(root: Path) -> bool:
+    """A shot as POV-Ray writes it now (a PPM, ``image.ppm``), stored as it is; it reads back whole."""
+    from povh3d.renderer.shots.cache import ImageCache
+    from povh3d.image.ppm import encode_ppm
+
+    images, image = ImageCache(root), np.arange(4 * 6 * 3, dtype=np.uint16).reshape(4, 6, 3) * 999
+    found = images.load("ef" * 32)
+    if found is not None:
+        assert found.dtype == np.uint16 and np.array_equal(found, image)
+        return True
+    source = root.parent / "frame.ppm"
+    source.write_bytes(encode_ppm(image))
+    images.store("ef" * 32, source)
+    return False
+
+
 def _output(root: Path) -> bool:
     from povh3d.renderer import output_cache
     from povh3d.image.io import write_image_pair
@@ -94,7 +110,7 @@ def _volume(root: Path) -> bool:
 
 
 KINDS: dict[str, Callable[[Path], bool]] = {
-    "frame": _frame, "output": _output, "camera": _camera, "camera-depth": _camera_depth,
+    "frame": _frame, "frame-ppm": _frame_ppm, "output": _output, "camera": _camera, "camera-depth": _camera_depth,
     "mesh": _mesh, "volume": _volume,
 }
 

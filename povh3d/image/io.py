@@ -187,12 +187,38 @@ def _temp_beside(path: Path) -> Path:
     return Path(tmp)
 
 
-def read_png(path: str | Path) -> np.ndarray:
-    """A PNG as ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth."""
+def read_image(path: str | Path) -> np.ndarray:
+    """A PNG, or a binary PPM as POV-Ray writes its frames (``image.ppm``), by its content, as
+    ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"image {str(path)!r} does not exist; check the path")
-    return decode_png(path, str(path))
+    return decode_image(path, str(path))
+
+
+def read_png(path: str | Path) -> np.ndarray:
+    """A PNG as ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth; a POV-Ray frame
+    (``povray.job.JobResult.images``, a PPM) reads too (``read_image``)."""
+    return read_image(path)
+
+
+def decode_image(source: Path | bytes, name: str) -> np.ndarray:
+    """A PNG or PPM file, or its bytes, as ``(H, W, C)``; an ``InputError`` naming ``name`` if damaged."""
+    from .ppm import MAGIC, decode_ppm
+
+    if isinstance(source, Path):
+        with open(source, "rb") as fh:
+            head = fh.read(len(MAGIC))
+    else:
+        head = source[:len(MAGIC)]
+    if head != MAGIC:
+        return decode_png(source, name)
+    try:
+        return decode_ppm(source, name)
+    except MemoryError:
+        raise InputError(f"{name!r} is too large to read into memory") from None
+    except ValueError as exc:
+        raise InputError(f"cannot read {name!r} ({exc}); render it again") from None
 
 
 def decode_png(source: Path | bytes, name: str) -> np.ndarray:

@@ -7,7 +7,7 @@ every worker with ``scatter``.  A worker lays them out under a private
 folder, mirroring their absolute paths, points the job's include folders
 and allow-list there, renders it with ``povray.run_jobs`` (so the worker's
 POV-Ray runs in the same sandbox, with the same timeout) and returns the
-PNG files as bytes.  No shell sees a path: files are bytes in messages.
+image files as bytes.  No shell sees a path: files are bytes in messages.
 
 A scene on a cluster must name its files relative to its folder or an
 ``--include`` folder (``#include "part.inc"``); an absolute path is the
@@ -241,7 +241,7 @@ def _hold(files: _Files) -> _Files:
 
 
 def _on_worker(job: PovrayJob, files: _Files) -> tuple[list[bytes], float, str]:
-    """Render `job` on this worker from its shipped files; the images as PNG bytes."""
+    """Render `job` on this worker from its shipped files; the images' bytes (``PovrayJob.image_suffix``)."""
     sweep_orphans(tempfile.gettempdir(), TASK_PREFIX)  # the folders of a worker killed on this machine
     root = tempfile.mkdtemp(prefix=owned_prefix(TASK_PREFIX))
     try:
@@ -401,7 +401,7 @@ class DaskRunner:
                                       f"{type(error).__name__}: {error}") from None
                 paths = []
                 for n, data in enumerate(images):
-                    path = folder / f"job{i}_{n}.png"
+                    path = folder / f"job{i}_{n}{jobs[i].image_suffix}"
                     path.write_bytes(data)
                     paths.append(path)
                 try:

@@ -14,10 +14,11 @@ from ..errors import ConfigError
 
 SCENE_FILE = "scene.pov"
 LOG_FILE = "povray.log"
-#: Output name: ``frame.png``, or ``frame1.png``... for an animation, where
-#: POV-Ray pads the number to the width of the last one (frame01..frame12).
+#: Output name: ``frame.ppm``, or ``frame1.ppm``... for an animation, where
+#: POV-Ray pads the number to the width of the last one (frame01..frame12);
+#: ``frame.png``... for a job that asks for alpha (``PovrayJob.image_suffix``).
 OUTPUT_STEM = "frame"
-_FRAME_NAME = re.compile(rf"{OUTPUT_STEM}(\d+)\.png")
+_FRAME_NAME = re.compile(rf"{OUTPUT_STEM}(\d+)\.(?:ppm|png)")
 
 
 @dataclass(frozen=True)
@@ -58,7 +59,7 @@ class PovrayJob:
     threads : int or None
         Render threads (``+WT``); None for POV-Ray's default.
     bit_depth : {8, 16}
-        Bits per PNG channel.
+        Bits per channel of the images.
     file_gamma : str
         ``File_Gamma`` of the output, e.g. ``"sRGB"`` or ``"1.0"``.
     timeout : float or None
@@ -137,6 +138,13 @@ class PovrayJob:
         return range(first, first + self.frames)
 
     @property
+    def image_suffix(self) -> str:
+        """How POV-Ray writes the job's images: ``".ppm"`` (binary P6, uncompressed: POV-Ray
+        deflating a PNG and povh3d inflating it again cost about 20 ms of CPU a frame), or
+        ``".png"`` for a job that asks for alpha (``+UA``), which a PPM cannot hold."""
+        return ".png" if any(o.upper().startswith("+UA") for o in self.options) else ".ppm"
+
+    @property
     def rows(self) -> tuple[int, int] | None:
         """``(start, end)`` rows to render, 0-based, end exclusive; None for all."""
         if self.start_row is None and self.end_row is None:
@@ -167,7 +175,8 @@ class JobResult:
     ----------
     job : PovrayJob
     images : tuple of Path
-        One PNG per frame, in frame order; deleted after ``on_result`` returns.
+        One image per frame (``PovrayJob.image_suffix``: PPM, or PNG with alpha), in frame
+        order; deleted after ``on_result`` returns.  ``image.io.read_image`` reads either.
     seconds : float
         Wall time of the POV-Ray process, s.
     log : str
@@ -199,8 +208,9 @@ def build_command(job: PovrayJob, binary: str) -> list[str]:
     working folder.
     """
     # +V: POV-Ray logs "Rendered N of M pixels" as it goes, which the progress display reads.
-    command = [binary, f"+I{SCENE_FILE}", f"+O{OUTPUT_STEM}.png",
-               f"+W{job.width}", f"+H{job.height}", f"+FN{job.bit_depth}",
+    kind = "N" if job.image_suffix == ".png" else "P"  # +FN PNG, +FP PPM
+    command = [binary, f"+I{SCENE_FILE}", f"+O{OUTPUT_STEM}{job.image_suffix}",
+               f"+W{job.width}", f"+H{job.height}", f"+F{kind}{job.bit_depth}",
                f"File_Gamma={job.file_gamma}", "-D", "+V", f"+MI{_image_buffer_mb(job)}"]
     # Unquoted, POV-Ray rejects a library path holding a space.
     command += [f"+L{_quote(os.path.abspath(folder))}" for folder in job.include_dirs]
@@ -259,9 +269,9 @@ def _quote(path: str) -> str:
 def collect_images(folder: Path, job: PovrayJob) -> tuple[Path, ...] | None:
     """The output images in frame order, or None unless all are there."""
     if job.frames == 1 and job.clock_run is None:
-        path = folder / f"{OUTPUT_STEM}.png"
+        path = folder / f"{OUTPUT_STEM}{job.image_suffix}"
         return (path,) if path.is_file() else None
-    numbered = {int(match[1]): path for path in folder.glob(f"{OUTPUT_STEM}*.png")
+    numbered = {int(match[1]): path for path in folder.glob(f"{OUTPUT_STEM}*{job.image_suffix}")
                 if (match := _FRAME_NAME.fullmatch(path.name))}
     if sorted(numbered) != list(job.frame_numbers):
         return None
@@ -271,15 +281,15 @@ def collect_images(folder: Path, job: PovrayJob) -> tuple[Path, ...] | None:
 def frame_image(folder: Path, job: PovrayJob, number: int) -> Path:
     """Where POV-Ray writes frame `number` (1-based, of the job's own frames) of `job`."""
     if job.frames == 1 and job.clock_run is None:
-        return folder / f"{OUTPUT_STEM}.png"
+        return folder / f"{OUTPUT_STEM}{job.image_suffix}"
     # POV-Ray pads the number to the width of the animation's last one.
     total = job.frames if job.clock_run is None else job.clock_run.total
-    return folder / f"{OUTPUT_STEM}{job.frame_numbers[number - 1]:0{len(str(total))}d}.png"
+    return folder / f"{OUTPUT_STEM}{job.frame_numbers[number - 1]:0{len(str(total))}d}{job.image_suffix}"
 
 
 def expected_images(job: PovrayJob) -> str:
     if job.frames == 1 and job.clock_run is None:
-        return f"{OUTPUT_STEM}.png"
+        return f"{OUTPUT_STEM}{job.image_suffix}"
     first, last = frame_image(Path(), job, 1), frame_image(Path(), job, job.frames)
     return f"the {job.frames} frames {first}..{last}"
 

@@ -357,7 +357,7 @@ def _image_bytes(job: PovrayJob) -> int:
 
 def full_disk(folder: Path, need: int, name: str) -> OutputError | None:
     """The error to give for a failure in ``folder`` when its disk has less than ``need`` bytes (and 1 MiB)
-    free: POV-Ray says only "Frontend halted render", or a PNG is cut short; None when there is room."""
+    free: POV-Ray says only "Frontend halted render", or an image is cut short; None when there is room."""
     try:
         free = shutil.disk_usage(folder).free
     except OSError:

@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..image.ppm import ppm_layout
 from .log import parse_progress
 
 #: How often ``run_jobs`` reports the running jobs' progress, and checks for a stop, s.
@@ -26,6 +27,7 @@ _LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") el
 _IN_CLOSE_WRITE = 0x8
 _IN_NONBLOCK, _IN_CLOEXEC = os.O_NONBLOCK, os.O_CLOEXEC
 _PNG_END = b"IEND\xaeB`\x82"  # the last chunk of every PNG, with its CRC
+_PPM_HEAD = 1024  # POV-Ray's PPM header: P6, four comment lines, size and maxval (about 130 bytes)
 
 
 _POLL_MAX_MS = 2**31 - 1
@@ -103,7 +105,7 @@ class JobWatch:
             return False
         if not self.written and self._drain():
             images = self.images()
-            self.written = images is not None and all(_complete_png(path) for path in images)
+            self.written = images is not None and all(complete_image(path) for path in images)
         if not self.written:
             return False
         self.progress.frames_rendered()
@@ -118,11 +120,11 @@ class JobWatch:
     def finished_frames(self) -> list[int]:
         """The frames (1-based, in order) newly known complete since the last call.
 
-        POV-Ray 3.7 writes a frame's PNG in one go once the frame is traced
-        (open, write, close; the end chunk last), then logs the frame's last
-        pixel count and starts the next frame.  A frame is complete when its
-        file ends with the PNG end chunk and the log has reached its last pixel
-        or a later frame, so a file still being written is never reported.
+        POV-Ray 3.7 writes a frame's image in one go once the frame is traced
+        (open, write, close), then logs the frame's last pixel count and starts
+        the next frame.  A frame is complete when its file is whole
+        (``complete_image``) and the log has reached its last pixel or a later
+        frame, so a file still being written is never reported.
         """
         if self.frame_image is None:
             return []
@@ -131,7 +133,7 @@ class JobWatch:
         done = []
         while self.handed < self.frames:
             number = self.handed + 1
-            if not _complete_png(self.frame_image(number)):
+            if not complete_image(self.frame_image(number)):
                 break
             if not (state[0] > number or (state[0] == number and state[1] >= 1.0)):
                 # Written; the log follows within milliseconds (``awaiting_log``).
@@ -165,10 +167,15 @@ class JobWatch:
             self.fd = None
 
 
-def _complete_png(path: Path) -> bool:
-    """Whether `path` ends with the PNG end chunk (POV-Ray writes it last)."""
+def complete_image(path: Path) -> bool:
+    """Whether POV-Ray has written all of `path`: a PPM as long as its header says, a PNG
+    ending with its end chunk (POV-Ray writes both in one go, the pixels last)."""
     try:
         with open(path, "rb") as f:
+            if path.suffix == ".ppm":
+                head = f.read(_PPM_HEAD)
+                layout = ppm_layout(head)
+                return layout is not None and os.fstat(f.fileno()).st_size == layout.size
             f.seek(-len(_PNG_END), os.SEEK_END)
             return f.read() == _PNG_END
     except OSError:

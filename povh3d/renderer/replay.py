@@ -25,7 +25,7 @@ from ..errors import ConfigError, param
 from ..geometry.lens_array import LensArray
 from ..geometry.chief_rays import check_ior
 from ..geometry.optics import Lenslet
-from ..image.io import read_png, write_png
+from ..image.io import read_image, write_png
 from ..scene.templates import render_template
 
 # The index of the lenslets of the thesis's lab displays' acrylic sheets (and the prototype's).
@@ -141,7 +141,7 @@ def render_replay(image: np.ndarray, lens_array: LensArray, eyes: np.ndarray, *,
         index = {job.name: n for n, job in enumerate(jobs)}
 
         def keep(result: Any) -> None:
-            pictures[index[result.job.name]] = read_png(result.images[0])[..., :3]
+            pictures[index[result.job.name]] = read_image(result.images[0])[..., :3]
 
         seconds = run_jobs(jobs, processes=min(processes, len(jobs)), on_result=keep)
     timings = {"povray_s": [float(s) for s in seconds], "total_s": time.perf_counter() - start,

@@ -23,7 +23,7 @@ from tests.support.render import render
 from povh3d.povray import cluster as cluster_module
 from povh3d.povray.cluster import DaskRunner
 from povh3d.errors import ConfigError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
-from povh3d.image.io import read_png, write_png
+from povh3d.image.io import read_image, read_png, write_png
 from povh3d.povray.process import JobResult, PovrayJob
 from povh3d.renderer.methods.quality import RenderSettings
 from tests.support.arrays import square_array
@@ -322,7 +322,7 @@ def rendered(run, jobs: list[PovrayJob], **kwargs) -> dict[str, np.ndarray]:
 
     def keep(result: JobResult) -> None:
         assert result.job.name not in images  # each job handed over once
-        images[result.job.name] = read_png(result.images[0])
+        images[result.job.name] = read_image(result.images[0])
         if "then" in kwargs:
             kwargs["then"](result)
 

@@ -19,7 +19,6 @@ import zlib
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-import png
 import pytest
 from PIL import Image
 
@@ -119,8 +118,8 @@ def test_build_command() -> None:
                     options=("+A0.3",), threads=2, bit_depth=16, file_gamma="1.0",
                     start_row=0, end_row=1)
     command = build_command(job, "/usr/bin/povray")
-    assert command[:11] == ["/usr/bin/povray", "+Iscene.pov", "+Oframe.png", "+W10",
-                            "+H6", "+FN16", "File_Gamma=1.0", "-D", "+V", "+MI128",
+    assert command[:11] == ["/usr/bin/povray", "+Iscene.pov", "+Oframe.ppm", "+W10",
+                            "+H6", "+FP16", "File_Gamma=1.0", "-D", "+V", "+MI128",
                             '+L"/a b"']
     assert f'+L"{os.path.abspath("rel")}"' in command
     # three shots of a still: the clock held at a still's 0 (POV-Ray would run it 0..1 over them)
@@ -236,9 +235,9 @@ def test_single_frame_and_animation(workdir: Path) -> None:
                        on_progress=lambda done, total: progress.append((done, total)),
                        workdir=workdir)
     (name, still), = images["still"]
-    assert name == "frame.png" and still.size == (3, 2)
+    assert name == "frame.ppm" and still.size == (3, 2)
     assert still.getpixel((2, 1)) == (255, srgb(0.5), 0)
-    assert [name for name, _ in images["anim"]] == ["frame1.png", "frame2.png", "frame3.png"]
+    assert [name for name, _ in images["anim"]] == ["frame1.ppm", "frame2.ppm", "frame3.ppm"]
     assert [image.getpixel((0, 0))[0] for _, image in images["anim"]] == [85, 170, 255]
     assert threads == {threading.get_ident()}
     assert progress == [(1, 2), (2, 2)]
@@ -256,9 +255,12 @@ def test_sixteen_bit(workdir: Path) -> None:
     values = []
 
     def on_result(result: JobResult) -> None:
-        # Pillow reduces 16-bit RGB to 8 bits; pypng keeps it.
-        width, height, rows, info = png.Reader(filename=str(result.images[0])).read()
-        values.append((info["bitdepth"], list(next(iter(rows)))[:3]))
+        # a 16-bit PPM (+FP16): the header's maxval 65535, big-endian samples
+        from povh3d.image.io import read_image
+        from povh3d.image.ppm import ppm_layout
+
+        layout = ppm_layout(result.images[0].read_bytes())
+        values.append((8 * layout.depth, read_image(result.images[0])[0, 0].tolist()))
 
     run_jobs([PovrayJob("deep", flat("rgb <0.5, 0.25, 1>"), 2, 2, bit_depth=16,
                         file_gamma="1.0")], processes=1, on_result=on_result,
@@ -475,7 +477,7 @@ def test_each_frame_is_handed_over_while_the_job_runs(workdir: Path) -> None:
     def on_frame(job: PovrayJob, index: int, path: Path) -> None:
         # The last frame's file does not exist yet while an earlier frame is handed over.
         handed.append((index, Image.open(path).convert("RGB").getpixel((0, 0))[0],
-                       (path.parent / "frame4.png").exists()))
+                       (path.parent / "frame4.ppm").exists()))
 
     run_jobs([PovrayJob("anim", _paced(4), 2, 2, frames=4, file_gamma="1.0")], processes=1,
              on_result=collect(images), on_frame=on_frame, workdir=workdir)

@@ -16,7 +16,7 @@ import pytest
 
 from povh3d.povray import sandbox
 from povh3d.errors import ConfigError, PovrayError
-from povh3d.image.io import read_png
+from povh3d.image.io import read_image
 from povh3d.povray.process import JobResult, PovrayJob, run_jobs, shared_libraries
 from povh3d.renderer.methods.quality import RenderSettings
 from tests.support.arrays import square_array
@@ -32,7 +32,7 @@ def run(script: str, workdir: Path, **job: object) -> list[np.ndarray]:
     images: list[np.ndarray] = []
 
     def keep(result: JobResult) -> None:
-        images.extend(read_png(path) for path in result.images)
+        images.extend(read_image(path) for path in result.images)
 
     run_jobs([PovrayJob("probe", script, 2, 2, **job)], processes=1, on_result=keep,
              workdir=workdir)

@@ -22,7 +22,7 @@ from povh3d.errors import ConfigError
 from povh3d.geometry.pose import DisplayPose, explicit_pose
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.image.interleave import extract
-from povh3d.image.io import read_png
+from povh3d.image.io import read_image, read_png
 from povh3d.image.metrics import psnr
 from povh3d.scene.format import pov_vector
 from povh3d.povray.process import PovrayJob, run_jobs
@@ -42,7 +42,7 @@ def _povray(script: str, width: int, height: int, include: Path) -> np.ndarray:
     images: list[np.ndarray] = []
     job = PovrayJob(name="oracle", script=script, width=width, height=height, include_dirs=(str(include),),
                     options=("-A",))
-    run_jobs([job], processes=1, on_result=lambda r: images.append(read_png(r.images[0])))
+    run_jobs([job], processes=1, on_result=lambda r: images.append(read_image(r.images[0])))
     return images[0]
 
 

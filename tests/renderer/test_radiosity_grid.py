@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from povh3d.image.io import read_png
+from povh3d.image.io import read_image
 from povh3d.image.metrics import psnr
 from povh3d.povray.process import PovrayJob, run_jobs
 
@@ -42,7 +42,7 @@ def _render(tmp_path, radiosity: str, shift: int = 0) -> np.ndarray:
     script = ROOM.format(radiosity=radiosity, x=-shift * pixel / 2, width=SPAN + shift * pixel)
     images = []
     run_jobs([PovrayJob(name="room", script=script, width=WIDTH + shift, height=HEIGHT, options=("-A",), threads=1)],
-             processes=1, workdir=tmp_path, on_result=lambda r: images.append(read_png(r.images[0])))
+             processes=1, workdir=tmp_path, on_result=lambda r: images.append(read_image(r.images[0])))
     return images[0][:, shift:, :3]
 
 

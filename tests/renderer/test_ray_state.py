@@ -14,7 +14,7 @@ import pytest
 
 from povh3d.renderer.placement.ray_state import check_ray_state, state_features
 from povh3d.errors import ConfigError, param
-from povh3d.image.io import read_png
+from povh3d.image.io import read_image, read_png
 from povh3d.povray.process import PovrayJob, run_jobs
 from povh3d.scene.features import Features
 
@@ -96,7 +96,7 @@ def _fogged_rows(tmp_path, camera: str, height: float, hollow: str = "") -> list
     images = []
     run_jobs([PovrayJob(name="state", script=PREMISE.format(height=height, hollow=hollow, camera=camera),
                         width=4, height=4, options=("-A",), threads=1)],
-             processes=1, workdir=tmp_path, on_result=lambda r: images.append(read_png(r.images[0])))
+             processes=1, workdir=tmp_path, on_result=lambda r: images.append(read_image(r.images[0])))
     return [bool(px[1] > 128) for px in images[0][:, 1, :3]]
 
 

@@ -21,7 +21,7 @@ import pytest
 from povh3d.errors import ConfigError
 from povh3d.geometry.lens_array import LensArray, Panel
 from povh3d.geometry.rays import pixel_rays
-from povh3d.image.io import read_png
+from povh3d.image.io import read_image
 from povh3d.renderer.methods.registry import display_header, run_method
 from povh3d.povray.process import PovrayJob, find_povray, run_jobs
 from povh3d.image.metrics import psnr
@@ -52,7 +52,7 @@ def render_linear16(batch, method: str, scene: Path, lens_array) -> list[np.ndar
     job = PovrayJob(name="positions", script=script, width=batch.width, height=batch.height,
                     options=("-A",), bit_depth=16, file_gamma="1.0", read_files=(str(scene),))
     out = []
-    run_jobs([job], processes=1, binary=find_povray(), on_result=lambda r: out.append(read_png(r.images[0])))
+    run_jobs([job], processes=1, binary=find_povray(), on_result=lambda r: out.append(read_image(r.images[0])))
     return out
 
 

@@ -98,6 +98,6 @@ object {{ {ident} }}
 
 
 def _read(path: Path) -> np.ndarray:
-    from povh3d.image.io import read_png
+    from povh3d.image.io import read_image
 
-    return read_png(path)
+    return read_image(path)

@@ -211,7 +211,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     None when the camera needs a run at the panel's own size (``measured_size``).  ``progress(done, total)``:
     the two frames (the run takes about a second, most of it POV-Ray's start-up)."""
     from .depth import PASS_THREADS, fog_distances, pass_lighting, pass_size
-    from ...image.io import read_png
+    from ...image.io import read_image
     from ...povray.process import PovrayJob
     from ...povray.sandbox import files_within
     from ...scene.templates import render_template
@@ -240,7 +240,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     found: list[tuple[str, list[np.ndarray]]] = []
     if progress:
         progress(0, 2)
-    _run(job, lambda r: found.append((r.log, [read_png(i) for i in r.images])), script.lines, scene,
+    _run(job, lambda r: found.append((r.log, [read_image(i) for i in r.images])), script.lines, scene,
          (lambda job, index, image: progress(index + 1, 2)) if progress else None)
     if progress:
         progress(2, 2)

@@ -24,7 +24,7 @@ from ..._version import __version__
 from ... import cache as cache_store
 from ...cache import cache_root, code_stamp, content_key
 from .cache import ImageCache
-from ...image.io import read_png
+from ...image.io import read_image
 from ...povray.job import SCENE_FILE
 from ...povray.log import parse_radiosity, past_scene_end
 from ...povray.job import ClockRun
@@ -109,12 +109,12 @@ def scene_include(scene: Scene, settings: RenderSettings) -> tuple[str, dict[str
 
 
 def _read_shot(image_path: Path, name: str) -> np.ndarray:
-    """A shot POV-Ray wrote; a PNG cut short by a full disk is that disk's error, not the PNG's."""
+    """A shot POV-Ray wrote; an image cut short by a full disk is that disk's error, not the image's."""
     from ...errors import InputError
     from ...povray.process import full_disk
 
     try:
-        return read_png(image_path)
+        return read_image(image_path)
     except InputError:
         raise full_disk(image_path.parent, 0, name) or InputError(
             f"{name}: POV-Ray wrote a damaged image {image_path.name!r}; render again") from None
