@@ -102,19 +102,19 @@ def scene_content(path: Path, lens_array: LensArray, placement: Any = None, *,
                             placement=placement or PlacementOptions())
     placed, record = place_display(request, scene)
     s = placed.settings
-    units = float(record.get("units_per_mm", 1.0))
+    units = record.units_per_mm if record.units_per_mm is not None else 1.0
     front_clearance = s.front_clearance or get_method(placed.method).default_front_clearance(lens_array)
     depth = depth_pass(scene, lens_array, s, front_clearance, units)
     points = depth_points(depth.z, depth.width_mm, depth.height_mm)
     faces = _grid_faces(depth.z, depth.width_mm / depth.z.shape[1], depth_budget_mm(lens_array))
     summary = depth.summary(depth_budget_mm(lens_array))
-    warnings = list(record.get("warnings", []))
+    warnings = list(record.warnings or ())
     if depth.unmeasured > 0.05:
         warnings.append(f"the depth pass could not measure {100 * depth.unmeasured:.0f} % of the field: the "
                         f"viewpoint is inside a solid object there (a plane or a box whose inside faces the "
                         f"viewer); declaring it 'hollow' lets the picture show it")
-    record = {**record, "depth": summary, "warnings": warnings}
-    return Content("scene", path.name, points, faces, points[:, 2], units_per_mm=units, record=record)
+    entry = {**record.to_json(), "depth": summary, "warnings": warnings}
+    return Content("scene", path.name, points, faces, points[:, 2], units_per_mm=units, record=entry)
 
 
 def _grid_faces(z: np.ndarray, step: float, budget: float) -> np.ndarray:

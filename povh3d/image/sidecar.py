@@ -124,8 +124,31 @@ class PassCost(Record):
                 "from_cache": self.from_cache}
 
 
+class _ReadsAsJSON:
+    """A record read as a mapping of its JSON (``{**side, ...}``, ``side["kind"]``, ``record["depth"]``):
+    the file's keys and values, never a way to change them (``with_``, ``updated``)."""
+
+    def to_json(self) -> dict[str, JSONValue]:   # the record's own (``jsontext.Record``), first in its bases
+        raise NotImplementedError
+
+    def keys(self) -> KeysView[str]:
+        return self.to_json().keys()
+
+    def __getitem__(self, key: str) -> JSONValue:
+        return self.to_json()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.to_json())
+
+    def __len__(self) -> int:
+        return len(self.to_json())
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.to_json()
+
+
 @dataclass(frozen=True, kw_only=True)
-class PlacementRecord(Record):
+class PlacementRecord(Record, _ReadsAsJSON):
     """Where the display sits in the scene and what the depth pass saw (``renderer.placement``): the
     sidecar's ``placement``.  The keys the render reads are typed; the rest (the pose's axes,
     the depth report's numbers) are kept as written."""
@@ -176,7 +199,7 @@ class AnimationRecord(Record):
 
 
 @dataclass(frozen=True, kw_only=True)
-class Sidecar(Record):
+class Sidecar(Record, _ReadsAsJSON):
     """One sidecar.  ``kind``: ``h3d``, ``panel``, ``views``, ``quilt``, ``refocus``, ``replay``, ...
 
     Built by ``Sidecar.new`` (``renderer.records.base_record``) and grown by ``with_``, each new key
@@ -238,22 +261,6 @@ class Sidecar(Record):
             return default if value is None and key not in self.order else to_json_value(value)
         return self.extra.get(key, default)
 
-    # Read as a mapping of its JSON (``{**side, ...}``, ``side["kind"]``, ``Display.from_record(side)``): the
-    # file's keys and values, never a way to change them (``with_``).
-    def keys(self) -> KeysView[str]:
-        return self.to_json().keys()
-
-    def __getitem__(self, key: str) -> JSONValue:
-        return self.to_json()[key]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.to_json())
-
-    def __len__(self) -> int:
-        return len(self.to_json())
-
-    def __contains__(self, key: object) -> bool:
-        return key in self.to_json()
 
 
 _TYPED = frozenset(f.name for f in dataclasses.fields(Sidecar)) - {"extra", "order"}

@@ -69,7 +69,7 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
     ray_state = None
     if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
         request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
-    placement_record = PlacementRecord.from_json({**placed, "ray_state": ray_state} if ray_state is not None else placed)
+    placement_record = placed if ray_state is None else placed.updated(ray_state=ray_state)
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
                     placement=placement_record)

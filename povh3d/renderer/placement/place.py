@@ -24,15 +24,24 @@ from ...geometry.pose import NATIVE, DisplayPose
 from ...scene.scene import Scene
 from .pose import resolve_pose_and_depth
 from ...geometry.fit import depth_budget_mm
+from ...image.sidecar import PlacementRecord
 
 if TYPE_CHECKING:  # only for annotations: keeps the import chain short
     from ..request import RenderRequest
 
 
 def place_display(request: RenderRequest, scene: Scene,
-                  progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any]]:
-    """The request with its placement (and clearance) resolved into the settings, and the record;
-    ``progress(done, total)``: a depth pass's shots."""
+                  progress: Progress | None = None) -> tuple[RenderRequest, PlacementRecord]:
+    """The request with its placement (and clearance) resolved into the settings, and the sidecar's
+    ``placement`` record (typed, checked as a sidecar's is read); ``progress(done, total)``: a depth
+    pass's shots."""
+    placed, record = _place(request, scene, progress)
+    return placed, PlacementRecord.from_json(record)
+
+
+def _place(request: RenderRequest, scene: Scene,
+           progress: Progress | None) -> tuple[RenderRequest, dict[str, Any]]:
+    """``place_display``, its record as the JSON it assembles."""
     array = request.render_array
     budget = depth_budget_mm(array)
     if request.is_model:  # the stage is built in display mm
