@@ -3,9 +3,13 @@ folder and the POV-Ray binary (looked up here alone)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import shutil
+import signal
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 from functools import cache
 
@@ -183,3 +187,29 @@ def memory_budget() -> int | None:
     """Bytes a run may use: the smaller of the user's limit and the memory available (None: unknown)."""
     known = [b for b in (memory_limit(), available_memory()) if b is not None]
     return min(known) if known else None
+
+
+@contextlib.contextmanager
+def deferred_signals() -> Iterator[None]:
+    """Hold Ctrl-C (and SIGTERM, SIGHUP where Python handles them) for the block: a signal that
+    comes meanwhile is handled when it ends.  Used where an interrupt in between would leave a
+    state nobody knows of: a child started but not recorded (``povray.process``), a new image
+    beside its old sidecar (``image.io``).  Python raises it only in the main thread, where the
+    handlers may be swapped; elsewhere there is nothing to hold.  An ignored
+    signal stays ignored.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    held = [s for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP) if callable(signal.getsignal(s))]
+    previous = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s in held}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if caught:
+            handler = previous[signal.Signals(caught[0])]
+            if callable(handler):  # always: only signals with a handler function were held
+                handler(caught[0], None)  # e.g. the default SIGINT handler raises KeyboardInterrupt

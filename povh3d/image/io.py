@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError, OutputError, param, plain
+from ..system import deferred_signals
 
 if TYPE_CHECKING:  # NumPy, Pillow and pypng are imported where images are coded: a cached
     import numpy as np  # output is copied as bytes without them (renderer/output_cache.py)
@@ -334,11 +335,17 @@ def write_png_bytes_pair(path: str | Path, data: bytes, record: Sidecar | JSONOb
 
 def _replace_pair(path: Path, write: Any, record: Sidecar | JSONObject) -> None:
     side = sidecar_path(path)
-    with atomic_path(side) as side_tmp:
-        with atomic_path(path) as image_tmp:
-            write(image_tmp)
-            _write_json(side_tmp, {**_as_json(record), "image_sha256": file_sha256(image_tmp)})
-        # the image is in place; the sidecar is renamed when this block ends
+    held = contextlib.ExitStack()
+    with held:
+        with atomic_path(side) as side_tmp:
+            with atomic_path(path) as image_tmp:
+                write(image_tmp)
+                _write_json(side_tmp, {**_as_json(record), "image_sha256": file_sha256(image_tmp)})
+                # Ctrl-C or SIGTERM between the two renames would leave the new image beside the old
+                # sidecar: from here a signal waits until both are in place (SIGKILL cannot: read_sidecar
+                # detects that pair by its image_sha256)
+                held.enter_context(deferred_signals())
+            # the image is in place; the sidecar is renamed when this block ends
 
 
 def _as_json(record: Sidecar | JSONObject) -> JSONObject:

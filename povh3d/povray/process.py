@@ -29,10 +29,9 @@ import shutil
 import signal
 import subprocess
 import tempfile
-import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
@@ -41,7 +40,7 @@ from . import limits, sandbox
 from ..errors import ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
-from ..system import INSTALL_HINT, find_povray, owned_prefix, sweep_orphans
+from ..system import INSTALL_HINT, deferred_signals, find_povray, owned_prefix, sweep_orphans
 from .log import denied_note, describe_exit, parse_error, tail
 from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
 
@@ -205,7 +204,7 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
         command = build_command(run, binary)
         env = _prepare(folder, run)
         with open(folder / LOG_FILE, "wb") as log, sandbox.confinement(binary, _inputs(run), folder, shared_libraries) as fd, \
-                _deferred_interrupt():
+                deferred_signals():
             process = _spawn(command, folder, env, log, fd)
             watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job),
                              functools.partial(frame_image, folder, job))
@@ -269,33 +268,6 @@ def _prepare(folder: Path, job: PovrayJob) -> dict[str, str]:
         raise full_disk(folder, 1 << 20, job.name) or \
             OutputError(f"Cannot write the scene into {folder}: {error.strerror}.") from None
     return dict(os.environ, HOME=str(home))
-
-
-@contextlib.contextmanager
-def _deferred_interrupt() -> Iterator[None]:
-    """Hold Ctrl-C (and SIGTERM, SIGHUP where Python handles them) while a child starts,
-    so it is recorded before any interrupt.
-
-    A KeyboardInterrupt raised inside Popen after the fork would leave a child
-    nobody knows of.  Python raises it only in the main thread, where the
-    handlers may be swapped; elsewhere there is nothing to hold.  An ignored
-    signal stays ignored.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-    held = [s for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP) if callable(signal.getsignal(s))]
-    previous = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s in held}
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-        if caught:
-            handler = previous[signal.Signals(caught[0])]
-            if callable(handler):  # always: only signals with a handler function were held
-                handler(caught[0], None)  # e.g. the default SIGINT handler raises KeyboardInterrupt
 
 
 def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | None = None,

@@ -174,3 +174,37 @@ def test_a_render_s_sidecar_reads_back_typed_and_byte_for_byte(tmp_path):
     before = sidecar_path(out).read_bytes()
     write_sidecar(out, side)
     assert sidecar_path(out).read_bytes() == before
+
+
+def test_a_signal_between_the_two_renames_waits_until_the_pair_is_in_place(tmp_path, monkeypatch):
+    """SIGTERM right after the image's rename (as in tests/renderer/test_reliability.py's fault matrix):
+    the run stops after the sidecar's rename too, so the new image never sits beside the old sidecar."""
+    import os
+    import signal
+
+    import numpy as np
+
+    from povh3d.image import io
+
+    path = tmp_path / "out.png"
+    io.write_image_pair(path, np.zeros((2, 2, 3), np.uint8), {"povh3d_version": "x", "kind": "h3d", "n": 1})
+    real, renames = os.replace, []
+
+    def replace_then_signal(src, dst):
+        real(src, dst)
+        renames.append(dst)
+        if len(renames) == 1:   # the image is in place
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, stop)
+    monkeypatch.setattr(io.os, "replace", replace_then_signal)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            io.write_image_pair(path, np.ones((2, 2, 3), np.uint8), {"povh3d_version": "x", "kind": "h3d", "n": 2})
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert len(renames) == 2   # both renamed before the signal was handled
+    assert io.read_sidecar(path)["n"] == 2   # the new pair, whole
