@@ -198,9 +198,12 @@ def read_image(path: str | Path) -> np.ndarray:
 
 
 def read_png(path: str | Path) -> np.ndarray:
-    """A PNG as ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth; a POV-Ray frame
-    (``povray.job.JobResult.images``, a PPM) reads too (``read_image``)."""
-    return read_image(path)
+    """A PNG as ``(H, W, C)`` uint8 or uint16, keeping the file's bit depth (a POV-Ray frame, a PPM:
+    ``read_image``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"image {str(path)!r} does not exist; check the path")
+    return decode_png(path, str(path))
 
 
 def decode_image(source: Path | bytes, name: str) -> np.ndarray:
