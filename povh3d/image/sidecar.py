@@ -128,8 +128,8 @@ class _ReadsAsJSON:
     """A record read as a mapping of its JSON (``{**side, ...}``, ``side["kind"]``, ``record["depth"]``):
     the file's keys and values, never a way to change them (``with_``, ``updated``)."""
 
-    def to_json(self) -> dict[str, JSONValue]:   # the record's own (``jsontext.Record``), first in its bases
-        raise NotImplementedError
+    if TYPE_CHECKING:   # the record's own (``jsontext.Record``): nothing here to shadow it at run time
+        def to_json(self) -> dict[str, JSONValue]: ...
 
     def keys(self) -> KeysView[str]:
         return self.to_json().keys()
