@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from . import limits, sandbox
-from ..errors import ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted
+from ..errors import ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted, warn
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
 from ..system import INSTALL_HINT, deferred_signals, find_povray, owned_prefix, sweep_orphans
@@ -47,6 +47,10 @@ from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_e
 _DENIED = re.compile(r"Cannot (open|find)")
 # POV-Ray takes about 0.6 s to act on SIGTERM; after this, SIGKILL.
 _GRACE_SECONDS = 1.0
+#: Signals POV-Ray 3.7 dies of by its own fault, not ours: it aborts (SIGABRT) about once in some
+#: thousands of runs on a loaded machine, at random, with nothing in its log.  The render is
+#: deterministic, so a job lost that way is run once more; a second loss is the error.
+_CRASH_SIGNALS = frozenset({signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS, signal.SIGFPE, signal.SIGILL})
 
 
 def povray_version(binary: str | None = None) -> str:
@@ -171,14 +175,22 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
     seconds = [0.0] * len(jobs)
     pending = deque(enumerate(jobs))
     running: list[_Child] = []
+    rerun: dict[int, int] = {}  # job index -> frames its crashed run had handed over (``_CRASH_SIGNALS``)
     done = 0
     try:
         while pending or running:
             while pending and len(running) < processes:
                 index, job = pending.popleft()
-                _start(index, job, binary, workdir, running)
+                _start(index, job, binary, workdir, running, handed=rerun.get(index, 0))
             for child in _wait_for_exits(running, should_stop, on_running, on_frame):
                 running.remove(child)
+                if child.index not in rerun and _crashed(child):
+                    rerun[child.index] = child.watch.handed
+                    warn(f"{child.job.name}: {describe_exit(child.process.returncode, '')} (a fault of "
+                         "POV-Ray's own, not of the scene); running it once more")
+                    _discard(child)
+                    pending.appendleft((child.index, child.job))
+                    continue
                 seconds[child.index] = _finish(child, on_result)
                 done += 1
                 if on_progress is not None:
@@ -195,8 +207,9 @@ def run_jobs(jobs: Sequence[PovrayJob], *, processes: int,
 
 
 def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
-           running: list[_Child]) -> None:
-    """Start `job` in a fresh folder and add it to `running`."""
+           running: list[_Child], handed: int = 0) -> None:
+    """Start `job` in a fresh folder and add it to `running`; its frames up to `handed` (1-based)
+    were handed over by an earlier run of it and are not reported again."""
     folder = _make_folder(workdir)
     registered = False  # once True, run_jobs owns the folder and the child
     try:
@@ -208,6 +221,7 @@ def _start(index: int, job: PovrayJob, binary: str, workdir: str | Path | None,
             process = _spawn(command, folder, env, log, fd)
             watch = JobWatch(folder / LOG_FILE, job.frames, functools.partial(collect_images, folder, job),
                              functools.partial(frame_image, folder, job))
+            watch.handed = handed
             running.append(_Child(index, job, folder, command, process, time.monotonic(), watch))
             registered = True
     except BaseException:
@@ -320,6 +334,20 @@ def _finish(child: _Child, on_result: Callable[[JobResult], None] | None) -> flo
     finally:
         child.watch.close()
         shutil.rmtree(child.folder, ignore_errors=True)
+
+
+def _crashed(child: _Child) -> bool:
+    """Whether the child died of a fault of POV-Ray's own (``_CRASH_SIGNALS``), not stopped by us
+    once its images were complete, and with no error of the scene's in its log."""
+    code = child.process.returncode
+    return (code is not None and code < 0 and -code in _CRASH_SIGNALS and not child.watch.early
+            and parse_error(child.log) is None)
+
+
+def _discard(child: _Child) -> None:
+    """Forget an exited child's run: its watch and its folder."""
+    child.watch.close()
+    shutil.rmtree(child.folder, ignore_errors=True)
 
 
 def _image_bytes(job: PovrayJob) -> int:

@@ -498,3 +498,77 @@ def test_frames_before_a_timeout_or_a_failure_are_kept(workdir: Path, fault: str
         run_jobs([job], processes=1, on_frame=lambda job, index, path: handed.append(index), workdir=workdir)
     assert handed == [0, 1]
     assert_clean(workdir)
+
+
+# -- a POV-Ray that crashes by its own fault is run once more --------------------------------------
+
+def _crashing_povray(tmp_path: Path, first_run: str, later_runs: str = 'exec "$POVRAY" "$@"') -> Path:
+    """A POV-Ray wrapper whose first run does `first_run` and the later ones `later_runs`;
+    each run appends a line to ``runs`` beside it.  POV-Ray 3.7 aborts (SIGABRT) on its own
+    about once in some thousands of runs; this makes it do so on demand."""
+    wrapper = tmp_path / "povray"
+    wrapper.write_text(f"""#!/bin/sh
+POVRAY={shutil.which("povray")}
+echo run >> {tmp_path / "runs"}
+if [ "$(wc -l < {tmp_path / "runs"})" -eq 1 ]; then
+  {first_run}
+fi
+{later_runs}
+""")
+    wrapper.chmod(0o755)
+    return wrapper
+
+
+@pytest.mark.povray
+@needs_povray
+def test_a_crashed_run_is_run_once_more(workdir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("POVH3D_SANDBOX", "off")  # the wrapper counts its runs outside the job's folder
+    binary = _crashing_povray(workdir.parent, "kill -ABRT $$")
+    images: dict[str, list] = {}
+    with pytest.warns(UserWarning, match=r"flat: POV-Ray was killed by signal 6 .*running it once more"):
+        run_jobs([PovrayJob("flat", flat("rgb <1, 0, 0>"), 2, 2, file_gamma="1.0")], processes=1,
+                 on_result=collect(images), binary=str(binary), workdir=workdir)
+    assert (workdir.parent / "runs").read_text().count("run") == 2
+    assert images["flat"][0][1].getpixel((0, 0)) == (255, 0, 0)
+    assert_clean(workdir)
+
+
+@pytest.mark.povray
+@needs_povray
+def test_a_second_crash_is_the_error(workdir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("POVH3D_SANDBOX", "off")
+    binary = _crashing_povray(workdir.parent, "kill -ABRT $$", "kill -ABRT $$")
+    with pytest.warns(UserWarning), pytest.raises(PovrayError, match="flat: POV-Ray was killed by signal 6$"):
+        run_jobs([PovrayJob("flat", flat("rgb <1, 0, 0>"), 2, 2)], processes=1, binary=str(binary),
+                 workdir=workdir)
+    assert (workdir.parent / "runs").read_text().count("run") == 2
+    assert_clean(workdir)
+
+
+@pytest.mark.povray
+@needs_povray
+def test_a_scene_error_is_not_run_again(workdir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Control: a failure of the scene's own (a parse error, exit code 1) is not POV-Ray's crash."""
+    monkeypatch.setenv("POVH3D_SANDBOX", "off")
+    binary = _crashing_povray(workdir.parent, ":")
+    with pytest.raises(PovrayError, match="Parse Error"):
+        run_jobs([PovrayJob("bad", HEAD + "Foo\n", 2, 2)], processes=1, binary=str(binary), workdir=workdir)
+    assert (workdir.parent / "runs").read_text().count("run") == 1
+    assert_clean(workdir)
+
+
+@pytest.mark.povray
+@needs_povray
+def test_frames_handed_before_a_crash_are_not_handed_again(workdir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("POVH3D_SANDBOX", "off")
+    # The first run renders frames 1-2 of 3 (a later +KFF wins), then aborts.
+    binary = _crashing_povray(workdir.parent, '"$POVRAY" "$@" +KFF2; kill -ABRT $$')
+    handed: list[int] = []
+    images: dict[str, list] = {}
+    with pytest.warns(UserWarning, match="running it once more"):
+        run_jobs([PovrayJob("anim", _paced(3), 2, 2, frames=3, file_gamma="1.0")], processes=1,
+                 on_result=collect(images), on_frame=lambda job, index, path: handed.append(index),
+                 binary=str(binary), workdir=workdir)
+    assert sorted(handed) == list(range(len(handed))) and handed[:2] == [0, 1]  # each once, in order
+    assert [image.getpixel((0, 0))[0] for _, image in images["anim"]] == [85, 170, 255]
+    assert_clean(workdir)
