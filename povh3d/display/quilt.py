@@ -131,13 +131,17 @@ def quilt_array(device: Device, views: QuiltViews) -> LensArray:
     return LensArray("lenticular", tw, th, pitch_x, pitch_y, focal, Panel(tw * n, th, pitch_x / n, pitch_y))
 
 
-def device_quilt(h3d: np.ndarray, array: LensArray, device: Device) -> np.ndarray:
+def device_quilt(h3d: np.ndarray, array: LensArray, device: Device, views: np.ndarray | None = None) -> np.ndarray:
     """The device's quilt ``(Hq, Wq, C)`` of a render of ``quilt_array``: tiles from the bottom
-    left, padding (black) right and top up to the device's quilt size."""
+    left, padding (black) right and top up to the device's quilt size.  ``views``: the render's
+    ``(1, N, Ly, Lx, C)`` camera bank views where it has them apart (the same pixels as ``h3d``'s,
+    each view whole in memory: a twentieth of the CPU of gathering every view back out of ``h3d``)."""
     ny, n = array.require_views()
-    region = h3d[array.bank_region]
-    # one row of views: bank view k, pixel (i, j) is region[i, j n + k] (interleave.extract's
-    # layout, by a reshape: no compiled gather to load for one image)
-    bank = region.reshape(region.shape[0], array.lenses_x, n, region.shape[2]).transpose(2, 0, 1, 3)[None]
-    views = bank_to_quilt_order(bank)
-    return views_to_quilt(views, *device.grid, size=device.quilt_size)   # each tile copied once, into place
+    if views is not None:
+        bank = views
+    else:
+        region = h3d[array.bank_region]
+        # one row of views: bank view k, pixel (i, j) is region[i, j n + k] (interleave.extract's
+        # layout, by a reshape: no compiled gather to load for one image)
+        bank = region.reshape(region.shape[0], array.lenses_x, n, region.shape[2]).transpose(2, 0, 1, 3)[None]
+    return views_to_quilt(bank_to_quilt_order(bank), *device.grid, size=device.quilt_size)   # each tile copied once, into place

@@ -88,7 +88,7 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
     companions = None
     if (quilt := request.display.quilt) is not None:   # a Looking Glass preset: each frame's quilt (and native image)
         def companions(staged: Path, image: RenderedImage) -> tuple[Sidecar, list[Path]]:
-            entry = write_device_outputs(staged, image.image, request.render_array, quilt)
+            entry = write_device_outputs(staged, image.image, request.render_array, quilt, image.views)
             names = [entry.file, *([entry.native] if entry.native is not None else [])]
             return image.record.with_(quilt=entry), [staged.with_name(n) for n in names]
     report = render_sequence(request.frames, output, frame, uses_clock=scene.uses_clock, progress=progress,
@@ -281,7 +281,9 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
         warn(f"every pixel of {request.output.name} is the same colour, as if no ray hit anything; check the "
              f"placement ({param('placement.mode')}, {param('placement.center')} ...) or the model's units and orientation ({param('unit')}, {param('up')}); a scene without a "
              f"camera is modelled in mm around z = 0, viewer on -z, the display spanning {w:.4g} x {h:.4g} mm")
-    views = extract(h3d[array.bank_region], array.require_views()) if request.views_dir is not None else None
+    views = result.views
+    if views is None and request.views_dir is not None:
+        views = extract(h3d[array.bank_region], array.require_views())
     mapping = request.display.mapping
     if mapping is not None:
         h3d = mapping.apply(h3d, request.image_size)

@@ -120,3 +120,22 @@ def test_centre_row_and_refusals():
         bank_to_quilt_order(bank)
     with pytest.raises(ConfigError, match="centre or all"):
         bank_to_quilt_order(bank, "middle")
+
+
+def test_a_device_quilt_from_the_rendered_views_equals_the_one_gathered_from_the_h3d():
+    """The vendor's cameras keep their views apart; the quilt tiled from them is the one gathered back
+    out of the interleaved image, pixel for pixel (and a bank in the wrong order is not)."""
+    from povh3d.display.looking_glass import device
+    from povh3d.display.quilt import QuiltViews, device_quilt, quilt_array
+    from povh3d.image.interleave import interleave
+    from povh3d.image.quilt import quilt_to_bank_order
+
+    dev = device("looking-glass-portrait")
+    array = quilt_array(dev, QuiltViews(40.0, dev.nominal_size_mm, "test"))
+    tw, th = dev.tile_size
+    tiles = np.random.default_rng(5).integers(0, 256, (dev.views, th, tw, 3), dtype=np.uint8)
+    bank = quilt_to_bank_order(tiles)
+    h3d = interleave(bank)
+    gathered = device_quilt(h3d, array, dev)
+    assert np.array_equal(device_quilt(h3d, array, dev, bank), gathered)
+    assert not np.array_equal(device_quilt(h3d, array, dev, tiles[None]), gathered)   # control: quilt order

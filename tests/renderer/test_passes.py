@@ -51,7 +51,7 @@ def test_a_plain_render_runs_no_depth_pass_and_fit_depth_does(cli, tmp_path):
     assert result.code == 0, result.err
     passes, frame = _passes(fitted)
     assert [p["name"] for p in passes] == ["scene-camera-depth"], passes
-    assert passes[0]["shots"] == 2 and passes[0]["runs"] == 1
+    assert passes[0]["shots"] == 2 and passes[0]["runs"] == 2   # the two fog frames side by side
     assert frame["depth"]["pass"] == "in the camera's evaluation run" and "fit" in frame["depth"]
     assert frame["centre"] == pytest.approx([0, 2, 0], abs=1e-9) and frame["normal"] == pytest.approx([0, 0, 1])
     # The sphere's front (1.5 units before the centre) in mm: the measured subject reaches it.

@@ -326,8 +326,10 @@ def test_the_renders_timeout_governs_the_camera_run(tmp_path):
     from povh3d.renderer.placement.pose import resolve_pose_and_depth
     from povh3d.errors import PovrayTimeout
 
-    path = tmp_path / "slow.pov"   # about 2 s of parse before the camera
-    path.write_text("#version 3.7;\n#declare T = 0; #while (T < 3000000) #declare T = T + 1; #end\n"
+    # about 4 s of parse before the camera (the two fog frames' runs parse side by side; stopping a
+    # run takes up to 1.3 s: SIGTERM, then SIGKILL after a grace)
+    path = tmp_path / "slow.pov"
+    path.write_text("#version 3.7;\n#declare T = 0; #while (T < 6000000) #declare T = T + 1; #end\n"
                     "camera { location <0, 0, -5> look_at 0 }\nsphere { 0, 1 pigment { rgb 1 } }\n")
     scene, array = load_scene(path), small_array()
     start = time.perf_counter()

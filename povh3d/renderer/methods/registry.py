@@ -316,6 +316,9 @@ class MethodResult:
     record: JSONObject | None = None  # the method's own set-up, for the sidecar
     front_clearance_reason: str = ""      # why rays start there, for the sidecar and the summary
     groups: list[np.ndarray] | None = None   # ``footprint_groups``: each group's H3D image, linear light
+    # (Ny, Nx, Ly, Lx, C): the camera bank's views where the method rendered them apart (the vendor's
+    # cameras), so a quilt is tiled from them, not gathered back out of the interleaved image
+    views: np.ndarray | None = None
 
 
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,

@@ -76,4 +76,4 @@ def run_vendor_views(scene: Scene, lens_array: LensArray, settings: Any, spec: M
               "camera_offsets_mm": [round(-distance * math.tan(half_cone), 4), round(distance * math.tan(half_cone), 4)],
               "screen_mm": [width, height]}
     return MethodResult(h3d, stats, distance, quality, record=record,
-                        front_clearance_reason=f"the viewer's eye, the vendor's cameras: {source}")
+                        front_clearance_reason=f"the viewer's eye, the vendor's cameras: {source}", views=bank)

@@ -40,16 +40,18 @@ def quilt_outputs(output: Path, device: Device, native: bool) -> tuple[Path, Pat
     return quilt, panel
 
 
-def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: Mapping[str, Any]) -> QuiltRecord:
+def write_device_outputs(output: Path, h3d: np.ndarray, array: LensArray, spec: Mapping[str, Any],
+                         views: np.ndarray | None = None) -> QuiltRecord:
     """Write the quilt (and with a calibration the native panel image) of a device render beside
-    ``output``; return the sidecar's ``quilt`` entry."""
+    ``output``; return the sidecar's ``quilt`` entry.  ``views``: the render's camera bank views, when
+    the method kept them (``MethodResult.views``), which the quilt is tiled from."""
     from ...display.looking_glass import device
     from ...display.mappings.looking_glass_shader import quilt_to_native
 
     dev = device(spec["device"])
     cone = quilt_views(dev, spec.get("calibration"))
     quilt_path, native_path = quilt_outputs(output, dev, spec.get("calibration") is not None)
-    quilt = device_quilt(h3d, array, dev)
+    quilt = device_quilt(h3d, array, dev, views)
     entry = QuiltRecord(device=dev.name, file=quilt_path.name, grid=dev.grid, quilt_size=dev.quilt_size,
                         tile_size=dev.tile_size, aspect=dev.aspect, view_cone_deg=cone.cone_deg,
                         view_cone_from=cone.cone_from)

@@ -118,7 +118,8 @@ def _write_depth_maps(still: Still) -> None:
 
 def _write_quilt(still: Still) -> None:
     quilt: Any = still.request.display.quilt
-    still.add(quilt=write_device_outputs(still.output, still.image.image, still.request.render_array, quilt))
+    still.add(quilt=write_device_outputs(still.output, still.image.image, still.request.render_array, quilt,
+                                         still.image.views))
 
 
 def _folder_against(field: str) -> Callable[[RenderRequest, Path, tuple[Path, ...]], object]:

@@ -149,16 +149,22 @@ PAIRS_PER_RUN = 2
 
 def _fog_batch(directions: list[tuple[float, float, float]], lens_array: LensArray, front_clearance: float,
                fog: float, width: int, height: int, field: tuple[float, float] | None = None) -> ShotBatch:
-    """Two shots (fog 0, fog 1) per direction, a pair never split between runs, in up to ``FOG_RUNS``
-    POV-Ray runs at once (one thread each: ``PASS_THREADS``).  ``field`` (mm, centred on the origin)
+    """Two shots (fog 0, fog 1) per direction, a pair never split between runs (but a lone pair's two
+    shots run side by side), in up to ``FOG_RUNS`` POV-Ray runs at once (one thread each: ``PASS_THREADS``).  ``field`` (mm, centred on the origin)
     defaults to the lens array's."""
     width_mm, height_mm = field or (lens_array.lenses_x * lens_array.pitch_x, lens_array.lenses_y * lens_array.pitch_y)
     right, up = (width_mm, 0.0, 0.0), (0.0, height_mm, 0.0)
     shots = [{"direction": d, "fog": colour} for d in directions for colour in (0, 1)]
-    runs = max(1, min(FOG_RUNS, len(directions) // PAIRS_PER_RUN))
-    pairs = -(-len(directions) // runs)
+    if len(directions) == 1:
+        # One pair: its two frames as two runs side by side, one thread each (the same images to the bit,
+        # each run starting POV-Ray's random sequences afresh), so the pass waits for one POV-Ray start-up
+        # and no frame change (about 0.25 s, nearly all of it POV-Ray idling: ``FOG_RUNS``).
+        per_job, runs = 1, 2
+    else:
+        runs = max(1, min(FOG_RUNS, len(directions) // PAIRS_PER_RUN))
+        per_job = 2 * -(-len(directions) // runs)
     return ShotBatch("depth.pov.j2", {"fog_distance": fog, "front_clearance": front_clearance, "right": right, "up": up},
-                      shots, width, height, shots_per_job=2 * pairs, processes=runs, options=("-A",))
+                      shots, width, height, shots_per_job=per_job, processes=runs, options=("-A",))
 
 
 def _views_batch(slopes: np.ndarray, views: tuple[int, int], cells: tuple[int, int], pitch: tuple[float, float],

@@ -121,7 +121,7 @@ def evaluate_camera(scene: Scene, script: str, lens_array: LensArray, cameras: i
     job = PovrayJob(name="scene camera", script=script, width=w, height=h, start_row=0, end_row=1,
                     options=("-A", "+Q0"), threads=1, timeout=timeout, **scene_inputs(scene))
     logs: list[str] = []
-    _run(job, lambda result: logs.append(result.log), lines, scene)
+    _run([job], lambda result: logs.append(result.log), lines, scene)
     camera = camera_from_log(logs[0] if logs else "", cameras).as_record()
     if use_cache:
         _keep(path, key, camera)
@@ -143,15 +143,15 @@ def camera_size(scene: Scene, lens_array: LensArray) -> tuple[int, int]:
     return ratio.numerator, ratio.denominator
 
 
-def _run(job: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scene: Scene, on_frame: Any = None) -> None:
-    """Run the camera's job; an error at a line of the rewritten script names the user's file and line."""
+def _run(jobs: Any, on_result: Any, lines: tuple[tuple[int, str, int], ...], scene: Scene) -> None:
+    """Run the camera's jobs side by side; an error at a line of the rewritten script names the user's file and line."""
     from ...errors import PovrayError, PovrayTimeout
     from ...povray.job import SCENE_FILE
     from ...povray.process import run_jobs
     from ...scene.camera_script import source_line
 
     try:
-        run_jobs([job], processes=1, on_result=on_result, on_frame=on_frame)
+        run_jobs(jobs, processes=len(jobs), on_result=on_result)
     except PovrayError as exc:
         if isinstance(exc, PovrayTimeout) or SCENE_FILE not in str(exc):
             raise
@@ -204,14 +204,15 @@ _RATIO = re.compile(r"\bimage_width\s*/\s*image_height\b|\bimage_height\s*/\s*im
 def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArray, front_clearance: float,
                          cache_dir: Any, use_cache: bool, timeout: float | None = None,
                          progress: Progress | None = None) -> tuple[dict[str, Any], Seen, float, bool] | None:
-    """The camera's vectors and a depth pass along the normal of the pose it defines, from one
-    POV-Ray run: the evaluation script, the rest of the scene and ``templates/camera_depth.pov.j2``,
+    """The camera's vectors and a depth pass along the normal of the pose it defines, from two
+    POV-Ray runs side by side (the two fog frames): the evaluation script, the rest of the scene and ``templates/camera_depth.pov.j2``,
     which works out the pose and the clearance from the declared values, prints them and renders
     the two fog frames (``renderer.passes.depth``).  Cached by the scene's digest, the panel and ``front_clearance``.
     None when the camera needs a run at the panel's own size (``measured_size``).  ``progress(done, total)``:
     the two frames (the run takes about a second, most of it POV-Ray's start-up)."""
     from .depth import PASS_THREADS, fog_distances, pass_lighting, pass_size
     from ...image.io import read_image
+    from ...povray.job import ClockRun, JobResult
     from ...povray.process import PovrayJob
     from ...povray.sandbox import files_within
     from ...scene.templates import render_template
@@ -233,18 +234,26 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
     text = script.script + script.rest + render_template(
         "camera_depth.pov.j2", panel_width=lens_array.panel.size_mm[0], front_clearance=front_clearance, right=right, up=up,
         add_assumed_gamma=not scene.sets_assumed_gamma, lighting=pass_lighting(scene))
-    job = PovrayJob(name="scene camera and depth", script=text, width=size[0], height=size[1], frames=2,
-                    threads=PASS_THREADS,
-                    include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), bit_depth=16,
-                    read_files=files_within(scene.files, scene.include_dirs), timeout=timeout)
-    found: list[tuple[str, list[np.ndarray]]] = []
+    # The two fog frames (frame_number 1 and 2 of the template) as two runs side by side, one thread
+    # each: the pass then waits for one POV-Ray start-up and no frame change (about 0.25 s, POV-Ray idling).
+    jobs = [PovrayJob(name="scene camera and depth", script=text, width=size[0], height=size[1],
+                      clock_run=ClockRun(frame, 2, 0.0, 0.0), threads=PASS_THREADS,
+                      include_dirs=tuple(str(d) for d in scene.include_dirs), options=("-A",), bit_depth=16,
+                      read_files=files_within(scene.files, scene.include_dirs), timeout=timeout)
+            for frame in (1, 2)]
+    found: dict[int, tuple[str, np.ndarray]] = {}
+
+    def take(result: JobResult) -> None:
+        assert result.job.clock_run is not None
+        found[result.job.clock_run.first] = (result.log, read_image(result.images[0]))
+        if progress:
+            progress(len(found), 2)
+
     if progress:
         progress(0, 2)
-    _run(job, lambda r: found.append((r.log, [read_image(i) for i in r.images])), script.lines, scene,
-         (lambda job, index, image: progress(index + 1, 2)) if progress else None)
-    if progress:
-        progress(2, 2)
-    log, images = found[0] if found else ("", [])
+    _run(jobs, take, script.lines, scene)
+    log = found[1][0] if 1 in found else ""
+    images = [found[frame][1] for frame in (1, 2) if frame in found]
     camera = camera_from_log(log, script.cameras).as_record()
     printed = next((tuple(v) for k, v in parse_log(log) if k == "depth_frame" and isinstance(v, list)), ())
     if len(printed) != 14 or len(images) != 2:
@@ -257,7 +266,7 @@ def evaluate_and_measure(scene: Scene, script: CameraScript, lens_array: LensArr
         np.save(buffer, seen.distances)
         _keep(path, key, {"camera": camera, "unmeasured": seen.unmeasured, "printed": list(printed)},
               buffer.getvalue())
-    note("scene-camera-depth", time.perf_counter() - start, 2, 1)
+    note("scene-camera-depth", time.perf_counter() - start, 2, 2)
     return camera, seen, time.perf_counter() - start, False
 
 
