@@ -7,9 +7,13 @@ machine's threads and both whole processes (start to exit).  The runs are interl
 (2D, povh3d, 2D, povh3d ...), so a change of load hits both sides; a row gives the medians and
 their ratio, the table the median and p90 of the ratios per preset, and the load before and
 after.  ``--gallery`` instead prints the median and p90 of the "vs 2D" column of the gallery
-table already in docs/benchmarks.md (``make gallery`` writes it).
+table already in docs/benchmarks.md (``make gallery`` writes it).  ``--sample N`` times N scenes of
+the gallery instead of the fixed list (every k-th of ``gallery.gallery_scenes``, whose order runs round
+the example folders, so each folder is in it), each command capped at ``--cap`` seconds: the gallery's
+median and p90 against 2D measured again, by one version of the code, in a fraction of its hours.
 
     .venv/bin/python benchmarks/bench_scenes.py [--repeats 3] [--presets demo ipad-retina] [--no-docs]
+    .venv/bin/python benchmarks/bench_scenes.py --sample 60 --presets demo --repeats 1 [--cap 60]
     .venv/bin/python benchmarks/bench_scenes.py --gallery
 """
 
@@ -21,8 +25,10 @@ import os
 import re
 import shutil
 import statistics
+import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -61,27 +67,47 @@ def _povh3d(scene: Path, preset: str, out: Path) -> list[str]:
             "-o", str(out), "-q"]
 
 
-def measure(scenes: list[str], presets: list[str], repeats: int) -> list[tuple[str, str, float, float]]:
-    """(scene, preset, median 2D seconds, median povh3d seconds) of interleaved runs, cold cache."""
-    rows = []
+def measure(scenes: list[str], presets: list[str], repeats: int,
+            cap: float | None = None) -> tuple[list[tuple[str, str, float, float]], list[tuple[str, str]]]:
+    """(scene, preset, median 2D seconds, median povh3d seconds) of interleaved runs, cold cache; and the
+    (scene, preset) left out because a command ran past ``cap`` seconds.  With a ``cap`` a command that fails
+    (a scene povh3d refuses, as the gallery's table counts it) is timed as it is; without, it is an error."""
+    rows, capped = [], []
     for name in scenes:
         scene = EXAMPLES / name
         if not scene.is_file():
             continue
         for preset in presets:
-            two_d, ours = [], []
+            two_d: list[float | None] = []
+            ours: list[float | None] = []
             with tempfile.TemporaryDirectory() as folder:
                 work = Path(folder)
                 for _ in range(repeats):
                     cache = work / "cache"
                     shutil.rmtree(cache, ignore_errors=True)
                     env = {**os.environ, "POVH3D_CACHE": str(cache)}
-                    two_d.append(whole_process_seconds(_two_d(scene, PANELS[preset], work / "2d.png"),
-                                                       scene.parent, env))
-                    ours.append(whole_process_seconds(_povh3d(scene, preset, work / "h3d.png"), scene.parent, env))
-            rows.append((name, preset, statistics.median(two_d), statistics.median(ours)))
+                    two_d.append(_seconds(_two_d(scene, PANELS[preset], work / "2d.png"), scene.parent, env, cap))
+                    ours.append(_seconds(_povh3d(scene, preset, work / "h3d.png"), scene.parent, env, cap))
+            if None in two_d or None in ours:
+                capped.append((name, preset))
+                print(f"{name} {preset}: past {cap} s", flush=True)
+                continue
+            rows.append((name, preset, statistics.median(two_d), statistics.median(ours)))  # type: ignore[type-var]
             print(f"{name} {preset}: 2D {rows[-1][2]:.2f} s, povh3d {rows[-1][3]:.2f} s", flush=True)
-    return rows
+    return rows, capped
+
+
+def _seconds(command: list[str], cwd: Path, env: dict[str, str], cap: float | None) -> float | None:
+    """Whole-process wall seconds; None past ``cap`` (the command killed; POV-Ray children die with it)."""
+    if cap is None:
+        return whole_process_seconds(command, cwd, env)
+    start = time.perf_counter()
+    try:
+        subprocess.run(command, cwd=cwd, check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                       env=env, timeout=cap)
+    except subprocess.TimeoutExpired:
+        return None
+    return time.perf_counter() - start
 
 
 def main() -> int:
@@ -90,6 +116,8 @@ def main() -> int:
     parser.add_argument("--presets", nargs="+", choices=list(PANELS), default=list(PANELS))
     parser.add_argument("--scenes", nargs="+", default=list(SCENES))
     parser.add_argument("--gallery", action="store_true", help="the gallery table's vs 2D column, summarised")
+    parser.add_argument("--sample", type=int, help="time N scenes of the gallery instead of --scenes")
+    parser.add_argument("--cap", type=float, default=60.0, help="with --sample: seconds allowed to each command")
     parser.add_argument("--no-docs", action="store_true")
     args = parser.parse_args()
     if args.gallery:
@@ -98,7 +126,9 @@ def main() -> int:
                   f"p90 {percentile(ratios, 0.9):.2f}x, over 2.5x: {sum(r > 2.5 for r in ratios)}")
         return 0
     load = os.getloadavg()
-    rows = measure(args.scenes, args.presets, args.repeats)
+    if args.sample:
+        return _sample(args, load)
+    rows, _ = measure(args.scenes, args.presets, args.repeats)
     lines = [(f"`{s}`", p, f"{a:.2f}", f"{b:.2f}", f"{b / a:.2f}x") for s, p, a, b in rows]
     for preset in args.presets:
         ratios = [b / a for _, p, a, b in rows if p == preset]
@@ -109,6 +139,30 @@ def main() -> int:
                  f"median of {args.repeats} interleaved runs, both at the machine's threads",
                  ["scene", "preset", "2D s", "povh3d s", "vs 2D"], lines, load)
     return publish("bench_scenes", text, not args.no_docs)
+
+
+def _sample(args: argparse.Namespace, load: tuple[float, ...]) -> int:
+    """Time ``args.sample`` gallery scenes (``--sample``) and publish their median and p90 against 2D."""
+    from gallery import gallery_scenes
+
+    scenes = gallery_scenes()
+    step = max(1, len(scenes) // args.sample)
+    names = [str(p.relative_to(EXAMPLES)) for p in scenes[::step][:args.sample]]
+    rows, capped = measure(names, args.presets, args.repeats, cap=args.cap)
+    lines = []
+    for preset in args.presets:
+        ratios = sorted(b / a for _, p, a, b in rows if p == preset)
+        if ratios:
+            over = [f"`{s}` {b / a:.1f}x" for s, p, a, b in sorted(rows, key=lambda r: r[2] / r[3]) if p == preset
+                    and b / a > 2.5]
+            lines.append((preset, str(len(ratios)), f"{statistics.median(ratios):.2f}x",
+                          f"{percentile(ratios, 0.75):.2f}x", f"{percentile(ratios, 0.9):.2f}x",
+                          ", ".join(over) or "none", ", ".join(f"`{s}`" for s, p in capped if p == preset) or "none"))
+    text = table(f"{len(names)} scenes of the gallery (every {step}th of its {len(scenes)}), `--quality draft` cold "
+                 f"cache against `povray -A` at the panel size, median of {args.repeats} interleaved runs, both at the "
+                 f"machine's threads, each command capped at {args.cap:g} s (a capped scene is left out)",
+                 ["preset", "scenes", "median vs 2D", "p75", "p90", "over 2.5x", "capped"], lines, load)
+    return publish("bench_scenes_sample", text, not args.no_docs)
 
 
 if __name__ == "__main__":

@@ -111,6 +111,8 @@ class PassCost(Record):
     shots : int         images POV-Ray traced for it (0: all from the cache)
     runs : int          POV-Ray processes it started
     from_cache : bool   its result came from the cache, no POV-Ray run
+    beside : bool       True: it ran beside the render (``renderer.passes.beside``), its seconds
+                        within the render's; omitted for a pass before or after it
     """
 
     name: str
@@ -118,10 +120,11 @@ class PassCost(Record):
     shots: int
     runs: int
     from_cache: bool = False
+    beside: bool | None = None
 
     def to_json(self) -> dict[str, JSONValue]:
         return {"name": self.name, "seconds": round(self.seconds, 4), "shots": self.shots, "runs": self.runs,
-                "from_cache": self.from_cache}
+                "from_cache": self.from_cache, **({"beside": self.beside} if self.beside is not None else {})}
 
 
 class _ReadsAsJSON:

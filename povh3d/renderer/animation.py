@@ -55,6 +55,7 @@ from ..jsontext import JSONValue
 from ..image.video import write_video
 from ..system import owned_prefix, sweep_orphans
 from .records import write_image
+from .passes.beside import BesidePass
 
 _RANGE = re.compile(r"^\s*(\d+)\s*:\s*(\d+)\s*$")
 
@@ -150,6 +151,7 @@ class RenderedImage:
     record: Sidecar
     views: np.ndarray | None = None     # (Ny, Nx, Ly, Lx, C) when asked for
     from_cache: bool = False            # every shot came from the cache
+    depth: BesidePass[np.ndarray] | None = None   # the depth pass run beside the render (``outputs.steps``)
 
 
 ImageRenderer = Callable[..., RenderedImage]  # (clock, progress, sequence=ClockSequence or None)

@@ -31,7 +31,8 @@ from .content.model import prepare_stage
 from .placement.place import place_display
 from .placement.ray_state import settle_method
 from .outputs.device_quilt import write_device_outputs
-from .outputs.steps import Still, check_outputs, write_outputs
+from .outputs.steps import Still, check_outputs, depth_beside, request_depth, write_outputs
+from .passes.beside import BesidePass
 from .outputs.steps import check_outputs_against as outputs_against
 from .passes.record import PassCost, recording
 from ..povray.sandbox import describe as describe_sandbox
@@ -78,7 +79,11 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
         _warn_unlit(scene, still.image)
         done = Still(request, scene, settings, still, output,
                      placement_record.units_per_mm if placement_record.units_per_mm is not None else 1.0, progress)
-        write_outputs(done)   # each adds its entry to the record
+        try:
+            write_outputs(done)   # each adds its entry to the record
+        finally:
+            if still.depth is not None:   # read by a step, or an error before: no POV-Ray left running
+                still.depth.cancel()
         still = done.image
         timings = (still.record.timings or Timings()).updated(total_seconds=round(time.perf_counter() - started, 4))
         still = replace(still, record=still.record.with_(timings=timings, passes=tuple(passes)))
@@ -223,6 +228,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     the animation frames from this one to the last, which the engine may render alongside it."""
     array = request.render_array
     start = time.perf_counter()
+    depth: BesidePass[np.ndarray] | None = None
     if auto is not None and auto.image is not None and request.frames is None:
         result = auto.image   # --quality auto rendered the full image while choosing it
     elif vendor_cameras(request):   # a Looking Glass preset's views through the vendor's cameras
@@ -232,8 +238,21 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
                                   dict(request.display.quilt or {}), placement.to_json() if placement else None,
                                   progress)  # a quilt preset
     else:
-        result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
-                            progress, crop=request.crop, method_options=request.method_options)
+        depth_kind = depth_beside(request, settings, clock)
+        units = placement.units_per_mm if placement is not None and placement.units_per_mm is not None else 1.0
+
+        def start_depth(front_clearance: float) -> None:   # the depth pass, beside the render
+            nonlocal depth
+            if depth_kind is not None:
+                depth = BesidePass(partial(request_depth, depth_kind, request, scene, settings, front_clearance, units))
+        try:
+            result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
+                                progress, crop=request.crop, method_options=request.method_options,
+                                on_clearance=start_depth)
+        except BaseException:
+            if depth is not None:
+                depth.cancel()
+            raise
     seconds = auto.seconds if auto is not None and result is auto.image else time.perf_counter() - start
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)
@@ -288,7 +307,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     if mapping is not None:
         h3d = mapping.apply(h3d, request.image_size)
         record = record.with_(kind="panel", mapping=mapping.name, size_px=list(request.image_size))
-    return RenderedImage(h3d, record, views, from_cache=timings.shots_from_cache == timings.shots)
+    return RenderedImage(h3d, record, views, from_cache=timings.shots_from_cache == timings.shots, depth=depth)
 
 
 def foreground_cut(placement: PlacementRecord, front_clearance: float, method: str) -> list[str]:

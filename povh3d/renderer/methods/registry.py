@@ -324,7 +324,8 @@ class MethodResult:
 def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderSettings,
                progress: Progress | None = None, crop: CropSettings | None = None,
                declared: LensArray | None = None, footprint_groups: list[np.ndarray] | None = None,
-               method_options: Mapping[str, JSONValue] | None = None, **options: Any) -> MethodResult:
+               method_options: Mapping[str, JSONValue] | None = None,
+               on_clearance: Callable[[float], None] | None = None, **options: Any) -> MethodResult:
     """Render ``scene`` with method ``name`` and return the H3D image.
 
     ``options`` (and ``method_options``, a request's) are the method's own (``single-stage``:
@@ -335,6 +336,8 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
     ``footprint_groups``: footprint sample sets ``(K_i, 4)`` traced in the one run instead of the
     quality's own (a method whose plan splits them; no crop), each group's image in ``groups`` and
     their mean over every sample in ``h3d``: --quality auto's seeds and its draft, priced as one render.
+    ``on_clearance(mm)``: called once where the rays will start is known, before POV-Ray runs (the
+    depth maps' pass starts beside the render there, ``passes.beside``).
     """
     method = get_method(name)
     options = method.resolve_options(name, {**(method_options or {}), **options})
@@ -377,6 +380,9 @@ def run_method(name: str, scene: Scene, lens_array: LensArray, settings: RenderS
         header["global_settings"] = settings_needed
     def trace(batch: ShotBatch, label: str, progress: Progress | None) -> tuple[list[np.ndarray], RenderStats]:
         return render_shots(scene, batch, settings, method=label, header=header, progress=progress)
+
+    if on_clearance is not None:
+        on_clearance(front_clearance)
 
     h3d, crop_info, record, groups = None, None, None, None
     if method.crops and crop is not None and footprint_groups is None and options.get("viewing_distance") is None:

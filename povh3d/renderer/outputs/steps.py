@@ -61,11 +61,48 @@ class Still:
     def depth_maps(self) -> np.ndarray:
         """Every view's depth along its rays (``passes.depth.view_depth_maps``), made on first use."""
         if self._depth is None:
-            from ..passes.depth import view_depth_maps
-
-            self._depth = view_depth_maps(self.scene, self.request.render_array, self.settings,
-                                          self.front_clearance, self.units_per_mm, progress=self.progress)
+            self._depth = self._depth_of("maps")
         return self._depth
+
+    def dataset_depth(self) -> np.ndarray:
+        """The depth along the rays of a dataset's exported pixels (``outputs.dataset.dataset_depth``)."""
+        return self._depth_of("dataset")
+
+    def _depth_of(self, kind: str) -> np.ndarray:
+        # The pass run beside the render where it was started for this kind (``depth_beside``), else now.
+        if self.image.depth is not None and depth_beside(self.request, self.settings, None) == kind:
+            return self.image.depth.result(self.progress)
+        return request_depth(kind, self.request, self.scene, self.settings, self.front_clearance,
+                             self.units_per_mm, progress=self.progress)
+
+
+def depth_beside(request: RenderRequest, settings: RenderSettings, clock: float | None) -> str | None:
+    """Which depth pass a still's outputs read, to be run beside its render (``passes.beside``): ``"maps"``
+    (``--depth-maps``, and a camera bank's dataset with them), ``"dataset"`` (a dataset alone), or None: no
+    depth pass read, an animation's frame, or a Dask cluster (whose jobs the render's own run submits)."""
+    if request.frames is not None or clock is not None or settings.scheduler:
+        return None
+    if request.depth_maps is not None:
+        return "maps"
+    return "dataset" if request.dataset is not None else None
+
+
+def request_depth(kind: str, request: RenderRequest, scene: Scene, settings: RenderSettings, front_clearance: float,
+                  units_per_mm: float, should_stop: Callable[[], bool] | None = None,
+                  progress: Progress | None = None) -> np.ndarray:
+    """The depth pass of ``kind`` (``depth_beside``) along the rays of ``request``'s render, which started
+    ``front_clearance`` mm out.  ``should_stop``: polled while its POV-Ray runs (a pass run beside the render)."""
+    from ..passes.depth import view_depth_maps
+
+    if should_stop is not None:
+        settings = replace(settings, should_stop=_either(should_stop, settings.should_stop))
+    if kind == "maps":
+        return view_depth_maps(scene, request.render_array, settings, front_clearance, units_per_mm, progress=progress)
+    return dataset_depth(scene, request.render_array, settings, front_clearance, units_per_mm, progress=progress)
+
+
+def _either(first: Callable[[], bool], second: Callable[[], bool] | None) -> Callable[[], bool]:
+    return first if second is None else (lambda: first() or second())
 
 
 @dataclass(frozen=True)
@@ -101,9 +138,7 @@ def _write_dataset(still: Still) -> None:
     # A camera bank exports its own lens centres: the depth maps' pass, when one is made, is the same
     # (a hex array's dataset is the grid of lens columns: its own pass).
     same = request.depth_maps is not None and request.render_array.views is not None
-    depth = still.depth_maps() if same else dataset_depth(still.scene, request.render_array, still.settings,
-                                                         still.front_clearance, still.units_per_mm,
-                                                         progress=still.progress)
+    depth = still.depth_maps() if same else still.dataset_depth()
     write_dataset(_wanted(request.dataset), still.image.image, request.render_array, depth,
                   all_views=request.dataset_all_views, scene=still.scene.path.stem)
     still.add(dataset={"folder": str(request.dataset), "layout": "HCI 4D light field"})

@@ -15,6 +15,13 @@ from ...image.sidecar import PassCost   # the sidecar's record of a pass
 
 
 _NOTES: ContextVar[list[PassCost] | None] = ContextVar("povh3d_pass_notes", default=None)
+#: Set in the context of a pass run beside the render (``passes.beside``), whose notes say so.
+_BESIDE: ContextVar[bool] = ContextVar("povh3d_pass_beside", default=False)
+
+
+def mark_beside() -> None:
+    """Mark the notes of the current context (a pass's own thread) as made beside the render."""
+    _BESIDE.set(True)
 
 
 @contextmanager
@@ -32,4 +39,4 @@ def note(name: str, seconds: float, shots: int, runs: int, from_cache: bool = Fa
     """Record a pass in the request being rendered, if any."""
     notes = _NOTES.get()
     if notes is not None:
-        notes.append(PassCost(name, seconds, shots, runs, from_cache))
+        notes.append(PassCost(name, seconds, shots, runs, from_cache, True if _BESIDE.get() else None))
