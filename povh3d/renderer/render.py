@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .methods.registry import run_method
+from .methods.registry import MethodResult, run_method
 from .shots.clock_runs import ClockSequence
 from .methods.quality import Progress, Quality, RenderSettings
 from ..errors import param, warn
@@ -221,6 +221,30 @@ def _resolve_quality(request: RenderRequest, scene: Scene,
     return replace(chosen, clock=None), auto
 
 
+def _run_with_depth(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
+                    sequence: ClockSequence | None, placement: PlacementRecord | None,
+                    progress: Progress | None) -> tuple[MethodResult, BesidePass[np.ndarray] | None]:
+    """The request's method run at ``clock``, and the depth pass its outputs read (``depth_beside``) started
+    beside it as soon as the method knows where its rays start; the pass is stopped if the render fails."""
+    kind = depth_beside(request, settings, clock)
+    units = placement.units_per_mm if placement is not None and placement.units_per_mm is not None else 1.0
+    depth: BesidePass[np.ndarray] | None = None
+
+    def start_depth(front_clearance: float) -> None:
+        nonlocal depth
+        if kind is not None:
+            depth = BesidePass(partial(request_depth, kind, request, scene, settings, front_clearance, units))
+    try:
+        result = run_method(request.method, scene, request.render_array,
+                            replace(settings, clock=clock, sequence=sequence), progress, crop=request.crop,
+                            method_options=request.method_options, on_clearance=start_depth)
+    except BaseException:
+        if depth is not None:
+            depth.cancel()
+        raise
+    return result, depth
+
+
 def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                  progress: Progress | None = None, *, sequence: ClockSequence | None = None, auto: AutoChoice | None = None,
                  model: JSONObject | None = None, placement: PlacementRecord | None = None) -> RenderedImage:
@@ -228,7 +252,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     the animation frames from this one to the last, which the engine may render alongside it."""
     array = request.render_array
     start = time.perf_counter()
-    depth: BesidePass[np.ndarray] | None = None
+    depth = None
     if auto is not None and auto.image is not None and request.frames is None:
         result = auto.image   # --quality auto rendered the full image while choosing it
     elif vendor_cameras(request):   # a Looking Glass preset's views through the vendor's cameras
@@ -238,21 +262,7 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
                                   dict(request.display.quilt or {}), placement.to_json() if placement else None,
                                   progress)  # a quilt preset
     else:
-        depth_kind = depth_beside(request, settings, clock)
-        units = placement.units_per_mm if placement is not None and placement.units_per_mm is not None else 1.0
-
-        def start_depth(front_clearance: float) -> None:   # the depth pass, beside the render
-            nonlocal depth
-            if depth_kind is not None:
-                depth = BesidePass(partial(request_depth, depth_kind, request, scene, settings, front_clearance, units))
-        try:
-            result = run_method(request.method, scene, array, replace(settings, clock=clock, sequence=sequence),
-                                progress, crop=request.crop, method_options=request.method_options,
-                                on_clearance=start_depth)
-        except BaseException:
-            if depth is not None:
-                depth.cancel()
-            raise
+        result, depth = _run_with_depth(request, scene, settings, clock, sequence, placement, progress)
     seconds = auto.seconds if auto is not None and result is auto.image else time.perf_counter() - start
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)
