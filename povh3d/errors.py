@@ -114,6 +114,11 @@ class RenderInterrupted(Povh3dError):
     exit_code = 130
 
 
+class RenderCancelled(RenderInterrupted):
+    """A caller's ``should_stop`` stopped the render (a cancelled cluster task, a render the inside-solid
+    pass beside it made needless); every child was stopped."""
+
+
 class Povh3dWarning(UserWarning):
     """Something the user should know that does not stop the work (an empty render, a
     cache that cannot be used).  Library code issues it with ``warnings.warn``; the

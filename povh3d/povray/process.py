@@ -37,7 +37,8 @@ from pathlib import Path
 from typing import BinaryIO
 
 from . import limits, sandbox
-from ..errors import ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderInterrupted, warn
+from ..errors import (ConfigError, OutputError, PovrayError, PovrayNotFound, PovrayTimeout, RenderCancelled,
+                      RenderInterrupted, warn)
 from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build_command, collect_images,
                   expected_images, frame_image, original_names, povray_conf)
 from ..system import INSTALL_HINT, deferred_signals, find_povray, owned_prefix, sweep_orphans
@@ -291,7 +292,7 @@ def _wait_for_exits(running: list[_Child], should_stop: Callable[[], bool] | Non
     while True:
         if should_stop is not None and should_stop():  # cancelled: nothing of theirs is kept, so no grace
             _signal_groups(running, signal.SIGKILL)  # (POV-Ray takes ~0.6 s to act on SIGTERM)
-            raise RenderInterrupted("Rendering cancelled; every POV-Ray process was stopped.")
+            raise RenderCancelled("Rendering cancelled; every POV-Ray process was stopped.")
         for child in running:
             frame_image = child.watch.frame_image  # None: a single image, no frames reported
             if on_frame is not None and frame_image is not None:

@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import glob
 import re
+import threading
 import time
 from dataclasses import replace
 from functools import partial
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,16 +24,16 @@ import numpy as np
 from .methods.registry import MethodResult, run_method
 from .shots.clock_runs import ClockSequence
 from .methods.quality import Progress, Quality, RenderSettings
-from ..errors import param, warn
+from ..errors import RenderCancelled, param, warn
 from pathlib import Path
 from .budget import check_disk, check_memory as check_memory_budget
 from ..image.interleave import extract
 from .content.model import prepare_stage
 from .placement.place import place_display
-from .placement.ray_state import settle_method
+from .placement.ray_state import FALLBACK, fallback_beside_pass, settle_method
 from .outputs.device_quilt import write_device_outputs
 from .outputs.steps import Still, check_outputs, depth_beside, request_depth, write_outputs
-from .passes.beside import BesidePass
+from .passes.beside import BesidePass, stop_either
 from .outputs.steps import check_outputs_against as outputs_against
 from .passes.record import PassCost, recording
 from ..povray.sandbox import describe as describe_sandbox
@@ -68,14 +69,18 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
     check_outputs_against(request, output, (request.source, *scene.files))
     request, placed = place_display(request, scene, progress)
     ray_state = None
-    if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
+    beside = not vendor_cameras(request) and fallback_beside_pass(request, scene)
+    if not vendor_cameras(request) and not beside:   # the vendor's perspective cameras trace no mesh camera
         request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
     placement_record = placed if ray_state is None else placed.updated(ray_state=ray_state)
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
                     placement=placement_record)
     if request.frames is None:
-        still = frame(None, progress)
+        if beside:   # the inside-solid pass beside the fallback's views
+            request, settings, still, placement_record = _settled_beside(request, scene, placed, model_record, progress)
+        else:
+            still = frame(None, progress)
         _warn_unlit(scene, still.image)
         done = Still(request, scene, settings, still, output,
                      placement_record.units_per_mm if placement_record.units_per_mm is not None else 1.0, progress)
@@ -221,6 +226,53 @@ def _resolve_quality(request: RenderRequest, scene: Scene,
     return replace(chosen, clock=None), auto
 
 
+class _MeshAfterAll(Exception):
+    """The inside-solid pass run beside the fallback's views found the request's own method right."""
+
+
+def _settled_beside(request: RenderRequest, scene: Scene, placed: PlacementRecord, model: JSONObject | None,
+                    progress: Progress | None) -> tuple[RenderRequest, RenderSettings, RenderedImage, PlacementRecord]:
+    """A still whose default mesh-camera method the inside-solid pass may trade for ``FALLBACK``
+    (``fallback_beside_pass``): the pass runs beside the fallback's views, which are exact either way; where it
+    finds the request's own method right, the views stop (or are set aside) and that method renders.  The
+    request, settings, image and placement as rendered, the same as when the pass runs first."""
+    mesh_right = threading.Event()
+
+    def settle(should_stop: Callable[[], bool], _progress: Progress) -> tuple[RenderRequest, JSONObject | None]:
+        stoppable = replace(request, settings=replace(request.settings, should_stop=stop_either(
+            should_stop, request.settings.should_stop)))
+        chosen, record = settle_method(stoppable, scene)
+        if chosen.method == request.method:
+            mesh_right.set()
+        return replace(chosen, settings=request.settings), record
+
+    decision = BesidePass(settle)
+    views = replace(request, method=FALLBACK, method_options={})
+    settings, _ = _resolve_quality(views, scene, progress)
+
+    def settled() -> JSONObject:
+        chosen, record = decision.result()
+        if chosen.method != FALLBACK or record is None:
+            raise _MeshAfterAll
+        return record
+    try:
+        still = render_image(views, scene, replace(settings, should_stop=stop_either(mesh_right.is_set, settings.should_stop)),
+                             None, progress, model=model, placement=placed, settled=settled)
+        return views, settings, still, placed.updated(ray_state=settled())
+    except (_MeshAfterAll, RenderCancelled):
+        if not mesh_right.is_set():   # a caller's own cancel, not the pass's finding
+            decision.cancel()
+            raise
+    except BaseException:
+        decision.cancel()
+        raise
+    chosen, record = decision.result()
+    settings, auto = _resolve_quality(chosen, scene, progress)
+    placement = placed if record is None else placed.updated(ray_state=record)
+    return chosen, settings, render_image(chosen, scene, settings, None, progress, auto=auto, model=model,
+                                          placement=placement), placement
+
+
 def _run_with_depth(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                     sequence: ClockSequence | None, placement: PlacementRecord | None,
                     progress: Progress | None) -> tuple[MethodResult, BesidePass[np.ndarray] | None]:
@@ -247,9 +299,12 @@ def _run_with_depth(request: RenderRequest, scene: Scene, settings: RenderSettin
 
 def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings, clock: float | None,
                  progress: Progress | None = None, *, sequence: ClockSequence | None = None, auto: AutoChoice | None = None,
-                 model: JSONObject | None = None, placement: PlacementRecord | None = None) -> RenderedImage:
+                 model: JSONObject | None = None, placement: PlacementRecord | None = None,
+                 settled: Callable[[], JSONObject] | None = None) -> RenderedImage:
     """Render one image of ``request`` at POV-Ray clock ``clock`` (None: POV-Ray's default); ``sequence``:
-    the animation frames from this one to the last, which the engine may render alongside it."""
+    the animation frames from this one to the last, which the engine may render alongside it.  ``settled()``:
+    the inside-solid check's record (``placement.ray_state``) where it ran beside the render, asked for once
+    the method has run (it raises where the check found another method)."""
     array = request.render_array
     start = time.perf_counter()
     depth = None
@@ -264,6 +319,13 @@ def render_image(request: RenderRequest, scene: Scene, settings: RenderSettings,
     else:
         result, depth = _run_with_depth(request, scene, settings, clock, sequence, placement, progress)
     seconds = auto.seconds if auto is not None and result is auto.image else time.perf_counter() - start
+    if settled is not None and placement is not None:
+        try:
+            placement = placement.updated(ray_state=settled())
+        except BaseException:
+            if depth is not None:   # the depth pass beside a render set aside: stopped with it
+                depth.cancel()
+            raise
     h3d = result.h3d
     expected = (array.panel.height, array.panel.width)
     if h3d.shape[:2] != expected:  # a bug, never the user's doing

@@ -263,25 +263,30 @@ def test_a_camera_in_an_include_is_left_to_povray(tmp_path):
 
 @pytest.mark.povray
 def test_the_inside_solid_check_says_its_progress_and_its_cost(tmp_path):
-    """A fogged scene: the inside-solid pass (two frames) shows on the render's progress before the render,
-    and in the sidecar; the same scene without fog runs no such pass (the negative control)."""
+    """A fogged scene: the inside-solid pass (two frames) shows in the sidecar, run beside the fallback's views
+    (``render._settled_beside``), or, where the fallback may not be taken (the method chosen), on the render's
+    progress before the render; the same scene without fog runs no such pass (the negative control)."""
     from povh3d.display.display import Display
     from povh3d.renderer.render import render
     from povh3d.renderer.request import RenderRequest
 
     fogged = CAMERA + "fog { rgb 0.8 distance 40 }\n"
     names = {}
-    for name, text in (("fog", fogged), ("clear", CAMERA)):
+    for name, text, chosen in (("fog", fogged, False), ("chosen", fogged, True), ("clear", CAMERA, False)):
         scene = tmp_path / f"{name}.pov"
         scene.write_text(text)
         calls: list[tuple[float, float]] = []
         request = RenderRequest(source=scene, display=Display(_plane_array()), output=tmp_path / f"{name}.png",
-                                settings=RenderSettings(quality="draft", cache_dir=tmp_path / "cache"))
+                                settings=RenderSettings(quality="draft", cache_dir=tmp_path / "cache"),
+                                method_chosen=chosen)
         record = render(request, lambda d, t: calls.append((d, t)))
-        names[name] = [p["name"] for p in record["passes"]]
-        if name == "fog":
+        names[name] = [(p["name"], p.get("beside")) for p in record["passes"]]
+        if name == "chosen":
             assert (2, 2) in calls and calls.index((2, 2)) < len(calls) - 1, calls
-    assert names == {"fog": ["scene-camera-text", "origins-inside"], "clear": ["scene-camera-text"]}
+        assert record["method"] == "multi-ortho"   # the plane is hollow: the mesh camera is right
+    assert names == {"fog": [("scene-camera-text", None), ("origins-inside", True)],
+                     "chosen": [("scene-camera-text", None), ("origins-inside", None)],
+                     "clear": [("scene-camera-text", None)]}
 
 
 @pytest.mark.povray

@@ -23,6 +23,7 @@ from .dataset import check_dataset_dir, dataset_depth, write_dataset
 from .depth_maps import check_depth_dir, write_depth_maps
 from .device_quilt import check_device_render, quilt_outputs, write_device_outputs
 from .views import check_views_dir, write_views
+from ..passes.beside import stop_either
 
 if TYPE_CHECKING:  # for annotations only: keeps the render's import chain short
 
@@ -95,14 +96,10 @@ def request_depth(kind: str, request: RenderRequest, scene: Scene, settings: Ren
     from ..passes.depth import view_depth_maps
 
     if should_stop is not None:
-        settings = replace(settings, should_stop=_either(should_stop, settings.should_stop))
+        settings = replace(settings, should_stop=stop_either(should_stop, settings.should_stop))
     if kind == "maps":
         return view_depth_maps(scene, request.render_array, settings, front_clearance, units_per_mm, progress=progress)
     return dataset_depth(scene, request.render_array, settings, front_clearance, units_per_mm, progress=progress)
-
-
-def _either(first: Callable[[], bool], second: Callable[[], bool] | None) -> Callable[[], bool]:
-    return first if second is None else (lambda: first() or second())
 
 
 @dataclass(frozen=True)

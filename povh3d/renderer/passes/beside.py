@@ -29,6 +29,11 @@ _T = TypeVar("_T")
 Work = Callable[[Callable[[], bool], Callable[[float, int], None]], _T]
 
 
+def stop_either(first: Callable[[], bool], second: Callable[[], bool] | None) -> Callable[[], bool]:
+    """A ``should_stop`` that is True when either is (``second`` None: ``first``)."""
+    return first if second is None else (lambda: first() or second())
+
+
 class BesidePass(Generic[_T]):
     """``work`` started in a thread now; ``result()`` waits for it, ``cancel()`` stops it."""
 

@@ -179,6 +179,26 @@ def image_size_problem(scene: Scene, method: str, views: tuple[int, int] | None)
         f"{fix}, or #declare the sizes the scene needs", "the scene reads image_width/image_height")
 
 
+def fallback_beside_pass(request: RenderRequest, scene: Scene) -> bool:
+    """Whether ``settle_method`` would run the inside-solid pass for ``request`` and may then trade its method for
+    ``FALLBACK``: a still of the default mesh-camera method on a scene with fog, media or an ior, the method not
+    chosen, whole views, no viewing distance, no ``--quality auto`` (which probes with the method) and no cluster.
+    Such a render traces ``FALLBACK``'s views beside the pass (``renderer.render``): exact whatever the pass finds,
+    and where the pass finds the mesh camera right after all, stopped for it.  On POV-Ray's example scenes with
+    fog the pass mostly finds the fallback (a ground plane the rays start below), whose views then wait for no pass."""
+    from ..methods.quality import AUTO
+
+    s, views = request.settings, request.render_array.views
+    if request.is_model or request.frames is not None or request.method_chosen or views is None:
+        return False
+    if s.quality == AUTO or s.scheduler or (request.viewing_distance is not None
+                                           and request.viewing_distance < float("inf")):
+        return False
+    if not get_method(request.method).shares_ray_state or image_size_problem(scene, request.method, views) is not None:
+        return False
+    return bool(state_features(scene).used)
+
+
 def settle_method(request: RenderRequest, scene: Scene,
                   progress: Progress | None = None) -> tuple[RenderRequest, dict[str, Any] | None]:
     """``request`` as it may render (its display placed): unchanged, or with the default method replaced by
