@@ -43,6 +43,7 @@ from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build
                   expected_images, frame_image, original_names, povray_conf)
 from ..system import INSTALL_HINT, deferred_signals, find_povray, owned_prefix, sweep_orphans
 from .log import denied_note, describe_exit, parse_error, tail
+from .version_memo import taken_probe
 from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
 
 _DENIED = re.compile(r"Cannot (open|find)")
@@ -62,20 +63,28 @@ def povray_version(binary: str | None = None) -> str:
 @functools.cache
 def _version(binary: str) -> str:
     command = [binary, "--version"]
+    probe = taken_probe(binary)   # started as the command started (``version_memo.probe_early``)
     try:
-        done = subprocess.run(command, capture_output=True, text=True,
-                              errors="replace", timeout=30, check=False)
+        if probe is not None:
+            output, _ = probe.communicate(timeout=30)
+            returncode = probe.returncode
+        else:
+            done = subprocess.run(command, capture_output=True, text=True,
+                                  errors="replace", timeout=30, check=False)
+            output, returncode = done.stdout + done.stderr, done.returncode  # POV-Ray 3.7 prints it on stderr
     except OSError as error:
         raise PovrayNotFound(f"Cannot run {binary}: {error.strerror}; "
                              f"{INSTALL_HINT}.") from None
     except subprocess.TimeoutExpired:
+        if probe is not None:
+            probe.kill()
+            probe.communicate()
         raise PovrayError(f"{' '.join(command)} did not answer within 30 s.",
                           command=command) from None
-    output = done.stdout + done.stderr  # POV-Ray 3.7 prints it on stderr
     match = re.search(r"^POV-Ray (\d+\.\d+\S*)", output, re.MULTILINE)
     if match is None:
         raise PovrayError(f"{' '.join(command)} did not report a POV-Ray version.",
-                          command=command, returncode=done.returncode,
+                          command=command, returncode=returncode,
                           log_tail=tail(output))
     return match[1]
 

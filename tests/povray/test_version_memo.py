@@ -62,3 +62,56 @@ def test_an_unwritable_or_corrupt_memory_is_ignored(tmp_path):
     # a binary that cannot be found is not remembered, only asked
     assert remembered_version(str(tmp_path / "nowhere"), tmp_path, ask) == "3.7.0.10"
     assert len(asked) == 4
+
+
+def _slow_povray(tmp_path, seconds: float):
+    """A stand-in ``povray`` that writes its pid, waits ``seconds``, prints a version and counts its runs."""
+    binary = tmp_path / "povray"
+    binary.write_text(f"#!/bin/sh\necho $$ > {tmp_path / 'pid'}\necho x >> {tmp_path / 'runs'}\nsleep {seconds}\n"
+                      "echo 'POV-Ray 3.7.0.10.unofficial' >&2\n")
+    binary.chmod(0o755)
+    return binary
+
+
+def test_an_early_probe_runs_beside_the_start_and_is_taken_once(tmp_path):
+    """``probe_early`` returns at once; ``povray_version`` then takes the probe's answer, not a second run; a
+    known binary starts no probe (the control)."""
+    import time
+
+    from povh3d.povray.version_memo import probe_early
+
+    binary = _slow_povray(tmp_path, 0.4)
+    process._version.cache_clear()
+    start = time.perf_counter()
+    probe_early(str(binary), tmp_path / "cache")
+    assert time.perf_counter() - start < 0.2
+    time.sleep(0.4)   # the command's own start-up, meanwhile
+    start = time.perf_counter()
+    assert remembered_version(str(binary), tmp_path / "cache", process.povray_version) \
+        == "3.7.0.10.unofficial"
+    assert time.perf_counter() - start < 0.3 and _runs(tmp_path) == 1
+    probe_early(str(binary), tmp_path / "cache")   # remembered now: no probe
+    process._version.cache_clear()
+    assert remembered_version(str(binary), tmp_path / "cache", process.povray_version) == "3.7.0.10.unofficial"
+    assert _runs(tmp_path) == 1
+
+
+def test_a_probe_nobody_took_is_stopped_at_exit(tmp_path):
+    """A command that fails before it renders leaves no ``povray --version`` running."""
+    import subprocess
+    import sys
+    import time
+
+    binary = tmp_path / "povray"   # the probe itself waits (exec): its pid is the process to be stopped
+    binary.write_text(f"#!/bin/sh\necho $$ > {tmp_path / 'pid'}\nexec sleep 30\n")
+    binary.chmod(0o755)
+    code = ("from povh3d.povray.version_memo import probe_early; import time\n"
+            f"probe_early({str(binary)!r}, {str(tmp_path / 'cache')!r}); time.sleep(0.3)\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=20)
+    pid = int((tmp_path / "pid").read_text())
+    time.sleep(0.1)
+    try:
+        state = open(f"/proc/{pid}/stat").read().split()[2]
+    except FileNotFoundError:
+        state = "gone"
+    assert state in ("gone", "Z"), state   # killed (a zombie of init's until reaped), never running

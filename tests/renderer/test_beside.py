@@ -13,6 +13,8 @@ import pytest
 from povh3d.errors import PovrayError
 from povh3d.geometry.lens_array import LensArray, Panel
 
+from ..povray.test_process import povray_children
+
 SCENE = """#version 3.7;
 global_settings { assumed_gamma 1 }
 light_source { <5, 10, -20> rgb 1 }
@@ -28,23 +30,6 @@ def _array() -> LensArray:
 
 def _maps(folder: Path) -> np.ndarray:
     return np.stack([np.load(p) for p in sorted(folder.glob("d_*.npy"))])
-
-
-def _povray_children() -> list[int]:
-    """This process's POV-Ray children, zombies included."""
-    import os
-
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                stat = (entry / "stat").read_text()
-            except OSError:
-                continue
-            name, rest = stat[stat.index("(") + 1:stat.rindex(")")], stat[stat.rindex(")") + 2:].split()
-            if name == "povray" and int(rest[1]) == os.getpid():
-                found.append(int(entry.name))
-    return found
 
 
 @pytest.mark.povray
@@ -91,7 +76,7 @@ def test_a_failed_render_stops_the_pass_beside_it(tmp_path, monkeypatch):
         povh3d.render(scene, tmp_path / "o.png", lens_array=_array(), quality="draft", use_cache=False,
                       depth_maps=tmp_path / "maps")
     failed = time.perf_counter() - start
-    assert _povray_children() == []
+    assert povray_children() == []
     assert not [t for t in threading.enumerate() if t.name == "povh3d-beside"]
     assert not (tmp_path / "maps").exists() and not (tmp_path / "o.png").exists()
     # the control: the pass alone, run to its end, takes far longer than the failed render took

@@ -113,7 +113,7 @@ def test_a_cancel_stops_the_views_and_the_pass(tmp_path):
     """A caller's ``should_stop`` while the views and the pass run: the cancel, and no POV-Ray or thread left."""
     from povh3d.renderer.render import render
 
-    from .test_beside import _povray_children
+    from ..povray.test_process import povray_children
 
     scene = tmp_path / "s.pov"
     scene.write_text("#declare T = 0; #while (T < 3000000) #declare T = T + 1; #end\n" + SCENE.format(hollow=""))
@@ -122,6 +122,6 @@ def test_a_cancel_stops_the_views_and_the_pass(tmp_path):
     with pytest.raises(RenderCancelled):
         render(RenderRequest(source=scene, display=Display(_array()), output=tmp_path / "s.png", method_chosen=False,
                              settings=RenderSettings(quality="draft", use_cache=False, should_stop=stop.is_set)))
-    assert _povray_children() == []
+    assert povray_children() == []
     assert not [t for t in threading.enumerate() if t.name == "povh3d-beside"]
     assert not (tmp_path / "s.png").exists()
