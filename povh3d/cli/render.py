@@ -126,29 +126,20 @@ def cmd_render(args: argparse.Namespace) -> int:
             warn(list(hit.warnings))
             print(f"{output}  {hit.summary}  {time.perf_counter() - start:.2f} s (output from cache)")
             return 0
+    from ..renderer.probe import probe_povray_early, stop_povray_probe
+
     if not args.scheduler:
-        _probe_povray_early()
-    with output_cache.warnings_kept() as given:
-        summary = _render(args)
+        probe_povray_early()
+    try:
+        with output_cache.warnings_kept() as given:
+            summary = _render(args)
+    finally:
+        stop_povray_probe()
     # A scene edited while it rendered: the image is of neither version's key.
     if key is not None and summary is not None and \
             output_cache.request_key(args.scene, output, options, args.include) == key:
         output_cache.keep(key, output, summary, given)
     return 0
-
-
-def _probe_povray_early() -> None:
-    """Start POV-Ray's version probe (where its answer is not remembered) beside the imports that follow
-    (``povray.version_memo.probe_early``); no POV-Ray here: the render says so."""
-    from ..cache import cache_root
-    from ..errors import Povh3dError
-    from ..povray.version_memo import probe_early
-    from ..system import find_povray
-
-    try:
-        probe_early(find_povray(), cache_root())
-    except Povh3dError:
-        pass
 
 
 def _render(args: argparse.Namespace) -> str | None:

@@ -21,6 +21,7 @@ output goes to a log file, so no pipe can fill up and block them.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import functools
 import os
@@ -43,7 +44,7 @@ from .job import (LOG_FILE, SCENE_FILE, JobResult, PovrayJob, ascii_paths, build
                   expected_images, frame_image, original_names, povray_conf)
 from ..system import INSTALL_HINT, deferred_signals, find_povray, owned_prefix, sweep_orphans
 from .log import denied_note, describe_exit, parse_error, tail
-from .version_memo import taken_probe
+from .version_memo import remembered
 from .watch import PROGRESS_SECONDS, STOP_CHECK_SECONDS, JobWatch, sleep_until_exit
 
 _DENIED = re.compile(r"Cannot (open|find)")
@@ -63,7 +64,7 @@ def povray_version(binary: str | None = None) -> str:
 @functools.cache
 def _version(binary: str) -> str:
     command = [binary, "--version"]
-    probe = taken_probe(binary)   # started as the command started (``version_memo.probe_early``)
+    probe = _PROBES.pop(binary, None)   # started as the command started (``probe_version_early``)
     try:
         if probe is not None:
             output, _ = probe.communicate(timeout=30)
@@ -86,7 +87,41 @@ def _version(binary: str) -> str:
         raise PovrayError(f"{' '.join(command)} did not report a POV-Ray version.",
                           command=command, returncode=returncode,
                           log_tail=tail(output))
+    _ANSWERED.add(binary)
     return match[1]
+
+
+#: ``povray --version`` runs started early (``probe_version_early``), by binary, until ``_version`` takes them.
+_PROBES: dict[str, subprocess.Popen[str]] = {}
+#: Binaries ``_version`` has answered for in this process (its cache): no probe for them.
+_ANSWERED: set[str] = set()
+
+
+def probe_version_early(binary: str, folder: str | Path) -> None:
+    """Start ``binary --version`` now, where neither this process nor the memory in ``folder``
+    (``version_memo``) knows the answer: the probe's 0.2 s (nearly all of it POV-Ray waiting) then pass
+    beside povh3d's own start-up instead of before its first render, and ``povray_version`` takes the
+    answer.  ``stop_probes`` (and the exit) stop a probe nobody took."""
+    if binary in _ANSWERED or binary in _PROBES or remembered(binary, folder) is not None:
+        return
+    try:
+        _PROBES[binary] = subprocess.Popen([binary, "--version"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                           stderr=subprocess.STDOUT, text=True, errors="replace")
+    except OSError:
+        return   # asked again, the usual way, where the error is said
+    if len(_PROBES) == 1:
+        atexit.register(stop_probes)
+
+
+def stop_probes() -> None:
+    """Stop and reap every probe nobody took (a command that failed before it rendered)."""
+    for probe in _PROBES.values():
+        if probe.poll() is None:
+            probe.kill()
+        probe.wait()
+        if probe.stdout is not None:
+            probe.stdout.close()
+    _PROBES.clear()
 
 
 @dataclass(eq=False)

@@ -5,22 +5,15 @@ The version of a binary is stored in a small JSON file of the cache folder,
 keyed on the binary's resolved path, size and modification time: replacing
 or upgrading POV-Ray changes the key, so a stale version is never used.  The
 memory is only an optimisation: an unreadable or unwritable file is ignored
-and the version is asked again.
-
-Where the memory does not know the binary (a first run, a cache folder just
-emptied), ``probe_early`` starts ``povray --version`` as the command starts, so
-the probe's 0.2 s (nearly all of it POV-Ray waiting) passes beside povh3d's own
-start-up instead of before its first render; ``process.povray_version`` takes
-its answer (``taken_probe``), and a probe nobody took is stopped at exit.
+and the version is asked again.  Where it does not know the binary, ``render``
+starts the question early (``process.probe_version_early``).
 """
 
 from __future__ import annotations
 
 from .. import jsontext
-import atexit
 import json
 import os
-import subprocess
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -30,41 +23,13 @@ from ..system import binary_key
 FILE_NAME = "povray-version.json"
 #: Entries kept: one per binary seen, a handful at most on any machine.
 _MAX_ENTRIES = 16
-#: ``povray --version`` runs started early (``probe_early``), by binary, until taken.
-_PROBES: dict[str, subprocess.Popen[str]] = {}
 
 
-def probe_early(binary: str, folder: str | Path) -> None:
-    """Start ``binary --version`` now unless the memory in ``folder`` knows the binary (or a probe runs)."""
+def remembered(binary: str, folder: str | Path) -> str | None:
+    """The version the memory in ``folder`` holds for ``binary``, or None."""
     key = binary_key(binary)
-    if key is None or binary in _PROBES:
-        return
-    known = _read(Path(folder) / FILE_NAME).get(key)
-    if isinstance(known, str) and known:
-        return
-    try:
-        _PROBES[binary] = subprocess.Popen([binary, "--version"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                           stderr=subprocess.STDOUT, text=True, errors="replace")
-    except OSError:
-        return   # asked again, the usual way, where the error is said
-    if len(_PROBES) == 1:
-        atexit.register(_stop_probes)
-
-
-def taken_probe(binary: str) -> subprocess.Popen[str] | None:
-    """The early probe of ``binary``, now the caller's to finish, or None."""
-    return _PROBES.pop(binary, None)
-
-
-def _stop_probes() -> None:
-    """At exit: no probe outlives the command (one nobody took: a command that failed first)."""
-    for probe in _PROBES.values():
-        if probe.poll() is None:
-            probe.kill()
-        probe.wait()
-        if probe.stdout is not None:
-            probe.stdout.close()
-    _PROBES.clear()
+    version = None if key is None else _read(Path(folder) / FILE_NAME).get(key)
+    return version if isinstance(version, str) and version else None
 
 
 def remembered_version(binary: str, folder: str | Path, ask: Callable[[str], str]) -> str:

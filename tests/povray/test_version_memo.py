@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 import json
 import os
+from pathlib import Path
 
 from povh3d.renderer.shots.shots import LocalRunner
 from povh3d.povray import process
@@ -74,11 +75,11 @@ def _slow_povray(tmp_path, seconds: float):
 
 
 def test_an_early_probe_runs_beside_the_start_and_is_taken_once(tmp_path):
-    """``probe_early`` returns at once; ``povray_version`` then takes the probe's answer, not a second run; a
-    known binary starts no probe (the control)."""
+    """``probe_version_early`` returns at once; ``povray_version`` then takes the probe's answer, not a second
+    run; a binary the memory knows starts no probe (the control)."""
     import time
 
-    from povh3d.povray.version_memo import probe_early
+    probe_early = process.probe_version_early
 
     binary = _slow_povray(tmp_path, 0.4)
     process._version.cache_clear()
@@ -105,8 +106,8 @@ def test_a_probe_nobody_took_is_stopped_at_exit(tmp_path):
     binary = tmp_path / "povray"   # the probe itself waits (exec): its pid is the process to be stopped
     binary.write_text(f"#!/bin/sh\necho $$ > {tmp_path / 'pid'}\nexec sleep 30\n")
     binary.chmod(0o755)
-    code = ("from povh3d.povray.version_memo import probe_early; import time\n"
-            f"probe_early({str(binary)!r}, {str(tmp_path / 'cache')!r}); time.sleep(0.3)\n")
+    code = ("from povh3d.povray.process import probe_version_early; import time\n"
+            f"probe_version_early({str(binary)!r}, {str(tmp_path / 'cache')!r}); time.sleep(0.3)\n")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=20)
     pid = int((tmp_path / "pid").read_text())
     time.sleep(0.1)
@@ -115,3 +116,28 @@ def test_a_probe_nobody_took_is_stopped_at_exit(tmp_path):
     except FileNotFoundError:
         state = "gone"
     assert state in ("gone", "Z"), state   # killed (a zombie of init's until reaped), never running
+
+
+def test_a_probe_the_command_did_not_take_is_stopped_when_it_ends(tmp_path, monkeypatch):
+    """In one long-lived process (an API caller's, a test's): ``render`` fails before its first POV-Ray run
+    (its depth maps' folder is a file), and no probe is left behind as a child; the probe had started."""
+    import povh3d.povray.process as process_module
+    from povh3d.cli.main import main
+
+    binary = tmp_path / "povray"
+    binary.write_text(f"#!/bin/sh\necho $$ > {tmp_path / 'pid'}\nexec sleep 30\n")
+    binary.chmod(0o755)
+    monkeypatch.setenv("POVH3D_POVRAY", str(binary))
+    monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
+    started = []
+    real = process_module.probe_version_early
+    monkeypatch.setattr(process_module, "probe_version_early", lambda *a: (started.append(a), real(*a)))
+    scene, blocker = tmp_path / "s.pov", tmp_path / "maps"
+    scene.write_text("sphere { 0, 1 pigment { rgb 1 } }\n")
+    blocker.write_text("")
+    with pytest.raises(SystemExit) as ended:
+        main(["render", str(scene), "-o", str(tmp_path / "o.png"), "--depth-maps", str(blocker)])
+    assert ended.value.code != 0
+    assert started and process_module._PROBES == {}
+    pid = int((tmp_path / "pid").read_text())
+    assert not Path(f"/proc/{pid}").exists() or open(f"/proc/{pid}/stat").read().split()[2] != "S"
