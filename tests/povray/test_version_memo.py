@@ -5,7 +5,6 @@ from __future__ import annotations
 import pytest
 import json
 import os
-from pathlib import Path
 
 from povh3d.renderer.shots.shots import LocalRunner
 from povh3d.povray import process
@@ -106,8 +105,11 @@ def test_a_probe_nobody_took_is_stopped_at_exit(tmp_path):
     binary = tmp_path / "povray"   # the probe itself waits (exec): its pid is the process to be stopped
     binary.write_text(f"#!/bin/sh\necho $$ > {tmp_path / 'pid'}\nexec sleep 30\n")
     binary.chmod(0o755)
-    code = ("from povh3d.povray.process import probe_version_early; import time\n"
-            f"probe_version_early({str(binary)!r}, {str(tmp_path / 'cache')!r}); time.sleep(0.3)\n")
+    pid_file = tmp_path / "pid"   # waited for, so the probe runs when the command ends, however loaded the machine
+    code = ("from povh3d.povray.process import probe_version_early; import os, time\n"
+            f"probe_version_early({str(binary)!r}, {str(tmp_path / 'cache')!r})\n"
+            f"deadline = time.monotonic() + 15\n"
+            f"while not os.path.exists({str(pid_file)!r}) and time.monotonic() < deadline: time.sleep(0.02)\n")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=20)
     pid = int((tmp_path / "pid").read_text())
     time.sleep(0.1)
@@ -120,24 +122,29 @@ def test_a_probe_nobody_took_is_stopped_at_exit(tmp_path):
 
 def test_a_probe_the_command_did_not_take_is_stopped_when_it_ends(tmp_path, monkeypatch):
     """In one long-lived process (an API caller's, a test's): ``render`` fails before its first POV-Ray run
-    (its depth maps' folder is a file), and no probe is left behind as a child; the probe had started."""
+    (its depth maps' folder is a file); the probe it started was stopped and reaped when it ended, so none is
+    left a child; the probe had started (the control)."""
     import povh3d.povray.process as process_module
     from povh3d.cli.main import main
 
     binary = tmp_path / "povray"
-    binary.write_text(f"#!/bin/sh\necho $$ > {tmp_path / 'pid'}\nexec sleep 30\n")
+    binary.write_text("#!/bin/sh\nexec sleep 30\n")
     binary.chmod(0o755)
     monkeypatch.setenv("POVH3D_POVRAY", str(binary))
     monkeypatch.setenv("POVH3D_CACHE", str(tmp_path / "cache"))
-    started = []
+    probes = []
     real = process_module.probe_version_early
-    monkeypatch.setattr(process_module, "probe_version_early", lambda *a: (started.append(a), real(*a)))
+
+    def spy(*args):
+        real(*args)
+        probes.extend(process_module._PROBES.values())
+
+    monkeypatch.setattr(process_module, "probe_version_early", spy)
     scene, blocker = tmp_path / "s.pov", tmp_path / "maps"
     scene.write_text("sphere { 0, 1 pigment { rgb 1 } }\n")
     blocker.write_text("")
     with pytest.raises(SystemExit) as ended:
         main(["render", str(scene), "-o", str(tmp_path / "o.png"), "--depth-maps", str(blocker)])
     assert ended.value.code != 0
-    assert started and process_module._PROBES == {}
-    pid = int((tmp_path / "pid").read_text())
-    assert not Path(f"/proc/{pid}").exists() or open(f"/proc/{pid}/stat").read().split()[2] != "S"
+    assert len(probes) == 1 and process_module._PROBES == {}
+    assert probes[0].returncode is not None   # waited for: neither running nor a zombie
