@@ -74,24 +74,20 @@ def _slow_povray(tmp_path, seconds: float):
 
 
 def test_an_early_probe_runs_beside_the_start_and_is_taken_once(tmp_path):
-    """``probe_version_early`` returns at once; ``povray_version`` then takes the probe's answer, not a second
-    run; a binary the memory knows starts no probe (the control)."""
-    import time
-
-    probe_early = process.probe_version_early
-
+    """``probe_version_early`` starts the probe without waiting for it; ``povray_version`` then takes the
+    probe's answer, not a second run; a binary the memory knows starts no probe (the control)."""
     binary = _slow_povray(tmp_path, 0.4)
     process._version.cache_clear()
-    start = time.perf_counter()
-    probe_early(str(binary), tmp_path / "cache")
-    assert time.perf_counter() - start < 0.2
-    time.sleep(0.4)   # the command's own start-up, meanwhile
-    start = time.perf_counter()
-    assert remembered_version(str(binary), tmp_path / "cache", process.povray_version) \
-        == "3.7.0.10.unofficial"
-    assert time.perf_counter() - start < 0.3 and _runs(tmp_path) == 1
-    probe_early(str(binary), tmp_path / "cache")   # remembered now: no probe
+    process._ANSWERED.discard(str(binary))
+    process.probe_version_early(str(binary), tmp_path / "cache")
+    probe = process._PROBES[str(binary)]
+    assert probe.poll() is None   # still running: the caller did not wait for it
+    assert remembered_version(str(binary), tmp_path / "cache", process.povray_version) == "3.7.0.10.unofficial"
+    assert _runs(tmp_path) == 1 and probe.returncode == 0 and process._PROBES == {}
     process._version.cache_clear()
+    process._ANSWERED.discard(str(binary))
+    process.probe_version_early(str(binary), tmp_path / "cache")   # remembered now: no probe
+    assert process._PROBES == {}
     assert remembered_version(str(binary), tmp_path / "cache", process.povray_version) == "3.7.0.10.unofficial"
     assert _runs(tmp_path) == 1
 
