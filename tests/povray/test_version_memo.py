@@ -105,7 +105,8 @@ def test_a_probe_nobody_took_is_stopped_at_exit(tmp_path):
     code = ("from povh3d.povray.process import probe_version_early; import os, time\n"
             f"probe_version_early({str(binary)!r}, {str(tmp_path / 'cache')!r})\n"
             f"deadline = time.monotonic() + 15\n"
-            f"while not os.path.exists({str(pid_file)!r}) and time.monotonic() < deadline: time.sleep(0.02)\n")
+            f"while not (os.path.exists({str(pid_file)!r}) and os.path.getsize({str(pid_file)!r}))"
+            " and time.monotonic() < deadline: time.sleep(0.02)\n")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=20)
     pid = int((tmp_path / "pid").read_text())
     time.sleep(0.1)
