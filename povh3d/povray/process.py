@@ -61,8 +61,13 @@ def povray_version(binary: str | None = None) -> str:
     return _version(binary or find_povray())
 
 
-@functools.cache
+#: The version of each binary asked in this process (``_version``): asked once, and no probe for it.
+_VERSIONS: dict[str, str] = {}
+
+
 def _version(binary: str) -> str:
+    if binary in _VERSIONS:
+        return _VERSIONS[binary]
     command = [binary, "--version"]
     probe = _PROBES.pop(binary, None)   # started as the command started (``probe_version_early``)
     try:
@@ -87,14 +92,12 @@ def _version(binary: str) -> str:
         raise PovrayError(f"{' '.join(command)} did not report a POV-Ray version.",
                           command=command, returncode=returncode,
                           log_tail=tail(output))
-    _ANSWERED.add(binary)
+    _VERSIONS[binary] = match[1]
     return match[1]
 
 
 #: ``povray --version`` runs started early (``probe_version_early``), by binary, until ``_version`` takes them.
 _PROBES: dict[str, subprocess.Popen[str]] = {}
-#: Binaries ``_version`` has answered for in this process (its cache): no probe for them.
-_ANSWERED: set[str] = set()
 
 
 def probe_version_early(binary: str, folder: str | Path) -> None:
@@ -102,7 +105,7 @@ def probe_version_early(binary: str, folder: str | Path) -> None:
     (``version_memo``) knows the answer: the probe's 0.2 s (nearly all of it POV-Ray waiting) then pass
     beside povh3d's own start-up instead of before its first render, and ``povray_version`` takes the
     answer.  ``stop_probes`` (and the exit) stop a probe nobody took."""
-    if binary in _ANSWERED or binary in _PROBES or remembered(binary, folder) is not None:
+    if binary in _VERSIONS or binary in _PROBES or remembered(binary, folder) is not None:
         return
     try:
         _PROBES[binary] = subprocess.Popen([binary, "--version"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,

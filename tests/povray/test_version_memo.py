@@ -30,14 +30,14 @@ def test_asked_once_then_remembered_until_the_binary_changes(tmp_path, monkeypat
     monkeypatch.setenv("POVH3D_CACHE", str(cache))
     binary = _fake_povray(tmp_path)
     for _ in range(3):  # three "processes": the in-process memory is cleared each time
-        process._version.cache_clear()
+        process._VERSIONS.clear()
         assert LocalRunner(str(binary)).version == "3.7.0.10.unofficial"
     assert _runs(tmp_path) == 1
     assert list(json.loads((cache / FILE_NAME).read_text()).values()) == ["3.7.0.10.unofficial"]
     # an upgrade in place changes the binary's size and mtime: asked again
     _fake_povray(tmp_path, "3.7.1.0")
     os.utime(binary, ns=(1, 10**18))
-    process._version.cache_clear()
+    process._VERSIONS.clear()
     assert LocalRunner(str(binary)).version == "3.7.1.0"
     assert _runs(tmp_path) == 2
 
@@ -77,15 +77,13 @@ def test_an_early_probe_runs_beside_the_start_and_is_taken_once(tmp_path):
     """``probe_version_early`` starts the probe without waiting for it; ``povray_version`` then takes the
     probe's answer, not a second run; a binary the memory knows starts no probe (the control)."""
     binary = _slow_povray(tmp_path, 0.4)
-    process._version.cache_clear()
-    process._ANSWERED.discard(str(binary))
+    process._VERSIONS.clear()
     process.probe_version_early(str(binary), tmp_path / "cache")
     probe = process._PROBES[str(binary)]
     assert probe.poll() is None   # still running: the caller did not wait for it
     assert remembered_version(str(binary), tmp_path / "cache", process.povray_version) == "3.7.0.10.unofficial"
     assert _runs(tmp_path) == 1 and probe.returncode == 0 and process._PROBES == {}
-    process._version.cache_clear()
-    process._ANSWERED.discard(str(binary))
+    process._VERSIONS.clear()
     process.probe_version_early(str(binary), tmp_path / "cache")   # remembered now: no probe
     assert process._PROBES == {}
     assert remembered_version(str(binary), tmp_path / "cache", process.povray_version) == "3.7.0.10.unofficial"
