@@ -68,10 +68,11 @@ def _render(request: RenderRequest, progress: Progress | None, passes: list[Pass
     scene, model_record = load_content(request)
     check_outputs_against(request, output, (request.source, *scene.files))
     request, placed = place_display(request, scene, progress)
-    ray_state = None
-    beside = not vendor_cameras(request) and fallback_beside_pass(request, scene)
-    if not vendor_cameras(request) and not beside:   # the vendor's perspective cameras trace no mesh camera
-        request, ray_state = settle_method(request, scene, progress)   # may trade the default method for one that renders it right
+    ray_state, beside = None, False
+    if not vendor_cameras(request):   # the vendor's perspective cameras trace no mesh camera
+        beside = fallback_beside_pass(request, scene)   # the inside-solid pass beside the fallback's views
+        if not beside:   # may trade the default method for one that renders it right
+            request, ray_state = settle_method(request, scene, progress)
     placement_record = placed if ray_state is None else placed.updated(ray_state=ray_state)
     settings, auto = _resolve_quality(request, scene, progress)
     frame = partial(render_image, request, scene, settings, auto=auto, model=model_record,
