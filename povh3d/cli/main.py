@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 import os
 import re
 import signal
@@ -22,18 +21,7 @@ from .._version import __version__
 from ..errors import Povh3dError, Povh3dWarning, RenderInterrupted, raw_message
 from .flags import flags, learn
 from . import calibration, display, hyper, layout, render, replay
-from .options import warn
-
-
-def _finite_float(text: str) -> float:
-    """``type=float`` of every option: a finite number (``nan`` and ``inf`` are refused here)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"takes a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"takes a finite number, got {text!r}")
-    return value
+from .options import finite_float, warn
 
 
 #: A value that starts with a minus and a digit (``-50,-40,-30``, ``-.5``): argparse takes only a bare
@@ -44,7 +32,7 @@ _NEGATIVE_VALUE = re.compile(r"-\.?[0-9]")
 class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.register("type", float, _finite_float)
+        self.register("type", float, finite_float)
 
     def _parse_optional(self, arg_string: str):
         if _NEGATIVE_VALUE.match(arg_string):  # no povh3d option starts with a digit

@@ -18,6 +18,17 @@ from .flags import flags
 _PAIR = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(?:[xX]\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*)?$")
 
 
+def finite_float(text: str) -> float:
+    """``type=float`` of every option: a finite number (``nan`` and ``inf`` are refused here)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"takes a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"takes a finite number, got {text!r}")
+    return value
+
+
 def parse_pair(text: str, option: str, *, integral: bool) -> tuple[float, float] | float:
     """``'60x40'`` -> (60, 40), ``'60'`` -> 60; a ConfigError naming the option otherwise."""
     m = _PAIR.match(text)

@@ -14,7 +14,7 @@ from typing import Any
 from ..errors import ConfigError
 from .flags import flags
 from .volume import add_volume_options, volume_options_from_args
-from .options import (add_array_options, add_mapping_options, add_mesh_options, display_from_args,
+from .options import (add_array_options, add_mapping_options, add_mesh_options, display_from_args, finite_float,
                       lens_array_from_args, max_triangles, parse_triple, positive_int, progress_bar, warn)
 
 METHOD_NAMES = ("multi-ortho", "multi-ortho-views", "pinhole", "single-stage", "subpixel")
@@ -64,12 +64,9 @@ def viewing_distance(text: str) -> float:
     if text.strip().lower() in ("inf", "infinity"):
         return math.inf
     try:
-        value = float(text)
-    except ValueError:
+        return finite_float(text)
+    except argparse.ArgumentTypeError:   # its own words: inf is a distance here
         raise argparse.ArgumentTypeError(f"takes a distance in mm or inf, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"takes a distance in mm or inf, got {text!r}")
-    return value
 
 
 def placement_options_from_args(args: argparse.Namespace) -> Any:
