@@ -209,6 +209,18 @@ def parse_radiosity(log: str) -> tuple[int, float] | None:
     return (sum(counts), sum(seconds)) if counts or seconds else None
 
 
+_PHOTONS_SHOT = re.compile(r"^\s*Number of photons shot:\s*(?P<count>\d+)")
+_PHOTON_SECONDS = re.compile(r"Photon Time:[^\n]*seconds")   # not "Photon Time: No photons"
+
+
+def parse_photons(log: str) -> int | None:
+    """The photons POV-Ray shot, summed over every frame of the log (a frame that loads its map shoots
+    none); None if no frame reports photon statistics."""
+    if not _PHOTON_SECONDS.search(log):
+        return None
+    return sum(int(m["count"]) for line in unwrap(log) if (m := _PHOTONS_SHOT.match(line)))
+
+
 def parse_progress(text: str, frame: int = 1, share: float = 0.0) -> tuple[int, float]:
     """Where a verbose (``+V``) POV-Ray run is, after reading `text` of its log.
 

@@ -26,6 +26,15 @@ The file lives in a folder of the render's own (removed with it); the saving run
 folder (the only place the sandbox lets POV-Ray write) and hands it over (``PovrayJob.keep_files``);
 the loading runs read it through a link in their job folder, allowed by name (``read_files``).
 Accuracy and cost (``radiosity/cornell.pov``): docs/methods.md, "Shared lighting".
+
+Photons are shot from the lights, whatever the camera, so one map serves every shot: the saving run's
+first frame shoots and saves it, its later frames and every other run load it (where the file is) (measured: a render that
+loads the map is, to the bit, the render that shot it; 0.9 s of a 1.7 s view of
+``advanced/benchmark/benchmark.pov`` at one thread was the shooting).  POV-Ray 3.7 saves and loads a
+photon map only by the scene's own ``global_settings { photons { save_file / load_file } }`` (a later
+``photons`` block of povh3d's would reset the scene's settings), so the runs render a copy of the scene
+whose block holds a hook for it (``scene.rewrite.photon_map_hook``); a scene whose block povh3d cannot
+reach (in another folder's include) or that keeps its own map shoots its photons in every run, as before.
 """
 
 from __future__ import annotations
@@ -43,16 +52,22 @@ from ..methods.quality import RenderSettings
 
 #: The solution's name in a job folder (POV-Ray's working folder).
 SOLUTION = "povh3d-radiosity.rad"
+#: The photon map's name there.
+PHOTONS = "povh3d-photons.ph"
 #: Added to the loading runs' global settings, after the scene's own.
 LOADED = "pretrace_start 1 pretrace_end 1 always_sample off"
 
 
 @dataclass(frozen=True)
 class SharedLighting:
-    """The shots whose run computes and saves the radiosity solution every other shot loads, in
-    the order it renders them (the first from nothing, each later one adding what it misses)."""
+    """The shots whose run computes and saves the lighting every other shot loads, in the order it
+    renders them (the first from nothing, each later one adding what it misses); what is shared: the
+    radiosity solution, the photon map (the runs then render a copy of the scene whose global ``photons``
+    block saves or loads it: ``scene.rewrite.photon_map_hook``)."""
 
     savers: tuple[int, ...]
+    radiosity: bool = True
+    photons: bool = False
 
     def keyed(self, keys: list[str]) -> list[str]:
         """The shots' cache keys: the first saving shot's as it is, the others' naming the solution."""
@@ -62,17 +77,27 @@ class SharedLighting:
 
     def saving(self, folder: Path) -> dict[str, Any]:
         """What the saving run adds to its job: the options that load (from its second frame on) and
-        save the solution, the file kept."""
-        return {"options": (f"Radiosity_File_Name={SOLUTION}", "Radiosity_From_File=on", "Radiosity_To_File=on"),
-                "keep_files": ((SOLUTION, str(folder / SOLUTION)),)}
+        save the solution, the files kept."""
+        out: dict[str, Any] = {"options": (), "keep_files": ()}
+        if self.radiosity:
+            out = {"options": (f"Radiosity_File_Name={SOLUTION}", "Radiosity_From_File=on", "Radiosity_To_File=on"),
+                   "keep_files": ((SOLUTION, str(folder / SOLUTION)),)}
+        if self.photons:
+            out["keep_files"] += ((PHOTONS, str(folder / PHOTONS)),)
+        return {field: value for field, value in out.items() if value}
 
-    def loading(self, folder: Path) -> dict[str, Any]:
-        """What a loading run adds to its job: the options that load the solution without a pretrace,
-        a link to it in the job folder, and leave to read it."""
-        path = str(folder / SOLUTION)
-        return {"options": (f"Radiosity_File_Name={SOLUTION}", "Radiosity_From_File=on",
-                            "Radiosity_Vain_Pretrace=off"),
-                "links": ((SOLUTION, path),), "read_files": (path,)}
+    def loading(self, folder: Path, radiosity: bool, photons: bool) -> dict[str, Any]:
+        """What a loading run adds to its job: the options that load the radiosity solution without a
+        pretrace, links to what the saving run saved (``radiosity``, ``photons``) in the job folder,
+        and leave to read them."""
+        out: dict[str, Any] = {"options": (), "links": (), "read_files": ()}
+        if radiosity:
+            out["options"] = (f"Radiosity_File_Name={SOLUTION}", "Radiosity_From_File=on", "Radiosity_Vain_Pretrace=off")
+        for name, used in ((SOLUTION, radiosity), (PHOTONS, photons)):
+            if used:
+                out["links"] += ((name, str(folder / name)),)
+                out["read_files"] += (str(folder / name),)
+        return {field: value for field, value in out.items() if value}   # an empty read_files would confine
 
 
 def loading_header(header: dict[str, Any]) -> dict[str, Any]:
@@ -83,25 +108,54 @@ def loading_header(header: dict[str, Any]) -> dict[str, Any]:
     return {**header, "global_settings": settings}
 
 
+def photon_header(header: dict[str, Any]) -> dict[str, Any]:
+    """``header`` with the declaration ``photon_map_hook`` reads: the map's file."""
+    from ...scene.rewrite import PHOTON_MAP   # here: the rewrite's tokenizer only where photons are shared
+
+    return {**header, "photon_map": {"name": PHOTON_MAP, "file": PHOTONS}}
+
+
+def photon_map_reachable(scene: Scene) -> bool:
+    """Whether the scene has photons and povh3d reaches its global ``photons`` block to share the map
+    (``scene.rewrite.photon_map_hook``)."""
+    if "photons" not in scene.features:
+        return False
+    from ...scene.rewrite import photon_map_hook, rewrites   # here: the tokenizer only for scenes with photons
+
+    return rewrites(scene, photon_map_hook)
+
+
 def shared_lighting(scene: Scene, batch: ShotBatch, settings: RenderSettings, local: bool) -> SharedLighting | None:
-    """The shared solution of this batch, or None where each shot lights itself: a batch that names no
+    """The shared lighting of this batch, or None where each shot lights itself: a batch that names no
     ``lighting_shots`` (the passes, whose frames must each light themselves; the mesh camera's
-    footprint banks), a scene without radiosity, a single shot, turned off, a cluster (no shared file
-    system), an animation whose frames go in clock sequences (each frame's runs then hold several clocks)."""
-    if (not batch.lighting_shots or "radiosity" not in scene.features or len(batch.shots) < 2
-            or not settings.shared_lighting or not local or (settings.sequence is not None and settings.sequence.later)):
+    footprint banks), a scene with neither radiosity nor photons povh3d can share, a single shot, turned
+    off, a cluster (no shared file system), an animation whose frames go in clock sequences (each frame's
+    runs then hold several clocks).  Photons alone need one saving shot: their map is the camera's to none."""
+    if (not batch.lighting_shots or len(batch.shots) < 2 or not settings.shared_lighting or not local
+            or (settings.sequence is not None and settings.sequence.later)):
+        return None
+    radiosity = "radiosity" in scene.features
+    photons = photon_map_reachable(scene)
+    if not (radiosity or photons):
         return None
     savers = batch.lighting_shots
-    if scene.animation_words - SEQUENCE_SAFE_WORDS:
+    if scene.animation_words - SEQUENCE_SAFE_WORDS or not radiosity:
         savers = savers[:1]  # each shot a run of its own (``shots._planned_jobs``): no chain of frames
-    return SharedLighting(tuple(savers))
+    return SharedLighting(tuple(savers), radiosity=radiosity, photons=photons)
 
 
 def record(lighting: SharedLighting, saved: tuple[int, float] | None, loaded: list[tuple[int, float] | None],
-           shots: int) -> dict[str, JSONValue]:
-    """The sidecar's account: the saving shots, the samples their run computed, and what the loading runs
-    computed beside the loaded ones (POV-Ray's statistics, ``povray.log.parse_radiosity``)."""
-    out: dict[str, JSONValue] = {"radiosity": "computed once, loaded by the other shots", "saving_shots": list(lighting.savers)}
+           shots: int, photons: tuple[int, int] | None = None) -> dict[str, JSONValue]:
+    """The sidecar's account: the saving shots, the radiosity samples their run computed and what the
+    loading runs computed beside the loaded ones (POV-Ray's statistics, ``povray.log.parse_radiosity``),
+    and, where the photon map was shared, the photons the saving run and all the loading runs shot."""
+    out: dict[str, JSONValue] = {}
+    if saved is not None:
+        out["radiosity"] = "computed once, loaded by the other shots"
+    if photons is not None:
+        out["photons"] = "shot once, loaded by the other shots"
+        out["photons_shot"], out["photons_shot_by_loading_shots"] = photons
+    out["saving_shots"] = list(lighting.savers)
     if saved is not None:
         out["samples_computed"], out["pretrace_seconds"] = saved[0], round(saved[1], 3)
     counts = [c for c in loaded if c is not None]
@@ -109,4 +163,6 @@ def record(lighting: SharedLighting, saved: tuple[int, float] | None, loaded: li
         out["loading_shots"] = shots
         out["samples_computed_per_loading_shot"] = round(sum(c[0] for c in counts) / shots, 1)
         out["loading_pretrace_seconds"] = round(sum(c[1] for c in counts), 3)
+    elif shots:
+        out["loading_shots"] = shots
     return out

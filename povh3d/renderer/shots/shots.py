@@ -26,7 +26,7 @@ from ...cache import cache_root, code_stamp, content_key
 from .cache import ImageCache
 from ...image.io import read_image
 from ...povray.job import SCENE_FILE
-from ...povray.log import parse_radiosity, past_scene_end
+from ...povray.log import parse_photons, parse_radiosity, past_scene_end
 from ...povray.job import ClockRun
 from ...povray.process import JOB_PREFIX, JobResult, PovrayJob, povray_version, run_jobs
 from ...povray.sandbox import confines, scene_inputs
@@ -36,7 +36,7 @@ from ...scene.scene import BOM, Scene, has_bom
 from ...system import cpu_count, find_povray, owned_prefix
 from .batch import ShotBatch, RenderStats
 from .clock_runs import SEQUENCE_SAFE_WORDS, plan_runs
-from .lighting import SOLUTION, SharedLighting, loading_header, shared_lighting
+from .lighting import PHOTONS, SOLUTION, SharedLighting, loading_header, photon_header, shared_lighting
 from .lighting import record as lighting_record
 from ..methods.quality import Progress, RenderSettings
 from ...scene.templates import render_template, templates_dir
@@ -196,26 +196,50 @@ def _run_lit(lighting: SharedLighting, runner: Any, taker: _Taker, scene: Scene,
     then the others' runs, which load it (``renderer.shots.lighting``)."""
     with tempfile.TemporaryDirectory(prefix=owned_prefix(JOB_PREFIX) + "lighting-") as name:
         folder = Path(name)
+        user = scene
         try:
+            if lighting.photons:   # the runs render a copy whose photons block saves or loads the map
+                from ...scene.rewrite import copy_rewritten, photon_map_hook
+                scene = copy_rewritten(scene, folder / "scene", photon_map_hook) or scene
             chain = replace(batch, shots_per_job=len(lighting.savers))  # one run: each frame adds to the file
-            saving, targets = _planned_jobs(scene, chain, settings, stats, method, header, list(lighting.savers), {},
-                                            extra=lighting.saving(folder))
+            # POV-Ray shoots the same photons every time at one thread (at two, their order and count vary
+            # from run to run): a photon map shot at one thread makes every view its independent render's.
+            shooting = settings if lighting.radiosity or settings.threads else replace(settings, threads=1)
+            saving, targets = _planned_jobs(scene, chain, shooting, stats, method,
+                                            photon_header(header) if lighting.photons else header,
+                                            list(lighting.savers), {}, extra=lighting.saving(folder))
             taker.targets.update(targets)
             _run(runner, saving, taker, settings, progress, stats)
             rest = [i for i in missing if i not in lighting.savers]
-            saved = taker.radiosity.get(id(saving[0])) if (folder / SOLUTION).is_file() else None
+            saved = (taker.radiosity.get(id(saving[0]))
+                     if lighting.radiosity and (folder / SOLUTION).is_file() else None)
             # No radiosity statistics (or no file): the scene's radiosity block is not in force (under an
             # #if), so there is nothing to share, and a later radiosity block would turn radiosity on.
-            shared = {"extra": lighting.loading(folder)} if saved is not None else {}
+            # No photon map: the scene's photons block is not in force, and loading a missing map fails.
+            photons = lighting.photons and (folder / PHOTONS).is_file()
+            loading_as = loading_header(header) if saved is not None else header
             loading, targets = _planned_jobs(scene, batch, settings, stats, method,
-                                             loading_header(header) if shared else header, rest, {}, **shared)
+                                             photon_header(loading_as) if photons else loading_as, rest, {},
+                                             extra=lighting.loading(folder, saved is not None, photons))
             taker.targets.update(targets)
             _run(runner, loading, taker, settings, progress, stats)
         except PovrayError as exc:
-            raise _said(exc, scene) from None
+            raise _said(_of_user(exc, scene, user), user) from None
     stats.jobs += 1
-    if saved is not None:
-        stats.lighting = lighting_record(lighting, saved, [taker.radiosity.get(id(job)) for job in loading], len(rest))
+    if saved is not None or photons:
+        shot = ((taker.photons.get(id(saving[0])) or 0, sum(taker.photons.get(id(job)) or 0 for job in loading))
+                if photons else None)
+        stats.lighting = lighting_record(lighting, saved, [taker.radiosity.get(id(job)) for job in loading], len(rest),
+                                         shot)
+
+
+def _of_user(exc: PovrayError, copy: Scene, user: Scene) -> PovrayError:
+    """``exc`` naming the user's files where POV-Ray named those of the copy it rendered."""
+    if copy is user or isinstance(exc, PovrayTimeout):
+        return exc
+    mine, theirs = str(copy.path.parent), str(user.path.parent)
+    return PovrayError(raw_message(exc).replace(mine, theirs), command=exc.command, returncode=exc.returncode,
+                       log_tail=exc.log_tail.replace(mine, theirs))
 
 
 def _runner(settings: RenderSettings) -> Any:
@@ -335,6 +359,7 @@ class _Taker:
         self.targets, self.copies, self.done, self.progress, self.method = targets, copies, done, progress, method
         self.taken: set[tuple[int, int]] = set()
         self.radiosity: dict[int, tuple[int, float] | None] = {}  # job id -> POV-Ray's radiosity statistics
+        self.photons: dict[int, int | None] = {}  # job id -> the photons POV-Ray shot
 
     def take(self, target: Target, image_path: Path) -> None:
         index, key = target
@@ -363,6 +388,7 @@ class _Taker:
     def collect(self, result: JobResult) -> None:
         """A finished job (jobs finish in any order): the frames not taken while it ran."""
         self.radiosity[id(result.job)] = parse_radiosity(result.log)
+        self.photons[id(result.job)] = parse_photons(result.log)
         for frame, (target, image_path) in enumerate(zip(self.targets[id(result.job)], result.images)):
             if (id(result.job), frame) not in self.taken:
                 self.take(target, image_path)
