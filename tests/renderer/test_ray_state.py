@@ -166,3 +166,33 @@ def test_the_refused_frame_would_be_wrong(cli, tmp_path, monkeypatch, hollow, wr
     view = read_png(views / "v_003_000.png")[..., :3]     # the bottom-left view
     oracle = oracle_view(scene, record, (3, 0), view.shape[:2], timeout=120)[..., :3]
     assert (psnr(view, oracle) < 35) == wrong
+
+
+# A grey wall whose face stands {gap} mm in front of the plane of the rays' origins (z = -1000 mm), and a
+# slab that holds the origins of the field's left half.
+NEAR_WALL = """#version 3.7;
+global_settings {{ assumed_gamma 1 }}
+light_source {{ <0, 0, -2000> rgb 1 }}
+box {{ <-1000, -1000, {face}>, <1000, 1000, 0> pigment {{ rgb 0.5 }} }}
+{slab}
+"""
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("slab, share", [("", 0.0),
+                                         ("box { <-1000, -1000, -1001>, <0, 1000, -999> pigment { rgb 0.5 } }", 0.5)])
+def test_the_origins_pass_sees_where_a_ray_starts_only(tmp_path, slab, share):
+    """The origins pass stops its rays at a black slab just in front of their plane, under a fog of that
+    distance: a surface 1e-3 mm before the origins (which, under a fog as deep as the clearance, changed
+    a pixel by less than a 16-bit level, so that the old pass counted every origin inside) leaves every
+    origin outside; a solid that holds the left half's origins is measured as half (the control)."""
+    from povh3d.renderer.methods.quality import RenderSettings
+    from povh3d.renderer.passes.depth import origins_inside
+    from povh3d.scene.scene import load_scene
+    from tests.support.arrays import square_array
+
+    scene = tmp_path / "wall.pov"
+    scene.write_text(NEAR_WALL.format(face=-1000 + 1e-3, slab=slab))
+    inside = origins_inside(load_scene(scene), square_array(lx=20, ly=16, nx=2, ny=2),
+                            RenderSettings(quality="draft", use_cache=False), 1000.0, 1.0)
+    assert inside == pytest.approx(share, abs=0.02)
