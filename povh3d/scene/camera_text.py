@@ -5,8 +5,9 @@ right x*image_width/image_height look_at <-2, 0, -4> }``.  Such a camera needs n
 to be known: ``literal_camera`` reads its modifiers as ``scene.camera.parse_log`` would from
 the run (the same items, so ``camera_from_items`` applies the same rules).  Anything else
 returns None and the camera is evaluated by POV-Ray (``renderer.passes.scene_camera``): a
-second camera word anywhere the parse may reach (an include holding one, a declared camera),
-a camera inside braces or a directive (``#if``, a macro), an include whose name is computed,
+second camera word anywhere the parse may reach (an include holding one, a declared camera: but
+``camera { NAME }`` reads the one ``#declare NAME = camera { ... }`` of literal values before it, as
+POV-Ray's scene templates write theirs), a camera inside braces or a directive (``#if``, a macro), an include whose name is computed,
 a ``#version`` before 3.5, any identifier, transform, type other than perspective or modifier
 outside the plain ones, and a vector of other than three components.
 
@@ -48,19 +49,36 @@ def literal_camera(main: str, read: Callable[[str], str | None], size: tuple[int
     if any(scene.holds_camera(name) for name in _literal_includes(toks)):
         return None
     sites = [i for i, t in enumerate(toks) if t.text == "camera"]
-    if len(sites) != 1 or sites[0] + 1 >= len(toks) or toks[sites[0] + 1].text != "{":
+    uses = [i for i in sites if not (i > 0 and toks[i - 1].text == "=")]
+    if len(uses) != 1 or any(i + 1 >= len(toks) or toks[i + 1].text != "{" for i in sites):
         return None
-    at = sites[0]
-    if at > 0 and toks[at - 1].text == "=":
-        return None
-    _, braces, directives = next(d for d in _depths(toks) if d[0] == at)
-    if braces or directives:
+    depth = {i: (braces, directives) for i, braces, directives in _depths(toks)}
+    at = uses[0]
+    if depth[at] != (0, 0):
         return None
     try:
         close = _closing_brace(toks, at + 1)
+        if close == at + 3 and sites != uses:   # camera { NAME }: the one declaration of NAME, before it
+            at = _declared(toks, depth, sites, toks[at + 2].text, at)
+            close = _closing_brace(toks, at + 1)
+        elif sites != uses:
+            return None
         return _items(main[toks[at + 1].end:toks[close].start], size)
     except (_NotLiteral, ArithmeticError, CameraError):
         return None
+
+
+def _declared(toks: list, depth: dict[int, tuple[int, int]], sites: list[int], name: str, use: int) -> int:
+    """The ``camera`` token of ``#declare name = camera { ... }``, the scene's only assignment of
+    ``name``, at the top level and before ``use`` (the templates' ``#declare Camera_0 = camera {...}``
+    ... ``camera { Camera_0 }``); the scene's other declared cameras are never used."""
+    assigned = [i for i in range(1, len(toks) - 1) if toks[i].text == name and toks[i - 1].text in ("#declare", "#local")]
+    if len(assigned) != 1 or toks[assigned[0] + 1].text != "=":
+        raise _NotLiteral
+    at = assigned[0] + 2
+    if at not in sites or at > use or depth[assigned[0] - 1] != (0, 0) or toks[assigned[0] - 1].text != "#declare":
+        raise _NotLiteral
+    return at
 
 
 def _items(body: str, size: tuple[int, int]) -> list[tuple[str, list[float] | str]]:

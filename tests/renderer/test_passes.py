@@ -202,6 +202,12 @@ LITERAL = [
     "camera { location <7, 20, 20> direction y sky z up z right x*image_width/image_height look_at <0.0, 0, 1.2> }",
     "camera { perspective location -(2 + 3) * z + <1, .5e1, 0> / 2 right -1.5*x direction 2*z }",   # right-handed
     "camera { location <0, 0, -5> /* a comment */ angle 65 // another\n look_at 0 }",   # a float promoted
+    # templates/Basic_Scenes: declared cameras, one used by name
+    "#declare Camera_0 = camera {/*ultra_wide_angle*/ angle 75 location <0.0, 1.0, -3.0>\n"
+    "  right x*image_width/image_height look_at <0.0, 1.0, 0.0>}\n"
+    "#declare Camera_1 = camera { angle 90 location <2.0, 2.5, -3.0> look_at <0.0, 1.0, 0.0>}\n"
+    "camera{Camera_0}",
+    "#declare C = camera { location <0, 0, -5> }\ncamera { C }",
 ]
 #: Cameras it does not decide (POV-Ray does): identifiers, transforms, two cameras, a directive around it.
 NOT_LITERAL = [
@@ -209,7 +215,11 @@ NOT_LITERAL = [
     "camera { location <0, 0, -5> look_at 0 rotate 30*y }",
     "camera { location <0, 0, -5> look_at 0 }\ncamera { location <0, 0, -6> look_at 0 }",
     "#if (1)\ncamera { location <0, 0, -5> look_at 0 }\n#end",
-    "#declare C = camera { location <0, 0, -5> }\ncamera { C }",
+    "#declare C = camera { location <0, 0, -5> }\n#declare C = camera { location <0, 0, -6> }\ncamera { C }",
+    "#if (1) #declare C = camera { location <0, 0, -5> } #end\ncamera { C }",
+    "#declare C = camera { location <0, 0, -5> }\ncamera { C rotate 30*y }",
+    "#declare C = camera { location <0, 0, -5> }\ncamera { location <0, 0, -6> }",
+    "#declare L = <0, 0, -5>;\n#declare C = camera { location L }\ncamera { C }",
     "camera { orthographic location <0, 0, -5> look_at 0 }",
     "camera { location <0, 0, -5> look_at 0 aperture 0.1 focal_point 0 }",
     "camera { location <0, 0, -5, 1> look_at 0 }",
