@@ -48,14 +48,17 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     ``OutputError`` naming ``path``; the existing ``path`` is left as it was.
     """
     path = Path(path)
-    tmp = _temp_beside(path)
+    tmp: Path | None = None
     try:
+        with deferred_signals():   # a SIGTERM between the file's creation and this try left it behind
+            tmp = _temp_beside(path)
         yield tmp
         _chmod(tmp)
         os.replace(tmp, path)
     except BaseException as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
         if isinstance(exc, OSError):
             raise _write_error(path, exc) from None
         raise
@@ -105,7 +108,8 @@ def check_writable(path: str | Path) -> None:
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"the output {str(path)!r} is a folder; give a file name inside it")
-    os.unlink(_temp_beside(path))
+    with deferred_signals():   # the probe's file never outlives a signal
+        os.unlink(_temp_beside(path))
 
 
 #: The keys every sidecar povh3d writes holds (``write_image_pair``, ``write_sidecar``): a ``NAME.json``

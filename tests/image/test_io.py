@@ -47,3 +47,53 @@ def test_sidecar_beside_image(tmp_path):
     write_sidecar(tmp_path / "a.png", {"x": 1})
     assert (tmp_path / "a.json").is_file()
     assert read_sidecar(tmp_path / "a.png") == {"x": 1}
+
+
+@pytest.mark.parametrize("during", ["write", "probe"])
+def test_a_signal_as_the_temporary_file_is_made_leaves_none(tmp_path, monkeypatch, during):
+    """Ctrl-C (or SIGTERM) landing right after the hidden ``.part`` file is created, before the write
+    that owns it has begun: the file goes with the interrupted write (a fault test under load found one
+    left beside ``out.json``).  Negative control: without the deferral the same moment leaves it."""
+    import os
+    import signal
+    import tempfile as tempfile_module
+
+    from povh3d.image import io as image_io
+
+    real = tempfile_module.mkstemp
+
+    def interrupted(*args, **kwargs):
+        made = real(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)   # Python raises it at its next step, still in _temp_beside
+        return made
+
+    monkeypatch.setattr(image_io.tempfile, "mkstemp", interrupted)
+    # Python's own Ctrl-C handler, not the CLI's quiet exit (which the test run may have installed)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _interrupted_writes(tmp_path, monkeypatch, during)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _interrupted_writes(tmp_path, monkeypatch, during):
+    import os
+
+    from povh3d.image import io as image_io
+
+    target = tmp_path / "out.json"
+
+    def attempt():
+        if during == "write":
+            with image_io.atomic_path(target) as tmp:
+                tmp.write_text("{}")
+        else:
+            image_io.check_writable(target)
+
+    with pytest.raises(KeyboardInterrupt):
+        attempt()
+    assert sorted(os.listdir(tmp_path)) == []
+    monkeypatch.setattr(image_io, "deferred_signals", lambda: __import__("contextlib").nullcontext())
+    with pytest.raises(KeyboardInterrupt):
+        attempt()
+    assert [p.suffix for p in tmp_path.iterdir()] == [".part"]
