@@ -208,6 +208,9 @@ LITERAL = [
     "#declare Camera_1 = camera { angle 90 location <2.0, 2.5, -3.0> look_at <0.0, 1.0, 0.0>}\n"
     "camera{Camera_0}",
     "#declare C = camera { location <0, 0, -5> }\ncamera { C }",
+    # a scene that builds from the image size itself (language/image_size.pov), its camera too
+    "camera { location <0, 1, -image_width/64> right x*image_width/image_height look_at 0 }\n"
+    "#declare TotalPixels = image_width * image_height;",
 ]
 #: Cameras it does not decide (POV-Ray does): identifiers, transforms, two cameras, a directive around it.
 NOT_LITERAL = [

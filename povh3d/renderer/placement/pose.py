@@ -158,8 +158,10 @@ def resolve_pose_and_depth(options: PlacementOptions, scene: Scene, lens_array: 
                                       script.lines, timeout, (w, h))
         if probe["type"] in REFUSED_TYPES:
             raise CameraError(_unusable_type(probe["type"]) + f" (its type told by a parse at {w}x{h} pixels)")
+    # The text's image_width and image_height are the evaluation's (``camera_size``: ``physical_size`` where
+    # the scene builds from them, else its ratio, which is all a literal camera reads of them otherwise).
     literal = (literal_camera(text, scene.include_text, physical_size(lens_array))
-               if found is None and front_clearance is None and not uses_image_size(scene) else None)
+               if found is None and front_clearance is None else None)
     if literal is not None:   # the text alone tells it: no POV-Ray run (scene/camera_text.py)
         start = time.perf_counter()
         camera, distances, cached = camera_from_items(literal).as_record(), None, False
