@@ -130,7 +130,7 @@ def shared_lighting(scene: Scene, batch: ShotBatch, settings: RenderSettings, lo
     ``lighting_shots`` (the passes, whose frames must each light themselves; the mesh camera's
     footprint banks), a scene with neither radiosity nor photons povh3d can share, a single shot, turned
     off, a cluster (no shared file system), an animation whose frames go in clock sequences (each frame's
-    runs then hold several clocks).  Photons alone need one saving shot: their map is the camera's to none."""
+    runs then hold several clocks).  Photons alone need one saving shot: their map does not depend on the camera."""
     if (not batch.lighting_shots or len(batch.shots) < 2 or not settings.shared_lighting or not local
             or (settings.sequence is not None and settings.sequence.later)):
         return None
