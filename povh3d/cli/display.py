@@ -52,7 +52,9 @@ def cmd_presets(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    display = display_from_args(args, mapped=bool(args.mapping))
+    # A calibration (or any mapping option) counts without --mapping too, as render reads it: a device's
+    # visual.json calibrates the preset's own quilt and panel image.
+    display = display_from_args(args, mapped=bool(args.mapping) or _mapping_given(args))
     lens_array = display.lens_array
     info = {**display.as_record()["display"], **lens_array.as_record()}
     if display.mapping is not None:
@@ -82,6 +84,13 @@ def cmd_info(args: argparse.Namespace) -> int:
     if "content" in info:
         _print_content(info["content"])
     return 0
+
+
+def _mapping_given(args: argparse.Namespace) -> bool:
+    """Whether a pixel mapping option other than ``--mapping`` is on the command line."""
+    return (args.calibration is not None or args.reverse_views or args.blend or bool(args.offset)
+            or any(getattr(args, name) is not None
+                   for name in ("subpixels_per_lens", "views", "slant_tan", "slant_deg", "rows_per_view")))
 
 
 def _print_content(report: dict) -> None:

@@ -47,6 +47,20 @@ def test_info_reports_mapping_figures(cli):
     assert info["resolution_3d"] == [720, 360] and info["mapping_lens_pitch_mm"] == pytest.approx(1.292)
 
 
+def test_info_reads_a_calibration_without_mapping(tmp_path, cli):
+    """``info --calibration`` reads the file as render does, with or without ``--mapping``: a Looking Glass
+    preset's quilt names it (it was silently dropped); a preset that cannot take one says so in one line."""
+    from povh3d.display.looking_glass import device, visual_json
+
+    visual = tmp_path / "visual.json"
+    visual.write_text(visual_json(device("looking-glass-portrait").calibration))
+    plain = json.loads(cli("info", "--preset", "looking-glass-portrait", "--json").out)
+    calibrated = json.loads(cli("info", "--preset", "looking-glass-portrait", "--calibration", visual, "--json").out)
+    assert plain["quilt"]["calibration"] is None
+    assert calibrated["quilt"]["calibration"] == str(visual)
+    assert "--calibration" in one_error_line(cli("info", "--preset", "demo", "--calibration", visual))
+
+
 @pytest.mark.povray
 def test_render_with_mapping_renders_only_the_views_it_needs(tmp_path, cli):
     out, views = tmp_path / "panel.png", tmp_path / "views"
