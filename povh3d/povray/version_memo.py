@@ -13,8 +13,6 @@ from __future__ import annotations
 
 from .. import jsontext
 import json
-import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -59,18 +57,14 @@ def _read(path: Path) -> dict[str, object]:
 
 
 def _write(path: Path, data: dict[str, object]) -> None:
-    """Atomically (a rename), so parallel renders never read half a file; errors ignored."""
+    """Atomically (``image.io.atomic_path``: a rename, its temporary file gone on any failure or signal), so
+    parallel renders never read half a file; errors ignored."""
+    from ..errors import OutputError
+    from ..image.io import atomic_path   # here: written once a binary, and the import graph stays shallow
+
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".version-", dir=path.parent)
-    except OSError:
-        return
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(data, f)
-        os.replace(tmp, path)
-    except OSError:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps(data), encoding="utf-8")
+    except (OSError, OutputError):
+        pass
