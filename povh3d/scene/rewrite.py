@@ -56,6 +56,8 @@ def photon_map_hook(text: str) -> str:
     block (an object's ``photons { target }`` is not one), so that the same copy renders as the scene does
     where nothing is declared; unchanged where such a block names a ``save_file`` or ``load_file`` of its own
     (the scene keeps its map itself) or a block has no closing brace."""
+    if "global_settings" not in text or "photons" not in text:
+        return text   # a mesh include of the scene's folder is not tokenized (its text is often many MB)
     toks = tokens(text)
     depth_of = {i: b for i, b, _ in _depths(toks)}
     starts = []

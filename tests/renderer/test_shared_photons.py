@@ -110,6 +110,21 @@ def test_the_hook_goes_in_the_global_photons_block_only():
     assert photon_map_hook(text).count("#ifdef (Povh3d_Photon_Map)") == 2
 
 
+def test_a_file_without_a_global_photons_block_is_not_tokenized(monkeypatch):
+    """The scene's own mesh includes (often many MB) are passed over on their words alone."""
+    import povh3d.scene.rewrite as rewrite
+
+    def refuse(text):
+        raise AssertionError("tokenized")
+
+    monkeypatch.setattr(rewrite, "tokens", refuse)
+    mesh = "mesh2 { vertex_vectors { 3, <0,0,0>, <1,0,0>, <0,1,0> } face_indices { 1, <0,1,2> } }\n"
+    assert photon_map_hook(mesh) == mesh
+    assert photon_map_hook("sphere { 0, 1 photons { target } }") == "sphere { 0, 1 photons { target } }"
+    with pytest.raises(AssertionError, match="tokenized"):   # the control: a global block is read
+        photon_map_hook("global_settings { photons { spacing 0.1 } }")
+
+
 def test_a_scene_that_keeps_its_own_map_is_left_alone(tmp_path):
     for own in ('save_file "m.ph"', 'load_file "m.ph"'):
         text = f"global_settings {{ photons {{ spacing 0.1 {own} }} }}"
