@@ -28,9 +28,9 @@ the loading runs read it through a link in their job folder, allowed by name (``
 Accuracy and cost (``radiosity/cornell.pov``): docs/methods.md, "Shared lighting".
 
 Photons are shot from the lights, whatever the camera, so one map serves every shot: the saving run's
-first frame shoots and saves it, its later frames and every other run load it (where the file is) (measured: a render that
-loads the map is, to the bit, the render that shot it; 0.9 s of a 1.7 s view of
-``advanced/benchmark/benchmark.pov`` at one thread was the shooting).  POV-Ray 3.7 saves and loads a
+first frame shoots and saves it, and its later frames and every other run, where the file is, load it.
+Measured: a render that loads the map is, to the bit, the render that shot it; 0.9 s of a 1.7 s view of
+``advanced/benchmark/benchmark.pov`` at one thread was the shooting.  POV-Ray 3.7 saves and loads a
 photon map only by the scene's own ``global_settings { photons { save_file / load_file } }`` (a later
 ``photons`` block of povh3d's would reset the scene's settings), so the runs render a copy of the scene
 whose block holds a hook for it (``scene.rewrite.photon_map_hook``); a scene whose block povh3d cannot
